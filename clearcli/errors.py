@@ -1,0 +1,90 @@
+"""One root exception for everything a user can get wrong, each kind with its exit code.
+
+The CLI prints ``str(error)`` as one line on stderr and exits with ``error.exit_code``;
+the codes are documented in ``clear --help`` and the README. Messages say what was wrong
+(naming the file) and what to do about it.
+"""
+
+from __future__ import annotations
+
+# Exit codes, documented in the README and in `clear --help`.
+EXIT_OK = 0
+EXIT_INTERNAL = 1  # a bug in clear: please report it
+EXIT_USAGE = 2  # Typer/Click: unknown option, missing argument
+EXIT_INPUT = 3  # input file missing, empty, corrupt, not a point cloud, bad settings file
+EXIT_SCENE = 4  # the frame holds no usable table (no plane, seen from below, all NaN)
+EXIT_NO_PLAN = 5  # the table cannot be cleared: no plan exists (the reason is printed)
+EXIT_PLANNER = 6  # the planner failed: time-out, crash, binary missing
+EXIT_NOT_YET = 7  # subcommand not implemented yet
+EXIT_OUTPUT = 8  # an output could not be written (exists without --force, not writable)
+EXIT_PARTIAL = 9  # a log was read only in part (truncated/corrupt after complete frames)
+
+EXIT_CODES: dict[int, str] = {
+    EXIT_OK: "success",
+    EXIT_INTERNAL: "internal error (a bug in clear; rerun with CLEAR_DEBUG=1 and report it)",
+    EXIT_USAGE: "usage error (unknown option, missing argument)",
+    EXIT_INPUT: "bad input: file missing, empty, corrupt, not a point cloud, bad settings",
+    EXIT_SCENE: "no usable table in the frame (no plane, seen from below, no finite points)",
+    EXIT_NO_PLAN: "no plan: the table cannot be cleared (reason printed)",
+    EXIT_PLANNER: "planner failure: time-out, crash or Fast Downward missing",
+    EXIT_NOT_YET: "subcommand not implemented yet",
+    EXIT_OUTPUT: "output not written: exists (use --force) or not writable",
+    EXIT_PARTIAL: "log read only in part: truncated or corrupt after the frames reported",
+}
+
+
+class ClearError(Exception):
+    """Root of every error a user can cause; carries the process exit code."""
+
+    exit_code: int = EXIT_INTERNAL
+
+    def __init__(self, message: str) -> None:
+        super().__init__(message)
+        self.message = message
+
+    def __str__(self) -> str:
+        return self.message
+
+
+class InputError(ClearError):
+    """A file cannot be read as what it should be."""
+
+    exit_code = EXIT_INPUT
+
+
+class SettingsError(InputError):
+    """A settings file or flag value is invalid."""
+
+
+class SceneError(ClearError):
+    """The frame was read but holds no usable table scene."""
+
+    exit_code = EXIT_SCENE
+
+
+class NoPlanError(ClearError):
+    """Planning finished and proved the table cannot be cleared."""
+
+    exit_code = EXIT_NO_PLAN
+
+
+class PlannerError(ClearError):
+    """The planner itself failed (time-out, crash, missing binary)."""
+
+    exit_code = EXIT_PLANNER
+
+
+class NotYetError(ClearError):
+    exit_code = EXIT_NOT_YET
+
+
+class OutputError(ClearError):
+    """An output file could not be written; nothing was changed."""
+
+    exit_code = EXIT_OUTPUT
+
+
+class PartialLogError(ClearError):
+    """A log ended early or was corrupt after some complete frames."""
+
+    exit_code = EXIT_PARTIAL

@@ -1,0 +1,54 @@
+"""`Frame`: one recorded point cloud, as every reader yields it and every stage takes it."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Mapping
+
+import numpy as np
+
+# The one label convention of the whole project (the mOSD one):
+# 0 none/invalid, 1 table (mOSD ground truth uses 1..9), 10*(k+1) object k.
+LABEL_NONE = 0
+LABEL_TABLE = 1
+
+
+def object_label(k: int) -> int:
+    """Label of object k (k counts from 0)."""
+    return 10 * (k + 1)
+
+
+@dataclass(frozen=True, eq=False)
+class Frame:
+    """A point cloud in the sensor frame (metres; optical frame: z forward, y down).
+
+    points:  (N, 3) float32; NaN rows are invalid pixels and are kept in place so that an
+             organized cloud keeps its (height, width) order.
+    colors:  (N, 3) uint8 RGB, or None.
+    shape:   (height, width) when organized, else None. N == height * width then.
+    fields:  any other per-point field by name, (N,) or (N, k) arrays, e.g. "label".
+    stamp_s: time stamp in seconds (log time for MCAP, 0.0 when unknown).
+    frame_id: the sensor frame's name ("" when unknown).
+    source:  where it came from, for messages ("scene.pcd", "log.mcap#3 /topic").
+    """
+
+    points: np.ndarray
+    colors: np.ndarray | None = None
+    shape: tuple[int, int] | None = None
+    fields: Mapping[str, np.ndarray] = field(default_factory=dict)
+    stamp_s: float = 0.0
+    frame_id: str = ""
+    source: str = ""
+
+    @property
+    def n_points(self) -> int:
+        return int(self.points.shape[0])
+
+    @property
+    def finite_mask(self) -> np.ndarray:
+        """(N,) bool: rows whose x, y and z are all finite."""
+        return np.isfinite(self.points).all(axis=1)
+
+    @property
+    def is_organized(self) -> bool:
+        return self.shape is not None and self.shape[0] > 1

@@ -1,0 +1,75 @@
+"""Values produced by segmentation: the table and the objects on it."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Mapping
+
+import numpy as np
+
+
+@dataclass(frozen=True, eq=False)
+class TablePlane:
+    """Plane n . p + d = 0 in the sensor frame; ``normal`` is unit and points up (away
+    from the table, towards the side the objects and the camera are on)."""
+
+    normal: np.ndarray  # (3,)
+    offset: float  # d
+
+    def height_of(self, points: np.ndarray) -> np.ndarray:
+        """Signed height (m) of points above the plane."""
+        return points @ self.normal + self.offset
+
+    def project(self, points: np.ndarray) -> np.ndarray:
+        """Orthogonal projection of points onto the plane."""
+        return points - np.outer(self.height_of(points), self.normal)
+
+
+@dataclass(frozen=True, eq=False)
+class SegmentedObject:
+    """One object: its points are ``frame.points[indices]``.
+
+    principal_axes rows are unit PCA axes, largest variance first (right-handed).
+    The oriented bounding box is centred at ``obb_center`` with axes ``obb_axes`` (rows)
+    and full side lengths ``obb_extents`` (m) along them.
+    """
+
+    indices: np.ndarray  # (M,) int64 into the frame's points
+    centroid: np.ndarray  # (3,)
+    obb_center: np.ndarray  # (3,)
+    obb_axes: np.ndarray  # (3, 3)
+    obb_extents: np.ndarray  # (3,)
+    principal_axes: np.ndarray  # (3, 3)
+
+    @property
+    def n_points(self) -> int:
+        return int(self.indices.shape[0])
+
+
+@dataclass(frozen=True, eq=False)
+class Segmentation:
+    """Result of `segment`: everything later stages need, and the frame it came from.
+
+    table_polygon: (K, 3) vertices of the table's 2D convex hull, on the plane, in order.
+    table_indices: indices of the table's inlier points in the frame.
+    objects: ordered as segmentation produced them (later stages rename them by position).
+    timings_s: seconds per stage, by stage name.
+    """
+
+    n_points: int
+    table: TablePlane
+    table_polygon: np.ndarray
+    table_indices: np.ndarray
+    objects: tuple[SegmentedObject, ...]
+    timings_s: Mapping[str, float] = field(default_factory=dict)
+    source: str = ""
+    frame_id: str = ""
+    stamp_s: float = 0.0
+
+    def labels(self) -> np.ndarray:
+        """(n_points,) int32 labels in the project convention (0 none, 1 table, 10(k+1))."""
+        out = np.zeros(self.n_points, dtype=np.int32)
+        out[self.table_indices] = 1
+        for k, obj in enumerate(self.objects):
+            out[obj.indices] = 10 * (k + 1)
+        return out
