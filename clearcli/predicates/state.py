@@ -1,0 +1,78 @@
+"""`SymbolicState`: what the planner reasons about, and the geometry the IK check needs.
+
+Contract between `predicates` (which builds it) and `plan` (which consumes it). Objects are
+named o0..oN-1 in a stable order by position, not by segmentation order.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Mapping
+
+import numpy as np
+
+from clearcli.perception.types import TablePlane
+
+DIRECTIONS: tuple[str, ...] = ("dir1", "dir2", "dir3", "dir4")
+
+# Fact tuples, all names as strings:
+#   ("on", a, b)                 a stands on b
+#   ("block_grasp", a, b)        a blocks grasping b
+#   ("block_dir", a, b, d)       a blocks pushing b along d
+#   ("ungraspable", o)           static: o's width across the closing direction is outside
+#                                the gripper's [closing, opening] range
+#   ("push_off_table", o, d)     static: pushing o along d would leave the table polygon
+#   ("ik_unfeasible_grasp", o), ("ik_unfeasible_dir", o, d)   added by the planner only
+Fact = tuple[str, ...]
+
+
+@dataclass(frozen=True, eq=False)
+class PushModel:
+    """One push direction of one object.
+
+    candidates: gripper pose sequences T_camera_gripper (4x4 each), one sequence per
+    half-turn of the symmetric gripper: [pre-push, push start, path points..., end, retreat].
+    """
+
+    direction: str
+    unit_vector: np.ndarray  # (3,) on the table plane, sensor frame
+    push_length_m: float
+    object_path: tuple[np.ndarray, ...]  # (3,) translations of the object along the push
+    candidates: tuple[tuple[np.ndarray, ...], ...]
+
+
+@dataclass(frozen=True, eq=False)
+class ObjectModel:
+    """An object as the predicates and the IK check see it (sensor frame)."""
+
+    name: str
+    segment_index: int  # index into Segmentation.objects
+    centroid: np.ndarray  # (3,)
+    principal_axes: np.ndarray  # (3, 3) rows, projected/orthonormalised: row 2 = table normal
+    extents_m: np.ndarray  # (3,) full sizes along principal_axes rows
+    hull_vertices: np.ndarray  # (V, 3) convex hull of the points and their table projection
+    hull_faces: np.ndarray  # (F, 3) int
+    # candidate grasp sequences, one per half-turn: [pre-grasp, grasp, lift]
+    grasp_candidates: tuple[tuple[np.ndarray, ...], ...]
+    pushes: Mapping[str, PushModel]
+
+
+@dataclass(frozen=True, eq=False)
+class SymbolicState:
+    objects: tuple[ObjectModel, ...]
+    table: TablePlane
+    table_polygon: np.ndarray  # (K, 3)
+    facts: frozenset[Fact]
+    # cost of each push action (object name, direction) -> positive int; 1 = unit costs
+    push_costs: Mapping[tuple[str, str], int] = field(default_factory=dict)
+    timings_s: Mapping[str, float] = field(default_factory=dict)
+    source: str = ""
+
+    def names(self) -> tuple[str, ...]:
+        return tuple(o.name for o in self.objects)
+
+    def by_name(self, name: str) -> ObjectModel:
+        for obj in self.objects:
+            if obj.name == name:
+                return obj
+        raise KeyError(name)
