@@ -17,6 +17,13 @@ from rich.console import Console
 
 from clearcli.errors import OutputError
 
+
+def _default_mode() -> int:
+    """The mode a plain open() would give: mkstemp's 0600 would surprise users."""
+    umask = os.umask(0)
+    os.umask(umask)
+    return 0o666 & ~umask
+
 JSON_SCHEMA_VERSION = 1
 
 # Results go to stdout; logs, tables meant for people and progress go to stderr when
@@ -58,6 +65,7 @@ def atomic_output(path: Path, mode: str = "wb") -> Iterator[Any]:
     try:
         with os.fdopen(fd, mode) as handle:
             yield handle
+        os.chmod(tmp, _default_mode())
         os.replace(tmp, path)
     except BaseException:
         with contextlib.suppress(OSError):
@@ -77,6 +85,7 @@ def atomic_path(path: Path) -> Iterator[Path]:
     os.close(fd)
     try:
         yield Path(tmp)
+        os.chmod(tmp, _default_mode())
         os.replace(tmp, path)
     except BaseException:
         with contextlib.suppress(OSError):

@@ -1,0 +1,363 @@
+"""Self-made tabletop scenes with known ground truth, for tests, fixtures and replays.
+
+Everything here is a frozen value and every builder is a pure function: moving or
+removing an object returns a new `Scene`.
+
+Frames:
+  table frame: origin at the centre of the table's top surface, z up, x to the right as
+  the camera sees it, y away from the camera. Object poses are given in it.
+  camera frame: the optical frame of the virtual Kinect (z forward, y down, x right).
+  `Scene.T_camera_table` maps table-frame points into the camera frame.
+
+Object identity: each object carries an ``object_id``; its ground-truth label is
+``10 * (object_id + 1)`` (the project's label convention). Builders number objects
+0..n-1, and `with_object_pose`/`without_object` keep the ids of the others, so an
+object keeps its label across the frames of a session (after a removal the labels have
+a gap). ``k`` in the editing functions is the index into ``scene.objects``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from typing import Union
+
+import numpy as np
+
+# Camera placement like the mOSD frames: the Kinect there is ~0.59 m above the table,
+# its optical axis 37-42 degrees below the horizontal. We take the middle of that.
+CAMERA_HEIGHT_M = 0.62
+CAMERA_PITCH_DEG = 42.0
+
+# Table top: large enough to fill the lower image like mOSD's cropped tables, small
+# enough that the camera sees all of it (keeps PCD fixtures small: misses are NaN rows).
+TABLE_SIZE_X_M = 0.80
+TABLE_SIZE_Y_M = 0.60
+
+# Graspable objects: the thesis's gripper closes on 3-7 cm widths.
+MIN_WIDTH_M = 0.03
+MAX_WIDTH_M = 0.07
+
+
+def camera_pose_T_camera_table(
+    height_m: float = CAMERA_HEIGHT_M, pitch_deg: float = CAMERA_PITCH_DEG
+) -> np.ndarray:
+    """T_camera_table (4x4) of a camera ``height_m`` above the table plane, in the plane
+    x = 0, looking along +y of the table, pitched ``pitch_deg`` below the horizontal so
+    that its optical axis hits the table-frame origin."""
+    pitch = math.radians(pitch_deg)
+    c, s = math.cos(pitch), math.sin(pitch)
+    # Camera axes written in the table frame (right-handed: x_c cross y_c = z_c).
+    x_c = np.array([1.0, 0.0, 0.0])
+    y_c = np.array([0.0, -s, -c])  # image "down": towards the near edge and the table
+    z_c = np.array([0.0, c, -s])  # optical axis
+    position = np.array([0.0, -height_m / math.tan(pitch), height_m])
+    T_table_camera = np.eye(4)
+    T_table_camera[:3, :3] = np.stack([x_c, y_c, z_c], axis=1)
+    T_table_camera[:3, 3] = position
+    return invert_transform(T_table_camera)
+
+
+def invert_transform(T: np.ndarray) -> np.ndarray:
+    """Inverse of a rigid 4x4 transform."""
+    R = T[:3, :3]
+    out = np.eye(4)
+    out[:3, :3] = R.T
+    out[:3, 3] = -R.T @ T[:3, 3]
+    return out
+
+
+# The transform of the camera every built-in scene uses.
+T_CAMERA_TABLE: np.ndarray = camera_pose_T_camera_table()
+T_CAMERA_TABLE.setflags(write=False)
+
+
+@dataclass(frozen=True)
+class Table:
+    """Rectangular table top, centred on the table-frame origin, sides along x and y."""
+
+    size_x_m: float = TABLE_SIZE_X_M
+    size_y_m: float = TABLE_SIZE_Y_M
+
+
+@dataclass(frozen=True)
+class Box:
+    """A box standing on the table (or on another object, ``base_z_m`` above the table).
+
+    Pose in the table frame: the centre of its bottom face at (x_m, y_m, base_z_m), its
+    local x axis turned ``yaw_rad`` from the table's x about z. Sizes are full lengths
+    along its local x, y and z.
+    """
+
+    object_id: int
+    size_x_m: float
+    size_y_m: float
+    size_z_m: float
+    x_m: float
+    y_m: float
+    yaw_rad: float = 0.0
+    base_z_m: float = 0.0
+
+    @property
+    def height_m(self) -> float:
+        return self.size_z_m
+
+    @property
+    def top_z_m(self) -> float:
+        return self.base_z_m + self.size_z_m
+
+    def footprint(self) -> np.ndarray:
+        """(4, 2) corners of its footprint on the table, counter-clockwise."""
+        hx, hy = self.size_x_m / 2, self.size_y_m / 2
+        local = np.array([[-hx, -hy], [hx, -hy], [hx, hy], [-hx, hy]])
+        return local @ _rot2(self.yaw_rad).T + np.array([self.x_m, self.y_m])
+
+
+@dataclass(frozen=True)
+class Cylinder:
+    """An upright cylinder; pose as for `Box` (yaw is kept only so that moves are uniform)."""
+
+    object_id: int
+    radius_m: float
+    height_m: float
+    x_m: float
+    y_m: float
+    yaw_rad: float = 0.0
+    base_z_m: float = 0.0
+
+    @property
+    def top_z_m(self) -> float:
+        return self.base_z_m + self.height_m
+
+    def footprint(self, n_sides: int = 32) -> np.ndarray:
+        """(n_sides, 2) polygon circumscribing its footprint circle, counter-clockwise."""
+        angles = np.arange(n_sides) * (2 * math.pi / n_sides)
+        r = self.radius_m / math.cos(math.pi / n_sides)  # circumscribed: never under-covers
+        return np.stack([self.x_m + r * np.cos(angles), self.y_m + r * np.sin(angles)], axis=1)
+
+
+SceneObject = Union[Box, Cylinder]
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A table, the objects on it, and the camera (its T_camera_table) that sees them.
+
+    ``T_camera_table_rows`` stores the 4x4 as nested tuples so the value stays hashable
+    and immutable; read it through ``T_camera_table``.
+    """
+
+    name: str
+    table: Table
+    objects: tuple[SceneObject, ...]
+    T_camera_table_rows: tuple[tuple[float, ...], ...]
+
+    @property
+    def T_camera_table(self) -> np.ndarray:
+        return np.array(self.T_camera_table_rows, dtype=float)
+
+    @property
+    def n_objects(self) -> int:
+        return len(self.objects)
+
+
+def _rows(T: np.ndarray) -> tuple[tuple[float, ...], ...]:
+    return tuple(tuple(float(v) for v in row) for row in np.asarray(T))
+
+
+def _rot2(yaw: float) -> np.ndarray:
+    c, s = math.cos(yaw), math.sin(yaw)
+    return np.array([[c, -s], [s, c]])
+
+
+def make_scene(
+    name: str,
+    objects: tuple[SceneObject, ...] | list[SceneObject],
+    table: Table | None = None,
+    T_camera_table: np.ndarray | None = None,
+) -> Scene:
+    return Scene(
+        name=name,
+        table=table or Table(),
+        objects=tuple(objects),
+        T_camera_table_rows=_rows(T_CAMERA_TABLE if T_camera_table is None else T_camera_table),
+    )
+
+
+# ---------------------------------------------------------------------------------------
+# Fixed scenes
+
+
+def isolated_box() -> Scene:
+    """One 5 x 4 x 8 cm box in the middle of the table, turned 30 degrees."""
+    return make_scene(
+        "isolated_box()",
+        [Box(0, 0.05, 0.04, 0.08, x_m=0.0, y_m=0.0, yaw_rad=math.radians(30.0))],
+    )
+
+
+def two_touching_boxes() -> Scene:
+    """Two boxes side by side along the table's x, faces in contact (zero gap)."""
+    a = Box(0, 0.06, 0.05, 0.10, x_m=-0.03, y_m=0.0)
+    b = Box(1, 0.04, 0.07, 0.06, x_m=0.02, y_m=0.01)  # a's +x face at x=0, b's -x face at x=0
+    return make_scene("two_touching_boxes()", [a, b])
+
+
+def box_on_box() -> Scene:
+    """A 4 x 3 x 4 cm box lying on top of an 8 x 6 x 5 cm box, turned 20 degrees on it."""
+    lower = Box(0, 0.08, 0.06, 0.05, x_m=0.0, y_m=0.02, yaw_rad=math.radians(-10.0))
+    upper = Box(
+        1, 0.04, 0.03, 0.04, x_m=0.005, y_m=0.015, yaw_rad=math.radians(10.0), base_z_m=lower.top_z_m
+    )
+    return make_scene("box_on_box()", [lower, upper])
+
+
+# ---------------------------------------------------------------------------------------
+# Random clutter
+
+
+# Where clutter goes: the middle of the table, in the arm's reach and away from the edges.
+CLUTTER_HALF_X_M = 0.22
+CLUTTER_HALF_Y_M = 0.15
+# Share of objects placed in contact with an earlier one (the thesis's hard case).
+CLUTTER_TOUCH_FRACTION = 0.4
+# Gap kept between objects that are meant not to touch (> the sensor's noise, so a
+# segmenter can be expected to separate them).
+CLUTTER_MIN_GAP_M = 0.015
+# Contact gap: bisection stops when the gap is below this (point clouds cannot tell it
+# from zero).
+CONTACT_TOLERANCE_M = 0.0002
+
+
+def polygons_overlap(a: np.ndarray, b: np.ndarray, clearance_m: float = 0.0) -> bool:
+    """Separating-axis test of two convex polygons, treating gaps < clearance as overlap."""
+    for poly in (a, b):
+        edges = np.roll(poly, -1, axis=0) - poly
+        normals = np.stack([edges[:, 1], -edges[:, 0]], axis=1)
+        normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+        pa = a @ normals.T  # (na, k)
+        pb = b @ normals.T
+        separated = (pa.max(axis=0) + clearance_m <= pb.min(axis=0)) | (
+            pb.max(axis=0) + clearance_m <= pa.min(axis=0)
+        )
+        if separated.any():
+            return False
+    return True
+
+
+def _random_object(rng: np.random.Generator, object_id: int) -> SceneObject:
+    height = float(rng.uniform(0.04, 0.15))
+    yaw = float(rng.uniform(-math.pi / 2, math.pi / 2))
+    if rng.random() < 0.3:
+        radius = float(rng.uniform(MIN_WIDTH_M, MAX_WIDTH_M)) / 2
+        return Cylinder(object_id, round(radius, 4), round(height, 4), 0.0, 0.0, round(yaw, 4))
+    sx, sy = rng.uniform(MIN_WIDTH_M, MAX_WIDTH_M, size=2)
+    # Some boxes are longer than a gripper's opening along one side only (still graspable
+    # across the other), like the cereal and tea boxes of the OSD scenes.
+    if rng.random() < 0.25:
+        sx = float(rng.uniform(0.08, 0.14))
+    return Box(object_id, round(float(sx), 4), round(float(sy), 4), round(height, 4), 0.0, 0.0, round(yaw, 4))
+
+
+def _in_region(poly: np.ndarray) -> bool:
+    return bool(
+        (np.abs(poly[:, 0]) <= CLUTTER_HALF_X_M).all() and (np.abs(poly[:, 1]) <= CLUTTER_HALF_Y_M).all()
+    )
+
+
+def _place_touching(obj: SceneObject, anchor: SceneObject, direction: float) -> SceneObject:
+    """``obj`` moved along ``direction`` (radians, from the anchor's centre) to the
+    smallest distance at which its footprint no longer overlaps the anchor's."""
+    ux, uy = math.cos(direction), math.sin(direction)
+    anchor_poly = anchor.footprint()
+
+    def at(d: float) -> SceneObject:
+        return replace(obj, x_m=anchor.x_m + d * ux, y_m=anchor.y_m + d * uy)
+
+    lo, hi = 0.0, 0.3
+    while hi - lo > CONTACT_TOLERANCE_M:
+        mid = (lo + hi) / 2
+        if polygons_overlap(at(mid).footprint(), anchor_poly):
+            lo = mid
+        else:
+            hi = mid
+    return at(hi)
+
+
+def clutter(n_objects: int, seed: int) -> Scene:
+    """``n_objects`` boxes and cylinders (3-7 cm wide, some boxes up to 14 cm long, 4-15 cm
+    tall) on the middle of the table, none overlapping, about 40 % of them in contact with
+    an earlier one. Deterministic from ``seed``."""
+    rng = np.random.default_rng(seed)
+    placed: list[SceneObject] = []
+    for object_id in range(n_objects):
+        obj = _random_object(rng, object_id)
+        for _attempt in range(500):
+            touch = bool(placed) and rng.random() < CLUTTER_TOUCH_FRACTION
+            if touch:
+                anchor = placed[int(rng.integers(len(placed)))]
+                # Touch face to face for boxes (same yaw) now and then: the hardest case.
+                if isinstance(anchor, Box) and isinstance(obj, Box) and rng.random() < 0.5:
+                    obj = replace(obj, yaw_rad=anchor.yaw_rad)
+                    direction = anchor.yaw_rad + float(rng.integers(4)) * math.pi / 2
+                else:
+                    direction = float(rng.uniform(-math.pi, math.pi))
+                candidate = _place_touching(obj, anchor, direction)
+                others = [p for p in placed if p is not anchor]
+            else:
+                candidate = replace(
+                    obj,
+                    x_m=float(rng.uniform(-CLUTTER_HALF_X_M, CLUTTER_HALF_X_M)),
+                    y_m=float(rng.uniform(-CLUTTER_HALF_Y_M, CLUTTER_HALF_Y_M)),
+                )
+                others = placed
+            poly = candidate.footprint()
+            if not _in_region(poly):
+                continue
+            if any(polygons_overlap(poly, p.footprint(), CLUTTER_MIN_GAP_M) for p in others):
+                continue
+            placed.append(candidate)
+            break
+        else:
+            raise ValueError(f"clutter({n_objects}, seed={seed}): no room for object {object_id}")
+    return make_scene(f"clutter({n_objects}, seed={seed})", placed)
+
+
+# ---------------------------------------------------------------------------------------
+# Editing (for replays: pushes move objects, picks remove them)
+
+
+def with_object_pose(scene: Scene, k: int, x_m: float, y_m: float, yaw_rad: float) -> Scene:
+    """The scene with object ``k`` (index into ``scene.objects``) at a new table pose."""
+    _check_index(scene, k)
+    moved = replace(scene.objects[k], x_m=float(x_m), y_m=float(y_m), yaw_rad=float(yaw_rad))
+    objects = scene.objects[:k] + (moved,) + scene.objects[k + 1 :]
+    return replace(scene, name=f"{scene.name}.move({k})", objects=objects)
+
+
+def without_object(scene: Scene, k: int) -> Scene:
+    """The scene with object ``k`` (index into ``scene.objects``) taken away."""
+    _check_index(scene, k)
+    objects = scene.objects[:k] + scene.objects[k + 1 :]
+    return replace(scene, name=f"{scene.name}.remove({k})", objects=objects)
+
+
+def _check_index(scene: Scene, k: int) -> None:
+    if not 0 <= k < len(scene.objects):
+        raise IndexError(f"{scene.name}: no object {k} (it has {len(scene.objects)})")
+
+
+def object_pose_T_table_object(obj: SceneObject) -> np.ndarray:
+    """T_table_object: the object frame has its origin at the bottom-face centre, z up."""
+    T = np.eye(4)
+    T[:2, :2] = _rot2(obj.yaw_rad)
+    T[:3, 3] = (obj.x_m, obj.y_m, obj.base_z_m)
+    return T
+
+
+def objects_overlap(a: SceneObject, b: SceneObject, clearance_m: float = 0.0) -> bool:
+    """Do the footprints of two objects on the same level overlap (gaps below
+    ``clearance_m`` count as overlap)? Objects at different heights (stacks) never do."""
+    if a.base_z_m >= b.top_z_m or b.base_z_m >= a.top_z_m:
+        return False
+    return polygons_overlap(a.footprint(), b.footprint(), clearance_m)
