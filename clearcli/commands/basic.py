@@ -27,12 +27,3 @@ def settings_cmd(settings: SettingsOpt = None) -> None:
     from clearcli.settings import load_settings, settings_to_toml
 
     typer.echo(settings_to_toml(load_settings(settings)), nl=False)
-
-
-def info_cmd(
-    file: Annotated[Path, typer.Argument(help="A .pcd or .mcap file.")],
-    json_out: Annotated[bool, typer.Option("--json", help="Machine-readable output.")] = False,
-) -> None:
-    """What a file holds: points, fields, organized shape, finite points, bounds; for
-    MCAP the channels, types, counts and time span."""
-    raise NotYetError("`clear info` is not implemented yet")

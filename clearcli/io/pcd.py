@@ -1,46 +1,293 @@
-"""PCD reading (pypcd4) into `Frame`. Minimal first version; hardened in the io issue."""
+"""PCD files <-> `Frame`.
+
+Reading: the header grammar is parsed by pypcd4 (`MetaData.parse_header`), but the header
+lines are collected and the data block is decoded here, with NumPy and python-lzf (the
+decompressor pypcd4 itself uses). pypcd4's own `PointCloud.from_path` is not used for the
+data because it trusts the header: a binary file shorter than declared silently yields
+fewer points, it stops looking for DATA after ten header lines, and it splits COUNT>1
+fields of compressed files into the wrong blocks. Here every size the header claims is
+checked against the file and any failure becomes an `InputError` naming the file.
+
+Writing: pypcd4 composes the header and the binary_compressed block (readable by PCL,
+open3d and this reader); the file appears atomically.
+"""
 
 from __future__ import annotations
 
+import os
+import struct
 from pathlib import Path
+from typing import BinaryIO
 
 import numpy as np
 
-from clearcli.errors import InputError
+from clearcli.errors import InputError, OutputError
 from clearcli.io.frames import Frame
+from clearcli.io.pointfields import frame_from_records, pack_rgb_float
+
+# A PCD header is ten short lines; anything without DATA in the first 64 KiB is not a PCD.
+_MAX_HEADER_BYTES = 1 << 16
+_HEADER_KEYS = ("VERSION", "FIELDS", "SIZE", "TYPE", "COUNT", "WIDTH", "HEIGHT", "VIEWPOINT", "POINTS", "DATA")
+_PCD_CODES = {("F", 4): "f4", ("F", 8): "f8", ("U", 1): "u1", ("U", 2): "u2", ("U", 4): "u4",
+              ("U", 8): "u8", ("I", 1): "i1", ("I", 2): "i2", ("I", 4): "i4", ("I", 8): "i8"}
+# pypcd4 renames the PCL padding field "_" to this prefix plus random letters.
+_PYPCD4_PADDING_PREFIX = "#$%&~~"
 
 
-def _unpack_rgb(values: np.ndarray) -> np.ndarray:
-    """Packed 0x00RRGGBB (as uint32 or float32 bits) -> (N, 3) uint8."""
-    packed = np.ascontiguousarray(values).view(np.uint32) if values.dtype != np.uint32 else values
-    rgb = np.empty((packed.shape[0], 3), dtype=np.uint8)
-    rgb[:, 0] = (packed >> 16) & 0xFF
-    rgb[:, 1] = (packed >> 8) & 0xFF
-    rgb[:, 2] = packed & 0xFF
-    return rgb
+def looks_like_pcd(head: bytes) -> bool:
+    """Whether a file's first bytes open a PCD header: a comment or a header keyword."""
+    stripped = head.lstrip()
+    if stripped.startswith(b"#ROSBAG"):  # a ROS 1 bag also opens with "#"
+        return False
+    return stripped.startswith(b"#") or any(stripped.startswith(k.encode()) for k in _HEADER_KEYS)
+
+
+def _read_header_lines(fp: BinaryIO, path: Path) -> tuple[list[str], int]:
+    """Non-comment header lines up to and including DATA, and the byte offset of the data."""
+    lines: list[str] = []
+    offset = 0
+    while True:
+        raw = fp.readline(_MAX_HEADER_BYTES)
+        if not raw:
+            if not lines and offset == 0:
+                raise InputError(f"{path}: empty file (0 bytes); expected a PCD file")
+            raise InputError(f"{path}: not a PCD file: the header has no DATA line (file truncated?)")
+        offset += len(raw)
+        if offset > _MAX_HEADER_BYTES:
+            raise InputError(f"{path}: not a PCD file: no DATA line in the first 64 KiB")
+        try:
+            line = raw.decode("ascii").strip()
+        except UnicodeDecodeError:
+            raise InputError(f"{path}: not a PCD file: binary bytes in the header") from None
+        if not line or line.startswith("#"):
+            continue
+        key = line.split(None, 1)[0].upper()
+        if not raw.endswith(b"\n") and key != "DATA":
+            # readline stopped without a newline: the file ends inside the header.
+            raise InputError(f"{path}: not a PCD file: the header has no DATA line (file truncated?)")
+        if key not in _HEADER_KEYS:
+            raise InputError(f"{path}: not a PCD file: unexpected header line {line[:40]!r}")
+        lines.append(line)
+        if key == "DATA":
+            return lines, offset
+
+
+def _parse_metadata(lines: list[str], path: Path):  # -> pypcd4.MetaData
+    import pypcd4
+
+    keys = {line.split(None, 1)[0].upper() for line in lines}
+    missing = [k for k in ("FIELDS", "SIZE", "TYPE", "WIDTH") if k not in keys]
+    if missing:
+        raise InputError(f"{path}: bad PCD header: no {', '.join(missing)} line")
+    # PCL accepts headers without COUNT/HEIGHT/POINTS (defaults 1s, 1, WIDTH*HEIGHT);
+    # pypcd4 wants them, so fill them in the same way.
+    fields_line = next(line for line in lines if line.upper().startswith("FIELDS"))
+    n_fields = len(fields_line.split()) - 1
+    if "COUNT" not in keys:
+        lines = lines[:-1] + ["COUNT " + " ".join(["1"] * n_fields)] + lines[-1:]
+    if "HEIGHT" not in keys:
+        lines = lines[:-1] + ["HEIGHT 1"] + lines[-1:]
+    try:
+        if "POINTS" not in keys:
+            width = int(next(line for line in lines if line.upper().startswith("WIDTH")).split()[1])
+            height = int(next(line for line in lines if line.upper().startswith("HEIGHT")).split()[1])
+            lines = lines[:-1] + [f"POINTS {width * height}"] + lines[-1:]
+        meta = pypcd4.MetaData.parse_header(lines)
+    except Exception as exc:  # pydantic.ValidationError, ValueError, IndexError
+        reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        if hasattr(exc, "errors"):
+            try:
+                first = exc.errors()[0]  # type: ignore[attr-defined]
+                reason = f"{'.'.join(str(p) for p in first['loc'])}: {first['msg']}"
+            except Exception:
+                pass
+        raise InputError(f"{path}: bad PCD header ({reason})") from None
+    lengths = {len(meta.fields), len(meta.size), len(meta.type), len(meta.count)}
+    if len(lengths) != 1:
+        raise InputError(
+            f"{path}: bad PCD header: {len(meta.fields)} FIELDS but {len(meta.size)} SIZE, "
+            f"{len(meta.type)} TYPE, {len(meta.count)} COUNT values"
+        )
+    for name, typ, size in zip(meta.fields, meta.type, meta.size):
+        if (typ, size) not in _PCD_CODES:
+            raise InputError(f"{path}: bad PCD header: field {name!r} has TYPE {typ} SIZE {size}")
+    if meta.points != meta.width * meta.height:
+        raise InputError(
+            f"{path}: bad PCD header: POINTS {meta.points} but WIDTH*HEIGHT = "
+            f"{meta.width}*{meta.height} = {meta.width * meta.height}"
+        )
+    return meta
+
+
+def _record_dtype(meta) -> np.dtype:
+    """Packed little-endian record dtype; COUNT>1 fields become sub-arrays, `_` padding `_pad<i>`."""
+    names, formats = [], []
+    for i, (name, typ, size, count) in enumerate(zip(meta.fields, meta.type, meta.size, meta.count)):
+        base = np.dtype("<" + _PCD_CODES[(typ, size)])
+        if name.startswith(_PYPCD4_PADDING_PREFIX) or name in names:
+            name = f"_pad{i}"
+        names.append(name)
+        formats.append(base if count == 1 else (base, (count,)))
+    return np.dtype({"names": names, "formats": formats})
+
+
+def _decode_data(fp: BinaryIO, path: Path, meta, dtype: np.dtype, data_bytes: int) -> np.ndarray:
+    import lzf
+
+    n = int(meta.points)
+    need = n * dtype.itemsize
+    encoding = str(meta.data.value)
+    if encoding == "ascii":
+        try:
+            records = np.loadtxt(fp, dtype=dtype, ndmin=1, comments="#")
+        except Exception as exc:
+            first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+            raise InputError(f"{path}: bad ASCII point data ({first[:120]})") from None
+        if records.shape[0] != n:
+            raise InputError(
+                f"{path}: the header declares {n} points but the ASCII data has {records.shape[0]} rows"
+            )
+        return records
+    if encoding == "binary":
+        if data_bytes < need:
+            raise InputError(
+                f"{path}: truncated PCD: the header declares {n} points of {dtype.itemsize} bytes "
+                f"({need} bytes) but the data holds {data_bytes}"
+            )
+        return np.frombuffer(fp.read(need), dtype=dtype, count=n)
+    # binary_compressed: sizes, then an LZF block holding each field's column in turn.
+    head = fp.read(8)
+    if len(head) < 8:
+        raise InputError(f"{path}: truncated PCD: the compressed block's size header is missing")
+    compressed_size, uncompressed_size = struct.unpack("<II", head)
+    if uncompressed_size != need:
+        raise InputError(
+            f"{path}: bad PCD: the header declares {n} points ({need} bytes) but the compressed "
+            f"block unpacks to {uncompressed_size} bytes"
+        )
+    if data_bytes - 8 < compressed_size:
+        raise InputError(
+            f"{path}: truncated PCD: the compressed block should hold {compressed_size} bytes, "
+            f"the file has {max(data_bytes - 8, 0)}"
+        )
+    if n == 0:
+        return np.empty(0, dtype=dtype)
+    try:
+        raw = lzf.decompress(fp.read(compressed_size), uncompressed_size)
+    except Exception as exc:
+        raise InputError(f"{path}: corrupt PCD: the compressed data cannot be unpacked ({exc})") from None
+    if raw is None or len(raw) != uncompressed_size:
+        raise InputError(f"{path}: corrupt PCD: the compressed data unpacks to the wrong size")
+    records = np.empty(n, dtype=dtype)
+    offset = 0
+    for name in dtype.names or ():
+        field = dtype.fields[name][0]  # type: ignore[index]
+        block = field.itemsize * n
+        base = field.base if field.shape else field
+        column = np.frombuffer(raw, dtype=base, count=block // base.itemsize, offset=offset)
+        records[name] = column.reshape((n, *field.shape))
+        offset += block
+    return records
 
 
 def read_pcd(path: Path) -> Frame:
-    import pypcd4
+    """Read a PCD file (ascii, binary or binary_compressed) into a `Frame`.
 
+    Organized clouds keep (height, width) and their NaN pixels in place. Colour comes from
+    `rgb` (float or uint32 bits) or `rgba`; every other field (label, normals, curvature,
+    intensity, ...) is kept in Frame.fields. Raises InputError on anything unreadable.
+    """
     path = Path(path)
     try:
-        cloud = pypcd4.PointCloud.from_path(path)
+        size = path.stat().st_size
+        fp = open(path, "rb")
     except FileNotFoundError:
         raise InputError(f"{path}: file not found") from None
-    except Exception as exc:  # pypcd4 raises many kinds on corrupt input
-        raise InputError(f"{path}: not a readable PCD file ({exc})") from None
-    meta = cloud.metadata
-    data = cloud.pc_data
-    names = list(data.dtype.names or ())
+    except IsADirectoryError:
+        raise InputError(f"{path}: is a directory, not a PCD file") from None
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read ({exc.strerror})") from None
+    with fp:
+        if size == 0:
+            raise InputError(f"{path}: empty file (0 bytes); expected a PCD file")
+        try:
+            lines, data_offset = _read_header_lines(fp, path)
+            meta = _parse_metadata(lines, path)
+            dtype = _record_dtype(meta)
+            records = _decode_data(fp, path, meta, dtype, size - data_offset)
+        except OSError as exc:
+            raise InputError(f"{path}: cannot read ({exc.strerror})") from None
+    names = [n for n in (records.dtype.names or ()) if not n.startswith("_pad")]
     if not {"x", "y", "z"} <= set(names):
-        raise InputError(f"{path}: the cloud has no x/y/z fields (fields: {', '.join(names)})")
-    points = np.stack([data["x"], data["y"], data["z"]], axis=1).astype(np.float32)
-    colors = None
-    for cname in ("rgb", "rgba"):
-        if cname in names:
-            colors = _unpack_rgb(data[cname])
-            break
-    extra = {n: np.asarray(data[n]) for n in names if n not in ("x", "y", "z", "rgb", "rgba")}
+        raise InputError(
+            f"{path}: the cloud has no x/y/z fields (fields: {' '.join(names) or 'none'}); "
+            "clear needs 3-D points"
+        )
     shape = (int(meta.height), int(meta.width)) if meta.height > 1 else None
-    return Frame(points=points, colors=colors, shape=shape, fields=extra, source=str(path))
+    skip = tuple(n for n in records.dtype.names or () if n.startswith("_pad"))
+    return frame_from_records(records, shape, source=str(path), skip=skip)
+
+
+def write_pcd(path: Path, frame: Frame, labels: np.ndarray | None = None) -> None:
+    """Write x y z (+ rgb, + label) as binary_compressed PCD, atomically.
+
+    Points keep their order and organisation (WIDTH/HEIGHT from frame.shape; unorganized
+    clouds get HEIGHT 1). Colours become PCL's packed-float `rgb`. The `label` field
+    (uint32) holds `labels` when given, else the frame's own "label" field when it has one.
+    The caller decides about overwriting (see commands.common.check_output_path).
+    """
+    import pypcd4
+
+    from clearcli.commands.common import atomic_path
+
+    path = Path(path)
+    n = frame.n_points
+    pts = np.asarray(frame.points, dtype=np.float32).reshape(n, 3)
+    arrays: list[np.ndarray] = [pts[:, 0], pts[:, 1], pts[:, 2]]
+    names: list[str] = ["x", "y", "z"]
+    types: list[type] = [np.float32, np.float32, np.float32]
+    if frame.colors is not None:
+        arrays.append(pack_rgb_float(frame.colors))
+        names.append("rgb")
+        types.append(np.float32)
+    if labels is None and "label" in frame.fields:
+        labels = np.asarray(frame.fields["label"])
+    if labels is not None:
+        labels = np.asarray(labels)
+        if labels.shape != (n,):
+            raise ValueError(f"labels must have shape ({n},), got {labels.shape}")
+        arrays.append(labels.astype(np.uint32))
+        names.append("label")
+        types.append(np.uint32)
+    height, width = frame.shape if frame.shape is not None else (1, n)
+    if height * width != n:
+        raise ValueError(f"frame.shape {frame.shape} does not hold {n} points")
+    cloud = pypcd4.PointCloud.from_points(arrays, names, types)
+    cloud.metadata = cloud.metadata.derive(width=width, height=height)
+    try:
+        with atomic_path(path) as tmp:
+            cloud.save(tmp, encoding=pypcd4.Encoding.BINARY_COMPRESSED)
+    except OSError as exc:
+        raise OutputError(f"{path}: cannot write ({exc.strerror or exc})") from None
+
+
+def pcd_header_fields(path: Path) -> dict[str, object]:
+    """The header of a PCD (fields, types, encoding) without decoding its points; for `info`."""
+    path = Path(path)
+    try:
+        with open(path, "rb") as fp:
+            lines, _ = _read_header_lines(fp, path)
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read ({exc.strerror})") from None
+    meta = _parse_metadata(lines, path)
+    return {
+        "encoding": str(meta.data.value),
+        "fields": [
+            {"name": "_" if f.startswith(_PYPCD4_PADDING_PREFIX) else f, "type": f"{t}{s}", "count": c}
+            for f, t, s, c in zip(meta.fields, meta.type, meta.size, meta.count)
+        ],
+        "width": int(meta.width),
+        "height": int(meta.height),
+        "viewpoint": [float(v) for v in meta.viewpoint],
+        "file_bytes": os.path.getsize(path),
+    }

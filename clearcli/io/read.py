@@ -1,25 +1,100 @@
-"""One way in: a path (PCD or MCAP) -> frames."""
+"""One way in: a path (PCD or MCAP, told apart by their first bytes) -> frames.
+
+Every frame-reading subcommand calls `read_frame(path, topic, index)`; `iter_frames` walks
+a whole file. Only ClearError subclasses leave these functions for anything a file can
+hold: InputError (exit 3) for unreadable input, PartialLogError (exit 9) when a log breaks
+after complete frames.
+
+Reading a frame whose points are all NaN is not an error (``clear info`` reports it); a
+stage that needs points calls `require_finite(frame)`, which raises SceneError (exit 4).
+"""
 
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Iterator
+from typing import Iterator, Literal
 
-from clearcli.errors import InputError
+from clearcli.errors import InputError, SceneError
 from clearcli.io.frames import Frame
+
+_SNIFF_BYTES = 64
+FileKind = Literal["pcd", "mcap"]
+
+
+def sniff(path: Path) -> FileKind:
+    """"pcd" or "mcap" from the file's first bytes (not its name); InputError otherwise."""
+    from clearcli.io.mcap import MCAP_MAGIC
+    from clearcli.io.pcd import looks_like_pcd
+
+    path = Path(path)
+    try:
+        with open(path, "rb") as fp:
+            head = fp.read(_SNIFF_BYTES)
+    except FileNotFoundError:
+        raise InputError(f"{path}: file not found") from None
+    except IsADirectoryError:
+        raise InputError(f"{path}: is a directory; expected a .pcd or .mcap file") from None
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read ({exc.strerror})") from None
+    if not head:
+        raise InputError(f"{path}: empty file (0 bytes); expected a PCD or MCAP file")
+    if head.startswith(MCAP_MAGIC):
+        return "mcap"
+    if head.startswith(b"#ROSBAG"):
+        raise InputError(
+            f"{path}: not an MCAP file: it is a ROS 1 bag; convert it with `mcap convert {path.name} out.mcap`"
+        )
+    if looks_like_pcd(head):
+        return "pcd"
+    if path.suffix.lower() == ".pcd":
+        raise InputError(f"{path}: not a PCD file (it does not start with a PCD header)")
+    raise InputError(f"{path}: not an MCAP file and not a PCD file (unrecognised first bytes)")
 
 
 def read_frame(path: Path, topic: str | None = None, index: int = 0) -> Frame:
-    """Frame ``index`` of the file at ``path`` (a PCD holds exactly one)."""
+    """Frame `index` (from 0) of the file at `path`; a PCD holds exactly one frame.
+
+    `topic` picks the point-cloud topic of an MCAP log holding several; ignored for PCD.
+    """
     path = Path(path)
-    if path.suffix.lower() == ".pcd":
+    kind = sniff(path)
+    if kind == "pcd":
         if index != 0:
-            raise InputError(f"{path}: a PCD file holds one frame; --frame {index} does not exist")
+            raise InputError(f"{path}: --frame {index} does not exist: a PCD file holds 1 frame (0)")
         from clearcli.io.pcd import read_pcd
 
         return read_pcd(path)
-    raise InputError(f"{path}: unsupported file type (expected .pcd or .mcap)")
+    from clearcli.io.mcap import read_mcap_frame
+
+    return read_mcap_frame(path, topic, index)
 
 
 def iter_frames(path: Path, topic: str | None = None) -> Iterator[Frame]:
-    yield read_frame(path, topic)
+    """Every frame of the file, one at a time (an MCAP log is streamed, never loaded whole)."""
+    path = Path(path)
+    kind = sniff(path)
+    if kind == "pcd":
+        from clearcli.io.pcd import read_pcd
+
+        yield read_pcd(path)
+        return
+    from clearcli.io.mcap import iter_mcap_frames
+
+    yield from iter_mcap_frames(path, topic)
+
+
+def require_finite(frame: Frame, min_points: int = 1) -> Frame:
+    """The frame itself when it holds at least `min_points` finite points; else SceneError.
+
+    For stages that need geometry; reading and `clear info` accept all-NaN frames.
+    """
+    n_finite = int(frame.finite_mask.sum()) if frame.n_points else 0
+    if n_finite < min_points:
+        where = frame.source or "the frame"
+        raise SceneError(
+            f"{where}: only {n_finite} finite points of {frame.n_points} (need {min_points}); "
+            "every pixel is invalid (NaN), so there is no scene to work on"
+            if n_finite == 0
+            else f"{where}: only {n_finite} finite points of {frame.n_points} (need {min_points})"
+        )
+    return frame

@@ -1,0 +1,231 @@
+"""`clear info FILE`: what a PCD or MCAP file holds, for people (a table) or scripts (--json).
+
+JSON schema (`clear info --json`), envelope {"schema": "clear.info", "version": 1, ...}:
+
+    file:    str, the path as given
+    format:  "pcd" | "mcap"
+    pcd:     (format "pcd" only) the header as written:
+             {encoding: "ascii"|"binary"|"binary_compressed",
+              fields: [{name, type ("F4", "U4", ...), count}], width, height,
+              viewpoint: [tx, ty, tz, qw, qx, qy, qz], file_bytes}
+    mcap:    (format "mcap" only)
+             {profile: str ("ros2", "ros1", "" ...), library: str,
+              indexed: bool (summary section with chunk index read),
+              complete: bool (false when the log breaks early), damage: str | null,
+              message_count: int, start_s: float | null, end_s: float | null,
+              duration_s: float | null,
+              channels: [{topic, schema, schema_encoding, message_encoding,
+                          message_count, point_cloud: bool}],
+              pointcloud_topics: [str],
+              pointcloud_topic: str | null (the topic frames are read from: --topic, or the
+                                only point-cloud topic; null when none or ambiguous),
+              frame_count: int | null (messages on pointcloud_topic)}
+    frame:   the frame read (PCD: its one frame; MCAP: frame --frame N of pointcloud_topic),
+             or null when the log has no (unambiguous) point-cloud topic:
+             {index: int, points: int, organized: bool, shape: [height, width] | null,
+              finite_points: int, has_colors: bool,
+              fields: [{name, dtype ("float32", "uint32", ...), count}] (x y z first,
+                       then "rgb" when colours exist, then every other field),
+              bounds_m: {min: [x, y, z], max: [x, y, z]} | null (finite points only),
+              stamp_s: float, frame_id: str}
+
+A log broken after complete frames is described, then the command exits 9.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated, Any, Optional
+
+import typer
+
+if TYPE_CHECKING:
+    from clearcli.io.frames import Frame
+
+
+def describe_frame(frame: "Frame", index: int = 0) -> dict[str, Any]:
+    """The `frame` object of the info schema."""
+    import numpy as np
+
+    finite = frame.finite_mask
+    n_finite = int(finite.sum())
+    fields: list[dict[str, Any]] = [{"name": a, "dtype": str(frame.points.dtype), "count": 1} for a in "xyz"]
+    if frame.colors is not None:
+        fields.append({"name": "rgb", "dtype": "uint8", "count": 3})
+    for name, values in frame.fields.items():
+        values = np.asarray(values)
+        fields.append({"name": name, "dtype": str(values.dtype), "count": int(np.prod(values.shape[1:], dtype=int))})
+    bounds = None
+    if n_finite:
+        pts = frame.points[finite]
+        bounds = {
+            "min": [round(float(v), 6) for v in pts.min(axis=0)],
+            "max": [round(float(v), 6) for v in pts.max(axis=0)],
+        }
+    return {
+        "index": index,
+        "points": frame.n_points,
+        "organized": frame.is_organized,
+        "shape": list(frame.shape) if frame.shape is not None else None,
+        "finite_points": n_finite,
+        "has_colors": frame.colors is not None,
+        "fields": fields,
+        "bounds_m": bounds,
+        "stamp_s": float(frame.stamp_s),
+        "frame_id": frame.frame_id,
+    }
+
+
+def describe_file(path: Path, topic: str | None = None, index: int = 0) -> dict[str, Any]:
+    """The info payload (without envelope) for `path`; raises ClearError on bad input.
+
+    A damaged MCAP log is described (mcap.complete false) without raising; the caller
+    decides what exit code that deserves.
+    """
+    from clearcli.io.read import read_frame, sniff
+
+    path = Path(path)
+    kind = sniff(path)
+    if kind == "pcd":
+        from clearcli.io.pcd import pcd_header_fields
+
+        header = pcd_header_fields(path)
+        frame = read_frame(path, topic, index)
+        return {"file": str(path), "format": "pcd", "pcd": header, "frame": describe_frame(frame, index)}
+
+    from clearcli.io.mcap import choose_topic, read_mcap_frame, read_summary
+
+    summary = read_summary(path)
+    candidates = summary.pointcloud_topics()
+    chosen: str | None = None
+    if topic is not None or len(candidates) == 1:
+        chosen = choose_topic(summary, topic)
+    start = summary.start_ns * 1e-9 if summary.start_ns is not None else None
+    end = summary.end_ns * 1e-9 if summary.end_ns is not None else None
+    mcap_part: dict[str, Any] = {
+        "profile": summary.profile,
+        "library": summary.library,
+        "indexed": summary.indexed,
+        "complete": summary.damage is None,
+        "damage": summary.damage,
+        "message_count": summary.message_count,
+        "start_s": start,
+        "end_s": end,
+        "duration_s": (end - start) if start is not None and end is not None else None,
+        "channels": [
+            {
+                "topic": ch.topic,
+                "schema": ch.schema_name,
+                "schema_encoding": ch.schema_encoding,
+                "message_encoding": ch.message_encoding,
+                "message_count": ch.message_count,
+                "point_cloud": ch.is_point_cloud,
+            }
+            for ch in summary.channels
+        ],
+        "pointcloud_topics": candidates,
+        "pointcloud_topic": chosen,
+        "frame_count": summary.count(chosen) if chosen is not None else None,
+    }
+    frame_part = None
+    if chosen is not None:
+        if summary.count(chosen) == 0 and index == 0:
+            frame_part = None  # the channel exists but holds no message yet
+        else:
+            frame_part = describe_frame(read_mcap_frame(path, chosen, index), index)
+    return {"file": str(path), "format": "mcap", "mcap": mcap_part, "frame": frame_part}
+
+
+def _fmt_int(n: int) -> str:
+    return f"{n:,}".replace(",", " ")
+
+
+def _frame_rows(frame: dict[str, Any]) -> list[tuple[str, str]]:
+    rows = []
+    shape = frame["shape"]
+    organized = f"organized: {shape[0]} rows x {shape[1]} columns" if shape else "unorganized"
+    rows.append(("points", f"{_fmt_int(frame['points'])} ({organized})"))
+    pct = 100.0 * frame["finite_points"] / frame["points"] if frame["points"] else 0.0
+    rows.append(("finite points", f"{_fmt_int(frame['finite_points'])} ({pct:.1f} %)"))
+    rows.append((
+        "fields",
+        " ".join(f["name"] + (f"[{f['count']}]" if f["count"] > 1 else "") + f":{f['dtype']}" for f in frame["fields"]),
+    ))
+    bounds = frame["bounds_m"]
+    if bounds:
+        rows.append((
+            "bounds (m)",
+            "  ".join(f"{a} [{lo:.3f}, {hi:.3f}]" for a, lo, hi in zip("xyz", bounds["min"], bounds["max"])),
+        ))
+    else:
+        rows.append(("bounds (m)", "none: no finite point"))
+    if frame["frame_id"] or frame["stamp_s"]:
+        rows.append(("frame_id / stamp", f"{frame['frame_id'] or '-'} / {frame['stamp_s']:.6f} s"))
+    return rows
+
+
+def _print_table(info: dict[str, Any]) -> None:
+    from rich.table import Table
+
+    from clearcli.commands.common import stdout
+
+    kv = Table(show_header=False, box=None, pad_edge=False)
+    kv.add_column(style="bold")
+    kv.add_column()
+    kv.add_row("file", info["file"])
+    if info["format"] == "pcd":
+        pcd = info["pcd"]
+        kv.add_row("format", f"PCD, DATA {pcd['encoding']}, {_fmt_int(pcd['file_bytes'])} bytes")
+        for key, value in _frame_rows(info["frame"]):
+            kv.add_row(key, value)
+        stdout.print(kv)
+        return
+    m = info["mcap"]
+    kv.add_row("format", f"MCAP, profile {m['profile'] or '(none)'}, {'indexed' if m['indexed'] else 'not indexed'}")
+    if m["start_s"] is not None:
+        kv.add_row("time span", f"{m['start_s']:.3f} .. {m['end_s']:.3f} s ({m['duration_s']:.3f} s)")
+    kv.add_row("messages", _fmt_int(m["message_count"]))
+    if not m["complete"]:
+        kv.add_row("damage", f"the log breaks {m['damage']}")
+    if m["pointcloud_topic"]:
+        n_frames = m["frame_count"]
+        kv.add_row("point cloud", f"{m['pointcloud_topic']} ({n_frames} frame{'s' if n_frames != 1 else ''})")
+    elif m["pointcloud_topics"]:
+        kv.add_row("point cloud", f"several topics ({', '.join(m['pointcloud_topics'])}): choose with --topic")
+    else:
+        kv.add_row("point cloud", "no point-cloud topic")
+    if info["frame"] is not None:
+        kv.add_row("frame", str(info["frame"]["index"]))
+        for key, value in _frame_rows(info["frame"]):
+            kv.add_row(key, value)
+    stdout.print(kv)
+    channels = Table(title="channels", title_justify="left")
+    for col in ("topic", "schema", "encoding", "messages", ""):
+        # Fold, not ellipsize: topic and type names are what people come here to read.
+        channels.add_column(col, justify="right" if col == "messages" else "left", overflow="fold")
+    for ch in m["channels"]:
+        mark = "<- point cloud" if ch["topic"] == m["pointcloud_topic"] else ("point cloud" if ch["point_cloud"] else "")
+        channels.add_row(ch["topic"], ch["schema"] or "-", ch["message_encoding"], _fmt_int(ch["message_count"]), mark)
+    stdout.print(channels)
+
+
+def info_cmd(
+    file: Annotated[Path, typer.Argument(help="A .pcd or .mcap file (told apart by content).")],
+    json_out: Annotated[bool, typer.Option("--json", help="Machine-readable output (schema clear.info).")] = False,
+    topic: Annotated[
+        Optional[str], typer.Option("--topic", help="MCAP: the point-cloud topic, when there are several.")
+    ] = None,
+    frame: Annotated[int, typer.Option("--frame", help="MCAP: which frame of the topic to describe (from 0).")] = 0,
+) -> None:
+    """What a file holds: points, fields, organized shape, finite points, bounds; for
+    MCAP also the profile, channels, message counts and time span."""
+    from clearcli.commands.common import print_json
+    from clearcli.errors import PartialLogError
+
+    info = describe_file(file, topic, frame)
+    if json_out:
+        print_json("info", info)
+    else:
+        _print_table(info)
+    if info["format"] == "mcap" and not info["mcap"]["complete"]:
+        raise PartialLogError(f"{file}: the log breaks {info['mcap']['damage']}; the figures above cover what precedes it")
