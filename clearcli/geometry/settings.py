@@ -8,7 +8,14 @@ from dataclasses import dataclass
 @dataclass(frozen=True)
 class GripperSettings:
     """The IRI parallel gripper (parameters.md). Frame: closing point at the origin,
-    approach along +z, closing direction along x."""
+    approach along +z, closing direction along x.
+
+    The collision model is two fingers and a base box (see `clearcli.geometry.gripper`):
+    the fingertips are ``closing_region_height_m / 2`` past the closing point, the fingers
+    ``finger_depth_m`` long, the base box behind them. ``gripper_height_m`` is the quoted
+    base-to-tip figure and is not used by the collision model.
+    Another gripper is a TOML file with a [gripper] table (``--settings FILE``).
+    """
 
     opening_width_m: float = 0.07
     closing_width_m: float = 0.03
@@ -34,5 +41,36 @@ class PushSettings:
 
 @dataclass(frozen=True)
 class PredicateSettings:
+    # th0 = th1 of thesis eq. 4.3; the deployed launch file used 20 (the thesis 100, for
+    # denser clouds than the mOSD crops)
     on_threshold_points: int = 20
+    # projected points within this distance of the other hull's border are not counted
+    # as inside it: coinciding edges of touching objects must not look like "on"
+    on_margin_m: float = 0.005
+    # beyond the thesis (see clearcli.predicates.relations.on_pairs): an object whose lowest
+    # points are less than this above the table stands on the table (Kinect noise ~5 mm)
+    on_min_lift_m: float = 0.01
+    # the lower object's points under the upper one's hull must be this much lower
+    on_height_gap_m: float = 0.01
+    # an object stands on the highest objects under it, those within this band of it
+    on_support_band_m: float = 0.02
     clearance_cost: bool = False  # original code's distance-based push cost
+    # parameters.md: cost 1 at d >= 0.05 m, else ceil(exp(100 (0.05 - d)))
+    clearance_cost_distance_m: float = 0.05
+    clearance_cost_gain_per_m: float = 100.0
+    # the grasp approach follows the third principal axis of the top surface only while it
+    # is within this angle of the table's downward normal; beyond it, straight down
+    # (a PCA dominated by a visible side must not tilt the gripper into the table)
+    max_grasp_tilt_deg: float = 30.0
+    # points this far below the object's top count as its top surface (Kinect noise ~5 mm)
+    top_surface_band_m: float = 0.01
+    # objects are modelled from the highest point of each footprint cell of this size:
+    # a few mm changes no fact, and the `on` counts become areas (cells), not densities
+    model_cell_m: float = 0.005
+    # fewer points than this: too little to model, left out with a warning
+    min_object_points: int = 10
+    # flatter objects are modelled this tall so that their hull is a solid
+    min_object_height_m: float = 0.005
+    # objects whose hulls already overlap (segmentation noise): a push along d counts as
+    # blocked by the other only when the other lies within this angle of d
+    touching_block_angle_deg: float = 60.0

@@ -55,6 +55,9 @@ class ObjectModel:
     # candidate grasp sequences, one per half-turn: [pre-grasp, grasp, lift]
     grasp_candidates: tuple[tuple[np.ndarray, ...], ...]
     pushes: Mapping[str, PushModel]
+    # added by the predicates stage (defaults keep older constructors valid)
+    grasp_width_m: float = 0.0  # size across the grasp's closing direction
+    height_m: float = 0.0  # top above the table
 
 
 @dataclass(frozen=True, eq=False)
@@ -67,6 +70,8 @@ class SymbolicState:
     push_costs: Mapping[tuple[str, str], int] = field(default_factory=dict)
     timings_s: Mapping[str, float] = field(default_factory=dict)
     source: str = ""
+    # segments left out of the model: (index into Segmentation.objects, reason)
+    skipped: tuple[tuple[int, str], ...] = ()
 
     def names(self) -> tuple[str, ...]:
         return tuple(o.name for o in self.objects)

@@ -1,0 +1,151 @@
+"""Parallel-gripper collision model built from named dimensions.
+
+Gripper frame: the closing point at the origin, approach along +z (the fingers point to
++z), closing direction along x (the fingers move along x), y = z x x.
+
+The model is three boxes: two fingers and the base behind them. Fingertips are at
+z = +closing_region_height / 2 so that the closing point sits in the middle of the
+closing region; each finger is ``finger_depth_m`` long (z), ``finger_width_m`` wide (y),
+``finger_thickness_m`` thick (x), its inner face at x = +/- width / 2 where width is the
+opening width (open) or the closing width (closed). The base is ``base_width_m`` (x) by
+``base_depth_m`` (y) by ``base_height_m`` (z) behind the fingers. The model is symmetric
+under a half-turn about z, so both half-turn grasp/push candidates occupy the same volume.
+
+Another gripper is a TOML file with a [gripper] table (the keys of `GripperSettings`):
+pass it with ``--settings FILE`` or load it with `load_gripper_settings`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from clearcli.errors import SettingsError
+from clearcli.geometry.settings import GripperSettings
+
+
+@dataclass(frozen=True, eq=False)
+class GripperBoxes:
+    """Axis-aligned boxes in the gripper frame: centres (B, 3) and half sizes (B, 3)."""
+
+    centers: np.ndarray
+    half_extents: np.ndarray
+
+    def corners(self) -> np.ndarray:
+        """(B, 8, 3) box corners in the gripper frame."""
+        signs = np.array(
+            [[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], dtype=float
+        )
+        return self.centers[:, None, :] + signs[None, :, :] * self.half_extents[:, None, :]
+
+    def transformed_corners(self, T_to_gripper: np.ndarray) -> np.ndarray:
+        """(B, 8, 3) corners in the frame of ``T_to_gripper``."""
+        c = self.corners()
+        return c @ T_to_gripper[:3, :3].T + T_to_gripper[:3, 3]
+
+
+@dataclass(frozen=True, eq=False)
+class GripperModel:
+    settings: GripperSettings
+    open_boxes: GripperBoxes
+    closed_boxes: GripperBoxes
+
+    @property
+    def fingertip_z_m(self) -> float:
+        """z of the fingertips in the gripper frame (past the closing point)."""
+        return self.settings.closing_region_height_m / 2.0
+
+    def finger_half_extent_along_x(self, closed: bool = True) -> float:
+        """Half size of the finger pair along the closing direction."""
+        s = self.settings
+        width = s.closing_width_m if closed else s.opening_width_m
+        return width / 2.0 + s.finger_thickness_m
+
+    def boxes(self, closed: bool) -> GripperBoxes:
+        return self.closed_boxes if closed else self.open_boxes
+
+    def mesh(self, closed: bool, T: np.ndarray | None = None) -> Any:
+        """trimesh.Trimesh of the gripper (open or closed), optionally moved by T."""
+        import trimesh
+
+        boxes = self.boxes(closed)
+        parts = []
+        for center, half in zip(boxes.centers, boxes.half_extents):
+            transform = np.eye(4)
+            transform[:3, 3] = center
+            parts.append(trimesh.creation.box(extents=2.0 * half, transform=transform))
+        mesh = trimesh.util.concatenate(parts)
+        if T is not None:
+            mesh.apply_transform(T)
+        return mesh
+
+    def fcl_objects(self, closed: bool, T: np.ndarray) -> list[Any]:
+        """python-fcl collision objects of the gripper at pose T (frame of T)."""
+        import fcl
+
+        boxes = self.boxes(closed)
+        out = []
+        R = T[:3, :3]
+        for center, half in zip(boxes.centers, boxes.half_extents):
+            shape = fcl.Box(*(2.0 * half))
+            out.append(fcl.CollisionObject(shape, fcl.Transform(R, R @ center + T[:3, 3])))
+        return out
+
+
+def _boxes(s: GripperSettings, width: float) -> GripperBoxes:
+    tip = s.closing_region_height_m / 2.0
+    finger_z = tip - s.finger_depth_m / 2.0
+    finger_x = width / 2.0 + s.finger_thickness_m / 2.0
+    base_z = tip - s.finger_depth_m - s.base_height_m / 2.0
+    centers = np.array([[finger_x, 0.0, finger_z], [-finger_x, 0.0, finger_z], [0.0, 0.0, base_z]])
+    finger_half = [s.finger_thickness_m / 2.0, s.finger_width_m / 2.0, s.finger_depth_m / 2.0]
+    base_half = [s.base_width_m / 2.0, s.base_depth_m / 2.0, s.base_height_m / 2.0]
+    half = np.array([finger_half, finger_half, base_half])
+    return GripperBoxes(centers=centers, half_extents=half)
+
+
+def check_gripper_settings(s: GripperSettings, where: str = "[gripper]") -> None:
+    """Reject dimensions that cannot describe a gripper (one-line SettingsError)."""
+    for f in dataclasses.fields(s):
+        value = getattr(s, f.name)
+        if not value > 0.0:
+            raise SettingsError(f"settings: {where} {f.name} must be positive, got {value!r}")
+    if s.closing_width_m > s.opening_width_m:
+        raise SettingsError(
+            f"settings: {where} closing_width_m ({s.closing_width_m}) exceeds "
+            f"opening_width_m ({s.opening_width_m})"
+        )
+
+
+def gripper_model(s: GripperSettings | None = None) -> GripperModel:
+    """The open and closed gripper models for the given dimensions (default: IRI)."""
+    s = s or GripperSettings()
+    check_gripper_settings(s)
+    return GripperModel(
+        settings=s, open_boxes=_boxes(s, s.opening_width_m), closed_boxes=_boxes(s, s.closing_width_m)
+    )
+
+
+def load_gripper_settings(path: Path) -> GripperSettings:
+    """GripperSettings from a TOML file: a [gripper] table, or the keys at top level.
+    Missing keys keep the IRI defaults; unknown keys are an error."""
+    path = Path(path)
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise SettingsError(f"{path}: gripper file not found") from None
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+        raise SettingsError(f"{path}: cannot read gripper TOML ({exc})") from None
+    table = data.get("gripper", data)
+    if not isinstance(table, dict):
+        raise SettingsError(f"{path}: [gripper] must be a table of keys")
+    from clearcli.settings import settings_from_dict
+
+    s = settings_from_dict({"gripper": table}).gripper
+    check_gripper_settings(s, where=f"{path} [gripper]")
+    return s

@@ -1,0 +1,397 @@
+"""Object models for the predicates: hulls, principal directions, oriented extents.
+
+All geometry is built in a table-aligned frame ``{table}`` (see `TableFrame`): z along the
+table normal (up), x along the sensor's viewing direction projected onto the table (away
+from the camera), origin under the sensor. Heights are then plain z, footprints plain xy.
+Results handed to other stages are transformed back to the sensor frame.
+
+An object's solid (thesis 4.2, "Objects Modelling") is the convex hull of its points
+together with their projection onto the table plane: the camera sees mostly the top and
+one or two sides, the projection fills in the hidden sides.
+
+Principal directions: PCA of the object's footprint (its projected convex hull, as a
+uniform region; the second moments of the polygon), which is the projection of the
+object onto the table independent of how densely each face was sampled.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from clearcli.perception.types import TablePlane
+
+log = logging.getLogger(__name__)
+
+
+def _apply(T: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """T applied to (N, 3) points (or one (3,) point). Written per column: an (N, 3) x
+    (3, 3) matmul goes through BLAS, whose threads make it slower, not faster, here."""
+    p = np.asarray(points)  # float32 input is promoted by the float64 transform
+    if p.ndim == 1:
+        return T[:3, :3] @ p + T[:3, 3]
+    R = T[:3, :3]
+    return p[:, 0:1] * R[:, 0] + p[:, 1:2] * R[:, 1] + p[:, 2:3] * R[:, 2] + T[:3, 3]
+
+
+@dataclass(frozen=True, eq=False)
+class TableFrame:
+    """The table-aligned frame. ``T_table_camera`` maps sensor points to table points."""
+
+    T_table_camera: np.ndarray
+    T_camera_table: np.ndarray
+
+    @staticmethod
+    def from_plane(table: TablePlane) -> "TableFrame":
+        n = np.asarray(table.normal, dtype=float)
+        n = n / np.linalg.norm(n)
+        # the sensor's forward axis, flattened onto the table: "away from the camera"
+        x = np.array([0.0, 0.0, 1.0]) - n[2] * n
+        if np.linalg.norm(x) < 0.1:  # camera looking straight down: image "up" instead
+            x = np.array([0.0, -1.0, 0.0]) - (-n[1]) * n
+        x = x / np.linalg.norm(x)
+        y = np.cross(n, x)
+        R_camera_table = np.column_stack([x, y, n])
+        origin = -float(table.offset) * n / float(n @ n)  # the sensor origin's foot point
+        T_camera_table = np.eye(4)
+        T_camera_table[:3, :3] = R_camera_table
+        T_camera_table[:3, 3] = origin
+        T_table_camera = np.eye(4)
+        T_table_camera[:3, :3] = R_camera_table.T
+        T_table_camera[:3, 3] = -R_camera_table.T @ origin
+        return TableFrame(T_table_camera=T_table_camera, T_camera_table=T_camera_table)
+
+    def to_table(self, points_camera: np.ndarray) -> np.ndarray:
+        return _apply(self.T_table_camera, points_camera)
+
+    def to_camera(self, points_table: np.ndarray) -> np.ndarray:
+        return _apply(self.T_camera_table, points_table)
+
+    def vector_to_camera(self, vectors_table: np.ndarray) -> np.ndarray:
+        return np.asarray(vectors_table, dtype=float) @ self.T_camera_table[:3, :3].T
+
+    def pose_to_camera(self, T_table_x: np.ndarray) -> np.ndarray:
+        """T_camera_x from T_table_x."""
+        return self.T_camera_table @ T_table_x
+
+
+@dataclass(frozen=True, eq=False)
+class ObjectGeometry:
+    """One object's model in the table frame.
+
+    axes2d: (2, 2) rows: first and second principal direction on the table (unit; row 1 is
+            row 0 turned +90 deg about the table normal); the sign rule is in `_fix_sign`.
+    center: (3,) centre of the oriented box (footprint centre, half height).
+    extents: (3,) full sizes along axes2d[0], axes2d[1] and the normal.
+    """
+
+    segment_index: int
+    n_points: int  # points given (the model keeps one per footprint cell)
+    centroid: np.ndarray  # (3,) mean of the points
+    hull_vertices: np.ndarray  # (V, 3)
+    hull_faces: np.ndarray  # (F, 3) int, outward
+    footprint: np.ndarray  # (K, 2) counter-clockwise convex polygon
+    projected_xy: np.ndarray  # (M, 2) the points projected onto the table, one per cell
+    column_heights: np.ndarray  # (M,) height of the highest point of each of those cells
+    axes2d: np.ndarray
+    center: np.ndarray
+    extents: np.ndarray
+    top_height_m: float
+    bottom_height_m: float  # 2nd percentile of the points' heights: > 0 when lifted
+    top_centroid: np.ndarray  # (3,) centroid of the top-surface points
+    top_normal: np.ndarray  # (3,) third principal axis of the top surface, pointing up
+    aabb: np.ndarray  # (2, 3) min, max of the hull
+    fcl_object: Any = None  # fcl.CollisionObject of the hull
+
+    @property
+    def principal_axes3(self) -> np.ndarray:
+        """(3, 3) rows: first, second principal direction on the table, table normal."""
+        a = np.zeros((3, 3))
+        a[:2, :2] = self.axes2d
+        a[2, 2] = 1.0
+        return a
+
+
+class DegenerateObject(ValueError):
+    """An object that cannot be given a solid model (too few points, a line)."""
+
+
+def _hull(points: np.ndarray) -> Any:
+    from scipy.spatial import ConvexHull, QhullError
+
+    try:
+        return ConvexHull(points)
+    except QhullError:
+        try:
+            return ConvexHull(points, qhull_options="QJ")
+        except QhullError as exc:
+            raise DegenerateObject(f"no convex hull ({str(exc).splitlines()[0]})") from None
+
+
+def fcl_convex(vertices: np.ndarray, faces: np.ndarray | None = None) -> Any:
+    """fcl.CollisionObject of a convex polytope (identity pose).
+
+    Without ``faces`` the shape carries one dummy triangle: fcl's GJK-based collision and
+    distance queries on a Convex only use its vertices (support function), and handing
+    python-fcl the faces costs ~0.3 ms per solid."""
+    import fcl
+
+    verts = np.ascontiguousarray(vertices, dtype=float)
+    if faces is None:
+        return fcl.CollisionObject(fcl.Convex(verts, 1, np.array([3, 0, 1, 2])), fcl.Transform())
+    flat = np.hstack([np.full((len(faces), 1), 3, dtype=np.int64), faces.astype(np.int64)]).ravel()
+    return fcl.CollisionObject(fcl.Convex(verts, len(faces), flat), fcl.Transform())
+
+
+def convex_solid(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices (V, 3) and outward faces (F, 3) of the convex hull of ``points``."""
+    hull = _hull(points)
+    used = hull.vertices
+    remap = np.full(len(points), -1, dtype=np.int64)
+    remap[used] = np.arange(len(used))
+    faces = remap[hull.simplices]
+    vertices = points[used]
+    # qhull's simplices are not consistently oriented: turn each face outward
+    inside = vertices.mean(axis=0)
+    a, b, c = vertices[faces[:, 0]], vertices[faces[:, 1]], vertices[faces[:, 2]]
+    normal = np.cross(b - a, c - a)
+    flip = np.einsum("ij,ij->i", normal, a - inside) < 0
+    faces[flip] = faces[flip][:, ::-1]
+    return vertices, faces
+
+
+def _polygon_moments(poly: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
+    """Area, centroid (2,) and second central moments (2, 2) of a CCW polygon."""
+    x, y = poly[:, 0], poly[:, 1]
+    xn, yn = np.roll(x, -1), np.roll(y, -1)
+    cross = x * yn - xn * y
+    area = cross.sum() / 2.0
+    if abs(area) < 1e-12:
+        raise DegenerateObject("footprint has no area (the points lie on a line)")
+    cx = ((x + xn) * cross).sum() / (6.0 * area)
+    cy = ((y + yn) * cross).sum() / (6.0 * area)
+    ixx = ((x * x + x * xn + xn * xn) * cross).sum() / 12.0
+    iyy = ((y * y + y * yn + yn * yn) * cross).sum() / 12.0
+    ixy = ((x * yn + 2 * x * y + 2 * xn * yn + xn * y) * cross).sum() / 24.0
+    c = np.array([cx, cy])
+    cov = np.array([[ixx, ixy], [ixy, iyy]]) / area - np.outer(c, c)
+    return float(area), c, cov
+
+
+def _fix_sign(axis: np.ndarray) -> np.ndarray:
+    """The documented sign rule for dir1: the first principal direction points away from
+    the camera (positive table x); exactly sideways, it points to table +y."""
+    if axis[0] < -1e-9 or (abs(axis[0]) <= 1e-9 and axis[1] < 0):
+        return -axis
+    return axis
+
+
+def _quantile(values: np.ndarray, fraction: float) -> float:
+    """A plain order statistic (np.percentile costs ~0.1 ms of overhead per call)."""
+    k = min(len(values) - 1, max(0, int(round(fraction * (len(values) - 1)))))
+    return float(np.partition(values, k)[k])
+
+
+def column_tops(q: np.ndarray, cell_m: float) -> np.ndarray:
+    """The highest point (table frame) of each ``cell_m`` square of the footprint."""
+    if cell_m <= 0.0 or len(q) == 0:
+        return q
+    cells = np.floor(q[:, :2] / cell_m).astype(np.int64)
+    cells -= cells.min(axis=0)
+    key = cells[:, 0] * (int(cells[:, 1].max()) + 1) + cells[:, 1]
+    # highest z per cell without sorting all points (ufunc.at is linear)
+    top = np.full(int(key.max()) + 1, -np.inf)
+    np.maximum.at(top, key, q[:, 2])
+    idx = np.nonzero(q[:, 2] >= top[key])[0]
+    first = np.full(len(top), len(q), dtype=np.int64)
+    np.minimum.at(first, key[idx], idx)  # one per cell among ties
+    return q[first[first < len(q)]]
+
+
+@dataclass(frozen=True, eq=False)
+class Columns:
+    """What the model needs of an object's points (table frame): their number, centroid,
+    lowest heights (2nd percentile) and the highest point of each footprint cell."""
+
+    n_points: int
+    centroid: np.ndarray
+    bottom_height_m: float
+    tops: np.ndarray  # (M, 3)
+
+
+def object_columns(
+    points_camera: np.ndarray, groups: list[np.ndarray], frame: TableFrame, cell_m: float
+) -> list[Columns | None]:
+    """`Columns` of each group of point indices, in one vectorised pass over all of them
+    (per-object NumPy calls cost more than the arithmetic here). None for a group without
+    finite points."""
+    sizes = np.array([len(g) for g in groups], dtype=np.int64)
+    if len(groups) == 0 or sizes.sum() == 0:
+        return [None] * len(groups)
+    idx = np.concatenate([np.asarray(g, dtype=np.int64) for g in groups])
+    owner = np.repeat(np.arange(len(groups)), sizes)
+    pts = np.asarray(points_camera)[idx]  # stays float32 until the transform
+    finite = np.isfinite(pts).all(axis=1)
+    if not finite.all():
+        pts, owner = pts[finite], owner[finite]
+    q = frame.to_table(pts)
+    q[:, 2] = np.maximum(q[:, 2], 0.0)  # noise below the table: the solid starts at the table
+    counts = np.bincount(owner, minlength=len(groups))
+    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    present = counts > 0
+    # cell keys, dense per object (its own bounding grid), objects one after the other
+    cells = np.floor(q[:, :2] * (1.0 / cell_m)).astype(np.int64)
+    lo = np.zeros((len(groups), 2), dtype=np.int64)
+    hi = np.zeros((len(groups), 2), dtype=np.int64)
+    lo[present] = np.minimum.reduceat(cells, starts[present], axis=0)
+    hi[present] = np.maximum.reduceat(cells, starts[present], axis=0)
+    span = hi - lo + 1
+    size = np.where(present, span[:, 0] * span[:, 1], 0)
+    offset = np.concatenate([[0], np.cumsum(size)[:-1]])
+    local = cells - lo[owner]
+    key = offset[owner] + local[:, 0] * span[owner, 1] + local[:, 1]
+    top = np.full(int(size.sum()), -np.inf)
+    np.maximum.at(top, key, q[:, 2])
+    cand = np.nonzero(q[:, 2] >= top[key])[0]
+    # one point per cell (the first of ties); reading the dense per-cell array in order
+    # sorts them by key, that is by object (np.unique would sort, ten times slower)
+    first = np.full(len(top), len(q), dtype=np.int64)
+    np.minimum.at(first, key[cand], cand)
+    keep = first[first < len(q)]
+    cut = np.searchsorted(owner[keep], np.arange(len(groups) + 1))
+    out: list[Columns | None] = []
+    for k in range(len(groups)):
+        if not present[k]:
+            out.append(None)
+            continue
+        zs = q[starts[k] : starts[k] + counts[k], 2]
+        out.append(
+            Columns(
+                n_points=int(counts[k]),
+                centroid=q[starts[k] : starts[k] + counts[k]].mean(axis=0),
+                bottom_height_m=_quantile(zs, 0.02),
+                tops=q[keep[cut[k] : cut[k + 1]]],
+            )
+        )
+    return out
+
+
+def build_object(
+    points_camera: np.ndarray,
+    frame: TableFrame,
+    segment_index: int,
+    *,
+    min_points: int = 10,
+    min_height_m: float = 0.005,
+    top_band_m: float = 0.01,
+    cell_m: float = 0.005,
+    with_fcl: bool = True,
+) -> ObjectGeometry:
+    """Model one object from its points (sensor frame). Raises DegenerateObject."""
+    pts = np.asarray(points_camera, dtype=float)
+    cols = object_columns(pts, [np.arange(len(pts))], frame, cell_m)[0]
+    if cols is None:
+        raise DegenerateObject(f"0 points (fewer than {min_points})")
+    return build_from_columns(
+        cols, segment_index, min_points=min_points, min_height_m=min_height_m, top_band_m=top_band_m,
+        cell_m=cell_m, with_fcl=with_fcl,
+    )
+
+
+def build_from_columns(
+    cols: Columns,
+    segment_index: int,
+    *,
+    min_points: int = 10,
+    min_height_m: float = 0.005,
+    top_band_m: float = 0.01,
+    cell_m: float = 0.005,
+    with_fcl: bool = True,
+) -> ObjectGeometry:
+    """Model one object from its `Columns`. Raises DegenerateObject."""
+    from scipy.spatial import ConvexHull, QhullError
+
+    if cols.n_points < min_points:
+        raise DegenerateObject(f"{cols.n_points} points (fewer than {min_points})")
+    # one point per footprint cell, the highest: a point under another one of its column
+    # is inside the solid anyway, and the cell counts measure areas independent of how
+    # densely the camera sampled each face
+    q = cols.tops
+    centroid, bottom = cols.centroid, cols.bottom_height_m
+    if len(q) < 3:
+        raise DegenerateObject("footprint has no area (the points lie on a line)")
+    xy = q[:, :2]
+    try:
+        fp_hull = ConvexHull(xy)
+    except QhullError:
+        raise DegenerateObject("footprint has no area (the points lie on a line)") from None
+    footprint = xy[fp_hull.vertices]  # scipy: counter-clockwise in 2D
+    rim = q[fp_hull.vertices]  # the column tops on the footprint's border
+    area, _, cov = _polygon_moments(footprint)
+    if area < 1e-6:  # under 1 cm^2
+        raise DegenerateObject(f"footprint of {area * 1e4:.2f} cm^2")
+    evals, evecs = np.linalg.eigh(cov)
+    a1 = _fix_sign(evecs[:, int(np.argmax(evals))])
+    a2 = np.array([-a1[1], a1[0]])
+    axes2d = np.vstack([a1, a2])
+
+    # top surface: its centroid (grasp point) and normal (grasp approach)
+    top = _quantile(q[:, 2], 0.99)
+    top = max(top, min_height_m)
+    band = q[q[:, 2] >= top - top_band_m]
+    if len(band) < 3:
+        band = q
+    top_centroid = band.mean(axis=0)
+    top_normal = np.array([0.0, 0.0, 1.0])
+    if len(band) >= 10:
+        centred = band - top_centroid
+        _, _, vt = np.linalg.svd(centred, full_matrices=False)
+        nrm = vt[2]
+        top_normal = nrm if nrm[2] >= 0 else -nrm
+
+    # solid: the column tops (on cells twice as coarse: the hull does not need every one)
+    # plus the tops on the footprint's border (exact where the sides are vertical) plus
+    # the footprint on the table
+    upper = np.vstack([column_tops(q, 2.0 * cell_m), rim])
+    if float(q[:, 2].max()) < min_height_m:  # flat: give it a thickness
+        upper[:, 2] = min_height_m
+    lower = np.column_stack([footprint, np.zeros(len(footprint))])
+    vertices, faces = convex_solid(np.vstack([upper, lower]))
+
+    s1 = vertices[:, :2] @ a1
+    s2 = vertices[:, :2] @ a2
+    zmax = float(vertices[:, 2].max())
+    lo = np.array([s1.min(), s2.min(), 0.0])
+    hi = np.array([s1.max(), s2.max(), zmax])
+    mid = (lo + hi) / 2.0
+    center = np.array([*(mid[0] * a1 + mid[1] * a2), mid[2]])
+    aabb = np.vstack([vertices.min(axis=0), vertices.max(axis=0)])
+    return ObjectGeometry(
+        segment_index=segment_index,
+        n_points=cols.n_points,
+        centroid=centroid,
+        hull_vertices=vertices,
+        hull_faces=faces,
+        footprint=footprint,
+        projected_xy=xy,
+        column_heights=q[:, 2].copy(),
+        axes2d=axes2d,
+        center=center,
+        extents=hi - lo,
+        top_height_m=zmax,
+        bottom_height_m=bottom,
+        top_centroid=top_centroid,
+        top_normal=top_normal,
+        aabb=aabb,
+        fcl_object=fcl_convex(vertices) if with_fcl else None,
+    )
+
+
+def hull_mesh(vertices: np.ndarray, faces: np.ndarray) -> Any:
+    """trimesh.Trimesh of a hull (for rendering and export)."""
+    import trimesh
+
+    return trimesh.Trimesh(vertices=vertices, faces=faces, process=False)

@@ -1,0 +1,142 @@
+"""The PDDL domain (a package data file) and the problem writer.
+
+The canonical domain is ``clearcli/data/domain.pddl`` (installed with the package as
+package data); ``pddl/domain.pddl`` at the top of the source tree is a symbolic link to it,
+so the two cannot drift apart. `domain_text()` reads it with importlib.resources, which
+works from a source checkout and from an installed wheel alike.
+
+Problem files: objects o0..oN-1 (the `SymbolicState` names, stable by position) with a
+comment per object giving its centroid; the initial state holds the state's facts, any
+extra facts (the planner's ik_unfeasible_* facts), and, when the state carries clearance
+costs, (= (push-cost o d) c) for every object and direction (use `domain_for(state)` as
+the domain then); the goal is every goal
+object removed, (and) when there is none (already true).
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from typing import Iterable, Sequence
+
+from clearcli.errors import InputError
+from clearcli.predicates.state import DIRECTIONS, Fact, SymbolicState
+
+DOMAIN_NAME = "table-clearing"
+DOMAIN_RESOURCE = "data/domain.pddl"
+
+# name -> arity (with the direction where it has one), for checking facts before writing
+FACT_ARITY: dict[str, int] = {
+    "on": 2,
+    "block_grasp": 2,
+    "block_dir": 3,
+    "removed": 1,
+    "ik_unfeasible_grasp": 1,
+    "ik_unfeasible_dir": 2,
+    "ungraspable": 1,
+    "push_off_table": 2,
+}
+
+
+_FUNCTIONS_UNIT = "  (:functions\n    (total-cost) - number)"
+_FUNCTIONS_COST = "  (:functions\n    (total-cost) - number\n    (push-cost ?o - obj ?d - direction) - number)"
+_PUSH_COST_UNIT = "      (not (ik_unfeasible_grasp ?o))\n      (increase (total-cost) 1)))"
+_PUSH_COST_VAR = "      (not (ik_unfeasible_grasp ?o))\n      (increase (total-cost) (push-cost ?o ?d))))"
+
+
+@lru_cache(maxsize=1)
+def _domain_file() -> str:
+    from importlib import resources
+
+    try:
+        return (resources.files("clearcli") / DOMAIN_RESOURCE).read_text(encoding="utf-8")
+    except (FileNotFoundError, OSError) as exc:  # a broken installation
+        raise InputError(f"the PDDL domain (clearcli/{DOMAIN_RESOURCE}) is missing: reinstall clear ({exc})") from None
+
+
+def domain_text(clearance_costs: bool = False) -> str:
+    """The domain: the file as shipped (unit costs), or with ``clearance_costs`` the
+    variant whose push costs (push-cost ?o ?d) come from the problem. The unit-cost file
+    uses only standard :action-costs (every PDDL parser takes it); the variant's static
+    cost function is accepted by Fast Downward and unified-planning."""
+    text = _domain_file()
+    if not clearance_costs:
+        return text
+    if _FUNCTIONS_UNIT not in text or _PUSH_COST_UNIT not in text:
+        raise InputError(f"clearcli/{DOMAIN_RESOURCE}: edited so that the push cost cannot be swapped in")
+    return text.replace(_FUNCTIONS_UNIT, _FUNCTIONS_COST).replace(_PUSH_COST_UNIT, _PUSH_COST_VAR)
+
+
+def domain_for(state: SymbolicState) -> str:
+    """The domain that goes with `write_problem(state)`: with clearance costs when the
+    state carries push costs."""
+    return domain_text(clearance_costs=bool(state.push_costs))
+
+
+def fact_to_pddl(fact: Fact) -> str:
+    """("block_dir", "o1", "o0", "dir3") -> "(block_dir o1 o0 dir3)"."""
+    return "(" + " ".join(fact) + ")"
+
+
+def _check_fact(fact: Fact, names: set[str]) -> None:
+    if not fact or fact[0] not in FACT_ARITY or len(fact) != FACT_ARITY[fact[0]] + 1:
+        raise ValueError(f"not a fact of the domain: {fact!r}")
+    for arg in fact[1:]:
+        if arg not in names and arg not in DIRECTIONS:
+            raise ValueError(f"fact {fact!r} names {arg!r}, which is not an object of the state")
+
+
+def write_problem(
+    state: SymbolicState,
+    goal_objects: Iterable[str] | None = None,
+    extra_facts: Iterable[Fact] = (),
+    problem_name: str = "clear-table",
+) -> str:
+    """The PDDL problem for ``state``: goal = every object in ``goal_objects`` (default:
+    all) removed; ``extra_facts`` are added to the initial state (e.g. ik_unfeasible_*)."""
+    names = list(state.names())
+    known = set(names)
+    goal: Sequence[str] = names if goal_objects is None else list(goal_objects)
+    for g in goal:
+        if g not in known:
+            raise ValueError(f"goal object {g!r} is not an object of the state")
+    facts = set(state.facts) | set(tuple(f) for f in extra_facts)
+    for f in facts:
+        _check_fact(f, known)
+
+    lines = [f"; {state.source}" if state.source else "; clear: table-clearing problem"]
+    lines.append("; objects by position (sensor frame centroid, m):")
+    for obj in state.objects:
+        c = obj.centroid
+        lines.append(f";   {obj.name}: ({c[0]:+.3f}, {c[1]:+.3f}, {c[2]:+.3f})")
+    lines.append(f"(define (problem {problem_name})")
+    lines.append(f"  (:domain {DOMAIN_NAME})")
+    lines.append("  (:objects" + ("".join(f" {n}" for n in names) + " - obj" if names else "") + ")")
+    lines.append("  (:init")
+    order = {k: i for i, k in enumerate(FACT_ARITY)}
+
+    def sort_key(f: Fact) -> tuple:
+        return (order[f[0]], *(_name_key(a) for a in f[1:]))
+
+    for f in sorted(facts, key=sort_key):
+        lines.append("    " + fact_to_pddl(f))
+    if state.push_costs:  # the clearance-cost domain (see domain_for)
+        for name in names:
+            for d in DIRECTIONS:
+                cost = int(state.push_costs.get((name, d), 1))
+                if cost < 1:
+                    raise ValueError(f"push cost of ({name}, {d}) must be a positive integer, got {cost}")
+                lines.append(f"    (= (push-cost {name} {d}) {cost})")
+    lines.append("    (= (total-cost) 0))")
+    if goal:
+        lines.append("  (:goal (and" + "".join(f" (removed {g})" for g in goal) + "))")
+    else:
+        lines.append("  (:goal (and))")
+    lines.append("  (:metric minimize (total-cost)))")
+    return "\n".join(lines) + "\n"
+
+
+def _name_key(name: str) -> tuple[int, str]:
+    # o10 after o9
+    if name[:1] == "o" and name[1:].isdigit():
+        return (int(name[1:]), "")
+    return (1 << 30, name)

@@ -1,0 +1,1 @@
+../clearcli/data/domain.pddl
