@@ -7,6 +7,20 @@ from dataclasses import dataclass
 
 @dataclass(frozen=True)
 class PlanSettings:
+    # Upper bound on any one Fast Downward call (translation + search, CPU seconds).
     time_limit_s: float = 30.0
-    optimal_max_objects: int = 20
+    # Optimal A* + LM-cut on the grounded form takes < 1 s for random states of up to 50
+    # objects here in 5 of 6 cases (25 s once, at 40; benchmarks/plan.py): try it up to
+    # this many goal objects, for at most optimal_time_s, then fall back to LAMA.
+    optimal_max_objects: int = 40
+    optimal_time_s: float = 10.0
     max_backtracks: int = 200
+    # Budget of the anytime (LAMA) search: it keeps improving its plan until this runs
+    # out, then the best plan so far is used (not proven optimal).
+    anytime_time_s: float = 5.0
+    # "positive": not-blocked compiled to complement facts (delete-free STRIPS), 0.46 s
+    # for 24 objects; "negative": the same actions with (not ...) preconditions, 16 s.
+    formulation: str = "positive"
+    # Before planning, mark every action whose gripper poses all lie beyond the arm's
+    # reach (tool plate > 0.915 m from the shoulder) as IK-infeasible: no IK needed.
+    reach_precheck: bool = True

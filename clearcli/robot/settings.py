@@ -13,3 +13,17 @@ class RobotSettings:
     ik_seeds: int = 8
     ik_tolerance_m: float = 0.001
     ik_tolerance_rad: float = 0.01
+    # Damped least squares: 0.05 keeps steps bounded near singularities (the straight-up
+    # home pose) while still converging in ~20 iterations far from them.
+    ik_damping: float = 0.05
+    ik_max_iterations: int = 150
+    # The default placement puts the WAM footprint this far outside the table edge
+    # nearest the camera: about the radius of the WAM base, so the base clears the table.
+    base_outside_edge_m: float = 0.10
+    # ...and at least this far (on the table plane) from every object's centroid: the
+    # visible table edge can be a crop with objects right at it, and a WAM cannot reach
+    # down beside its own base (top grasps fail there in IK).
+    base_min_object_distance_m: float = 0.30
+    # Arm links must keep this clearance from the table plane and from other objects'
+    # hulls (the gripper itself is checked by the predicates: block_grasp, block_dir).
+    collision_margin_m: float = 0.01

@@ -1,0 +1,92 @@
+"""`clear plan --png`: a top view of the table in the robot base frame with the plan.
+
+Objects are drawn as their hulls seen from above, coloured by role (in the goal,
+unreachable, cannot be freed, ungraspable), numbered by the step that removes or pushes
+them; pushes are arrows; the robot's shoulder is at the origin, its reach circle dashed.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+
+def render_plan(path: Path, frame: Any, state: Any, plan: Any) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from scipy.spatial import ConvexHull
+
+    from clearcli.robot.kinematics import REACH_TOOL_PLATE_M, TCP_PAST_TOOL_PLATE_M
+
+    T = plan.T_base_camera if plan.T_base_camera is not None else np.eye(4)
+    R, t = T[:3, :3], T[:3, 3]
+    fig, ax = plt.subplots(figsize=(7, 7), dpi=110)
+    poly = np.asarray(state.table_polygon, dtype=float).reshape(-1, 3) @ R.T + t
+    if len(poly) >= 3:
+        ax.fill(poly[:, 0], poly[:, 1], color="#e8e2d0", zorder=0, label="table")
+    colours = {}
+    for o in plan.goal:
+        colours[o] = "#4c9a2a"
+    for o in plan.stuck:
+        colours[o] = "#e08a1e"
+    for o in plan.ungraspable:
+        colours[o] = "#8d8d8d"
+    for o in plan.unreachable:
+        colours[o] = "#c0392b"
+    steps: dict[str, list[str]] = {}
+    for i, a in enumerate(plan.actions, 1):
+        steps.setdefault(a.obj, []).append(str(i))
+    for obj in state.objects:
+        v = np.asarray(obj.hull_vertices, dtype=float)
+        if len(v) < 3:
+            continue
+        vb = v @ R.T + t
+        xy = vb[:, :2]
+        try:
+            hull = ConvexHull(xy)
+            ring = xy[hull.vertices]
+        except Exception:  # degenerate outline: draw the points
+            ring = xy
+        ax.fill(ring[:, 0], ring[:, 1], color=colours.get(obj.name, "#3a6ea5"), alpha=0.75, zorder=2)
+        c = xy.mean(axis=0)
+        label = obj.name + (f" [{','.join(steps[obj.name])}]" if obj.name in steps else "")
+        ax.text(c[0], c[1], label, ha="center", va="center", fontsize=8, zorder=4)
+    for i, a in enumerate(plan.actions, 1):
+        if a.kind != "push":
+            continue
+        obj = state.by_name(a.obj)
+        push = obj.pushes.get(a.direction)
+        if push is None:
+            continue
+        c = R @ np.asarray(obj.centroid, dtype=float) + t
+        u = R @ np.asarray(push.unit_vector, dtype=float) * max(push.push_length_m, 0.05)
+        ax.annotate("", xy=(c[0] + u[0], c[1] + u[1]), xytext=(c[0], c[1]),
+                    arrowprops=dict(arrowstyle="->", color="k", lw=1.5), zorder=5)
+    reach = REACH_TOOL_PLATE_M + TCP_PAST_TOOL_PLATE_M
+    ax.add_patch(plt.Circle((0, 0), reach, fill=False, ls="--", color="#555555", zorder=1))
+    ax.plot([0], [0], marker="o", color="k", zorder=5)
+    ax.text(0, -0.04, "WAM", ha="center", va="top", fontsize=8)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (m, robot base)")
+    ax.set_ylabel("y (m, robot base)")
+    status = "optimal" if plan.optimal else "not proven optimal"
+    ax.set_title(f"{len(plan.actions)} actions, cost {plan.cost} ({status})", fontsize=10)
+    from matplotlib.patches import Patch
+
+    ax.legend(
+        handles=[
+            Patch(color="#4c9a2a", label="in the goal"),
+            Patch(color="#c0392b", label="unreachable"),
+            Patch(color="#e08a1e", label="cannot be freed"),
+            Patch(color="#8d8d8d", label="ungraspable"),
+        ],
+        loc="upper right",
+        fontsize=7,
+    )
+    fig.tight_layout()
+    fig.savefig(str(path), format="png")
+    plt.close(fig)

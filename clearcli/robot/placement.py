@@ -1,0 +1,169 @@
+"""Where the robot stands: T_base_camera (the points' optical frame in the WAM base frame).
+
+Three sources, in order of precedence:
+
+1. ``--camera-pose x y z qx qy qz qw`` / ``[robot] camera_pose``: the optical frame's
+   pose in the WAM base (DH frame 0, at the shoulder).
+2. ``--camera-pose thesis``: the thesis's Kinect extrinsic (parameters.md), which is
+   ``link_base -> camera_link`` (x forward, z up), composed with the fixed rotation from
+   camera_link to the optical frame (z forward, x right, y down) the points are in.
+3. Default, derived from the table found in the frame: the WAM's footprint lies on the
+   table plane just outside the table edge nearest the camera, its x axis facing the
+   objects (their centroid on the plane), z along the table normal, the shoulder 0.346 m
+   above the footprint; moved back if needed so that no object centroid is nearer than
+   0.30 m (a WAM cannot reach down right beside its own base). Frames without calibration thus still give meaningful answers.
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+
+from clearcli.errors import SettingsError
+
+SHOULDER_ABOVE_FOOTPRINT_M = 0.346
+
+# Thesis extrinsic: estirabot_link_base -> camera_link (x y z, qx qy qz qw).
+THESIS_BASE_CAMERA_LINK = (0.9014760, -0.0594, 0.7251720, -0.641407, 0.032404, 0.772933, 0.011045)
+# Columns: the optical frame's axes in camera_link (x_opt = -y_link, y_opt = -z_link,
+# z_opt = x_link).
+R_CAMERA_LINK_OPTICAL = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
+
+
+def quat_to_matrix(qx: float, qy: float, qz: float, qw: float) -> np.ndarray:
+    q = np.array([qw, qx, qy, qz], dtype=float)
+    norm = np.linalg.norm(q)
+    if not np.isfinite(norm) or norm < 1e-9:
+        raise SettingsError("camera pose: the quaternion must be non-zero")
+    w, x, y, z = q / norm
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+
+
+def pose_to_matrix(pose: Sequence[float]) -> np.ndarray:
+    """x y z qx qy qz qw -> 4x4."""
+    if len(pose) != 7 or not all(np.isfinite(float(v)) for v in pose):
+        raise SettingsError(
+            f"camera pose: expected 7 finite numbers x y z qx qy qz qw, got {list(pose)!r}"
+        )
+    T = np.eye(4)
+    T[:3, :3] = quat_to_matrix(*[float(v) for v in pose[3:]])
+    T[:3, 3] = [float(v) for v in pose[:3]]
+    return T
+
+
+def thesis_T_base_camera() -> np.ndarray:
+    """The thesis setup's extrinsic, to the optical frame."""
+    T = pose_to_matrix(THESIS_BASE_CAMERA_LINK)
+    T[:3, :3] = T[:3, :3] @ R_CAMERA_LINK_OPTICAL
+    return T
+
+
+def _closest_on_polygon(point: np.ndarray, polygon: np.ndarray) -> np.ndarray:
+    a = polygon
+    b = np.roll(polygon, -1, axis=0)
+    ab = b - a
+    denom = np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-12)
+    t = np.clip(np.einsum("ij,ij->i", point - a, ab) / denom, 0.0, 1.0)
+    closest = a + t[:, None] * ab
+    return closest[np.argmin(np.linalg.norm(closest - point, axis=1))]
+
+
+def default_T_base_camera(
+    table_normal: np.ndarray,
+    table_offset: float,
+    table_polygon: np.ndarray,
+    object_centroids: np.ndarray | None = None,
+    outside_edge_m: float = 0.10,
+    min_object_distance_m: float = 0.30,
+) -> np.ndarray:
+    """Footprint just outside the table edge nearest the camera, facing the objects, and
+    at least ``min_object_distance_m`` from every object's centroid (on the plane)."""
+    n = np.asarray(table_normal, dtype=float)
+    n = n / np.linalg.norm(n)
+    d = float(table_offset)
+
+    def proj(p: np.ndarray) -> np.ndarray:
+        return p - (p @ n + d) * n
+
+    polygon = np.asarray(table_polygon, dtype=float).reshape(-1, 3)
+    camera_on_table = proj(np.zeros(3))
+    if len(polygon) >= 3:
+        polygon = polygon - np.outer(polygon @ n + d, n)
+        edge = _closest_on_polygon(camera_on_table, polygon)
+        centre = polygon.mean(axis=0)
+    else:
+        edge = camera_on_table
+        centre = camera_on_table
+    outward = edge - centre
+    outward -= (outward @ n) * n
+    if np.linalg.norm(outward) < 1e-6:
+        outward = camera_on_table - centre
+        outward -= (outward @ n) * n
+    if np.linalg.norm(outward) < 1e-6:
+        outward = np.cross(n, [1.0, 0.0, 0.0])
+    outward /= np.linalg.norm(outward)
+    footprint = edge + outside_edge_m * outward
+    if object_centroids is not None and len(object_centroids):
+        target = proj(np.asarray(object_centroids, dtype=float).reshape(-1, 3).mean(axis=0))
+    else:
+        target = centre
+    x = target - footprint
+    x -= (x @ n) * n
+    if np.linalg.norm(x) < 1e-6:
+        x = -outward
+    x /= np.linalg.norm(x)
+    if object_centroids is not None and len(object_centroids) and min_object_distance_m > 0:
+        # A table edge seen in the frame may be a crop of the real one, with objects
+        # right at it: step back (away from the objects) until the nearest is at
+        # min_object_distance_m, where a WAM can still reach down to it.
+        flat = np.array([proj(c) for c in np.asarray(object_centroids, dtype=float).reshape(-1, 3)])
+        for _ in range(20):
+            gap = float(np.min(np.linalg.norm(flat - footprint, axis=1)))
+            if gap >= min_object_distance_m - 1e-6:
+                break
+            footprint = footprint - x * (min_object_distance_m - gap)
+    y = np.cross(n, x)
+    T_camera_base = np.eye(4)
+    T_camera_base[:3, :3] = np.column_stack([x, y, n])
+    T_camera_base[:3, 3] = footprint + SHOULDER_ABOVE_FOOTPRINT_M * n
+    return np.linalg.inv(T_camera_base)
+
+
+def resolve_T_base_camera(
+    camera_pose: Sequence[float] | str | None,
+    state: object | None = None,
+    outside_edge_m: float = 0.10,
+    min_object_distance_m: float = 0.30,
+) -> tuple[np.ndarray, str]:
+    """T_base_camera and where it came from ("given", "thesis", "default from table")."""
+    if isinstance(camera_pose, str):
+        if camera_pose.strip().lower() == "thesis":
+            return thesis_T_base_camera(), "thesis"
+        try:
+            values = [float(v) for v in camera_pose.replace(",", " ").split()]
+        except ValueError:
+            raise SettingsError(
+                f"camera pose: expected 'thesis' or 7 numbers x y z qx qy qz qw, got {camera_pose!r}"
+            ) from None
+        return pose_to_matrix(values), "given"
+    if camera_pose is not None and len(camera_pose) > 0:
+        return pose_to_matrix(list(camera_pose)), "given"
+    if state is None:
+        raise SettingsError("camera pose: none given and no table to derive it from")
+    centroids = np.array([o.centroid for o in state.objects]) if state.objects else None  # type: ignore[attr-defined]
+    T = default_T_base_camera(
+        state.table.normal,  # type: ignore[attr-defined]
+        state.table.offset,  # type: ignore[attr-defined]
+        state.table_polygon,  # type: ignore[attr-defined]
+        centroids,
+        outside_edge_m,
+        min_object_distance_m,
+    )
+    return T, "default from table"

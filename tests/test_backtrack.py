@@ -1,0 +1,243 @@
+"""Algorithm 1: plan, IK-check the first action, add ik_unfeasible facts, replan."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+import plan_scenes as ps
+from clearcli.errors import NoPlanError
+from clearcli.planning.backtrack import IKActionChecker, backtrack, make_plan
+from clearcli.planning.types import Action, CheckedAction, Plan
+from clearcli.predicates.state import DIRECTIONS, Fact
+from clearcli.settings import Settings
+
+
+def _settings(**plan: object) -> Settings:
+    s = Settings()
+    return dataclasses.replace(s, plan=dataclasses.replace(s.plan, **plan))
+
+
+def replay(state_facts: frozenset[Fact], names: tuple[str, ...], actions: tuple[Action, ...]) -> set[str]:
+    """An independent replay of the thesis's action semantics; returns removed objects."""
+    facts = set(state_facts)
+    removed: set[str] = set()
+    for a in actions:
+        o = a.obj
+        if a.kind == "grasp":
+            assert ("ungraspable", o) not in facts and ("ik_unfeasible_grasp", o) not in facts
+            assert not any(f[0] in ("on", "block_grasp") and f[2] == o for f in facts), a
+            removed.add(o)
+            facts = {f for f in facts if not (f[0] in ("on", "block_grasp", "block_dir") and f[1] == o)}
+        else:
+            assert ("push_off_table", o, a.direction) not in facts
+            assert ("ik_unfeasible_dir", o, a.direction) not in facts
+            assert not any(f[0] == "block_dir" and f[2] == o and f[3] == a.direction for f in facts), a
+            assert not any(f[0] == "on" and o in f[1:] for f in facts), a
+            facts = {
+                f
+                for f in facts
+                if not (f[0] in ("block_dir", "block_grasp") and o in f[1:3]) and f != ("ik_unfeasible_grasp", o)
+            }
+    return removed
+
+
+def check_plan(state, plan: Plan) -> None:  # type: ignore[no-untyped-def]
+    """Every plan: validated by unified-planning on the lifted model and replayed here;
+    it removes every goal object."""
+    facts = frozenset(state.facts) | plan.ik_facts
+    domain, problem, _which = ps.lifted_pddl(state.names(), facts, plan.goal, state.push_costs, state)
+    assert ps.validate(domain, problem, plan.actions)
+    assert replay(facts, state.names(), plan.actions) >= set(plan.goal)
+
+
+def test_figure_3_1_backtracking_sequence() -> None:
+    state = ps.figure_3_1()
+    # No reach pre-check: walk the thesis's sequence through the real IK check.
+    with pytest.raises(NoPlanError) as info:
+        make_plan(state, _settings(reach_precheck=False), ps.T_BASE_CAMERA)
+    plan = info.value.plan  # type: ignore[attr-defined]
+    steps = plan.steps
+    # first plan: grasp the cup o2 (it blocks everything), then the boxes (thesis: cost 4)
+    assert steps[0].plan[0] == Action("grasp", "o2") and steps[0].cost == 4
+    assert {a.pddl() for a in steps[0].plan[1:]} == {"(push o0 dir1)", "(grasp o0)", "(grasp o1)"}
+    # then: push o2 in some direction and grasp it (cost 5), each push infeasible in turn
+    pushed = []
+    for s in steps[1:]:
+        assert s.cost == 5 and s.plan[0].kind == "push" and s.plan[0].obj == "o2"
+        assert s.plan[1] == Action("grasp", "o2")
+        pushed.append(s.plan[0].direction)
+    assert sorted(pushed) == list(DIRECTIONS)
+    assert all(not s.feasible and "reach" in s.reason for s in steps)
+    assert plan.unreachable == ("o2",)
+    assert set(plan.stuck) == {"o0", "o1"}
+    assert plan.ik_facts == frozenset({("ik_unfeasible_grasp", "o2")} | {("ik_unfeasible_dir", "o2", d) for d in DIRECTIONS})
+    assert "o2" in str(info.value) and "reach" in str(info.value)
+    # each intermediate plan is valid for the state it was made for
+    facts = set(state.facts)
+    for s in steps:
+        domain, problem, _ = ps.lifted_pddl(state.names(), frozenset(facts), ["o0", "o1", "o2"], None, state)
+        assert ps.validate(domain, problem, s.plan)
+        facts.add(s.plan[0].ik_fact())
+
+
+def test_figure_3_1_with_reach_precheck_needs_no_replans() -> None:
+    with pytest.raises(NoPlanError) as info:
+        make_plan(ps.figure_3_1(), Settings(), ps.T_BASE_CAMERA)
+    plan = info.value.plan  # type: ignore[attr-defined]
+    assert plan.unreachable == ("o2",) and plan.replans == 0
+
+
+def test_far_object_dropped_rest_planned() -> None:
+    state = ps.clutter(6, far=True)  # o6 is 2 m away and blocks nothing
+    plan = make_plan(state, Settings(), ps.T_BASE_CAMERA)
+    assert plan.unreachable == ("o6",)
+    assert set(plan.goal) == {f"o{i}" for i in range(6)}
+    assert plan.cost == len(plan.actions) == 6 and plan.optimal
+    # the stack o2-on-o1 and the grasp-block chain o(i+1) -> o(i) fix the order
+    order = [a.obj for a in plan.actions]
+    assert order.index("o2") < order.index("o1")
+    assert all(order.index(f"o{i + 1}") < order.index(f"o{i}") for i in range(5))
+    first = plan.first
+    assert first is not None and first.action == plan.actions[0]
+    assert len(first.joint_solutions) == len(first.T_base_gripper) == 3
+    # FK of each joint solution is the pose it was solved for
+    from clearcli.robot.kinematics import WamKinematics
+
+    kin = WamKinematics()
+    for q, T in zip(first.joint_solutions, first.T_base_gripper):
+        np.testing.assert_allclose(kin.fk(q)[:3, 3], T[:3, 3], atol=0.0011)
+    check_plan(state, plan)
+
+
+def test_nothing_reachable_is_no_plan() -> None:
+    state = ps.scene({"o0": ps.Box(2.0, 0.0), "o1": ps.Box(2.2, 0.3)})
+    with pytest.raises(NoPlanError, match="reach"):
+        make_plan(state, Settings(), ps.T_BASE_CAMERA)
+
+
+def test_empty_table_is_an_empty_plan() -> None:
+    plan = make_plan(ps.scene({}), Settings(), ps.T_BASE_CAMERA)
+    assert plan.actions == () and plan.cost == 0 and plan.first is None
+
+
+class FakeIK:
+    """IK oracle from a set of infeasible actions (symbolic tests)."""
+
+    def __init__(self, infeasible: set[Action]) -> None:
+        self.infeasible = infeasible
+        self.calls: list[Action] = []
+
+    def __call__(self, action: Action) -> tuple[CheckedAction | None, str]:
+        self.calls.append(action)
+        if action in self.infeasible:
+            return None, "no IK solution"
+        return CheckedAction(action, (), ()), ""
+
+
+def test_grasp_infeasible_push_then_grasp() -> None:
+    # The thesis: a push makes an IK-infeasible grasp possible again.
+    state = ps.dummy_state(["o0", "o1"], frozenset())
+    ik = FakeIK({Action("grasp", "o0"), Action("grasp", "o1")})
+    plan = backtrack(state, ik)
+    assert plan.cost == 4 and plan.actions[0].kind == "push"
+    assert ("ik_unfeasible_grasp", "o0") in plan.ik_facts or ("ik_unfeasible_grasp", "o1") in plan.ik_facts
+    check_plan(state, plan)
+
+
+def test_unreachable_blocker_leaves_others_stuck_but_plans_the_rest() -> None:
+    # o0 is out of reach and blocks grasping/pushing o1, and grasping o2 (o2 can be pushed).
+    facts = frozenset(
+        {("block_grasp", "o0", "o1"), ("block_grasp", "o0", "o2")}
+        | {("block_dir", "o0", "o1", d) for d in DIRECTIONS}
+    )
+    state = ps.dummy_state(["o0", "o1", "o2"], facts)
+    everything_o0 = {Action("grasp", "o0")} | {Action("push", "o0", d) for d in DIRECTIONS}
+    plan = backtrack(state, FakeIK(everything_o0))
+    assert plan.unreachable == ("o0",) and plan.stuck == ("o1",)
+    assert plan.goal == ("o2",) and plan.cost == 2 and plan.replans == 6
+    assert plan.actions[0].pddl().startswith("(push o2") and plan.actions[1].pddl() == "(grasp o2)"
+    check_plan(state, plan)
+
+
+def test_ungraspable_not_in_goal_but_pushed_out_of_the_way() -> None:
+    facts = frozenset({("ungraspable", "o0"), ("block_grasp", "o0", "o1")})
+    state = ps.dummy_state(["o0", "o1"], facts)
+    plan = backtrack(state, FakeIK(set()))
+    assert plan.ungraspable == ("o0",) and plan.goal == ("o1",)
+    assert plan.cost == 2 and plan.actions[0].kind == "push"
+    check_plan(state, plan)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_random_states_with_random_ik_failures(seed: int) -> None:
+    from clearcli.planning.compile import random_facts
+
+    rng = np.random.default_rng(seed)
+    names = [f"o{i}" for i in range(6)]
+    facts = random_facts(6, seed + 10, density=1.5)
+    state = ps.dummy_state(names, facts)
+    all_actions = [Action("grasp", o) for o in names] + [Action("push", o, d) for o in names for d in DIRECTIONS]
+    infeasible = {a for a in all_actions if rng.random() < 0.3}
+    ik = FakeIK(infeasible)
+    try:
+        plan = backtrack(state, ik)
+    except NoPlanError:
+        return
+    assert plan.actions[0] not in infeasible
+    # only first actions are checked, one check per plan
+    assert len(ik.calls) == plan.replans
+    check_plan(state, plan)
+
+
+def test_ik_checker_on_scene_grasp_and_push() -> None:
+    state = ps.clutter(3)
+    from clearcli.robot.kinematics import WamKinematics, make_obstacles
+
+    kin = WamKinematics()
+    checker = IKActionChecker(state, ps.T_BASE_CAMERA, kin, make_obstacles(state, ps.T_BASE_CAMERA))
+    for action in (Action("grasp", "o0"), Action("push", "o1", "dir3")):
+        checked, why = checker(action)
+        assert checked is not None, why
+        n = len(checked.T_base_gripper)
+        assert n == len(checked.joint_solutions) and n >= 3
+        for q in checked.joint_solutions:
+            a, b, r = kin.capsules(q)
+            # arm above the table (z = -0.346 in the base frame) by its radius
+            assert np.all(np.minimum(a[:, 2], b[:, 2]) - r > -0.346)
+    # an arm-collision: a tall object standing between the robot and o0 blocks the arm
+    tall = ps.scene({"o0": ps.Box(0.75, 0.0), "o1": ps.Box(0.40, 0.0, (0.30, 0.30, 0.6))})
+    checker = IKActionChecker(tall, ps.T_BASE_CAMERA, kin, make_obstacles(tall, ps.T_BASE_CAMERA))
+    checked, why = checker(Action("grasp", "o0"))
+    assert checked is None and "collides with o1" in why
+
+
+def _clear(*args: str) -> "subprocess.CompletedProcess[str]":
+    import subprocess
+    import sys
+
+    return subprocess.run(
+        [sys.executable, "-m", "clearcli.cli", *args], capture_output=True, text=True, timeout=300
+    )
+
+
+def test_cli_plan_on_a_real_frame() -> None:
+    import json
+
+    from utils import shared_path
+
+    pcd = shared_path("mosd/test/test57.pcd")
+    res = _clear("plan", str(pcd), "--json")
+    assert res.returncode == 0, res.stderr
+    doc = json.loads(res.stdout)
+    assert doc["schema"] == "clear.plan" and doc["version"] == 1
+    assert doc["cost"] == len(doc["actions"]) >= 1
+    assert isinstance(doc["optimal"], bool) and doc["camera_pose_source"] == "default from table"
+    first = doc["first_action"]
+    assert first["action"] == doc["actions"][0]
+    assert len(first["joints_rad"]) == len(first["T_base_gripper"]) and len(first["joints_rad"][0]) == 7
+    # a camera pose that is not one: exit 3 with the reason
+    bad = _clear("plan", str(pcd), "--camera-pose", "1 2 3")
+    assert bad.returncode == 3 and "camera pose" in bad.stderr

@@ -1,0 +1,190 @@
+"""The WAM model: URDF kinematics against a third-party URDF, IK round trips, collision
+checks, where the robot stands."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from clearcli.errors import SettingsError
+from clearcli.robot import placement
+from clearcli.robot.kinematics import (
+    REACH_TOOL_PLATE_M,
+    Obstacles,
+    WamKinematics,
+    capsule_spheres,
+    half_turn,
+    hull_planes,
+)
+from utils import shared_path
+
+
+@pytest.fixture(scope="module")
+def kin() -> WamKinematics:
+    return WamKinematics()
+
+
+def test_urdf_straight_up_at_zero(kin: WamKinematics) -> None:
+    # Hand-derived from the DH table: 0.55 + 0.30 + 0.06 = 0.91 m to the tool plate,
+    # the gripper TCP 0.115 m further; the shoulder 0.346 m above the footprint.
+    q = np.zeros(7)
+    np.testing.assert_allclose(kin.fk(q, "wam_tool_plate"), _trans(0, 0, 0.91), atol=1e-12)
+    np.testing.assert_allclose(kin.fk(q), _trans(0, 0, 1.025), atol=1e-12)
+    np.testing.assert_allclose(kin.fk(q, "wam_link_footprint"), _trans(0, 0, -0.346), atol=1e-12)
+    # Joint limits: the manual's column.
+    np.testing.assert_allclose(kin.lower, [-2.6, -2.0, -2.8, -0.9, -4.76, -1.6, -3.0])
+    np.testing.assert_allclose(kin.upper, [2.6, 2.0, 2.8, 3.1, 1.24, 1.6, 3.0])
+    assert REACH_TOOL_PLATE_M == pytest.approx(0.915, abs=0.001)
+
+
+def test_elbow_bent_by_hand(kin: WamKinematics) -> None:
+    # q4 = pi/2: the forearm (0.30 m) and tool plate (0.06 m) point along base +x (the elbow
+    # turns about base +y... through DH frames: rows 3/4 give x offsets 0.045 - ...).
+    q = np.array([0.0, 0.0, 0.0, math.pi / 2, 0.0, 0.0, 0.0])
+    T = kin.fk(q, "wam_tool_plate")
+    # Shoulder to elbow: (0.045, 0, 0.55). Elbow frame turned by +pi/2 about base y
+    # sends the forearm's z along +x, and the -0.045 offset along +z.
+    np.testing.assert_allclose(T[:3, 3], [0.045 + 0.36, 0.0, 0.55 + 0.045], atol=1e-9)
+
+
+def test_fk_matches_third_party_urdf(kin: WamKinematics) -> None:
+    import pinocchio as pin
+
+    urdf = shared_path("wam/iri_wam_description/urdf/wam.urdf")
+    ref = pin.buildModelFromUrdf(str(urdf))
+    data = ref.createData()
+    base = ref.getFrameId("iri_wam_link_base")  # the shoulder; footprint offset (0.22, 0.14, 0.346)
+    tcp = ref.getFrameId("iri_wam_link_tcp")  # 0.06 m past link 7 = our tool plate
+    lo = np.maximum(kin.lower, ref.lowerPositionLimit)
+    hi = np.minimum(kin.upper, ref.upperPositionLimit)
+    rng = np.random.default_rng(7)
+    worst_m, worst_rad = 0.0, 0.0
+    for _ in range(300):
+        q = rng.uniform(lo, hi)
+        ours = kin.fk(q, "wam_tool_plate")
+        pin.framesForwardKinematics(ref, data, q)
+        theirs = np.array((data.oMf[base].inverse() * data.oMf[tcp]).homogeneous)
+        worst_m = max(worst_m, float(np.linalg.norm(ours[:3, 3] - theirs[:3, 3])))
+        worst_rad = max(worst_rad, float(np.linalg.norm(pin.log3(ours[:3, :3].T @ theirs[:3, :3]))))
+    assert worst_m < 0.001
+    assert worst_rad < 0.01
+
+
+def test_ik_round_trips(kin: WamKinematics) -> None:
+    rng = np.random.default_rng(3)
+    solved = 0
+    for _ in range(60):
+        q_true = rng.uniform(kin.lower, kin.upper)
+        target = kin.fk(q_true)
+        q = kin.ik(target)
+        if q is None:
+            continue
+        solved += 1
+        got = kin.fk(q)
+        assert np.linalg.norm(got[:3, 3] - target[:3, 3]) < 0.001
+        R_err = got[:3, :3].T @ target[:3, :3]
+        assert math.acos(np.clip((np.trace(R_err) - 1) / 2, -1, 1)) < 0.01
+        assert np.all(q >= kin.lower - 1e-12) and np.all(q <= kin.upper + 1e-12)
+    assert solved >= 57  # FK-generated targets are reachable by construction
+
+
+def test_ik_top_grasp_and_out_of_reach(kin: WamKinematics) -> None:
+    down = np.diag([1.0, -1.0, -1.0])  # approach along -z
+    T = np.eye(4)
+    T[:3, :3] = down
+    T[:3, 3] = [0.6, 0.1, -0.25]  # on a table 0.346 m below the shoulder
+    q = kin.ik(T)
+    assert q is not None
+    np.testing.assert_allclose(kin.fk(q)[:3, 3], T[:3, 3], atol=0.001)
+    # warm start from that solution converges to a nearby pose
+    T2 = T.copy()
+    T2[:3, 3] += [0.0, 0.03, 0.0]
+    q2 = kin.ik(T2, warm=q)
+    assert q2 is not None and np.max(np.abs(q2 - q)) < 0.5
+    far = T.copy()
+    far[:3, 3] = [1.3, 0.0, -0.25]
+    assert not kin.reachable(far)
+    assert kin.ik(far) is None
+    # half-turn about the approach axis: same position and approach, closing axis flipped
+    H = half_turn(T)
+    np.testing.assert_allclose(H[:3, 2], T[:3, 2])
+    np.testing.assert_allclose(H[:3, 0], -T[:3, 0])
+
+
+def test_capsules_and_collisions(kin: WamKinematics) -> None:
+    q = np.zeros(7)
+    a, b, r = kin.capsules(q)
+    # at q = 0 the upper arm runs from the shoulder (origin) to the elbow (0.045, 0, 0.55)
+    np.testing.assert_allclose(a[0], [0, 0, 0], atol=1e-12)
+    np.testing.assert_allclose(b[0], [0.045, 0, 0.55], atol=1e-12)
+    centres, radii = capsule_spheres(a, b, r)
+    table_low = Obstacles(np.array([0, 0, 1.0]), 0.346, margin_m=0.01)  # table 0.346 below
+    assert table_low.collisions(centres, radii) == []
+    table_high = Obstacles(np.array([0, 0, 1.0]), -0.5, margin_m=0.01)  # a plane at z = 0.5
+    assert table_high.collisions(centres, radii) == ["table"]
+    # a box around the forearm at q = 0 (z 0.6 .. 0.85) is hit; one beside it is not
+    cube = np.array([[x, y, z] for x in (-0.05, 0.05) for y in (-0.05, 0.05) for z in (0.65, 0.75)])
+    from scipy.spatial import ConvexHull
+
+    faces = ConvexHull(cube).simplices
+    planes = hull_planes(cube, faces)
+    assert np.all(cube.mean(0) @ planes[:, :3].T + planes[:, 3] < 0)
+    obs = Obstacles(np.array([0, 0, 1.0]), 0.346, ("o0",), (planes,), ((cube.min(0), cube.max(0)),))
+    assert obs.collisions(centres, radii) == ["o0"]
+    assert obs.collisions(centres, radii, ignore=("o0",)) == []
+    moved = cube + [0.3, 0, 0]
+    obs2 = Obstacles(
+        np.array([0, 0, 1.0]), 0.346, ("o0",), (hull_planes(moved, faces),), ((moved.min(0), moved.max(0)),)
+    )
+    assert obs2.collisions(centres, radii) == []
+
+
+def test_thesis_camera_pose() -> None:
+    T = placement.thesis_T_base_camera()
+    R = T[:3, :3]
+    np.testing.assert_allclose(R @ R.T, np.eye(3), atol=1e-6)
+    assert np.linalg.det(R) == pytest.approx(1.0, abs=1e-6)
+    link = placement.pose_to_matrix(placement.THESIS_BASE_CAMERA_LINK)
+    # the optical z (viewing direction) is camera_link's x; optical y (down) is -z_link
+    np.testing.assert_allclose(R[:, 2], link[:3, 0], atol=1e-9)
+    np.testing.assert_allclose(R[:, 1], -link[:3, 2], atol=1e-9)
+    np.testing.assert_allclose(T[:3, 3], [0.901476, -0.0594, 0.725172])
+    # the camera looks down towards the table in front of the robot
+    assert R[2, 2] < -0.5 and R[0, 2] < 0
+
+
+def test_camera_pose_parsing() -> None:
+    T, src = placement.resolve_T_base_camera("1 2 3 0 0 0 1")
+    assert src == "given"
+    np.testing.assert_allclose(T, _trans(1, 2, 3))
+    T, src = placement.resolve_T_base_camera((0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0))
+    np.testing.assert_allclose(T[:3, :3], np.diag([-1.0, -1.0, 1.0]), atol=1e-12)
+    with pytest.raises(SettingsError):
+        placement.resolve_T_base_camera("1 2 3")
+    with pytest.raises(SettingsError):
+        placement.resolve_T_base_camera("1 2 3 0 0 0 0")
+    with pytest.raises(SettingsError):
+        placement.resolve_T_base_camera("left")
+
+
+def test_default_placement_from_table() -> None:
+    import plan_scenes as ps
+
+    state = ps.clutter(3)
+    T, src = placement.resolve_T_base_camera(None, state, 0.10)
+    assert src == "default from table"
+    # Rebuild the scene's world frame: the table is z = 0, near edge x = 0, camera above
+    # x = -0.05; the footprint should be at x = -0.10 (just outside the near edge),
+    # facing +x (the objects), the shoulder 0.346 m above.
+    T_world_base = ps.T_WORLD_CAMERA @ np.linalg.inv(T)
+    np.testing.assert_allclose(T_world_base[:3, 3], [-0.10, 0.0, 0.346], atol=0.02)
+    np.testing.assert_allclose(T_world_base[:3, 2], [0, 0, 1], atol=1e-9)
+    assert T_world_base[0, 0] > 0.95  # base x towards the objects (+x)
+
+
+def _trans(x: float, y: float, z: float) -> np.ndarray:
+    T = np.eye(4)
+    T[:3, 3] = [x, y, z]
+    return T
