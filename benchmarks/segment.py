@@ -1,0 +1,118 @@
+"""Segmentation over every mOSD frame: object F1 and IoU per category, time, memory.
+
+    .venv/bin/python benchmarks/segment.py [--data ../shared/data/mosd] [--key=value ...]
+
+`--key=value` overrides a SegmentSettings field (e.g. --concavity_tolerance_deg=15) to
+compare choices. The defaults were chosen on the 45 learn frames only; the 5 test
+frames are held out and reported apart.
+
+Times are per frame in a warm process (one untimed frame first, so imports and first
+calls are excluded; reading the file is excluded too); memory is the peak resident
+set of the process (ru_maxrss) after all frames.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import re
+import resource
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(REPO))
+
+from clearcli.evaluate.segmentation import score  # noqa: E402
+from clearcli.io.read import read_frame  # noqa: E402
+from clearcli.perception.segment import segment  # noqa: E402
+from clearcli.perception.settings import SegmentSettings  # noqa: E402
+
+CATEGORIES: list[tuple[str, list[str]]] = [
+    ("boxes", [f"learn/learn{i}.pcd" for i in range(0, 17)]),
+    ("stacked", [f"learn/learn{i}.pcd" for i in range(17, 25)]),
+    ("occluded", [f"learn/learn{i}.pcd" for i in range(25, 33)]),
+    ("cylindrical", [f"learn/learn{i}.pcd" for i in range(33, 45)]),
+    ("mixed (test)", [f"test/test{i}.pcd" for i in (44, 46, 47)]),
+    ("complex (test)", [f"test/test{i}.pcd" for i in (55, 57)]),
+]
+STAGES = ("filter", "table", "supervoxels", "lccp", "merge", "objects", "total")
+
+
+def _settings(overrides: list[str]) -> SegmentSettings:
+    base = SegmentSettings()
+    kinds = {f.name: type(getattr(base, f.name)) for f in dataclasses.fields(base)}
+    changes = {}
+    for item in overrides:
+        m = re.fullmatch(r"--(\w+)=(.*)", item)
+        if not m or m.group(1) not in kinds:
+            raise SystemExit(f"unknown override {item!r}; fields: {', '.join(kinds)}")
+        key, text = m.groups()
+        kind = kinds[key]
+        changes[key] = text.lower() in ("1", "true", "yes") if kind is bool else kind(text)
+    return dataclasses.replace(base, **changes)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--data", type=Path, default=REPO.parent / "shared" / "data" / "mosd")
+    args, rest = parser.parse_known_args()
+    settings = _settings(rest)
+    changed = {
+        f.name: getattr(settings, f.name)
+        for f in dataclasses.fields(settings)
+        if getattr(settings, f.name) != getattr(SegmentSettings(), f.name)
+    }
+    print(f"settings: defaults{' with ' + str(changed) if changed else ''}")
+
+    first = args.data / CATEGORIES[0][1][0]
+    segment(read_frame(first), settings)  # warm-up: imports, first calls
+
+    rows: dict[str, list[tuple[str, float, float, dict[str, float]]]] = {}
+    for cat, names in CATEGORIES:
+        for name in names:
+            frame = read_frame(args.data / name)
+            t0 = time.perf_counter()
+            seg = segment(frame, settings)
+            wall = time.perf_counter() - t0
+            sc = score(seg.labels(), frame.fields["label"])
+            timings = dict(seg.timings_s)
+            timings["total"] = wall
+            rows.setdefault(cat, []).append((name, sc.f1, sc.mean_best_iou, timings))
+            flag = "" if sc.f1 == 1.0 else f"  (true {sc.n_true}, predicted {sc.n_pred}, matched {sc.true_positives})"
+            print(f"  {name:18s} F1 {sc.f1:.3f}  IoU {sc.mean_best_iou:.3f}  {wall * 1000:5.0f} ms{flag}")
+
+    def summary(label: str, items: list[tuple[str, float, float, dict[str, float]]]) -> None:
+        f1 = np.mean([r[1] for r in items])
+        iou = np.mean([r[2] for r in items])
+        tot = np.array([r[3]["total"] for r in items])
+        print(
+            f"{label:16s} n={len(items):2d}  mean F1 {f1:.3f}  mean IoU {iou:.3f}  "
+            f"time median {np.median(tot) * 1000:4.0f} ms  max {tot.max() * 1000:4.0f} ms"
+        )
+
+    print()
+    for cat, _ in CATEGORIES:
+        summary(cat, rows[cat])
+    learn = [r for cat, _ in CATEGORIES[:4] for r in rows[cat]]
+    test = [r for cat, _ in CATEGORIES[4:] for r in rows[cat]]
+    every = learn + test
+    print()
+    summary("learn (45)", learn)
+    summary("test (5, held out)", test)
+    summary("all (50)", every)
+    print()
+    print("per stage (all 50 frames):   median    max   (ms)")
+    for stage in STAGES:
+        vals = np.array([r[3].get(stage, 0.0) for r in every]) * 1000
+        print(f"  {stage:12s}              {np.median(vals):6.1f} {vals.max():6.1f}")
+    peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    print(f"peak memory (resident, whole process): {peak_mb:.0f} MB")
+    print(f"overall mean F1 over all {len(every)} frames: {np.mean([r[1] for r in every]):.3f}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,110 @@
+"""Stage 1: finite points and outlier removal.
+
+Kinect-style depth sensors produce "flying pixels" between a foreground edge and the
+background; left in, they bridge objects and the table. The original pipeline removed
+them with a statistical filter over a fixed k = 10 neighbours, which also removes most
+of the far, sparsely sampled points (parameters.md). Ours judges every point by a radius
+proportional to its range, so the test means the same thing near and far.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from clearcli.perception.settings import SegmentSettings
+
+
+def finite_mask(points: np.ndarray) -> np.ndarray:
+    """(N,) bool: rows with finite x, y and z."""
+    return np.isfinite(points).all(axis=1)
+
+
+def _organized_neighbor_counts(points: np.ndarray, shape: tuple[int, int], radius_at_1m_m: float) -> np.ndarray:
+    """Number of the 8 pixel neighbours of each pixel within the range-scaled radius.
+
+    The radius of a pair uses their mean range so the relation is symmetric; that lets
+    4 of the 8 offsets do all the work (each hit counts for both pixels).
+    """
+    h, w = shape
+    grid = points.reshape(h, w, 3).astype(np.float32, copy=False)
+    rng = np.sqrt(np.einsum("ijk,ijk->ij", grid, grid))  # NaN for invalid pixels
+    counts = np.zeros((h, w), dtype=np.int16)
+    k2 = np.float32((radius_at_1m_m * 0.5) ** 2)
+    for dy, dx in ((0, 1), (1, -1), (1, 0), (1, 1)):
+        ys_a = slice(0, h - dy)
+        ys_b = slice(dy, h)
+        xs_a = slice(max(0, -dx), w - max(0, dx))
+        xs_b = slice(max(0, dx), w - max(0, -dx))
+        a = grid[ys_a, xs_a]
+        b = grid[ys_b, xs_b]
+        diff = a - b
+        d2 = np.einsum("ijk,ijk->ij", diff, diff)
+        rr = rng[ys_a, xs_a] + rng[ys_b, xs_b]
+        hit = d2 < k2 * rr * rr  # NaN compares False
+        counts[ys_a, xs_a] += hit
+        counts[ys_b, xs_b] += hit
+    return counts.reshape(-1)
+
+
+def depth_radius_mask(
+    points: np.ndarray, shape: tuple[int, int] | None, radius_at_1m_m: float, min_neighbors: int
+) -> np.ndarray:
+    """(N,) bool: finite points with at least ``min_neighbors`` neighbours within
+    ``radius_at_1m_m * range``. Pixel neighbours when organized, a KD-tree otherwise."""
+    if shape is not None and shape[0] > 1 and shape[0] * shape[1] == points.shape[0]:
+        counts = _organized_neighbor_counts(points, shape, radius_at_1m_m)
+        if min_neighbors >= 1:  # only finite pixels have neighbours (NaN compares False)
+            return counts >= min_neighbors
+        return finite_mask(points) & (counts >= min_neighbors)
+    finite = finite_mask(points)
+    from scipy.spatial import cKDTree
+
+    idx = np.flatnonzero(finite)
+    p = points[idx].astype(np.float64)
+    if p.shape[0] == 0:
+        return finite
+    tree = cKDTree(p)
+    # a cloud that is not a camera's (range from the origin means nothing, e.g. a z-up
+    # cloud in the table's frame, or one thinned on a grid): never judge a point by a
+    # radius under 2.5 typical point spacings
+    spacing = float(np.median(tree.query(p[:: max(1, p.shape[0] // 2000)], k=2)[0][:, 1]))
+    radius = np.maximum(radius_at_1m_m * np.linalg.norm(p, axis=1), 2.5 * spacing)
+    counts = tree.query_ball_point(p, radius, return_length=True) - 1  # minus itself
+    out = np.zeros(points.shape[0], dtype=bool)
+    out[idx] = counts >= min_neighbors
+    return out
+
+
+def statistical_mask(points: np.ndarray, k: int, std_mul: float) -> np.ndarray:
+    """(N,) bool: the original statistical outlier removal (PCL semantics): a point
+    survives when its mean distance to its k nearest neighbours is at most the mean of
+    those distances over the cloud plus ``std_mul`` standard deviations."""
+    from scipy.spatial import cKDTree
+
+    finite = finite_mask(points)
+    idx = np.flatnonzero(finite)
+    out = np.zeros(points.shape[0], dtype=bool)
+    if idx.size <= k:
+        out[idx] = True
+        return out
+    p = points[idx].astype(np.float64)
+    dist, _ = cKDTree(p).query(p, k=k + 1, workers=-1)
+    mean_d = dist[:, 1:].mean(axis=1)
+    out[idx] = mean_d <= mean_d.mean() + std_mul * mean_d.std()
+    return out
+
+
+def clean_mask(points: np.ndarray, shape: tuple[int, int] | None, settings: SegmentSettings) -> np.ndarray:
+    """Stage 1: (N,) bool of the points that go on to table detection."""
+    method = settings.outlier_method
+    if method == "depth_radius":
+        return depth_radius_mask(points, shape, settings.outlier_radius_at_1m_m, settings.outlier_min_neighbors)
+    if method == "statistical":
+        return statistical_mask(points, settings.outlier_k, settings.outlier_std)
+    if method == "none":
+        return finite_mask(points)
+    from clearcli.errors import SettingsError
+
+    raise SettingsError(
+        f"settings: [segment] outlier_method must be depth_radius, statistical or none, got {method!r}"
+    )

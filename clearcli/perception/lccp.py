@@ -1,0 +1,125 @@
+"""Stage 3b: Locally Convex Connected Patches (Stein et al., CVPR 2014), vectorised.
+
+Every supervoxel adjacency is classified convex or concave from the two patches'
+centroids and normals; segments are the connected components over the convex ones;
+segments of fewer than ``min_segment_supervoxels`` supervoxels then join their largest
+neighbouring segment (edges where normals are smoothed over are the usual source).
+
+Convexity of a connection (x1, n1) - (x2, n2), d = x1 - x2, alpha = angle(n1, n2):
+- convex when angle(d, n1) - angle(d, n2) <= 0 (the surfaces open away from each other),
+  else accepted only when alpha is under the concavity tolerance;
+- sanity criterion: rejected when the line joining the centroids is nearly parallel to
+  n1 x n2 (within 60 deg / (1 + exp(-0.25 (alpha - 25 deg)))): convexity is undefined
+  for such a pair (a step, or two patches side by side);
+- smoothness check: rejected when the patches are offset along their normals by more
+  than |n1 x n2| * seed + smoothness_threshold * voxel (a step between parallel faces).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from clearcli.perception.settings import SegmentSettings
+from clearcli.perception.supervoxels import Supervoxels
+
+
+def _angle_deg(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise angle between vectors, degrees (0 for a zero vector)."""
+    na = np.linalg.norm(a, axis=1)
+    nb = np.linalg.norm(b, axis=1)
+    cos = np.einsum("ij,ij->i", a, b) / np.maximum(na * nb, 1e-12)
+    return np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
+
+
+def convex_edges(sv: Supervoxels, settings: SegmentSettings) -> np.ndarray:
+    """(A,) bool: which supervoxel adjacencies are convex (may be merged)."""
+    e = sv.edges
+    if e.shape[0] == 0:
+        return np.zeros(0, dtype=bool)
+    x1, x2 = sv.centroids[e[:, 0]], sv.centroids[e[:, 1]]
+    n1, n2 = sv.normals[e[:, 0]], sv.normals[e[:, 1]]
+    d = x1 - x2  # target -> source, the reference direction
+    normal_angle = _angle_deg(n1, n2)
+    ncross = np.cross(n1, n2)
+    ok = np.ones(e.shape[0], dtype=bool)
+    if settings.smoothness_check:
+        expected = np.linalg.norm(ncross, axis=1) * settings.seed_m
+        p1 = np.abs(np.einsum("ij,ij->i", d, n1))
+        p2 = np.abs(np.einsum("ij,ij->i", -d, n2))
+        ok &= np.minimum(p1, p2) <= expected + settings.smoothness_threshold * settings.voxel_m
+    convex = _angle_deg(d, n1) - _angle_deg(d, n2) <= 0
+    is_convex = convex | (normal_angle < settings.concavity_tolerance_deg)
+    if settings.sanity_criterion:
+        inter = _angle_deg(ncross, d)
+        min_inter = np.minimum(inter, 180.0 - inter)
+        thresh = 60.0 / (1.0 + np.exp(-0.25 * (normal_angle - 25.0)))
+        is_convex &= ~(min_inter < thresh)
+    return ok & is_convex
+
+
+def lccp_segments(sv: Supervoxels, settings: SegmentSettings) -> np.ndarray:
+    """(S,) segment index of every supervoxel, 0..G-1."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    n_sv = sv.centroids.shape[0]
+    if n_sv == 0:
+        return np.zeros(0, dtype=np.int64)
+    keep = convex_edges(sv, settings)
+    e = sv.edges[keep]
+    graph = coo_matrix((np.ones(e.shape[0], dtype=np.int8), (e[:, 0], e[:, 1])), shape=(n_sv, n_sv))
+    seg = connected_components(graph, directed=False)[1].astype(np.int64)
+    # "small" also by area: the connectivity step of the supervoxels can leave a small
+    # patch in several pieces, which would count as several supervoxels
+    min_voxels = int(settings.min_segment_supervoxels * (settings.seed_m / settings.voxel_m) ** 2)
+    return merge_small_segments(seg, sv.edges, settings.min_segment_supervoxels, sv.n_voxels, min_voxels)
+
+
+def merge_small_segments(
+    seg: np.ndarray,
+    sv_edges: np.ndarray,
+    min_size: int,
+    sv_voxels: np.ndarray | None = None,
+    min_voxels: int = 0,
+) -> np.ndarray:
+    """Segments with fewer than ``min_size`` supervoxels (or fewer than ``min_voxels``
+    voxels) join their largest adjacent segment (PCL's rule), smallest first; isolated
+    small segments stay."""
+    seg = seg.copy()
+    if (min_size <= 1 and min_voxels <= 0) or sv_edges.shape[0] == 0:
+        _, seg = np.unique(seg, return_inverse=True)
+        return seg
+    n_seg = int(seg.max()) + 1
+    parent = np.arange(n_seg)
+    size = np.bincount(seg, minlength=n_seg)
+    vox = np.bincount(seg, weights=sv_voxels, minlength=n_seg) if sv_voxels is not None else size.astype(float)
+
+    def root(i: int) -> int:
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    # segment adjacency (loops below run over segments, a few hundred at most)
+    a, b = seg[sv_edges[:, 0]], seg[sv_edges[:, 1]]
+    cross = a != b
+    pairs = np.unique(np.stack([np.minimum(a[cross], b[cross]), np.maximum(a[cross], b[cross])], 1), axis=0)
+    neighbours: dict[int, set[int]] = {}
+    for s, t in pairs.tolist():
+        neighbours.setdefault(s, set()).add(t)
+        neighbours.setdefault(t, set()).add(s)
+    for s in np.argsort(size, kind="stable").tolist():
+        if (size[s] >= min_size and vox[s] >= min_voxels) or root(s) != s:
+            continue
+        roots = {root(t) for t in neighbours.get(s, ())} - {s}
+        if not roots:
+            continue
+        target = max(roots, key=lambda r: (size[r], -r))
+        parent[s] = target
+        size[target] += size[s]
+        vox[target] += vox[s]
+        for t in neighbours.get(s, ()):
+            neighbours.setdefault(target, set()).add(t)
+    final = np.array([root(s) for s in range(n_seg)])[seg]
+    _, out = np.unique(final, return_inverse=True)
+    return out.astype(np.int64)

@@ -1,0 +1,155 @@
+"""Stage 3c (ours, not in the thesis): join the pieces of an object that a nearer object
+cuts in two.
+
+LCCP joins only adjacent patches, so an object seen on both sides of a nearer one comes
+out as two segments (mOSD's "occluded objects" frames). Two segments are joined when
+- they do not touch, they reach the same height above the table, and each has a supervoxel on one common plane with the other's
+  (parallel normals, each centroid on the other's plane; a box's top face in two
+  pieces), the closest such pair at most ``occlusion_max_gap_m`` apart,
+- and the camera cannot see the gap: along the straight line between those two patches
+  the measured depth is in front of the line (something hides it) at most pixels that
+  have depth, and almost never behind it (which would mean we see through the gap).
+Needs an organized frame (the depth image); the camera's intrinsics are estimated from
+the frame itself (pixel coordinates against x/z, y/z).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+# patch normals within this angle count as the same surface
+_MAX_ANGLE_DEG = 15.0
+# depth margin (m) for "in front of" / "behind" the gap line, plus a share of the range
+_DEPTH_TOL_M = 0.015
+_MIN_HIDDEN = 0.7
+_TOP_TOL_M = 0.015
+_MAX_SEEN_THROUGH = 0.05
+
+
+def estimate_intrinsics(points: np.ndarray, shape: tuple[int, int]) -> tuple[float, float, float, float] | None:
+    """(fx, fy, cx, cy) from an organized cloud, or None when it is not a pinhole image."""
+    h, w = shape
+    idx = np.flatnonzero(np.isfinite(points).all(axis=1))[::7]
+    if idx.size < 100:
+        return None
+    p = points[idx].astype(np.float64)
+    ok = p[:, 2] > 1e-3
+    p, idx = p[ok], idx[ok]
+    if idx.size < 100:
+        return None
+    row, col = np.divmod(idx, w)
+    out = []
+    for coord, pix in ((p[:, 0] / p[:, 2], col), (p[:, 1] / p[:, 2], row)):
+        a = np.stack([coord, np.ones_like(coord)], axis=1)
+        sol, *_ = np.linalg.lstsq(a, pix.astype(np.float64), rcond=None)
+        resid = pix - a @ sol
+        if np.sqrt(np.mean(resid**2)) > 2.0:  # pixels: not a pinhole projection
+            return None
+        out.append(sol)
+    return float(out[0][0]), float(out[1][0]), float(out[0][1]), float(out[1][1])
+
+
+def merge_occluded(
+    seg_of_sv: np.ndarray,
+    sv_centroids: np.ndarray,
+    sv_normals: np.ndarray,
+    sv_edges: np.ndarray,
+    sv_voxels: np.ndarray,
+    frame_points: np.ndarray,
+    shape: tuple[int, int],
+    max_gap_m: float,
+    voxel_m: float,
+    min_voxels: int,
+    sv_height: np.ndarray | None = None,
+) -> np.ndarray:
+    """Segment index per supervoxel after joining occluded pieces (renumbered).
+
+    ``sv_height``: height of each supervoxel above the table; when given, the two
+    pieces must also reach the same height (within ``_TOP_TOL_M``), as the two sides
+    of one object cut by a nearer one do.
+
+    For two segments that do not touch, the closest pair of their supervoxels that lie
+    on one plane (parallel normals, each centroid on the other's plane) gives the gap
+    line; the pair is joined when the camera cannot see that line.
+    """
+    intr = estimate_intrinsics(frame_points, shape)
+    n_seg = int(seg_of_sv.max()) + 1 if seg_of_sv.size else 0
+    if intr is None or n_seg < 2:
+        return seg_of_sv
+    fx, fy, cx, cy = intr
+    h, w = shape
+    depth = frame_points[:, 2].reshape(h, w)
+    seg_voxels = np.bincount(seg_of_sv, weights=sv_voxels, minlength=n_seg)
+    cand = np.flatnonzero(seg_voxels >= min_voxels)
+    if cand.size < 2:
+        return seg_of_sv
+    a_seg, b_seg = seg_of_sv[sv_edges[:, 0]], seg_of_sv[sv_edges[:, 1]]
+    touching = {(int(min(x, y)), int(max(x, y))) for x, y in zip(a_seg.tolist(), b_seg.tolist()) if x != y}
+    order = np.argsort(seg_of_sv, kind="stable")
+    bounds = np.searchsorted(seg_of_sv[order], np.arange(n_seg + 1))
+    members = {int(s): order[bounds[s] : bounds[s + 1]] for s in cand}
+    lo = {s: sv_centroids[m].min(axis=0) for s, m in members.items()}
+    hi = {s: sv_centroids[m].max(axis=0) for s, m in members.items()}
+    cos_max = np.cos(np.radians(_MAX_ANGLE_DEG))
+    parent = np.arange(n_seg)
+
+    def root(i: int) -> int:
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    cand_list = cand.tolist()
+    for ia, a in enumerate(cand_list):
+        for b in cand_list[ia + 1 :]:
+            if (a, b) in touching or root(a) == root(b):
+                continue
+            gap_box = np.maximum(0.0, np.maximum(lo[a] - hi[b], lo[b] - hi[a]))
+            if np.linalg.norm(gap_box) > max_gap_m:
+                continue
+            if sv_height is not None and abs(sv_height[members[a]].max() - sv_height[members[b]].max()) > _TOP_TOL_M:
+                continue
+            xa, na = sv_centroids[members[a]], sv_normals[members[a]]
+            xb, nb = sv_centroids[members[b]], sv_normals[members[b]]
+            diff = xb[None, :, :] - xa[:, None, :]  # (A, B, 3)
+            dist = np.linalg.norm(diff, axis=2)
+            parallel = np.abs(na @ nb.T) >= cos_max
+            off_a = np.abs(np.einsum("ik,ijk->ij", na, diff))
+            off_b = np.abs(np.einsum("jk,ijk->ij", nb, diff))
+            tol = np.maximum(0.01, 0.05 * dist)
+            ok = parallel & (off_a <= tol) & (off_b <= tol) & (dist <= max_gap_m)
+            if not ok.any():
+                continue
+            dist_ok = np.where(ok, dist, np.inf)
+            i, j = np.unravel_index(int(np.argmin(dist_ok)), dist_ok.shape)
+            gap = float(dist[i, j])
+            pa, pb = xa[i], xb[j]
+            n_s = max(3, int(gap / (0.5 * voxel_m)))
+            t = np.linspace(0.0, 1.0, n_s + 2)[1:-1]
+            t = t[(t * gap > 0.01) & ((1 - t) * gap > 0.01)]  # the ends are the patches' own
+            if t.size < 3:
+                continue
+            line = pa + t[:, None] * (pb - pa)
+            if np.any(line[:, 2] <= 1e-3):
+                continue
+            col = np.round(fx * line[:, 0] / line[:, 2] + cx).astype(np.int64)
+            row = np.round(fy * line[:, 1] / line[:, 2] + cy).astype(np.int64)
+            if not ((col >= 0) & (col < w) & (row >= 0) & (row < h)).all():
+                continue
+            z_meas = depth[row, col]
+            tol_z = _DEPTH_TOL_M + 0.01 * line[:, 2]
+            hidden = np.isfinite(z_meas) & (z_meas < line[:, 2] - tol_z)
+            seen_through = np.isfinite(z_meas) & (z_meas > line[:, 2] + tol_z)
+            # missing depth (the sensor's shadow beside a nearer edge) says nothing;
+            # judge by the pixels that have depth, and want most of them
+            measured = np.isfinite(z_meas)
+            n_meas = int(measured.sum())
+            if (
+                n_meas >= 0.5 * measured.size
+                and hidden.sum() >= _MIN_HIDDEN * n_meas
+                and seen_through.sum() <= _MAX_SEEN_THROUGH * n_meas
+            ):
+                parent[root(b)] = root(a)
+    final = np.array([root(s) for s in range(n_seg)])[seg_of_sv]
+    _, out = np.unique(final, return_inverse=True)
+    return out.astype(np.int64)

@@ -1,0 +1,240 @@
+"""The `segment` stage: Frame -> Segmentation (thesis 4.1).
+
+1. finite points, outlier removal (filters.py; range-scaled radius by default)
+2. the table: RANSAC planes, the support surface among them, its 2D convex hull, the
+   polygonal prism of points above it (table.py)
+3. supervoxels (VCCS, supervoxels.py) and LCCP merging (lccp.py); then two merges of
+   ours: pieces of one object cut apart by a nearer one (occlusion.py, organized frames)
+   and the inner and outer walls of a container (rims.py)
+4. minimum-size filter (visible area in voxels, and a point count)
+
+Every stage is its own function; `segment` chains them and times each one.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from clearcli.errors import SceneError
+from clearcli.io.frames import Frame
+from clearcli.perception.settings import SegmentSettings
+from clearcli.perception.types import Segmentation, SegmentedObject, TablePlane
+
+
+def principal_axes(points: np.ndarray) -> np.ndarray:
+    """(3, 3) rows: unit PCA axes, largest variance first, right-handed."""
+    if points.shape[0] < 2:
+        return np.eye(3)
+    c = points - points.mean(axis=0)
+    _, vecs = np.linalg.eigh(c.T @ c)
+    axes = vecs[:, ::-1].T.copy()
+    axes[2] = np.cross(axes[0], axes[1])
+    return axes
+
+
+def table_aligned_box(
+    points: np.ndarray, table: TablePlane, rests_below_m: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Oriented bounding box with one axis on the table normal: (center, axes rows, extents).
+
+    In-plane: the minimum-area rectangle of the projected points (rotating calipers over
+    the 2D hull's edges), longer side first. Along the normal: from the lowest to the
+    highest point, except that an object whose lowest point is within ``rests_below_m``
+    of the table reaches down to the table (the prism cuts its bottom, and it stands on
+    the table).
+    """
+    from scipy.spatial import ConvexHull, QhullError
+
+    n = table.normal
+    helper = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    u = np.cross(helper, n)
+    u /= np.linalg.norm(u)
+    v = np.cross(n, u)
+    xy = np.stack([points @ u, points @ v], axis=1)  # matvecs: fast for (N, 3)
+    h = table.height_of(points)
+    try:
+        hull = xy[ConvexHull(xy).vertices]
+    except (QhullError, ValueError):
+        hull = xy
+    edges = np.roll(hull, -1, axis=0) - hull
+    lens = np.linalg.norm(edges, axis=1)
+    dirs = edges[lens > 1e-12] / lens[lens > 1e-12, None]
+    if dirs.shape[0] == 0:
+        dirs = np.array([[1.0, 0.0]])
+    perp = np.stack([-dirs[:, 1], dirs[:, 0]], axis=1)  # +90 deg in (u, v), i.e. n x dir
+    pa = hull @ dirs.T  # (K, D)
+    pb = hull @ perp.T
+    areas = (pa.max(0) - pa.min(0)) * (pb.max(0) - pb.min(0))
+    best = int(np.argmin(areas))
+    a1_2d = dirs[best]
+    if np.ptp(pb[:, best]) > np.ptp(pa[:, best]):  # longer side first
+        a1_2d = perp[best]
+    a2_2d = np.array([-a1_2d[1], a1_2d[0]])
+    c1, c2 = hull @ a1_2d, hull @ a2_2d
+    ext = np.array([np.ptp(c1), np.ptp(c2)])
+    mid = np.array([(c1.max() + c1.min()) / 2, (c2.max() + c2.min()) / 2])
+    a1 = a1_2d[0] * u + a1_2d[1] * v
+    a2 = a2_2d[0] * u + a2_2d[1] * v  # = n x a1
+    centre_2d = mid[0] * a1 + mid[1] * a2
+    lo = float(h.min())
+    hi = float(h.max())
+    if lo <= rests_below_m:
+        lo = 0.0
+    # a1, a2 are in-plane, so centre_2d has no normal component: the point of the plane
+    # below it is centre_2d - offset * n
+    center = centre_2d - table.offset * n + (lo + hi) / 2 * n
+    axes = np.stack([a1, a2, n])
+    extents = np.array([ext[0], ext[1], hi - lo])
+    return center, axes, extents
+
+
+def make_object(
+    frame_indices: np.ndarray, points: np.ndarray, table: TablePlane, rests_below_m: float
+) -> SegmentedObject:
+    center, axes, extents = table_aligned_box(points, table, rests_below_m)
+    return SegmentedObject(
+        indices=frame_indices.astype(np.int64),
+        centroid=points.mean(axis=0),
+        obb_center=center,
+        obb_axes=axes,
+        obb_extents=extents,
+        principal_axes=principal_axes(points),
+    )
+
+
+def _fit_to_density(points: np.ndarray, settings: SegmentSettings) -> SegmentSettings:
+    """Settings for a cloud sparser than the voxel grid (an unorganized cloud thinned on
+    a coarser grid): voxels of at least 1.5 point spacings, or no voxel has neighbours;
+    seeds and normal radius grow with them."""
+    import dataclasses
+
+    from scipy.spatial import cKDTree
+
+    if points.shape[0] < 10:
+        return settings
+    probe = points[:: max(1, points.shape[0] // 2000)]
+    spacing = float(np.median(cKDTree(points).query(probe, k=2)[0][:, 1]))
+    voxel = max(settings.voxel_m, 1.5 * spacing)
+    if voxel <= settings.voxel_m:
+        return settings
+    scale = voxel / settings.voxel_m
+    return dataclasses.replace(
+        settings,
+        voxel_m=voxel,
+        seed_m=settings.seed_m * scale,
+        normal_radius_m=settings.normal_radius_m * scale,
+    )
+
+
+def segment(frame: Frame, settings: SegmentSettings) -> Segmentation:
+    """Segment the objects on the table of ``frame``.
+
+    Raises SceneError when there is no usable table (no finite points, no plane, a table
+    seen from below). A table with nothing on it is a result with zero objects.
+    """
+    from clearcli.perception.filters import clean_mask
+    from clearcli.perception.lccp import lccp_segments
+    from clearcli.perception.supervoxels import compute_supervoxels, voxelize
+    from clearcli.perception.table import find_table, table_and_prism
+
+    where = f"{frame.source}: " if frame.source else ""
+    timings: dict[str, float] = {}
+    t0 = time.perf_counter()
+    points = frame.points
+    if points.ndim != 2 or points.shape[1] != 3 or points.shape[0] == 0:
+        raise SceneError(f"{where}the frame holds no points")
+    organized = frame.is_organized and frame.shape is not None and frame.shape[0] * frame.shape[1] == points.shape[0]
+
+    # 1. finite points, outliers
+    keep = clean_mask(points, frame.shape if organized else None, settings)
+    idx = np.flatnonzero(keep)
+    if idx.size == 0:
+        if not np.isfinite(points).all(axis=1).any():
+            raise SceneError(f"{where}the frame has no finite points (all NaN)")
+        raise SceneError(f"{where}no table: no points are left after outlier removal")
+    pts = points[idx].astype(np.float64)
+    t1 = time.perf_counter()
+    timings["filter"] = t1 - t0
+
+    # 2. table, hull, prism
+    fit = find_table(pts, settings, organized, frame.source)
+    table_mask, prism_mask, _ = table_and_prism(pts, fit, settings)
+    t2 = time.perf_counter()
+    timings["table"] = t2 - t1
+
+    obj_idx = idx[prism_mask]
+    obj_pts = pts[prism_mask]
+    objects: list[SegmentedObject] = []
+    timings["supervoxels"] = timings["lccp"] = timings["merge"] = 0.0
+    if obj_pts.shape[0] >= 4:
+        if fit.camera_is_origin:
+            viewpoint = np.zeros(3)
+        else:  # a cloud in the table's frame: look from above the table's middle
+            viewpoint = fit.polygon.mean(axis=0) + 1.0 * fit.plane.normal
+        colors = frame.colors[obj_idx] if (frame.colors is not None and settings.color_importance > 0) else None
+
+        # 3. supervoxels, LCCP
+        seg_settings = settings
+        if not organized:
+            seg_settings = _fit_to_density(obj_pts, settings)
+        vox = voxelize(obj_pts, seg_settings.voxel_m, colors)
+        sv = compute_supervoxels(vox, viewpoint, seg_settings)
+        t3 = time.perf_counter()
+        timings["supervoxels"] = t3 - t2
+        seg_of_sv = lccp_segments(sv, seg_settings)
+        t4 = time.perf_counter()
+        timings["lccp"] = t4 - t3
+
+        if settings.occlusion_merge and organized and frame.shape is not None:
+            from clearcli.perception.occlusion import merge_occluded
+
+            min_vox = max(1, int(settings.min_object_area_m2 / settings.voxel_m**2))
+            seg_of_sv = merge_occluded(
+                seg_of_sv, sv.centroids, sv.normals, sv.edges, sv.n_voxels, points, frame.shape,
+                settings.occlusion_max_gap_m, settings.voxel_m, min_vox, fit.plane.height_of(sv.centroids),
+            )
+        seg_of_voxel = seg_of_sv[sv.voxel_label]
+        if settings.rim_merge:
+            from clearcli.perception.rims import merge_rims
+
+            seg_of_voxel = merge_rims(
+                seg_of_voxel, vox.centroids, fit.plane.height_of(vox.centroids), settings.rim_tolerance_m,
+                settings.rim_contact_m,
+            )
+        t5 = time.perf_counter()
+        timings["merge"] = t5 - t4
+
+        # 4. size filter
+        seg_of_point = seg_of_voxel[vox.point_voxel]
+        n_seg = int(seg_of_voxel.max()) + 1 if seg_of_voxel.size else 0
+        seg_voxels = np.bincount(seg_of_voxel, minlength=n_seg)
+        seg_points = np.bincount(seg_of_point, minlength=n_seg)
+        ok = (seg_voxels * seg_settings.voxel_m**2 >= settings.min_object_area_m2) & (
+            seg_points >= settings.min_object_points
+        )
+        kept = np.flatnonzero(ok)
+        kept = kept[np.argsort(-seg_points[kept], kind="stable")]  # largest first
+        order = np.argsort(seg_of_point, kind="stable")
+        bounds = np.searchsorted(seg_of_point[order], np.arange(n_seg + 1))
+        rests = settings.prism_min_height_m + settings.plane_distance_m
+        for s in kept.tolist():
+            members = order[bounds[s] : bounds[s + 1]]
+            p = obj_pts[members]
+            # the prism's lower bound grew with range: so does "resting on the table"
+            noise = settings.prism_noise_per_m2 * float(np.min(np.einsum("ij,ij->i", p, p))) if fit.camera_is_origin else 0.0
+            objects.append(make_object(obj_idx[members], p, fit.plane, rests + noise))
+    timings["objects"] = time.perf_counter() - t0 - sum(timings.values())
+    timings["total"] = time.perf_counter() - t0
+    return Segmentation(
+        n_points=frame.n_points,
+        table=fit.plane,
+        table_polygon=fit.polygon,
+        table_indices=idx[table_mask],
+        objects=tuple(objects),
+        timings_s=timings,
+        source=frame.source,
+        frame_id=frame.frame_id,
+        stamp_s=frame.stamp_s,
+    )

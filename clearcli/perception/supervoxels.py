@@ -1,0 +1,249 @@
+"""Stage 3a: supervoxels after VCCS (Papon et al., CVPR 2013), vectorised.
+
+Voxel grid -> 26-neighbourhood voxel adjacency -> voxel normals -> seeds on a grid of
+``seed_m`` cells -> every voxel joins the nearby seed with the smallest VCCS distance
+    D = spatial_importance * |dx| / seed_m + normal_importance * (1 - |n . n_s|)
+        + color_importance * |dc| / 255,
+seeds move to the mean of their voxels, repeat; finally each supervoxel is split into its
+connected pieces over the voxel adjacency (VCCS grows supervoxels through adjacency, so a
+supervoxel never jumps a gap), and a piece cut off from its seed joins the neighbour it
+touches most.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from clearcli.perception.settings import SegmentSettings
+
+# 13 of the 26 neighbour offsets: each undirected adjacency found once
+_HALF_OFFSETS = np.array(
+    [(dx, dy, dz) for dx in (-1, 0, 1) for dy in (-1, 0, 1) for dz in (-1, 0, 1) if (dx, dy, dz) > (0, 0, 0)],
+    dtype=np.int64,
+)
+
+
+@dataclass(frozen=True, eq=False)
+class VoxelCloud:
+    point_voxel: np.ndarray  # (M,) voxel index of every input point
+    centroids: np.ndarray  # (V, 3)
+    counts: np.ndarray  # (V,) points per voxel
+    keys: np.ndarray  # (V, 3) integer grid coordinates
+    colors: np.ndarray | None  # (V, 3) float mean RGB
+    edges: np.ndarray  # (E, 2) adjacent voxel pairs (26-neighbourhood), i < j unordered
+
+    @property
+    def n_voxels(self) -> int:
+        return int(self.centroids.shape[0])
+
+
+def voxelize(points: np.ndarray, voxel_m: float, colors: np.ndarray | None = None) -> VoxelCloud:
+    """Voxel grid of ``points`` (M, 3) and the voxel adjacency graph."""
+    keys3 = np.floor(points / voxel_m).astype(np.int64)
+    lo = keys3.min(axis=0) - 1  # one empty layer around so offsets never wrap
+    keys3 -= lo
+    dims = keys3.max(axis=0) + 2
+    packed = (keys3[:, 0] * dims[1] + keys3[:, 1]) * dims[2] + keys3[:, 2]
+    uniq, inverse = np.unique(packed, return_inverse=True)
+    n_vox = uniq.shape[0]
+    counts = np.bincount(inverse, minlength=n_vox)
+    cent = np.stack([np.bincount(inverse, weights=points[:, k], minlength=n_vox) for k in range(3)], axis=1)
+    cent /= counts[:, None]
+    vcol = None
+    if colors is not None:
+        vcol = np.stack(
+            [np.bincount(inverse, weights=colors[:, k].astype(np.float64), minlength=n_vox) for k in range(3)],
+            axis=1,
+        ) / counts[:, None]
+    keys = np.stack([uniq // (dims[1] * dims[2]), (uniq // dims[2]) % dims[1], uniq % dims[2]], axis=1)
+    src: list[np.ndarray] = []
+    dst: list[np.ndarray] = []
+    for off in _HALF_OFFSETS:
+        target = uniq + (off[0] * dims[1] + off[1]) * dims[2] + off[2]
+        pos = np.searchsorted(uniq, target)
+        pos[pos >= n_vox] = n_vox - 1
+        hit = uniq[pos] == target
+        src.append(np.flatnonzero(hit))
+        dst.append(pos[hit])
+    edges = np.stack([np.concatenate(src), np.concatenate(dst)], axis=1) if src else np.zeros((0, 2), np.int64)
+    return VoxelCloud(inverse.astype(np.int64), cent, counts, keys, vcol, edges)
+
+
+def orient_towards(normals: np.ndarray, points: np.ndarray, viewpoint: np.ndarray) -> np.ndarray:
+    """Flip normals so that they face the viewpoint."""
+    flip = np.einsum("ij,ij->i", normals, viewpoint - points) < 0
+    out = normals.copy()
+    out[flip] *= -1
+    return out
+
+
+def voxel_normals(centroids: np.ndarray, radius_m: float, viewpoint: np.ndarray) -> np.ndarray:
+    """(V, 3) unit normals of the voxel centroids (PCA over a radius), facing the viewpoint."""
+    import open3d as o3d
+
+    pcd = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(centroids))
+    pcd.estimate_normals(o3d.geometry.KDTreeSearchParamHybrid(radius=radius_m, max_nn=30))
+    normals = np.asarray(pcd.normals)
+    if normals.shape[0] != centroids.shape[0]:  # too few points: no normals at all
+        normals = np.tile(np.array([0.0, 0.0, 1.0]), (centroids.shape[0], 1))
+    return orient_towards(normals, centroids, viewpoint)
+
+
+def _components(n: int, edges: np.ndarray) -> np.ndarray:
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    graph = coo_matrix((np.ones(edges.shape[0], dtype=np.int8), (edges[:, 0], edges[:, 1])), shape=(n, n))
+    return connected_components(graph, directed=False)[1]
+
+
+def supervoxel_labels(vox: VoxelCloud, normals: np.ndarray, settings: SegmentSettings) -> np.ndarray:
+    """(V,) supervoxel index of every voxel, 0..S-1."""
+    from scipy.spatial import cKDTree
+
+    cent = vox.centroids
+    n_vox = vox.n_voxels
+    seed_m = settings.seed_m
+    # seeds: in every occupied seed cell holding enough voxels (a speck is no seed), the
+    # voxel nearest to the mean of that cell's voxels
+    cell = np.floor(cent / seed_m).astype(np.int64)
+    cell -= cell.min(axis=0)
+    cdims = cell.max(axis=0) + 1
+    cpacked = (cell[:, 0] * cdims[1] + cell[:, 1]) * cdims[2] + cell[:, 2]
+    _, cinv = np.unique(cpacked, return_inverse=True)
+    n_cells = int(cinv.max()) + 1 if n_vox else 0
+    ccount = np.bincount(cinv, minlength=n_cells)
+    cmean = np.stack([np.bincount(cinv, weights=cent[:, k], minlength=n_cells) for k in range(3)], axis=1)
+    cmean /= ccount[:, None]
+    dist_to_mean = np.linalg.norm(cent - cmean[cinv], axis=1)
+    order = np.lexsort((dist_to_mean, cinv))
+    first = np.ones(order.shape[0], dtype=bool)
+    first[1:] = cinv[order[1:]] != cinv[order[:-1]]
+    seed_vox = order[first]
+    min_seed_voxels = max(1, int(0.1 * (seed_m / settings.voxel_m) ** 2))
+    seed_vox = seed_vox[ccount[cinv[seed_vox]] >= min_seed_voxels]
+    if seed_vox.size == 0:
+        seed_vox = np.array([0], dtype=np.int64)
+
+    seed_pos = cent[seed_vox]
+    seed_nrm = normals[seed_vox]
+    seed_col = vox.colors[seed_vox] if (vox.colors is not None and settings.color_importance > 0) else None
+    k = min(8, seed_pos.shape[0])
+    labels = np.full(n_vox, -1, dtype=np.int64)
+    for _ in range(max(1, settings.supervoxel_iterations)):
+        tree = cKDTree(seed_pos)
+        dist, nb = tree.query(cent, k=k, distance_upper_bound=1.5 * seed_m)
+        if k == 1:
+            dist, nb = dist[:, None], nb[:, None]
+        valid = np.isfinite(dist)
+        nb_safe = np.where(valid, nb, 0)
+        cost = settings.spatial_importance * dist / seed_m
+        cost = cost + settings.normal_importance * (
+            1.0 - np.abs(np.einsum("vj,vkj->vk", normals, seed_nrm[nb_safe]))
+        )
+        if seed_col is not None and vox.colors is not None:
+            cost = cost + settings.color_importance * np.linalg.norm(
+                vox.colors[:, None, :] - seed_col[nb_safe], axis=2
+            ) / 255.0
+        cost[~valid] = np.inf
+        pick = np.argmin(cost, axis=1)
+        labels = np.where(valid[np.arange(n_vox), pick], nb_safe[np.arange(n_vox), pick], -1)
+        # move the seeds to the mean of their voxels
+        used = labels >= 0
+        n_s = seed_pos.shape[0]
+        cnt = np.bincount(labels[used], minlength=n_s)
+        keep = cnt > 0
+        new_pos = np.stack([np.bincount(labels[used], weights=cent[used, j], minlength=n_s) for j in range(3)], axis=1)
+        new_nrm = np.stack([np.bincount(labels[used], weights=normals[used, j], minlength=n_s) for j in range(3)], axis=1)
+        seed_pos = np.where(keep[:, None], new_pos / np.maximum(cnt, 1)[:, None], seed_pos)
+        nn = np.linalg.norm(new_nrm, axis=1)
+        seed_nrm = np.where((keep & (nn > 1e-9))[:, None], new_nrm / np.maximum(nn, 1e-9)[:, None], seed_nrm)
+        if seed_col is not None and vox.colors is not None:
+            new_col = np.stack(
+                [np.bincount(labels[used], weights=vox.colors[used, j], minlength=n_s) for j in range(3)], axis=1
+            )
+            seed_col = np.where(keep[:, None], new_col / np.maximum(cnt, 1)[:, None], seed_col)
+
+    # connectivity: pieces of one supervoxel that do not touch become separate pieces;
+    # unassigned voxels form pieces of their own
+    e = vox.edges
+    same = labels[e[:, 0]] == labels[e[:, 1]]
+    piece = _components(n_vox, e[same])
+    # the piece holding most of a supervoxel's voxels keeps it; other pieces are orphans
+    n_pieces = int(piece.max()) + 1 if n_vox else 0
+    piece_size = np.bincount(piece, minlength=n_pieces)
+    piece_label = np.full(n_pieces, -1, dtype=np.int64)
+    piece_label[piece] = labels
+    main = np.zeros(n_pieces, dtype=bool)
+    has = piece_label >= 0
+    if has.any():
+        order = np.lexsort((-piece_size[has], piece_label[has]))
+        pl = piece_label[has][order]
+        firsts = np.ones(pl.shape[0], dtype=bool)
+        firsts[1:] = pl[1:] != pl[:-1]
+        main[np.flatnonzero(has)[order[firsts]]] = True
+    # an orphan piece joins the main piece it shares most adjacencies with (one pass)
+    pa, pb = piece[e[:, 0]], piece[e[:, 1]]
+    cross = pa != pb
+    pa, pb = pa[cross], pb[cross]
+    pairs = np.concatenate([np.stack([pa, pb], 1), np.stack([pb, pa], 1)])
+    pairs = pairs[~main[pairs[:, 0]] & main[pairs[:, 1]]]
+    target = np.arange(n_pieces)
+    if pairs.shape[0]:
+        uniq, cnt = np.unique(pairs, axis=0, return_counts=True)
+        order = np.lexsort((-cnt, uniq[:, 0]))
+        u = uniq[order]
+        firsts = np.ones(u.shape[0], dtype=bool)
+        firsts[1:] = u[1:, 0] != u[:-1, 0]
+        target[u[firsts, 0]] = u[firsts, 1]
+    final = target[piece]
+    _, out = np.unique(final, return_inverse=True)
+    return out.astype(np.int64)
+
+
+@dataclass(frozen=True, eq=False)
+class Supervoxels:
+    voxel_label: np.ndarray  # (V,) supervoxel of each voxel
+    centroids: np.ndarray  # (S, 3)
+    normals: np.ndarray  # (S, 3) unit, facing the viewpoint
+    n_voxels: np.ndarray  # (S,) voxels per supervoxel
+    edges: np.ndarray  # (A, 2) adjacent supervoxel pairs, i < j
+
+
+def supervoxel_stats(
+    vox: VoxelCloud, voxel_normals_: np.ndarray, labels: np.ndarray, viewpoint: np.ndarray
+) -> Supervoxels:
+    """Centroid and normal (PCA of its voxel centroids; the mean voxel normal when the
+    patch is too small or too thin for PCA) of every supervoxel, and their adjacency."""
+    n_sv = int(labels.max()) + 1 if labels.size else 0
+    cent = vox.centroids
+    cnt = np.bincount(labels, minlength=n_sv).astype(np.float64)
+    mean = np.stack([np.bincount(labels, weights=cent[:, k], minlength=n_sv) for k in range(3)], axis=1) / cnt[:, None]
+    d = cent - mean[labels]
+    cov = np.zeros((n_sv, 3, 3))
+    for a in range(3):
+        for b in range(a, 3):
+            cov[:, a, b] = cov[:, b, a] = np.bincount(labels, weights=d[:, a] * d[:, b], minlength=n_sv)
+    evals, evecs = np.linalg.eigh(cov)
+    pca_n = evecs[:, :, 0]
+    mean_n = np.stack([np.bincount(labels, weights=voxel_normals_[:, k], minlength=n_sv) for k in range(3)], axis=1)
+    mean_n /= np.maximum(np.linalg.norm(mean_n, axis=1, keepdims=True), 1e-12)
+    # PCA needs a patch that spans two directions
+    good = (cnt >= 4) & (evals[:, 1] > 4.0 * np.maximum(evals[:, 0], 1e-12))
+    normals = np.where(good[:, None], pca_n, mean_n)
+    normals = orient_towards(normals, mean, viewpoint)
+    e = vox.edges
+    la, lb = labels[e[:, 0]], labels[e[:, 1]]
+    cross = la != lb
+    pairs = np.stack([np.minimum(la[cross], lb[cross]), np.maximum(la[cross], lb[cross])], axis=1)
+    pairs = np.unique(pairs, axis=0) if pairs.shape[0] else np.zeros((0, 2), np.int64)
+    return Supervoxels(labels, mean, normals, cnt.astype(np.int64), pairs)
+
+
+def compute_supervoxels(vox: VoxelCloud, viewpoint: np.ndarray, settings: SegmentSettings) -> Supervoxels:
+    """Stage 3a: voxel normals, VCCS clustering, supervoxel centroids/normals/adjacency."""
+    normals = voxel_normals(vox.centroids, settings.normal_radius_m, viewpoint)
+    labels = supervoxel_labels(vox, normals, settings)
+    return supervoxel_stats(vox, normals, labels, viewpoint)
