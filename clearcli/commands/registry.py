@@ -10,15 +10,20 @@ from typing import Any, Callable
 
 import typer
 
-from clearcli.commands import basic
+from clearcli.commands import basic, info, replay, plan, predicates, simulate
+from clearcli.commands import evaluate, segment
 
 COMMANDS: list[tuple[str, Callable[..., Any], dict[str, Any]]] = [
-    ("info", basic.info_cmd, {}),
-    ("segment", basic.not_yet("segment"), {}),
-    ("predicates", basic.not_yet("predicates"), {}),
-    ("plan", basic.not_yet("plan"), {}),
-    ("replay", basic.not_yet("replay"), {}),
+    ("info", info.info_cmd, {}),
+    ("segment", segment.segment_cmd, {}),
+    ("predicates", predicates.predicates_cmd, {}),
+    ("domain", predicates.domain_cmd, {}),
+    ("plan", plan.plan_cmd, {}),
+    ("replay", replay.replay_cmd, {}),
+    ("simulate", simulate.simulate_cmd, {}),
     ("settings", basic.settings_cmd, {}),
 ]
 
-GROUPS: list[tuple[str, typer.Typer]] = []
+GROUPS: list[tuple[str, typer.Typer]] = [
+    ("evaluate", evaluate.evaluate_app),
+]

@@ -1,0 +1,205 @@
+"""`clear replay LOG`: the whole pipeline over a recorded session, frame by frame.
+
+--json writes one line per replayed frame, then one summary line, each in the shared
+envelope ({"schema": "clear.replay", "version": 1, ...}) with a "type":
+  frame:   index (position on the topic), stamp_s, time_s (from the start of the log),
+           status (ok | cleared | no_table | no_plan | failed), objects [{id, name,
+           centroid_m, extents_m, new}], gone [ids], first_action {kind, id, name,
+           direction, unit_vector, push_length_m} or null, plan_length, plan (actions
+           with ids, cost, optimal, replans, unreachable/ungraspable/stuck ids) or null,
+           execution (did the previous first action happen: action, id, outcome
+           done|failed, detail, moved_along_m) or null, undoes_push, timings_s by stage,
+           error and stage when the frame was not planned.
+  summary: frames_read, frames, ok, cleared, no_table, no_plan, failed, objects_seen,
+           actions, grasps, pushes, executions {done, failed}, back_and_forth,
+           unreachable, time_s and mean_time_s by stage, frames_per_s, stopped (why a
+           damaged log ended early, else null).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated, Any, Iterator, Optional
+
+import typer
+
+from clearcli.commands.basic import SettingsOpt
+
+if TYPE_CHECKING:
+    from clearcli.io.frames import Frame
+    from clearcli.replay.session import FrameReport, Summary
+
+
+def replay_cmd(
+    log: Annotated[Path, typer.Argument(help="An MCAP log of point clouds (a PCD works too: one frame).")],
+    topic: Annotated[
+        Optional[str], typer.Option("--topic", help="Point-cloud topic (needed when the log has several).")
+    ] = None,
+    out: Annotated[
+        Optional[Path],
+        typer.Option("--out", help="Write an annotated MCAP (frames + scene, predicates, plan) for Foxglove."),
+    ] = None,
+    force: Annotated[bool, typer.Option("--force", help="Overwrite --out if it exists.")] = False,
+    json_out: Annotated[
+        bool, typer.Option("--json", help="One JSON line per frame on stdout, then a summary line.")
+    ] = False,
+    every: Annotated[int, typer.Option("--every", min=1, help="Replay every N-th frame only.")] = 1,
+    from_s: Annotated[
+        Optional[float], typer.Option("--from", help="Start at this many seconds from the start of the log.")
+    ] = None,
+    to_s: Annotated[
+        Optional[float], typer.Option("--to", help="Stop after this many seconds from the start of the log.")
+    ] = None,
+    fail_fast: Annotated[bool, typer.Option("--fail-fast", help="Stop at the first frame that fails.")] = False,
+    no_push_memory: Annotated[
+        bool,
+        typer.Option(
+            "--no-push-memory", help="Plan every frame afresh, as the thesis did (pushes may be undone)."
+        ),
+    ] = False,
+    base_frame: Annotated[
+        Optional[str],
+        typer.Option("--base-frame", help="Robot base frame to look up in the log's /tf_static or /tf."),
+    ] = None,
+    settings: SettingsOpt = None,
+) -> None:
+    """Replay a recorded clearing session: segment, predicates and plan on every frame,
+    with object ids stable across frames, a check of whether each planned action
+    happened, and no pushing back and forth. Progress on stderr; a summary at the end."""
+    from clearcli.commands.common import check_output_path, print_json, stderr, stdout
+    from clearcli.errors import PartialLogError, SettingsError
+    from clearcli.io.read import iter_frames, sniff
+    from clearcli.pipeline import Pipeline
+    from clearcli.replay.session import BASE_FRAMES, ReplayOptions, Session, base_camera_from_log, replay
+    from clearcli.settings import load_settings
+
+    config = load_settings(settings)
+    if from_s is not None and to_s is not None and to_s < from_s:
+        raise SettingsError(f"--to {to_s} is before --from {from_s}")
+    kind = sniff(log)
+    log_start_s: float | None = None
+    total: int | None = None
+    if kind == "mcap":
+        from clearcli.io.mcap import choose_topic, read_summary
+
+        summary = read_summary(log)
+        topic = choose_topic(summary, topic)
+        if summary.start_ns is not None:
+            log_start_s = summary.start_ns / 1e9
+        total = summary.count(topic) or None
+    else:
+        total = 1
+    if out is not None:
+        check_output_path(out, force, inputs=(log,))
+
+    pipeline = Pipeline(config)
+    options = ReplayOptions(
+        every=every, from_s=from_s, to_s=to_s, fail_fast=fail_fast, push_memory=not no_push_memory
+    )
+    session = Session(pipeline, options)
+    bases = (base_frame,) if base_frame else BASE_FRAMES
+
+    def frames() -> Iterator["Frame"]:
+        first = True
+        for frame in iter_frames(log, topic):
+            if first and kind == "mcap" and not config.robot.camera_pose:
+                T, base = base_camera_from_log(log, frame.frame_id, bases)
+                if T is not None:
+                    pipeline.T_base_camera = T
+                    stderr.print(f"robot base: {base} -> {frame.frame_id} from the log's transforms")
+                elif base_frame:
+                    stderr.print(
+                        f"robot base: no transform {base_frame} -> {frame.frame_id} in the log; "
+                        "placing the robot by the plan stage's rules"
+                    )
+            first = False
+            yield frame
+
+    partial: PartialLogError | None = None
+
+    def run(sink: Any) -> None:
+        nonlocal partial
+        from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+        progress = Progress(
+            TextColumn("replay"),
+            BarColumn(),
+            MofNCompleteColumn(),
+            TimeElapsedColumn(),
+            TextColumn("{task.description}"),
+            console=stderr,
+            transient=True,
+            disable=json_out,
+        )
+        with progress:
+            task = progress.add_task("", total=total)
+            try:
+                for report in replay(frames(), session, log_start_s):
+                    if json_out:
+                        print_json("replay", report.to_json())
+                    if sink is not None:
+                        sink.write(report, report.frame)
+                    progress.update(task, completed=session.summary.frames_read, description=_brief(report))
+            except PartialLogError as exc:
+                partial = exc
+
+    if out is not None:
+        from clearcli.replay.annotate import AnnotatedLog
+
+        with AnnotatedLog(out, log if kind == "mcap" else None, topic, config) as annotated:
+            run(annotated)
+    else:
+        run(None)
+
+    result = session.summary
+    if json_out:
+        print_json("replay", result.to_json())
+    else:
+        _print_summary(result, stdout, out)
+    if partial is not None:
+        raise partial
+
+
+def _brief(report: "FrameReport") -> str:
+    first = report.first_action()
+    action = ""
+    if first is not None:
+        ids = report.ids_by_name
+        action = f" next: {first.kind} #{ids.get(first.obj, first.obj)}" + (
+            f" {first.direction}" if first.direction else ""
+        )
+    return f"frame {report.index}: {report.status}, {len(report.objects)} objects{action}"
+
+
+def _print_summary(summary: "Summary", console: Any, out: Path | None) -> None:
+    from rich.table import Table
+
+    data = summary.to_json()
+    table = Table(title="replay", show_header=False, title_justify="left")
+    table.add_column("what")
+    table.add_column("value", justify="right")
+    table.add_row("frames replayed", f"{data['frames']} of {data['frames_read']} read")
+    table.add_row("planned", str(data["ok"]))
+    table.add_row("table cleared", "yes" if data["cleared"] else "no")
+    table.add_row("objects seen", str(data["objects_seen"]))
+    table.add_row("actions planned", f"{data['actions']} ({data['grasps']} grasps, {data['pushes']} pushes)")
+    table.add_row(
+        "actions carried out",
+        f"{data['executions']['done']} done, {data['executions']['failed']} not",
+    )
+    table.add_row("unreachable objects", ", ".join(f"#{i}" for i in data["unreachable"]) or "none")
+    table.add_row("pushes undoing a push", str(data["back_and_forth"]))
+    table.add_row("frames without a table", str(data["no_table"]))
+    table.add_row("frames without a plan", str(data["no_plan"]))
+    table.add_row("failed frames", str(data["failed"]))
+    for stage in ("read", "segment", "predicates", "plan", "total"):
+        mean = data["mean_time_s"].get(stage)
+        if mean is not None:
+            table.add_row(f"time per frame: {stage}", f"{mean:.3f} s")
+    if data["frames_per_s"] is not None:
+        table.add_row("frames per second", f"{data['frames_per_s']:.2f}")
+    if out is not None:
+        table.add_row("annotated log", str(out))
+    if data["stopped"]:
+        table.add_row("stopped early", data["stopped"])
+    console.print(table)

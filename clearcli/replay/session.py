@@ -1,0 +1,585 @@
+"""The replay loop: frame after frame through the pipeline, with identity, monitoring and
+push memory carried from one frame to the next, and nothing else kept.
+
+`Session.step` takes one frame and returns a `FrameReport`; `replay` drives a session
+over an iterator of frames (--every, --from/--to, the end of a cleared table, a log cut
+short). The state kept between frames is bounded: the tracker's tracks (objects seen in
+the last few frames), the push memory (a few pushes per object), the previous frame's
+expected effect, and the summary's counters.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Iterable, Iterator, Mapping
+
+import numpy as np
+
+from clearcli.errors import ClearError, PartialLogError
+from clearcli.pipeline import CLEARED, FAILED, NO_PLAN, NO_TABLE, OK, FrameResult, Pipeline
+from clearcli.replay import memory as push_memory
+from clearcli.replay.memory import MemoryParams, PushMemory, PushRecord
+from clearcli.replay.tracking import (
+    Assignment,
+    ExecutionReport,
+    ExpectedEffect,
+    Observation,
+    TrackerState,
+    TrackingParams,
+    check_execution,
+    shape_signature,
+    update,
+    vec3,
+)
+
+if TYPE_CHECKING:
+    from clearcli.io.frames import Frame
+    from clearcli.perception.types import Segmentation
+    from clearcli.planning.types import Action
+    from clearcli.predicates.state import SymbolicState
+
+STAGES = ("read", "segment", "predicates", "plan", "total")
+
+
+@dataclass(frozen=True)
+class ReplayOptions:
+    every: int = 1  # process every N-th frame of the log (1 = all)
+    from_s: float | None = None  # seconds from the start of the log
+    to_s: float | None = None
+    fail_fast: bool = False  # a failed frame ends the replay (raises)
+    push_memory: bool = True  # False: the thesis's behaviour, for control runs
+    stop_when_cleared: bool = True  # a frame with an empty table ends the session
+    tracking: TrackingParams = TrackingParams()
+    memory: MemoryParams = MemoryParams()
+
+
+@dataclass(frozen=True)
+class ObjectReport:
+    track_id: int
+    name: str  # the name in this frame's state ("" when predicates did not run)
+    segment_index: int
+    centroid_m: tuple[float, float, float]
+    extents_m: tuple[float, float, float]
+    new: bool
+
+
+@dataclass(frozen=True, eq=False)
+class FrameReport:
+    index: int  # position of the frame on its topic (0-based), as the reader counts
+    stamp_s: float
+    time_s: float  # seconds from the start of the log
+    result: FrameResult
+    objects: tuple[ObjectReport, ...] = ()
+    gone: tuple[int, ...] = ()
+    execution: ExecutionReport | None = None
+    undoes_push: bool = False  # the first action pushes an object back where it came from
+    timings_s: Mapping[str, float] = field(default_factory=dict)
+    frame: "Frame | None" = None  # the frame itself, for writers (not in the JSON)
+
+    @property
+    def status(self) -> str:
+        return self.result.status
+
+    @property
+    def ids_by_name(self) -> dict[str, int]:
+        return {o.name: o.track_id for o in self.objects if o.name}
+
+    def first_action(self) -> "Action | None":
+        plan = self.result.plan
+        if plan is None or not plan.actions:
+            return None
+        return plan.actions[0]
+
+    def plan_json(self) -> dict[str, Any] | None:
+        """The plan with track ids (the same dict goes to the annotated log)."""
+        plan = self.result.plan
+        if plan is None:
+            return None
+        ids = self.ids_by_name
+        return {
+            "frame": self.index,
+            "actions": [action_json(a, ids) for a in plan.actions],
+            "cost": int(plan.cost),
+            "optimal": bool(plan.optimal),
+            "replans": int(plan.replans),
+            "unreachable": [ids.get(n, n) for n in plan.unreachable],
+            "ungraspable": [ids.get(n, n) for n in getattr(plan, "ungraspable", ())],
+            "stuck": [ids.get(n, n) for n in getattr(plan, "stuck", ())],
+        }
+
+    def to_json(self) -> dict[str, Any]:
+        """One `frame` line of `clear replay --json` (without the envelope)."""
+        first = self.first_action()
+        first_json = None
+        if first is not None:
+            first_json = action_json(first, self.ids_by_name)
+            state = self.result.state
+            if first.kind == "push" and state is not None and first.direction is not None:
+                push = state.by_name(first.obj).pushes.get(first.direction)
+                if push is not None:
+                    first_json["unit_vector"] = [round(float(v), 6) for v in push.unit_vector]
+                    first_json["push_length_m"] = round(float(push.push_length_m), 6)
+        plan = self.result.plan
+        return {
+            "type": "frame",
+            "index": self.index,
+            "stamp_s": _finite(self.stamp_s),
+            "time_s": _finite(self.time_s),
+            "status": self.status,
+            "objects": [
+                {
+                    "id": o.track_id,
+                    "name": o.name,
+                    "centroid_m": [round(v, 5) for v in o.centroid_m],
+                    "extents_m": [round(v, 5) for v in o.extents_m],
+                    "new": o.new,
+                }
+                for o in self.objects
+            ],
+            "gone": list(self.gone),
+            "first_action": first_json,
+            "plan_length": len(plan.actions) if plan is not None else 0,
+            "plan": self.plan_json(),
+            "execution": execution_json(self.execution),
+            "undoes_push": self.undoes_push,
+            "timings_s": {k: round(float(v), 6) for k, v in self.timings_s.items()},
+            "error": self.result.error or None,
+            "stage": self.result.stage or None,
+        }
+
+
+def _finite(value: float) -> float | None:
+    return float(value) if math.isfinite(value) else None
+
+
+def action_json(action: "Action", ids_by_name: Mapping[str, int]) -> dict[str, Any]:
+    out: dict[str, Any] = {"kind": action.kind, "id": ids_by_name.get(action.obj), "name": action.obj}
+    if action.direction is not None:
+        out["direction"] = action.direction
+    return out
+
+
+def execution_json(report: ExecutionReport | None) -> dict[str, Any] | None:
+    if report is None:
+        return None
+    out: dict[str, Any] = {
+        "action": report.action,
+        "id": report.track_id,
+        "outcome": report.outcome,
+        "detail": report.detail,
+    }
+    if report.moved_along_m is not None:
+        out["moved_along_m"] = round(report.moved_along_m, 5)
+        out["moved_across_m"] = round(float(report.moved_across_m or 0.0), 5)
+    return out
+
+
+def observations_of(segmentation: "Segmentation") -> list[Observation]:
+    return [
+        Observation(centroid=vec3(o.centroid), extents_m=shape_signature(o.obb_extents))
+        for o in segmentation.objects
+    ]
+
+
+def expected_effect(
+    action: "Action", state: "SymbolicState", ids_by_name: Mapping[str, int], observations: list[Observation]
+) -> ExpectedEffect | None:
+    """What ``action`` (the first of this frame's plan) should do, for the next frame."""
+    track_id = ids_by_name.get(action.obj)
+    if track_id is None:
+        return None
+    obj = state.by_name(action.obj)
+    seen = observations[obj.segment_index] if 0 <= obj.segment_index < len(observations) else None
+    start = seen.centroid if seen is not None else vec3(obj.centroid)
+    extents = seen.extents_m if seen is not None else shape_signature(obj.extents_m)
+    label = f"({action.kind} #{track_id}{' ' + action.direction if action.direction else ''})"
+    if action.kind == "push" and action.direction is not None:
+        push = obj.pushes[action.direction]
+        return ExpectedEffect(
+            kind="push",
+            track_id=track_id,
+            start_centroid=start,
+            action=label,
+            unit_vector=vec3(push.unit_vector),
+            push_length_m=float(push.push_length_m),
+            extents_m=extents,
+        )
+    return ExpectedEffect(kind="grasp", track_id=track_id, start_centroid=start, action=label, extents_m=extents)
+
+
+@dataclass
+class Summary:
+    """Counters over the whole replay (a fixed number of fields: bounded)."""
+
+    frames_read: int = 0
+    frames: int = 0  # processed
+    ok: int = 0
+    cleared: bool = False
+    no_table: int = 0
+    no_plan: int = 0
+    failed: int = 0
+    objects_seen: int = 0
+    grasps: int = 0
+    pushes: int = 0
+    executions_done: int = 0
+    executions_failed: int = 0
+    back_and_forth: int = 0
+    unreachable_ids: set[int] = field(default_factory=set)
+    time_s: dict[str, float] = field(default_factory=lambda: {s: 0.0 for s in STAGES})
+    stopped: str = ""  # why the log ended early (a partial log), "" when read whole
+    wall_s: float = 0.0
+
+    def to_json(self) -> dict[str, Any]:
+        n = max(self.frames, 1)
+        return {
+            "type": "summary",
+            "frames_read": self.frames_read,
+            "frames": self.frames,
+            "ok": self.ok,
+            "cleared": self.cleared,
+            "no_table": self.no_table,
+            "no_plan": self.no_plan,
+            "failed": self.failed,
+            "objects_seen": self.objects_seen,
+            "actions": self.grasps + self.pushes,
+            "grasps": self.grasps,
+            "pushes": self.pushes,
+            "executions": {"done": self.executions_done, "failed": self.executions_failed},
+            "back_and_forth": self.back_and_forth,
+            "unreachable": sorted(self.unreachable_ids),
+            "time_s": {k: round(v, 6) for k, v in self.time_s.items()},
+            "mean_time_s": {k: round(v / n, 6) for k, v in self.time_s.items()},
+            "frames_per_s": round(self.frames / self.wall_s, 4) if self.wall_s > 0 else None,
+            "stopped": self.stopped or None,
+        }
+
+
+class Session:
+    """Carries identity, expectations and push memory from frame to frame."""
+
+    def __init__(self, pipeline: Pipeline, options: ReplayOptions = ReplayOptions()) -> None:
+        self.pipeline = pipeline
+        self.options = options
+        self.tracker = TrackerState()
+        self.memory = PushMemory()
+        self.effect: ExpectedEffect | None = None
+        self.frame_count = 0  # frames processed: the tracker's clock
+        self.summary = Summary()
+
+    def step(self, frame: "Frame", index: int, time_s: float = 0.0, read_s: float = 0.0) -> FrameReport:
+        clock = self.frame_count
+        self.frame_count += 1
+        options = self.options
+        self.memory = push_memory.expire(self.memory, clock, options.memory)
+        found: dict[str, Any] = {}
+
+        def on_segmentation(segmentation: "Segmentation") -> None:
+            observations = observations_of(segmentation)
+            self.tracker, assignment = update(
+                self.tracker, observations, clock, self.effect, options.tracking
+            )
+            found["observations"] = observations
+            found["assignment"] = assignment
+            if self.effect is not None:
+                execution = check_execution(self.effect, observations, assignment, options.tracking)
+                found["execution"] = execution
+                # what the last action did changes what this frame may plan
+                if execution.outcome == "done" and self.effect.kind == "grasp":
+                    self.memory = push_memory.forget(self.memory, {self.effect.track_id})
+                elif execution.outcome != "done" and self.effect.kind == "push":
+                    self.memory = push_memory.mark_failed(self.memory, self.effect.track_id)
+
+        def adjust(segmentation: "Segmentation", state: "SymbolicState") -> "SymbolicState":
+            assignment: Assignment = found["assignment"]
+            ids = {o.name: assignment.ids[o.segment_index] for o in state.objects}
+            found["ids_by_name"] = ids
+            if not options.push_memory:
+                return state
+            return push_memory.apply_memory(state, ids, self.memory, options.memory)
+
+        result = self.pipeline.run(
+            frame, adjust=adjust, on_segmentation=on_segmentation, catch_internal=not options.fail_fast
+        )
+        report = self._report(frame, index, time_s, read_s, result, found)
+        self._account(report, found)
+        return report
+
+    def _report(
+        self,
+        frame: "Frame",
+        index: int,
+        time_s: float,
+        read_s: float,
+        result: FrameResult,
+        found: dict[str, Any],
+    ) -> FrameReport:
+        objects: tuple[ObjectReport, ...] = ()
+        gone: tuple[int, ...] = ()
+        assignment: Assignment | None = found.get("assignment")
+        if assignment is not None:
+            names: dict[int, str] = {}
+            if result.state is not None:
+                names = {o.segment_index: o.name for o in result.state.objects}
+            observations: list[Observation] = found["observations"]
+            objects = tuple(
+                ObjectReport(
+                    track_id=tid,
+                    name=names.get(k, ""),
+                    segment_index=k,
+                    centroid_m=observations[k].centroid,
+                    extents_m=observations[k].extents_m,
+                    new=tid in assignment.new,
+                )
+                for k, tid in enumerate(assignment.ids)
+            )
+            gone = assignment.gone
+        timings = {"read": read_s, **result.timings_s}
+        timings["total"] = read_s + result.timings_s.get("total", 0.0)
+        undoes = False
+        if result.status == OK and result.plan is not None and result.state is not None:
+            first = result.plan.actions[0]
+            ids = found.get("ids_by_name", {})
+            if first.kind == "push" and first.direction is not None and first.obj in ids:
+                u = result.state.by_name(first.obj).pushes[first.direction].unit_vector
+                undoes = push_memory.reverses_last(self.memory, ids[first.obj], u, self.options.memory)
+        return FrameReport(
+            index=index,
+            stamp_s=frame.stamp_s,
+            time_s=time_s,
+            result=result,
+            objects=objects,
+            gone=gone,
+            execution=found.get("execution"),
+            undoes_push=undoes,
+            timings_s=timings,
+            frame=frame,
+        )
+
+    def _account(self, report: FrameReport, found: dict[str, Any]) -> None:
+        """Update the summary and what the next frame is compared with."""
+        s = self.summary
+        result = report.result
+        s.frames += 1
+        for stage, seconds in report.timings_s.items():
+            s.time_s[stage] = s.time_s.get(stage, 0.0) + float(seconds)
+        s.objects_seen = self.tracker.next_id
+        if report.execution is not None:
+            if report.execution.outcome == "done":
+                s.executions_done += 1
+            else:
+                s.executions_failed += 1
+        if "assignment" in found:
+            # the expectation has been checked against a segmented frame: it is spent
+            self.effect = None
+        status = result.status
+        if status == OK:
+            s.ok += 1
+        elif status == CLEARED:
+            s.cleared = True
+        elif status == NO_TABLE:
+            s.no_table += 1
+        elif status == NO_PLAN:
+            s.no_plan += 1
+        elif status == FAILED:
+            s.failed += 1
+        plan = result.plan
+        ids = report.ids_by_name
+        if plan is not None:
+            s.unreachable_ids.update(ids[n] for n in plan.unreachable if n in ids)
+        if status != OK or plan is None or result.state is None:
+            return
+        first = plan.actions[0]
+        if first.kind == "grasp":
+            s.grasps += 1
+        else:
+            s.pushes += 1
+        if report.undoes_push:
+            s.back_and_forth += 1
+        observations: list[Observation] = found["observations"]
+        self.effect = expected_effect(first, result.state, ids, observations)
+        if self.effect is not None and self.effect.kind == "push" and self.effect.unit_vector is not None:
+            self.memory = push_memory.remember(
+                self.memory,
+                PushRecord(self.effect.track_id, self.effect.unit_vector, self.frame_count - 1),
+                self.options.memory,
+            )
+
+
+def replay(
+    frames: Iterable["Frame"],
+    session: Session,
+    log_start_s: float | None = None,
+) -> Iterator[FrameReport]:
+    """Run ``session`` over ``frames``; yields one report per processed frame.
+
+    Stops after a frame with an empty table (when the options say so), at --to, or when
+    the frames end. A log that ends in a corrupt or truncated part raises
+    `PartialLogError` from the reader: that is recorded in ``session.summary.stopped``
+    and re-raised after every complete frame has been reported. A frame whose stage
+    fails is reported and the replay goes on, unless ``fail_fast``.
+    """
+    options = session.options
+    every = max(1, int(options.every))
+    summary = session.summary
+    started = time.perf_counter()
+    iterator = iter(frames)
+    start_s = log_start_s
+    index = -1
+    try:
+        while True:
+            t_read = time.perf_counter()
+            try:
+                frame = next(iterator)
+            except StopIteration:
+                break
+            except PartialLogError as exc:
+                summary.stopped = str(exc)
+                raise
+            read_s = time.perf_counter() - t_read
+            index += 1
+            summary.frames_read += 1
+            if start_s is None:
+                start_s = frame.stamp_s
+            time_s = frame.stamp_s - start_s
+            if options.to_s is not None and time_s > options.to_s + 1e-9:
+                break
+            if options.from_s is not None and time_s < options.from_s - 1e-9:
+                continue
+            if index % every:
+                continue
+            report = session.step(frame, index, time_s, read_s)
+            summary.wall_s = time.perf_counter() - started
+            yield report
+            if report.status == FAILED and options.fail_fast:
+                exc = report.result.exception
+                message = (
+                    f"{frame.source or 'frame'}: {report.result.stage} failed on frame {index}: "
+                    f"{report.result.error} (stopped by --fail-fast)"
+                )
+                if isinstance(exc, ClearError):
+                    raise type(exc)(message) from None
+                raise ClearError(message)
+            if report.status == CLEARED and options.stop_when_cleared:
+                break
+    finally:
+        summary.wall_s = time.perf_counter() - started
+        close = getattr(iterator, "close", None)
+        if close is not None:
+            close()
+
+
+# --- where the robot stands: a log's /tf_static or /tf ---------------------------------
+
+# Names the robot base frame goes by in WAM setups (IRI's and the ROS WAM packages), and
+# the generic ROS one last; `--base-frame` picks another.
+BASE_FRAMES = ("wam_base", "wam_link_base", "iri_wam_link_base", "estirabot_link_base", "link_base", "base_link")
+TF_TOPICS = ("/tf_static", "/tf")
+
+
+def _field(msg: Any, *names: str) -> Any:
+    for name in names:
+        if isinstance(msg, dict):
+            if name in msg:
+                return msg[name]
+        elif hasattr(msg, name):
+            return getattr(msg, name)
+    return None
+
+
+def _transform_matrix(translation: Any, rotation: Any) -> np.ndarray:
+    from scipy.spatial.transform import Rotation
+
+    q = [float(_field(rotation, k) or 0.0) for k in ("x", "y", "z", "w")]
+    if not np.isfinite(q).all() or np.linalg.norm(q) < 1e-9:
+        raise ValueError("zero quaternion")
+    T = np.eye(4)
+    T[:3, :3] = Rotation.from_quat(q).as_matrix()
+    T[:3, 3] = [float(_field(translation, k) or 0.0) for k in ("x", "y", "z")]
+    return T
+
+
+def read_transforms(path: Any, max_messages: int = 1000) -> dict[tuple[str, str], np.ndarray]:
+    """T_parent_child of every (parent, child) pair on the log's /tf_static and /tf
+    (the first seen of each; a session's camera does not move). Reads at most
+    ``max_messages`` transform messages, so a long /tf costs little. A log without them,
+    or whose transforms cannot be decoded, gives {}."""
+    from clearcli.io.mcap import _Decoders, read_summary
+
+    try:
+        summary = read_summary(path)
+    except ClearError:
+        return {}
+    topics = [t for t, _ in summary.topics() if t in TF_TOPICS]
+    if not topics:
+        return {}
+    from mcap.reader import NonSeekingReader, SeekingReader
+
+    found: dict[tuple[str, str], np.ndarray] = {}
+    decoders = _Decoders()
+    try:
+        with open(path, "rb") as fp:
+            reader: Any = SeekingReader(fp) if summary.indexed else NonSeekingReader(fp)
+            for count, (schema, channel, message) in enumerate(reader.iter_messages(topics=topics)):
+                if count >= max_messages:
+                    break
+                try:
+                    msg = decoders.decode(schema, channel, message.data)
+                except Exception:
+                    continue
+                items = _field(msg, "transforms")
+                for tf in items if items is not None else [msg]:
+                    try:
+                        header = _field(tf, "header")
+                        parent = _field(header, "frame_id") if header is not None else _field(tf, "parent_frame_id")
+                        child = _field(tf, "child_frame_id")
+                        inner = _field(tf, "transform") or tf
+                        T = _transform_matrix(_field(inner, "translation"), _field(inner, "rotation"))
+                    except Exception:
+                        continue
+                    if parent and child:
+                        found.setdefault((str(parent).lstrip("/"), str(child).lstrip("/")), T)
+    except Exception:  # a damaged log: whatever was read before the damage
+        pass
+    return found
+
+
+def lookup_transform(transforms: Mapping[tuple[str, str], np.ndarray], target: str, source: str) -> np.ndarray | None:
+    """T_target_source by chaining the transforms (either way along each edge); None when
+    the two frames are not connected."""
+    target, source = target.lstrip("/"), source.lstrip("/")
+    if target == source:
+        return np.eye(4)
+    edges: dict[str, list[tuple[str, np.ndarray]]] = {}
+    for (parent, child), T in transforms.items():
+        edges.setdefault(parent, []).append((child, T))  # T_parent_child
+        edges.setdefault(child, []).append((parent, np.linalg.inv(T)))  # T_child_parent
+    # breadth first from the target: T_target_node accumulates along the way
+    best: dict[str, np.ndarray] = {target: np.eye(4)}
+    queue = [target]
+    while queue:
+        node = queue.pop(0)
+        for nxt, T_node_next in edges.get(node, []):
+            if nxt not in best:
+                best[nxt] = best[node] @ T_node_next
+                if nxt == source:
+                    return best[nxt]
+                queue.append(nxt)
+    return None
+
+
+def base_camera_from_log(
+    path: Any, frame_id: str, base_frames: tuple[str, ...] = BASE_FRAMES
+) -> tuple[np.ndarray | None, str]:
+    """(T_base_camera, the base frame's name) from the log's transforms, or (None, "")."""
+    if not frame_id:
+        return None, ""
+    transforms = read_transforms(path)
+    if not transforms:
+        return None, ""
+    for base in base_frames:
+        T = lookup_transform(transforms, base, frame_id)
+        if T is not None:
+            return T, base
+    return None, ""

@@ -1,0 +1,473 @@
+"""Self-made clearing sessions: plan, act with the world's own imperfections, look again.
+
+An `Episode` renders a `Scene` with the virtual Kinect, runs the replay `Session` on the
+frame (segment, predicates, plan, with tracking and push memory, exactly as `clear
+replay` would), and carries out the plan's first action on the scene, not on the
+planner's model of it:
+
+* a push slides the object along the push direction in small steps, its heading and
+  yaw drifting with seeded noise; an object it runs into is shoved along with it, and
+  the push stops early when that one is blocked in turn or the pushed object would
+  leave the table (then it falls off and is gone);
+* a grasp takes the object away, except that a grasp across a width close to the
+  gripper's opening slips now and then (the object stays, slightly moved).
+
+Then the next frame is rendered, until the table is clear, no plan exists, or the
+action budget runs out. The frames go to a ROS 2 PointCloud2 MCAP (with the labels the
+camera knows, and the robot's place on /tf_static), which `clear replay` reads back.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections import Counter
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Iterator
+
+import numpy as np
+
+from clearcli.sim.scene import Cylinder, Scene, SceneObject, with_object_pose, without_object
+
+if TYPE_CHECKING:
+    from clearcli.io.frames import Frame
+    from clearcli.perception.types import Segmentation
+    from clearcli.replay.session import FrameReport, Session
+
+BASE_FRAME = "wam_base"
+
+
+@dataclass(frozen=True)
+class WorldParams:
+    """How the simulated world departs from the planner's model."""
+
+    # Push: the object advances in steps of this length.
+    push_step_m: float = 0.005
+    # Heading noise per step (degrees) and yaw turn per step (always the same way within
+    # one push): a pushed box turns a degree or two per centimetre when the contact is
+    # off its centre.
+    heading_noise_deg: float = 1.0
+    yaw_noise_deg: float = 0.8
+    # A grasp across a width within this margin of the gripper's opening slips with
+    # this probability.
+    tight_grasp_margin_m: float = 0.01
+    tight_grasp_fail_probability: float = 0.5
+    # Seconds between frames (the thesis's actions take a few seconds each).
+    frame_interval_s: float = 1.0
+
+
+@dataclass(frozen=True)
+class StepRecord:
+    """One frame of the episode and what the world did with its first action."""
+
+    frame_index: int
+    status: str
+    n_objects: int  # objects in the world when the frame was taken
+    action: str = ""  # "(push 3 dir1)" with the world's object id
+    object_id: int | None = None
+    outcome: str = ""  # "removed", "slipped", "pushed 0.083 m", "shoved 2", "fell off", ...
+    undoes_push: bool = False
+    unreachable: tuple[int, ...] = ()  # world ids the planner cannot clear: out of reach or ungraspable
+    ungraspable: tuple[int, ...] = ()
+    stuck: tuple[int, ...] = ()  # world ids the planner found blocked by objects it cannot move
+    seen: tuple[int, ...] = ()  # world ids that are the bulk of some segment (the rest: merged or missed)
+
+
+@dataclass(frozen=True)
+class EpisodeResult:
+    scene: str
+    seed: int
+    n_objects: int
+    steps: tuple[StepRecord, ...]
+    end: str  # "cleared" | "no_plan" | "budget" | "failed"
+    remaining: tuple[int, ...]  # world ids still on the table
+    unreachable: tuple[int, ...]  # of those, the ones the last plan said it cannot reach or grasp
+    actions_per_object: dict[int, int] = field(default_factory=dict)
+    stuck: tuple[int, ...] = ()  # of those, the ones blocked by objects it cannot move
+    reason: str = ""  # the last frame's error, when the episode ended without clearing
+    unseen: tuple[int, ...] = ()  # of those, the ones no segment stood for (merged or missed)
+
+    @property
+    def actions(self) -> int:
+        return sum(1 for s in self.steps if s.action)
+
+    @property
+    def back_and_forth(self) -> int:
+        return sum(1 for s in self.steps if s.undoes_push)
+
+    @property
+    def cleared_reachable(self) -> bool:
+        """Every object left is one the planner showed it cannot reach or grasp (or none
+        is left)."""
+        return self.end != "budget" and set(self.remaining) <= set(self.unreachable)
+
+    @property
+    def cleared_unblocked(self) -> bool:
+        """Every object left cannot be reached or grasped, or is blocked by such objects."""
+        return self.end != "budget" and set(self.remaining) <= set(self.unreachable) | set(self.stuck)
+
+
+# --- the world's actions ------------------------------------------------------------------
+
+
+def _rot2(angle: float) -> np.ndarray:
+    c, s = math.cos(angle), math.sin(angle)
+    return np.array([[c, -s], [s, c]])
+
+
+def grasp_width_m(obj: SceneObject) -> float:
+    """Width the gripper closes across: the narrower side (a cylinder's diameter)."""
+    if isinstance(obj, Cylinder):
+        return 2.0 * obj.radius_m
+    return min(obj.size_x_m, obj.size_y_m)
+
+
+def on_table(scene: Scene, obj: SceneObject) -> bool:
+    """The object's centre is over the table top (else it falls)."""
+    return abs(obj.x_m) <= scene.table.size_x_m / 2 and abs(obj.y_m) <= scene.table.size_y_m / 2
+
+
+def world_grasp(
+    scene: Scene, k: int, opening_width_m: float, rng: np.random.Generator, params: WorldParams = WorldParams()
+) -> tuple[Scene, str]:
+    obj = scene.objects[k]
+    width = grasp_width_m(obj)
+    if width >= opening_width_m - params.tight_grasp_margin_m and rng.random() < params.tight_grasp_fail_probability:
+        # the fingers close on an edge and the object slips back, a little displaced
+        dx, dy = rng.normal(0.0, 0.004, 2)
+        turned = obj.yaw_rad + float(rng.normal(0.0, math.radians(3.0)))
+        return with_object_pose(scene, k, obj.x_m + dx, obj.y_m + dy, turned), "slipped"
+    return without_object(scene, k), "removed"
+
+
+def separation(a: np.ndarray, b: np.ndarray) -> np.ndarray | None:
+    """The shortest translation of convex polygon ``b`` (2D) that ends its overlap with
+    ``a`` (separating-axis method), or None when they do not overlap."""
+    best: np.ndarray | None = None
+    best_depth = math.inf
+    for poly in (a, b):
+        edges = np.roll(poly, -1, axis=0) - poly
+        normals = np.stack([edges[:, 1], -edges[:, 0]], axis=1)
+        lengths = np.linalg.norm(normals, axis=1)
+        normals = normals[lengths > 1e-12] / lengths[lengths > 1e-12, None]
+        pa, pb = a @ normals.T, b @ normals.T
+        forward = pa.max(axis=0) - pb.min(axis=0)  # move b along +normal by this
+        backward = pb.max(axis=0) - pa.min(axis=0)  # or along -normal by this
+        if (forward <= 0).any() or (backward <= 0).any():
+            return None
+        for k in range(normals.shape[0]):
+            if forward[k] < best_depth:
+                best_depth, best = float(forward[k]), normals[k] * forward[k]
+            if backward[k] < best_depth:
+                best_depth, best = float(backward[k]), -normals[k] * backward[k]
+    return best
+
+
+def _shove(scene: Scene, mover: int, fixed: frozenset[int], depth: int) -> Scene | None:
+    """Push every object the ``mover`` now overlaps out of it (along the contact normal),
+    and what those overlap in turn, ``depth`` levels deep; None when something is stuck
+    (an overlap with a ``fixed`` object, or too deep a chain)."""
+    moving = scene.objects[mover]
+    poly = moving.footprint()
+    for j, other in enumerate(scene.objects):
+        if j == mover or other.base_z_m >= moving.top_z_m or moving.base_z_m >= other.top_z_m:
+            continue
+        shift = separation(poly, other.footprint())
+        if shift is None:
+            continue
+        if j in fixed or depth <= 0:
+            return None
+        shift = shift * 1.05 + 1e-4 * shift / max(float(np.linalg.norm(shift)), 1e-12)
+        scene = with_object_pose(scene, j, other.x_m + shift[0], other.y_m + shift[1], other.yaw_rad)
+        result = _shove(scene, j, fixed | {mover}, depth - 1)
+        if result is None:
+            return None
+        scene = result
+    return scene
+
+
+def world_push(
+    scene: Scene,
+    k: int,
+    direction_table: np.ndarray,
+    length_m: float,
+    rng: np.random.Generator,
+    params: WorldParams = WorldParams(),
+) -> tuple[Scene, str]:
+    """Slide object ``k`` along ``direction_table`` (2D, table frame) for ``length_m``,
+    in steps, its heading and yaw drifting; what it runs into is shoved out of its way,
+    and the push stops (the gripper stalls) when that would need a chain of more than
+    two shoves."""
+    d = np.asarray(direction_table[:2], dtype=float)
+    d /= max(float(np.linalg.norm(d)), 1e-12)
+    steps = max(1, int(math.ceil(length_m / params.push_step_m)))
+    step = length_m / steps
+    moved = 0.0
+    spin = float(rng.choice([-1.0, 1.0]))  # which way this push tends to turn the object
+    before = {o.object_id: (o.x_m, o.y_m) for o in scene.objects}
+    pushed_id = scene.objects[k].object_id
+    for _ in range(steps):
+        heading = _rot2(math.radians(float(rng.normal(0.0, params.heading_noise_deg)))) @ d
+        obj = scene.objects[k]
+        turn = spin * abs(float(rng.normal(0.0, math.radians(params.yaw_noise_deg))))
+        trial = with_object_pose(scene, k, obj.x_m + heading[0] * step, obj.y_m + heading[1] * step, obj.yaw_rad + turn)
+        shoved = _shove(trial, k, frozenset(), depth=2)
+        if shoved is None:
+            break  # jammed: the object stays where the last step left it
+        scene = shoved
+        moved += step
+        if not on_table(scene, scene.objects[k]):
+            return without_object(scene, k), f"fell off after {moved:.3f} m"
+    displaced = sorted(
+        o.object_id
+        for o in scene.objects
+        if o.object_id != pushed_id and math.dist((o.x_m, o.y_m), before[o.object_id]) > 0.002
+    )
+    fallen = [i for i, o in enumerate(scene.objects) if not on_table(scene, o)]
+    for i in reversed(fallen):
+        scene = without_object(scene, i)
+    outcome = f"pushed {moved:.3f} m of {length_m:.3f} m"
+    if displaced:
+        outcome += f", shoved {', '.join(str(i) for i in displaced)}"
+    return scene, outcome
+
+
+# --- perception of the simulated world ------------------------------------------------------
+
+
+def truth_segment(frame: "Frame", settings: Any = None) -> "Segmentation":
+    """A perfect segmentation from the camera's labels (for fast tests and as an oracle
+    that separates the planner's behaviour from the segmenter's errors)."""
+    from scipy.spatial import ConvexHull
+
+    from clearcli.errors import SceneError
+    from clearcli.perception.segment import make_object
+    from clearcli.perception.types import Segmentation, TablePlane
+
+    labels = np.asarray(frame.fields.get("label", np.zeros(frame.n_points)), dtype=np.int64)
+    finite = frame.finite_mask
+    table_idx = np.flatnonzero(finite & (labels >= 1) & (labels <= 9))
+    if table_idx.size < 3:
+        raise SceneError(f"{frame.source or 'frame'}: no table points in the labels")
+    pts = frame.points[table_idx].astype(np.float64)
+    centre = pts.mean(axis=0)
+    _, _, vt = np.linalg.svd(pts - centre, full_matrices=False)
+    normal = vt[2]
+    if normal @ (np.zeros(3) - centre) < 0:  # towards the camera (the origin)
+        normal = -normal
+    table = TablePlane(normal=normal, offset=float(-normal @ centre))
+    u = vt[0]
+    v = np.cross(normal, u)
+    flat = table.project(pts)
+    xy = np.stack([flat @ u, flat @ v], axis=1)
+    polygon = flat[ConvexHull(xy).vertices]
+    objects = []
+    obj_idx = np.flatnonzero(finite & (labels >= 10))
+    groups = labels[obj_idx] // 10
+    for g in np.unique(groups):
+        members = obj_idx[groups == g]
+        if members.size < 30:
+            continue
+        objects.append(make_object(members, frame.points[members].astype(np.float64), table, 0.02))
+    return Segmentation(
+        n_points=frame.n_points,
+        table=table,
+        table_polygon=polygon,
+        table_indices=table_idx,
+        objects=tuple(objects),
+        source=frame.source,
+        frame_id=frame.frame_id,
+        stamp_s=frame.stamp_s,
+    )
+
+
+def world_object_of(frame: "Frame", segmentation: "Segmentation", segment_index: int) -> int | None:
+    """The world's object id under a segment: the most common label among its points."""
+    labels = frame.fields.get("label")
+    if labels is None:
+        return None
+    own = np.asarray(labels)[segmentation.objects[segment_index].indices]
+    own = own[own >= 10]
+    if own.size == 0:
+        return None
+    return int(Counter((own // 10 - 1).tolist()).most_common(1)[0][0])
+
+
+# --- the closed loop -------------------------------------------------------------------------
+
+
+class Episode:
+    """Iterate it for the frames (each rendered after the previous frame's action); then
+    read ``result``. ``session`` is the replay session that plans (its options decide
+    push memory); ``render_seed`` seeds the camera noise, ``seed`` the world's."""
+
+    def __init__(
+        self,
+        scene: Scene,
+        session: "Session",
+        seed: int = 0,
+        max_actions: int = 40,
+        params: WorldParams = WorldParams(),
+        start_s: float = 0.0,
+    ) -> None:
+        self.scene = scene
+        self.session = session
+        self.seed = seed
+        self.max_actions = max_actions
+        self.params = params
+        self.start_s = start_s
+        self.rng = np.random.default_rng(seed)
+        self.steps: list[StepRecord] = []
+        self.result: EpisodeResult | None = None
+        self.reports: list[dict[str, Any]] = []  # the JSON of every frame, for callers
+
+    def render(self, index: int) -> "Frame":
+        from clearcli.sim.camera import render
+
+        frame = render(self.scene, seed=self.seed * 1000 + index, stamp_s=self.start_s + index * self.params.frame_interval_s)
+        return dataclasses.replace(frame, source=f"{self.scene.name}#{index}")
+
+    def robot_placement(self, frame: "Frame") -> np.ndarray:
+        """T_base_camera fixed for the whole episode (the robot does not move), by the
+        plan stage's rule on the first frame, unless the settings give one."""
+        from clearcli.robot.placement import resolve_T_base_camera
+
+        pipeline = self.session.pipeline
+        if pipeline.T_base_camera is not None:
+            return np.asarray(pipeline.T_base_camera)
+        robot = pipeline.settings.robot
+        segmentation = pipeline.segment(frame)
+        state = pipeline.state(frame, segmentation) if segmentation.objects else None
+        if state is None:
+            T, _ = resolve_T_base_camera(robot.camera_pose, None) if robot.camera_pose else (np.eye(4), "")
+        else:
+            T, _ = resolve_T_base_camera(robot.camera_pose, state, robot.base_outside_edge_m)
+        pipeline.T_base_camera = T
+        return T
+
+    def __iter__(self) -> Iterator["Frame"]:
+        ids_at_start = tuple(o.object_id for o in self.scene.objects)
+        actions = 0
+        end = "budget"
+        last_unreachable: tuple[int, ...] = ()
+        last_stuck: tuple[int, ...] = ()
+        last_seen: tuple[int, ...] = ()
+        reason = ""
+        per_object: Counter[int] = Counter()
+        index = 0
+        while True:
+            frame = self.render(index)
+            if index == 0:
+                self.robot_placement(frame)
+            yield frame
+            report = self.session.step(frame, index, time_s=index * self.params.frame_interval_s)
+            self.reports.append(report.to_json())
+            record, unreachable = self._act(frame, report, index)
+            last_unreachable = unreachable
+            last_stuck = record.stuck
+            last_seen = record.seen
+            reason = report.result.error
+            self.steps.append(record)
+            if record.object_id is not None and record.action:
+                per_object[record.object_id] += 1
+            if report.status == "cleared":
+                end = "cleared"
+                break
+            if report.status in ("no_plan", "no_table"):
+                end = "no_plan"
+                break
+            if report.status == "failed":
+                end = "failed"
+                break
+            if record.action:
+                actions += 1
+            if actions >= self.max_actions:
+                end = "budget"
+                # the last frame shows where the budget left the table
+                index += 1
+                yield self.render(index)
+                break
+            index += 1
+        remaining = tuple(o.object_id for o in self.scene.objects)
+        self.result = EpisodeResult(
+            scene=self.scene.name.split(".")[0],
+            seed=self.seed,
+            n_objects=len(ids_at_start),
+            steps=tuple(self.steps),
+            end=end,
+            remaining=remaining,
+            unreachable=tuple(sorted(set(last_unreachable) & set(remaining))),
+            actions_per_object=dict(per_object),
+            stuck=tuple(sorted(set(last_stuck) & set(remaining))),
+            reason=reason if end != "cleared" else "",
+            unseen=tuple(sorted(set(remaining) - set(last_seen))),
+        )
+
+    def _act(self, frame: "Frame", report: "FrameReport", index: int) -> tuple[StepRecord, tuple[int, ...]]:
+        result = report.result
+        n = len(self.scene.objects)
+        unreachable: tuple[int, ...] = ()
+        ungraspable: tuple[int, ...] = ()
+        stuck: tuple[int, ...] = ()
+        seg, state, plan = result.segmentation, result.state, result.plan
+        seen: tuple[int, ...] = ()
+        if seg is not None:
+            seen = tuple(
+                sorted({w for k in range(len(seg.objects)) if (w := world_object_of(frame, seg, k)) is not None})
+            )
+        if seg is not None and state is not None and plan is not None:
+
+            def world_ids(names: Any) -> tuple[int, ...]:
+                out = []
+                for name in names:
+                    try:
+                        wid = world_object_of(frame, seg, state.by_name(name).segment_index)
+                    except KeyError:
+                        continue
+                    if wid is not None:
+                        out.append(wid)
+                return tuple(sorted(set(out)))
+
+            ungraspable = world_ids(getattr(plan, "ungraspable", ()))
+            unreachable = tuple(sorted(set(world_ids(plan.unreachable)) | set(ungraspable)))
+            stuck = world_ids(getattr(plan, "stuck", ()))
+        first = report.first_action()
+        if first is None or seg is None or state is None:
+            record = StepRecord(
+                index, report.status, n, unreachable=unreachable, ungraspable=ungraspable, stuck=stuck, seen=seen
+            )
+            return record, unreachable
+        model = state.by_name(first.obj)
+        wid = world_object_of(frame, seg, model.segment_index)
+        k = next((i for i, o in enumerate(self.scene.objects) if o.object_id == wid), None)
+        label = f"({first.kind} {wid}{' ' + first.direction if first.direction else ''})"
+        if k is None:
+            outcome = "missed: no object there"
+        elif first.kind == "grasp":
+            opening = self.session.pipeline.settings.gripper.opening_width_m
+            self.scene, outcome = world_grasp(self.scene, k, opening, self.rng, self.params)
+        else:
+            push = model.pushes[first.direction or ""]
+            R_table_camera = np.linalg.inv(self.scene.T_camera_table)[:3, :3]
+            direction = R_table_camera @ np.asarray(push.unit_vector, dtype=float)
+            self.scene, outcome = world_push(self.scene, k, direction, float(push.push_length_m), self.rng, self.params)
+        record = StepRecord(
+            frame_index=index,
+            status=report.status,
+            n_objects=n,
+            action=label,
+            object_id=wid,
+            outcome=outcome,
+            undoes_push=report.undoes_push,
+            unreachable=unreachable,
+            ungraspable=ungraspable,
+            stuck=stuck,
+            seen=seen,
+        )
+        return record, unreachable
+
+
+def static_transforms(T_base_camera: np.ndarray, frame_id: str) -> list[Any]:
+    from clearcli.io.mcap import StaticTransform
+
+    return [StaticTransform(parent_frame=BASE_FRAME, child_frame=frame_id, T_parent_child=np.asarray(T_base_camera))]
