@@ -1,6 +1,6 @@
 """Predicate-stage figures: time per predicate family and for the whole stage.
 
-    .venv/bin/python benchmarks/predicates.py [--repeat 15]
+    .venv/bin/python benchmarks/predicates.py [--repeat 31]
 
 Scenes: mOSD test57 (16 objects) segmented by the segmentation stage, the same frame
 with its ground-truth objects, and a self-made 30-object scene (boxes on a 6 x 5 grid,
@@ -14,6 +14,7 @@ phase runs only for those). Target: whole stage under 50 ms median for 16 object
 from __future__ import annotations
 
 import argparse
+import os
 import statistics
 import sys
 import time
@@ -93,9 +94,14 @@ def bench(name: str, frame, seg, settings: Settings, repeat: int) -> None:  # ty
 
 def main() -> None:
     ap = argparse.ArgumentParser()
-    ap.add_argument("--repeat", type=int, default=15)
+    ap.add_argument("--repeat", type=int, default=31)
     args = ap.parse_args()
+    if args.repeat < 21:
+        ap.error("--repeat: at least 21 runs (the figures are medians)")
     settings = Settings()
+    # wall figures depend on what else runs: print the load next to them
+    load = os.getloadavg() if hasattr(os, "getloadavg") else (float("nan"),) * 3
+    print(f"{os.cpu_count()} CPUs, load average {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}")
     pcd = SHARED / "mosd" / "test" / "test57.pcd"
     if pcd.exists():
         from clearcli.io.read import read_frame

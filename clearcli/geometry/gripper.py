@@ -20,6 +20,7 @@ from __future__ import annotations
 import dataclasses
 import tomllib
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
@@ -89,12 +90,20 @@ class GripperModel:
         import fcl
 
         boxes = self.boxes(closed)
-        out = []
         R = T[:3, :3]
-        for center, half in zip(boxes.centers, boxes.half_extents):
-            shape = fcl.Box(*(2.0 * half))
-            out.append(fcl.CollisionObject(shape, fcl.Transform(R, R @ center + T[:3, 3])))
-        return out
+        # the box shapes are shared by every pose (fcl objects only hold a reference)
+        shapes = _fcl_boxes(tuple(map(tuple, boxes.half_extents.tolist())))
+        return [
+            fcl.CollisionObject(shape, fcl.Transform(R, R @ center + T[:3, 3]))
+            for shape, center in zip(shapes, boxes.centers)
+        ]
+
+
+@lru_cache(maxsize=16)
+def _fcl_boxes(half_extents: tuple[tuple[float, float, float], ...]) -> tuple[Any, ...]:
+    import fcl
+
+    return tuple(fcl.Box(*(2.0 * np.asarray(h))) for h in half_extents)
 
 
 def _boxes(s: GripperSettings, width: float) -> GripperBoxes:
@@ -123,12 +132,21 @@ def check_gripper_settings(s: GripperSettings, where: str = "[gripper]") -> None
 
 
 def gripper_model(s: GripperSettings | None = None) -> GripperModel:
-    """The open and closed gripper models for the given dimensions (default: IRI)."""
-    s = s or GripperSettings()
+    """The open and closed gripper models for the given dimensions (default: IRI).
+    One model per settings value, built once (its arrays are read-only)."""
+    return _gripper_model(s or GripperSettings())
+
+
+@lru_cache(maxsize=16)
+def _gripper_model(s: GripperSettings) -> GripperModel:
     check_gripper_settings(s)
-    return GripperModel(
+    model = GripperModel(
         settings=s, open_boxes=_boxes(s, s.opening_width_m), closed_boxes=_boxes(s, s.closing_width_m)
     )
+    for b in (model.open_boxes, model.closed_boxes):
+        b.centers.setflags(write=False)
+        b.half_extents.setflags(write=False)
+    return model
 
 
 def load_gripper_settings(path: Path) -> GripperSettings:

@@ -157,7 +157,9 @@ def convex_solid(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     # qhull's simplices are not consistently oriented: turn each face outward
     inside = vertices.mean(axis=0)
     a, b, c = vertices[faces[:, 0]], vertices[faces[:, 1]], vertices[faces[:, 2]]
-    normal = np.cross(b - a, c - a)
+    u, w = (b - a).T, (c - a).T
+    # the cross product written out (np.cross costs ~30 us of overhead per call)
+    normal = np.stack([u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]], axis=1)
     flip = np.einsum("ij,ij->i", normal, a - inside) < 0
     faces[flip] = faces[flip][:, ::-1]
     return vertices, faces
@@ -166,7 +168,8 @@ def convex_solid(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def _polygon_moments(poly: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
     """Area, centroid (2,) and second central moments (2, 2) of a CCW polygon."""
     x, y = poly[:, 0], poly[:, 1]
-    xn, yn = np.roll(x, -1), np.roll(y, -1)
+    nxt = np.concatenate([poly[1:], poly[:1]])  # np.roll(poly, -1), without its overhead
+    xn, yn = nxt[:, 0], nxt[:, 1]
     cross = x * yn - xn * y
     area = cross.sum() / 2.0
     if abs(area) < 1e-12:
@@ -214,12 +217,55 @@ def column_tops(q: np.ndarray, cell_m: float) -> np.ndarray:
 @dataclass(frozen=True, eq=False)
 class Columns:
     """What the model needs of an object's points (table frame): their number, centroid,
-    lowest heights (2nd percentile) and the highest point of each footprint cell."""
+    lowest heights (2nd percentile) and the highest point of each footprint cell.
+
+    ``coarse_tops`` (the highest of ``tops`` per cell of ``coarse_cell_m``, as
+    `column_tops` gives them) is filled by `object_columns` for all objects in one pass;
+    without it `build_from_columns` computes the same per object."""
 
     n_points: int
     centroid: np.ndarray
     bottom_height_m: float
     tops: np.ndarray  # (M, 3)
+    coarse_tops: np.ndarray | None = None
+    coarse_cell_m: float = 0.0
+
+
+def _segment_starts(counts: np.ndarray) -> np.ndarray:
+    return np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
+
+
+def _grouped_tops(
+    z: np.ndarray, counts: np.ndarray, cells_x: np.ndarray, cells_y: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Index of the highest point (first among ties) of each occupied cell, for points
+    grouped by object (``counts`` per group, in order), sorted by group, then by cell
+    (x index major), as `column_tops` orders them: one dense cell grid per group. Also
+    the number of those cells per group."""
+    present = counts > 0
+    starts = _segment_starts(counts)[present]
+    lo_x, lo_y = np.zeros(len(counts), np.int64), np.zeros(len(counts), np.int64)
+    hi_x, hi_y = np.zeros(len(counts), np.int64), np.zeros(len(counts), np.int64)
+    lo_x[present], lo_y[present] = np.minimum.reduceat(cells_x, starts), np.minimum.reduceat(cells_y, starts)
+    hi_x[present], hi_y[present] = np.maximum.reduceat(cells_x, starts), np.maximum.reduceat(cells_y, starts)
+    span_y = hi_y - lo_y + 1
+    size = np.where(present, (hi_x - lo_x + 1) * span_y, 0)
+    offset = _segment_starts(size)
+    # per-group constants spread with repeat (cheaper than indexing by an owner array)
+    key = cells_x * np.repeat(span_y, counts)
+    key += cells_y
+    key += np.repeat(offset - lo_x * span_y - lo_y, counts)
+    top = np.full(int(size.sum()), -np.inf)
+    np.maximum.at(top, key, z)  # highest z per cell without sorting (ufunc.at is linear)
+    cand = np.nonzero(z >= top[key])[0]
+    # one point per cell (the first of ties); reading the dense per-cell array in order
+    # sorts them by key, that is by group (np.unique would sort, ten times slower)
+    first = np.full(len(top), len(z), dtype=np.int64)
+    np.minimum.at(first, key[cand], cand)
+    occupied = first < len(z)
+    per_group = np.zeros(len(counts), dtype=np.int64)
+    per_group[present] = np.add.reduceat(occupied, offset[present], dtype=np.int64)
+    return first[occupied], per_group
 
 
 def object_columns(
@@ -228,52 +274,67 @@ def object_columns(
     """`Columns` of each group of point indices, in one vectorised pass over all of them
     (per-object NumPy calls cost more than the arithmetic here). None for a group without
     finite points."""
+    n_g = len(groups)
     sizes = np.array([len(g) for g in groups], dtype=np.int64)
-    if len(groups) == 0 or sizes.sum() == 0:
-        return [None] * len(groups)
+    if n_g == 0 or sizes.sum() == 0:
+        return [None] * n_g
     idx = np.concatenate([np.asarray(g, dtype=np.int64) for g in groups])
-    owner = np.repeat(np.arange(len(groups)), sizes)
-    pts = np.asarray(points_camera)[idx]  # stays float32 until the transform
-    finite = np.isfinite(pts).all(axis=1)
+    P = np.asarray(points_camera)
+    # the transform column by column on contiguous float64 copies: the same products and
+    # sums, in the same order, as `_apply` (bit-identical), at half its cost
+    src = [P[:, i].take(idx).astype(np.float64) for i in range(3)]
+    T = frame.T_table_camera
+    q = np.empty((3, len(idx)))  # rows x, y, z (table frame)
+    tmp = np.empty(len(idx))
+    with np.errstate(invalid="ignore", over="ignore"):  # non-finite points: dropped below
+        for j in range(3):
+            col = q[j]
+            np.multiply(src[0], T[j, 0], out=col)
+            np.multiply(src[1], T[j, 1], out=tmp)
+            col += tmp
+            np.multiply(src[2], T[j, 2], out=tmp)
+            col += tmp
+            col += T[j, 3]
+    # a non-finite coordinate makes every transformed coordinate non-finite (nan or inf,
+    # no finite input overflows in float64), so the table height alone tells
+    finite = np.isfinite(q[2])
+    counts = sizes
     if not finite.all():
-        pts, owner = pts[finite], owner[finite]
-    q = frame.to_table(pts)
-    q[:, 2] = np.maximum(q[:, 2], 0.0)  # noise below the table: the solid starts at the table
-    counts = np.bincount(owner, minlength=len(groups))
-    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+        owner = np.repeat(np.arange(n_g), sizes)[finite]
+        q = q[:, finite]
+        counts = np.bincount(owner, minlength=n_g)
+    qx, qy, qz = q
+    np.maximum(qz, 0.0, out=qz)  # noise below the table: the solid starts at the table
+    starts = _segment_starts(counts)
     present = counts > 0
-    # cell keys, dense per object (its own bounding grid), objects one after the other
-    cells = np.floor(q[:, :2] * (1.0 / cell_m)).astype(np.int64)
-    lo = np.zeros((len(groups), 2), dtype=np.int64)
-    hi = np.zeros((len(groups), 2), dtype=np.int64)
-    lo[present] = np.minimum.reduceat(cells, starts[present], axis=0)
-    hi[present] = np.maximum.reduceat(cells, starts[present], axis=0)
-    span = hi - lo + 1
-    size = np.where(present, span[:, 0] * span[:, 1], 0)
-    offset = np.concatenate([[0], np.cumsum(size)[:-1]])
-    local = cells - lo[owner]
-    key = offset[owner] + local[:, 0] * span[owner, 1] + local[:, 1]
-    top = np.full(int(size.sum()), -np.inf)
-    np.maximum.at(top, key, q[:, 2])
-    cand = np.nonzero(q[:, 2] >= top[key])[0]
-    # one point per cell (the first of ties); reading the dense per-cell array in order
-    # sorts them by key, that is by object (np.unique would sort, ten times slower)
-    first = np.full(len(top), len(q), dtype=np.int64)
-    np.minimum.at(first, key[cand], cand)
-    keep = first[first < len(q)]
-    cut = np.searchsorted(owner[keep], np.arange(len(groups) + 1))
+    inv = 1.0 / cell_m
+    keep, t_counts = _grouped_tops(qz, counts, np.floor(qx * inv).astype(np.int64), np.floor(qy * inv).astype(np.int64))
+    tops = np.column_stack([qx[keep], qy[keep], qz[keep]])
+    cut = np.concatenate([[0], np.cumsum(t_counts)])
+    # the coarse tops of the solid (`column_tops` on cells twice as coarse, per object)
+    coarse_m = 2.0 * cell_m
+    cx = np.floor(tops[:, 0] / coarse_m).astype(np.int64)
+    cy = np.floor(tops[:, 1] / coarse_m).astype(np.int64)
+    coarse_idx, c_counts = _grouped_tops(tops[:, 2], t_counts, cx, cy)
+    coarse = tops[coarse_idx]
+    c_cut = np.concatenate([[0], np.cumsum(c_counts)])
     out: list[Columns | None] = []
-    for k in range(len(groups)):
+    for k in range(n_g):
         if not present[k]:
             out.append(None)
             continue
-        zs = q[starts[k] : starts[k] + counts[k], 2]
+        s, e = starts[k], starts[k] + counts[k]
+        # the mean of (n, 3) points sums row after row; a cumulative sum along each
+        # coordinate adds in the same order (bit-identical) in one call per object
+        centroid = np.cumsum(q[:, s:e], axis=1)[:, -1] / counts[k]
         out.append(
             Columns(
                 n_points=int(counts[k]),
-                centroid=q[starts[k] : starts[k] + counts[k]].mean(axis=0),
-                bottom_height_m=_quantile(zs, 0.02),
-                tops=q[keep[cut[k] : cut[k + 1]]],
+                centroid=centroid,
+                bottom_height_m=_quantile(qz[s:e], 0.02),
+                tops=tops[cut[k] : cut[k + 1]],
+                coarse_tops=coarse[c_cut[k] : c_cut[k + 1]],
+                coarse_cell_m=coarse_m,
             )
         )
     return out
@@ -355,7 +416,8 @@ def build_from_columns(
     # solid: the column tops (on cells twice as coarse: the hull does not need every one)
     # plus the tops on the footprint's border (exact where the sides are vertical) plus
     # the footprint on the table
-    upper = np.vstack([column_tops(q, 2.0 * cell_m), rim])
+    coarse = cols.coarse_tops if cols.coarse_tops is not None and cols.coarse_cell_m == 2.0 * cell_m else None
+    upper = np.vstack([column_tops(q, 2.0 * cell_m) if coarse is None else coarse, rim])
     if float(q[:, 2].max()) < min_height_m:  # flat: give it a thickness
         upper[:, 2] = min_height_m
     lower = np.column_stack([footprint, np.zeros(len(footprint))])

@@ -125,14 +125,19 @@ def push_geometry(obj: ObjectGeometry, gripper: GripperModel, push: PushSettings
     g = gripper.settings
     out: dict[str, PushGeometry] = {}
     height = push.fingertips_above_table_m + g.closing_region_height_m / 2.0
+    hull_xy = obj.hull_vertices[:, :2]
+    c = obj.center.copy()
+    c[2] = 0.0
+    up_approach = push.approach_m * UP
+    # half size of the closed finger pair along the push: its width across the fingers
+    # (dir1/dir2, closing direction along the push) or a finger's width (dir3/dir4)
+    half_parallel = gripper.finger_half_extent_along_x(closed=True)
+    half_across = g.finger_width_m / 2.0
     for name, d in direction_vectors(obj).items():
         parallel = name in ("dir1", "dir2")
         x = d if parallel else _cross(UP, d)
-        # half size of the closed finger pair along the push
-        half_along = gripper.finger_half_extent_along_x(closed=True) if parallel else g.finger_width_m / 2.0
-        rear = float((obj.hull_vertices[:, :2] @ d[:2]).min())
-        c = obj.center.copy()
-        c[2] = 0.0
+        half_along = half_parallel if parallel else half_across
+        rear = float((hull_xy @ d[:2]).min())
         lateral = c - (c @ d) * d
         start = lateral + (rear - push.gripper_behind_m - half_along) * d
         start[2] = height
@@ -141,18 +146,19 @@ def push_geometry(obj: ObjectGeometry, gripper: GripperModel, push: PushSettings
         n = max(1, math.ceil(length / push.path_resolution_m - 1e-9))
         steps = length * np.arange(1, n + 1) / n
         translations = steps[:, None] * d[None, :]
-        cands = []
-        for T in _half_turns(x, -UP, start):
-            seq = np.repeat(T[None], len(translations) + 3, axis=0)  # pre, start, path, retreat
-            seq[0, :3, 3] += push.approach_m * UP
-            seq[2:-1, :3, 3] += translations
-            seq[-1, :3, 3] += translations[-1] + push.approach_m * UP
-            cands.append(tuple(seq))
+        T, T_turned = _half_turns(x, -UP, start)
+        seq = np.repeat(T[None], n + 3, axis=0)  # pre, start, path, retreat
+        seq[0, :3, 3] += up_approach
+        seq[2:-1, :3, 3] += translations
+        seq[-1, :3, 3] += translations[-1] + up_approach
+        # the half-turned candidate: the same positions, its own rotation
+        turned = seq.copy()
+        turned[:, :3, :3] = T_turned[:3, :3]
         out[name] = PushGeometry(
             direction=name,
             unit=d,
             length_m=length,
             object_translations=translations,
-            candidates=tuple(cands),
+            candidates=(tuple(seq), tuple(turned)),
         )
     return out

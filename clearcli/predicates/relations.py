@@ -58,13 +58,25 @@ def inside_convex(points: np.ndarray, polygon: np.ndarray, margin: float = 0.0) 
     least ``margin`` from every edge."""
     if len(points) == 0 or len(polygon) < 3:
         return np.zeros(len(points), dtype=bool)
-    edges = np.roll(polygon, -1, axis=0) - polygon
+    return inside_edge_lines(points, edge_lines(polygon), margin)
+
+
+def edge_lines(polygon: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Inward unit normals (K, 2) and offsets (K,) of a counter-clockwise convex
+    polygon's edges (zero-length edges left out), for `inside_edge_lines`."""
+    edges = np.concatenate([polygon[1:], polygon[:1]]) - polygon  # np.roll, without its overhead
     lengths = np.linalg.norm(edges, axis=1)
     keep = lengths > 1e-12
     edges, starts, lengths = edges[keep], polygon[keep], lengths[keep]
     inward = np.column_stack([-edges[:, 1], edges[:, 0]]) / lengths[:, None]
+    return inward, np.einsum("kj,kj->k", starts, inward)
+
+
+def inside_edge_lines(points: np.ndarray, lines: tuple[np.ndarray, np.ndarray], margin: float = 0.0) -> np.ndarray:
+    """`inside_convex` for a polygon given by its `edge_lines`."""
+    inward, offsets = lines
     # signed distances (N, K) of every point from every edge line
-    dist = points @ inward.T - np.einsum("kj,kj->k", starts, inward)[None, :]
+    dist = points @ inward.T - offsets[None, :]
     return np.all(dist >= margin, axis=1)
 
 
@@ -112,13 +124,20 @@ def on_pairs(
     close = np.all((lo[:, None, :] <= hi[None, :, :]) & (hi[:, None, :] >= lo[None, :, :]), axis=2)
     np.fill_diagonal(close, False)
 
+    lines: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # each footprint's edges, once
+
     def inside(points_of: int, hull_of: int) -> np.ndarray:
         """Heights of points_of's cells inside hull_of's footprint (by the margin)."""
         obj = objects[points_of]
         pts = obj.projected_xy
         sel = np.all((pts >= lo[hull_of]) & (pts <= hi[hull_of]), axis=1)
         pts, h = pts[sel], obj.column_heights[sel]
-        return h[inside_convex(pts, objects[hull_of].footprint, margin_m)]
+        poly = objects[hull_of].footprint
+        if len(pts) == 0 or len(poly) < 3:
+            return h[:0]
+        if hull_of not in lines:
+            lines[hull_of] = edge_lines(poly)
+        return h[inside_edge_lines(pts, lines[hull_of], margin_m)]
 
     candidates: dict[int, list[int]] = {}
     for a, b in zip(*np.nonzero(close)):
