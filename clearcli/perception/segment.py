@@ -3,9 +3,10 @@
 1. finite points, outlier removal (filters.py; range-scaled radius by default)
 2. the table: RANSAC planes, the support surface among them, its 2D convex hull, the
    polygonal prism of points above it (table.py)
-3. supervoxels (VCCS, supervoxels.py) and LCCP merging (lccp.py); then two merges of
-   ours: pieces of one object cut apart by a nearer one (occlusion.py, organized frames)
-   and the inner and outer walls of a container (rims.py)
+3. supervoxels (VCCS, supervoxels.py) and LCCP merging (lccp.py); planar cuts through
+   concave seams left inside LCCP segments (cuts.py, after CPC); then two merges of
+   ours: pieces of one object cut apart by a nearer one (occlusion.py, organized
+   frames) and the inner and outer walls of a container (rims.py)
 4. minimum-size filter (visible area in voxels, and a point count)
 
 Every stage is its own function; `segment` chains them and times each one.
@@ -167,7 +168,7 @@ def segment(frame: Frame, settings: SegmentSettings) -> Segmentation:
     obj_idx = idx[prism_mask]
     obj_pts = pts[prism_mask]
     objects: list[SegmentedObject] = []
-    timings["supervoxels"] = timings["lccp"] = timings["merge"] = 0.0
+    timings["supervoxels"] = timings["lccp"] = timings["cuts"] = timings["merge"] = 0.0
     if obj_pts.shape[0] >= 4:
         if fit.camera_is_origin:
             viewpoint = np.zeros(3)
@@ -186,6 +187,12 @@ def segment(frame: Frame, settings: SegmentSettings) -> Segmentation:
         seg_of_sv = lccp_segments(sv, seg_settings)
         t4 = time.perf_counter()
         timings["lccp"] = t4 - t3
+        if settings.planar_cuts:
+            from clearcli.perception.cuts import planar_cuts
+
+            seg_of_sv = planar_cuts(seg_of_sv, sv, vox.centroids, fit.plane.normal, seg_settings)
+            t4 = time.perf_counter()
+            timings["cuts"] = t4 - t3 - timings["lccp"]
 
         if settings.occlusion_merge and organized and frame.shape is not None:
             from clearcli.perception.occlusion import merge_occluded
