@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from clearcli.perception.types import TablePlane
+from clearcli.predicates.synthetic import camera_pose
 from clearcli.predicates.state import DIRECTIONS, Fact, ObjectModel, PushModel, SymbolicState
 
 # The robot footprint in W: 0.10 m outside the near edge (x = 0), facing +x.
@@ -23,19 +24,7 @@ TABLE_X = (0.0, 1.6)
 TABLE_Y = (-0.8, 0.8)
 
 
-def _look_at(eye: np.ndarray, target: np.ndarray) -> np.ndarray:
-    z = target - eye
-    z /= np.linalg.norm(z)
-    x = np.cross(z, [0.0, 0.0, 1.0])
-    x /= np.linalg.norm(x)
-    y = np.cross(z, x)
-    T = np.eye(4)
-    T[:3, :3] = np.column_stack([x, y, z])
-    T[:3, 3] = eye
-    return T
-
-
-T_WORLD_CAMERA = _look_at(np.array([-0.05, 0.0, 0.75]), np.array([0.45, 0.0, 0.0]))
+T_WORLD_CAMERA = camera_pose((-0.05, 0.0, 0.75), (0.45, 0.0, 0.0))
 T_CAMERA_WORLD = np.linalg.inv(T_WORLD_CAMERA)
 T_BASE_CAMERA = np.linalg.inv(T_WORLD_BASE) @ T_WORLD_CAMERA
 
