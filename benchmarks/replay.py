@@ -13,6 +13,13 @@ sim: self-made sessions of 3 to 12 objects (20 seeds by default) run the closed 
 (plan, act in the imperfect world, look again) with push memory and, as the control,
 without it; prints how many sessions cleared every object the planner can reach, the
 actions per object, and how often a push undid the previous push of the same object.
+
+"Cleared" is judged by the world, not by the planner: an object may be left only when the
+world's gripper truly cannot hold it (narrowest side over the opening or under the closing
+width), or when the planner found no arm motion for it and the robot had not moved it
+there itself. The planner's own "too wide"/"out of reach" verdicts (the older figure, also
+printed) can be wrong: a modelled width is off by millimetres, and a push can carry an
+object out of reach.
 """
 
 from __future__ import annotations
@@ -196,6 +203,7 @@ def report_sessions(label: str, results: list) -> dict:
     n = len(results)
     ok = sum(r.cleared_reachable for r in results)
     ok_unblocked = sum(r.cleared_unblocked for r in results)
+    ok_truly = sum(r.cleared_truly for r in results)
     removed = sum(r.n_objects - len(r.remaining) for r in results)
     actions = sum(r.actions for r in results)
     pushes = sum(1 for r in results for s in r.steps if s.action.startswith("(push"))
@@ -209,6 +217,13 @@ def report_sessions(label: str, results: list) -> dict:
         f"ungraspable): {ok}/{n} = {100 * ok / max(n, 1):.0f} %; also counting objects blocked "
         f"by those: {ok_unblocked}/{n} = {100 * ok_unblocked / max(n, 1):.0f} %"
     )
+    false_wide = sum(len(r.false_ungraspable) for r in results)
+    print(
+        f"    judged by the world (left: only objects the gripper truly cannot hold, or with no arm "
+        f"motion and not pushed there by the robot): {ok_truly}/{n} = {100 * ok_truly / max(n, 1):.0f} % "
+        f"(target >= 95 %); objects left "
+        f"that the planner called too wide/narrow but the gripper fits: {false_wide}"
+    )
     print(
         f"    actions {actions} for {removed} objects removed = {actions / max(removed, 1):.2f} per object; "
         f"actions per object acted on: mean {statistics.mean(per_object) if per_object else 0:.2f}, "
@@ -221,13 +236,21 @@ def report_sessions(label: str, results: list) -> dict:
                 f"{s.action} {s.outcome}" + (" [undoes the last push]" if s.undoes_push else "") for s in r.steps if s.action
             )
             print(f"    back and forth in {r.scene} seed {r.seed}: {steps}")
-    unseen = sum(1 for r in results if not r.cleared_reachable and r.unseen)
+    unseen = sum(1 for r in results if not r.cleared_truly and r.unseen)
     print(f"    of the sessions not cleared, {unseen} left objects that no segment stood for (merged or missed)")
     for r in results:
-        if not r.cleared_reachable:
+        if not r.cleared_truly:
             print(f"    not cleared: {r.scene} seed {r.seed}: end {r.end}, left {r.remaining}, "
-                  f"unreachable/ungraspable {r.unreachable}, stuck {r.stuck}, merged/missed {r.unseen}: {r.reason}")
-    return {"sessions": n, "cleared_reachable": ok, "back_and_forth": back, "budget": budget, "unseen": unseen}
+                  f"unreachable/ungraspable {r.unreachable} (truly too wide/narrow {r.truly_ungraspable}), "
+                  f"stuck {r.stuck}, merged/missed {r.unseen}, moved by the robot {r.moved}: {r.reason}")
+    return {
+        "sessions": n,
+        "cleared_reachable": ok,
+        "cleared_truly": ok_truly,
+        "back_and_forth": back,
+        "budget": budget,
+        "unseen": unseen,
+    }
 
 
 def part_sim(quick: bool, truth: bool) -> None:

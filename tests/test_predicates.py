@@ -307,3 +307,37 @@ def test_cli_predicates_json_problem_png_and_domain(tmp_path) -> None:
     assert isinstance(res2.exception, OutputError)  # main() maps it to exit code 8
     res3 = runner.invoke(app, ["domain"])
     assert res3.exit_code == 0 and res3.stdout == domain_text()
+# Tests for tests/test_predicates.py (uses its state_of/by_segment/facts_of helpers).
+
+
+def test_grasp_turns_the_gripper_away_from_a_tall_neighbour() -> None:
+    # a 6 x 5 cm box, its 6 cm side 1 cm from a tall box: closing across the 5 cm width
+    # puts a finger inside the neighbour; turned a quarter turn (across the 6 cm length,
+    # within the 7 cm opening) the fingers and the base stay clear of it
+    small = Box((0.0, -0.03), (0.06, 0.05, 0.05))
+    tall = Box((0.0, 0.03), (0.10, 0.05, 0.15))
+    state = state_of([small, tall])
+    n = by_segment(state)
+    assert ("block_grasp", n[1], n[0]) not in facts_of(state, "block_grasp")
+    assert 0.055 < state.by_name(n[0]).grasp_width_m < 0.066  # closing across the length
+    assert facts_of(state, "ungraspable") == set()
+
+
+def test_square_box_seen_corner_on_is_graspable_across_its_side() -> None:
+    # a 6 cm square turned 45 degrees: the principal directions of a square footprint
+    # point anywhere (here along the diagonals: 8.5 cm across, "too wide"); the
+    # narrowest width is its side
+    state = state_of([Box((0.0, 0.0), (0.060, 0.060, 0.08), yaw_deg=45.0)])
+    (obj,) = state.objects
+    assert abs(obj.grasp_width_m - 0.060) < 0.004 and facts_of(state, "ungraspable") == set()
+
+
+def test_min_width_direction_of_a_turned_rectangle() -> None:
+    from clearcli.geometry.poses import min_width_direction
+
+    c, s = np.cos(0.3), np.sin(0.3)
+    rect = np.array([[0.05, 0.02], [-0.05, 0.02], [-0.05, -0.02], [0.05, -0.02]]) @ np.array([[c, s], [-s, c]])
+    e1, e2 = rect[1] - rect[0], rect[2] - rect[1]
+    rect = rect[::-1] if e1[0] * e2[1] - e1[1] * e2[0] < 0 else rect
+    d = min_width_direction(rect)
+    assert abs(abs(d @ np.array([-s, c])) - 1.0) < 1e-9  # across the 4 cm side

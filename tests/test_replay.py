@@ -489,6 +489,40 @@ def test_world_grasp_of_a_tight_object_slips_sometimes() -> None:
     assert len(scene.objects) == 1 and scene.objects[0] != tight.objects[0]
 
 
+def test_world_grasp_never_holds_an_object_too_wide_or_too_narrow() -> None:
+    from clearcli.sim.episode import truly_ungraspable, world_grasp
+    from clearcli.sim.scene import Box, Cylinder, make_scene
+
+    rng = np.random.default_rng(2)
+    wide = make_scene("wide", [Box(0, 0.1, 0.08, 0.08, x_m=0.0, y_m=0.0)])
+    thin = make_scene("thin", [Cylinder(0, 0.012, 0.1, x_m=0.0, y_m=0.0)])
+    for _ in range(10):
+        assert world_grasp(wide, 0, 0.07, rng, closing_width_m=0.03) == (wide, "too wide")
+        assert world_grasp(thin, 0, 0.07, rng, closing_width_m=0.03) == (thin, "too narrow")
+    assert truly_ungraspable(wide.objects[0], 0.07, 0.03) and truly_ungraspable(thin.objects[0], 0.07, 0.03)
+    # 6.9 cm across its narrow side: the gripper fits it (it may slip, never refuses)
+    fits = make_scene("fits", [Box(0, 0.1, 0.069, 0.08, x_m=0.0, y_m=0.0)])
+    assert not truly_ungraspable(fits.objects[0], 0.07, 0.03)
+    assert {world_grasp(fits, 0, 0.07, rng, closing_width_m=0.03)[1] for _ in range(20)} <= {"removed", "slipped"}
+
+
+def test_cleared_truly_does_not_take_the_planners_word_for_widths() -> None:
+    from clearcli.sim.episode import EpisodeResult
+
+    base = EpisodeResult(scene="s", seed=0, n_objects=3, steps=(), end="no_plan", remaining=(1, 2), unreachable=(1, 2))
+    # the planner called 1 too wide and 2 out of reach: the old criterion passes either way
+    claimed = dataclasses.replace(base, claimed_ungraspable=(1,))
+    assert claimed.cleared_reachable and not claimed.cleared_truly and claimed.false_ungraspable == (1,)
+    # the world agrees that 1 is too wide: cleared (2 is out of reach: the arm has no motion)
+    truly = dataclasses.replace(claimed, truly_ungraspable=(1,))
+    assert truly.cleared_truly and truly.false_ungraspable == ()
+    # out of reach because the robot pushed it there: not excused
+    assert not dataclasses.replace(truly, moved=(2,)).cleared_truly
+    # a stuck object is never excused, nor is anything when the budget ran out
+    assert not dataclasses.replace(truly, remaining=(1, 2, 3)).cleared_truly
+    assert not dataclasses.replace(truly, end="budget").cleared_truly
+
+
 def test_simulate_command_writes_a_replayable_log(tmp_path: Path, capsys, monkeypatch) -> None:
     from clearcli.io.mcap import read_summary
 

@@ -9,9 +9,10 @@ An object's solid (thesis 4.2, "Objects Modelling") is the convex hull of its po
 together with their projection onto the table plane: the camera sees mostly the top and
 one or two sides, the projection fills in the hidden sides.
 
-Principal directions: PCA of the object's footprint (its projected convex hull, as a
-uniform region; the second moments of the polygon), which is the projection of the
-object onto the table independent of how densely each face was sampled.
+Principal directions: the sides of the smallest-area rectangle holding the object's
+footprint (its projected convex hull), the first along the longer side. The thesis takes
+the PCA of the footprint; for a box these agree except when the footprint is nearly
+square, where the PCA points anywhere (push directions 30-45 degrees off the faces).
 """
 
 from __future__ import annotations
@@ -182,6 +183,22 @@ def _polygon_moments(poly: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
     c = np.array([cx, cy])
     cov = np.array([[ixx, ixy], [ixy, iyy]]) / area - np.outer(c, c)
     return float(area), c, cov
+
+
+def _min_area_rect_axis(poly: np.ndarray) -> np.ndarray:
+    """Long-side direction of the smallest-area rectangle holding the convex polygon
+    (K, 2): one of its sides lies on a polygon edge. For a box these are its faces,
+    where the PCA of a nearly square footprint points anywhere (two touching 6.6 cm
+    boxes got push directions 30 degrees off their faces, every push then blocked)."""
+    edges = np.roll(poly, -1, axis=0) - poly
+    lengths = np.linalg.norm(edges, axis=1)
+    keep = lengths > 1e-12
+    u = edges[keep] / lengths[keep, None]
+    v = np.column_stack([-u[:, 1], u[:, 0]])
+    wu = np.ptp(poly @ u.T, axis=0)
+    wv = np.ptp(poly @ v.T, axis=0)
+    k = int(np.argmin(wu * wv))
+    return u[k] if wu[k] >= wv[k] else v[k]
 
 
 def _fix_sign(axis: np.ndarray) -> np.ndarray:
@@ -394,8 +411,7 @@ def build_from_columns(
     area, _, cov = _polygon_moments(footprint)
     if area < 1e-6:  # under 1 cm^2
         raise DegenerateObject(f"footprint of {area * 1e4:.2f} cm^2")
-    evals, evecs = np.linalg.eigh(cov)
-    a1 = _fix_sign(evecs[:, int(np.argmax(evals))])
+    a1 = _fix_sign(_min_area_rect_axis(footprint))
     a2 = np.array([-a1[1], a1[0]])
     axes2d = np.vstack([a1, a2])
 

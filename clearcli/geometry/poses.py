@@ -5,7 +5,11 @@ Gripper frame as in `clearcli.geometry.gripper`: closing point at the origin, ap
 under a half-turn about its approach axis, so every pose has two candidates (x, y) and
 (-x, -y); the IK check may pick either.
 
-Grasp: the closing direction is orthogonal to the first principal direction, the approach
+Grasp: the closing direction is across the footprint's narrowest width (the thesis: across
+the first principal direction; for a nearly square footprint that can be its diagonal),
+with the other yaw (a quarter turn) as an alternative when that side fits the opening;
+pushes carry the other gripper yaw as an alternative too, and the predicates stage keeps,
+per action, the yaw the neighbours block least. The approach
 follows the top surface's third principal axis pointing into the table (straight down for
 an object lying flat, or when that axis tilts more than ``max_grasp_tilt_deg``); the
 closing point is the top-surface centroid moved along the approach by half the
@@ -28,6 +32,7 @@ at most ``path_resolution_m``; retreat: ``approach_m`` above the end.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -69,6 +74,10 @@ class GraspGeometry:
     closing_dir: np.ndarray  # (3,) x of the first candidate
     approach: np.ndarray  # (3,)
     width_m: float  # the object's size across the closing direction
+    # The same grasp with the gripper turned a quarter turn about its approach (closing
+    # across the other side of the footprint), when that side fits the opening; the
+    # predicates stage keeps whichever of the two the neighbours block least.
+    alternatives: tuple["GraspGeometry", ...] = ()
 
     @property
     def T_grasp(self) -> np.ndarray:
@@ -82,6 +91,12 @@ class PushGeometry:
     length_m: float
     object_translations: np.ndarray  # (n, 3) along the path, the last is the end
     candidates: tuple[tuple[np.ndarray, ...], ...]  # per half-turn: pre, start, ..., end, retreat
+    # The same push with the gripper turned a quarter turn about the vertical (closing
+    # direction across the push instead of along it, or the reverse): the base box is
+    # 0.11 m one way and 0.06 m the other, so beside a tall neighbour one yaw often
+    # fits where the other does not. The predicates stage keeps the one the neighbours
+    # block least.
+    alternatives: tuple["PushGeometry", ...] = ()
 
     @property
     def T_start(self) -> np.ndarray:
@@ -94,24 +109,45 @@ def grasp_geometry(
     half = gripper.settings.closing_region_height_m / 2.0
     tilt = math.degrees(math.acos(float(np.clip(obj.top_normal @ UP, -1.0, 1.0))))
     approach = -obj.top_normal if tilt <= max_tilt_deg else -UP
-    a1 = np.array([obj.axes2d[0, 0], obj.axes2d[0, 1], 0.0])
-    x = _cross(approach, a1)
-    x = x / np.linalg.norm(x)
     point = obj.top_centroid + half * approach
     tip_height = float((point + half * approach)[2])
     if tip_height < push.fingertips_above_table_m:
         # raise it back along the approach until the fingertips clear the table
         point = point - approach * (push.fingertips_above_table_m - tip_height) / (-approach[2])
-    # the object's width across the closing direction, measured on the footprint: a tilted
-    # approach must not add the object's height to it
-    across = np.array([x[0], x[1]]) / max(float(np.hypot(x[0], x[1])), 1e-12)
-    width = float(np.ptp(obj.footprint @ across))
-    cands = []
-    for T in _half_turns(x, approach, point):
-        pre = _moved(T, -push.approach_m * approach)
-        lift = _moved(T, push.approach_m * UP)
-        cands.append((pre, T, lift))
-    return GraspGeometry(candidates=tuple(cands), closing_dir=x, approach=approach, width_m=width)
+    # Close across the footprint's narrowest width (rotating calipers), not across the
+    # first principal direction: for a nearly square footprint, or a box seen corner on,
+    # the principal directions point anywhere and the width across them can be 40 % too
+    # large (a 5.9 x 6.3 cm box measured 8.2 cm wide, "too wide for the gripper").
+    across2 = min_width_direction(obj.footprint)
+    grasps = []
+    for turn in (0, 1):
+        d2 = across2 if turn == 0 else np.array([-across2[1], across2[0]])
+        x3 = np.array([d2[0], d2[1], 0.0])
+        x = x3 - float(x3 @ approach) * approach  # orthogonal to a tilted approach
+        x = x / np.linalg.norm(x)
+        # the object's width across the closing direction, measured on the footprint: a
+        # tilted approach must not add the object's height to it
+        width = float(np.ptp(obj.footprint @ d2))
+        if turn == 1 and width > gripper.settings.opening_width_m:
+            break  # the other side does not fit: no alternative
+        cands = []
+        for T in _half_turns(x, approach, point):
+            pre = _moved(T, -push.approach_m * approach)
+            lift = _moved(T, push.approach_m * UP)
+            cands.append((pre, T, lift))
+        grasps.append(GraspGeometry(candidates=tuple(cands), closing_dir=x, approach=approach, width_m=width))
+    return dataclasses.replace(grasps[0], alternatives=tuple(grasps[1:]))
+
+
+def min_width_direction(footprint: np.ndarray) -> np.ndarray:
+    """Unit 2D direction across which the convex polygon (K, 2) is narrowest: the width
+    between two parallel supporting lines is least when one of them holds an edge."""
+    edges = np.roll(footprint, -1, axis=0) - footprint
+    lengths = np.linalg.norm(edges, axis=1)
+    keep = lengths > 1e-12
+    normals = np.column_stack([-edges[keep, 1], edges[keep, 0]]) / lengths[keep, None]
+    widths = np.ptp(footprint @ normals.T, axis=0)
+    return normals[int(np.argmin(widths))]
 
 
 def direction_vectors(obj: ObjectGeometry) -> dict[str, np.ndarray]:
@@ -135,30 +171,35 @@ def push_geometry(obj: ObjectGeometry, gripper: GripperModel, push: PushSettings
     half_across = g.finger_width_m / 2.0
     for name, d in direction_vectors(obj).items():
         parallel = name in ("dir1", "dir2")
-        x = d if parallel else _cross(UP, d)
-        half_along = half_parallel if parallel else half_across
         rear = float((hull_xy @ d[:2]).min())
         lateral = c - (c @ d) * d
-        start = lateral + (rear - push.gripper_behind_m - half_along) * d
-        start[2] = height
         extent = float(obj.extents[0] if parallel else obj.extents[1])
         length = min(push.pushing_step * extent, push.push_length_limit_m)
         n = max(1, math.ceil(length / push.path_resolution_m - 1e-9))
         steps = length * np.arange(1, n + 1) / n
         translations = steps[:, None] * d[None, :]
-        T, T_turned = _half_turns(x, -UP, start)
-        seq = np.repeat(T[None], n + 3, axis=0)  # pre, start, path, retreat
-        seq[0, :3, 3] += up_approach
-        seq[2:-1, :3, 3] += translations
-        seq[-1, :3, 3] += translations[-1] + up_approach
-        # the half-turned candidate: the same positions, its own rotation
-        turned = seq.copy()
-        turned[:, :3, :3] = T_turned[:3, :3]
-        out[name] = PushGeometry(
-            direction=name,
-            unit=d,
-            length_m=length,
-            object_translations=translations,
-            candidates=(tuple(seq), tuple(turned)),
-        )
+        yaws = []
+        for along in (parallel, not parallel):  # the documented yaw first, then the other
+            x = d if along else _cross(UP, d)
+            half_along = half_parallel if along else half_across
+            start = lateral + (rear - push.gripper_behind_m - half_along) * d
+            start[2] = height
+            T, T_turned = _half_turns(x, -UP, start)
+            seq = np.repeat(T[None], n + 3, axis=0)  # pre, start, path, retreat
+            seq[0, :3, 3] += up_approach
+            seq[2:-1, :3, 3] += translations
+            seq[-1, :3, 3] += translations[-1] + up_approach
+            # the half-turned candidate: the same positions, its own rotation
+            turned = seq.copy()
+            turned[:, :3, :3] = T_turned[:3, :3]
+            yaws.append(
+                PushGeometry(
+                    direction=name,
+                    unit=d,
+                    length_m=length,
+                    object_translations=translations,
+                    candidates=(tuple(seq), tuple(turned)),
+                )
+            )
+        out[name] = dataclasses.replace(yaws[0], alternatives=tuple(yaws[1:]))
     return out

@@ -12,6 +12,7 @@ and grasping the lower one while the upper one is on it.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from typing import Any, Iterable, Sequence
 
@@ -236,6 +237,56 @@ def block_grasp_pairs(
     return {(a, b) for b, a in hits}
 
 
+def least_blocked_grasps(
+    objects: Sequence[ObjectGeometry],
+    grasps: Sequence[GraspGeometry],
+    gripper: GripperModel,
+    exclude: set[tuple[int, int]],
+) -> list[GraspGeometry]:
+    """Each grasp as the gripper yaw (the grasp or one of its ``alternatives``) whose
+    open gripper hits the fewest other objects, the first on ties. The gripper turns
+    about its approach at will, so a neighbour that blocks one yaw need not block the
+    grasp; the planning model has no disjunction, so the least blocked yaw stands for
+    the grasp, and its candidates are the only ones the IK check sees."""
+    allowed = _allowed(len(objects), exclude)
+    out = []
+    for b, grasp in enumerate(grasps):
+        options = (dataclasses.replace(grasp, alternatives=()), *grasp.alternatives)
+        if len(options) > 1:
+            poses = np.stack([g.T_grasp for g in options])
+            hits = _gripper_hits(gripper, False, poses, objects, np.repeat(allowed[b : b + 1], len(options), axis=0))
+            counts = np.bincount([p for p, _ in hits], minlength=len(options))
+            out.append(options[int(np.argmin(counts))])
+        else:
+            out.append(options[0])
+    return out
+
+
+def least_blocked_pushes(
+    objects: Sequence[ObjectGeometry],
+    pushes: Sequence[dict[str, PushGeometry]],
+    gripper: GripperModel,
+    exclude: set[tuple[int, int]],
+) -> list[dict[str, PushGeometry]]:
+    """Each push as the gripper yaw whose closed gripper at the push's start hits the
+    fewest other objects, the first on ties (see `least_blocked_grasps`)."""
+    allowed = _allowed(len(objects), exclude)
+    out = []
+    for b, by_dir in enumerate(pushes):
+        chosen = {}
+        for name, push in by_dir.items():
+            options = (dataclasses.replace(push, alternatives=()), *push.alternatives)
+            if len(options) > 1:
+                poses = np.stack([p.T_start for p in options])
+                hits = _gripper_hits(gripper, True, poses, objects, np.repeat(allowed[b : b + 1], len(options), axis=0))
+                counts = np.bincount([p for p, _ in hits], minlength=len(options))
+                chosen[name] = options[int(np.argmin(counts))]
+            else:
+                chosen[name] = options[0]
+        out.append(chosen)
+    return out
+
+
 # ---------------------------------------------------------------------------- block_dir
 def start_overlaps(objects: Sequence[ObjectGeometry]) -> set[tuple[int, int]]:
     """Pairs (both orders) whose solids already intersect (segmentation noise, stacks)."""
@@ -331,12 +382,15 @@ def block_dir_triples(
 
 
 # ---------------------------------------------------------------------------- static facts
-def ungraspable(grasps: Sequence[GraspGeometry], gripper: GripperModel) -> set[int]:
+def ungraspable(grasps: Sequence[GraspGeometry], gripper: GripperModel, margin_m: float = 0.0) -> set[int]:
     """Objects wider than the opening, or narrower than the closing width, across the
-    closing direction of their grasp."""
+    closing direction of their grasp, by more than ``margin_m`` (the modelled width's
+    error: an object within it is tried, and the grasp's outcome tells)."""
     s = gripper.settings
     return {
-        i for i, g in enumerate(grasps) if g.width_m > s.opening_width_m or g.width_m < s.closing_width_m
+        i
+        for i, g in enumerate(grasps)
+        if g.width_m > s.opening_width_m + margin_m or g.width_m < s.closing_width_m - margin_m
     }
 
 

@@ -89,6 +89,9 @@ def compute_state(frame: Frame, seg: Segmentation, settings: "Settings | None" =
     facts.update(("on", names[a], names[b]) for a, b in on)
     timings["on"] = time.perf_counter() - t0
     exclude = rel.related(on)
+    # the gripper yaw of each grasp and push that the neighbours block least
+    grasps = rel.least_blocked_grasps(geoms, grasps, gripper, exclude)
+    pushes = rel.least_blocked_pushes(geoms, pushes, gripper, exclude)
 
     t0 = time.perf_counter()
     facts.update(("block_grasp", names[a], names[b]) for a, b in rel.block_grasp_pairs(geoms, grasps, gripper, exclude))
@@ -101,7 +104,7 @@ def compute_state(frame: Frame, seg: Segmentation, settings: "Settings | None" =
     timings["block_dir"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    facts.update(("ungraspable", names[i]) for i in rel.ungraspable(grasps, gripper))
+    facts.update(("ungraspable", names[i]) for i in rel.ungraspable(grasps, gripper, ps.grasp_width_margin_m))
     table_xy = tf.to_table(np.asarray(seg.table_polygon, dtype=float).reshape(-1, 3))[:, :2]
     facts.update(("push_off_table", names[i], d) for i, d in rel.push_off_table(geoms, pushes, table_xy))
     timings["static"] = time.perf_counter() - t0

@@ -35,6 +35,9 @@ if TYPE_CHECKING:
     from clearcli.replay.session import FrameReport, Session
 
 BASE_FRAME = "wam_base"
+# An object whose centre ends farther than this from where it started was moved by the
+# robot (a slipped grasp displaces it by ~4 mm, so this only counts pushes and shoves).
+MOVED_M = 0.01
 
 
 @dataclass(frozen=True)
@@ -86,6 +89,13 @@ class EpisodeResult:
     stuck: tuple[int, ...] = ()  # of those, the ones blocked by objects it cannot move
     reason: str = ""  # the last frame's error, when the episode ended without clearing
     unseen: tuple[int, ...] = ()  # of those, the ones no segment stood for (merged or missed)
+    # Of those, the ones the planner called too wide or narrow for the gripper (part of
+    # ``unreachable``), and the ones the world's gripper truly cannot hold.
+    claimed_ungraspable: tuple[int, ...] = ()
+    truly_ungraspable: tuple[int, ...] = ()
+    # Of those, the ones the robot moved (pushed, or shoved with another): when such an
+    # object ends out of reach, the robot put it there.
+    moved: tuple[int, ...] = ()
 
     @property
     def actions(self) -> int:
@@ -100,6 +110,24 @@ class EpisodeResult:
         """Every object left is one the planner showed it cannot reach or grasp (or none
         is left)."""
         return self.end != "budget" and set(self.remaining) <= set(self.unreachable)
+
+    @property
+    def cleared_truly(self) -> bool:
+        """Every object left is one the robot truly cannot take: too wide or narrow for
+        the gripper in the world (not by the planner's noisy model of it), or one the
+        planner found no arm motion for (out of reach, or the arm would hit something
+        whatever it does) and that the robot did not move there itself.
+        ``cleared_reachable`` takes the planner's word for the widths too, so a model that
+        wrongly finds an object too wide passes it, as does a push that carries an object
+        out of the arm's reach."""
+        out_of_reach = set(self.unreachable) - set(self.claimed_ungraspable) - set(self.moved)
+        excused = set(self.truly_ungraspable) | out_of_reach
+        return self.end != "budget" and set(self.remaining) <= excused
+
+    @property
+    def false_ungraspable(self) -> tuple[int, ...]:
+        """Objects left that the planner called too wide or narrow but the gripper fits."""
+        return tuple(sorted(set(self.claimed_ungraspable) - set(self.truly_ungraspable)))
 
     @property
     def cleared_unblocked(self) -> bool:
@@ -127,11 +155,26 @@ def on_table(scene: Scene, obj: SceneObject) -> bool:
     return abs(obj.x_m) <= scene.table.size_x_m / 2 and abs(obj.y_m) <= scene.table.size_y_m / 2
 
 
+def truly_ungraspable(obj: SceneObject, opening_width_m: float, closing_width_m: float) -> bool:
+    """The real gripper cannot hold the object whichever way it closes: its narrowest
+    width is beyond the opening, or under the closing width (the fingers meet first)."""
+    width = grasp_width_m(obj)
+    return width > opening_width_m or width < closing_width_m
+
+
 def world_grasp(
-    scene: Scene, k: int, opening_width_m: float, rng: np.random.Generator, params: WorldParams = WorldParams()
+    scene: Scene,
+    k: int,
+    opening_width_m: float,
+    rng: np.random.Generator,
+    params: WorldParams = WorldParams(),
+    closing_width_m: float = 0.0,
 ) -> tuple[Scene, str]:
     obj = scene.objects[k]
     width = grasp_width_m(obj)
+    if truly_ungraspable(obj, opening_width_m, closing_width_m):
+        # the fingers do not fit round it, or close past it: nothing happens
+        return scene, "too wide" if width > opening_width_m else "too narrow"
     if width >= opening_width_m - params.tight_grasp_margin_m and rng.random() < params.tight_grasp_fail_probability:
         # the fingers close on an edge and the object slips back, a little displaced
         dx, dy = rng.normal(0.0, 0.004, 2)
@@ -347,9 +390,11 @@ class Episode:
 
     def __iter__(self) -> Iterator["Frame"]:
         ids_at_start = tuple(o.object_id for o in self.scene.objects)
+        start_xy = {o.object_id: (o.x_m, o.y_m) for o in self.scene.objects}
         actions = 0
         end = "budget"
         last_unreachable: tuple[int, ...] = ()
+        last_ungraspable: tuple[int, ...] = ()
         last_stuck: tuple[int, ...] = ()
         last_seen: tuple[int, ...] = ()
         reason = ""
@@ -364,6 +409,7 @@ class Episode:
             self.reports.append(report.to_json())
             record, unreachable = self._act(frame, report, index)
             last_unreachable = unreachable
+            last_ungraspable = record.ungraspable
             last_stuck = record.stuck
             last_seen = record.seen
             reason = report.result.error
@@ -389,6 +435,14 @@ class Episode:
                 break
             index += 1
         remaining = tuple(o.object_id for o in self.scene.objects)
+        gripper = self.session.pipeline.settings.gripper
+        too_wide_or_narrow = tuple(
+            sorted(
+                o.object_id
+                for o in self.scene.objects
+                if truly_ungraspable(o, gripper.opening_width_m, gripper.closing_width_m)
+            )
+        )
         self.result = EpisodeResult(
             scene=self.scene.name.split(".")[0],
             seed=self.seed,
@@ -401,6 +455,15 @@ class Episode:
             stuck=tuple(sorted(set(last_stuck) & set(remaining))),
             reason=reason if end != "cleared" else "",
             unseen=tuple(sorted(set(remaining) - set(last_seen))),
+            claimed_ungraspable=tuple(sorted(set(last_ungraspable) & set(remaining))),
+            truly_ungraspable=too_wide_or_narrow,
+            moved=tuple(
+                sorted(
+                    o.object_id
+                    for o in self.scene.objects
+                    if math.dist((o.x_m, o.y_m), start_xy[o.object_id]) > MOVED_M
+                )
+            ),
         )
 
     def _act(self, frame: "Frame", report: "FrameReport", index: int) -> tuple[StepRecord, tuple[int, ...]]:
@@ -444,8 +507,10 @@ class Episode:
         if k is None:
             outcome = "missed: no object there"
         elif first.kind == "grasp":
-            opening = self.session.pipeline.settings.gripper.opening_width_m
-            self.scene, outcome = world_grasp(self.scene, k, opening, self.rng, self.params)
+            gripper = self.session.pipeline.settings.gripper
+            self.scene, outcome = world_grasp(
+                self.scene, k, gripper.opening_width_m, self.rng, self.params, gripper.closing_width_m
+            )
         else:
             push = model.pushes[first.direction or ""]
             R_table_camera = np.linalg.inv(self.scene.T_camera_table)[:3, :3]
