@@ -68,6 +68,7 @@ def simulate_cmd(
         "objects": result.n_objects,
         "end": result.end,
         "cleared_reachable": result.cleared_reachable,
+        "cleared_truly": result.cleared_truly,
         "remaining": list(result.remaining),
         "unreachable": list(result.unreachable),
         "actions": result.actions,
