@@ -679,3 +679,4 @@ def write_tf_static(path: Path, transforms: Sequence[StaticTransform]) -> None:
 # Public names for what other modules (replay) already use under the private ones.
 raw_messages = _raw_messages
 MessageDecoders = _Decoders
+message_field = _get

@@ -602,10 +602,10 @@ class AnnotatedLog:
 def _raw_iter(path: Path, topic: str) -> Iterator[tuple[Any, Any, Any]]:
     """(schema, channel, message) of ``topic`` in the input log, in the reader's order;
     ends quietly where the log is damaged (the replay reports that itself)."""
-    from clearcli.io.mcap import _raw_messages, read_summary
+    from clearcli.io.mcap import raw_messages, read_summary
 
     summary = read_summary(path)
-    iterator = _raw_messages(path, summary, topic)
+    iterator = raw_messages(path, summary, topic)
     try:
         while True:
             try:

@@ -479,13 +479,9 @@ TF_TOPICS = ("/tf_static", "/tf")
 
 
 def _field(msg: Any, *names: str) -> Any:
-    for name in names:
-        if isinstance(msg, dict):
-            if name in msg:
-                return msg[name]
-        elif hasattr(msg, name):
-            return getattr(msg, name)
-    return None
+    from clearcli.io.mcap import message_field
+
+    return message_field(msg, *names)
 
 
 def _transform_matrix(translation: Any, rotation: Any) -> np.ndarray:
@@ -505,7 +501,7 @@ def read_transforms(path: Any, max_messages: int = 1000) -> dict[tuple[str, str]
     (the first seen of each; a session's camera does not move). Reads at most
     ``max_messages`` transform messages, so a long /tf costs little. A log without them,
     or whose transforms cannot be decoded, gives {}."""
-    from clearcli.io.mcap import _Decoders, read_summary
+    from clearcli.io.mcap import MessageDecoders, read_summary
 
     try:
         summary = read_summary(path)
@@ -517,7 +513,7 @@ def read_transforms(path: Any, max_messages: int = 1000) -> dict[tuple[str, str]
     from mcap.reader import NonSeekingReader, SeekingReader
 
     found: dict[tuple[str, str], np.ndarray] = {}
-    decoders = _Decoders()
+    decoders = MessageDecoders()
     try:
         with open(path, "rb") as fp:
             reader: Any = SeekingReader(fp) if summary.indexed else NonSeekingReader(fp)
