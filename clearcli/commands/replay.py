@@ -14,6 +14,10 @@ envelope ({"schema": "clear.replay", "version": 1, ...}) with a "type":
            actions, grasps, pushes, executions {done, failed}, back_and_forth,
            unreachable, time_s and mean_time_s by stage, frames_per_s, stopped (why a
            damaged log ended early, else null).
+
+Exit codes: 0 when at least one frame was planned (frames without a table or that failed
+are reported and skipped), 9 when a damaged log ended early (after the summary), 4 when
+no frame replayed held a usable table.
 """
 
 from __future__ import annotations
@@ -158,6 +162,14 @@ def replay_cmd(
         _print_summary(result, stdout, out)
     if partial is not None:
         raise partial
+    if result.frames > 0 and result.no_table + result.failed == result.frames:
+        # every frame was skipped: a script must not mistake this for a replayed session
+        from clearcli.errors import SceneError
+
+        raise SceneError(
+            f"{log}: none of the {result.frames} frame(s) replayed held a usable table "
+            f"({result.no_table} without a table, {result.failed} failed)"
+        )
 
 
 def _brief(report: "FrameReport") -> str:
