@@ -32,7 +32,7 @@ def _load_script() -> ModuleType:
 def regenerated(tmp_path_factory: pytest.TempPathFactory) -> Path:
     out = tmp_path_factory.mktemp("fixtures")
     written = _load_script().generate(out)
-    assert set(written) == set(PCD_NAMES) | {"session"}
+    assert set(written) == set(PCD_NAMES) | {"session", "simulated_session"}
     return out
 
 
@@ -69,6 +69,16 @@ def test_session_fixture_matches_regeneration(regenerated: Path) -> None:
         fresh = read_frame(regenerated / "session.mcap", SESSION_TOPIC, i)
         _assert_close(committed, fresh)
         assert committed.stamp_s == pytest.approx(fresh.stamp_s, abs=1e-6)
+
+
+def test_simulated_session_fixture_matches_regeneration(regenerated: Path) -> None:
+    from clearcli.io.read import iter_frames
+
+    committed = list(iter_frames(_committed("simulated_session.mcap")))
+    fresh = list(iter_frames(regenerated / "simulated_session.mcap"))
+    assert len(committed) == len(fresh) >= 3
+    for a, b in zip(committed, fresh):
+        _assert_close(a, b)
 
 
 # ---- what the README promises ---------------------------------------------------------
