@@ -26,6 +26,24 @@ class Box:
     base_z: float = 0.0  # bottom face height (the top of the box it stands on)
 
 
+def pca_object(indices: np.ndarray, points: np.ndarray) -> SegmentedObject:
+    """A SegmentedObject whose box and principal axes come from the PCA of its points."""
+    centroid = points.mean(axis=0)
+    _, _, vt = np.linalg.svd(points - centroid, full_matrices=False)
+    if np.linalg.det(vt) < 0:
+        vt[2] = -vt[2]
+    local = (points - centroid) @ vt.T
+    lo, hi = local.min(axis=0), local.max(axis=0)
+    return SegmentedObject(
+        indices=indices,
+        centroid=centroid,
+        obb_center=centroid + ((lo + hi) / 2.0) @ vt,
+        obb_axes=vt,
+        obb_extents=hi - lo,
+        principal_axes=vt,
+    )
+
+
 def camera_pose(camera_xyz=(-0.5, 0.0, 0.6), target_xyz=(0.0, 0.0, 0.0)) -> np.ndarray:
     """T_world_camera of an optical-frame camera (z forward, y down) at camera_xyz."""
     c = np.asarray(camera_xyz, float)
@@ -123,23 +141,7 @@ def make_scene(
     for pts in chunks:
         idx = np.arange(start, start + len(pts), dtype=np.int64)
         start += len(pts)
-        p = cam_pts[idx]
-        c = p.mean(axis=0)
-        _, _, vt = np.linalg.svd(p - c, full_matrices=False)
-        if np.linalg.det(vt) < 0:
-            vt[2] = -vt[2]
-        local = (p - c) @ vt.T
-        lo, hi = local.min(axis=0), local.max(axis=0)
-        objects.append(
-            SegmentedObject(
-                indices=idx,
-                centroid=c,
-                obb_center=c + ((lo + hi) / 2.0) @ vt,
-                obb_axes=vt,
-                obb_extents=hi - lo,
-                principal_axes=vt,
-            )
-        )
+        objects.append(pca_object(idx, cam_pts[idx]))
     seg = Segmentation(
         n_points=len(cam_pts),
         table=plane,
@@ -183,23 +185,7 @@ def segmentation_from_labels(frame: Frame, min_points: int = 50) -> Segmentation
         idx = np.nonzero(finite & (labels >= 10) & (ids == oid))[0]
         if len(idx) < min_points:
             continue
-        p = pts[idx]
-        cen = p.mean(axis=0)
-        _, _, vt = np.linalg.svd(p - cen, full_matrices=False)
-        if np.linalg.det(vt) < 0:
-            vt[2] = -vt[2]
-        local = (p - cen) @ vt.T
-        lo, hi = local.min(axis=0), local.max(axis=0)
-        objects.append(
-            SegmentedObject(
-                indices=idx.astype(np.int64),
-                centroid=cen,
-                obb_center=cen + ((lo + hi) / 2.0) @ vt,
-                obb_axes=vt,
-                obb_extents=hi - lo,
-                principal_axes=vt,
-            )
-        )
+        objects.append(pca_object(idx.astype(np.int64), pts[idx]))
     return Segmentation(
         n_points=frame.n_points,
         table=plane,
