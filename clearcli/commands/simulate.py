@@ -36,12 +36,9 @@ def simulate_cmd(
     plan exists or the budget runs out. The frames go to OUT for `clear replay`."""
     from clearcli.commands.common import check_output_path, print_json, stderr, stdout
     from clearcli.errors import SettingsError
-    from clearcli.io.mcap import write_pointcloud2_mcap
-    from clearcli.pipeline import Pipeline
-    from clearcli.replay.session import ReplayOptions, Session
     from clearcli.settings import load_settings
     from clearcli.sim import scene as scenes
-    from clearcli.sim.episode import Episode, static_transforms, truth_segment
+    from clearcli.sim.episode import record_session
 
     config = load_settings(settings)
     if scene not in SCENES:
@@ -51,15 +48,16 @@ def simulate_cmd(
         world = scenes.clutter(objects, seed) if scene == "clutter" else getattr(scenes, scene)()
     except ValueError as exc:
         raise SettingsError(f"--scene {scene}: {exc}") from None
-    pipeline = Pipeline(config, segment_fn=truth_segment if truth_segmentation else None)
-    session = Session(pipeline, ReplayOptions(push_memory=not no_push_memory, stop_when_cleared=True))
-    episode = Episode(world, session, seed=seed, max_actions=max_actions)
-    first = episode.render(0)
-    T_base_camera = episode.robot_placement(first)
     with stderr.status("simulating", spinner="dots") if not json_out else _nothing():
-        count = write_pointcloud2_mcap(out, episode, tf_static=static_transforms(T_base_camera, first.frame_id))
-    result = episode.result
-    assert result is not None
+        count, result = record_session(
+            out,
+            world,
+            config,
+            seed=seed,
+            max_actions=max_actions,
+            push_memory=not no_push_memory,
+            truth_segmentation=truth_segmentation,
+        )
     payload: dict[str, Any] = {
         "out": str(out),
         "frames": count,
