@@ -6,7 +6,10 @@ rim, which is the top of both. So two touching segments are joined when nearly a
 their contact lies within ``rim_tolerance_m`` of the top of each:
 - a box on a box touches the lower one at the lower one's top but the upper one's
   bottom: kept apart (unless the upper one is flatter than the tolerance);
-- objects side by side touch down a vertical seam: kept apart.
+- objects side by side touch down a vertical seam: kept apart;
+- tall objects side by side, whose lower parts hide each other, touch along their top
+  edges: a contact where either voxel lies on a top face (``voxel_is_top``: a
+  horizontal patch) is not a rim, which is two walls meeting.
 """
 
 from __future__ import annotations
@@ -24,6 +27,7 @@ def merge_rims(
     voxel_height: np.ndarray,
     tolerance_m: float,
     contact_m: float,
+    voxel_is_top: np.ndarray | None = None,
 ) -> np.ndarray:
     """(V,) segment per voxel after joining segments that touch only along their tops.
 
@@ -48,6 +52,8 @@ def merge_rims(
     h_contact = 0.5 * (ha + hb)
     lo, hi = np.minimum(ea, eb), np.maximum(ea, eb)
     at_top = (h_contact >= top[lo] - tolerance_m) & (h_contact >= top[hi] - tolerance_m)
+    if voxel_is_top is not None:
+        at_top &= ~(voxel_is_top[voxel_edges[cross, 0]] | voxel_is_top[voxel_edges[cross, 1]])
     key = lo * n_seg + hi
     uniq, inv = np.unique(key, return_inverse=True)
     n_contacts = np.bincount(inv)

@@ -116,6 +116,17 @@ class SegmentSettings:
     # rounds of cuts (each cuts every segment at most once): a segment joining more than
     # two objects needs more than one
     cut_max_rounds: int = 3
+    # --- 3b''. steps between tops (ours; see steps.py) ---------------------------------
+    # split a segment whose horizontal tops stand at two heights on either side of a
+    # line: two touching objects of different heights
+    step_split: bool = True
+    # a top patch: normal within this of the table's
+    step_max_tilt_deg: float = 20.0
+    # the smallest step (m) between two tops: 3-4 times the depth noise of a patch's
+    # mean height at 1 m, and what cut_min_rise_m asks of a seam
+    step_min_m: float = 0.008
+    # share of the smaller top's voxels a separating line may leave on the wrong side
+    step_max_error: float = 0.03
     # --- 3c. occluded pieces (ours) -------------------------------------------------------
     # join two segments when a nearer object hides the gap between them and their
     # surfaces continue each other (organized frames only; see occlusion.py)

@@ -1,0 +1,153 @@
+"""Stage 3b'' (ours, not in the thesis): split a segment whose top faces stand at two
+heights, side by side.
+
+Two boxes standing face to face, one taller than the other, are often one LCCP segment:
+their front faces continue each other, and the seam where the lower top meets the
+taller side is a few supervoxels wide at best, too few for the planar cuts (cuts.py) to
+be sure of. Their tops tell them apart plainly: two horizontal faces, centimetres apart
+in height, lying on either side of a line in the table plane.
+
+Per segment (every round, every segment):
+1. its top patches: supervoxels whose normal is within ``step_max_tilt_deg`` of the
+   table's, with their height above the table (a patch's mean: millimetre noise);
+2. sorted by height, the largest gap between consecutive patches; a step when it is at
+   least ``step_min_m`` and the tops below and above it each cover at least
+   ``min_object_area_m2``;
+3. the vertical plane that best separates the two tops' voxels in the table plane (90
+   directions, every threshold, counted errors); accepted when at most
+   ``step_max_error`` of the smaller top lies on the wrong side. One object's tops at two
+   heights do not pass this: the inside bottom of a bowl or a mug is surrounded by its
+   rim, so no line separates them;
+4. every supervoxel of the segment goes to the side of the plane its centroid is on;
+   pieces are connected components, small ones rejoin a neighbour (LCCP's rule).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from clearcli.perception.settings import SegmentSettings
+from clearcli.perception.supervoxels import Supervoxels
+
+_N_DIRECTIONS = 90  # 2 degree steps over half a turn
+
+
+def best_separating_line(xy: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray, float, int]:
+    """The line in the plane that best separates the points ``xy`` (N, 2) flagged
+    ``upper`` from the rest: (unit normal (2,), offset, misclassified count); points
+    with ``xy @ normal > offset`` are on the upper side."""
+    angles = np.arange(_N_DIRECTIONS) * (np.pi / _N_DIRECTIONS)
+    normals = np.stack([np.cos(angles), np.sin(angles)], axis=1)  # (D, 2)
+    proj = xy @ normals.T  # (N, D)
+    order = np.argsort(proj, axis=0)
+    up_sorted = upper[order].astype(np.int64)  # (N, D)
+    n_up = int(upper.sum())
+    n_low = upper.size - n_up
+    # threshold after the first k points (k = 0..N): below it lower, above it upper
+    up_below = np.vstack([np.zeros((1, proj.shape[1]), dtype=np.int64), np.cumsum(up_sorted, axis=0)])
+    k = np.arange(upper.size + 1)[:, None]
+    low_below = k - up_below
+    err_pos = up_below + (n_low - low_below)  # upper side = larger projections
+    err_neg = low_below + (n_up - up_below)  # upper side = smaller projections
+    errs = np.minimum(err_pos, err_neg)
+    flat = int(np.argmin(errs))
+    kk, d = np.unravel_index(flat, errs.shape)
+    sorted_proj = np.take_along_axis(proj, order, axis=0)[:, d]
+    if kk == 0:
+        offset = float(sorted_proj[0]) - 1e-6
+    elif kk == upper.size:
+        offset = float(sorted_proj[-1]) + 1e-6
+    else:
+        offset = float(sorted_proj[kk - 1] + sorted_proj[kk]) / 2
+    normal = normals[d]
+    if err_neg[kk, d] < err_pos[kk, d]:
+        normal, offset = -normal, -offset
+    return normal, offset, int(errs[kk, d])
+
+
+def step_splits(
+    seg: np.ndarray,
+    sv: Supervoxels,
+    voxel_centroids: np.ndarray,
+    heights_of_sv: np.ndarray,
+    up: np.ndarray,
+    settings: SegmentSettings,
+) -> np.ndarray:
+    """(S,) segment of every supervoxel after splitting at steps between tops, 0..G-1.
+
+    ``heights_of_sv`` (S,) are the supervoxels' heights above the table, ``up`` its unit
+    normal, ``voxel_centroids`` (V, 3) the voxels ``sv.voxel_label`` labels."""
+    from clearcli.perception.lccp import merge_small_segments
+
+    seg = np.asarray(seg, dtype=np.int64).copy()
+    e = sv.edges
+    if seg.size == 0 or e.shape[0] == 0:
+        return seg
+    up = up / np.linalg.norm(up)
+    # a basis of the table plane for the 2-D separation
+    helper = np.array([1.0, 0.0, 0.0]) if abs(up[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    u = np.cross(up, helper)
+    u /= np.linalg.norm(u)
+    v = np.cross(up, u)
+    top = np.abs(sv.normals @ up) >= np.cos(np.radians(settings.step_max_tilt_deg))
+    min_top_vox = settings.min_object_area_m2 / settings.voxel_m**2
+    min_segment_voxels = int(settings.min_segment_supervoxels * (settings.seed_m / settings.voxel_m) ** 2)
+    min_side_vox = max(settings.cut_min_side_m2 / settings.voxel_m**2, min_segment_voxels)
+    vox_of_sv_order = np.argsort(sv.voxel_label, kind="stable")
+    counts = np.bincount(sv.voxel_label, minlength=seg.size)
+    starts = np.cumsum(counts) - counts
+    cut_any = False
+    for _ in range(settings.cut_max_rounds):
+        next_label = int(seg.max()) + 1
+        cut_round = False
+        for s in np.unique(seg).tolist():
+            members = np.flatnonzero(seg == s)
+            tops = members[top[members]]
+            if tops.size < 2:
+                continue
+            h = heights_of_sv[tops]
+            order = np.argsort(h)
+            h_sorted = h[order]
+            vox_sorted = sv.n_voxels[tops[order]]
+            gaps = np.diff(h_sorted)
+            below_vox = np.cumsum(vox_sorted)[:-1]
+            above_vox = vox_sorted.sum() - below_vox
+            ok = (gaps >= settings.step_min_m) & (below_vox >= min_top_vox) & (above_vox >= min_top_vox)
+            if not ok.any():
+                continue
+            k = int(np.argmax(np.where(ok, gaps, -np.inf)))
+            upper_sv = tops[order[k + 1 :]]
+            lower_sv = tops[order[: k + 1]]
+            vox_lower = np.concatenate([vox_of_sv_order[starts[i] : starts[i] + counts[i]] for i in lower_sv])
+            vox_upper = np.concatenate([vox_of_sv_order[starts[i] : starts[i] + counts[i]] for i in upper_sv])
+            is_upper = np.r_[np.zeros(vox_lower.size, dtype=bool), np.ones(vox_upper.size, dtype=bool)]
+            p = voxel_centroids[np.r_[vox_lower, vox_upper]]
+            xy = np.stack([p @ u, p @ v], axis=1)
+            normal2, offset, errors = best_separating_line(xy, is_upper)
+            smaller = min(int(is_upper.sum()), int((~is_upper).sum()))
+            if errors > settings.step_max_error * smaller:
+                continue
+            c = sv.centroids[members]
+            side = np.stack([c @ u, c @ v], axis=1) @ normal2 > offset
+            n_side = int(sv.n_voxels[members[side]].sum())
+            n_all = int(sv.n_voxels[members].sum())
+            if min(n_side, n_all - n_side) < min_side_vox:
+                continue
+            if min(int(side.sum()), int((~side).sum())) < settings.min_segment_supervoxels:
+                continue
+            seg[members[side]] = next_label
+            next_label += 1
+            cut_round = True
+        if not cut_round:
+            break
+        cut_any = True
+    if not cut_any:
+        return seg
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    n_sv = seg.size
+    keep = seg[e[:, 0]] == seg[e[:, 1]]
+    graph = coo_matrix((np.ones(int(keep.sum()), dtype=np.int8), (e[keep, 0], e[keep, 1])), shape=(n_sv, n_sv))
+    comp = connected_components(graph, directed=False)[1].astype(np.int64)
+    return merge_small_segments(comp, e, settings.min_segment_supervoxels, sv.n_voxels, min_segment_voxels)
