@@ -79,6 +79,14 @@ def test_simulated_session_fixture_matches_regeneration(regenerated: Path) -> No
     assert len(committed) == len(fresh) >= 3
     for a, b in zip(committed, fresh):
         _assert_close(a, b)
+    # and the robot's place (/tf_static), which the placement rule decides
+    from clearcli.replay.session import read_transforms
+
+    tf_committed = read_transforms(_committed("simulated_session.mcap"))
+    tf_fresh = read_transforms(regenerated / "simulated_session.mcap")
+    assert tf_committed.keys() == tf_fresh.keys() and tf_committed
+    for key in tf_committed:
+        np.testing.assert_allclose(tf_committed[key], tf_fresh[key], atol=1e-6)
 
 
 # ---- what the README promises ---------------------------------------------------------

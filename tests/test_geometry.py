@@ -218,7 +218,21 @@ def test_push_poses_and_paths() -> None:
         assert np.allclose(path[-1][:3, 3], p + push.push_length_m * u)
         assert np.allclose(push.object_path[-1], push.push_length_m * u)
         assert np.allclose(retreat[:3, 3], path[-1][:3, 3] + 0.10 * n)
-        assert len(push.candidates) == 2 and np.allclose(push.candidates[1][1][:3, 0], -x)
+        assert np.allclose(push.candidates[1][1][:3, 0], -x)
+        # IK fallbacks after the two half-turns (a lone box: nothing blocks any option):
+        # the other yaw (2 candidates), then contact points off the middle of the rear
+        # face, 5 mm short of its ends. dir1's rear face is 5 cm wide: the documented yaw
+        # (a 3 cm finger across) moves 2.5 - 1.5 - 0.5 = 0.5 cm either way, the other yaw
+        # (the 5 cm finger pair across) not at all. dir3's is 10 cm: 5 - 2.5 - 0.5 = 2 cm
+        # for the documented yaw, 5 - 1.5 - 0.5 = 3 cm for the other.
+        side = np.cross(n, u)
+        starts = [c[1][:3, 3] for c in push.candidates]
+        shifts = {"dir1": [0.005], "dir3": [0.02, 0.03]}[d]
+        assert len(push.candidates) == 4 + 4 * len(shifts)
+        assert abs(float((starts[2] - p) @ side)) < 1e-9  # the other yaw: centred
+        offsets = sorted(abs(round(float((t - p) @ side), 4)) for t in starts[4:])
+        assert offsets == pytest.approx(sorted(v for v in shifts for _ in range(4)), abs=1e-4)
+        assert all(abs(float(t @ n - p @ n)) < 1e-9 for t in starts)  # all at the same height
 
 
 def test_push_length_is_capped() -> None:

@@ -129,7 +129,7 @@ def plan_cmd(
     from clearcli.perception.segment import segment
     from clearcli.planning.backtrack import make_plan
     from clearcli.predicates.state_builder import compute_state
-    from clearcli.robot.placement import resolve_T_base_camera
+    from clearcli.robot.placement import placement_from_settings
     from clearcli.settings import load_settings, override
 
     cfg = load_settings(settings)
@@ -141,10 +141,7 @@ def plan_cmd(
     frm = read_frame(frame, topic, frame_index)
     seg = segment(frm, cfg.segment)
     state = compute_state(frm, seg, cfg)
-    pose = camera_pose if camera_pose is not None else (cfg.robot.camera_pose or None)
-    T_base_camera, pose_source = resolve_T_base_camera(
-        pose, state, cfg.robot.base_outside_edge_m, cfg.robot.base_min_object_distance_m
-    )
+    T_base_camera, pose_source = placement_from_settings(cfg.robot, state, camera_pose)
     # NoPlanError / PlannerError propagate: the CLI prints the reason, exit 5 / 6.
     plan = make_plan(state, cfg, T_base_camera)
     payload = plan_payload(plan, str(frame), getattr(frm, "frame_id", ""), pose_source)

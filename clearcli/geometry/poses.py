@@ -24,7 +24,9 @@ Push pose (thesis 4.3.1, Fig. 4.12): approach straight down; closing direction p
 the push for dir1/dir2 (the narrow side of the closed finger pair leads, so the gripper
 does not also push a neighbour beside a long object), orthogonal for dir3/dir4; fingertips
 ``fingertips_above_table_m`` above the table; the fingers ``gripper_behind_m`` behind the
-object's rear face along the push, centred on the object across it. Pre-push:
+object's rear face along the push, centred on the object across it. Alternatives: the
+other yaw, and (``lateral_shift``) the contact moved towards either end of the rear face,
+``contact_edge_margin_m`` short of it: beside a tall neighbour the wrist clears it there. Pre-push:
 ``approach_m`` above the push pose. Push length: ``pushing_step`` times the object's extent
 along the direction, at most ``push_length_limit_m``; the gripper path is cut into steps of
 at most ``path_resolution_m``; retreat: ``approach_m`` above the end.
@@ -178,28 +180,49 @@ def push_geometry(obj: ObjectGeometry, gripper: GripperModel, push: PushSettings
         n = max(1, math.ceil(length / push.path_resolution_m - 1e-9))
         steps = length * np.arange(1, n + 1) / n
         translations = steps[:, None] * d[None, :]
+        # the rear face's half width across the push, for contact points off its middle
+        side = _cross(UP, d)
+        across = hull_xy @ side[:2]
+        face_half = float(np.ptp(across)) / 2.0
+        centre_across = float((across.max() + across.min()) / 2.0 - c[:2] @ side[:2])
         yaws = []
+        shifted = []
         for along in (parallel, not parallel):  # the documented yaw first, then the other
             x = d if along else _cross(UP, d)
             half_along = half_parallel if along else half_across
-            start = lateral + (rear - push.gripper_behind_m - half_along) * d
-            start[2] = height
-            T, T_turned = _half_turns(x, -UP, start)
-            seq = np.repeat(T[None], n + 3, axis=0)  # pre, start, path, retreat
-            seq[0, :3, 3] += up_approach
-            seq[2:-1, :3, 3] += translations
-            seq[-1, :3, 3] += translations[-1] + up_approach
-            # the half-turned candidate: the same positions, its own rotation
-            turned = seq.copy()
-            turned[:, :3, :3] = T_turned[:3, :3]
-            yaws.append(
-                PushGeometry(
+            # half the contact's width across the push: a finger's width, or the pair's
+            contact_half = half_across if along else half_parallel
+            reach = face_half - contact_half - push.contact_edge_margin_m
+            offsets = [0.0]
+            if push.lateral_shift and reach >= push.contact_edge_margin_m:
+                offsets += [reach, -reach]
+            for k, offset in enumerate(offsets):
+                start = lateral + (rear - push.gripper_behind_m - half_along) * d + (centre_across * (k > 0) + offset) * side
+                start[2] = height
+                seq_pose = _push_sequence(x, start, up_approach, translations, n)
+                geometry = PushGeometry(
                     direction=name,
                     unit=d,
                     length_m=length,
                     object_translations=translations,
-                    candidates=(tuple(seq), tuple(turned)),
+                    candidates=seq_pose,
                 )
-            )
-        out[name] = dataclasses.replace(yaws[0], alternatives=tuple(yaws[1:]))
+                (yaws if k == 0 else shifted).append(geometry)
+        out[name] = dataclasses.replace(yaws[0], alternatives=tuple(yaws[1:] + shifted))
     return out
+
+
+def _push_sequence(
+    x: np.ndarray, start: np.ndarray, up_approach: np.ndarray, translations: np.ndarray, n: int
+) -> tuple[tuple[np.ndarray, ...], ...]:
+    """Both half-turn candidates of a push from ``start`` with closing direction ``x``:
+    pre, start, path points, retreat."""
+    T, T_turned = _half_turns(x, -UP, start)
+    seq = np.repeat(T[None], n + 3, axis=0)
+    seq[0, :3, 3] += up_approach
+    seq[2:-1, :3, 3] += translations
+    seq[-1, :3, 3] += translations[-1] + up_approach
+    # the half-turned candidate: the same positions, its own rotation
+    turned = seq.copy()
+    turned[:, :3, :3] = T_turned[:3, :3]
+    return (tuple(seq), tuple(turned))

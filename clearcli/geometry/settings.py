@@ -37,6 +37,10 @@ class PushSettings:
     gripper_behind_m: float = 0.03
     fingertips_above_table_m: float = 0.01
     approach_m: float = 0.10
+    # push alternatives with the contact off the middle of the rear face, this far (m)
+    # from its ends: the IK check tries them when the centred push has no arm motion
+    lateral_shift: bool = True
+    contact_edge_margin_m: float = 0.005
 
 
 @dataclass(frozen=True)

@@ -194,15 +194,6 @@ def segment(frame: Frame, settings: SegmentSettings) -> Segmentation:
             t4 = time.perf_counter()
             timings["cuts"] = t4 - t3 - timings["lccp"]
 
-        if settings.step_split:
-            from clearcli.perception.steps import step_splits
-
-            seg_of_sv = step_splits(
-                seg_of_sv, sv, vox.centroids, fit.plane.height_of(sv.centroids), fit.plane.normal, seg_settings
-            )
-            t4 = time.perf_counter()
-            timings["cuts"] = t4 - t3 - timings["lccp"]
-
         if settings.occlusion_merge and organized and frame.shape is not None:
             from clearcli.perception.occlusion import merge_occluded
 
@@ -212,11 +203,18 @@ def segment(frame: Frame, settings: SegmentSettings) -> Segmentation:
                 settings.occlusion_max_gap_m, settings.voxel_m, min_vox, fit.plane.height_of(sv.centroids),
             )
         seg_of_voxel = seg_of_sv[sv.voxel_label]
+        voxel_height = fit.plane.height_of(vox.centroids)
+        if settings.step_split:
+            from clearcli.perception.steps import step_splits
+
+            seg_of_voxel = step_splits(
+                seg_of_voxel, sv, vox.centroids, voxel_height, vox.edges, fit.plane.normal, seg_settings
+            )
         if settings.rim_merge:
             from clearcli.perception.rims import merge_rims
 
             seg_of_voxel = merge_rims(
-                seg_of_voxel, vox.centroids, fit.plane.height_of(vox.centroids), settings.rim_tolerance_m,
+                seg_of_voxel, vox.centroids, voxel_height, settings.rim_tolerance_m,
                 settings.rim_contact_m,
                 voxel_is_top=(np.abs(sv.normals @ fit.plane.normal) >= np.cos(np.radians(settings.step_max_tilt_deg)))[
                     sv.voxel_label

@@ -18,8 +18,9 @@ Per segment (every round, every segment):
    ``step_max_error`` of the smaller top lies on the wrong side. One object's tops at two
    heights do not pass this: the inside bottom of a bowl or a mug is surrounded by its
    rim, so no line separates them;
-4. every supervoxel of the segment goes to the side of the plane its centroid is on;
-   pieces are connected components, small ones rejoin a neighbour (LCCP's rule).
+4. every voxel of the segment goes to the side of the plane it is on (voxels, not
+   supervoxels: a patch may straddle the seam); pieces are connected components, small
+   ones rejoin a neighbour (LCCP's rule).
 """
 
 from __future__ import annotations
@@ -50,9 +51,22 @@ def best_separating_line(xy: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray,
     err_pos = up_below + (n_low - low_below)  # upper side = larger projections
     err_neg = low_below + (n_up - up_below)  # upper side = smaller projections
     errs = np.minimum(err_pos, err_neg)
-    flat = int(np.argmin(errs))
-    kk, d = np.unravel_index(flat, errs.shape)
-    sorted_proj = np.take_along_axis(proj, order, axis=0)[:, d]
+    # fewest errors; among directions with as few, the widest gap at the threshold (two
+    # tops apart by a few millimetres are separated by many directions, and only the
+    # widest-margin one runs along the seam)
+    all_sorted = np.take_along_axis(proj, order, axis=0)
+    gaps = np.full(errs.shape, -np.inf)
+    gaps[1:-1] = np.diff(all_sorted, axis=0)
+    k_best = np.argmin(errs + 1e-6 * 0, axis=0)
+    e_best = errs[k_best, np.arange(errs.shape[1])]
+    fewest = e_best == e_best.min()
+    # the best threshold of each direction among those with its fewest errors: widest gap
+    masked_gaps = np.where(errs == e_best[None, :], gaps, -np.inf)
+    k_best = np.argmax(masked_gaps, axis=0)
+    margin = masked_gaps[k_best, np.arange(errs.shape[1])]
+    d = int(np.argmax(np.where(fewest, margin, -np.inf)))
+    kk = int(k_best[d])
+    sorted_proj = all_sorted[:, d]
     if kk == 0:
         offset = float(sorted_proj[0]) - 1e-6
     elif kk == upper.size:
@@ -66,22 +80,25 @@ def best_separating_line(xy: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray,
 
 
 def step_splits(
-    seg: np.ndarray,
+    seg_of_voxel: np.ndarray,
     sv: Supervoxels,
     voxel_centroids: np.ndarray,
-    heights_of_sv: np.ndarray,
+    voxel_height: np.ndarray,
+    voxel_edges: np.ndarray,
     up: np.ndarray,
     settings: SegmentSettings,
 ) -> np.ndarray:
-    """(S,) segment of every supervoxel after splitting at steps between tops, 0..G-1.
+    """(V,) segment of every voxel after splitting at steps between tops, 0..G-1.
 
-    ``heights_of_sv`` (S,) are the supervoxels' heights above the table, ``up`` its unit
-    normal, ``voxel_centroids`` (V, 3) the voxels ``sv.voxel_label`` labels."""
+    Works on voxels, not supervoxels: a supervoxel may straddle the seam (the two
+    objects' end faces nearly in one plane), and the plane must cut through it.
+    ``voxel_height`` (V,) are the voxels' heights above the table, ``up`` its normal,
+    ``voxel_edges`` (E, 2) the voxel adjacency; the supervoxels (``sv.voxel_label`` over
+    the same voxels) give the top patches and their normals."""
     from clearcli.perception.lccp import merge_small_segments
 
-    seg = np.asarray(seg, dtype=np.int64).copy()
-    e = sv.edges
-    if seg.size == 0 or e.shape[0] == 0:
+    seg = np.asarray(seg_of_voxel, dtype=np.int64).copy()
+    if seg.size == 0:
         return seg
     up = up / np.linalg.norm(up)
     # a basis of the table plane for the 2-D separation
@@ -89,13 +106,12 @@ def step_splits(
     u = np.cross(up, helper)
     u /= np.linalg.norm(u)
     v = np.cross(up, u)
-    top = np.abs(sv.normals @ up) >= np.cos(np.radians(settings.step_max_tilt_deg))
+    xy = np.stack([voxel_centroids @ u, voxel_centroids @ v], axis=1)
+    top_sv = np.abs(sv.normals @ up) >= np.cos(np.radians(settings.step_max_tilt_deg))
+    top = top_sv[sv.voxel_label]
     min_top_vox = settings.min_object_area_m2 / settings.voxel_m**2
     min_segment_voxels = int(settings.min_segment_supervoxels * (settings.seed_m / settings.voxel_m) ** 2)
     min_side_vox = max(settings.cut_min_side_m2 / settings.voxel_m**2, min_segment_voxels)
-    vox_of_sv_order = np.argsort(sv.voxel_label, kind="stable")
-    counts = np.bincount(sv.voxel_label, minlength=seg.size)
-    starts = np.cumsum(counts) - counts
     cut_any = False
     for _ in range(settings.cut_max_rounds):
         next_label = int(seg.max()) + 1
@@ -105,35 +121,25 @@ def step_splits(
             tops = members[top[members]]
             if tops.size < 2:
                 continue
-            h = heights_of_sv[tops]
+            # top patches: the segment's part of each top supervoxel, at its mean height
+            _, patch = np.unique(sv.voxel_label[tops], return_inverse=True)
+            n_vox = np.bincount(patch)
+            h = np.bincount(patch, weights=voxel_height[tops]) / n_vox
             order = np.argsort(h)
-            h_sorted = h[order]
-            vox_sorted = sv.n_voxels[tops[order]]
-            gaps = np.diff(h_sorted)
-            below_vox = np.cumsum(vox_sorted)[:-1]
-            above_vox = vox_sorted.sum() - below_vox
+            gaps = np.diff(h[order])
+            below_vox = np.cumsum(n_vox[order])[:-1]
+            above_vox = tops.size - below_vox
             ok = (gaps >= settings.step_min_m) & (below_vox >= min_top_vox) & (above_vox >= min_top_vox)
             if not ok.any():
                 continue
             k = int(np.argmax(np.where(ok, gaps, -np.inf)))
-            upper_sv = tops[order[k + 1 :]]
-            lower_sv = tops[order[: k + 1]]
-            vox_lower = np.concatenate([vox_of_sv_order[starts[i] : starts[i] + counts[i]] for i in lower_sv])
-            vox_upper = np.concatenate([vox_of_sv_order[starts[i] : starts[i] + counts[i]] for i in upper_sv])
-            is_upper = np.r_[np.zeros(vox_lower.size, dtype=bool), np.ones(vox_upper.size, dtype=bool)]
-            p = voxel_centroids[np.r_[vox_lower, vox_upper]]
-            xy = np.stack([p @ u, p @ v], axis=1)
-            normal2, offset, errors = best_separating_line(xy, is_upper)
+            is_upper = np.isin(patch, order[k + 1 :])
+            normal2, offset, errors = best_separating_line(xy[tops], is_upper)
             smaller = min(int(is_upper.sum()), int((~is_upper).sum()))
             if errors > settings.step_max_error * smaller:
                 continue
-            c = sv.centroids[members]
-            side = np.stack([c @ u, c @ v], axis=1) @ normal2 > offset
-            n_side = int(sv.n_voxels[members[side]].sum())
-            n_all = int(sv.n_voxels[members].sum())
-            if min(n_side, n_all - n_side) < min_side_vox:
-                continue
-            if min(int(side.sum()), int((~side).sum())) < settings.min_segment_supervoxels:
+            side = xy[members] @ normal2 > offset
+            if min(int(side.sum()), int((~side).sum())) < min_side_vox:
                 continue
             seg[members[side]] = next_label
             next_label += 1
@@ -142,12 +148,15 @@ def step_splits(
             break
         cut_any = True
     if not cut_any:
-        return seg
+        _, out = np.unique(seg, return_inverse=True)
+        return out.astype(np.int64)
+    # a side may fall apart into pieces: pieces are connected components, small ones
+    # rejoin their largest neighbour (LCCP's rule, counted in voxels)
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
-    n_sv = seg.size
+    e = voxel_edges
     keep = seg[e[:, 0]] == seg[e[:, 1]]
-    graph = coo_matrix((np.ones(int(keep.sum()), dtype=np.int8), (e[keep, 0], e[keep, 1])), shape=(n_sv, n_sv))
+    graph = coo_matrix((np.ones(int(keep.sum()), dtype=np.int8), (e[keep, 0], e[keep, 1])), shape=(seg.size, seg.size))
     comp = connected_components(graph, directed=False)[1].astype(np.int64)
-    return merge_small_segments(comp, e, settings.min_segment_supervoxels, sv.n_voxels, min_segment_voxels)
+    return merge_small_segments(comp, e, min_segment_voxels)

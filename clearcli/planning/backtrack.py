@@ -263,6 +263,8 @@ class IKActionChecker:
     kin: object
     obstacles: object
     per_action_s: list[float] = field(default_factory=list)
+    # check that a pushed object can be grasped where the push leaves it
+    push_lookahead: bool = False
 
     def poses(self, action: Action) -> tuple[tuple[np.ndarray, ...], ...]:
         from clearcli.robot.kinematics import half_turn
@@ -299,11 +301,37 @@ class IKActionChecker:
             for i, poses in enumerate(cands):
                 res = checker.check(poses, action.obj)
                 if res.ok:
+                    if action.kind == "push" and self.push_lookahead:
+                        why = self.grasp_after_push(action, checker)
+                        if why:
+                            return None, why
                     return CheckedAction(action, poses, res.joints, i), ""
                 reasons.append(res.reason)
             return None, min(reasons, key=_reason_rank)
         finally:
             self.per_action_s.append(time.perf_counter() - t0)
+
+
+    def grasp_after_push(self, action: Action, checker: object) -> str:
+        """Empty when some grasp candidate, moved by the push, has IK solutions clear of
+        the other objects (as they stand now); else why not."""
+        obj = self.state.by_name(action.obj)
+        push = obj.pushes.get(str(action.direction))
+        if push is None or not push.object_path or not obj.grasp_candidates:
+            return ""
+        shift = np.asarray(push.object_path[-1], dtype=float)
+        reasons = []
+        for cand in obj.grasp_candidates:
+            moved = []
+            for T in cand:
+                T2 = np.array(T, dtype=float)
+                T2[:3, 3] += shift
+                moved.append(self.T_base_camera @ T2)
+            res = checker.check(moved, action.obj)  # type: ignore[attr-defined]
+            if res.ok:
+                return ""
+            reasons.append(res.reason)
+        return f"the push leaves {action.obj} where it cannot be grasped ({min(reasons, key=_reason_rank)})"
 
 
 def _reason_rank(reason: str) -> int:
@@ -318,14 +346,12 @@ def make_plan(state: SymbolicState, settings: object, T_base_camera: np.ndarray 
     """Plan for ``state`` (SymbolicState) with the WAM at ``T_base_camera`` (else from
     ``[robot] camera_pose`` or derived from the table, see clearcli/robot/placement.py)."""
     from clearcli.robot.kinematics import WamKinematics, make_obstacles
-    from clearcli.robot.placement import resolve_T_base_camera
+    from clearcli.robot.placement import placement_from_settings
 
     robot = settings.robot  # type: ignore[attr-defined]
     plan_s = settings.plan  # type: ignore[attr-defined]
     if T_base_camera is None:
-        T_base_camera, _ = resolve_T_base_camera(
-            robot.camera_pose, state, robot.base_outside_edge_m, robot.base_min_object_distance_m
-        )
+        T_base_camera, _ = placement_from_settings(robot, state)
     T_base_camera = np.asarray(T_base_camera, dtype=float)
     kin = WamKinematics(
         damping=robot.ik_damping,
@@ -335,7 +361,7 @@ def make_plan(state: SymbolicState, settings: object, T_base_camera: np.ndarray 
         n_seeds=robot.ik_seeds,
     )
     obstacles = make_obstacles(state, T_base_camera, robot.collision_margin_m)
-    checker = IKActionChecker(state, T_base_camera, kin, obstacles)
+    checker = IKActionChecker(state, T_base_camera, kin, obstacles, push_lookahead=plan_s.push_lookahead)
     try:
         plan = backtrack(
             state,

@@ -24,3 +24,8 @@ class PlanSettings:
     # Before planning, mark every action whose gripper poses all lie beyond the arm's
     # reach (tool plate > 0.915 m from the shoulder) as IK-infeasible: no IK needed.
     reach_precheck: bool = True
+    # A push passes the IK check only when the object can still be grasped where the
+    # push leaves it (the grasp poses moved by the push, checked with IK and collisions):
+    # the planner's model takes a pushed object as graspable anywhere, and a push
+    # towards the robot's base can carry it out of the arm's reach for good.
+    push_lookahead: bool = True

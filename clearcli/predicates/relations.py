@@ -247,7 +247,8 @@ def least_blocked_grasps(
     open gripper hits the fewest other objects, the first on ties. The gripper turns
     about its approach at will, so a neighbour that blocks one yaw need not block the
     grasp; the planning model has no disjunction, so the least blocked yaw stands for
-    the grasp, and its candidates are the only ones the IK check sees."""
+    the grasp (its blocking facts), and the IK check sees its candidates first, then
+    those of the yaws no more blocked (`_with_fallbacks`)."""
     allowed = _allowed(len(objects), exclude)
     out = []
     for b, grasp in enumerate(grasps):
@@ -255,11 +256,31 @@ def least_blocked_grasps(
         if len(options) > 1:
             poses = np.stack([g.T_grasp for g in options])
             hits = _gripper_hits(gripper, False, poses, objects, np.repeat(allowed[b : b + 1], len(options), axis=0))
-            counts = np.bincount([p for p, _ in hits], minlength=len(options))
-            out.append(options[int(np.argmin(counts))])
+            out.append(_with_fallbacks(options, hits))
         else:
             out.append(options[0])
     return out
+
+
+def _with_fallbacks(options: Sequence[Any], hits: list[tuple[int, int]]) -> Any:
+    """The least blocked option (the first on ties), its candidates followed by those of
+    every other option blocked by no object it is not blocked by: the IK check tries
+    them in turn, so a yaw or contact point the arm cannot reach falls back on another
+    that the neighbours allow as well."""
+    blockers = [set() for _ in options]
+    for p, i in hits:
+        blockers[p].add(i)
+    best = min(range(len(options)), key=lambda k: (len(blockers[k]), k))
+    extra = [
+        cand
+        for k, option in enumerate(options)
+        if k != best and blockers[k] <= blockers[best]
+        for cand in option.candidates
+    ]
+    chosen = options[best]
+    if not extra:
+        return chosen
+    return dataclasses.replace(chosen, candidates=tuple(chosen.candidates) + tuple(extra))
 
 
 def least_blocked_pushes(
@@ -268,8 +289,9 @@ def least_blocked_pushes(
     gripper: GripperModel,
     exclude: set[tuple[int, int]],
 ) -> list[dict[str, PushGeometry]]:
-    """Each push as the gripper yaw whose closed gripper at the push's start hits the
-    fewest other objects, the first on ties (see `least_blocked_grasps`)."""
+    """Each push as the gripper yaw and contact point whose closed gripper at the push's
+    start hits the fewest other objects, the first on ties, with the others no more
+    blocked as IK fallbacks (see `least_blocked_grasps`)."""
     allowed = _allowed(len(objects), exclude)
     out = []
     for b, by_dir in enumerate(pushes):
@@ -279,8 +301,7 @@ def least_blocked_pushes(
             if len(options) > 1:
                 poses = np.stack([p.T_start for p in options])
                 hits = _gripper_hits(gripper, True, poses, objects, np.repeat(allowed[b : b + 1], len(options), axis=0))
-                counts = np.bincount([p for p, _ in hits], minlength=len(options))
-                chosen[name] = options[int(np.argmin(counts))]
+                chosen[name] = _with_fallbacks(options, hits)
             else:
                 chosen[name] = options[0]
         out.append(chosen)

@@ -11,7 +11,9 @@ Three sources, in order of precedence:
    table plane just outside the table edge nearest the camera, its x axis facing the
    objects (their centroid on the plane), z along the table normal, the shoulder 0.346 m
    above the footprint; moved back if needed so that no object centroid is nearer than
-   0.30 m (a WAM cannot reach down right beside its own base). Frames without calibration thus still give meaningful answers.
+   0.30 m (a WAM cannot reach down right beside its own base), and farther, towards
+   0.40 m from the nearest, while the farthest stays within 0.85 m (room for pushes
+   towards the base). Frames without calibration thus still give meaningful answers.
 """
 
 from __future__ import annotations
@@ -82,9 +84,13 @@ def default_T_base_camera(
     object_centroids: np.ndarray | None = None,
     outside_edge_m: float = 0.10,
     min_object_distance_m: float = 0.30,
+    preferred_object_distance_m: float = 0.0,
+    max_object_distance_m: float = 0.85,
 ) -> np.ndarray:
     """Footprint just outside the table edge nearest the camera, facing the objects, and
-    at least ``min_object_distance_m`` from every object's centroid (on the plane)."""
+    at least ``min_object_distance_m`` from every object's centroid (on the plane); then
+    farther back, up to ``preferred_object_distance_m`` from the nearest object, as long
+    as the farthest stays within ``max_object_distance_m``."""
     n = np.asarray(table_normal, dtype=float)
     n = n / np.linalg.norm(n)
     d = float(table_offset)
@@ -129,6 +135,16 @@ def default_T_base_camera(
             if gap >= min_object_distance_m - 1e-6:
                 break
             footprint = footprint - x * (min_object_distance_m - gap)
+        # Objects near the base are reachable for a grasp, but pushes towards the base
+        # start 5-15 cm nearer still, where a top-down pose folds the WAM past its limits
+        # (wrist centre within ~0.26 m of the shoulder axis: no IK). Step back further
+        # while the farthest object stays well within reach.
+        for _ in range(5):
+            dist = np.linalg.norm(flat - footprint, axis=1)
+            step = min(preferred_object_distance_m - float(dist.min()), max_object_distance_m - float(dist.max()))
+            if step <= 1e-4:
+                break
+            footprint = footprint - x * step
     y = np.cross(n, x)
     T_camera_base = np.eye(4)
     T_camera_base[:3, :3] = np.column_stack([x, y, n])
@@ -141,6 +157,8 @@ def resolve_T_base_camera(
     state: object | None = None,
     outside_edge_m: float = 0.10,
     min_object_distance_m: float = 0.30,
+    preferred_object_distance_m: float = 0.0,
+    max_object_distance_m: float = 0.85,
 ) -> tuple[np.ndarray, str]:
     """T_base_camera and where it came from ("given", "thesis", "default from table")."""
     if isinstance(camera_pose, str):
@@ -165,5 +183,23 @@ def resolve_T_base_camera(
         centroids,
         outside_edge_m,
         min_object_distance_m,
+        preferred_object_distance_m,
+        max_object_distance_m,
     )
     return T, "default from table"
+
+
+def placement_from_settings(
+    robot: object, state: object | None, camera_pose: Sequence[float] | str | None = None
+) -> tuple[np.ndarray, str]:
+    """`resolve_T_base_camera` with the [robot] settings' placement rule; ``camera_pose``
+    (a command-line value) overrides ``robot.camera_pose``."""
+    pose = camera_pose if camera_pose is not None else (getattr(robot, "camera_pose", None) or None)
+    return resolve_T_base_camera(
+        pose,
+        state,
+        robot.base_outside_edge_m,  # type: ignore[attr-defined]
+        robot.base_min_object_distance_m,  # type: ignore[attr-defined]
+        robot.base_preferred_object_distance_m,  # type: ignore[attr-defined]
+        robot.base_max_object_distance_m,  # type: ignore[attr-defined]
+    )

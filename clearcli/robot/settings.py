@@ -24,6 +24,14 @@ class RobotSettings:
     # visible table edge can be a crop with objects right at it, and a WAM cannot reach
     # down beside its own base (top grasps fail there in IK).
     base_min_object_distance_m: float = 0.30
+    # ...and farther back, up to this from the nearest object, while the farthest stays
+    # within base_max_object_distance_m: a push towards the base starts 5-15 cm nearer
+    # than its object, and top-down poses with the wrist centre within ~0.26 m of the
+    # shoulder axis have no IK (measured on the simulated sessions' failures).
+    base_preferred_object_distance_m: float = 0.40
+    # the WAM's tool plate reaches 0.915 m from the shoulder; top grasps of tall objects
+    # need some of it
+    base_max_object_distance_m: float = 0.85
     # Arm links must keep this clearance from the table plane and from other objects'
     # hulls (the gripper itself is checked by the predicates: block_grasp, block_dir).
     collision_margin_m: float = 0.01

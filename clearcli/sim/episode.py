@@ -373,7 +373,7 @@ class Episode:
     def robot_placement(self, frame: "Frame") -> np.ndarray:
         """T_base_camera fixed for the whole episode (the robot does not move), by the
         plan stage's rule on the first frame, unless the settings give one."""
-        from clearcli.robot.placement import resolve_T_base_camera
+        from clearcli.robot.placement import placement_from_settings, resolve_T_base_camera
 
         pipeline = self.session.pipeline
         if pipeline.T_base_camera is not None:
@@ -384,7 +384,7 @@ class Episode:
         if state is None:
             T, _ = resolve_T_base_camera(robot.camera_pose, None) if robot.camera_pose else (np.eye(4), "")
         else:
-            T, _ = resolve_T_base_camera(robot.camera_pose, state, robot.base_outside_edge_m)
+            T, _ = placement_from_settings(robot, state)
         pipeline.T_base_camera = T
         return T
 
