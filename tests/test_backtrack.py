@@ -241,3 +241,25 @@ def test_cli_plan_on_a_real_frame() -> None:
     # a camera pose that is not one: exit 3 with the reason
     bad = _clear("plan", str(pcd), "--camera-pose", "1 2 3")
     assert bad.returncode == 3 and "camera pose" in bad.stderr
+
+
+@pytest.mark.parametrize("x, lookahead_ok", [(0.22, False), (0.30, True)])
+def test_push_lookahead_rejects_a_push_that_leaves_the_object_out_of_reach(x: float, lookahead_ok: bool) -> None:
+    """A 10 cm box pushed 10 cm towards the robot (dir2, -x): from 0.32 m before the
+    shoulder's axis it ends at 0.22 m, where the WAM folded past its limits has no
+    top-down grasp; from 0.40 m it ends at 0.30 m and stays graspable. The push itself
+    has arm motions either way."""
+    from clearcli.robot.kinematics import WamKinematics, make_obstacles
+
+    state = ps.scene({"o0": ps.Box(x, 0.0, size=(0.10, 0.05, 0.08))})
+    kin = WamKinematics()
+    obstacles = make_obstacles(state, ps.T_BASE_CAMERA)
+    push = Action("push", "o0", "dir2")
+    plain = IKActionChecker(state, ps.T_BASE_CAMERA, kin, obstacles)
+    assert plain(push)[0] is not None
+    assert plain(Action("grasp", "o0"))[0] is not None  # graspable where it stands
+    ahead = IKActionChecker(state, ps.T_BASE_CAMERA, kin, obstacles, push_lookahead=True)
+    checked, why = ahead(push)
+    assert (checked is not None) == lookahead_ok
+    if not lookahead_ok:
+        assert why.startswith("the push leaves o0 where it cannot be grasped (no IK solution")

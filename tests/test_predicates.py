@@ -341,3 +341,26 @@ def test_min_width_direction_of_a_turned_rectangle() -> None:
     rect = rect[::-1] if e1[0] * e2[1] - e1[1] * e2[0] < 0 else rect
     d = min_width_direction(rect)
     assert abs(abs(d @ np.array([-s, c])) - 1.0) < 1e-9  # across the 4 cm side
+
+
+def test_least_blocked_option_keeps_its_facts_and_gets_the_others_as_ik_fallbacks() -> None:
+    """Options 0-3 of one push: 0 blocked by objects {1}, 1 by {1, 2}, 2 by {}, 3 by {}.
+    The least blocked (2, the first of the two free ones) stands for the push; 3 (blocked
+    by nothing 2 is not) follows as a fallback; 0 and 1 (blocked by more) do not."""
+    import dataclasses
+
+    from clearcli.predicates.relations import _with_fallbacks
+
+    @dataclasses.dataclass(frozen=True)
+    class Option:
+        candidates: tuple
+
+    options = [Option((f"o{k}a", f"o{k}b")) for k in range(4)]
+    hits = [(0, 1), (1, 1), (1, 2)]
+    chosen = _with_fallbacks(options, hits)
+    assert chosen.candidates == ("o2a", "o2b", "o3a", "o3b")
+    # a blocked best: fallbacks are the options blocked by a subset of its blockers
+    chosen = _with_fallbacks(options[:2], [(0, 1), (1, 1), (1, 2)])
+    assert chosen.candidates == ("o0a", "o0b")
+    chosen = _with_fallbacks(options[:2], [(0, 1), (1, 1)])
+    assert chosen.candidates == ("o0a", "o0b", "o1a", "o1b")

@@ -184,6 +184,30 @@ def test_default_placement_from_table() -> None:
     assert T_world_base[0, 0] > 0.95  # base x towards the objects (+x)
 
 
+@pytest.mark.parametrize(
+    "near_x, far_x, preferred, footprint_x",
+    [
+        # nearest 0.25 m from the default footprint (x = -0.10): back to the 0.30 m floor
+        (0.15, 0.45, 0.0, -0.15),
+        # then on to 0.40 m from the nearest: the farthest ends 0.70 m away (<= 0.85)
+        (0.15, 0.45, 0.40, -0.25),
+        # the farthest would pass 0.85 m: stop where it reaches it (0.70 + 0.15 = 0.85)
+        (0.15, 0.65, 0.40, -0.20),
+        # far objects alone: the floor and the reach limit both hold already
+        (0.15, 0.70, 0.40, -0.15),
+    ],
+)
+def test_default_placement_steps_back_within_reach(
+    near_x: float, far_x: float, preferred: float, footprint_x: float
+) -> None:
+    import plan_scenes as ps
+
+    state = ps.scene({"a": ps.Box(near_x, 0.0), "b": ps.Box(far_x, 0.0)})
+    T, _ = placement.resolve_T_base_camera(None, state, 0.10, 0.30, preferred, 0.85)
+    T_world_base = ps.T_WORLD_CAMERA @ np.linalg.inv(T)
+    np.testing.assert_allclose(T_world_base[:3, 3], [footprint_x, 0.0, 0.346], atol=1e-3)
+
+
 def _trans(x: float, y: float, z: float) -> np.ndarray:
     T = np.eye(4)
     T[:3, 3] = [x, y, z]
