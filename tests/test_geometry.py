@@ -191,7 +191,10 @@ def test_low_object_grasp_keeps_fingertips_above_table(height: float) -> None:
 
 
 def test_push_poses_and_paths() -> None:
-    state, obj = one_box(Box((0.0, 0.0), BOX))
+    # default: the two half-turns of the documented yaw, then those of the other yaw
+    _, plain = one_box(Box((0.0, 0.0), BOX))
+    assert all(len(plain.pushes[d].candidates) == 4 for d in ("dir1", "dir2", "dir3", "dir4"))
+    state, obj = one_box(Box((0.0, 0.0), BOX), settings_from_dict({"push": {"lateral_shift": True}}))
     n = state.table.normal
     for d, along, extent in (("dir1", 0.025, 0.10), ("dir3", 0.015, 0.05)):
         push = obj.pushes[d]
@@ -220,8 +223,8 @@ def test_push_poses_and_paths() -> None:
         assert np.allclose(retreat[:3, 3], path[-1][:3, 3] + 0.10 * n)
         assert np.allclose(push.candidates[1][1][:3, 0], -x)
         # IK fallbacks after the two half-turns (a lone box: nothing blocks any option):
-        # the other yaw (2 candidates), then contact points off the middle of the rear
-        # face, 5 mm short of its ends. dir1's rear face is 5 cm wide: the documented yaw
+        # the other yaw (2 candidates), then (lateral_shift) contact points off the middle
+        # of the rear face, 5 mm short of its ends. dir1's rear face is 5 cm wide: the documented yaw
         # (a 3 cm finger across) moves 2.5 - 1.5 - 0.5 = 0.5 cm either way, the other yaw
         # (the 5 cm finger pair across) not at all. dir3's is 10 cm: 5 - 2.5 - 0.5 = 2 cm
         # for the documented yaw, 5 - 1.5 - 0.5 = 3 cm for the other.

@@ -26,8 +26,8 @@ does not also push a neighbour beside a long object), orthogonal for dir3/dir4; 
 ``fingertips_above_table_m`` above the table; the fingers ``gripper_behind_m`` behind the
 object's rear face along the push, centred on the object across it. Alternatives: the
 other yaw, and (``lateral_shift``) the contact moved towards either end of the rear face,
-``contact_edge_margin_m`` short of it: beside a tall neighbour the wrist clears it there. Pre-push:
-``approach_m`` above the push pose. Push length: ``pushing_step`` times the object's extent
+``contact_edge_margin_m`` short of it: beside a tall neighbour the wrist may clear it
+there. Pre-push: ``approach_m`` above the push pose. Push length: ``pushing_step`` times the object's extent
 along the direction, at most ``push_length_limit_m``; the gripper path is cut into steps of
 at most ``path_resolution_m``; retreat: ``approach_m`` above the end.
 """
@@ -197,7 +197,8 @@ def push_geometry(obj: ObjectGeometry, gripper: GripperModel, push: PushSettings
             if push.lateral_shift and reach >= push.contact_edge_margin_m:
                 offsets += [reach, -reach]
             for k, offset in enumerate(offsets):
-                start = lateral + (rear - push.gripper_behind_m - half_along) * d + (centre_across * (k > 0) + offset) * side
+                across_m = (centre_across if k > 0 else 0.0) + offset
+                start = lateral + (rear - push.gripper_behind_m - half_along) * d + across_m * side
                 start[2] = height
                 seq_pose = _push_sequence(x, start, up_approach, translations, n)
                 geometry = PushGeometry(

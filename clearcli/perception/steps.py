@@ -57,7 +57,7 @@ def best_separating_line(xy: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray,
     all_sorted = np.take_along_axis(proj, order, axis=0)
     gaps = np.full(errs.shape, -np.inf)
     gaps[1:-1] = np.diff(all_sorted, axis=0)
-    k_best = np.argmin(errs + 1e-6 * 0, axis=0)
+    k_best = np.argmin(errs, axis=0)
     e_best = errs[k_best, np.arange(errs.shape[1])]
     fewest = e_best == e_best.min()
     # the best threshold of each direction among those with its fewest errors: widest gap

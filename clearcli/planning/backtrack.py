@@ -311,7 +311,6 @@ class IKActionChecker:
         finally:
             self.per_action_s.append(time.perf_counter() - t0)
 
-
     def grasp_after_push(self, action: Action, checker: object) -> str:
         """Empty when some grasp candidate, moved by the push, has IK solutions clear of
         the other objects (as they stand now); else why not."""
