@@ -121,7 +121,7 @@ def planar_cuts(
     ``voxel_centroids`` (V, 3) are the voxels ``sv.voxel_label`` labels; ``up`` is the
     table's normal. ``trace``, when given, receives a dict per round with every
     candidate's figures (for choosing the thresholds)."""
-    from clearcli.perception.lccp import merge_small_segments
+    from clearcli.perception.lccp import rejoin_pieces
 
     seg = np.asarray(seg, dtype=np.int64).copy()
     e = sv.edges
@@ -220,11 +220,4 @@ def planar_cuts(
         return seg
     # a side may fall apart into pieces; pieces are connected components, small ones
     # rejoin their largest neighbour as after LCCP
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
-    n_sv = seg.size
-    keep = seg[e[:, 0]] == seg[e[:, 1]]
-    graph = coo_matrix((np.ones(int(keep.sum()), dtype=np.int8), (e[keep, 0], e[keep, 1])), shape=(n_sv, n_sv))
-    comp = connected_components(graph, directed=False)[1].astype(np.int64)
-    return merge_small_segments(comp, e, settings.min_segment_supervoxels, sv.n_voxels, min_segment_voxels)
+    return rejoin_pieces(seg, e, settings.min_segment_supervoxels, sv.n_voxels, min_segment_voxels)

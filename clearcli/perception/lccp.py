@@ -75,6 +75,22 @@ def lccp_segments(sv: Supervoxels, settings: SegmentSettings) -> np.ndarray:
     return merge_small_segments(seg, sv.edges, settings.min_segment_supervoxels, sv.n_voxels, min_voxels)
 
 
+def rejoin_pieces(
+    seg: np.ndarray,
+    edges: np.ndarray,
+    min_size: int,
+    sizes: np.ndarray | None = None,
+    min_voxels: int = 0,
+) -> np.ndarray:
+    """After a cut: every segment of ``seg`` split into its connected pieces over
+    ``edges``, and small pieces joined to their largest neighbour (`merge_small_segments`)."""
+    from clearcli.perception.supervoxels import _components
+
+    keep = seg[edges[:, 0]] == seg[edges[:, 1]]
+    pieces = _components(seg.size, edges[keep]).astype(np.int64)
+    return merge_small_segments(pieces, edges, min_size, sizes, min_voxels)
+
+
 def merge_small_segments(
     seg: np.ndarray,
     sv_edges: np.ndarray,

@@ -95,18 +95,14 @@ def step_splits(
     ``voxel_height`` (V,) are the voxels' heights above the table, ``up`` its normal,
     ``voxel_edges`` (E, 2) the voxel adjacency; the supervoxels (``sv.voxel_label`` over
     the same voxels) give the top patches and their normals."""
-    from clearcli.perception.lccp import merge_small_segments
+    from clearcli.perception.lccp import rejoin_pieces
+    from clearcli.perception.table import plane_basis
 
     seg = np.asarray(seg_of_voxel, dtype=np.int64).copy()
     if seg.size == 0:
         return seg
     up = up / np.linalg.norm(up)
-    # a basis of the table plane for the 2-D separation
-    helper = np.array([1.0, 0.0, 0.0]) if abs(up[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    u = np.cross(up, helper)
-    u /= np.linalg.norm(u)
-    v = np.cross(up, u)
-    xy = np.stack([voxel_centroids @ u, voxel_centroids @ v], axis=1)
+    xy = voxel_centroids @ plane_basis(up).T  # in the table plane, for the 2-D separation
     top_sv = np.abs(sv.normals @ up) >= np.cos(np.radians(settings.step_max_tilt_deg))
     top = top_sv[sv.voxel_label]
     min_top_vox = settings.min_object_area_m2 / settings.voxel_m**2
@@ -152,11 +148,4 @@ def step_splits(
         return out.astype(np.int64)
     # a side may fall apart into pieces: pieces are connected components, small ones
     # rejoin their largest neighbour (LCCP's rule, counted in voxels)
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
-    e = voxel_edges
-    keep = seg[e[:, 0]] == seg[e[:, 1]]
-    graph = coo_matrix((np.ones(int(keep.sum()), dtype=np.int8), (e[keep, 0], e[keep, 1])), shape=(seg.size, seg.size))
-    comp = connected_components(graph, directed=False)[1].astype(np.int64)
-    return merge_small_segments(comp, e, min_segment_voxels)
+    return rejoin_pieces(seg, voxel_edges, min_segment_voxels)
