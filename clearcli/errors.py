@@ -8,28 +8,30 @@ the codes are documented in ``clear --help`` and the README. Messages say what w
 from __future__ import annotations
 
 # Exit codes, documented in the README and in `clear --help`.
-EXIT_OK = 0
+EXIT_OK = 0  # for `plan`: the plan removes every object (an empty table included)
 EXIT_INTERNAL = 1  # a bug in clear: please report it
 EXIT_USAGE = 2  # Typer/Click: unknown option, missing argument
 EXIT_INPUT = 3  # input file missing, empty, corrupt, not a point cloud, bad settings file
 EXIT_SCENE = 4  # the frame holds no usable table (no plane, seen from below, all NaN)
-EXIT_NO_PLAN = 5  # the table cannot be cleared: no plan exists (the reason is printed)
+EXIT_NO_PLAN = 5  # nothing can be done: no object can be removed (the reasons are printed)
 EXIT_PLANNER = 6  # the planner failed: time-out, crash, binary missing
 EXIT_NOT_YET = 7  # subcommand not implemented yet
 EXIT_OUTPUT = 8  # an output could not be written (exists without --force, not writable)
 EXIT_PARTIAL = 9  # a log was read only in part (truncated/corrupt after complete frames)
+EXIT_PARTIAL_PLAN = 10  # the plan removes some objects; the others are left, with reasons
 
 EXIT_CODES: dict[int, str] = {
-    EXIT_OK: "success",
+    EXIT_OK: "success (plan: every object removed, an empty table included)",
     EXIT_INTERNAL: "internal error (a bug in clear; rerun with CLEAR_DEBUG=1 and report it)",
     EXIT_USAGE: "usage error (unknown option, missing argument)",
     EXIT_INPUT: "bad input: file missing, empty, corrupt, not a point cloud, bad settings",
     EXIT_SCENE: "no usable table in the frame (no plane, seen from below, no finite points)",
-    EXIT_NO_PLAN: "no plan: the table cannot be cleared (reason printed)",
+    EXIT_NO_PLAN: "no plan: no object can be removed (reasons printed; plan --json still prints its document)",
     EXIT_PLANNER: "planner failure: time-out, crash or Fast Downward missing",
     EXIT_NOT_YET: "subcommand not implemented yet",
     EXIT_OUTPUT: "output not written: exists (use --force) or not writable",
     EXIT_PARTIAL: "log read only in part: truncated or corrupt after the frames reported",
+    EXIT_PARTIAL_PLAN: "partial plan: it removes some objects; the others are left, each with its reason",
 }
 
 

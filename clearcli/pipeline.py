@@ -110,7 +110,9 @@ class Pipeline:
     def plan(self, state: "SymbolicState") -> "Plan":
         if self._plan_fn is None:
             self._plan_fn = _default_plan()
-        return self._plan_fn(state, self.settings, T_base_camera=self.T_base_camera)
+        # A replay acts on the first action and plans again from the next frame: it
+        # checks what [plan] replay_check says (the first action, by default).
+        return self._plan_fn(state, self.settings, T_base_camera=self.T_base_camera, check=self.settings.plan.replay_check)
 
     def run(
         self,

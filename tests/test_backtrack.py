@@ -9,7 +9,8 @@ import pytest
 
 import plan_scenes as ps
 from clearcli.errors import NoPlanError
-from clearcli.planning.backtrack import IKActionChecker, backtrack, make_plan
+from clearcli.planning.backtrack import backtrack, make_plan
+from clearcli.planning.feasibility import IKActionChecker, Infeasible, SceneContext
 from clearcli.planning.types import Action, CheckedAction, Plan
 from clearcli.predicates.state import DIRECTIONS, Fact
 from clearcli.settings import Settings
@@ -67,7 +68,8 @@ def test_figure_3_1_backtracking_sequence() -> None:
     pushed = []
     for s in steps[1:]:
         assert s.cost == 5 and s.plan[0].kind == "push" and s.plan[0].obj == "o2"
-        assert s.plan[1] == Action("grasp", "o2")
+        assert Action("grasp", "o2") in s.plan[1:]  # equally short orders tie
+        assert s.failed_step == 0 and s.learnt == (s.plan[0].ik_fact(),)
         pushed.append(s.plan[0].direction)
     assert sorted(pushed) == list(DIRECTIONS)
     assert all(not s.feasible and "reach" in s.reason for s in steps)
@@ -124,17 +126,18 @@ def test_empty_table_is_an_empty_plan() -> None:
 
 
 class FakeIK:
-    """IK oracle from a set of infeasible actions (symbolic tests)."""
+    """IK oracle from a set of actions infeasible where their object stands as recorded
+    (once it was pushed, everything about it is feasible: the thesis's assumption)."""
 
     def __init__(self, infeasible: set[Action]) -> None:
         self.infeasible = infeasible
         self.calls: list[Action] = []
 
-    def __call__(self, action: Action) -> tuple[CheckedAction | None, str]:
+    def __call__(self, action: Action, ctx: SceneContext = SceneContext()) -> "CheckedAction | Infeasible":
         self.calls.append(action)
-        if action in self.infeasible:
-            return None, "no IK solution"
-        return CheckedAction(action, (), ()), ""
+        if action in self.infeasible and not ctx.moved(action.obj):
+            return Infeasible("no IK solution", "ik")
+        return CheckedAction(action, (), ())
 
 
 def test_grasp_infeasible_push_then_grasp() -> None:
@@ -183,13 +186,19 @@ def test_random_states_with_random_ik_failures(seed: int) -> None:
     infeasible = {a for a in all_actions if rng.random() < 0.3}
     ik = FakeIK(infeasible)
     try:
-        plan = backtrack(state, ik)
+        plan = backtrack(state, ik, mode="first")
     except NoPlanError:
         return
     assert plan.actions[0] not in infeasible
     # only first actions are checked, one check per plan
     assert len(ik.calls) == plan.replans
     check_plan(state, plan)
+    # the whole-plan check: no action of the plan is infeasible
+    whole = backtrack(state, FakeIK(infeasible))
+    for k, a in enumerate(whole.actions):  # infeasible as recorded: only after a push of it
+        assert a not in infeasible or any(p.obj == a.obj for p in whole.actions[:k]), (k, a)
+    assert all(c is not None for c in whole.checked) and len(whole.checked) == len(whole.actions)
+    check_plan(state, whole)
 
 
 def test_ik_checker_on_scene_grasp_and_push() -> None:
@@ -199,8 +208,8 @@ def test_ik_checker_on_scene_grasp_and_push() -> None:
     kin = WamKinematics()
     checker = IKActionChecker(state, ps.T_BASE_CAMERA, kin, make_obstacles(state, ps.T_BASE_CAMERA))
     for action in (Action("grasp", "o0"), Action("push", "o1", "dir3")):
-        checked, why = checker(action)
-        assert checked is not None, why
+        checked = checker(action)
+        assert isinstance(checked, CheckedAction), checked
         n = len(checked.T_base_gripper)
         assert n == len(checked.joint_solutions) and n >= 3
         for q in checked.joint_solutions:
@@ -210,8 +219,10 @@ def test_ik_checker_on_scene_grasp_and_push() -> None:
     # an arm-collision: a tall object standing between the robot and o0 blocks the arm
     tall = ps.scene({"o0": ps.Box(0.75, 0.0), "o1": ps.Box(0.40, 0.0, (0.30, 0.30, 0.6))})
     checker = IKActionChecker(tall, ps.T_BASE_CAMERA, kin, make_obstacles(tall, ps.T_BASE_CAMERA))
-    checked, why = checker(Action("grasp", "o0"))
-    assert checked is None and "collides with o1" in why
+    failed = checker(Action("grasp", "o0"))
+    assert isinstance(failed, Infeasible) and "collides with o1" in failed.reason
+    assert failed.kind == "collision" and failed.colliders == ("o1",)
+    assert failed.facts(Action("grasp", "o0")) == (("block_grasp", "o1", "o0"),)
 
 
 def _clear(*args: str) -> "subprocess.CompletedProcess[str]":
@@ -256,10 +267,11 @@ def test_push_lookahead_rejects_a_push_that_leaves_the_object_out_of_reach(x: fl
     obstacles = make_obstacles(state, ps.T_BASE_CAMERA)
     push = Action("push", "o0", "dir2")
     plain = IKActionChecker(state, ps.T_BASE_CAMERA, kin, obstacles)
-    assert plain(push)[0] is not None
-    assert plain(Action("grasp", "o0"))[0] is not None  # graspable where it stands
+    assert isinstance(plain(push), CheckedAction)
+    assert isinstance(plain(Action("grasp", "o0")), CheckedAction)  # graspable where it stands
     ahead = IKActionChecker(state, ps.T_BASE_CAMERA, kin, obstacles, push_lookahead=True)
-    checked, why = ahead(push)
-    assert (checked is not None) == lookahead_ok
+    checked = ahead(push)
+    assert isinstance(checked, CheckedAction) == lookahead_ok
     if not lookahead_ok:
-        assert why.startswith("the push leaves o0 where it cannot be grasped (no IK solution")
+        assert isinstance(checked, Infeasible) and checked.kind == "lookahead"
+        assert checked.reason.startswith("the push leaves o0 where it cannot be grasped (no IK solution")

@@ -332,7 +332,7 @@ class _ToyPlanner:
     def __init__(self) -> None:
         self.last_motion: np.ndarray | None = None
 
-    def __call__(self, state: SymbolicState, settings: Any, T_base_camera: Any = None) -> Plan:
+    def __call__(self, state: SymbolicState, settings: Any, T_base_camera: Any = None, check: str = "first") -> Plan:
         obj = state.objects[0]
         if not state.facts:
             return Plan((Action("grasp", "o0"),), 1, True, None, frozenset(), (), 1)

@@ -32,9 +32,11 @@ stdout = Console(soft_wrap=True)
 stderr = Console(stderr=True, soft_wrap=True)
 
 
-def print_json(kind: str, payload: dict[str, Any]) -> None:
-    """One JSON document on stdout with the versioned envelope every command shares."""
-    doc = {"schema": f"clear.{kind}", "version": JSON_SCHEMA_VERSION, **payload}
+def print_json(kind: str, payload: dict[str, Any], version: int = JSON_SCHEMA_VERSION) -> None:
+    """One JSON document on stdout with the versioned envelope every command shares.
+    Versions are per schema: a schema's version rises when a key is removed, renamed or
+    changes meaning."""
+    doc = {"schema": f"clear.{kind}", "version": version, **payload}
     sys.stdout.write(json.dumps(doc, separators=(",", ":"), allow_nan=False) + "\n")
     sys.stdout.flush()
 

@@ -1,39 +1,69 @@
-"""Planning with backtracking on IK (thesis Algorithm 1).
+"""Planning with backtracking on IK (thesis Algorithm 1), every action checked.
 
     repeat
-        plan <- Fast Downward(state + ik facts, goal)
-        check the first action: IK for every gripper pose of it, arm clear of the table
-        and of the other objects
-        if infeasible: add ik_unfeasible_grasp(o) / ik_unfeasible_dir(o, d)
-            and when every action of o is IK-infeasible, drop o from the goal (unreachable)
-    until the first action is feasible, or the goal is empty / unreachable
+        plan <- Fast Downward(state + learnt facts, goal)
+        check the plan's actions in order, each in the scene as the earlier ones leave it
+        (`feasibility.SceneContext`: grasped objects gone, pushed ones moved)
+        if an action has no arm motion: learn why, and plan again
+    until every action has joint solutions, or the goal is empty
 
-Two additions to the thesis's loop, both exact because the model is monotone (no action
-ever makes a blocking or IK fact true, see compile.py):
+The thesis checks only the first action (``check="first"``, `clear plan --first-only`,
+and what `replay` and `simulate` use: the robot replans after every action anyway).
 
-* objects that no sequence of actions can free any more (say, blocked only by an
-  unreachable object) are dropped from the goal as ``stuck`` instead of making the
-  whole problem unsolvable; a frame where nothing can be removed is "no plan";
-* objects whose width the gripper cannot take (``ungraspable``) are never in the goal,
-  but can still be pushed out of the way.
+**What is learnt, and where it holds.** The model's ``ik_unfeasible_*`` facts are
+initial-state facts, and ``push o`` deletes ``ik_unfeasible_grasp o``: "the grasp of o
+fails after o's push" cannot be said in the initial state. So a failure is learnt where
+it is true:
+
+* If the failing action's object still stands where it stood in the state the plan was
+  made from (the *base*), the action is checked again in the base; when it fails there
+  too, that failure's facts hold in the base and are added to it. A failure of the
+  first action is a failure in the base by definition (the thesis's case).
+* Otherwise (the object was pushed earlier in the plan, or only an object pushed
+  earlier stands in the way) nothing can be said of the base: the checked actions
+  before the failing one are *fixed*, the base becomes the state they leave (symbolic
+  facts progressed by the domain's effects, geometry by the context), the failure is
+  learnt there, and the rest is planned from it.
+
+Either way every fact ever added is true in the state it is added to, so every plan
+returned has actions that are all checked in the scene they act on, and a problem
+written from the recorded scene plus the facts learnt in it (``Plan.ik_facts``) is
+solved by the whole plan: the facts learnt after a fixed prefix only restrict the
+rest (they appear in negative preconditions alone), so leaving them out keeps the plan
+valid. The loop ends: each round adds a new fact to a finite set at the current base, or
+fixes at least one more checked action; ``[plan] max_backtracks`` bounds it and the
+time limit bounds it in seconds.
+
+What a failure teaches (`feasibility.Infeasible.facts`): an arm that hits objects in
+every candidate learns ``block_grasp x o`` / ``block_dir x o d`` for the objects x hit
+(the arm is in x's way as the gripper would be: moving x frees it, as the model says of
+blocking objects); no IK, beyond reach or the table learn ``ik_unfeasible_*``. Both keep
+the compiled model delete-only for blocking and IK facts (compile.py), so
+`removable_objects` stays exact: objects no sequence of actions can free are dropped
+from the goal as ``stuck``, objects whose every action is IK-infeasible as
+``unreachable``; objects the gripper cannot hold (``ungraspable``) are never in the goal
+but can still be pushed out of the way.
 """
 
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Callable, Iterable, Mapping, Sequence
 
 import numpy as np
 
 from clearcli.errors import NoPlanError, PlannerError, SettingsError
 from clearcli.planning import downward
-from clearcli.planning.compile import compile_strips, removable_objects
-from clearcli.planning.types import Action, BacktrackStep, CheckedAction, Plan
+from clearcli.planning.compile import removable_objects
+from clearcli.planning.feasibility import EMPTY, IKActionChecker, Infeasible, SceneContext, gripper_opening_text
+from clearcli.planning.types import Action, BacktrackStep, CheckedAction, LeftObject, Plan
 from clearcli.predicates.state import DIRECTIONS, Fact, SymbolicState
 
-# check(action) -> (CheckedAction or None, reason when None)
-Checker = Callable[[Action], tuple[CheckedAction | None, str]]
+# check(action, context) -> CheckedAction, or Infeasible with the reason
+Checker = Callable[[Action, SceneContext], "CheckedAction | Infeasible"]
+
+CHECK_MODES = ("whole", "first")
 
 
 @dataclass(frozen=True)
@@ -43,6 +73,14 @@ class Solved:
     optimal: bool
     config: str
     time_s: float
+    deadline: bool = False  # the overall time limit cut the anytime search short
+
+
+def _deadline_error(time_limit_s: float) -> PlannerError:
+    return PlannerError(
+        f"no plan with every action checked within the time limit of {time_limit_s:g} s "
+        "(--time-limit, [plan] time_limit_s): raise it"
+    )
 
 
 def solve(
@@ -56,38 +94,49 @@ def solve(
     optimal_time_s: float = 10.0,
     anytime_time_s: float = 5.0,
     formulation: str = "positive",
+    deadline_at: float | None = None,
 ) -> Solved | None:
     """One Fast Downward plan for removing ``goal`` (None when proven impossible).
 
     Optimal A* + LM-cut up to ``optimal_max_objects`` goal objects, for at most
     ``optimal_time_s``; beyond that, or when the optimal search runs out of time, LAMA
-    (anytime) within ``anytime_time_s``. Both capped by ``time_limit_s``.
+    (anytime) within ``anytime_time_s``. Both end by ``deadline_at`` (perf_counter
+    seconds; default now + ``time_limit_s``): LAMA stopped by it returns its best plan
+    so far with ``deadline=True``.
     """
     if formulation not in ("positive", "negative"):
         raise SettingsError(f"settings: [plan] formulation must be \"positive\" or \"negative\", got {formulation!r}")
     if not goal:
         return Solved((), 0, True, "", 0.0)
-    task = compile_strips(objects, facts, goal, push_costs, positive=formulation == "positive")
+    if deadline_at is None:
+        deadline_at = time.perf_counter() + time_limit_s
+    run, task = _task(objects, facts, goal, push_costs, formulation)
     result = None
+    remaining = deadline_at - time.perf_counter()
+    if remaining <= 0:
+        raise _deadline_error(time_limit_s)
     if len(goal) <= optimal_max_objects:
+        # Leave LAMA half of what is left when the deadline is the tighter bound.
+        limit = min(optimal_time_s, remaining if remaining > optimal_time_s + anytime_time_s else remaining / 2)
         try:
-            result = downward.run_downward(
-                task.domain,
-                task.problem,
-                search=downward.OPTIMAL,
-                time_limit_s=min(optimal_time_s, time_limit_s),
-            )
+            result = run(search=downward.OPTIMAL, time_limit_s=limit)
         except PlannerError as exc:
             if "timed out" not in str(exc):
                 raise
             result = None
+    deadline = False
     if result is None:
-        result = downward.run_downward(
-            task.domain,
-            task.problem,
-            alias=downward.ANYTIME_ALIAS,
-            time_limit_s=min(anytime_time_s, time_limit_s),
-        )
+        remaining = deadline_at - time.perf_counter()
+        if remaining <= 0.05:
+            raise _deadline_error(time_limit_s)
+        limit = min(anytime_time_s, remaining)
+        try:
+            result = run(alias=downward.ANYTIME_ALIAS, time_limit_s=limit)
+        except PlannerError as exc:
+            if "timed out" in str(exc) and limit < anytime_time_s:
+                raise _deadline_error(time_limit_s) from None
+            raise
+        deadline = bool(getattr(result, "timed_out", False)) and limit < anytime_time_s
     if result.unsolvable:
         return None
     actions: list[Action] = []
@@ -102,12 +151,39 @@ def solve(
             # The grounded form leaves out the lifted domain's (not (removed ?o)): acting
             # on a removed object changes nothing that matters, so an anytime plan that
             # does it is the same plan without that step.
-            cost -= 1 if action.kind == "grasp" else int(costs.get((action.obj, str(action.direction)), 1))
+            cost -= action_cost(action, costs)
             continue
         if action.kind == "grasp":
             removed.add(action.obj)
         actions.append(action)
-    return Solved(tuple(actions), cost, result.optimal, result.config, result.time_s)
+    return Solved(tuple(actions), cost, result.optimal and not deadline, result.config, result.time_s, deadline)
+
+
+def _task(objects: Sequence[str], facts: Iterable[Fact], goal: Sequence[str], push_costs, formulation: str):  # type: ignore[no-untyped-def]
+    """The grounded task and a function running Fast Downward on it: the SAS+ task
+    straight into the search component when available (no translator: it only
+    re-grounds what is grounded already), else the PDDL text through the driver."""
+    from clearcli.planning.compile import compile_strips
+
+    if formulation == "positive" and hasattr(downward, "run_sas"):
+        from clearcli.planning.sas import compile_sas
+
+        sas = compile_sas(objects, facts, goal, push_costs)
+
+        def run_sas(**kw):  # type: ignore[no-untyped-def]
+            return downward.run_sas(sas.text, **kw)
+
+        return run_sas, sas
+    task = compile_strips(objects, facts, goal, push_costs, positive=formulation == "positive")
+
+    def run_pddl(**kw):  # type: ignore[no-untyped-def]
+        return downward.run_downward(task.domain, task.problem, **kw)
+
+    return run_pddl, task
+
+
+def action_cost(action: Action, push_costs: Mapping[tuple[str, str], int]) -> int:
+    return 1 if action.kind == "grasp" else int(push_costs.get((action.obj, str(action.direction)), 1))
 
 
 def action_space(state_facts: frozenset[Fact], obj: str, directions: Sequence[str] = DIRECTIONS) -> list[Action]:
@@ -119,6 +195,24 @@ def action_space(state_facts: frozenset[Fact], obj: str, directions: Sequence[st
         if ("push_off_table", obj, d) not in state_facts:
             out.append(Action("push", obj, d))
     return out
+
+
+def progress(facts: frozenset[Fact], action: Action) -> frozenset[Fact]:
+    """The facts after ``action``, by the lifted domain's effects (pddl/domain.pddl)."""
+    o = action.obj
+    if action.kind == "grasp":
+        # o is gone: every fact that names it goes with it (what the domain deletes, plus
+        # facts of others about o, which no action can consult any more)
+        return frozenset(f for f in facts if o not in f[1:])
+    return frozenset(
+        f
+        for f in facts
+        if not (f[0] in ("block_dir", "block_grasp") and o in f[1:3]) and f != ("ik_unfeasible_grasp", o)
+    )
+
+
+def _label(action: Action) -> str:
+    return "grasp" if action.kind == "grasp" else f"push {action.direction}"
 
 
 def backtrack(
@@ -133,51 +227,89 @@ def backtrack(
     formulation: str = "positive",
     goal_objects: Sequence[str] | None = None,
     precheck: Callable[[Action], str] | None = None,
+    mode: str = "whole",
+    describe_width: Callable[[str], tuple[str, float | None]] | None = None,
 ) -> Plan:
-    """Algorithm 1 with ``check`` as HASIKSOLUTION. Raises NoPlanError when nothing can be
-    removed (with the reason and the partial result in ``error.plan``)."""
+    """Backtracking with ``check`` as HASIKSOLUTION, on every action (``mode="whole"``) or
+    the first (``"first"``). Raises NoPlanError when nothing can be removed (the reason
+    in the message, the result in ``error.plan``), PlannerError when the search fails or
+    ``time_limit_s`` (the whole planning) ends without a checked plan."""
+    if mode not in CHECK_MODES:
+        raise SettingsError(f"settings: [plan] check must be one of {', '.join(CHECK_MODES)}, got {mode!r}")
     t_start = time.perf_counter()
+    deadline_at = t_start + time_limit_s
     names = state.names()
-    facts = frozenset(state.facts)
-    ungraspable = tuple(o for o in names if ("ungraspable", o) in facts)
-    goal = [o for o in (goal_objects if goal_objects is not None else names) if o not in ungraspable]
-    ik_facts: set[Fact] = set()
-    unreachable: list[str] = []
-    stuck: list[str] = []
+    facts0 = frozenset(state.facts)
+    ungraspable = tuple(o for o in names if ("ungraspable", o) in facts0)
+    wanted = [o for o in (goal_objects if goal_objects is not None else names) if o not in ungraspable]
+    learnt0: set[Fact] = set()  # learnt, true in the recorded scene
+    why: dict[str, dict[str, str]] = {}  # object -> action label -> why it has no arm motion
     steps: list[BacktrackStep] = []
     timings = {"planner_s": 0.0, "ik_s": 0.0}
-    reasons: dict[str, str] = {}
+
+    # The base: the state plans are made from (the recorded scene until a prefix is fixed).
+    prefix: list[Action] = []
+    prefix_checked: list[CheckedAction] = []
+    base_ctx: SceneContext = EMPTY
+    base_facts: frozenset[Fact] = facts0
+    learnt_here: set[Fact] = set()  # learnt in the base after a prefix
+    learnt_later: list[tuple[int, Fact]] = []
+    goal: list[str] = list(wanted)
+    unreachable: list[str] = []
+    stuck: list[str] = []
+
+    def known() -> frozenset[Fact]:
+        return base_facts | (learnt0 if not prefix else frozenset()) | learnt_here
+
+    def base_names() -> tuple[str, ...]:
+        gone = {a.obj for a in prefix if a.kind == "grasp"}
+        return tuple(o for o in names if o not in gone)
 
     def refresh_goal() -> None:
-        # Objects whose every allowed action is IK-infeasible are unreachable.
-        for o in list(goal):
-            space = action_space(facts, o)
-            if all(a.ik_fact() in ik_facts for a in space):
+        gone = {a.obj for a in prefix if a.kind == "grasp"}
+        goal[:] = [o for o in wanted if o not in gone]
+        unreachable.clear()
+        stuck.clear()
+        facts = known()
+        for o in list(goal):  # every allowed action IK-infeasible
+            if all(a.ik_fact() in facts for a in action_space(facts, o)):
                 goal.remove(o)
                 unreachable.append(o)
-        # Objects no plan can remove any more (exact: the model is monotone).
-        removable = removable_objects(names, facts | ik_facts, state.push_costs)
-        for o in list(goal):
+        removable = removable_objects(base_names(), facts, state.push_costs)
+        for o in list(goal):  # exact: the model is monotone
             if o not in removable:
                 goal.remove(o)
                 stuck.append(o)
 
-    def partial(actions: tuple[Action, ...], cost: int, optimal: bool, first: CheckedAction | None, config: str) -> Plan:
+    def result(solved: Solved, checked: Sequence[CheckedAction | None]) -> Plan:
         timings["total_s"] = time.perf_counter() - t_start
+        actions = tuple(prefix) + solved.actions
+        all_checked = tuple(prefix_checked) + tuple(checked) + (None,) * (len(solved.actions) - len(checked))
+        removed = tuple(a.obj for a in actions if a.kind == "grasp")
+        costs = state.push_costs or {}
+        cost = sum(action_cost(a, costs) for a in prefix) + solved.cost
+        left = _left_objects(
+            names, removed, ungraspable, unreachable, stuck, known(), why, describe_width
+        )
         return Plan(
             actions=actions,
             cost=cost,
-            optimal=optimal,
-            first=first,
-            ik_facts=frozenset(ik_facts),
+            optimal=solved.optimal and not prefix,
+            first=all_checked[0] if all_checked else None,
+            ik_facts=frozenset(learnt0),
             unreachable=tuple(unreachable),
             replans=len(steps),
             timings_s=dict(timings),
-            goal=tuple(goal),
+            goal=removed,
             ungraspable=ungraspable,
             stuck=tuple(stuck),
-            search=config,
+            search=solved.config,
             steps=tuple(steps),
+            checked=all_checked,
+            check=mode,
+            deadline=solved.deadline,
+            learnt_later=tuple(learnt_later),
+            left=left,
         )
 
     if precheck is not None:
@@ -185,30 +317,31 @@ def backtrack(
         # object far away is dropped without planning around it first.
         t0 = time.perf_counter()
         for o in names:
-            for a in action_space(facts, o):
-                why = precheck(a)
-                if why:
-                    ik_facts.add(a.ik_fact())
-                    reasons.setdefault(o, why)
+            for a in action_space(facts0, o):
+                reason = precheck(a)
+                if reason:
+                    learnt0.add(a.ik_fact())
+                    why.setdefault(o, {})[_label(a)] = reason
         timings["precheck_s"] = time.perf_counter() - t0
     refresh_goal()
     while True:
         if not goal:
-            plan = partial((), 0, True, None, "")
-            if not names:
-                return plan  # an empty table is clear already
-            why = _no_plan_reason(names, unreachable, stuck, ungraspable, reasons)
-            err = NoPlanError(f"no plan: {why}")
+            plan = result(Solved((), 0, True, "", 0.0), ())
+            if not names or prefix:
+                return plan  # an empty table is clear already; a fixed prefix is a plan
+            err = NoPlanError(f"no plan: {_no_plan_reason(plan)}")
             err.plan = plan  # type: ignore[attr-defined]
             raise err
         if len(steps) >= max_backtracks:
             raise PlannerError(
                 f"backtracking gave up after {len(steps)} replans; raise [plan] max_backtracks"
             )
+        if time.perf_counter() >= deadline_at:
+            raise _deadline_error(time_limit_s)
         t0 = time.perf_counter()
         solved = solve(
-            names,
-            facts | ik_facts,
+            base_names(),
+            known(),
             goal,
             state.push_costs,
             time_limit_s=time_limit_s,
@@ -216,139 +349,164 @@ def backtrack(
             optimal_time_s=optimal_time_s,
             anytime_time_s=anytime_time_s,
             formulation=formulation,
+            deadline_at=deadline_at,
         )
         timings["planner_s"] += time.perf_counter() - t0
         if solved is None:
             # Cannot happen after refresh_goal (the fixpoint is exact); guard anyway.
             raise PlannerError("Fast Downward proved the goal unsolvable although it is reachable")
-        first_action = solved.actions[0]
+
         t0 = time.perf_counter()
-        checked, reason = check(first_action)
+        ctx = base_ctx
+        checked: list[CheckedAction] = []
+        failure: tuple[int, Action, Infeasible, SceneContext] | None = None
+        for i, action in enumerate(solved.actions if mode == "whole" else solved.actions[:1]):
+            res = check(action, ctx)
+            if isinstance(res, Infeasible):
+                failure = (i, action, res, ctx)
+                break
+            checked.append(res)
+            ctx = ctx.after(action, state)
+        if failure is None:
+            timings["ik_s"] += time.perf_counter() - t0
+            steps.append(BacktrackStep(solved.actions, solved.cost, solved.optimal, True, prefix=len(prefix)))
+            return result(solved, checked)
+
+        i, action, fail, ctx_i = failure
+        new: set[Fact] = set()
+        if i == 0:
+            new = set(fail.facts(action)) - known()
+            why.setdefault(action.obj, {})[_label(action)] = fail.reason
+        else:
+            pushes_before = [j for j, a in enumerate(solved.actions[:i]) if a.obj == action.obj]
+            if not pushes_before:
+                # The object stands where it stood in the base: does the action fail
+                # there too? Then what that failure teaches holds in the base.
+                at_base = check(action, base_ctx)
+                if isinstance(at_base, Infeasible):
+                    new = set(at_base.facts(action)) - known()
+                    if new:
+                        why.setdefault(action.obj, {})[_label(action)] = at_base.reason
+            elif action.kind == "grasp" and len(pushes_before) == 1:
+                # Pushed once from where it stood in the base, then not graspable: the
+                # push look-ahead's rule, in hindsight (the look-ahead saw the other
+                # objects as they stood at the push): that push is infeasible in the base.
+                push = solved.actions[pushes_before[0]]
+                if push.ik_fact() not in known():
+                    new = {push.ik_fact()}
+                    why.setdefault(action.obj, {})[_label(push)] = (
+                        f"the push leaves {action.obj} where it cannot be grasped ({fail.reason})"
+                    )
         timings["ik_s"] += time.perf_counter() - t0
-        steps.append(BacktrackStep(solved.actions, solved.cost, solved.optimal, checked is not None, reason))
-        if checked is not None:
-            return partial(solved.actions, solved.cost, solved.optimal, checked, solved.config)
-        ik_facts.add(first_action.ik_fact())
-        reasons[first_action.obj] = reason
+        if new:
+            (learnt0 if not prefix else learnt_here).update(new)
+            if prefix:
+                learnt_later.extend((len(prefix), f) for f in sorted(new))
+            steps.append(
+                BacktrackStep(solved.actions, solved.cost, solved.optimal, False, fail.reason, i, tuple(sorted(new)), len(prefix))
+            )
+        elif i == 0:
+            # A failure in the base whose facts are known already: the planner would not
+            # have planned the action. A bug, not a scene: say so rather than loop.
+            raise PlannerError(f"backtracking learnt nothing from {action.pddl()} ({fail.reason})")
+        else:
+            # Nothing to say of the base: fix the checked actions before the failure and
+            # plan the rest from the state they leave, where the failure is learnt.
+            steps.append(
+                BacktrackStep(
+                    solved.actions, solved.cost, solved.optimal, False, fail.reason, i,
+                    tuple(sorted(fail.facts(action))), len(prefix),
+                )
+            )
+            # The facts known in the base, carried through the fixed actions by the
+            # domain's effects, are the new base's facts.
+            facts_now = known()
+            for a in solved.actions[:i]:
+                facts_now = progress(facts_now, a)
+            prefix.extend(solved.actions[:i])
+            prefix_checked.extend(checked[:i])
+            base_ctx = ctx_i
+            base_facts = facts_now
+            learnt_here = set(fail.facts(action)) - facts_now
+            learnt_later.extend((len(prefix), f) for f in sorted(learnt_here))
+            why.setdefault(action.obj, {})[_label(action)] = fail.reason
         refresh_goal()
 
 
-def _no_plan_reason(
+def _left_objects(
     names: Sequence[str],
+    removed: Sequence[str],
+    ungraspable: Sequence[str],
     unreachable: Sequence[str],
     stuck: Sequence[str],
-    ungraspable: Sequence[str],
-    reasons: Mapping[str, str],
-) -> str:
+    facts: frozenset[Fact],
+    why: Mapping[str, Mapping[str, str]],
+    describe_width: Callable[[str], tuple[str, float | None]] | None,
+) -> tuple[LeftObject, ...]:
+    """Every object the plan does not remove, with the reason."""
+    gone = set(removed)
+    left_names = [o for o in names if o not in gone]
+    left_set = set(left_names)
+    out = []
+    for o in left_names:
+        actions = dict(why.get(o, {}))
+        if o in ungraspable:
+            text, width = describe_width(o) if describe_width else ("too wide or narrow for the gripper", None)
+            out.append(LeftObject(o, "ungraspable", text, actions, width_m=width))
+        elif o in unreachable:
+            detail = "; ".join(f"{k}: {v}" for k, v in actions.items()) or "no action has an arm motion"
+            out.append(LeftObject(o, "unreachable", detail, actions))
+        else:
+            holders = sorted(
+                {
+                    f[1]
+                    for f in facts
+                    if f[0] in ("on", "block_grasp", "block_dir") and len(f) > 2 and f[2] == o and f[1] in left_set and f[1] != o
+                }
+                | {f[2] for f in facts if f[0] == "on" and f[1] == o and f[2] in left_set},
+                key=_name_key,
+            )
+            detail = "held by objects that cannot be moved: " + (", ".join(holders) if holders else "none found")
+            out.append(LeftObject(o, "stuck", detail, actions, blockers=tuple(holders)))
+    return tuple(out)
+
+
+def _name_key(name: str) -> tuple[int, str]:
+    return (int(name[1:]), "") if name[:1] == "o" and name[1:].isdigit() else (1 << 30, name)
+
+
+def _no_plan_reason(plan: Plan) -> str:
     parts = []
+    unreachable = [x for x in plan.left if x.reason == "unreachable"]
+    stuck = [x for x in plan.left if x.reason == "stuck"]
+    narrow = [x for x in plan.left if x.reason == "ungraspable"]
     if unreachable:
-        detail = "; ".join(f"{o}: {reasons[o]}" for o in unreachable if o in reasons)
-        parts.append(f"out of the robot's reach: {', '.join(unreachable)}" + (f" ({detail})" if detail else ""))
+        detail = "; ".join(f"{x.name}: {x.detail}" for x in unreachable)
+        parts.append(f"out of the robot's reach: {', '.join(x.name for x in unreachable)} ({detail})")
     if stuck:
-        parts.append(f"blocked by objects that cannot be moved: {', '.join(stuck)}")
-    if ungraspable:
-        parts.append(f"too wide or narrow for the gripper: {', '.join(ungraspable)}")
+        parts.append(f"blocked by objects that cannot be moved: {', '.join(x.name for x in stuck)}")
+    if narrow:
+        parts.append(f"too wide or narrow for the gripper: {', '.join(x.name for x in narrow)}")
     if not parts:
-        parts.append(f"none of {', '.join(names)} can be removed")
+        parts.append("no object can be removed")
     return "; ".join(parts)
 
 
-@dataclass
-class IKActionChecker:
-    """HASIKSOLUTION: every pose of some half-turn candidate of the action has an IK
-    solution with the arm clear of the table and of the other objects."""
-
-    state: SymbolicState
-    T_base_camera: np.ndarray
-    kin: object
-    obstacles: object
-    per_action_s: list[float] = field(default_factory=list)
-    # check that a pushed object can be grasped where the push leaves it
-    push_lookahead: bool = False
-
-    def poses(self, action: Action) -> tuple[tuple[np.ndarray, ...], ...]:
-        from clearcli.robot.kinematics import half_turn
-
-        obj = self.state.by_name(action.obj)
-        if action.kind == "grasp":
-            cands = tuple(obj.grasp_candidates)
-        else:
-            push = obj.pushes.get(str(action.direction))
-            cands = tuple(push.candidates) if push is not None else ()
-        if len(cands) == 1:  # the gripper is symmetric: its half-turn is as good
-            cands = (cands[0], tuple(half_turn(T) for T in cands[0]))
-        return tuple(tuple(self.T_base_camera @ np.asarray(T, dtype=float) for T in c) for c in cands)
-
-    def beyond_reach(self, action: Action) -> str:
-        """Non-empty when every candidate has a pose beyond the arm's reach."""
-        cands = self.poses(action)
-        if not cands:
-            return "no gripper poses for this action"
-        if all(any(not self.kin.reachable(T) for T in c) for c in cands):  # type: ignore[attr-defined]
-            return "beyond the arm's reach"
-        return ""
-
-    def __call__(self, action: Action) -> tuple[CheckedAction | None, str]:
-        from clearcli.robot.kinematics import SequenceChecker
-
-        t0 = time.perf_counter()
-        try:
-            cands = self.poses(action)
-            if not cands:
-                return None, "no gripper poses for this action"
-            checker = SequenceChecker(self.kin, self.obstacles)  # type: ignore[arg-type]
-            reasons = []
-            for i, poses in enumerate(cands):
-                res = checker.check(poses, action.obj)
-                if res.ok:
-                    if action.kind == "push" and self.push_lookahead:
-                        why = self.grasp_after_push(action, checker)
-                        if why:
-                            return None, why
-                    return CheckedAction(action, poses, res.joints, i), ""
-                reasons.append(res.reason)
-            return None, min(reasons, key=_reason_rank)
-        finally:
-            self.per_action_s.append(time.perf_counter() - t0)
-
-    def grasp_after_push(self, action: Action, checker: object) -> str:
-        """Empty when some grasp candidate, moved by the push, has IK solutions clear of
-        the other objects (as they stand now); else why not."""
-        obj = self.state.by_name(action.obj)
-        push = obj.pushes.get(str(action.direction))
-        if push is None or not push.object_path or not obj.grasp_candidates:
-            return ""
-        shift = np.asarray(push.object_path[-1], dtype=float)
-        reasons = []
-        for cand in obj.grasp_candidates:
-            moved = []
-            for T in cand:
-                T2 = np.array(T, dtype=float)
-                T2[:3, 3] += shift
-                moved.append(self.T_base_camera @ T2)
-            res = checker.check(moved, action.obj)  # type: ignore[attr-defined]
-            if res.ok:
-                return ""
-            reasons.append(res.reason)
-        return f"the push leaves {action.obj} where it cannot be grasped ({min(reasons, key=_reason_rank)})"
-
-
-def _reason_rank(reason: str) -> int:
-    # Report the most telling failure among the half-turns.
-    for rank, key in enumerate(("collides", "no IK", "beyond")):
-        if key in reason:
-            return rank
-    return 3
-
-
-def make_plan(state: SymbolicState, settings: object, T_base_camera: np.ndarray | None = None) -> Plan:
+def make_plan(
+    state: SymbolicState,
+    settings: object,
+    T_base_camera: np.ndarray | None = None,
+    check: str | None = None,
+) -> Plan:
     """Plan for ``state`` (SymbolicState) with the WAM at ``T_base_camera`` (else from
-    ``[robot] camera_pose`` or derived from the table, see clearcli/robot/placement.py)."""
+    ``[robot] camera_pose`` or derived from the table, see clearcli/robot/placement.py).
+    ``check``: "whole" or "first" (default ``[plan] check``)."""
     from clearcli.robot.kinematics import WamKinematics, make_obstacles
     from clearcli.robot.placement import placement_from_settings
 
     robot = settings.robot  # type: ignore[attr-defined]
     plan_s = settings.plan  # type: ignore[attr-defined]
+    gripper = settings.gripper  # type: ignore[attr-defined]
     if T_base_camera is None:
         T_base_camera, _ = placement_from_settings(robot, state)
     T_base_camera = np.asarray(T_base_camera, dtype=float)
@@ -361,6 +519,13 @@ def make_plan(state: SymbolicState, settings: object, T_base_camera: np.ndarray 
     )
     obstacles = make_obstacles(state, T_base_camera, robot.collision_margin_m)
     checker = IKActionChecker(state, T_base_camera, kin, obstacles, push_lookahead=plan_s.push_lookahead)
+
+    def describe_width(name: str) -> tuple[str, float | None]:
+        width = float(state.by_name(name).grasp_width_m)
+        if width <= 0:
+            return "too wide or narrow for the gripper", None
+        return gripper_opening_text(width, gripper.opening_width_m, gripper.closing_width_m), width
+
     try:
         plan = backtrack(
             state,
@@ -372,6 +537,8 @@ def make_plan(state: SymbolicState, settings: object, T_base_camera: np.ndarray 
             max_backtracks=plan_s.max_backtracks,
             formulation=plan_s.formulation,
             precheck=checker.beyond_reach if plan_s.reach_precheck else None,
+            mode=check or plan_s.check,
+            describe_width=describe_width,
         )
     except NoPlanError as err:
         if getattr(err, "plan", None) is not None:

@@ -140,3 +140,12 @@ def _name_key(name: str) -> tuple[int, str]:
     if name[:1] == "o" and name[1:].isdigit():
         return (int(name[1:]), "")
     return (1 << 30, name)
+
+
+def write_plan(actions: Sequence[object], cost: int, unit_cost: bool) -> str:
+    """A plan in Fast Downward's plan-file format, in the lifted domain's terms: one
+    ``(action args)`` per line, then ``; cost = N (unit cost)`` or ``(general cost)``.
+    ``actions`` are `clearcli.planning.types.Action` values."""
+    lines = [a.pddl() for a in actions]  # type: ignore[attr-defined]
+    lines.append(f"; cost = {int(cost)} ({'unit' if unit_cost else 'general'} cost)")
+    return "\n".join(lines) + "\n"

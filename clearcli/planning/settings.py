@@ -7,8 +7,16 @@ from dataclasses import dataclass
 
 @dataclass(frozen=True)
 class PlanSettings:
-    # Upper bound on any one Fast Downward call (translation + search, CPU seconds).
+    # Wall-clock bound on the whole planning, backtracking included (--time-limit). When
+    # it ends the anytime search, its best plan is used if every action of it checks out.
     time_limit_s: float = 30.0
+    # Which actions of a plan are IK-checked before it is accepted: "whole" (every action,
+    # each in the scene as the earlier ones leave it) or "first" (the thesis: the robot
+    # replans after every action). `clear plan` uses `check` (--first-only: "first");
+    # `replay` and `simulate` use `replay_check`: they act on the first action only and
+    # plan again from the next frame, so checking the rest would be work thrown away.
+    check: str = "whole"
+    replay_check: str = "first"
     # Optimal A* + LM-cut on the grounded form takes < 1 s for random states of up to 50
     # objects here in 5 of 6 cases (25 s once, at 40; benchmarks/plan.py): try it up to
     # this many goal objects, for at most optimal_time_s, then fall back to LAMA.

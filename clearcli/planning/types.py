@@ -42,23 +42,39 @@ class CheckedAction:
 
 @dataclass(frozen=True)
 class BacktrackStep:
-    """One round of Algorithm 1: the plan found and what the IK check of its first
-    action said."""
+    """One round of backtracking: the plan found and what the IK check said of it."""
 
-    plan: tuple[Action, ...]
+    plan: tuple[Action, ...]  # the plan searched for in this round (after ``prefix``)
     cost: int
     optimal: bool
-    feasible: bool  # the first action has an IK solution
-    reason: str = ""  # why not ("no IK solution", "beyond reach", ...)
+    feasible: bool  # every action checked had an arm motion
+    reason: str = ""  # why the failing action has none ("no IK solution for pose 2/3", ...)
+    failed_step: int = -1  # index in ``plan`` of the action that failed, -1 when none did
+    learnt: tuple[Fact, ...] = ()  # facts learnt from the failure
+    prefix: int = 0  # actions already fixed before this round's plan (see backtrack.py)
+
+
+@dataclass(frozen=True)
+class LeftObject:
+    """An object the plan does not remove, and why."""
+
+    name: str
+    reason: str  # "unreachable" | "ungraspable" | "stuck"
+    detail: str  # for people: which pose failed and how, the width, what holds it
+    actions: Mapping[str, str] = field(default_factory=dict)  # "grasp"/"push dir1" -> why infeasible
+    blockers: tuple[str, ...] = ()  # stuck: the objects left that hold it
+    width_m: float | None = None  # ungraspable: measured width across the grasp
 
 
 @dataclass(frozen=True, eq=False)
 class Plan:
     actions: tuple[Action, ...]
     cost: int
-    optimal: bool  # proven optimal by the search
+    optimal: bool  # proven optimal by the search (for the model and the facts learnt)
     first: CheckedAction | None  # IK-checked first action (None when actions is empty)
-    ik_facts: frozenset[Fact]  # ik_unfeasible_* facts added by backtracking
+    # Facts learnt by backtracking that hold in the recorded scene (ik_unfeasible_*, and
+    # block_grasp/block_dir where the arm hits an object): the --problem file's additions.
+    ik_facts: frozenset[Fact]
     unreachable: tuple[str, ...]  # objects dropped from the goal (all actions IK-infeasible)
     replans: int
     timings_s: Mapping[str, float] = field(default_factory=dict)
@@ -69,3 +85,18 @@ class Plan:
     search: str = ""  # Fast Downward configuration that produced the plan
     steps: tuple[BacktrackStep, ...] = ()
     T_base_camera: np.ndarray | None = None
+    # One entry per action: its joint solutions, or None where the mode did not check it.
+    checked: tuple[CheckedAction | None, ...] = ()
+    check: str = "whole"  # "whole": every action checked; "first": the thesis's first only
+    deadline: bool = False  # the time limit ended the search; the plan is the best found
+    # Facts learnt in the scene as the first k actions leave it: (k, fact), k >= 1. Not
+    # in the --problem file (they do not hold in the recorded scene; see backtrack.py).
+    learnt_later: tuple[tuple[int, Fact], ...] = ()
+    left: tuple[LeftObject, ...] = ()  # every object not removed, with the reason
+
+    @property
+    def status(self) -> str:
+        """complete: every object removed; partial: some left; no_plan: nothing to do."""
+        if not self.left:
+            return "complete"
+        return "partial" if self.actions and self.goal else "no_plan"
