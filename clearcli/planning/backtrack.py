@@ -285,9 +285,17 @@ def backtrack(
         timings["total_s"] = time.perf_counter() - t_start
         actions = tuple(prefix) + solved.actions
         all_checked = tuple(prefix_checked) + tuple(checked) + (None,) * (len(solved.actions) - len(checked))
-        removed = tuple(a.obj for a in actions if a.kind == "grasp")
         costs = state.push_costs or {}
         cost = sum(action_cost(a, costs) for a in prefix) + solved.cost
+        # Pushes after the last grasp serve nothing (a fixed prefix can end so when the
+        # rest turns out impossible): leave them out.
+        keep = len(actions)
+        while keep and actions[keep - 1].kind == "push":
+            keep -= 1
+        if keep < len(actions):
+            actions, all_checked = actions[:keep], all_checked[:keep]
+            cost = sum(action_cost(a, costs) for a in actions)
+        removed = tuple(a.obj for a in actions if a.kind == "grasp")
         left = _left_objects(
             names, removed, ungraspable, unreachable, stuck, known(), why, describe_width
         )
@@ -327,7 +335,7 @@ def backtrack(
     while True:
         if not goal:
             plan = result(Solved((), 0, True, "", 0.0), ())
-            if not names or prefix:
+            if not names or plan.actions:
                 return plan  # an empty table is clear already; a fixed prefix is a plan
             err = NoPlanError(f"no plan: {_no_plan_reason(plan)}")
             err.plan = plan  # type: ignore[attr-defined]

@@ -240,7 +240,9 @@ class IKActionChecker:
                 assert res.failure is not None
                 failures.append(res.failure)
                 continue
-            if action.kind == "push" and self.push_lookahead:
+            # (an object the gripper cannot hold is pushed only out of the way: no grasp
+            # of it is to come)
+            if action.kind == "push" and self.push_lookahead and ("ungraspable", action.obj) not in self.state.facts:
                 why = self.grasp_after_push(action, ctx, obstacles)
                 if why:
                     return Infeasible(why, "lookahead")
