@@ -361,3 +361,29 @@ def test_relearning_loop_ends_with_a_fixed_prefix() -> None:
     assert plan.replans <= Settings().plan.max_backtracks
     _assert_checked_by_fk(plan)
     check_plan(state, plan)
+
+
+def _many_objects(n: int) -> "SymbolicState":  # type: ignore[name-defined]  # noqa: F821
+    from clearcli.planning.compile import random_facts
+
+    return ps.dummy_state([f"o{i}" for i in range(n)], random_facts(n, 3, density=0.5))
+
+
+def test_deadline_returns_the_checked_plan_found_so_far() -> None:
+    """80 objects: more goal objects than the optimal search takes, so LAMA runs; the
+    whole planning's time limit ends it, and its best plan, every action checked, is the
+    answer, marked deadline and not optimal."""
+    state = _many_objects(80)
+    plan = backtrack(state, FakeIK(set()), time_limit_s=1.5, anytime_time_s=30.0)
+    assert plan.deadline and not plan.optimal and plan.search == "seq-sat-lama-2011"
+    assert plan.goal and all(c is not None for c in plan.checked)
+    assert plan.timings_s["total_s"] < 1.5 + 1.0  # the limit bounds the whole planning
+    # (the independent replay: unified-planning takes long to ground 80 objects)
+    assert replay(frozenset(state.facts) | plan.ik_facts, state.names(), plan.actions) >= set(plan.goal)
+
+
+def test_deadline_without_a_checked_plan_is_a_planner_error() -> None:
+    from clearcli.errors import PlannerError
+
+    with pytest.raises(PlannerError, match="time limit of 0.05 s"):
+        backtrack(_many_objects(120), FakeIK(set()), time_limit_s=0.05)
