@@ -387,3 +387,24 @@ def test_deadline_without_a_checked_plan_is_a_planner_error() -> None:
 
     with pytest.raises(PlannerError, match="time limit of 0.05 s"):
         backtrack(_many_objects(120), FakeIK(set()), time_limit_s=0.05)
+
+
+@pytest.mark.parametrize("replay_check", ["first", "whole"])
+def test_replay_and_simulate_check_what_the_setting_says(replay_check: str) -> None:
+    """The pipeline `replay` and `simulate` run passes [plan] replay_check (default
+    "first": the robot replans after every action) to the planner."""
+    from clearcli.pipeline import Pipeline
+
+    s = _settings(replay_check=replay_check)
+    seen: list[str] = []
+
+    def spy(state, settings, T_base_camera=None, check="whole"):  # type: ignore[no-untyped-def]
+        seen.append(check)
+        return make_plan(state, settings, ps.T_BASE_CAMERA, check=check)
+
+    state = ps.scene({"o0": ps.Box(0.45, 0.0), "o1": ps.Box(0.12, 0.0)}, {("block_grasp", "o0", "o1")})
+    plan = Pipeline(s, plan_fn=spy).plan(state)
+    assert seen == [replay_check] and plan.check == replay_check
+    assert Settings().plan.replay_check == "first" and Settings().plan.check == "whole"
+    # first: the unreachable second grasp goes unnoticed; whole: it is found
+    assert len(plan.actions) == (2 if replay_check == "first" else 1)

@@ -74,7 +74,12 @@ def render_plan(path: Path, frame: Any, state: Any, plan: Any) -> None:
     ax.set_xlabel("x (m, robot base)")
     ax.set_ylabel("y (m, robot base)")
     status = "optimal" if plan.optimal else "not proven optimal"
-    ax.set_title(f"{len(plan.actions)} actions, cost {plan.cost} ({status})", fontsize=10)
+    outcome = {"complete": "every object removed", "partial": f"{len(plan.left)} left", "no_plan": "nothing can be done"}
+    checked = "every action IK-checked" if plan.check == "whole" else "first action IK-checked"
+    ax.set_title(
+        f"{plan.status}: {outcome.get(plan.status, '')}; {len(plan.actions)} actions, cost {plan.cost} ({status}); {checked}",
+        fontsize=9,
+    )
     from matplotlib.patches import Patch
 
     ax.legend(
