@@ -247,25 +247,28 @@ def run_downward(
     config = alias or search or ""
     # The driver's own limit is CPU time in whole seconds (and each component gets what
     # is left after the ones before it, rounded down): only a backstop here.
-    cpu_limit = _backstop_cpu_s(time_limit_s)
     with tempfile.TemporaryDirectory(prefix="clear-fd-") as tmp:
         tmpdir = Path(tmp)
         (tmpdir / "domain.pddl").write_text(domain, encoding="utf-8")
         (tmpdir / "problem.pddl").write_text(problem, encoding="utf-8")
-        cmd = [sys.executable, str(driver), "--overall-time-limit", f"{cpu_limit}s", "--plan-file", "sas_plan"]
-        if alias:
-            cmd += ["--alias", alias, "domain.pddl", "problem.pddl"]
-        else:
-            cmd += ["domain.pddl", "problem.pddl", "--search", str(search)]
-        return _execute(
-            cmd,
-            tmpdir,
-            stdin_path=None,
-            time_limit_s=time_limit_s,
-            config=config,
-            optimal=bool(optimal and alias is None),
-            env=_clean_env(),
+        return _run_driver(
+            driver, ["domain.pddl", "problem.pddl"], tmpdir, alias=alias, search=search,
+            time_limit_s=time_limit_s, config=config, optimal=bool(optimal and alias is None),
         )
+
+
+def _run_driver(
+    driver: Path, inputs: list[str], tmpdir: Path, *, alias: str | None, search: str | None,
+    time_limit_s: float, config: str, optimal: bool,
+) -> DownwardResult:
+    """The driver on ``inputs`` (PDDL files, or one .sas file: then it only searches)."""
+    cpu_limit = _backstop_cpu_s(time_limit_s)
+    cmd = [sys.executable, str(driver), "--overall-time-limit", f"{cpu_limit}s", "--plan-file", "sas_plan"]
+    if alias:
+        cmd += ["--alias", alias, *inputs]
+    else:
+        cmd += [*inputs, "--search", str(search)]
+    return _execute(cmd, tmpdir, stdin_path=None, time_limit_s=time_limit_s, config=config, optimal=optimal, env=_clean_env())
 
 
 def run_sas(
@@ -298,18 +301,9 @@ def run_sas(
         sas_path = tmpdir / "output.sas"
         sas_path.write_text(sas_text, encoding="utf-8")
         if alias:
-            driver = find_fast_downward()
-            cpu_limit = _backstop_cpu_s(time_limit_s)  # backstop, see run_downward
-            cmd = [sys.executable, str(driver), "--overall-time-limit", f"{cpu_limit}s", "--plan-file", "sas_plan"]
-            cmd += ["--alias", alias, "output.sas"]
-            return _execute(
-                cmd,
-                tmpdir,
-                stdin_path=None,
-                time_limit_s=time_limit_s,
-                config=config,
-                optimal=False,
-                env=_clean_env(),
+            return _run_driver(
+                find_fast_downward(), ["output.sas"], tmpdir, alias=alias, search=None,
+                time_limit_s=time_limit_s, config=config, optimal=False,
             )
         binary = find_search_binary()
         cmd = [str(binary), "--search", str(search), "--internal-plan-file", "sas_plan"]
