@@ -5,24 +5,13 @@ Only light imports here (typer, rich): `clear --help` must stay fast.
 
 from __future__ import annotations
 
-import contextlib
 import json
-import os
 import sys
-import tempfile
-from pathlib import Path
-from typing import Any, Iterator
+from typing import Any
 
 from rich.console import Console
 
-from clearcli.errors import OutputError
-
-
-def _default_mode() -> int:
-    """The mode a plain open() would give: mkstemp's 0600 would surprise users."""
-    umask = os.umask(0)
-    os.umask(umask)
-    return 0o666 & ~umask
+from clearcli.io.files import atomic_output, atomic_path, check_output_path  # noqa: F401  (re-exported)
 
 JSON_SCHEMA_VERSION = 1
 
@@ -41,55 +30,3 @@ def print_json(kind: str, payload: dict[str, Any], version: int = JSON_SCHEMA_VE
     sys.stdout.flush()
 
 
-def check_output_path(path: Path, force: bool, inputs: tuple[Path, ...] = ()) -> None:
-    """Refuse to clobber: an input, or an existing file without --force."""
-    path = Path(path)
-    for inp in inputs:
-        with contextlib.suppress(OSError):
-            if path.resolve() == Path(inp).resolve():
-                raise OutputError(f"{path}: refusing to overwrite the input file; choose another path")
-    if path.exists() and not force:
-        raise OutputError(f"{path}: exists; pass --force to overwrite it")
-    parent = path.parent if str(path.parent) else Path(".")
-    if not parent.is_dir():
-        raise OutputError(f"{path}: directory {parent} does not exist")
-
-
-@contextlib.contextmanager
-def atomic_output(path: Path, mode: str = "wb") -> Iterator[Any]:
-    """Write to a temporary file beside ``path`` and move it into place only when whole."""
-    path = Path(path)
-    parent = path.parent if str(path.parent) else Path(".")
-    try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=parent)
-    except OSError as exc:
-        raise OutputError(f"{path}: cannot write ({exc.strerror})") from None
-    try:
-        with os.fdopen(fd, mode) as handle:
-            yield handle
-        os.chmod(tmp, _default_mode())
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise
-
-
-@contextlib.contextmanager
-def atomic_path(path: Path) -> Iterator[Path]:
-    """Like `atomic_output`, for writers that want a path (open3d, matplotlib)."""
-    path = Path(path)
-    parent = path.parent if str(path.parent) else Path(".")
-    try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=parent)
-    except OSError as exc:
-        raise OutputError(f"{path}: cannot write ({exc.strerror})") from None
-    os.close(fd)
-    try:
-        yield Path(tmp)
-        os.chmod(tmp, _default_mode())
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise

@@ -1,0 +1,81 @@
+"""Output files written whole or not at all, and never over what the user had.
+
+Every writer of `clear` goes through these: a temporary file beside the target, moved into
+place only when complete (`os.replace` is atomic on one file system), removed on any
+error or interruption. `clearcli.commands.common` re-exports them for the subcommands.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import tempfile
+from pathlib import Path
+from typing import Any, Iterator
+
+from clearcli.errors import OutputError
+
+# Temporary files are named ".<target name>.<random>.part" (atomic_output) or
+# ".<target stem>.<random><suffix>" (atomic_path) beside their target.
+PART_SUFFIX = ".part"
+
+
+def _default_mode() -> int:
+    """The mode a plain open() would give: mkstemp's 0600 would surprise users."""
+    umask = os.umask(0)
+    os.umask(umask)
+    return 0o666 & ~umask
+
+
+def check_output_path(path: Path, force: bool, inputs: tuple[Path, ...] = ()) -> None:
+    """Refuse to clobber: an input, or an existing file without --force."""
+    path = Path(path)
+    for inp in inputs:
+        with contextlib.suppress(OSError):
+            if path.resolve() == Path(inp).resolve():
+                raise OutputError(f"{path}: refusing to overwrite the input file; choose another path")
+    if path.exists() and not force:
+        raise OutputError(f"{path}: exists; pass --force to overwrite it")
+    parent = path.parent if str(path.parent) else Path(".")
+    if not parent.is_dir():
+        raise OutputError(f"{path}: directory {parent} does not exist")
+
+
+@contextlib.contextmanager
+def atomic_output(path: Path, mode: str = "wb") -> Iterator[Any]:
+    """Write to a temporary file beside ``path`` and move it into place only when whole."""
+    path = Path(path)
+    parent = path.parent if str(path.parent) else Path(".")
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=parent)
+    except OSError as exc:
+        raise OutputError(f"{path}: cannot write ({exc.strerror})") from None
+    try:
+        with os.fdopen(fd, mode) as handle:
+            yield handle
+        os.chmod(tmp, _default_mode())
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
+
+
+@contextlib.contextmanager
+def atomic_path(path: Path) -> Iterator[Path]:
+    """Like `atomic_output`, for writers that want a path (open3d, matplotlib)."""
+    path = Path(path)
+    parent = path.parent if str(path.parent) else Path(".")
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=parent)
+    except OSError as exc:
+        raise OutputError(f"{path}: cannot write ({exc.strerror})") from None
+    os.close(fd)
+    try:
+        yield Path(tmp)
+        os.chmod(tmp, _default_mode())
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
