@@ -35,14 +35,22 @@ from clearcli.io.read import read_frame  # noqa: E402
 from clearcli.perception.segment import segment  # noqa: E402
 from clearcli.perception.settings import SegmentSettings  # noqa: E402
 
-CATEGORIES: list[tuple[str, list[str]]] = [
-    ("boxes", [f"learn/learn{i}.pcd" for i in range(0, 17)]),
-    ("stacked", [f"learn/learn{i}.pcd" for i in range(17, 25)]),
-    ("occluded", [f"learn/learn{i}.pcd" for i in range(25, 33)]),
-    ("cylindrical", [f"learn/learn{i}.pcd" for i in range(33, 45)]),
-    ("mixed (test)", [f"test/test{i}.pcd" for i in (44, 46, 47)]),
-    ("complex (test)", [f"test/test{i}.pcd" for i in (55, 57)]),
-]
+def _categories() -> list[tuple[str, list[str]]]:
+    """mOSD's categories from the groups file `clear evaluate dataset --groups mosd` uses."""
+    import fnmatch
+
+    from clearcli.batch.sources import natural_key
+    from clearcli.evaluate.dataset import load_groups
+
+    names = [f"learn/learn{i}.pcd" for i in range(45)] + [f"test/test{i}.pcd" for i in (44, 46, 47, 55, 57)]
+    out = []
+    for group, patterns in load_groups("mosd").items():
+        hits = [n for n in names if any(fnmatch.fnmatchcase(Path(n).name, p) for p in patterns)]
+        out.append((group, sorted(hits, key=lambda n: natural_key(Path(n)))))
+    return out
+
+
+CATEGORIES: list[tuple[str, list[str]]] = _categories()
 STAGES = ("filter", "table", "supervoxels", "lccp", "cuts", "merge", "objects", "total")
 
 

@@ -1,5 +1,14 @@
 """`clear evaluate ...`: scores against ground truth.
 
+`clear evaluate dataset INPUTS... [--pred DIR] [--groups FILE|mosd] [--json] [--csv F] [--png F]`:
+each labelled frame segmented and scored against its own labels, on every core or on
+Ray (clearcli/batch/run.py). With --json, one `clear.batch` line per frame whose
+document is `clear.evaluate.frame` (source, name, group, n_true, n_pred,
+true_positives, precision, recall, f1, mean_best_iou, over_segmented, under_segmented,
+time_s), then the summary line with "evaluation": {"all": {frames, mean_precision,
+mean_recall, mean_f1, mean_best_iou, over_segmented, under_segmented, median_time_s},
+"groups": {name: the same}}.
+
 `clear evaluate segmentation PRED TRUTH [--json]`; JSON envelope
 {"schema": "clear.evaluate.segmentation", "version": 1, ...} with the fields of
 `clearcli.evaluate.segmentation.SegmentationScore` (n_true, n_pred, true_positives,
@@ -10,9 +19,11 @@ true_ids, pred_ids) plus "pred" and "truth" (the paths).
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any, Optional
 
 import typer
+
+from clearcli.commands import batchopts as bo
 
 evaluate_app = typer.Typer(
     name="evaluate",
@@ -64,3 +75,103 @@ def segmentation_cmd(
         f"mean best IoU {result.mean_best_iou:.3f}\n"
         f"over-segmented true objects {result.over_segmented}, under-segmenting predictions {result.under_segmented}"
     )
+
+
+@evaluate_app.command("dataset")
+def dataset_cmd(
+    inputs: Annotated[
+        list[Path],
+        typer.Argument(help="Labelled frames (mOSD `label` field): files, and folders to search for them."),
+    ],
+    pred: Annotated[
+        Optional[Path],
+        typer.Option("--pred", help="Score the label files in this folder (as `--out-dir` names them) instead of segmenting."),
+    ] = None,
+    groups: Annotated[
+        Optional[str],
+        typer.Option("--groups", help="Per-group means: a TOML file of [groups] name = [patterns], or 'mosd' (shipped)."),
+    ] = None,
+    json_out: Annotated[bool, typer.Option("--json", help="JSON lines: one per frame, then the summary.")] = False,
+    csv_out: Annotated[Optional[Path], typer.Option("--csv", help="Write the per-frame table as CSV.")] = None,
+    png: Annotated[Optional[Path], typer.Option("--png", help="Draw the per-frame F1 as a bar chart.")] = None,
+    force: Annotated[bool, typer.Option("--force", help="Overwrite existing output files.")] = False,
+    settings: Annotated[Optional[Path], typer.Option("--settings", help="TOML settings file (see `clear settings`).")] = None,
+    topic: Annotated[Optional[str], typer.Option("--topic", help="Log topic with the point clouds.")] = None,
+    frame_index: Annotated[int, typer.Option("--frame", help="Frame index in a log.", min=0)] = 0,
+    every: bo.Every = None,
+    out_dir: bo.OutDir = None,
+    outputs_kinds: bo.outputs_option(("labels",)) = None,  # type: ignore[valid-type]
+    resume: bo.Resume = False,
+    jobs: bo.Jobs = None,
+    ray: bo.Ray = None,
+    fail_fast: bo.FailFast = False,
+) -> None:
+    """Segment each labelled frame and score it against its own labels (or score the
+    label files in --pred): a per-frame table (objects true/predicted, precision,
+    recall, F1 at IoU >= 0.5, mean best IoU, over/under-segmentation, time), the means,
+    and per-group means with --groups. Runs on every core, or on Ray, like every batch."""
+    from clearcli.batch.run import BatchRequest, default_jobs, parse_outputs, run_batch
+    from clearcli.commands.common import check_output_path, stdout
+    from clearcli.evaluate.dataset import load_groups, summarise, write_csv, write_png
+
+    for out in (csv_out, png):
+        if out is not None:
+            check_output_path(out, force, tuple(inputs))
+    group_map = load_groups(groups)
+    if pred is not None and not pred.is_dir():
+        from clearcli.errors import InputError
+
+        raise InputError(f"--pred {pred}: not a folder")
+
+    def docs_of(lines: Any) -> list[dict[str, Any]]:
+        return [ln["document"] for ln in lines if "document" in ln]
+
+    def extra(lines: Any) -> dict[str, Any]:
+        return {"evaluation": summarise(docs_of(lines), group_map)}
+
+    def render(rows: Any, summary: Any) -> None:
+        from rich.table import Table
+
+        table = Table("frame", "group", "true", "pred", "P", "R", "F1", "IoU", "over", "under", "ms")
+        for ln in rows:
+            d = ln.get("document")
+            if d is None:
+                table.add_row(str(ln["source"]), "", "", "", "", "", "", "", "", "", ln["error"]["message"])
+                continue
+            table.add_row(
+                Path(d["source"]).name, d.get("group") or "", str(d["n_true"]), str(d["n_pred"]),
+                f"{d['precision']:.3f}", f"{d['recall']:.3f}", f"{d['f1']:.3f}", f"{d['mean_best_iou']:.3f}",
+                str(d["over_segmented"]), str(d["under_segmented"]), f"{1000 * d['time_s']:.0f}",
+            )
+        stdout.print(table)
+        ev = summary["evaluation"]
+        means = Table("frames", "n", "mean F1", "mean IoU", "mean P", "mean R", "over", "under", "median ms")
+        for label, m in [("all", ev["all"])] + list(ev.get("groups", {}).items()):
+            if m["frames"]:
+                means.add_row(
+                    label, str(m["frames"]), f"{m['mean_f1']:.3f}", f"{m['mean_best_iou']:.3f}",
+                    f"{m['mean_precision']:.3f}", f"{m['mean_recall']:.3f}", str(m["over_segmented"]),
+                    str(m["under_segmented"]), f"{1000 * m['median_time_s']:.0f}",
+                )
+        stdout.print(means)
+        stdout.print(
+            f"{summary['frames']} frames, {summary['failed']} failed; {summary['backend']}, {summary['wall_s']:.1f} s",
+            markup=False, highlight=False,
+        )
+
+    collected: list[dict[str, Any]] = []
+    req = BatchRequest(
+        "evaluate", inputs,
+        {"settings": None if settings is None else str(settings), "pred": None if pred is None else str(pred),
+         "groups": group_map},
+        frame=frame_index, every=every, topic=topic, out_dir=out_dir,
+        outputs=parse_outputs("evaluate", outputs_kinds), force=force, resume=resume,
+        jobs=jobs or default_jobs(), ray=ray, fail_fast=fail_fast, json_out=json_out,
+    )
+    code = run_batch(req, on_line=collected.append, extra_summary=extra, render=render)
+    docs = docs_of(collected)
+    if csv_out is not None:
+        write_csv(csv_out, docs)
+    if png is not None:
+        write_png(png, docs)
+    raise typer.Exit(code)

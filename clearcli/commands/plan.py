@@ -33,6 +33,7 @@ plan); errors (3, 4, 6, 8) are one line on stderr.
                               against the opening; what holds it), "actions": {"grasp"|
                               "push dirN": why it has no arm motion}, "blockers": [..],
                               "width_m": float|null}] for every object not removed
+    no_plan_reason            null, or (status no_plan) the one-line reason also printed on stderr
     unreachable, stuck, ungraspable   the names in ``left``, by reason
     ik_unfeasible             facts learnt that hold in the recorded scene (the --problem
                               file's additions), e.g. ["ik_unfeasible_grasp", "o2"],
@@ -56,6 +57,7 @@ from typing import Annotated, Any, Optional
 
 import typer
 
+from clearcli.commands import batchopts as bo
 from clearcli.commands.common import stderr, stdout
 
 PLAN_SCHEMA_VERSION = 2
@@ -114,6 +116,7 @@ def plan_payload(plan: Any, source: str, frame_id: str, pose_source: str, unit_c
         "search": plan.search,
         "goal": list(plan.goal),
         "left": left,
+        "no_plan_reason": None,
         "unreachable": list(plan.unreachable),
         "stuck": list(plan.stuck),
         "ungraspable": list(plan.ungraspable),
@@ -176,7 +179,7 @@ def print_plan(payload: dict[str, Any]) -> None:
 
 
 def plan_cmd(
-    frame: Annotated[Path, typer.Argument(help="A .pcd or .mcap file.")],
+    inputs: bo.Inputs,
     output: Annotated[
         Optional[Path],
         typer.Option("-o", "--output", help="Write the plan in Fast Downward's plan-file format (lifted domain terms)."),
@@ -225,6 +228,13 @@ def plan_cmd(
     ] = None,
     topic: Annotated[Optional[str], typer.Option("--topic", help="MCAP topic with the point clouds.")] = None,
     frame_index: Annotated[int, typer.Option("--frame", help="Frame index in an MCAP log.", min=0)] = 0,
+    every: bo.Every = None,
+    out_dir: bo.OutDir = None,
+    outputs_kinds: bo.outputs_option(("problem", "domain", "plan", "png")) = None,  # type: ignore[valid-type]
+    resume: bo.Resume = False,
+    jobs: bo.Jobs = None,
+    ray: bo.Ray = None,
+    fail_fast: bo.FailFast = False,
 ) -> None:
     """Plan how to clear the table in FRAME: numbered actions, every one IK-checked in the
     scene the earlier ones leave (backtracking as in the thesis's Algorithm 1, extended
@@ -234,14 +244,23 @@ def plan_cmd(
     reasons). Exit 5: nothing can be done. -o, --problem and --domain are written for all
     three (problem and domain first, the plan file last)."""
     from clearcli.commands.common import check_output_path
-    from clearcli.errors import EXIT_NO_PLAN, EXIT_PARTIAL_PLAN, InputError, NoPlanError
-    from clearcli.io.read import read_frame
-    from clearcli.perception.segment import segment
-    from clearcli.planning.backtrack import make_plan
-    from clearcli.predicates.state_builder import compute_state
-    from clearcli.robot.placement import placement_from_settings
+    from clearcli.errors import EXIT_NO_PLAN, InputError
     from clearcli.settings import load_settings, override
 
+    from clearcli.batch.run import BatchRequest, default_jobs, is_batch, parse_outputs, run_batch
+
+    if is_batch(inputs, every, out_dir, ray):
+        bo.single_only(**{"-o": output, "--problem": problem, "--domain": domain, "--png": png})
+        req = BatchRequest(
+            "plan", inputs,
+            {"settings": None if settings is None else str(settings), "overrides": {"plan": {"time_limit_s": time_limit}},
+             "camera_pose": camera_pose, "first_only": first_only},
+            frame=frame_index, every=every, topic=topic, out_dir=out_dir,
+            outputs=parse_outputs("plan", outputs_kinds), force=force, resume=resume,
+            jobs=jobs or default_jobs(), ray=ray, fail_fast=fail_fast, json_out=json_out,
+        )
+        raise typer.Exit(run_batch(req))
+    frame = inputs[0]
     cfg = load_settings(settings)
     cfg = override(cfg, "plan", time_limit_s=time_limit)
     outputs = [p for p in (problem, domain, output, png) if p is not None]
@@ -250,6 +269,44 @@ def plan_cmd(
     resolved = [Path(p).resolve() for p in outputs]
     if len(set(resolved)) != len(resolved):
         raise InputError("-o, --problem, --domain and --png must name different files")
+    payload, code = plan_frame(
+        frame, frame_index, cfg, topic=topic, camera_pose=camera_pose, first_only=first_only,
+        problem=problem, domain=domain, output=output, png=png,
+    )
+    if json_out:
+        from clearcli.commands.common import print_json
+
+        print_json("plan", payload, version=PLAN_SCHEMA_VERSION)
+    else:
+        print_plan(payload)
+    if code == EXIT_NO_PLAN:
+        stderr.print(f"clear: {payload['no_plan_reason']}", markup=False, highlight=False)
+    if code != 0:
+        raise typer.Exit(code)
+
+
+def plan_frame(
+    frame: Path,
+    frame_index: int,
+    cfg: Any,
+    *,
+    topic: str | None = None,
+    camera_pose: str | None = None,
+    first_only: bool = False,
+    problem: Path | None = None,
+    domain: Path | None = None,
+    output: Path | None = None,
+    png: Path | None = None,
+) -> tuple[dict[str, Any], int]:
+    """One frame planned: its clear.plan payload and exit code (0 complete, 10 partial,
+    5 nothing can be done), the output files written. Errors raise ClearError."""
+    from clearcli.errors import EXIT_NO_PLAN, EXIT_OK, EXIT_PARTIAL_PLAN, NoPlanError
+    from clearcli.io.read import read_frame
+    from clearcli.perception.segment import segment
+    from clearcli.planning.backtrack import make_plan
+    from clearcli.predicates.state_builder import compute_state
+    from clearcli.robot.placement import placement_from_settings
+
     frm = read_frame(frame, topic, frame_index)
     seg = segment(frm, cfg.segment)
     state = compute_state(frm, seg, cfg)
@@ -261,26 +318,18 @@ def plan_cmd(
         if getattr(err, "plan", None) is None:
             raise
         no_plan, plan = err, err.plan  # type: ignore[attr-defined]
-    unit_cost = not state.push_costs
-    payload = plan_payload(plan, str(frame), getattr(frm, "frame_id", ""), pose_source, unit_cost)
+    payload = plan_payload(plan, str(frame), getattr(frm, "frame_id", ""), pose_source, not state.push_costs)
     write_plan_files(state, plan, problem=problem, domain=domain, output=output)
     if png is not None:
-        from clearcli.commands.common import atomic_path
+        from clearcli.io.files import atomic_path
         from clearcli.render.plan_png import render_plan
 
         with atomic_path(png) as tmp:
             render_plan(tmp, frm, state, plan)
-    if json_out:
-        from clearcli.commands.common import print_json
-
-        print_json("plan", payload, version=PLAN_SCHEMA_VERSION)
-    else:
-        print_plan(payload)
     if no_plan is not None:
-        stderr.print(f"clear: {no_plan}", markup=False, highlight=False)
-        raise typer.Exit(EXIT_NO_PLAN)
-    if plan.status == "partial":
-        raise typer.Exit(EXIT_PARTIAL_PLAN)
+        payload["no_plan_reason"] = str(no_plan)
+        return payload, EXIT_NO_PLAN
+    return payload, EXIT_PARTIAL_PLAN if plan.status == "partial" else EXIT_OK
 
 
 def write_plan_files(state: Any, plan: Any, *, problem: Path | None, domain: Path | None, output: Path | None) -> None:

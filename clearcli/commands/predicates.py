@@ -28,6 +28,7 @@ from typing import Annotated, Any, Optional
 
 import typer
 
+from clearcli.commands import batchopts as bo
 from clearcli.commands.common import stderr, stdout
 
 
@@ -111,7 +112,7 @@ def print_state(state: Any) -> None:
 
 
 def predicates_cmd(
-    frame: Annotated[Path, typer.Argument(help="A .pcd or .mcap file.")],
+    inputs: bo.Inputs,
     output: Annotated[
         Optional[Path], typer.Option("-o", "--output", help="Write the PDDL problem to this file.")
     ] = None,
@@ -128,6 +129,13 @@ def predicates_cmd(
             help="Use the frame's 'label' field (mOSD ground truth) instead of running segmentation.",
         ),
     ] = False,
+    every: bo.Every = None,
+    out_dir: bo.OutDir = None,
+    outputs_kinds: bo.outputs_option(("problem", "png")) = None,  # type: ignore[valid-type]
+    resume: bo.Resume = False,
+    jobs: bo.Jobs = None,
+    ray: bo.Ray = None,
+    fail_fast: bo.FailFast = False,
 ) -> None:
     """Objects and symbolic facts of FRAME (on, block_grasp, block_dir, ungraspable,
     push_off_table): runs segmentation, models each object, computes the predicates; -o
@@ -139,6 +147,19 @@ def predicates_cmd(
     from clearcli.predicates.state_builder import compute_state
     from clearcli.settings import load_settings
 
+    from clearcli.batch.run import BatchRequest, default_jobs, is_batch, parse_outputs, run_batch
+
+    if is_batch(inputs, every, out_dir, ray):
+        bo.single_only(**{"-o": output, "--png": png})
+        req = BatchRequest(
+            "predicates", inputs,
+            {"settings": None if settings is None else str(settings), "ground_truth": ground_truth},
+            frame=frame_index, every=every, topic=topic, out_dir=out_dir,
+            outputs=parse_outputs("predicates", outputs_kinds), force=force, resume=resume,
+            jobs=jobs or default_jobs(), ray=ray, fail_fast=fail_fast, json_out=json_out,
+        )
+        raise typer.Exit(run_batch(req))
+    frame = inputs[0]
     cfg = load_settings(settings)
     for out in (output, png):
         if out is not None:
@@ -147,11 +168,7 @@ def predicates_cmd(
         raise InputError(f"{output}: -o and --png name the same file")
     frm = read_frame(frame, topic, frame_index)
     if ground_truth:
-        if "label" not in frm.fields:
-            raise InputError(f"{frame}: --ground-truth needs a 'label' field, and this frame has none")
-        from clearcli.predicates.synthetic import segmentation_from_labels
-
-        seg = segmentation_from_labels(frm)
+        seg = ground_truth_segmentation(frm, frame)
     else:
         from clearcli.perception.segment import segment
 
@@ -172,6 +189,16 @@ def predicates_cmd(
         print_json("predicates", predicates_payload(state))
     else:
         print_state(state)
+
+
+def ground_truth_segmentation(frm: Any, path: Path) -> Any:
+    """The segmentation the frame's own 'label' field gives (mOSD ground truth)."""
+    from clearcli.errors import InputError
+    from clearcli.predicates.synthetic import segmentation_from_labels
+
+    if "label" not in frm.fields:
+        raise InputError(f"{path}: --ground-truth needs a 'label' field, and this frame has none")
+    return segmentation_from_labels(frm)
 
 
 def domain_cmd(

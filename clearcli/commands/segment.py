@@ -28,6 +28,7 @@ from typing import Annotated, Any, Optional
 
 import typer
 
+from clearcli.commands import batchopts as bo
 from clearcli.commands.basic import SettingsOpt
 
 
@@ -68,7 +69,7 @@ def segmentation_payload(seg: Any) -> dict[str, Any]:
 
 
 def segment_cmd(
-    frame_path: Annotated[Path, typer.Argument(metavar="FRAME", help="A .pcd or .mcap file.")],
+    inputs: bo.Inputs,
     json_out: Annotated[bool, typer.Option("--json", help="Machine-readable output (schema in the docs).")] = False,
     labels_out: Annotated[
         Optional[Path], typer.Option("-o", "--output", help="Write a PCD of the frame with a `label` field.")
@@ -96,6 +97,13 @@ def segment_cmd(
         Optional[bool],
         typer.Option("--occlusion-merge/--no-occlusion-merge", help="Join pieces of an object cut by a nearer one."),
     ] = None,
+    every: bo.Every = None,
+    out_dir: bo.OutDir = None,
+    outputs_kinds: bo.outputs_option(("labels", "png")) = None,  # type: ignore[valid-type]
+    resume: bo.Resume = False,
+    jobs: bo.Jobs = None,
+    ray: bo.Ray = None,
+    fail_fast: bo.FailFast = False,
 ) -> None:
     """Find the table and segment the objects on it (thesis 4.1): a summary table, or
     --json; -o writes the labels (0 none, 1 table, 10(k+1) object k) as a PCD."""
@@ -104,12 +112,9 @@ def segment_cmd(
     from clearcli.perception.segment import segment
     from clearcli.settings import load_settings, override
 
-    for out in (labels_out, png):
-        if out is not None:
-            check_output_path(out, force, (frame_path,))
-    settings = override(
-        load_settings(settings_file),
-        "segment",
+    from clearcli.batch.run import BatchRequest, default_jobs, is_batch, parse_outputs, run_batch
+
+    flags = dict(
         voxel_m=voxel_m,
         seed_m=seed_m,
         concavity_tolerance_deg=concavity_deg,
@@ -118,6 +123,21 @@ def segment_cmd(
         outlier_method=outlier_method,
         occlusion_merge=occlusion_merge,
     )
+    if is_batch(inputs, every, out_dir, ray):
+        bo.single_only(**{"-o": labels_out, "--png": png})
+        req = BatchRequest(
+            "segment", inputs,
+            {"settings": None if settings_file is None else str(settings_file), "overrides": {"segment": flags}},
+            frame=frame_index, every=every, topic=topic, out_dir=out_dir,
+            outputs=parse_outputs("segment", outputs_kinds), force=force, resume=resume,
+            jobs=jobs or default_jobs(), ray=ray, fail_fast=fail_fast, json_out=json_out,
+        )
+        raise typer.Exit(run_batch(req))
+    frame_path = inputs[0]
+    for out in (labels_out, png):
+        if out is not None:
+            check_output_path(out, force, (frame_path,))
+    settings = override(load_settings(settings_file), "segment", **flags)
     frame = read_frame(frame_path, topic, frame_index)
     seg = segment(frame, settings.segment)
 

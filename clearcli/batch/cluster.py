@@ -1,0 +1,78 @@
+"""The same batch on a Ray cluster (`pip install 'clear-table[ray]'`).
+
+Ray is the scheduler beyond one machine; `clear` only hands it one task per frame and
+reads the lines back. Each task runs `work.run_job`, as a local worker does; Ray keeps
+its worker processes, so each imports `clear`'s libraries once. A task whose worker dies
+is not retried (the frame may be what kills it): its frame gets an internal-error line.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Callable, Iterator, Sequence
+
+from clearcli.batch.work import Job, frame_line, run_job
+from clearcli.errors import InputError
+
+LOCAL = "local"
+
+
+def connect(address: str) -> float:
+    """ray.init on ``address`` ("local": a cluster of this machine alone); the seconds it
+    took. An address that cannot be reached is a one-line error before any work."""
+    import time
+
+    try:
+        import ray
+    except ImportError:
+        raise InputError(
+            "--ray needs Ray: install the extra with `pip install 'clear-table[ray]'` "
+            "(or `pip install ray`) into clear's environment"
+        ) from None
+    t0 = time.perf_counter()
+    if ray.is_initialized():
+        return 0.0
+    kwargs: dict[str, Any] = {"include_dashboard": False, "log_to_driver": False, "logging_level": "ERROR"}
+    try:
+        if address == LOCAL:
+            ray.init(**kwargs)
+        else:
+            ray.init(address=address, **kwargs)
+    except Exception as exc:  # ConnectionError, RuntimeError, ValueError by Ray version
+        raise InputError(f"--ray {address}: cannot connect to a Ray cluster there ({type(exc).__name__}: {exc})") from None
+    return time.perf_counter() - t0
+
+
+def _remote() -> Any:
+    import ray
+
+    return ray.remote(max_retries=0)(run_job)
+
+
+def run(jobs: Sequence[Job], stop: Callable[[], bool] = lambda: False) -> Iterator[tuple[int, dict[str, Any]]]:
+    """(index, line) per job in completion order; ``stop()`` true: no new task."""
+    import ray
+
+    task = _remote()
+    # Enough tasks in flight to keep every CPU busy, no more: stopping (fail-fast,
+    # Ctrl-C) then leaves little running.
+    width = max(1, int(ray.cluster_resources().get("CPU", 1)) * 2)
+    pending = list(range(len(jobs)))[::-1]
+    running: dict[Any, int] = {}
+    try:
+        while pending or running:
+            while pending and len(running) < width and not stop():
+                i = pending.pop()
+                running[task.remote(jobs[i])] = i
+            if not running:
+                break
+            done, _ = ray.wait(list(running), num_returns=1)
+            for ref in done:
+                i = running.pop(ref)
+                try:
+                    line = ray.get(ref)
+                except ray.exceptions.RayError as exc:
+                    line = frame_line(jobs[i], None, (f"internal error: the Ray task failed ({type(exc).__name__})", 1))
+                yield i, line
+    finally:
+        for ref in running:
+            ray.cancel(ref, force=True)

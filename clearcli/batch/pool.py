@@ -1,0 +1,137 @@
+"""Frames on every core: worker processes that each import once and run many frames.
+
+The standard library's pools cannot say which frame a dead worker was running (a
+`ProcessPoolExecutor` fails every pending future when one worker dies), so this is a
+small pool over `multiprocessing` pipes: one job at a time per worker, so a worker that
+dies (killed, out of memory) fails exactly its frame with an internal-error line, and a
+new worker takes its place. Workers ignore SIGINT (Ctrl-C reaches the whole process
+group); the parent stops them with SIGTERM, which they turn into an exit that runs the
+writers' clean-up, so no half-written file is left.
+"""
+
+from __future__ import annotations
+
+import multiprocessing as mp
+import os
+import signal
+import sys
+from collections import deque
+from dataclasses import dataclass
+from multiprocessing.connection import Connection, wait
+from typing import Any, Callable, Iterator, Sequence
+
+from clearcli.batch.work import Job, frame_line, run_job
+
+
+def _worker(conn: Connection) -> None:
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
+    while True:
+        try:
+            msg = conn.recv()
+        except (EOFError, OSError):
+            return
+        if msg is None:
+            return
+        i, job = msg
+        line = run_job(job)
+        line["_rss_mb"] = _rss_mb()
+        line["_pid"] = os.getpid()
+        conn.send((i, line))
+
+
+def _rss_mb() -> float:
+    try:
+        with open("/proc/self/status", encoding="ascii") as fp:
+            for row in fp:
+                if row.startswith("VmRSS:"):
+                    return int(row.split()[1]) / 1024.0
+    except OSError:
+        pass
+    return 0.0
+
+
+@dataclass
+class _Slot:
+    proc: Any
+    conn: Connection
+    job: int | None = None
+
+
+class WorkerPool:
+    """``n`` worker processes (spawned: a clean interpreter each, no state inherited)."""
+
+    def __init__(self, n: int) -> None:
+        self.n = max(1, int(n))
+        self._ctx = mp.get_context("spawn")
+        self._slots: list[_Slot] = []
+
+    def _start(self) -> _Slot:
+        parent, child = self._ctx.Pipe()
+        proc = self._ctx.Process(target=_worker, args=(child,), daemon=True)
+        proc.start()
+        child.close()
+        return _Slot(proc, parent)
+
+    def run(self, jobs: Sequence[Job], stop: Callable[[], bool] = lambda: False) -> Iterator[tuple[int, dict[str, Any]]]:
+        """(index, line) for every job, in completion order. ``stop()`` true: no new job
+        is started (the running ones finish)."""
+        pending = deque(range(len(jobs)))
+        self._slots = [self._start() for _ in range(min(self.n, len(jobs)))]
+        try:
+            while pending or any(s.job is not None for s in self._slots):
+                for slot in self._slots:
+                    if slot.job is None and pending and not stop():
+                        slot.job = pending.popleft()
+                        slot.conn.send((slot.job, jobs[slot.job]))
+                busy = [s for s in self._slots if s.job is not None]
+                if not busy:
+                    break  # stopped with jobs left
+                ready = wait([s.conn for s in busy] + [s.proc.sentinel for s in busy])
+                for k, slot in enumerate(list(self._slots)):
+                    if slot.job is None:
+                        continue
+                    if slot.conn in ready:
+                        try:
+                            i, line = slot.conn.recv()
+                        except (EOFError, OSError):
+                            pass  # died while answering: handled below
+                        else:
+                            slot.job = None
+                            yield i, line
+                            continue
+                    if slot.proc.sentinel in ready or not slot.proc.is_alive():
+                        slot.proc.join(1.0)
+                        i = slot.job
+                        code = slot.proc.exitcode
+                        how = f"killed by signal {-code}" if code is not None and code < 0 else f"exit code {code}"
+                        line = frame_line(
+                            jobs[i], None, (f"internal error: the worker process died ({how}) on this frame", 1)
+                        )
+                        slot.conn.close()
+                        self._slots[k] = self._start()
+                        yield i, line
+        finally:
+            self.close()
+
+    def close(self) -> None:
+        """Stop every worker: SIGTERM (writers clean up), then SIGKILL after 5 s."""
+        for slot in self._slots:
+            if slot.proc.is_alive():
+                if slot.job is None:
+                    try:
+                        slot.conn.send(None)
+                    except (OSError, BrokenPipeError):
+                        pass
+                else:
+                    slot.proc.terminate()
+        for slot in self._slots:
+            slot.proc.join(5.0)
+            if slot.proc.is_alive():
+                slot.proc.kill()
+                slot.proc.join(1.0)
+            slot.conn.close()
+        self._slots = []
+
+    def pids(self) -> list[int]:
+        return [s.proc.pid for s in self._slots if s.proc.pid is not None]

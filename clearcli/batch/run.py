@@ -1,0 +1,283 @@
+"""A batch: many frames in one call, on every core (`--jobs`) or a Ray cluster (`--ray`).
+
+Output: with ``--json``, one line per frame in input order (``{"type": "frame", "source",
+"frame", "name", "exit_code", "document" | "error"}``: the document a single call prints,
+or its error with the message and exit code a single call gives), then one summary line
+(``{"type": "summary", ...}``); schema ``clear.batch`` version 1 on every line. Without it,
+a progress bar on stderr and a summary table on stdout. A frame that fails is reported
+and the batch goes on (``--fail-fast`` stops starting new ones). Partial plans (10) and
+"nothing can be done" (5) are results, not failures. Exit code: 0 when no frame failed,
+11 when some did (each failed frame's own code is in its line), 130 on Ctrl-C.
+
+``--out-dir DIR`` writes each frame's outputs as ``<name>.<kind>`` (`work.OUTPUT_FILES`),
+each whole or not at all, then ``<name>.json`` with the frame's line, last: the mark that
+the frame is done. ``--resume`` skips frames with that mark; every other file of a frame
+without one, and every temporary a killed run left, is removed before the frame is done
+again, so a batch killed at any moment (SIGKILL during a write included) picks up
+without redoing or losing a frame.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Mapping, Sequence
+
+from clearcli.batch.sources import BadInput, FrameRef, check_unique_names, expand
+from clearcli.batch.work import MARK, OUTPUT_KINDS, Job, run_job
+from clearcli.errors import EXIT_BATCH_FAILED, EXIT_NO_PLAN, EXIT_OK, EXIT_PARTIAL_PLAN, InputError
+
+BATCH_SCHEMA_VERSION = 1
+# Exit codes that are results, not failures.
+RESULT_CODES = (EXIT_OK, EXIT_NO_PLAN, EXIT_PARTIAL_PLAN)
+
+
+@dataclass
+class BatchRequest:
+    command: str
+    inputs: Sequence[Path]
+    options: Mapping[str, Any] = field(default_factory=dict)  # for the jobs (plain values)
+    frame: int | None = None
+    every: int | None = None
+    topic: str | None = None
+    out_dir: Path | None = None
+    outputs: tuple[str, ...] = ()
+    force: bool = False
+    resume: bool = False
+    jobs: int = 1
+    ray: str | None = None
+    fail_fast: bool = False
+    json_out: bool = False
+
+
+def is_batch(inputs: Sequence[Path], every: int | None, out_dir: Path | None, ray: str | None) -> bool:
+    """Several frames, a folder, --every, --out-dir or --ray make a batch."""
+    return len(inputs) != 1 or Path(inputs[0]).is_dir() or every is not None or out_dir is not None or ray is not None
+
+
+def parse_outputs(command: str, text: str | None) -> tuple[str, ...]:
+    allowed = OUTPUT_KINDS[command]
+    if not text:
+        return ()
+    kinds = tuple(k.strip() for k in text.split(",") if k.strip())
+    bad = [k for k in kinds if k not in allowed]
+    if bad:
+        raise InputError(
+            f"--outputs: {', '.join(bad)} not made by `{command}`; choose from {', '.join(allowed) or 'none'}"
+        )
+    return kinds
+
+
+def default_jobs() -> int:
+    import os
+
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # not Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def _clean_stale(out_dir: Path, name: str, keep_mark: bool) -> None:
+    """A frame's leftovers: temporaries of killed writes (hidden ``.<name>.*``) and, for
+    a frame without its mark, outputs of an unfinished run."""
+    for p in out_dir.glob(f".{name}.*"):
+        p.unlink(missing_ok=True)
+    if not keep_mark:
+        for p in out_dir.glob(f"{name}.*"):
+            p.unlink(missing_ok=True)
+
+
+def _line_for_bad(item: BadInput) -> dict[str, Any]:
+    return {
+        "type": "frame", "source": item.source, "frame": item.index, "name": item.name,
+        "exit_code": item.exit_code, "error": {"message": item.message, "exit_code": item.exit_code},
+    }
+
+
+def _public(line: Mapping[str, Any]) -> dict[str, Any]:
+    return {"schema": "clear.batch", "version": BATCH_SCHEMA_VERSION, **{k: v for k, v in line.items() if not k.startswith("_")}}
+
+
+def _short(line: Mapping[str, Any]) -> str:
+    """One cell for people: the frame's result or its error."""
+    if "error" in line:
+        return line["error"]["message"]
+    doc = line.get("document", {})
+    schema = doc.get("schema", "")
+    if schema == "clear.plan":
+        return f"{doc['status']}: {len(doc['actions'])} actions, {len(doc['goal'])} removed, {len(doc['left'])} left"
+    if schema == "clear.segmentation":
+        return f"{len(doc['objects'])} objects"
+    if schema == "clear.predicates":
+        return f"{len(doc['objects'])} objects, {len(doc['facts'])} facts"
+    if schema == "clear.info":
+        fr = doc.get("frame") or {}
+        return f"{fr.get('n_points', '?')} points, {fr.get('n_finite', '?')} finite"
+    if schema == "clear.evaluate.frame":
+        return f"F1 {doc['f1']:.3f}, {doc['n_true']} true / {doc['n_pred']} found"
+    return ""
+
+
+def run_batch(
+    req: BatchRequest,
+    on_line: Callable[[dict[str, Any]], None] | None = None,
+    extra_summary: Callable[[Sequence[dict[str, Any]]], dict[str, Any]] | None = None,
+    render: Callable[[Sequence[dict[str, Any]], Mapping[str, Any]], None] | None = None,
+) -> int:
+    """Run the batch; print lines (or the progress bar and table); the exit code.
+    ``extra_summary`` adds keys to the summary from every frame's line; ``render``
+    replaces the summary table for people."""
+    from clearcli.commands.common import stderr, stdout
+
+    t0 = time.perf_counter()
+    items = expand(req.inputs, frame=req.frame, every=req.every, topic=req.topic)
+    if req.out_dir is not None:
+        check_unique_names(items)
+        if req.out_dir.exists() and not req.out_dir.is_dir():
+            raise InputError(f"--out-dir {req.out_dir}: exists and is not a folder")
+        req.out_dir.mkdir(parents=True, exist_ok=True)
+    elif req.outputs or req.resume:
+        raise InputError("--outputs and --resume need --out-dir DIR")
+
+    lines: list[dict[str, Any] | None] = [None] * len(items)
+    jobs: list[Job] = []
+    job_at: list[int] = []
+    skipped = 0
+    for k, it in enumerate(items):
+        if isinstance(it, BadInput):
+            lines[k] = _line_for_bad(it)
+            continue
+        assert isinstance(it, FrameRef)
+        if req.out_dir is not None:
+            mark = req.out_dir / MARK.format(name=it.name)
+            done = req.resume and mark.is_file()
+            _clean_stale(req.out_dir, it.name, keep_mark=done)
+            if done:
+                try:
+                    lines[k] = {**json.loads(mark.read_text(encoding="utf-8")), "_resumed": True}
+                    skipped += 1
+                    continue
+                except (OSError, ValueError):
+                    mark.unlink(missing_ok=True)  # unreadable: do the frame again
+        job_at.append(k)
+        jobs.append(
+            Job(req.command, it.source, it.index, it.name, dict(req.options, topic=req.topic),
+                None if req.out_dir is None else str(req.out_dir), req.outputs, req.force)
+        )
+
+    emitted = 0
+    failed = 0
+    stopped = False
+    counts: dict[int, int] = {}
+    rows: list[dict[str, Any]] = []
+    ray_init_s = None
+
+    def emit_ready() -> None:
+        nonlocal emitted, failed, stopped
+        while emitted < len(lines) and lines[emitted] is not None:
+            line = lines[emitted]
+            assert line is not None
+            emitted += 1
+            code = int(line["exit_code"])
+            counts[code] = counts.get(code, 0) + 1
+            if code not in RESULT_CODES:
+                failed += 1
+                if req.fail_fast:
+                    stopped = True
+            if on_line is not None:
+                on_line(line)
+            if req.json_out:
+                sys.stdout.write(json.dumps(_public(line), separators=(",", ":"), allow_nan=False) + "\n")
+                sys.stdout.flush()
+            else:
+                rows.append(line)
+
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+
+    backend = "in-process"
+    interrupted = False
+    progress = Progress(
+        TextColumn(f"{req.command}"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn(),
+        console=stderr, transient=True, disable=not stderr.is_terminal,
+    )
+    try:
+        with progress:
+            task = progress.add_task("frames", total=len(jobs))
+            emit_ready()
+            if jobs:
+                if req.ray is not None:
+                    from clearcli.batch import cluster
+
+                    ray_init_s = cluster.connect(req.ray)
+                    backend = f"ray ({req.ray})"
+                    results = cluster.run(jobs, stop=lambda: stopped)
+                elif req.jobs > 1 and len(jobs) > 1:
+                    from clearcli.batch.pool import WorkerPool
+
+                    backend = f"{min(req.jobs, len(jobs))} worker processes"
+                    results = WorkerPool(req.jobs).run(jobs, stop=lambda: stopped)
+                else:
+                    results = ((i, run_job(j)) for i, j in enumerate(jobs) if not stopped)
+                try:
+                    for i, line in results:
+                        lines[job_at[i]] = line
+                        progress.advance(task)
+                        emit_ready()
+                finally:
+                    close = getattr(results, "close", None)
+                    if close is not None:
+                        close()
+    except KeyboardInterrupt:
+        interrupted = True
+        if req.out_dir is not None:  # temporaries of writes cut short by the stop
+            for it in items:
+                if isinstance(it, FrameRef):
+                    for p in req.out_dir.glob(f".{it.name}.*"):
+                        p.unlink(missing_ok=True)
+    not_done = sum(1 for k in job_at if lines[k] is None)
+    summary = {
+        "type": "summary",
+        "frames": len(items),
+        "done": len(items) - not_done - skipped,
+        "resumed": skipped,
+        "not_done": not_done,
+        "failed": failed,
+        "exit_codes": {str(k): v for k, v in sorted(counts.items())},
+        "interrupted": interrupted,
+        "stopped_early": bool(stopped and not_done),
+        "backend": backend,
+        "ray_init_s": None if ray_init_s is None else round(ray_init_s, 3),
+        "wall_s": round(time.perf_counter() - t0, 3),
+    }
+    if extra_summary is not None:
+        summary.update(extra_summary([ln for ln in lines if ln is not None]))
+    if req.json_out:
+        sys.stdout.write(json.dumps(_public(summary), separators=(",", ":")) + "\n")
+        sys.stdout.flush()
+    elif render is not None:
+        render(rows, summary)
+    else:
+        _print_table(rows, summary, stdout)
+    if interrupted:
+        stderr.print("clear: interrupted; the summary covers the frames that finished", markup=False)
+        return 130
+    return EXIT_OK if failed == 0 else EXIT_BATCH_FAILED
+
+
+def _print_table(rows: Sequence[Mapping[str, Any]], summary: Mapping[str, Any], out: Any) -> None:
+    from rich.table import Table
+
+    table = Table("source", "frame", "exit", "result")
+    for line in rows:
+        table.add_row(str(line["source"]), str(line["frame"]), str(line["exit_code"]), _short(line))
+    out.print(table)
+    codes = ", ".join(f"exit {k}: {v}" for k, v in summary["exit_codes"].items())
+    out.print(
+        f"{summary['frames']} frames: {summary['done']} done, {summary['resumed']} resumed, "
+        f"{summary['failed']} failed, {summary['not_done']} not done ({codes}); {summary['backend']}, "
+        f"{summary['wall_s']:.1f} s",
+        markup=False, highlight=False,
+    )

@@ -1,0 +1,160 @@
+"""From the inputs a user names (files and folders) to the frames a batch works on.
+
+A folder is searched (recursively, sorted by name, numbers in names by value) for `.pcd`, `.mcap` and `.bag` files; a
+folder holding `metadata.yaml` is one rosbag2 bag. A log contributes frame 0, or
+``--frame N``, or every N-th frame with ``--every N``. Each frame gets the name its
+outputs carry in ``--out-dir``: the input's stem, plus ``_f<index>`` for a log.
+
+What cannot be expanded (a missing file, a folder with no frames, a log that cannot be
+read) becomes a `BadInput`: the batch reports it in its own line and goes on.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Sequence, Union
+
+FRAME_SUFFIXES = (".pcd", ".mcap", ".bag")
+
+
+@dataclass(frozen=True)
+class FrameRef:
+    """One frame of one input."""
+
+    source: str  # the file (or rosbag2 folder)
+    index: int  # frame index within it (0 for a PCD)
+    is_log: bool  # a log (MCAP, bag): names carry the frame index
+    name: str  # base name of its outputs in --out-dir
+
+
+@dataclass(frozen=True)
+class BadInput:
+    """An input that yields no frame, with the error a single call would give."""
+
+    source: str
+    message: str
+    exit_code: int
+    index: int = 0
+    name: str = ""
+
+
+Item = Union[FrameRef, BadInput]
+
+
+def natural_key(path: Path) -> tuple:
+    """learn2 before learn10: digit runs compare as numbers."""
+    import re
+
+    return tuple(int(t) if t.isdigit() else t for t in re.split(r"(\d+)", path.name))
+
+
+def _is_rosbag2(path: Path) -> bool:
+    return path.is_dir() and (path / "metadata.yaml").is_file()
+
+
+def _files_in(folder: Path) -> list[Path]:
+    """Frame files below ``folder``, sorted; a rosbag2 folder is one entry, hidden
+    entries (a batch's own temporaries, editors' backups) are passed over."""
+    found: list[Path] = []
+    for p in sorted(folder.iterdir(), key=natural_key):
+        if p.name.startswith("."):
+            continue
+        if p.is_dir():
+            found.extend([p] if _is_rosbag2(p) else _files_in(p))
+        elif p.suffix.lower() in FRAME_SUFFIXES:
+            found.append(p)
+    return found
+
+
+def _is_log(path: Path) -> bool:
+    if path.is_dir():
+        return True
+    try:
+        with open(path, "rb") as fp:
+            head = fp.read(16)
+    except OSError:
+        return path.suffix.lower() in (".mcap", ".bag")
+    return head.startswith(b"\x89MCAP") or head.startswith(b"#ROSBAG")
+
+
+def count_frames(path: Path, topic: str | None) -> tuple[int, Exception | None]:
+    """Point-cloud frames in a log, and the PartialLogError that ended it early, if any.
+    An intact MCAP log is counted from its summary; anything else is read through."""
+    from clearcli.errors import PartialLogError
+    from clearcli.io.read import iter_frames, sniff
+
+    if not path.is_dir() and sniff(path) == "mcap":
+        from clearcli.io.mcap import choose_topic, read_summary
+
+        summary = read_summary(path)
+        if summary.damage is None:
+            chosen = choose_topic(summary, topic)
+            return sum(ch.message_count for ch in summary.channels if ch.topic == chosen), None
+    n = 0
+    try:
+        for _ in iter_frames(path, topic):
+            n += 1
+    except PartialLogError as exc:
+        return n, exc
+    return n, None
+
+
+def expand(
+    inputs: Sequence[Path],
+    *,
+    frame: int | None = None,
+    every: int | None = None,
+    topic: str | None = None,
+) -> list[Item]:
+    """The frames of ``inputs`` in order (folders expanded), and the inputs that fail."""
+    from clearcli.errors import EXIT_INPUT, ClearError
+
+    items: list[Item] = []
+    for raw in inputs:
+        path = Path(raw)
+        if path.is_dir() and not _is_rosbag2(path):
+            files = _files_in(path)
+            if not files:
+                items.append(BadInput(str(path), f"{path}: folder holds no .pcd, .mcap or .bag file", EXIT_INPUT))
+            paths = files
+        elif not path.exists():
+            items.append(BadInput(str(path), f"{path}: file not found", EXIT_INPUT))
+            continue
+        else:
+            paths = [path]
+        for p in paths:
+            stem = p.name if p.is_dir() else p.stem
+            if not _is_log(p):
+                items.append(FrameRef(str(p), 0, False, stem))
+                continue
+            if every is None:
+                k = frame or 0
+                items.append(FrameRef(str(p), k, True, f"{stem}_f{k}"))
+                continue
+            try:
+                n, broken = count_frames(p, topic)
+            except ClearError as exc:
+                items.append(BadInput(str(p), str(exc), exc.exit_code))
+                continue
+            start = frame or 0
+            items.extend(FrameRef(str(p), k, True, f"{stem}_f{k}") for k in range(start, n, every))
+            if broken is not None:  # every complete frame is in; the break is reported
+                items.append(BadInput(str(p), str(broken), broken.exit_code, n, f"{stem}_f{n}"))  # type: ignore[attr-defined]
+    return items
+
+
+def check_unique_names(items: Sequence[Item]) -> None:
+    """Two frames whose outputs would share a name: a usage error before any work."""
+    from clearcli.errors import InputError
+
+    seen: dict[str, str] = {}
+    for it in items:
+        if isinstance(it, FrameRef):
+            other = seen.get(it.name)
+            if other is not None and other != it.source:
+                raise InputError(
+                    f"{it.source} and {other} would both write outputs named {it.name!r} in --out-dir; "
+                    "run them in separate batches or rename one"
+                )
+            seen[it.name] = it.source

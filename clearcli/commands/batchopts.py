@@ -1,0 +1,56 @@
+"""The options every frame command shares for batches (see clearcli/batch/run.py)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Any, Optional
+
+import typer
+
+Inputs = Annotated[
+    list[Path],
+    typer.Argument(
+        help="Frames: .pcd, .mcap or .bag files, rosbag2 folders, and folders to search for them. "
+        "More than one frame makes a batch.",
+    ),
+]
+Every = Annotated[
+    Optional[int], typer.Option("--every", help="Batch: every N-th frame of each log (from --frame, default 0).", min=1)
+]
+OutDir = Annotated[
+    Optional[Path],
+    typer.Option("--out-dir", help="Batch: write each frame's outputs and its <name>.json line into this folder."),
+]
+Resume = Annotated[
+    bool, typer.Option("--resume", help="Batch: skip frames whose <name>.json is in --out-dir; redo the others.")
+]
+Jobs = Annotated[
+    Optional[int], typer.Option("--jobs", help="Batch: worker processes (default: the cores available).", min=1)
+]
+Ray = Annotated[
+    Optional[str],
+    typer.Option(
+        "--ray",
+        help="Batch on a Ray cluster at ADDRESS (`--ray` alone: a local one); needs `pip install 'clear-table[ray]'`.",
+        metavar="[ADDRESS]",
+    ),
+]
+FailFast = Annotated[bool, typer.Option("--fail-fast", help="Batch: stop at the first frame that fails.")]
+
+
+def outputs_option(kinds: tuple[str, ...]) -> Any:
+    return Annotated[
+        Optional[str],
+        typer.Option("--outputs", help=f"Batch: what to write per frame into --out-dir, comma-separated: {','.join(kinds)}."),
+    ]
+
+
+def single_only(**given: Any) -> None:
+    """Options that name one file cannot serve a batch."""
+    from clearcli.errors import InputError
+
+    named = [flag for flag, value in given.items() if value is not None]
+    if named:
+        raise InputError(
+            f"{', '.join(named)} name(s) one file, for a single frame; with several frames use --out-dir DIR and --outputs"
+        )
