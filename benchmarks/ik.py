@@ -1,15 +1,15 @@
 """WAM inverse kinematics: time per pose, success rate and IK starts, for the kinds of
-gripper poses the planner asks about, with the new solver and the one at git HEAD.
+gripper poses the planner asks about, with the new solver and the one it replaced.
 
 Solvers ("who"): new = WamKinematics() as the planner builds it (closed-form elbow test,
 damped least squares from the warm start or rest shape for at most 20 iterations, then
 the swivel sweep); swp = the same with track_iterations = 0 (the sweep alone: exact
-solution nearest the start); old = clearcli/robot/kinematics.py at git HEAD (damped least
+solution nearest the start); old = clearcli/robot/kinematics.py at OLD_REV (damped least
 squares from the warm start, then 8 seeds, 150 iterations each).
 
     .venv/bin/python benchmarks/ik.py            # 2000 / 300 / 200 / 500 poses drawn (a few min)
     .venv/bin/python benchmarks/ik.py --quick    # 400 / 60 / 40 / 200 poses drawn (about 1 min)
-    .venv/bin/python benchmarks/ik.py --no-old   # without the code at git HEAD
+    .venv/bin/python benchmarks/ik.py --no-old   # without the replaced solver
 
 All poses are T_base_tcp in the WAM's DH frame 0 (the shoulder). The table top is
 0.346 m below the shoulder (the default placement stands the WAM's footprint on the table
@@ -44,7 +44,7 @@ analytic swivel sweeps per pose. The cache is emptied before every call (it woul
 repeats free), and the solvers take turns by blocks of 20 poses (timings on this machine
 drift by up to 2x from run to run; the ratio old/new is steadier than either). Every
 returned solution is checked (within the joint limits, FK within the tolerances); a
-nonzero count is printed as WRONG. The old module is loaded from `git show HEAD:...`
+nonzero count is printed as WRONG. The old module is loaded from `git show OLD_REV:...`
 beside the current one; --no-old skips it.
 """
 
@@ -77,6 +77,9 @@ BLOCK = 20  # poses per turn of a solver (see run)
 
 # -- poses ---------------------------------------------------------------------------------
 
+
+# The last commit with the seeded damped-least-squares solver this one replaced.
+OLD_REV = "c25499e"
 
 def _rz(t: np.ndarray) -> np.ndarray:
     c, s, z, o = np.cos(t), np.sin(t), np.zeros_like(t), np.ones_like(t)
@@ -169,10 +172,10 @@ def beyond_reach_poses(n: int, seed: int) -> list[np.ndarray]:
 
 
 def old_module() -> Any | None:
-    """clearcli/robot/kinematics.py as committed at git HEAD (None if git cannot say)."""
+    """clearcli/robot/kinematics.py as committed at OLD_REV (None if git cannot say)."""
     try:
         src = subprocess.run(
-            ["git", "show", "HEAD:clearcli/robot/kinematics.py"], cwd=REPO, capture_output=True, text=True, check=True
+            ["git", "show", f"{OLD_REV}:clearcli/robot/kinematics.py"], cwd=REPO, capture_output=True, text=True, check=True
         ).stdout
     except (OSError, subprocess.CalledProcessError):
         return None
@@ -330,7 +333,7 @@ def timed(f: Callable[[], Any], repeat: int) -> float:
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true")
-    ap.add_argument("--no-old", action="store_true", help="skip the code at git HEAD")
+    ap.add_argument("--no-old", action="store_true", help="skip the replaced solver (OLD_REV)")
     args = ap.parse_args()
     n1, n2, n2b, n3 = (400, 60, 40, 200) if args.quick else (2000, 300, 200, 500)
 
