@@ -19,27 +19,12 @@ from clearcli.errors import EXIT_CODES, EXIT_INTERNAL, ClearError
 
 _EXIT_HELP = "\n\n".join(f"{code}: {text}" for code, text in EXIT_CODES.items())
 
-app = typer.Typer(
-    name="clear",
-    help=(
-        "Plan how a robot arm clears a cluttered table, from recorded point clouds.\n\n"
-        "Results go to stdout (--json: one stable, versioned schema); logs and progress "
-        "to stderr.\n\nExit codes:\n\n" + _EXIT_HELP
-    ),
-    no_args_is_help=True,
-    add_completion=False,
-    pretty_exceptions_enable=False,
-    rich_markup_mode=None,
-)
-
-
 def _version(value: bool) -> None:
     if value:
         typer.echo(f"clear {__version__}")
         raise typer.Exit(0)
 
 
-@app.callback()
 def _root(
     version: Annotated[
         Optional[bool],
@@ -49,16 +34,56 @@ def _root(
     pass
 
 
-def _register() -> None:
+def make_app(only: str | None = None) -> typer.Typer:
+    """The `clear` app with every subcommand registered, or only the one named ``only``.
+
+    `main` registers only the subcommand it runs: importing the other command modules
+    and building their click commands is start-up time spent on nothing. `app` (this
+    module's attribute, built on first use) has them all, for tests and embedding.
+    """
     from clearcli.commands import registry
 
-    for name, func, kwargs in registry.COMMANDS:
-        app.command(name, **kwargs)(func)
-    for name, sub in registry.GROUPS:
-        app.add_typer(sub, name=name)
+    app = typer.Typer(
+        name="clear",
+        help=(
+            "Plan how a robot arm clears a cluttered table, from recorded point clouds.\n\n"
+            "Results go to stdout (--json: one stable, versioned schema); logs and progress "
+            "to stderr.\n\nExit codes:\n\n" + _EXIT_HELP
+        ),
+        no_args_is_help=True,
+        add_completion=False,
+        pretty_exceptions_enable=False,
+        rich_markup_mode=None,
+    )
+    app.callback()(_root)
+    for name, target, kwargs in registry.COMMANDS:
+        if only is None or name == only:
+            app.command(name, **kwargs)(registry.load(target))
+    for name, target in registry.GROUPS:
+        if only is None or name == only:
+            app.add_typer(registry.load(target), name=name)
+    return app
 
 
-_register()
+_full_app: typer.Typer | None = None
+
+
+def __getattr__(name: str) -> typer.Typer:
+    if name == "app":
+        global _full_app
+        if _full_app is None:
+            _full_app = make_app()
+        return _full_app
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def _command_named(args: list[str]) -> str | None:
+    """The subcommand ``args`` (argv without the program) runs when it is the first word,
+    else None: every command is registered then, for `--help`'s listing or click's error.
+    (The root's only options, --help and --version, print and exit.)"""
+    from clearcli.commands.registry import NAMES
+
+    return args[0] if args and args[0] in NAMES else None
 
 
 def _run_terminal_clear() -> None:
@@ -84,6 +109,11 @@ def main() -> None:
     ):
         _run_terminal_clear()
         return
+    if "--ray" in sys.argv:
+        from clearcli.commands.batchopts import ray_argv
+
+        sys.argv = ray_argv(sys.argv)
+    app = make_app(_command_named(sys.argv[1:]))
     try:
         app(prog_name=Path(sys.argv[0]).name or "clear")
     except ClearError as exc:

@@ -31,6 +31,8 @@ def connect(address: str) -> float:
     t0 = time.perf_counter()
     if ray.is_initialized():
         return 0.0
+    if address not in (LOCAL, "auto"):
+        _probe(address)
     kwargs: dict[str, Any] = {"include_dashboard": False, "log_to_driver": False, "logging_level": "ERROR"}
     try:
         if address == LOCAL:
@@ -40,6 +42,22 @@ def connect(address: str) -> float:
     except Exception as exc:  # ConnectionError, RuntimeError, ValueError by Ray version
         raise InputError(f"--ray {address}: cannot connect to a Ray cluster there ({type(exc).__name__}: {exc})") from None
     return time.perf_counter() - t0
+
+
+def _probe(address: str, timeout_s: float = 5.0) -> None:
+    """A TCP connection to the address's host and port, so that an address nobody
+    answers at is reported at once (ray.init would retry for minutes)."""
+    import socket
+
+    hostport = address.split("://", 1)[-1].rstrip("/")
+    host, sep, port = hostport.rpartition(":")
+    if not sep or not port.isdigit():
+        raise InputError(f"--ray {address}: expected HOST:PORT, ray://HOST:PORT, 'auto' or nothing (a local cluster)")
+    try:
+        with socket.create_connection((host.strip("[]"), int(port)), timeout=timeout_s):
+            pass
+    except OSError as exc:
+        raise InputError(f"--ray {address}: cannot reach a Ray cluster there ({exc.strerror or exc})") from None
 
 
 def _remote() -> Any:

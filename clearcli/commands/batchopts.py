@@ -54,3 +54,19 @@ def single_only(**given: Any) -> None:
         raise InputError(
             f"{', '.join(named)} name(s) one file, for a single frame; with several frames use --out-dir DIR and --outputs"
         )
+
+
+def ray_argv(argv: list[str]) -> list[str]:
+    """``--ray`` may stand alone (a local cluster): give it the value "local" when the
+    next word is missing, an option, or an input that exists (a file or folder), since
+    an address is none of those."""
+    from pathlib import Path
+
+    out: list[str] = []
+    for k, word in enumerate(argv):
+        out.append(word)
+        if word == "--ray":
+            nxt = argv[k + 1] if k + 1 < len(argv) else None
+            if nxt is None or nxt.startswith("-") or Path(nxt).exists():
+                out.append("local")
+    return out

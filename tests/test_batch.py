@@ -1,0 +1,233 @@
+"""Batches: many inputs per call, on worker processes and on Ray, with per-frame outputs
+that survive a kill, and `clear evaluate dataset`."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from utils import FIXTURES, shared_path
+
+FRAMES = [FIXTURES / n for n in ("isolated_box.pcd", "two_touching_boxes.pcd", "box_on_box.pcd", "clutter10.pcd")]
+
+
+def clear(*args: Any, env: dict[str, str] | None = None, timeout: float = 600) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "clearcli.cli", *map(str, args)],
+        capture_output=True, text=True, timeout=timeout, env=env,
+    )
+
+
+def lines_of(out: str) -> tuple[list[dict[str, Any]], dict[str, Any]]:
+    rows = [json.loads(x) for x in out.splitlines() if x.strip()]
+    assert all(r["schema"] == "clear.batch" for r in rows)
+    assert rows[-1]["type"] == "summary" and all(r["type"] == "frame" for r in rows[:-1])
+    return rows[:-1], rows[-1]
+
+
+def comparable(doc: dict[str, Any]) -> dict[str, Any]:
+    """A document without what differs between two runs of the same frame (timings)."""
+    doc = {k: v for k, v in doc.items() if k != "timings_s"}
+    if "steps" in doc:  # the plan's trace: its search timings ride along nowhere else
+        doc["backtracking"] = [{k: v for k, v in b.items()} for b in doc["backtracking"]]
+    return doc
+
+
+def test_plan_lines_equal_single_calls_and_jobs_2_equals_jobs_1() -> None:
+    one = clear("plan", *FRAMES, "--json", "--jobs", "1")
+    two = clear("plan", *FRAMES, "--json", "--jobs", "2")
+    assert one.returncode == two.returncode == 0, one.stderr + two.stderr  # 10s are results
+    rows1, summary1 = lines_of(one.stdout)
+    rows2, summary2 = lines_of(two.stdout)
+    assert [r["source"] for r in rows1] == [str(p) for p in FRAMES]  # input order
+    assert summary1["frames"] == 4 and summary1["failed"] == 0 and summary2["backend"] == "2 worker processes"
+    for r1, r2, path in zip(rows1, rows2, FRAMES):
+        single = clear("plan", path, "--json")
+        doc = json.loads(single.stdout)
+        assert r1["exit_code"] == r2["exit_code"] == single.returncode
+        assert comparable(r1["document"]) == comparable(r2["document"]) == comparable(doc)
+
+
+def test_bad_inputs_reported_each_in_its_line(tmp_path: Path) -> None:
+    empty = tmp_path / "empty.pcd"
+    empty.write_bytes(b"")
+    text = tmp_path / "notes.pcd"
+    text.write_text("this is not a point cloud\n")
+    corrupt = tmp_path / "corrupt.pcd"
+    corrupt.write_bytes((FIXTURES / "isolated_box.pcd").read_bytes()[:2000])
+    truncated = tmp_path / "cut.mcap"
+    truncated.write_bytes((FIXTURES / "session.mcap").read_bytes()[:5000])
+    nothing = tmp_path / "nothing"
+    nothing.mkdir()
+    out = tmp_path / "out"
+    res = clear(
+        "plan", FRAMES[0], empty, corrupt, truncated, text, nothing, FRAMES[1], "--json",
+        "--out-dir", out, "--outputs", "plan,problem", "--jobs", "2",
+    )
+    assert res.returncode == 11, res.stderr  # some frames failed
+    rows, summary = lines_of(res.stdout)
+    by_source = {Path(r["source"]).name: r for r in rows}
+    assert by_source["isolated_box.pcd"]["exit_code"] == 0 and by_source["two_touching_boxes.pcd"]["exit_code"] == 0
+    for name in ("empty.pcd", "corrupt.pcd", "cut.mcap", "notes.pcd", "nothing"):
+        err = by_source[name]["error"]
+        assert err["exit_code"] in (3, 9) and name in err["message"], (name, err)
+        single = clear("plan", tmp_path / name) if name != "nothing" else None
+        if single is not None:  # the message and code a single call gives
+            assert single.returncode == err["exit_code"] and err["message"] in single.stderr
+    assert summary["failed"] == 5 and summary["done"] == 7
+    # the good frames are complete; nothing half-written
+    # the good frames complete, the bad ones only their line (a file that cannot be read
+    # fails the same way again: --resume does not retry it); nothing half-written
+    names = sorted(p.name for p in out.iterdir())
+    good = [f"{s}.{e}" for s in ("isolated_box", "two_touching_boxes") for e in ("json", "plan", "problem.pddl")]
+    assert names == sorted(good + ["corrupt.json", "cut_f0.json", "empty.json", "notes.json"])
+
+
+SLOW_WRITES = '''
+import time
+import clearcli.io.files as files
+_orig = files.atomic_output
+import contextlib
+@contextlib.contextmanager
+def slow(path, mode="wb"):
+    with _orig(path, mode) as handle:
+        yield handle
+        handle.flush()
+        time.sleep(0.4)  # the write is half done: the temporary exists, the target not yet
+files.atomic_output = slow
+'''
+
+
+def test_sigkill_during_a_write_then_resume(tmp_path: Path) -> None:
+    hook = tmp_path / "hook"
+    hook.mkdir()
+    (hook / "sitecustomize.py").write_text(SLOW_WRITES)
+    env = dict(os.environ, PYTHONPATH=str(hook))
+    out = tmp_path / "out"
+    args = [sys.executable, "-m", "clearcli.cli", "plan", *map(str, FRAMES), "--json", "--out-dir", str(out),
+            "--outputs", "plan,problem", "--jobs", "1"]
+    proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env, start_new_session=True)
+    deadline = time.time() + 300
+    killed_during_write = False
+    while time.time() < deadline and proc.poll() is None:
+        marks = list(out.glob("*.json")) if out.exists() else []
+        parts = [p for p in out.glob(".*")] if out.exists() else []
+        if len(marks) >= 2 and parts:  # two frames done, a third being written
+            os.killpg(proc.pid, signal.SIGKILL)
+            killed_during_write = True
+            break
+        time.sleep(0.01)
+    proc.wait(30)
+    assert killed_during_write, "the batch finished before it could be killed mid-write"
+    assert [p for p in out.glob(".*")], "a temporary of the killed write is left"
+    done_before = {p.name: p.stat().st_mtime_ns for p in out.glob("*.json")}
+    res = clear("plan", *FRAMES, "--json", "--out-dir", out, "--outputs", "plan,problem", "--resume", "--jobs", "1")
+    assert res.returncode == 0, res.stderr
+    rows, summary = lines_of(res.stdout)
+    assert summary["resumed"] == len(done_before) and summary["done"] == len(FRAMES) - len(done_before)
+    assert [r["name"] for r in rows] == [p.stem for p in FRAMES]  # no frame lost
+    for name, mtime in done_before.items():  # none redone
+        assert (out / name).stat().st_mtime_ns == mtime
+    assert not [p for p in out.glob(".*")]  # no stale temporary
+    assert sorted(p.name for p in out.iterdir()) == sorted(
+        f"{p.stem}.{ext}" for p in FRAMES for ext in ("json", "plan", "problem.pddl")
+    )
+    for p in FRAMES:  # every plan file is whole
+        assert (out / f"{p.stem}.plan").read_text().splitlines()[-1].startswith("; cost = ")
+
+
+KILL_ONE = '''
+import os, signal
+import clearcli.batch.work as work
+_orig = work.run_job
+def run_job(job):
+    if job.name == "box_on_box":
+        os.kill(os.getpid(), signal.SIGKILL)
+    return _orig(job)
+work.run_job = run_job
+import clearcli.batch.pool as pool
+pool.run_job = run_job
+'''
+
+
+def test_a_worker_killed_mid_batch_fails_its_frame_only(tmp_path: Path) -> None:
+    hook = tmp_path / "hook"
+    hook.mkdir()
+    (hook / "sitecustomize.py").write_text(KILL_ONE)
+    env = dict(os.environ, PYTHONPATH=str(hook))
+    res = clear("segment", *FRAMES, FIXTURES / "isolated_box.pcd", "--json", "--jobs", "2", env=env)
+    assert res.returncode == 11, res.stderr
+    rows, summary = lines_of(res.stdout)
+    assert len(rows) == 5
+    dead = [r for r in rows if "error" in r]
+    assert [Path(r["source"]).name for r in dead] == ["box_on_box.pcd"]
+    assert dead[0]["exit_code"] == 1 and "worker process died (killed by signal 9)" in dead[0]["error"]["message"]
+    assert all(r["exit_code"] == 0 for r in rows if "error" not in r)  # the pool went on
+
+
+def _need_ray() -> None:
+    try:
+        import ray  # noqa: F401
+    except ImportError:
+        if os.environ.get("CLEAR_REQUIRE_SHARED") == "1":
+            pytest.fail("Ray is not installed, and CI must run this test: pip install 'clear-table[ray]'")
+        pytest.skip("Ray is not installed (pip install 'clear-table[ray]')")
+
+
+def test_local_ray_run_equals_the_pool() -> None:
+    _need_ray()
+    pool = clear("plan", *FRAMES[:3], "--json", "--jobs", "2")
+    ray = clear("plan", *FRAMES[:3], "--json", "--ray")
+    assert pool.returncode == ray.returncode == 0, ray.stderr
+    rows_p, _ = lines_of(pool.stdout)
+    rows_r, summary = lines_of(ray.stdout)
+    assert summary["backend"] == "ray (local)" and summary["ray_init_s"] is not None
+    assert [comparable(r["document"]) for r in rows_r] == [comparable(r["document"]) for r in rows_p]
+
+
+def test_ray_address_that_cannot_be_reached() -> None:
+    _need_ray()
+    res = clear("plan", *FRAMES[:2], "--ray", "127.0.0.1:1", timeout=120)
+    assert res.returncode == 3 and "127.0.0.1:1" in res.stderr and "Traceback" not in res.stderr
+    assert res.stdout == ""  # before any work
+
+
+def test_evaluate_dataset_on_the_given_mosd_frames(tmp_path: Path) -> None:
+    mosd = shared_path("mosd")
+    res = clear("evaluate", "dataset", mosd, "--groups", "mosd", "--json", "--jobs", "2",
+                "--csv", tmp_path / "scores.csv", "--png", tmp_path / "f1.png")
+    assert res.returncode == 0, res.stderr
+    rows, summary = lines_of(res.stdout)
+    assert len(rows) == 50 and summary["failed"] == 0
+    docs = [r["document"] for r in rows]
+    assert all(d["schema"] == "clear.evaluate.frame" for d in docs)
+    ev = summary["evaluation"]
+    assert ev["all"]["frames"] == 50 and ev["all"]["mean_f1"] >= 0.95
+    assert {g: m["frames"] for g, m in ev["groups"].items()} == {
+        "boxes": 17, "stacked": 8, "occluded": 8, "cylindrical": 12, "mixed (test)": 3, "complex (test)": 2
+    }
+    assert len((tmp_path / "scores.csv").read_text().splitlines()) == 51
+    assert (tmp_path / "f1.png").read_bytes()[:4] == b"\x89PNG"
+    # a frame's score equals `segment -o` + `evaluate segmentation` on it
+    frame = mosd / "test" / "test57.pcd"
+    labels = tmp_path / "test57.labels.pcd"
+    assert clear("segment", frame, "-o", labels).returncode == 0
+    single = json.loads(clear("evaluate", "segmentation", labels, frame, "--json").stdout)
+    doc = next(d for d in docs if d["source"].endswith("test57.pcd"))
+    for key in ("n_true", "n_pred", "true_positives", "precision", "recall", "f1", "mean_best_iou"):
+        assert doc[key] == single[key], key
+    # --pred: the label files of a batch's --out-dir, scored without segmenting
+    out = tmp_path / "labels"
+    assert clear("segment", mosd / "test", "--out-dir", out, "--outputs", "labels", "--json").returncode == 0
+    pred = clear("evaluate", "dataset", mosd / "test", "--pred", out, "--json")
+    prow, psummary = lines_of(pred.stdout)
+    assert [r["document"]["f1"] for r in prow] == [d["f1"] for d in docs if "/test/" in d["source"]]
+    assert all(r["document"]["time_s"] == 0 for r in prow)
