@@ -92,9 +92,9 @@ def test_cli_json_envelope_and_table() -> None:
 
 
 def test_cli_errors_one_line_exit_3(tmp_path: Path) -> None:
-    _assert_one_line_error(
-        _clear("info", str(shared_path("mcap/mosd_tabletop_ros1.bag"))), EXIT_INPUT, "not an MCAP file"
-    )
+    cut_bag = tmp_path / "cut.bag"
+    cut_bag.write_bytes(shared_path("mcap/mosd_tabletop_ros1.bag").read_bytes()[:5000])
+    _assert_one_line_error(_clear("segment", str(cut_bag)), EXIT_INPUT, "truncated", "ROS 1 bag")
     _assert_one_line_error(
         _clear("info", str(shared_path("pcd_formats/stereo_left.pcd"))), EXIT_INPUT, "no x/y/z", "stereo_left.pcd"
     )

@@ -228,7 +228,7 @@ def test_bad_pcd_inputs(tmp_path: Path) -> None:
         "bad_type.pcd": (_header().replace(b"TYPE F F F", b"TYPE F F Q"), "bad PCD header"),
         "bad_width.pcd": (_header().replace(b"WIDTH 3", b"WIDTH three"), "bad PCD header"),
         "no_xyz.pcd": (_header().replace(b"FIELDS x y z", b"FIELDS a b c") + _xyz(3), "no x/y/z"),
-        "ros1.bag.pcd": (b"#ROSBAG V2.0\n\x00\x00", "not an MCAP file"),
+        "ros1.bag.pcd": (b"#ROSBAG V2.0\n\x00\x00", "truncated or corrupt ROS 1 bag"),
     }
     for name, (content, match) in cases.items():
         path = tmp_path / name
@@ -370,12 +370,12 @@ def test_logs_without_point_clouds_list_their_topics() -> None:
         read_frame(talker)
 
 
-def test_ros1_bag_is_not_mcap() -> None:
+def test_ros1_bag_is_read_not_rejected() -> None:
+    # ROS 1 bags are read by clearcli.io.rosbag (tests/test_rosbag.py has the details).
     bag = shared_path("mcap/mosd_tabletop_ros1.bag")
-    message = _one_line_error(bag, "not an MCAP file")
-    assert "ROS 1 bag" in message
-    with pytest.raises(InputError, match="not an MCAP file"):
-        list(iter_frames(bag))
+    frames = list(iter_frames(bag))
+    assert len(frames) == 1
+    assert _same(frames[0].points, read_pcd(shared_path("mosd/test/test57.pcd")).points)
 
 
 def test_magic_decides_not_the_extension(tmp_path: Path) -> None:

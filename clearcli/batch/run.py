@@ -55,7 +55,9 @@ class BatchRequest:
 
 def is_batch(inputs: Sequence[Path], every: int | None, out_dir: Path | None, ray: str | None) -> bool:
     """Several frames, a folder, --every, --out-dir or --ray make a batch."""
-    return len(inputs) != 1 or Path(inputs[0]).is_dir() or every is not None or out_dir is not None or ray is not None
+    first = Path(inputs[0]) if inputs else Path()
+    folder = first.is_dir() and not (first / "metadata.yaml").is_file()  # a rosbag2 bag is one log
+    return len(inputs) != 1 or folder or every is not None or out_dir is not None or ray is not None
 
 
 def parse_outputs(command: str, text: str | None) -> tuple[str, ...]:

@@ -1,9 +1,9 @@
-"""`clear info FILE`: what a PCD or MCAP file holds, for people (a table) or scripts (--json).
+"""`clear info FILE`: what a PCD, MCAP or bag file holds, for people (a table) or scripts (--json).
 
 JSON schema (`clear info --json`), envelope {"schema": "clear.info", "version": 1, ...}:
 
     file:    str, the path as given
-    format:  "pcd" | "mcap"
+    format:  "pcd" | "mcap" | "rosbag1" (a ROS 1 bag) | "rosbag2" (a rosbag2 folder or .db3)
     pcd:     (format "pcd" only) the header as written:
              {encoding: "ascii"|"binary"|"binary_compressed",
               fields: [{name, type ("F4", "U4", ...), count}], width, height,
@@ -20,7 +20,11 @@ JSON schema (`clear info --json`), envelope {"schema": "clear.info", "version": 
               pointcloud_topic: str | null (the topic frames are read from: --topic, or the
                                 only point-cloud topic; null when none or ambiguous),
               frame_count: int | null (messages on pointcloud_topic)}
-    frame:   the frame read (PCD: its one frame; MCAP: frame --frame N of pointcloud_topic),
+    bag:     (formats "rosbag1" and "rosbag2") the same keys as `mcap` (profile "ros1" or
+             "ros2"; channel schema = the message type; indexed false when a ROS 1 bag's
+             index is missing and its records were scanned), plus
+             storage: "rosbag1" | "sqlite3" | "mcap"
+    frame:   the frame read (PCD: its one frame; logs: frame --frame N of pointcloud_topic),
              or null when the log has no (unambiguous) point-cloud topic:
              {index: int, points: int, organized: bool, shape: [height, width] | null,
               finite_points: int, has_colors: bool,
@@ -29,7 +33,7 @@ JSON schema (`clear info --json`), envelope {"schema": "clear.info", "version": 
               bounds_m: {min: [x, y, z], max: [x, y, z]} | null (finite points only),
               stamp_s: float, frame_id: str}
 
-A log broken after complete frames is described, then the command exits 9.
+A log or bag broken after complete frames is described, then the command exits 9.
 """
 
 from __future__ import annotations
@@ -79,8 +83,8 @@ def describe_frame(frame: "Frame", index: int = 0) -> dict[str, Any]:
 def describe_file(path: Path, topic: str | None = None, index: int = 0) -> dict[str, Any]:
     """The info payload (without envelope) for `path`; raises ClearError on bad input.
 
-    A damaged MCAP log is described (mcap.complete false) without raising; the caller
-    decides what exit code that deserves.
+    A damaged MCAP log or bag is described (mcap/bag.complete false) without raising; the
+    caller decides what exit code that deserves.
     """
     from clearcli.io.read import read_frame, sniff
 
@@ -93,9 +97,18 @@ def describe_file(path: Path, topic: str | None = None, index: int = 0) -> dict[
         frame = read_frame(path, topic, index)
         return {"file": str(path), "format": "pcd", "pcd": header, "frame": describe_frame(frame, index)}
 
-    from clearcli.io.mcap import choose_topic, read_mcap_frame, read_summary
+    # A log (MCAP) or a bag: the same summary attributes, topic rules and frame reading.
+    if kind == "mcap":
+        from clearcli.io.mcap import choose_topic, read_mcap_frame, read_summary
 
-    summary = read_summary(path)
+        summary: Any = read_summary(path)
+        read_one: Any = read_mcap_frame
+    else:
+        from clearcli.io.rosbag import choose_bag_topic as choose_topic  # type: ignore[assignment]
+        from clearcli.io.rosbag import read_bag_frame, read_bag_summary
+
+        summary = read_bag_summary(path)
+        read_one = read_bag_frame
     candidates = summary.pointcloud_topics()
     chosen: str | None = None
     if topic is not None or len(candidates) == 1:
@@ -132,8 +145,16 @@ def describe_file(path: Path, topic: str | None = None, index: int = 0) -> dict[
         if summary.count(chosen) == 0 and index == 0:
             frame_part = None  # the channel exists but holds no message yet
         else:
-            frame_part = describe_frame(read_mcap_frame(path, chosen, index), index)
+            frame_part = describe_frame(read_one(path, chosen, index), index)
+    if kind != "mcap":
+        mcap_part["storage"] = summary.storage
+        return {"file": str(path), "format": kind, "bag": mcap_part, "frame": frame_part}
     return {"file": str(path), "format": "mcap", "mcap": mcap_part, "frame": frame_part}
+
+
+def log_part(info: dict[str, Any]) -> dict[str, Any] | None:
+    """The `mcap` or `bag` object of an info payload (None for a PCD)."""
+    return info.get("mcap") or info.get("bag")
 
 
 def _fmt_int(n: int) -> str:
@@ -180,13 +201,19 @@ def _print_table(info: dict[str, Any]) -> None:
             kv.add_row(key, value)
         stdout.print(kv)
         return
-    m = info["mcap"]
-    kv.add_row("format", f"MCAP, profile {m['profile'] or '(none)'}, {'indexed' if m['indexed'] else 'not indexed'}")
+    m = log_part(info)
+    assert m is not None
+    if info["format"] == "rosbag1":
+        kv.add_row("format", f"ROS 1 bag, {'indexed' if m['indexed'] else 'index missing: records scanned'}")
+    elif info["format"] == "rosbag2":
+        kv.add_row("format", m["library"])
+    else:
+        kv.add_row("format", f"MCAP, profile {m['profile'] or '(none)'}, {'indexed' if m['indexed'] else 'not indexed'}")
     if m["start_s"] is not None:
         kv.add_row("time span", f"{m['start_s']:.3f} .. {m['end_s']:.3f} s ({m['duration_s']:.3f} s)")
     kv.add_row("messages", _fmt_int(m["message_count"]))
     if not m["complete"]:
-        kv.add_row("damage", f"the log breaks {m['damage']}")
+        kv.add_row("damage", f"the {'log' if info['format'] == 'mcap' else 'bag'} breaks {m['damage']}")
     if m["pointcloud_topic"]:
         n_frames = m["frame_count"]
         kv.add_row("point cloud", f"{m['pointcloud_topic']} ({n_frames} frame{'s' if n_frames != 1 else ''})")
@@ -199,8 +226,8 @@ def _print_table(info: dict[str, Any]) -> None:
         for key, value in _frame_rows(info["frame"]):
             kv.add_row(key, value)
     stdout.print(kv)
-    channels = Table(title="channels", title_justify="left")
-    for col in ("topic", "schema", "encoding", "messages", ""):
+    channels = Table(title="channels" if info["format"] == "mcap" else "topics", title_justify="left")
+    for col in ("topic", "schema" if info["format"] == "mcap" else "type", "encoding", "messages", ""):
         # Fold, not ellipsize: topic and type names are what people come here to read.
         channels.add_column(col, justify="right" if col == "messages" else "left", overflow="fold")
     for ch in m["channels"]:
@@ -210,15 +237,17 @@ def _print_table(info: dict[str, Any]) -> None:
 
 
 def info_cmd(
-    file: Annotated[Path, typer.Argument(help="A .pcd or .mcap file (told apart by content).")],
+    file: Annotated[
+        Path, typer.Argument(help="A .pcd, .mcap or ROS 1 .bag file (told apart by content), or a rosbag2 folder.")
+    ],
     json_out: Annotated[bool, typer.Option("--json", help="Machine-readable output (schema clear.info).")] = False,
     topic: Annotated[
-        Optional[str], typer.Option("--topic", help="MCAP: the point-cloud topic, when there are several.")
+        Optional[str], typer.Option("--topic", help="MCAP/bag: the point-cloud topic, when there are several.")
     ] = None,
-    frame: Annotated[int, typer.Option("--frame", help="MCAP: which frame of the topic to describe (from 0).")] = 0,
+    frame: Annotated[int, typer.Option("--frame", help="MCAP/bag: which frame of the topic to describe (from 0).")] = 0,
 ) -> None:
     """What a file holds: points, fields, organized shape, finite points, bounds; for
-    MCAP also the profile, channels, message counts and time span."""
+    MCAP logs and ROS bags also the channels/topics, types, message counts and time span."""
     from clearcli.commands.common import print_json
     from clearcli.errors import PartialLogError
 
@@ -227,5 +256,7 @@ def info_cmd(
         print_json("info", info)
     else:
         _print_table(info)
-    if info["format"] == "mcap" and not info["mcap"]["complete"]:
-        raise PartialLogError(f"{file}: the log breaks {info['mcap']['damage']}; the figures above cover what precedes it")
+    log = log_part(info)
+    if log is not None and not log["complete"]:
+        what = "log" if info["format"] == "mcap" else "bag"
+        raise PartialLogError(f"{file}: the {what} breaks {log['damage']}; the figures above cover what precedes it")

@@ -1,4 +1,8 @@
-"""One way in: a path (PCD or MCAP, told apart by their first bytes) -> frames.
+"""One way in: a path (PCD, MCAP or a bag, told apart by content) -> frames.
+
+PCD and MCAP files and ROS 1 bags (`#ROSBAG`) are told apart by their first bytes, not
+their names; a folder holding `metadata.yaml` (or that file itself, or a `.db3` SQLite
+file) is a rosbag2 bag. Logs and bags are streamed, never loaded whole.
 
 Every frame-reading subcommand calls `read_frame(path, topic, index)`; `iter_frames` walks
 a whole file. Only ClearError subclasses leave these functions for anything a file can
@@ -18,43 +22,69 @@ from clearcli.errors import InputError, SceneError
 from clearcli.io.frames import Frame
 
 _SNIFF_BYTES = 64
-FileKind = Literal["pcd", "mcap"]
+FileKind = Literal["pcd", "mcap", "rosbag1", "rosbag2"]
+
+
+def _directory_kind(path: Path) -> FileKind:
+    from clearcli.io.rosbag import ROSBAG2_METADATA
+
+    if (path / ROSBAG2_METADATA).is_file():
+        return "rosbag2"
+    try:
+        storage = sorted(p.name for p in path.iterdir() if p.suffix in (".db3", ".mcap"))
+    except OSError:
+        storage = []
+    hint = (
+        f"; it holds {', '.join(storage[:3])}{' ...' if len(storage) > 3 else ''}: pass that file instead"
+        if storage
+        else ""
+    )
+    raise InputError(
+        f"{path}: is a directory without {ROSBAG2_METADATA} (not a rosbag2 bag); "
+        f"expected a .pcd, .mcap or .bag file or a rosbag2 folder{hint}"
+    )
 
 
 def sniff(path: Path) -> FileKind:
-    """"pcd" or "mcap" from the file's first bytes (not its name); InputError otherwise."""
+    """"pcd", "mcap", "rosbag1" (a ROS 1 bag) from the file's first bytes (not its name), or
+    "rosbag2" for a rosbag2 folder, its metadata.yaml or a .db3 file; InputError otherwise."""
     from clearcli.io.mcap import MCAP_MAGIC
     from clearcli.io.pcd import looks_like_pcd
+    from clearcli.io.rosbag import ROSBAG1_MAGIC, ROSBAG2_METADATA, SQLITE_MAGIC
 
     path = Path(path)
+    if path.is_dir():
+        return _directory_kind(path)
     try:
         with open(path, "rb") as fp:
             head = fp.read(_SNIFF_BYTES)
     except FileNotFoundError:
         raise InputError(f"{path}: file not found") from None
     except IsADirectoryError:
-        raise InputError(f"{path}: is a directory; expected a .pcd or .mcap file") from None
+        return _directory_kind(path)
     except OSError as exc:
         raise InputError(f"{path}: cannot read ({exc.strerror})") from None
     if not head:
-        raise InputError(f"{path}: empty file (0 bytes); expected a PCD or MCAP file")
+        raise InputError(f"{path}: empty file (0 bytes); expected a PCD or MCAP file or a bag")
     if head.startswith(MCAP_MAGIC):
         return "mcap"
-    if head.startswith(b"#ROSBAG"):
-        raise InputError(
-            f"{path}: not an MCAP file: it is a ROS 1 bag; convert it with `mcap convert {path.name} out.mcap`"
-        )
+    if head.startswith(ROSBAG1_MAGIC):
+        return "rosbag1"
+    if head.startswith(SQLITE_MAGIC) or (
+        path.name == ROSBAG2_METADATA and head.lstrip().startswith(b"rosbag2_bagfile_information")
+    ):
+        return "rosbag2"
     if looks_like_pcd(head):
         return "pcd"
     if path.suffix.lower() == ".pcd":
         raise InputError(f"{path}: not a PCD file (it does not start with a PCD header)")
-    raise InputError(f"{path}: not an MCAP file and not a PCD file (unrecognised first bytes)")
+    raise InputError(f"{path}: not an MCAP file, a ROS bag or a PCD file (unrecognised first bytes)")
 
 
 def read_frame(path: Path, topic: str | None = None, index: int = 0) -> Frame:
     """Frame `index` (from 0) of the file at `path`; a PCD holds exactly one frame.
 
-    `topic` picks the point-cloud topic of an MCAP log holding several; ignored for PCD.
+    `topic` picks the point-cloud topic of a log or bag holding several; ignored for PCD.
     """
     path = Path(path)
     kind = sniff(path)
@@ -64,19 +94,28 @@ def read_frame(path: Path, topic: str | None = None, index: int = 0) -> Frame:
         from clearcli.io.pcd import read_pcd
 
         return read_pcd(path)
+    if kind in ("rosbag1", "rosbag2"):
+        from clearcli.io.rosbag import read_bag_frame
+
+        return read_bag_frame(path, topic, index)
     from clearcli.io.mcap import read_mcap_frame
 
     return read_mcap_frame(path, topic, index)
 
 
 def iter_frames(path: Path, topic: str | None = None) -> Iterator[Frame]:
-    """Every frame of the file, one at a time (an MCAP log is streamed, never loaded whole)."""
+    """Every frame of the file, one at a time (a log or bag is streamed, never loaded whole)."""
     path = Path(path)
     kind = sniff(path)
     if kind == "pcd":
         from clearcli.io.pcd import read_pcd
 
         yield read_pcd(path)
+        return
+    if kind in ("rosbag1", "rosbag2"):
+        from clearcli.io.rosbag import iter_bag_frames
+
+        yield from iter_bag_frames(path, topic)
         return
     from clearcli.io.mcap import iter_mcap_frames
 

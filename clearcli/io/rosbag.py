@@ -1,0 +1,811 @@
+"""ROS 1 bags and rosbag2 bags <-> `Frame`s, one message at a time, with `rosbags`.
+
+Reading, what `clearcli.io.mcap` offers for MCAP logs: `read_bag_summary` (topics, types,
+counts, time span), `choose_bag_topic` (the same topic rules and messages),
+`iter_bag_frames` and `read_bag_frame`, and `read_bag_transforms` (/tf_static and /tf).
+
+- ROS 1 (`#ROSBAG V2.0`, a `.bag` file): an intact bag is read through its index with
+  `rosbags.rosbag1.Reader`, one chunk in memory at a time; `--frame N` seeks straight to
+  the chunk holding message N. A bag whose index is missing or unreadable (a recording cut
+  short, a truncated copy, an unindexed bag) is streamed record by record in file order
+  by this module instead; when the records stop making sense it raises PartialLogError
+  after yielding every complete frame (InputError when there is none).
+- rosbag2 (a folder holding `metadata.yaml`, or its `.db3` sqlite storage file alone):
+  `rosbags.rosbag2.Reader`, sqlite3 and mcap storage; messages come from a database
+  cursor or one MCAP chunk at a time (a bag compressed per file is first unpacked by
+  rosbags into a temporary folder). A `.mcap` storage file alone is an MCAP log, read by
+  `clearcli.io.mcap`, which also reads a damaged one up to its damage.
+
+Messages are deserialised with a `rosbags.typesys` type store built from the bag's own
+message definitions when it carries them (else the standard ROS 1 Noetic / ROS 2 types);
+the PointCloud2 point blob is then viewed through a NumPy structured dtype by the MCAP
+reader's own PointCloud2 / foxglove converters, so every format agrees on what a point
+cloud becomes. Only ClearError subclasses leave the public functions.
+"""
+
+from __future__ import annotations
+
+import bz2
+import contextlib
+import io
+import os
+import struct
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, BinaryIO, Callable, Iterator, Literal
+
+import numpy as np
+
+from clearcli.errors import InputError, PartialLogError
+from clearcli.io.frames import Frame
+# The MCAP reader's message -> Frame converters (private there, shared on purpose: one
+# definition of what a PointCloud2 or foxglove.PointCloud becomes).
+from clearcli.io.mcap import (
+    POINTCLOUD2_SCHEMAS,
+    POINTCLOUD_SCHEMAS,
+    ChannelInfo,
+    _foxglove_frame,
+    _pointcloud2_frame,
+    _quat_matrix,
+    _reason,
+)
+
+ROSBAG1_MAGIC = b"#ROSBAG"
+SQLITE_MAGIC = b"SQLite format 3\x00"
+ROSBAG2_METADATA = "metadata.yaml"
+TF_TOPICS = ("/tf_static", "/tf")
+
+BagFormat = Literal["rosbag1", "rosbag2"]
+
+
+@dataclass(frozen=True)
+class BagSummary:
+    """What a bag holds; the same attributes and methods as `mcap.McapSummary`.
+
+    channels: one per ROS 1 connection / rosbag2 topic; `schema_name` is the type as the
+    bag spells it (ROS 1 `sensor_msgs/PointCloud2`, ROS 2 `sensor_msgs/msg/PointCloud2`).
+    """
+
+    path: Path
+    format: BagFormat
+    storage: str  # "rosbag1", "sqlite3", "mcap"
+    profile: str  # "ros1" | "ros2"
+    library: str
+    channels: tuple[ChannelInfo, ...]
+    message_count: int
+    start_ns: int | None
+    end_ns: int | None
+    indexed: bool  # ROS 1: read through the index (else a scan of the records)
+    chunk_count: int
+    damage: str | None = None  # where and why a scan stopped early, None when whole
+
+    def topics(self) -> list[tuple[str, str]]:
+        """(topic, type) once per topic, in channel order."""
+        seen: dict[str, str] = {}
+        for ch in self.channels:
+            seen.setdefault(ch.topic, ch.schema_name)
+        return list(seen.items())
+
+    def pointcloud_topics(self) -> list[str]:
+        return [topic for topic, schema in self.topics() if schema in POINTCLOUD_SCHEMAS]
+
+    def count(self, topic: str) -> int:
+        return sum(ch.message_count for ch in self.channels if ch.topic == topic)
+
+    @property
+    def what(self) -> str:
+        return "ROS 1 bag" if self.format == "rosbag1" else "rosbag2 bag"
+
+
+def _plural(n: int, word: str) -> str:
+    return f"{n} {word}{'s' if n != 1 else ''}"
+
+
+def _ros1_name(msgtype: str) -> str:
+    """rosbags' normalised `pkg/msg/Type` -> ROS 1's `pkg/Type`."""
+    return msgtype.replace("/msg/", "/", 1)
+
+
+def _normalize(msgtype: str) -> str:
+    from rosbags.typesys.msg import normalize_msgtype
+
+    return normalize_msgtype(msgtype)
+
+
+def bag_root(path: Path) -> Path:
+    """The rosbag2 bag `path` names: the folder itself, the folder of a metadata.yaml, or a .db3."""
+    path = Path(path)
+    if path.is_file() and path.name == ROSBAG2_METADATA:
+        return path.parent
+    return path
+
+
+# --- ROS 1: records in file order (bags without a usable index) ------------------------
+
+_OP_MSGDATA, _OP_BAGHEADER, _OP_IDXDATA, _OP_CHUNK, _OP_CHUNK_INFO, _OP_CONNECTION = 2, 3, 4, 5, 6, 7
+_MAX_HEADER = 1 << 24  # 16 MiB: far beyond any real record header; larger means garbage
+
+
+class _Damage(Exception):
+    """The record stream stops making sense here."""
+
+
+@dataclass(frozen=True)
+class _Ros1Conn:
+    id: int
+    topic: str
+    msgtype: str  # as written (ROS 1 spelling)
+    msgdef: str
+    md5sum: str
+
+
+@dataclass(frozen=True)
+class _Ros1Msg:
+    conn: int
+    time_ns: int
+    data: bytes | None  # None when not asked for
+
+
+def _fields(blob: bytes) -> dict[str, bytes]:
+    out: dict[str, bytes] = {}
+    pos = 0
+    while pos < len(blob):
+        if pos + 4 > len(blob):
+            raise _Damage("record header field cut short")
+        (size,) = struct.unpack_from("<I", blob, pos)
+        pos += 4
+        if pos + size > len(blob):
+            raise _Damage("record header field longer than its header")
+        name, sep, value = blob[pos : pos + size].partition(b"=")
+        if not sep:
+            raise _Damage("record header field without '='")
+        out[name.decode("latin-1")] = value
+        pos += size
+    return out
+
+
+def _u32(fields: dict[str, bytes], name: str) -> int:
+    try:
+        return struct.unpack("<I", fields[name])[0]
+    except (KeyError, struct.error):
+        raise _Damage(f"record lacks a valid {name!r} field") from None
+
+
+def _text(fields: dict[str, bytes], name: str) -> str:
+    if name not in fields:
+        raise _Damage(f"record lacks a {name!r} field")
+    return fields[name].decode("utf-8", errors="replace")
+
+
+class _Ros1Stream:
+    """Records of a ROS 1 bag in file order: connections and messages.
+
+    Message data is read only for connections `want(conn)` accepts; the others are skipped
+    (seeked over in uncompressed chunks). Raises _Damage where the file stops making sense,
+    including when it ends before the index its header announces.
+    """
+
+    def __init__(self, fp: BinaryIO, size: int, want: Callable[[_Ros1Conn], bool]) -> None:
+        self.fp = fp
+        self.size = size
+        self.want = want
+        self.conns: dict[int, _Ros1Conn] = {}
+        self.index_pos = 0
+        self.chunks = 0
+
+    def _read(self, src: BinaryIO, n: int, what: str) -> bytes:
+        data = src.read(n)
+        if len(data) != n:
+            raise _Damage(f"the file ends inside {what}")
+        return data
+
+    def _record(self, src: BinaryIO, end: int, cut_ok: bool = False) -> tuple[dict[str, bytes], int] | None:
+        """(header fields, data length) with `src` at the data; None at a clean end.
+
+        `cut_ok`: the data may run past `end` (an uncompressed chunk whose records are
+        read one by one, so that a cut chunk still gives its complete messages).
+        """
+        start = src.tell()
+        if start >= end:
+            return None
+        raw = src.read(4)
+        if not raw:
+            return None
+        if len(raw) < 4:
+            raise _Damage("the file ends inside a record")
+        (hlen,) = struct.unpack("<I", raw)
+        if hlen > _MAX_HEADER or start + 4 + hlen > end:
+            raise _Damage(f"record header at byte {start} is {hlen} bytes: garbage or cut")
+        fields = _fields(self._read(src, hlen, "a record header"))
+        raw = self._read(src, 4, "a record")
+        (dlen,) = struct.unpack("<I", raw)
+        if src.tell() + dlen > end and not cut_ok:
+            raise _Damage(f"the {'file' if end >= self.size else 'chunk'} ends inside a record's data")
+        if "op" not in fields or len(fields["op"]) != 1:
+            raise _Damage(f"record at byte {start} has no op code")
+        return fields, dlen
+
+    def _connection(self, fields: dict[str, bytes], data: bytes) -> _Ros1Conn | None:
+        cid = _u32(fields, "conn")
+        inner = _fields(data)
+        conn = _Ros1Conn(cid, _text(fields, "topic"), _text(inner, "type"),
+                         inner.get("message_definition", b"").decode("utf-8", errors="replace"),
+                         inner.get("md5sum", b"").decode("latin-1"))
+        if cid in self.conns:
+            return None
+        self.conns[cid] = conn
+        return conn
+
+    def _inner(self, src: BinaryIO, end: int) -> Iterator[_Ros1Conn | _Ros1Msg]:
+        """Connection and message records of one chunk's data, from `src` up to `end`."""
+        while True:
+            rec = self._record(src, end)
+            if rec is None:
+                return
+            fields, dlen = rec
+            op = fields["op"][0]
+            if op == _OP_CONNECTION:
+                conn = self._connection(fields, self._read(src, dlen, "a connection record"))
+                if conn is not None:
+                    yield conn
+            elif op == _OP_MSGDATA:
+                cid = _u32(fields, "conn")
+                time = fields.get("time", b"")
+                if len(time) != 8:
+                    raise _Damage("message record without a valid time")
+                sec, nsec = struct.unpack("<II", time)
+                conn = self.conns.get(cid)
+                if conn is None:
+                    raise _Damage(f"message on unknown connection {cid}")
+                if self.want(conn):
+                    data: bytes | None = self._read(src, dlen, "a message")
+                else:
+                    src.seek(dlen, os.SEEK_CUR)
+                    data = None
+                yield _Ros1Msg(cid, sec * 1_000_000_000 + nsec, data)
+            else:
+                raise _Damage(f"record of type {op} inside a chunk")
+
+    def records(self) -> Iterator[_Ros1Conn | _Ros1Msg]:
+        fp = self.fp
+        fp.seek(0)
+        magic = fp.readline(64)
+        if not magic.startswith(b"#ROSBAG V2.0"):
+            raise _Damage(f"unsupported bag version {magic[:12].decode('latin-1', 'replace')!r} (only V2.0 is read)")
+        rec = self._record(fp, self.size)
+        if rec is None or rec[0]["op"][0] != _OP_BAGHEADER:
+            raise _Damage("the bag header record is missing")
+        fields, dlen = rec
+        try:
+            self.index_pos = struct.unpack("<Q", fields.get("index_pos", b""))[0]
+        except struct.error:
+            raise _Damage("the bag header has no valid index_pos") from None
+        if fields.get("encryptor"):
+            raise _Damage(f"encrypted bag ({fields['encryptor'].decode('latin-1')}) cannot be read")
+        fp.seek(dlen, os.SEEK_CUR)
+        while True:
+            rec = self._record(fp, self.size, cut_ok=True)
+            if rec is None:
+                break
+            fields, dlen = rec
+            op = fields["op"][0]
+            if op != _OP_CHUNK and fp.tell() + dlen > self.size:
+                raise _Damage("the file ends inside a record's data")
+            if op == _OP_CHUNK:
+                self.chunks += 1
+                compression = fields.get("compression", b"none").decode("latin-1")
+                if compression == "none":  # its records one by one: a cut chunk keeps its whole ones
+                    chunk_end = fp.tell() + dlen
+                    yield from self._inner(fp, min(chunk_end, self.size))
+                    if chunk_end > self.size:
+                        raise _Damage(f"the file ends inside chunk {self.chunks}")
+                    continue
+                blob = self._read(fp, dlen, "a chunk")
+                try:
+                    if compression == "bz2":
+                        raw = bz2.decompress(blob)
+                    elif compression == "lz4":
+                        from lz4.frame import decompress as lz4_decompress
+
+                        raw = lz4_decompress(blob)
+                    else:
+                        raise _Damage(f"chunk compression {compression!r} is not supported")
+                except _Damage:
+                    raise
+                except Exception as exc:
+                    raise _Damage(f"chunk {self.chunks} cannot be decompressed ({_reason(exc)})") from None
+                yield from self._inner(io.BytesIO(raw), len(raw))
+            elif op == _OP_CONNECTION:
+                conn = self._connection(fields, self._read(fp, dlen, "a connection record"))
+                if conn is not None:
+                    yield conn
+            elif op in (_OP_IDXDATA, _OP_CHUNK_INFO):
+                fp.seek(dlen, os.SEEK_CUR)
+            else:
+                raise _Damage(f"unexpected record of type {op} at byte {fp.tell()}")
+        if self.index_pos and self.size <= self.index_pos:  # no index section at all
+            raise _Damage(f"the file ends at byte {self.size}, before its index at byte {self.index_pos}")
+
+
+# --- summaries --------------------------------------------------------------------------
+
+
+def _open_file(path: Path) -> BinaryIO:
+    try:
+        return open(path, "rb")
+    except FileNotFoundError:
+        raise InputError(f"{path}: file not found") from None
+    except IsADirectoryError:
+        raise InputError(f"{path}: is a directory, not a ROS 1 bag") from None
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read ({exc.strerror})") from None
+
+
+def _ros1_channels(conns: list[tuple[int, str, str, str, int]]) -> tuple[ChannelInfo, ...]:
+    """(id, topic, ROS 1 type, msgdef, count) -> ChannelInfo."""
+    return tuple(
+        ChannelInfo(id=cid, topic=topic, schema_name=msgtype,
+                    schema_encoding="ros1msg" if msgdef else "", message_encoding="ros1", message_count=n)
+        for cid, topic, msgtype, msgdef, n in conns
+    )
+
+
+def _ros1_scan(path: Path) -> BagSummary:
+    """Connections, counts and span from the records themselves (no usable index)."""
+    counts: dict[int, int] = {}
+    n = 0
+    start = end = None
+    damage = None
+    with _open_file(path) as fp:
+        stream = _Ros1Stream(fp, os.fstat(fp.fileno()).st_size, lambda conn: False)
+        try:
+            for item in stream.records():
+                if isinstance(item, _Ros1Msg):
+                    counts[item.conn] = counts.get(item.conn, 0) + 1
+                    n += 1
+                    start = item.time_ns if start is None else min(start, item.time_ns)
+                    end = item.time_ns if end is None else max(end, item.time_ns)
+        except _Damage as exc:
+            damage = f"after {_plural(n, 'complete message')} ({exc})"
+        except Exception as exc:  # anything else a garbage byte can provoke
+            damage = f"after {_plural(n, 'complete message')} ({_reason(exc)})"
+    channels = _ros1_channels(
+        [(c.id, c.topic, c.msgtype, c.msgdef, counts.get(c.id, 0)) for c in stream.conns.values()]
+    )
+    return BagSummary(
+        path=path, format="rosbag1", storage="rosbag1", profile="ros1", library="ROS 1 bag V2.0",
+        channels=channels, message_count=n, start_ns=start, end_ns=end, indexed=False,
+        chunk_count=stream.chunks, damage=damage,
+    )
+
+
+def _ros1_reader(path: Path) -> Any | None:
+    """An open rosbags.rosbag1.Reader, or None when the bag's index cannot be used."""
+    from rosbags.rosbag1 import Reader
+
+    reader = Reader(path)
+    try:
+        reader.open()
+    except Exception:  # ReaderError (no/damaged index), struct.error, AssertionError...
+        return None
+    return reader
+
+
+def _ros1_summary(path: Path) -> BagSummary:
+    with _open_file(path) as fp:  # missing file, directory, permissions: one clear message
+        magic = fp.readline(64).rstrip(b"\n")
+    if magic.startswith(ROSBAG1_MAGIC) and magic != b"#ROSBAG V2.0":
+        version = magic[len(ROSBAG1_MAGIC) :].decode("latin-1", "replace").strip() or "unknown"
+        raise InputError(f"{path}: a ROS 1 bag of format {version}; only V2.0 bags (ROS Groovy and later) are read")
+    reader = _ros1_reader(path)
+    if reader is None:
+        return _ros1_scan(path)
+    try:
+        conns = sorted(reader.connections, key=lambda c: c.id)
+        channels = _ros1_channels(
+            [(c.id, c.topic, _ros1_name(c.msgtype), c.msgdef.data, c.msgcount) for c in conns]
+        )
+        n = sum(c.msgcount for c in conns)
+        return BagSummary(
+            path=path, format="rosbag1", storage="rosbag1", profile="ros1", library="ROS 1 bag V2.0",
+            channels=channels, message_count=n,
+            start_ns=int(reader.start_time) if n else None,
+            end_ns=int(reader.end_time) - 1 if n else None,  # rosbags' end_time is exclusive
+            indexed=True, chunk_count=len(reader.chunk_infos),
+        )
+    finally:
+        reader.close()
+
+
+def _rosbag2_reader(path: Path) -> Any:
+    """An open rosbags.rosbag2.Reader on a bag folder or a .db3 file; InputError otherwise."""
+    from rosbags.rosbag2 import Reader
+
+    root = bag_root(path)
+    if root.is_file() and root.suffix != ".db3":
+        raise InputError(
+            f"{path}: an SQLite file but not named .db3; rosbag2 sqlite storage is read from a "
+            f".db3 file or from its bag folder (with {ROSBAG2_METADATA})"
+        )
+    try:
+        reader = Reader(root)
+        reader.open()
+    except FileNotFoundError:
+        raise InputError(f"{path}: file not found") from None
+    except PermissionError as exc:
+        raise InputError(f"{path}: cannot read ({exc.strerror})") from None
+    except Exception as exc:  # ReaderError (bad metadata, missing .db3, unsupported), apsw errors
+        hint = ""
+        if root.is_dir():
+            mcaps = sorted(p.name for p in root.glob("*.mcap"))
+            if mcaps:  # clearcli's MCAP reader gives what precedes damage in an MCAP file
+                hint = f"; its MCAP storage can be read up to any damage: pass {root / mcaps[0]} itself"
+        raise InputError(f"{path}: cannot read the rosbag2 bag ({_reason(exc)}){hint}") from None
+    return reader
+
+
+def _rosbag2_storage(reader: Any) -> str:
+    storage = reader.storage
+    inner = getattr(storage, "storages", None) or [storage]
+    name = type(inner[0]).__name__
+    return {"Sqlite3Reader": "sqlite3", "McapReader": "mcap"}.get(name, name)
+
+
+def _rosbag2_summary(path: Path) -> BagSummary:
+    reader = _rosbag2_reader(path)
+    try:
+        conns = list(reader.connections)
+        channels = tuple(
+            ChannelInfo(
+                id=c.id, topic=c.topic, schema_name=c.msgtype,
+                schema_encoding={"MSG": "ros2msg", "IDL": "ros2idl"}.get(c.msgdef.format.name, ""),
+                message_encoding=getattr(c.ext, "serialization_format", "cdr"),
+                message_count=int(c.msgcount),
+            )
+            for c in conns
+        )
+        n = int(reader.message_count)
+        storage = _rosbag2_storage(reader)
+        distro = reader.ros_distro
+        compression = reader.compression_mode
+        library = f"rosbag2, {storage} storage" + (f", {distro}" if distro else "") + (
+            f", {reader.compression_format} {compression} compression" if compression else ""
+        )
+        return BagSummary(
+            path=path, format="rosbag2", storage=storage, profile="ros2", library=library,
+            channels=channels, message_count=n,
+            start_ns=int(reader.start_time) if n else None,
+            end_ns=int(reader.end_time) - 1 if n else None,
+            indexed=True, chunk_count=0,
+        )
+    except InputError:
+        raise
+    except Exception as exc:
+        raise InputError(f"{path}: cannot read the rosbag2 bag ({_reason(exc)})") from None
+    finally:
+        reader.close()
+
+
+def bag_format(path: Path) -> BagFormat:
+    """"rosbag1" for a #ROSBAG file, else "rosbag2" (a folder, its metadata.yaml, a .db3)."""
+    path = Path(path)
+    if path.is_file() and path.name != ROSBAG2_METADATA:
+        with _open_file(path) as fp:
+            if fp.read(len(ROSBAG1_MAGIC)) == ROSBAG1_MAGIC:
+                return "rosbag1"
+    return "rosbag2"
+
+
+def read_bag_summary(path: Path) -> BagSummary:
+    """Topics, types, counts and time span of a ROS 1 bag or a rosbag2 bag (InputError if neither)."""
+    path = Path(path)
+    return _ros1_summary(path) if bag_format(path) == "rosbag1" else _rosbag2_summary(path)
+
+
+def _topic_list(summary: BagSummary) -> str:
+    return ", ".join(f"{t} ({s or 'no type'})" for t, s in summary.topics()) or "none"
+
+
+def choose_bag_topic(summary: BagSummary, topic: str | None) -> str:
+    """The point-cloud topic to read: `topic` if given (checked), else the only one there is."""
+    path = summary.path
+    if topic is not None:
+        types = dict(summary.topics())
+        if topic not in types:
+            raise InputError(f"{path}: no topic {topic!r}; topics: {_topic_list(summary)}")
+        if types[topic] not in POINTCLOUD_SCHEMAS:
+            raise InputError(
+                f"{path}: topic {topic} has type {types[topic] or 'unknown'}, not a point cloud "
+                f"({', '.join(sorted(POINTCLOUD_SCHEMAS))})"
+            )
+        return topic
+    candidates = summary.pointcloud_topics()
+    if not candidates and summary.damage is not None:
+        raise InputError(
+            f"{path}: truncated or corrupt {summary.what}: it breaks {summary.damage} before any "
+            f"point-cloud connection; topics seen: {_topic_list(summary)}"
+        )
+    if not candidates:
+        raise InputError(f"no point-cloud topic in {path}; topics: {_topic_list(summary)}")
+    if len(candidates) > 1:
+        raise InputError(
+            f"{path}: several point-cloud topics ({', '.join(candidates)}); choose one with --topic"
+        )
+    return candidates[0]
+
+
+# --- decoding ---------------------------------------------------------------------------
+
+
+# Type stores by (ros1, type, definition), for the whole process: building one and
+# generating its deserialisers costs tens of milliseconds, more than reading a frame.
+_STORES: dict[tuple[bool, str, str], Any] = {}
+_STANDARD: dict[bool, Any] = {}
+
+
+class _Decoders:
+    """rosbags type stores, one per message definition, built lazily and kept.
+
+    A type is taken from the definition the bag carries when there is one (a ROS 1
+    connection always has it; newer rosbag2 bags too), else from the standard types of
+    ROS 1 Noetic / the latest ROS 2.
+    """
+
+    def __init__(self, ros1: bool) -> None:
+        self.ros1 = ros1
+
+    def _standard_store(self) -> Any:
+        from rosbags.typesys import Stores, get_typestore
+
+        if self.ros1 not in _STANDARD:
+            _STANDARD[self.ros1] = get_typestore(Stores.ROS1_NOETIC if self.ros1 else Stores.LATEST)
+        return _STANDARD[self.ros1]
+
+    def _store(self, msgtype: str, msgdef: str, fmt: str) -> Any:
+        key = (self.ros1, msgtype, msgdef)
+        store = _STORES.get(key)
+        if store is None:
+            store = self._standard_store()
+            if msgdef and (self.ros1 or msgtype not in store.fielddefs):
+                from rosbags.typesys import Stores, get_types_from_idl, get_types_from_msg, get_typestore
+
+                try:
+                    own = get_typestore(Stores.EMPTY)
+                    types = get_types_from_idl(msgdef) if fmt == "IDL" else get_types_from_msg(msgdef, msgtype)
+                    own.register(types)
+                    if msgtype in own.fielddefs:
+                        store = own
+                except Exception:  # an unparsable definition: the standard types, if they have it
+                    pass
+            _STORES[key] = store
+        return store
+
+    def decode(self, msgtype: str, msgdef: str, fmt: str, data: bytes | memoryview) -> Any:
+        store = self._store(msgtype, msgdef, fmt)
+        if self.ros1:
+            return store.deserialize_ros1(data, msgtype)
+        return store.deserialize_cdr(data, msgtype)
+
+
+def _frame(decoders: _Decoders, msgtype: str, msgdef: str, fmt: str, data: bytes | memoryview,
+           time_ns: int, source: str) -> Frame:
+    msg = decoders.decode(msgtype, msgdef, fmt, data)
+    if msgtype in POINTCLOUD2_SCHEMAS:
+        return _pointcloud2_frame(_ZeroCopy(msg), time_ns, source)
+    return _foxglove_frame(_ZeroCopy(msg), time_ns, source)
+
+
+class _ZeroCopy:
+    """A deserialised message whose `data` (a NumPy uint8 array) reads as a memoryview,
+    so that the point blob is viewed in place rather than copied to bytes first."""
+
+    def __init__(self, msg: Any) -> None:
+        self._msg = msg
+        data = getattr(msg, "data", b"")
+        self.data = memoryview(data) if isinstance(data, np.ndarray) and data.flags.c_contiguous else data
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._msg, name)
+
+
+# --- iteration --------------------------------------------------------------------------
+
+# One raw message: (normalised type, definition, definition format, data, log time ns).
+_Raw = tuple[str, str, str, "bytes | memoryview", int]
+
+
+def _ros1_indexed(reader: Any, topic: str, skip_to: int = 0) -> Iterator[_Raw]:
+    """Messages of `topic` through the index, in time order, from message `skip_to` on.
+
+    Skipping uses the index: chunks before message `skip_to` are neither read nor
+    decompressed.
+    """
+    import heapq
+
+    conns = [c for c in reader.connections if c.topic == topic]
+    start = None
+    skip = 0
+    if skip_to > 0:
+        entries = heapq.merge(*(reader.indexes[c.id] for c in conns))
+        times = [e.time for _, e in zip(range(skip_to + 1), entries)]
+        if len(times) <= skip_to:
+            return  # the index holds no message `skip_to`
+        start = times[-1]
+        skip = skip_to - sum(1 for t in times[:-1] if t < start)
+    for i, (conn, time_ns, data) in enumerate(reader.messages(connections=conns, start=start)):
+        if i < skip:
+            continue
+        yield conn.msgtype, conn.msgdef.data, "MSG", data, int(time_ns)
+
+
+def _ros1_streamed(path: Path, topic: str) -> Iterator[_Raw]:
+    """Messages of `topic` in file order (no usable index); _Damage where the bag breaks."""
+    with _open_file(path) as fp:
+        stream = _Ros1Stream(fp, os.fstat(fp.fileno()).st_size, lambda conn: conn.topic == topic)
+        for item in stream.records():
+            if isinstance(item, _Ros1Msg) and item.data is not None:
+                conn = stream.conns[item.conn]
+                yield _normalize(conn.msgtype), conn.msgdef, "MSG", item.data, item.time_ns
+
+
+def _rosbag2_messages(path: Path, topic: str) -> Iterator[_Raw]:
+    reader = _rosbag2_reader(path)
+    try:
+        conns = [c for c in reader.connections if c.topic == topic]
+        for conn, time_ns, data in reader.messages(connections=conns):
+            yield conn.msgtype, conn.msgdef.data, conn.msgdef.format.name, data, int(time_ns)
+    finally:
+        reader.close()
+
+
+def _seeks(summary: BagSummary) -> bool:
+    """Whether frame N is found through the bag's index (else by reading the ones before)."""
+    return summary.format == "rosbag1" and summary.indexed
+
+
+def _raw_messages(summary: BagSummary, topic: str, skip_to: int = 0) -> Iterator[tuple[int, _Raw]]:
+    """(index, raw message) of `topic`: from message `skip_to` on when the bag seeks
+    (`_seeks`), else from message 0 (the caller passes over the first ones)."""
+    path = summary.path
+    if summary.format == "rosbag2":
+        yield from enumerate(_rosbag2_messages(path, topic))
+        return
+    reader = _ros1_reader(path) if summary.indexed else None
+    if reader is None:
+        yield from enumerate(_ros1_streamed(path, topic))
+        return
+    try:
+        yield from enumerate(_ros1_indexed(reader, topic, skip_to), start=skip_to)
+    finally:
+        reader.close()
+
+
+def _raise_damage(summary: BagSummary, topic: str, complete: int, reason: str) -> None:
+    path = summary.path
+    if complete == 0:
+        raise InputError(f"{path}: corrupt or truncated {summary.what}: no complete frame on {topic} ({reason})")
+    raise PartialLogError(
+        f"{path}: {summary.what} truncated or corrupt after frame {complete - 1} of {topic} "
+        f"({complete} complete frame{'s' if complete != 1 else ''} read; {reason})"
+    )
+
+
+def _guarded(summary: BagSummary, topic: str, skip_to: int = 0) -> Iterator[tuple[int, _Raw]]:
+    """Raw messages from `skip_to` on; damage after k complete messages -> PartialLogError
+    (k > 0), else InputError. Messages passed over through the index count as complete."""
+    it = _raw_messages(summary, topic, skip_to)
+    complete = skip_to if _seeks(summary) else 0
+    try:
+        while True:
+            try:
+                index, raw = next(it)
+            except StopIteration:
+                return
+            except InputError:
+                raise
+            except _Damage as exc:
+                _raise_damage(summary, topic, complete, str(exc))
+            except Exception as exc:  # rosbags ReaderError, apsw errors, struct.error...
+                _raise_damage(summary, topic, complete, _reason(exc))
+            complete = index + 1
+            if index >= skip_to:
+                yield index, raw
+    finally:
+        it.close()
+
+
+def _decode(decoders: _Decoders, summary: BagSummary, topic: str, index: int, raw: _Raw) -> Frame:
+    msgtype, msgdef, fmt, data, time_ns = raw
+    return _frame(decoders, msgtype, msgdef, fmt, data, time_ns, f"{summary.path.name}#{index} {topic}")
+
+
+def iter_bag_frames(path: Path, topic: str | None = None) -> Iterator[Frame]:
+    """Every frame of the point-cloud topic, decoded one message at a time."""
+    path = Path(path)
+    summary = read_bag_summary(path)
+    topic = choose_bag_topic(summary, topic)
+    decoders = _Decoders(ros1=summary.format == "rosbag1")
+    for index, raw in _guarded(summary, topic):
+        try:
+            frame = _decode(decoders, summary, topic, index, raw)
+        except Exception as exc:
+            _raise_damage(summary, topic, index, f"message {index} cannot be decoded: {_reason(exc)}")
+        yield frame
+
+
+def read_bag_frame(path: Path, topic: str | None = None, index: int = 0) -> Frame:
+    """Frame `index` (from 0) of the point-cloud topic; only that message is decoded."""
+    path = Path(path)
+    summary = read_bag_summary(path)
+    topic = choose_bag_topic(summary, topic)
+    total = summary.count(topic)
+    if index < 0 or (summary.damage is None and index >= total):
+        raise InputError(
+            f"{path}: --frame {index} does not exist: {topic} has {_plural(total, 'frame')}"
+            + (f" (0..{total - 1})" if total else "")
+        )
+    decoders = _Decoders(ros1=summary.format == "rosbag1")
+    for i, raw in _guarded(summary, topic, skip_to=index):
+        if i == index:
+            try:
+                return _decode(decoders, summary, topic, index, raw)
+            except Exception as exc:
+                raise InputError(f"{path}: frame {index} of {topic} cannot be decoded ({_reason(exc)})") from None
+    total = summary.count(topic)
+    if summary.damage is not None:
+        _raise_damage(summary, topic, total, f"frame {index} is past the damage; the bag breaks {summary.damage}")
+    raise InputError(f"{path}: --frame {index} does not exist: {topic} has {_plural(total, 'frame')}")
+
+
+# --- transforms -------------------------------------------------------------------------
+
+
+def read_bag_transforms(path: Path, max_messages: int = 1000) -> dict[tuple[str, str], np.ndarray]:
+    """T_parent_child (4x4) of every (parent, child) pair on the bag's /tf_static and /tf.
+
+    The first seen of each pair; at most `max_messages` transform messages are read. A bag
+    without them, or whose transforms cannot be read, gives {} (what
+    `clearcli.replay.session.read_transforms` gives for an MCAP log).
+    """
+    try:
+        summary = read_bag_summary(Path(path))
+    except InputError:
+        return {}
+    decoders = _Decoders(ros1=summary.format == "rosbag1")
+    found: dict[tuple[str, str], np.ndarray] = {}
+    budget = max_messages
+    present = dict(summary.topics())
+    for topic in (t for t in TF_TOPICS if t in present):
+        with contextlib.closing(_raw_messages(summary, topic)) as messages:
+            try:
+                for _, (msgtype, msgdef, fmt, data, _t) in messages:
+                    if budget <= 0:
+                        return found
+                    budget -= 1
+                    try:
+                        items = list(decoders.decode(msgtype, msgdef, fmt, data).transforms)
+                    except Exception:
+                        continue
+                    for tf in items:
+                        pair, T = _transform(tf)
+                        if T is not None:
+                            found.setdefault(pair, T)
+            except Exception:  # a damaged bag: whatever was read before the damage
+                continue
+    return found
+
+
+def _transform(tf: Any) -> tuple[tuple[str, str], np.ndarray | None]:
+    """((parent, child), T_parent_child) of a geometry_msgs/TransformStamped; T None if unusable."""
+    try:
+        pair = (str(tf.header.frame_id).lstrip("/"), str(tf.child_frame_id).lstrip("/"))
+        r, t = tf.transform.rotation, tf.transform.translation
+        q = [float(r.x), float(r.y), float(r.z), float(r.w)]
+        if not all(pair) or not np.isfinite(q).all() or np.linalg.norm(q) < 1e-9:
+            return pair, None
+        T = np.eye(4)
+        T[:3, :3] = _quat_matrix(q)
+        T[:3, 3] = [float(t.x), float(t.y), float(t.z)]
+    except Exception:
+        return ("", ""), None
+    return pair, T
