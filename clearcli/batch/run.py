@@ -116,8 +116,10 @@ def _short(line: Mapping[str, Any]) -> str:
     if schema == "clear.predicates":
         return f"{len(doc['objects'])} objects, {len(doc['facts'])} facts"
     if schema == "clear.info":
-        fr = doc.get("frame") or {}
-        return f"{fr.get('n_points', '?')} points, {fr.get('n_finite', '?')} finite"
+        fr = doc.get("frame")
+        if not fr:
+            return f"{doc.get('format', '?')}: no point-cloud frame"
+        return f"{doc.get('format', '?')}: {fr['points']} points, {fr['finite_points']} finite"
     if schema == "clear.evaluate.frame":
         return f"F1 {doc['f1']:.3f}, {doc['n_true']} true / {doc['n_pred']} found"
     return ""

@@ -94,9 +94,11 @@ def _check_outputs(job: Job) -> None:
 def _info(job: Job) -> Outcome:
     from clearcli.commands.info import describe_file
 
+    from clearcli.commands.info import log_part
+
     info = describe_file(Path(job.source), job.options.get("topic"), job.index)
-    complete = info.get("format") != "mcap" or info["mcap"]["complete"]
-    return Outcome("info", 1, info, 0 if complete else 9)
+    log = log_part(info)
+    return Outcome("info", 1, info, 0 if log is None or log["complete"] else 9)
 
 
 def _segment(job: Job) -> Outcome:

@@ -43,6 +43,8 @@ from typing import TYPE_CHECKING, Annotated, Any, Optional
 
 import typer
 
+from clearcli.commands import batchopts as bo
+
 if TYPE_CHECKING:
     from clearcli.io.frames import Frame
 
@@ -237,19 +239,38 @@ def _print_table(info: dict[str, Any]) -> None:
 
 
 def info_cmd(
-    file: Annotated[
-        Path, typer.Argument(help="A .pcd, .mcap or ROS 1 .bag file (told apart by content), or a rosbag2 folder.")
+    inputs: Annotated[
+        list[Path],
+        typer.Argument(
+            help="A .pcd, .mcap or ROS 1 .bag file (told apart by content), or a rosbag2 folder; "
+            "several, or folders to search, make a batch.",
+        ),
     ],
     json_out: Annotated[bool, typer.Option("--json", help="Machine-readable output (schema clear.info).")] = False,
     topic: Annotated[
         Optional[str], typer.Option("--topic", help="MCAP/bag: the point-cloud topic, when there are several.")
     ] = None,
     frame: Annotated[int, typer.Option("--frame", help="MCAP/bag: which frame of the topic to describe (from 0).")] = 0,
+    every: bo.Every = None,
+    out_dir: bo.OutDir = None,
+    resume: bo.Resume = False,
+    jobs: bo.Jobs = None,
+    ray: bo.Ray = None,
+    fail_fast: bo.FailFast = False,
 ) -> None:
     """What a file holds: points, fields, organized shape, finite points, bounds; for
     MCAP logs and ROS bags also the channels/topics, types, message counts and time span."""
+    from clearcli.batch.run import BatchRequest, default_jobs, is_batch, run_batch
     from clearcli.commands.common import print_json
     from clearcli.errors import PartialLogError
+
+    if is_batch(inputs, every, out_dir, ray):
+        req = BatchRequest(
+            "info", inputs, {}, frame=frame, every=every, topic=topic, out_dir=out_dir, resume=resume,
+            jobs=jobs or default_jobs(), ray=ray, fail_fast=fail_fast, json_out=json_out,
+        )
+        raise typer.Exit(run_batch(req))
+    file = inputs[0]
 
     info = describe_file(file, topic, frame)
     if json_out:
