@@ -222,12 +222,14 @@ def read_summary(path: Path) -> McapSummary:
         )
 
 
-def _topic_list(summary: McapSummary) -> str:
-    return ", ".join(f"{t} ({s or 'no schema'})" for t, s in summary.topics()) or "none"
+def _topic_list(summary: Any) -> str:
+    return ", ".join(f"{t} ({s or 'no type'})" for t, s in summary.topics()) or "none"
 
 
-def choose_topic(summary: McapSummary, topic: str | None) -> str:
-    """The point-cloud topic to read: `topic` if given (checked), else the only one there is."""
+def choose_topic(summary: Any, topic: str | None) -> str:
+    """The point-cloud topic to read: `topic` if given (checked), else the only one there is.
+    ``summary``: an `McapSummary`, or a bag's summary (`clearcli.io.rosbag.BagSummary`):
+    anything with ``path``, ``topics()``, ``pointcloud_topics()`` and ``damage``."""
     path = summary.path
     if topic is not None:
         types = dict(summary.topics())
@@ -241,9 +243,10 @@ def choose_topic(summary: McapSummary, topic: str | None) -> str:
         return topic
     candidates = summary.pointcloud_topics()
     if not candidates and summary.damage is not None:
+        what = getattr(summary, "what", "MCAP log")
         raise InputError(
-            f"{path}: truncated or corrupt MCAP log: it breaks {summary.damage} before any "
-            f"point-cloud channel; topics seen: {_topic_list(summary)}"
+            f"{path}: truncated or corrupt {what}: it breaks {summary.damage} before any "
+            f"point-cloud topic; topics seen: {_topic_list(summary)}"
         )
     if not candidates:
         raise InputError(f"no point-cloud topic in {path}; topics: {_topic_list(summary)}")

@@ -502,36 +502,11 @@ def read_bag_summary(path: Path) -> BagSummary:
     return _ros1_summary(path) if bag_format(path) == "rosbag1" else _rosbag2_summary(path)
 
 
-def _topic_list(summary: BagSummary) -> str:
-    return ", ".join(f"{t} ({s or 'no type'})" for t, s in summary.topics()) or "none"
-
-
 def choose_bag_topic(summary: BagSummary, topic: str | None) -> str:
-    """The point-cloud topic to read: `topic` if given (checked), else the only one there is."""
-    path = summary.path
-    if topic is not None:
-        types = dict(summary.topics())
-        if topic not in types:
-            raise InputError(f"{path}: no topic {topic!r}; topics: {_topic_list(summary)}")
-        if types[topic] not in POINTCLOUD_SCHEMAS:
-            raise InputError(
-                f"{path}: topic {topic} has type {types[topic] or 'unknown'}, not a point cloud "
-                f"({', '.join(sorted(POINTCLOUD_SCHEMAS))})"
-            )
-        return topic
-    candidates = summary.pointcloud_topics()
-    if not candidates and summary.damage is not None:
-        raise InputError(
-            f"{path}: truncated or corrupt {summary.what}: it breaks {summary.damage} before any "
-            f"point-cloud connection; topics seen: {_topic_list(summary)}"
-        )
-    if not candidates:
-        raise InputError(f"no point-cloud topic in {path}; topics: {_topic_list(summary)}")
-    if len(candidates) > 1:
-        raise InputError(
-            f"{path}: several point-cloud topics ({', '.join(candidates)}); choose one with --topic"
-        )
-    return candidates[0]
+    """The point-cloud topic to read: the rules and messages of MCAP logs."""
+    from clearcli.io.mcap import choose_topic
+
+    return choose_topic(summary, topic)
 
 
 # --- decoding ---------------------------------------------------------------------------
