@@ -1,7 +1,8 @@
 """The `clear` command line: parse, call one function, print. Nothing else.
 
-Subcommands live in `clearcli/commands/<name>.py`, each a plain function registered here;
-heavy libraries are imported inside those functions so that `clear --help` is fast.
+Subcommands live in `clearcli/commands/<name>.py`, each a plain function registered here
+(clearcli/commands/registry.py lists them; `main` imports and registers only the one it
+runs); heavy libraries are imported inside those functions so that `clear --help` is fast.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from clearcli import __version__
 from clearcli.errors import EXIT_CODES, EXIT_INTERNAL, ClearError
 
 _EXIT_HELP = "\n\n".join(f"{code}: {text}" for code, text in EXIT_CODES.items())
+
 
 def _version(value: bool) -> None:
     if value:

@@ -1,29 +1,38 @@
 """The subcommands, in the order `clear --help` lists them.
 
-Each entry: (name, function, typer.command kwargs). A subcommand's module imports only
-typer/rich at top level.
+Each entry names its function as "module:attribute", imported only when the command is
+registered: `clear plan ...` imports and registers `plan` alone (clearcli/cli.py), while
+`clear --help` and anything not naming a known command register them all. A
+subcommand's module imports only typer/rich at top level.
+
+COMMANDS: (name, "module:function", typer.command kwargs).
+GROUPS: (name, "module:typer.Typer").
 """
 
 from __future__ import annotations
 
-from typing import Any, Callable
+from importlib import import_module
+from typing import Any
 
-import typer
-
-from clearcli.commands import basic, info, replay, plan, predicates, simulate
-from clearcli.commands import evaluate, segment
-
-COMMANDS: list[tuple[str, Callable[..., Any], dict[str, Any]]] = [
-    ("info", info.info_cmd, {}),
-    ("segment", segment.segment_cmd, {}),
-    ("predicates", predicates.predicates_cmd, {}),
-    ("domain", predicates.domain_cmd, {}),
-    ("plan", plan.plan_cmd, {}),
-    ("replay", replay.replay_cmd, {}),
-    ("simulate", simulate.simulate_cmd, {}),
-    ("settings", basic.settings_cmd, {}),
+COMMANDS: list[tuple[str, str, dict[str, Any]]] = [
+    ("info", "clearcli.commands.info:info_cmd", {}),
+    ("segment", "clearcli.commands.segment:segment_cmd", {}),
+    ("predicates", "clearcli.commands.predicates:predicates_cmd", {}),
+    ("domain", "clearcli.commands.predicates:domain_cmd", {}),
+    ("plan", "clearcli.commands.plan:plan_cmd", {}),
+    ("replay", "clearcli.commands.replay:replay_cmd", {}),
+    ("simulate", "clearcli.commands.simulate:simulate_cmd", {}),
+    ("settings", "clearcli.commands.basic:settings_cmd", {}),
 ]
 
-GROUPS: list[tuple[str, typer.Typer]] = [
-    ("evaluate", evaluate.evaluate_app),
+GROUPS: list[tuple[str, str]] = [
+    ("evaluate", "clearcli.commands.evaluate:evaluate_app"),
 ]
+
+NAMES: frozenset[str] = frozenset([name for name, _, _ in COMMANDS] + [name for name, _ in GROUPS])
+
+
+def load(target: str) -> Any:
+    """The object a "module:attribute" entry names."""
+    module, _, attr = target.partition(":")
+    return getattr(import_module(module), attr)

@@ -162,12 +162,59 @@ def inside_convex_raster(
     return out
 
 
+def _label_grid(grid: np.ndarray) -> tuple[np.ndarray, int]:
+    """8-connected components of a 2D bool grid: (labels (H, W), n), 0 off the grid's
+    cells, 1..n numbered in raster order of each component's first cell, as
+    scipy.ndimage.label numbers them (this replaces ndimage.label and binary_dilation:
+    importing scipy.ndimage cost more than everything they did here)."""
+    from scipy.sparse import csr_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    h, w = grid.shape
+    flat = np.flatnonzero(grid)  # raster order
+    m = flat.size
+    labels = np.zeros(grid.shape, dtype=np.int32)
+    if m == 0:
+        return labels, 0
+    ids = np.full((h + 2, w + 2), -1, dtype=np.int32)  # cell -> node, -1 empty, a border of -1
+    inner = ids[1:-1, 1:-1]
+    inner[grid] = np.arange(m, dtype=np.int32)
+    src: list[np.ndarray] = []
+    dst: list[np.ndarray] = []
+    for dy, dx in ((0, 1), (1, -1), (1, 0), (1, 1)):  # each neighbouring pair once
+        nbr = ids[1 + dy : h + 1 + dy, 1 + dx : w + 1 + dx]
+        hit = (inner >= 0) & (nbr >= 0)
+        src.append(inner[hit])
+        dst.append(nbr[hit])
+    a, b = np.concatenate(src), np.concatenate(dst)
+    graph = csr_matrix((np.ones(a.size, dtype=np.int8), (a, b)), shape=(m, m))
+    n, comp = connected_components(graph, directed=False)
+    first = np.full(n, m, dtype=np.int64)
+    np.minimum.at(first, comp, np.arange(m))
+    rank = np.empty(n, dtype=np.int32)
+    rank[np.argsort(first)] = np.arange(1, n + 1, dtype=np.int32)
+    labels.ravel()[flat] = rank[comp]
+    return labels, int(n)
+
+
+def _dilate(mask: np.ndarray, steps: int) -> np.ndarray:
+    """``mask`` dilated ``steps`` times by a 3x3 square (ndimage.binary_dilation's
+    ``iterations``), i.e. every cell within Chebyshev distance ``steps`` of a set cell:
+    a box sum over (2 steps + 1) cells along each axis, by cumulative sums."""
+    out = mask.astype(np.int32)
+    width = 2 * steps + 1
+    for axis in (0, 1):
+        pad = [(0, 0), (0, 0)]
+        pad[axis] = (steps + 1, steps)
+        c = np.cumsum(np.pad(out, pad), axis=axis, dtype=np.int32)
+        out = c[width:] - c[:-width] if axis == 0 else c[:, width:] - c[:, :-width]
+    return out > 0
+
+
 def largest_component(points_2d: np.ndarray, cell_m: float, join_gap_m: float = 0.0) -> tuple[np.ndarray, float]:
     """Mask of the points in the largest 8-connected piece of the occupied grid cells,
     together with every other piece within ``join_gap_m`` of it (objects standing on a
     table and their shadows cut its visible surface into pieces), and their area (m^2)."""
-    from scipy import ndimage
-
     cells = np.floor((points_2d - points_2d.min(axis=0)) / cell_m).astype(np.int64)
     dims = cells.max(axis=0) + 1
     if dims[0] * dims[1] > 4_000_000:  # a plane reaching far away: coarser cells
@@ -177,7 +224,7 @@ def largest_component(points_2d: np.ndarray, cell_m: float, join_gap_m: float = 
         dims = cells.max(axis=0) + 1
     grid = np.zeros(dims, dtype=bool)
     grid[cells[:, 0], cells[:, 1]] = True
-    labels, n = ndimage.label(grid, structure=np.ones((3, 3), dtype=bool))
+    labels, n = _label_grid(grid)
     if n == 0:
         return np.zeros(points_2d.shape[0], dtype=bool), 0.0
     sizes = np.bincount(labels.ravel())
@@ -187,7 +234,7 @@ def largest_component(points_2d: np.ndarray, cell_m: float, join_gap_m: float = 
     chosen[best] = True
     steps = int(round(join_gap_m / cell_m))
     if steps > 0 and n > 1:
-        near = ndimage.binary_dilation(labels == best, structure=np.ones((3, 3), dtype=bool), iterations=steps)
+        near = _dilate(labels == best, steps)
         touched = np.unique(labels[near])
         touched = touched[(touched > 0) & (sizes[touched] >= 4)]  # not specks
         chosen[touched] = True

@@ -1,0 +1,206 @@
+"""Cold start of `clear`: wall time per command, each run a fresh process, and the
+share of it spent importing.
+
+    .venv/bin/python benchmarks/startup.py [--runs N] [--no-imports] [--top K]
+
+Commands timed (FRAME = mosd/test/test57.pcd of the shared data): `clear --help`,
+`clear info FRAME`, `clear segment FRAME`, `clear predicates FRAME`, `clear plan FRAME`.
+Every run is a new process of the venv's `clear` script (stdout and stderr discarded);
+one untimed run per command first warms the page cache. The commands' runs are
+interleaved; printed are the median and min wall time of N runs and the median CPU time
+(user + system of the process and its children, helper threads included, so it can
+exceed the wall time). Other work on the machine inflates both: the load average is
+printed before and after.
+
+Import share: the modules a command imports are taken from one `-X importtime` run of
+it (the top-level entries after `site`, in import order); a fresh process that imports
+only those modules is timed the same way ("imports", median of N); "work" is the wall
+median minus that. The heaviest top-level imports (cumulative ms from -X importtime,
+which adds its own overhead) are listed per command. "python" is a bare
+`python -c pass`, for scale.
+
+A note is printed when clearcli has no bytecode cache (e.g. PYTHONDONTWRITEBYTECODE set
+with an editable install): every run then compiles clearcli's modules from source.
+
+Shared data: $CLEAR_SHARED, else ../shared/data beside the repository.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import resource
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+
+def _shared() -> Path:
+    env = os.environ.get("CLEAR_SHARED")
+    return Path(env) if env else Path(__file__).resolve().parent.parent.parent / "shared" / "data"
+
+
+def _clear_cmd() -> list[str]:
+    """How to start `clear`: [python, script] for the venv's console script (what users
+    run; started through this interpreter so -X importtime can be added), else
+    [python, -m, clearcli.cli]."""
+    script = Path(sys.executable).parent / "clear"
+    if script.is_file():
+        return [sys.executable, str(script)]
+    return [sys.executable, "-m", "clearcli.cli"]
+
+
+def _run(argv: list[str]) -> tuple[float, float, int]:
+    """(wall s, CPU s of the process and its children, exit code)."""
+    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    proc = subprocess.run(argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    wall = time.perf_counter() - t0
+    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
+    return wall, cpu, proc.returncode
+
+
+def _imports(clear: list[str], args: list[str]) -> tuple[list[str], list[tuple[float, str]]]:
+    """The top-level modules a command imports after `site` (in order), and their
+    cumulative ms."""
+    proc = subprocess.run(
+        [clear[0], "-X", "importtime", *clear[1:], *args],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    names: list[str] = []
+    costs: list[tuple[float, str]] = []
+    children: list[tuple[float, str]] = []  # level-1 entries of the next top-level one
+    after_site = False
+    for line in proc.stderr.splitlines():
+        if not line.startswith("import time:") or "cumulative" in line:
+            continue
+        _, cum, name = line[len("import time:") :].split("|")
+        level = (len(name) - len(name.lstrip(" ")) - 1) // 2
+        ms = int(cum) / 1000.0
+        name = name.strip()
+        if level == 1:
+            children.append((ms, name))
+        if level != 0:
+            continue
+        if not after_site:  # site, and what it imports, run before any command anyway
+            after_site = name == "site"
+        else:
+            names.append(name)
+            # clearcli.cli holds typer and the command modules: list those instead
+            costs.extend(children if name == "clearcli.cli" else [(ms, name)])
+        children = []
+    return names, costs
+
+
+def _bytecode_note() -> str | None:
+    """A warning when clearcli's modules are compiled from source on every start."""
+    import importlib.util
+
+    spec = importlib.util.find_spec("clearcli.cli")
+    if spec is None or spec.origin is None:
+        return None
+    if Path(importlib.util.cache_from_source(spec.origin)).exists():
+        return None
+    why = " (PYTHONDONTWRITEBYTECODE is set)" if os.environ.get("PYTHONDONTWRITEBYTECODE") else ""
+    return (
+        f"note: clearcli has no bytecode cache{why}: every run compiles its modules from source; "
+        f"`{Path(sys.executable).name} -m compileall -q {Path(spec.origin).parent}` would save that time"
+    )
+
+
+def _import_only_argv(modules: list[str]) -> list[str]:
+    code = (
+        "import importlib\n"
+        f"for m in {modules!r}:\n"
+        "    try:\n"
+        "        importlib.import_module(m)\n"
+        "    except Exception:\n"
+        "        pass\n"
+    )
+    return [sys.executable, "-c", code]
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--runs", type=int, default=7, help="fresh processes per command (default 7)")
+    ap.add_argument("--no-imports", action="store_true", help="skip the import-share measurement")
+    ap.add_argument("--top", type=int, default=6, help="heaviest top-level imports listed per command")
+    opts = ap.parse_args()
+    runs = max(1, opts.runs)
+
+    data = _shared()
+    frame = data / "mosd" / "test" / "test57.pcd"
+    if not frame.is_file():
+        sys.exit(
+            f"startup.py: shared data not found: {frame} is missing.\n"
+            "Set CLEAR_SHARED to the shared data directory (the one holding mosd/test/test57.pcd)."
+        )
+
+    clear = _clear_cmd()
+    commands: list[tuple[str, list[str]]] = [
+        ("--help", ["--help"]),
+        ("info", ["info", str(frame)]),
+        ("segment", ["segment", str(frame)]),
+        ("predicates", ["predicates", str(frame)]),
+        ("plan", ["plan", str(frame)]),
+    ]
+    load0 = os.getloadavg()[0]
+    print(f"clear: {' '.join(clear)}\nframe: {frame}\nruns: {runs}   cpus: {os.cpu_count()}")
+
+    import_argv: dict[str, list[str]] = {}
+    top: dict[str, list[tuple[float, str]]] = {}
+    if not opts.no_imports:
+        for label, args in commands:
+            names, costs = _imports(clear, args)
+            import_argv[label] = _import_only_argv(names)
+            top[label] = sorted(costs, reverse=True)[: opts.top]
+
+    walls: dict[str, list[float]] = {label: [] for label, _ in commands}
+    cpus: dict[str, list[float]] = {label: [] for label, _ in commands}
+    imps: dict[str, list[float]] = {label: [] for label, _ in commands}
+    codes: dict[str, set[int]] = {label: set() for label, _ in commands}
+    bare: list[float] = []
+    for _, args in commands:  # warm-up: page cache
+        _run(clear + args)
+    for _ in range(runs):
+        bare.append(_run([sys.executable, "-c", "pass"])[0])
+        for label, args in commands:
+            wall, cpu, rc = _run(clear + args)
+            walls[label].append(wall)
+            cpus[label].append(cpu)
+            codes[label].add(rc)
+            if label in import_argv:
+                imps[label].append(_run(import_argv[label])[0])
+    load1 = os.getloadavg()[0]
+
+    print(f"load average (1 min) before {load0:.2f}, after {load1:.2f}")
+    note = _bytecode_note()
+    if note:
+        print(note)
+    print()
+    print(f"{'command':<12} {'wall med':>9} {'min':>7} {'cpu med':>8} {'imports':>8} {'share':>6} {'work':>7}  exit")
+    print(f"{'python':<12} {statistics.median(bare):9.3f} {min(bare):7.3f}")
+    for label, _ in commands:
+        w = statistics.median(walls[label])
+        line = f"{label:<12} {w:9.3f} {min(walls[label]):7.3f} {statistics.median(cpus[label]):8.3f}"
+        if imps[label]:
+            i = statistics.median(imps[label])
+            line += f" {i:8.3f} {100 * i / w:5.0f}% {w - i:7.3f}"
+        else:
+            line += " " * 23
+        line += "  " + ",".join(str(c) for c in sorted(codes[label]))
+        print(line)
+    print("(seconds; wall: a fresh `clear` process; imports: a fresh process importing only what it imports)")
+    if top:
+        print("\nheaviest top-level imports (-X importtime cumulative, ms):")
+        for label, _ in commands:
+            print(f"  {label:<11} " + ", ".join(f"{name} {ms:.0f}" for ms, name in top[label]))
+
+
+if __name__ == "__main__":
+    main()
