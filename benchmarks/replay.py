@@ -85,7 +85,6 @@ def measure(log: Path) -> dict:
     import clearcli.robot.kinematics  # noqa: F401
     import mcap.reader  # noqa: F401
     import mcap_ros2.decoder  # noqa: F401
-    import open3d  # noqa: F401
     import pinocchio  # noqa: F401
     from clearcli.io.read import iter_frames
     from clearcli.pipeline import Pipeline

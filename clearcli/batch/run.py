@@ -28,6 +28,7 @@ from typing import Any, Callable, Mapping, Sequence
 
 from clearcli.batch.sources import BadInput, FrameRef, check_unique_names, expand
 from clearcli.batch.work import MARK, OUTPUT_KINDS, Job, run_job
+from clearcli.commands.batchopts import is_batch  # noqa: F401  (re-exported)
 from clearcli.errors import EXIT_BATCH_FAILED, EXIT_NO_PLAN, EXIT_OK, EXIT_PARTIAL_PLAN, InputError
 
 BATCH_SCHEMA_VERSION = 1
@@ -51,13 +52,6 @@ class BatchRequest:
     ray: str | None = None
     fail_fast: bool = False
     json_out: bool = False
-
-
-def is_batch(inputs: Sequence[Path], every: int | None, out_dir: Path | None, ray: str | None) -> bool:
-    """Several frames, a folder, --every, --out-dir or --ray make a batch."""
-    first = Path(inputs[0]) if inputs else Path()
-    folder = first.is_dir() and not (first / "metadata.yaml").is_file()  # a rosbag2 bag is one log
-    return len(inputs) != 1 or folder or every is not None or out_dir is not None or ray is not None
 
 
 def parse_outputs(command: str, text: str | None) -> tuple[str, ...]:

@@ -38,6 +38,13 @@ Ray = Annotated[
 FailFast = Annotated[bool, typer.Option("--fail-fast", help="Batch: stop at the first frame that fails.")]
 
 
+def is_batch(inputs: Any, every: int | None, out_dir: Path | None, ray: str | None) -> bool:
+    """Several frames, a folder (not a rosbag2 bag), --every, --out-dir or --ray make a batch."""
+    first = Path(inputs[0]) if inputs else Path()
+    folder = first.is_dir() and not (first / "metadata.yaml").is_file()
+    return len(inputs) != 1 or folder or every is not None or out_dir is not None or ray is not None
+
+
 def outputs_option(kinds: tuple[str, ...]) -> Any:
     return Annotated[
         Optional[str],

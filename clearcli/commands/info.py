@@ -260,11 +260,12 @@ def info_cmd(
 ) -> None:
     """What a file holds: points, fields, organized shape, finite points, bounds; for
     MCAP logs and ROS bags also the channels/topics, types, message counts and time span."""
-    from clearcli.batch.run import BatchRequest, default_jobs, is_batch, run_batch
     from clearcli.commands.common import print_json
     from clearcli.errors import PartialLogError
 
-    if is_batch(inputs, every, out_dir, ray):
+    if bo.is_batch(inputs, every, out_dir, ray):
+        from clearcli.batch.run import BatchRequest, default_jobs, run_batch
+
         req = BatchRequest(
             "info", inputs, {}, frame=frame, every=every, topic=topic, out_dir=out_dir, resume=resume,
             jobs=jobs or default_jobs(), ray=ray, fail_fast=fail_fast, json_out=json_out,

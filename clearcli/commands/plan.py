@@ -247,9 +247,10 @@ def plan_cmd(
     from clearcli.errors import EXIT_NO_PLAN, InputError
     from clearcli.settings import load_settings, override
 
-    from clearcli.batch.run import BatchRequest, default_jobs, is_batch, parse_outputs, run_batch
 
-    if is_batch(inputs, every, out_dir, ray):
+    if bo.is_batch(inputs, every, out_dir, ray):
+        from clearcli.batch.run import BatchRequest, default_jobs, parse_outputs, run_batch
+
         bo.single_only(**{"-o": output, "--problem": problem, "--domain": domain, "--png": png})
         req = BatchRequest(
             "plan", inputs,

@@ -147,9 +147,10 @@ def predicates_cmd(
     from clearcli.predicates.state_builder import compute_state
     from clearcli.settings import load_settings
 
-    from clearcli.batch.run import BatchRequest, default_jobs, is_batch, parse_outputs, run_batch
 
-    if is_batch(inputs, every, out_dir, ray):
+    if bo.is_batch(inputs, every, out_dir, ray):
+        from clearcli.batch.run import BatchRequest, default_jobs, parse_outputs, run_batch
+
         bo.single_only(**{"-o": output, "--png": png})
         req = BatchRequest(
             "predicates", inputs,

@@ -112,7 +112,6 @@ def segment_cmd(
     from clearcli.perception.segment import segment
     from clearcli.settings import load_settings, override
 
-    from clearcli.batch.run import BatchRequest, default_jobs, is_batch, parse_outputs, run_batch
 
     flags = dict(
         voxel_m=voxel_m,
@@ -123,7 +122,9 @@ def segment_cmd(
         outlier_method=outlier_method,
         occlusion_merge=occlusion_merge,
     )
-    if is_batch(inputs, every, out_dir, ray):
+    if bo.is_batch(inputs, every, out_dir, ray):
+        from clearcli.batch.run import BatchRequest, default_jobs, parse_outputs, run_batch
+
         bo.single_only(**{"-o": labels_out, "--png": png})
         req = BatchRequest(
             "segment", inputs,

@@ -40,7 +40,7 @@ from clearcli.io.pointfields import (
     records_from_blob,
 )
 
-MCAP_MAGIC = b"\x89MCAP0\r\n"
+from clearcli.io.read import MCAP_MAGIC  # noqa: E402  (the signatures live with the sniffer)
 DEFAULT_TOPIC = "/camera/depth_registered/points"
 DEFAULT_FRAME_ID = "camera_rgb_optical_frame"
 

@@ -22,12 +22,15 @@ from clearcli.errors import InputError, SceneError
 from clearcli.io.frames import Frame
 
 _SNIFF_BYTES = 64
+# File signatures, here so that telling a PCD apart imports no log reader.
+MCAP_MAGIC = b"\x89MCAP0\r\n"
+ROSBAG1_MAGIC = b"#ROSBAG"
+SQLITE_MAGIC = b"SQLite format 3\x00"
+ROSBAG2_METADATA = "metadata.yaml"
 FileKind = Literal["pcd", "mcap", "rosbag1", "rosbag2"]
 
 
 def _directory_kind(path: Path) -> FileKind:
-    from clearcli.io.rosbag import ROSBAG2_METADATA
-
     if (path / ROSBAG2_METADATA).is_file():
         return "rosbag2"
     try:
@@ -48,9 +51,7 @@ def _directory_kind(path: Path) -> FileKind:
 def sniff(path: Path) -> FileKind:
     """"pcd", "mcap", "rosbag1" (a ROS 1 bag) from the file's first bytes (not its name), or
     "rosbag2" for a rosbag2 folder, its metadata.yaml or a .db3 file; InputError otherwise."""
-    from clearcli.io.mcap import MCAP_MAGIC
     from clearcli.io.pcd import looks_like_pcd
-    from clearcli.io.rosbag import ROSBAG1_MAGIC, ROSBAG2_METADATA, SQLITE_MAGIC
 
     path = Path(path)
     if path.is_dir():

@@ -50,9 +50,7 @@ from clearcli.io.mcap import (
     _reason,
 )
 
-ROSBAG1_MAGIC = b"#ROSBAG"
-SQLITE_MAGIC = b"SQLite format 3\x00"
-ROSBAG2_METADATA = "metadata.yaml"
+from clearcli.io.read import ROSBAG1_MAGIC, ROSBAG2_METADATA, SQLITE_MAGIC  # noqa: E402
 TF_TOPICS = ("/tf_static", "/tf")
 
 BagFormat = Literal["rosbag1", "rosbag2"]
