@@ -231,3 +231,44 @@ def test_evaluate_dataset_on_the_given_mosd_frames(tmp_path: Path) -> None:
     prow, psummary = lines_of(pred.stdout)
     assert [r["document"]["f1"] for r in prow] == [d["f1"] for d in docs if "/test/" in d["source"]]
     assert all(r["document"]["time_s"] == 0 for r in prow)
+
+
+def test_fail_fast_stops_after_the_first_failure(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.pcd"
+    bad.write_text("not a cloud")
+    res = clear("segment", bad, *FRAMES, "--json", "--fail-fast", "--jobs", "1")
+    assert res.returncode == 11
+    rows, summary = lines_of(res.stdout)
+    assert [Path(r["source"]).name for r in rows] == ["bad.pcd"] and rows[0]["exit_code"] == 3
+    assert summary["stopped_early"] and summary["not_done"] == len(FRAMES)
+
+
+def test_ctrl_c_stops_cleanly(tmp_path: Path) -> None:
+    """SIGINT to the whole process group (what a terminal's Ctrl-C sends) mid-batch:
+    exit 130, the summary of what finished, no worker left, no temporary left."""
+    out = tmp_path / "out"
+    args = [sys.executable, "-m", "clearcli.cli", "plan", *map(str, FRAMES * 3), "--json", "--jobs", "2"]
+    frames = [tmp_path / f"f{k}.pcd" for k in range(len(FRAMES) * 3)]
+    for f, src in zip(frames, FRAMES * 3):
+        f.write_bytes(src.read_bytes())
+    args = [sys.executable, "-m", "clearcli.cli", "plan", *map(str, frames), "--json", "--jobs", "2",
+            "--out-dir", str(out), "--outputs", "plan,problem,png"]
+    proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    deadline = time.time() + 300
+    while time.time() < deadline and not (out.exists() and list(out.glob("*.json"))):
+        time.sleep(0.05)
+    os.killpg(proc.pid, signal.SIGINT)
+    stdout, stderr = proc.communicate(timeout=120)
+    assert proc.returncode == 130, stderr
+    rows, summary = lines_of(stdout)
+    assert summary["interrupted"] and summary["done"] == len(rows) < len(frames)
+    assert "interrupted" in stderr and "Traceback" not in stderr
+    time.sleep(0.5)
+    ps = subprocess.run(["ps", "-o", "pid=,stat=", "-g", str(proc.pid)], capture_output=True, text=True).stdout
+    # (exited processes whose parent is gone stay zombies here: this sandbox's init does
+    # not reap them; they run nothing)
+    alive = [row for row in ps.splitlines() if row.split() and not row.split()[1].startswith("Z")]
+    assert not alive, f"processes left running in the batch's group: {alive}"
+    assert not [p for p in out.glob(".*")]  # no half-written file
+    for r in rows:  # every reported frame is complete on disk
+        assert (out / f"{r['name']}.json").is_file() and (out / f"{r['name']}.plan").is_file()

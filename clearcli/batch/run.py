@@ -173,12 +173,15 @@ def run_batch(
     rows: list[dict[str, Any]] = []
     ray_init_s = None
 
-    def emit_ready() -> None:
+    def emit_ready(gaps: bool = False) -> None:
+        """Print the lines whose turn has come (input order); with ``gaps`` (the batch
+        was interrupted) every finished line, past the frames that did not finish."""
         nonlocal emitted, failed, stopped
-        while emitted < len(lines) and lines[emitted] is not None:
+        while emitted < len(lines) and (lines[emitted] is not None or gaps):
             line = lines[emitted]
-            assert line is not None
             emitted += 1
+            if line is None:
+                continue
             code = int(line["exit_code"])
             counts[code] = counts.get(code, 0) + 1
             if code not in RESULT_CODES:
@@ -230,6 +233,7 @@ def run_batch(
                         close()
     except KeyboardInterrupt:
         interrupted = True
+        emit_ready(gaps=True)
         if req.out_dir is not None:  # temporaries of writes cut short by the stop
             for it in items:
                 if isinstance(it, FrameRef):
