@@ -44,6 +44,7 @@ from clearcli.io.mcap import (
     POINTCLOUD2_SCHEMAS,
     POINTCLOUD_SCHEMAS,
     ChannelInfo,
+    McapSummary,
     _foxglove_frame,
     _pointcloud2_frame,
     _quat_matrix,
@@ -57,38 +58,17 @@ BagFormat = Literal["rosbag1", "rosbag2"]
 
 
 @dataclass(frozen=True)
-class BagSummary:
-    """What a bag holds; the same attributes and methods as `mcap.McapSummary`.
+class BagSummary(McapSummary):
+    """What a bag holds: an `mcap.McapSummary` (same attributes and methods) plus the bag's
+    format and storage.
 
     channels: one per ROS 1 connection / rosbag2 topic; `schema_name` is the type as the
     bag spells it (ROS 1 `sensor_msgs/PointCloud2`, ROS 2 `sensor_msgs/msg/PointCloud2`).
+    ``indexed`` for ROS 1: read through the index (else a scan of the records).
     """
 
-    path: Path
-    format: BagFormat
-    storage: str  # "rosbag1", "sqlite3", "mcap"
-    profile: str  # "ros1" | "ros2"
-    library: str
-    channels: tuple[ChannelInfo, ...]
-    message_count: int
-    start_ns: int | None
-    end_ns: int | None
-    indexed: bool  # ROS 1: read through the index (else a scan of the records)
-    chunk_count: int
-    damage: str | None = None  # where and why a scan stopped early, None when whole
-
-    def topics(self) -> list[tuple[str, str]]:
-        """(topic, type) once per topic, in channel order."""
-        seen: dict[str, str] = {}
-        for ch in self.channels:
-            seen.setdefault(ch.topic, ch.schema_name)
-        return list(seen.items())
-
-    def pointcloud_topics(self) -> list[str]:
-        return [topic for topic, schema in self.topics() if schema in POINTCLOUD_SCHEMAS]
-
-    def count(self, topic: str) -> int:
-        return sum(ch.message_count for ch in self.channels if ch.topic == topic)
+    format: BagFormat = "rosbag1"
+    storage: str = "rosbag1"  # "rosbag1", "sqlite3", "mcap"
 
     @property
     def what(self) -> str:
