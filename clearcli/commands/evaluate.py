@@ -33,6 +33,8 @@ evaluate_app = typer.Typer(
     rich_markup_mode=None,
 )
 
+LabelOutputs = bo.outputs_option(("labels",))
+
 
 def _labels_of(path: Path, what: str) -> "object":
     from clearcli.errors import InputError
@@ -100,7 +102,7 @@ def dataset_cmd(
     frame_index: Annotated[int, typer.Option("--frame", help="Frame index in a log.", min=0)] = 0,
     every: bo.Every = None,
     out_dir: bo.OutDir = None,
-    outputs_kinds: bo.outputs_option(("labels",)) = None,  # type: ignore[valid-type]
+    outputs_kinds: LabelOutputs = None,
     resume: bo.Resume = False,
     jobs: bo.Jobs = None,
     ray: bo.Ray = None,

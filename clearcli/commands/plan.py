@@ -60,6 +60,8 @@ import typer
 from clearcli.commands import batchopts as bo
 from clearcli.commands.common import stderr, stdout
 
+PlanOutputs = bo.outputs_option(("problem", "domain", "plan", "png"))
+
 PLAN_SCHEMA_VERSION = 2
 
 
@@ -230,7 +232,7 @@ def plan_cmd(
     frame_index: Annotated[int, typer.Option("--frame", help="Frame index in an MCAP log.", min=0)] = 0,
     every: bo.Every = None,
     out_dir: bo.OutDir = None,
-    outputs_kinds: bo.outputs_option(("problem", "domain", "plan", "png")) = None,  # type: ignore[valid-type]
+    outputs_kinds: PlanOutputs = None,
     resume: bo.Resume = False,
     jobs: bo.Jobs = None,
     ray: bo.Ray = None,

@@ -31,6 +31,8 @@ import typer
 from clearcli.commands import batchopts as bo
 from clearcli.commands.common import stderr, stdout
 
+PredicateOutputs = bo.outputs_option(("problem", "png"))
+
 
 def _matrix(a: Any) -> list:
     import numpy as np
@@ -131,7 +133,7 @@ def predicates_cmd(
     ] = False,
     every: bo.Every = None,
     out_dir: bo.OutDir = None,
-    outputs_kinds: bo.outputs_option(("problem", "png")) = None,  # type: ignore[valid-type]
+    outputs_kinds: PredicateOutputs = None,
     resume: bo.Resume = False,
     jobs: bo.Jobs = None,
     ray: bo.Ray = None,

@@ -31,6 +31,8 @@ import typer
 from clearcli.commands import batchopts as bo
 from clearcli.commands.basic import SettingsOpt
 
+SegmentOutputs = bo.outputs_option(("labels", "png"))
+
 
 def _vec(a: Any) -> list[float]:
     return [round(float(x), 6) for x in a]
@@ -99,7 +101,7 @@ def segment_cmd(
     ] = None,
     every: bo.Every = None,
     out_dir: bo.OutDir = None,
-    outputs_kinds: bo.outputs_option(("labels", "png")) = None,  # type: ignore[valid-type]
+    outputs_kinds: SegmentOutputs = None,
     resume: bo.Resume = False,
     jobs: bo.Jobs = None,
     ray: bo.Ray = None,

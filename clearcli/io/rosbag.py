@@ -42,7 +42,6 @@ from clearcli.io.frames import Frame
 # definition of what a PointCloud2 or foxglove.PointCloud becomes).
 from clearcli.io.mcap import (
     POINTCLOUD2_SCHEMAS,
-    POINTCLOUD_SCHEMAS,
     ChannelInfo,
     McapSummary,
     _foxglove_frame,
@@ -51,7 +50,7 @@ from clearcli.io.mcap import (
     _reason,
 )
 
-from clearcli.io.read import ROSBAG1_MAGIC, ROSBAG2_METADATA, SQLITE_MAGIC  # noqa: E402
+from clearcli.io.read import ROSBAG1_MAGIC, ROSBAG2_METADATA  # noqa: E402
 TF_TOPICS = ("/tf_static", "/tf")
 
 BagFormat = Literal["rosbag1", "rosbag2"]
