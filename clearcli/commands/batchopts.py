@@ -10,6 +10,7 @@ import typer
 Inputs = Annotated[
     list[Path],
     typer.Argument(
+        metavar="FRAME",
         help="Frames: .pcd, .mcap or .bag files, rosbag2 folders, and folders to search for them. "
         "More than one frame makes a batch.",
     ),
