@@ -478,3 +478,21 @@ def test_static_transforms(tmp_path: Path, kind: str) -> None:
     assert np.allclose(T, want, atol=1e-12)
     assert read_bag_transforms(write_ros1(tmp_path / "notf.bag", {TOPIC: frames})) == {}
     assert len(list(iter_frames(bag))) == 1  # /tf_static does not disturb the topic rules
+
+
+@pytest.mark.parametrize("kind", ["ros1", "rosbag2"])
+def test_replay_places_the_robot_from_a_bags_tf_static(tmp_path: Path, kind: str) -> None:
+    """`replay` reads where the robot stands from a bag's /tf_static, as from an MCAP's."""
+    from clearcli.replay.session import base_camera_from_log
+
+    tf = ("wam_link_base", "camera_rgb_optical_frame", [0.1, -0.2, 0.5], [0.0, 0.0, 0.0, 1.0])
+    if kind == "ros1":
+        bag = tmp_path / "session.bag"
+        write_ros1(bag, {TOPIC: _frames(1, rows=4)}, tf=tf)
+    else:
+        bag = write_rosbag2(tmp_path / "session", {TOPIC: _frames(1, rows=4)}, tf=tf)
+    T, base = base_camera_from_log(bag, "camera_rgb_optical_frame")
+    assert base == "wam_link_base" and T is not None
+    np.testing.assert_allclose(T[:3, 3], [0.1, -0.2, 0.5])
+    np.testing.assert_allclose(T[:3, :3], np.eye(3))
+    assert base_camera_from_log(bag, "no_such_frame") == (None, "")

@@ -121,7 +121,7 @@ def _open(path: Path) -> BinaryIO:
     return fp
 
 
-def _reason(exc: BaseException) -> str:
+def error_reason(exc: BaseException) -> str:
     text = str(exc).splitlines()[0] if str(exc) else ""
     name = type(exc).__name__
     return f"{name}: {text[:120]}" if text else name
@@ -162,7 +162,7 @@ def _scan(path: Path, fp: BinaryIO) -> McapSummary:
                 start = record.log_time if start is None else min(start, record.log_time)
                 end = record.log_time if end is None else max(end, record.log_time)
     except Exception as exc:  # EndOfFile, struct.error, zstd/lz4 errors, CRC errors...
-        damage = f"after {n} complete messages ({_reason(exc)})"
+        damage = f"after {n} complete messages ({error_reason(exc)})"
     infos = tuple(
         ChannelInfo(
             id=cid,
@@ -328,7 +328,7 @@ def _as_bytes(data: Any) -> bytes | memoryview:
     return bytes(data)
 
 
-def _pointcloud2_frame(msg: Any, log_time_ns: int, source: str) -> Frame:
+def pointcloud2_frame(msg: Any, log_time_ns: int, source: str) -> Frame:
     header = _get(msg, "header")
     height, width = int(msg.height), int(msg.width)
     point_step, row_step = int(msg.point_step), int(msg.row_step)
@@ -348,7 +348,7 @@ def _pointcloud2_frame(msg: Any, log_time_ns: int, source: str) -> Frame:
     )
 
 
-def _quat_matrix(q: Sequence[float]) -> np.ndarray:
+def quat_matrix(q: Sequence[float]) -> np.ndarray:
     x, y, z, w = q
     norm = x * x + y * y + z * z + w * w
     if norm == 0.0:
@@ -363,7 +363,7 @@ def _quat_matrix(q: Sequence[float]) -> np.ndarray:
     )
 
 
-def _foxglove_frame(msg: Any, log_time_ns: int, source: str) -> Frame:
+def foxglove_frame(msg: Any, log_time_ns: int, source: str) -> Frame:
     stride = int(_get(msg, "point_stride", default=0) or 0)
     specs = []
     for f in _get(msg, "fields", default=[]) or []:
@@ -393,7 +393,7 @@ def _foxglove_frame(msg: Any, log_time_ns: int, source: str) -> Frame:
     q = [float(_get(ori, a, default=0.0) or 0.0) for a in "xyzw"] if ori is not None else [0, 0, 0, 1]
     if ori is not None and not any(q):
         q = [0.0, 0.0, 0.0, 1.0]  # protobuf leaves an all-default quaternion empty
-    R = _quat_matrix(q)
+    R = quat_matrix(q)
     if np.allclose(R, np.eye(3)) and not t.any():
         return frame
     points = (frame.points.astype(np.float64) @ R.T + t).astype(np.float32)
@@ -419,8 +419,8 @@ def _message_frame(decoders: _Decoders, schema: Any, channel: Any, message: Any,
     source = f"{path.name}#{index} {channel.topic}"
     msg = decoders.decode(schema, channel, message.data)
     if _schema_name(schema) in POINTCLOUD2_SCHEMAS:
-        return _pointcloud2_frame(msg, message.log_time, source)
-    return _foxglove_frame(msg, message.log_time, source)
+        return pointcloud2_frame(msg, message.log_time, source)
+    return foxglove_frame(msg, message.log_time, source)
 
 
 # --- iteration ------------------------------------------------------------------------
@@ -453,7 +453,7 @@ def _guarded(path: Path, summary: McapSummary, topic: str) -> Iterator[tuple[int
         except InputError:
             raise
         except Exception as exc:
-            _raise_damage(path, topic, index, _reason(exc))
+            _raise_damage(path, topic, index, error_reason(exc))
         yield index, schema, channel, message
         index += 1
 
@@ -477,7 +477,7 @@ def iter_mcap_frames(path: Path, topic: str | None = None) -> Iterator[Frame]:
         try:
             frame = _message_frame(decoders, schema, channel, message, index, path)
         except Exception as exc:
-            _raise_damage(path, topic, index, f"message {index} cannot be decoded: {_reason(exc)}")
+            _raise_damage(path, topic, index, f"message {index} cannot be decoded: {error_reason(exc)}")
         yield frame
 
 
@@ -500,7 +500,7 @@ def read_mcap_frame(path: Path, topic: str | None = None, index: int = 0) -> Fra
             try:
                 return _message_frame(decoders, schema, channel, message, index, path)
             except Exception as exc:
-                raise InputError(f"{path}: frame {index} of {topic} cannot be decoded ({_reason(exc)})") from None
+                raise InputError(f"{path}: frame {index} of {topic} cannot be decoded ({error_reason(exc)})") from None
     if summary.damage is not None:
         _raise_damage(path, topic, seen, f"frame {index} is past the damage; the log is {summary.damage}")
     raise InputError(f"{path}: --frame {index} does not exist: {topic} has {seen} frames")

@@ -44,10 +44,10 @@ from clearcli.io.mcap import (
     POINTCLOUD2_SCHEMAS,
     ChannelInfo,
     McapSummary,
-    _foxglove_frame,
-    _pointcloud2_frame,
-    _quat_matrix,
-    _reason,
+    foxglove_frame,
+    pointcloud2_frame,
+    quat_matrix,
+    error_reason,
 )
 
 from clearcli.io.read import ROSBAG1_MAGIC, ROSBAG2_METADATA  # noqa: E402
@@ -290,7 +290,7 @@ class _Ros1Stream:
                 except _Damage:
                     raise
                 except Exception as exc:
-                    raise _Damage(f"chunk {self.chunks} cannot be decompressed ({_reason(exc)})") from None
+                    raise _Damage(f"chunk {self.chunks} cannot be decompressed ({error_reason(exc)})") from None
                 yield from self._inner(io.BytesIO(raw), len(raw))
             elif op == _OP_CONNECTION:
                 conn = self._connection(fields, self._read(fp, dlen, "a connection record"))
@@ -345,7 +345,7 @@ def _ros1_scan(path: Path) -> BagSummary:
         except _Damage as exc:
             damage = f"after {_plural(n, 'complete message')} ({exc})"
         except Exception as exc:  # anything else a garbage byte can provoke
-            damage = f"after {_plural(n, 'complete message')} ({_reason(exc)})"
+            damage = f"after {_plural(n, 'complete message')} ({error_reason(exc)})"
     channels = _ros1_channels(
         [(c.id, c.topic, c.msgtype, c.msgdef, counts.get(c.id, 0)) for c in stream.conns.values()]
     )
@@ -417,7 +417,7 @@ def _rosbag2_reader(path: Path) -> Any:
             mcaps = sorted(p.name for p in root.glob("*.mcap"))
             if mcaps:  # clearcli's MCAP reader gives what precedes damage in an MCAP file
                 hint = f"; its MCAP storage can be read up to any damage: pass {root / mcaps[0]} itself"
-        raise InputError(f"{path}: cannot read the rosbag2 bag ({_reason(exc)}){hint}") from None
+        raise InputError(f"{path}: cannot read the rosbag2 bag ({error_reason(exc)}){hint}") from None
     return reader
 
 
@@ -458,7 +458,7 @@ def _rosbag2_summary(path: Path) -> BagSummary:
     except InputError:
         raise
     except Exception as exc:
-        raise InputError(f"{path}: cannot read the rosbag2 bag ({_reason(exc)})") from None
+        raise InputError(f"{path}: cannot read the rosbag2 bag ({error_reason(exc)})") from None
     finally:
         reader.close()
 
@@ -543,8 +543,8 @@ def _frame(decoders: _Decoders, msgtype: str, msgdef: str, fmt: str, data: bytes
            time_ns: int, source: str) -> Frame:
     msg = decoders.decode(msgtype, msgdef, fmt, data)
     if msgtype in POINTCLOUD2_SCHEMAS:
-        return _pointcloud2_frame(_ZeroCopy(msg), time_ns, source)
-    return _foxglove_frame(_ZeroCopy(msg), time_ns, source)
+        return pointcloud2_frame(_ZeroCopy(msg), time_ns, source)
+    return foxglove_frame(_ZeroCopy(msg), time_ns, source)
 
 
 class _ZeroCopy:
@@ -658,7 +658,7 @@ def _guarded(summary: BagSummary, topic: str, skip_to: int = 0) -> Iterator[tupl
             except _Damage as exc:
                 _raise_damage(summary, topic, complete, str(exc))
             except Exception as exc:  # rosbags ReaderError, apsw errors, struct.error...
-                _raise_damage(summary, topic, complete, _reason(exc))
+                _raise_damage(summary, topic, complete, error_reason(exc))
             complete = index + 1
             if index >= skip_to:
                 yield index, raw
@@ -681,7 +681,7 @@ def iter_bag_frames(path: Path, topic: str | None = None) -> Iterator[Frame]:
         try:
             frame = _decode(decoders, summary, topic, index, raw)
         except Exception as exc:
-            _raise_damage(summary, topic, index, f"message {index} cannot be decoded: {_reason(exc)}")
+            _raise_damage(summary, topic, index, f"message {index} cannot be decoded: {error_reason(exc)}")
         yield frame
 
 
@@ -702,7 +702,7 @@ def read_bag_frame(path: Path, topic: str | None = None, index: int = 0) -> Fram
             try:
                 return _decode(decoders, summary, topic, index, raw)
             except Exception as exc:
-                raise InputError(f"{path}: frame {index} of {topic} cannot be decoded ({_reason(exc)})") from None
+                raise InputError(f"{path}: frame {index} of {topic} cannot be decoded ({error_reason(exc)})") from None
     total = summary.count(topic)
     if summary.damage is not None:
         _raise_damage(summary, topic, total, f"frame {index} is past the damage; the bag breaks {summary.damage}")
@@ -756,7 +756,7 @@ def _transform(tf: Any) -> tuple[tuple[str, str], np.ndarray | None]:
         if not all(pair) or not np.isfinite(q).all() or np.linalg.norm(q) < 1e-9:
             return pair, None
         T = np.eye(4)
-        T[:3, :3] = _quat_matrix(q)
+        T[:3, :3] = quat_matrix(q)
         T[:3, 3] = [float(t.x), float(t.y), float(t.z)]
     except Exception:
         return ("", ""), None

@@ -500,10 +500,15 @@ def read_transforms(path: Any, max_messages: int = 1000) -> dict[tuple[str, str]
     """T_parent_child of every (parent, child) pair on the log's /tf_static and /tf
     (the first seen of each; a session's camera does not move). Reads at most
     ``max_messages`` transform messages, so a long /tf costs little. A log without them,
-    or whose transforms cannot be decoded, gives {}."""
+    or whose transforms cannot be decoded, gives {}. ROS bags: `io.rosbag.read_bag_transforms`."""
     from clearcli.io.mcap import MessageDecoders, read_summary
+    from clearcli.io.read import sniff
 
     try:
+        if sniff(path) in ("rosbag1", "rosbag2"):
+            from clearcli.io.rosbag import read_bag_transforms
+
+            return read_bag_transforms(path, max_messages)
         summary = read_summary(path)
     except ClearError:
         return {}
