@@ -272,3 +272,18 @@ def test_ctrl_c_stops_cleanly(tmp_path: Path) -> None:
     assert not [p for p in out.glob(".*")]  # no half-written file
     for r in rows:  # every reported frame is complete on disk
         assert (out / f"{r['name']}.json").is_file() and (out / f"{r['name']}.plan").is_file()
+
+
+def test_out_dir_outputs_are_not_overwritten_without_force(tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    first = clear("segment", *FRAMES[:2], "--json", "--out-dir", out, "--outputs", "labels", "--jobs", "1")
+    assert first.returncode == 0, first.stderr
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    again = clear("segment", *FRAMES[:2], "--json", "--out-dir", out, "--outputs", "labels", "--jobs", "1")
+    assert again.returncode == 11
+    rows, _ = lines_of(again.stdout)
+    assert all(r["exit_code"] == 8 and "--force" in r["error"]["message"] for r in rows)
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before  # nothing the user had is lost
+    forced = clear("segment", *FRAMES[:2], "--json", "--out-dir", out, "--outputs", "labels", "--force", "--jobs", "1")
+    assert forced.returncode == 0
+    assert sorted(p.name for p in out.iterdir()) == sorted(before)

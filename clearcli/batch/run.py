@@ -76,14 +76,23 @@ def default_jobs() -> int:
         return max(1, os.cpu_count() or 1)
 
 
-def _clean_stale(out_dir: Path, name: str, keep_mark: bool) -> None:
-    """A frame's leftovers: temporaries of killed writes (hidden ``.<name>.*``) and, for
-    a frame without its mark, outputs of an unfinished run."""
+def _clean_stale(out_dir: Path, name: str, resume: bool, force: bool) -> bool:
+    """Before a frame runs: remove the temporaries killed writes left (hidden
+    ``.<name>.*``, only ever ours). With ``--resume``, a frame with its mark is done (True)
+    and the outputs of one without are an unfinished run's: removed. With ``--force``,
+    the old mark goes first, so that a mark always means complete outputs. Otherwise
+    nothing the user has is touched: the frame refuses existing outputs (exit 8)."""
     for p in out_dir.glob(f".{name}.*"):
         p.unlink(missing_ok=True)
-    if not keep_mark:
+    mark = out_dir / MARK.format(name=name)
+    if resume:
+        if mark.is_file():
+            return True
         for p in out_dir.glob(f"{name}.*"):
             p.unlink(missing_ok=True)
+    elif force:
+        mark.unlink(missing_ok=True)
+    return False
 
 
 def _line_for_bad(item: BadInput) -> dict[str, Any]:
@@ -151,9 +160,7 @@ def run_batch(
         assert isinstance(it, FrameRef)
         if req.out_dir is not None:
             mark = req.out_dir / MARK.format(name=it.name)
-            done = req.resume and mark.is_file()
-            _clean_stale(req.out_dir, it.name, keep_mark=done)
-            if done:
+            if _clean_stale(req.out_dir, it.name, req.resume, req.force):
                 try:
                     lines[k] = {**json.loads(mark.read_text(encoding="utf-8")), "_resumed": True}
                     skipped += 1

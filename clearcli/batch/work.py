@@ -83,10 +83,11 @@ def settings_for(options: Mapping[str, Any]) -> Any:
 
 
 def _check_outputs(job: Job) -> None:
+    """Refuse to overwrite a frame's outputs or its mark (without --force): exit 8."""
     from clearcli.io.files import check_output_path
 
-    for kind in job.outputs:
-        p = job.output_path(kind)
+    paths = [job.output_path(kind) for kind in job.outputs] + [job.mark_path()]
+    for p in paths:
         if p is not None:
             check_output_path(p, job.force, (Path(job.source),))
 
@@ -209,10 +210,13 @@ def frame_line(job: Job, outcome: Outcome | None, error: tuple[str, int] | None)
 
 def run_job(job: Job) -> dict[str, Any]:
     """One frame, start to end; the line it reports (see `frame_line`)."""
-    from clearcli.errors import EXIT_INTERNAL, ClearError
+    from clearcli.errors import EXIT_INTERNAL, EXIT_OUTPUT, ClearError, OutputError
 
     try:
         _check_outputs(job)
+    except OutputError as exc:  # what the user has stays as it is, its mark included
+        return frame_line(job, None, (str(exc), exc.exit_code))
+    try:
         outcome = WORK[job.command](job)
         line = frame_line(job, outcome, None)
     except ClearError as exc:
@@ -222,9 +226,13 @@ def run_job(job: Job) -> dict[str, Any]:
             raise
         line = frame_line(job, None, (f"internal error: {type(exc).__name__}: {exc}", EXIT_INTERNAL))
     mark = job.mark_path()
-    if mark is not None and line["exit_code"] != EXIT_INTERNAL:
-        # (an internal error may be passing: --resume does that frame again)
-        write_mark(mark, line)
+    if mark is not None and line["exit_code"] not in (EXIT_INTERNAL, EXIT_OUTPUT):
+        # (a bug or a failed write may be passing: without a mark --resume does the
+        # frame again)
+        try:
+            write_mark(mark, line)
+        except ClearError:
+            pass
     return line
 
 
