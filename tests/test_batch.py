@@ -287,3 +287,14 @@ def test_out_dir_outputs_are_not_overwritten_without_force(tmp_path: Path) -> No
     forced = clear("segment", *FRAMES[:2], "--json", "--out-dir", out, "--outputs", "labels", "--force", "--jobs", "1")
     assert forced.returncode == 0
     assert sorted(p.name for p in out.iterdir()) == sorted(before)
+
+
+def test_every_frame_of_a_truncated_log_then_its_break(tmp_path: Path) -> None:
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes((FIXTURES / "session.mcap").read_bytes()[:1_500_000])
+    res = clear("segment", cut, "--every", "1", "--json", "--jobs", "1")
+    assert res.returncode == 11
+    rows, summary = lines_of(res.stdout)
+    assert [(r["frame"], r["exit_code"]) for r in rows] == [(0, 0), (1, 0), (2, 9)]
+    assert "2 complete frames read" in rows[-1]["error"]["message"]
+    assert [r["name"] for r in rows[:2]] == ["cut_f0", "cut_f1"]
