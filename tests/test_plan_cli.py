@@ -58,7 +58,15 @@ def scenes(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     near = S.Box(0, 0.05, 0.04, 0.08, x_m=0.30, y_m=0.0)
     far = S.Box(1, 0.05, 0.04, 0.08, x_m=-0.32, y_m=0.05)
     wide = S.Box(0, 0.14, 0.12, 0.08, x_m=0.0, y_m=0.0, yaw_rad=0.3)
+    # a long table seen from higher up: one box beside the robot, one ~2.4 m from it
+    two_m = S.make_scene(
+        "two_metres",
+        [S.Box(0, 0.06, 0.05, 0.10, x_m=0.90, y_m=0.0), S.Box(1, 0.06, 0.05, 0.10, x_m=-1.10, y_m=0.1)],
+        table=S.Table(2.6, 0.8),
+        T_camera_table=S.camera_pose_T_camera_table(height_m=1.6, pitch_deg=55),
+    )
     return {
+        "two_metres": render_pcd(two_m, d / "two_metres.pcd", seed=7),
         "near_far": render_pcd(S.make_scene("near_far", [near, far]), d / "near_far.pcd", seed=5),
         "wide": render_pcd(S.make_scene("wide", [wide]), d / "wide.pcd", seed=6),
     }
@@ -121,6 +129,34 @@ def test_partial_plan_exit_10_unreachable_object_and_learnt_facts(scenes: dict[s
     # the human output lists what is left, and why
     human = clear("plan", scenes["near_far"], "--camera-pose", pose)
     assert human.returncode == 10 and f"{left['object']} unreachable" in human.stdout
+
+
+def test_object_two_metres_away_unreachable_rest_planned(scenes: dict[str, Path], tmp_path: Path) -> None:
+    pose = camera_pose_beside_table(
+        S.make_scene("", [], T_camera_table=S.camera_pose_T_camera_table(height_m=1.6, pitch_deg=55)), 1.35
+    )
+    out, prob = tmp_path / "plan.txt", tmp_path / "problem.pddl"
+    res = clear("plan", scenes["two_metres"], "--camera-pose", pose, "--json", "-o", out, "--problem", prob)
+    assert res.returncode == 10, res.stderr
+    doc = json.loads(res.stdout)
+    assert doc["status"] == "partial" and doc["actions"] == [f"(grasp {doc['goal'][0]})"] and len(doc["goal"]) == 1
+    # (at 2.4 m the far box may come out in pieces: each is unreachable, none is planned)
+    assert doc["left"] and all(x["reason"] == "unreachable" and "beyond the arm's reach" in x["detail"] for x in doc["left"])
+    assert validate_files(DOMAIN, prob, out)
+    # the problem file gives each object's centroid (sensor frame): the ones left stand
+    # more than 2 m from the shoulder, the one planned within reach
+    import re
+
+    T = np.array(doc["T_base_camera"])
+    text = prob.read_text()
+    centroids = {
+        m.group(1): np.array([float(m.group(k)) for k in (2, 3, 4)])
+        for m in re.finditer(r";\s+(o\d+): \(([-+.\d]+), ([-+.\d]+), ([-+.\d]+)\)", text)
+    }
+    dist = {o: float(np.linalg.norm((T[:3, :3] @ c + T[:3, 3])[:2])) for o, c in centroids.items()}
+    assert dist[doc["goal"][0]] < 0.9
+    for x in doc["left"]:
+        assert dist[x["object"]] > 2.0 and f"(ik_unfeasible_grasp {x['object']})" in text
 
 
 def test_nothing_to_do_exit_5_with_json_and_files(scenes: dict[str, Path], tmp_path: Path) -> None:
