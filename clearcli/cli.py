@@ -16,7 +16,7 @@ from typing import Annotated, Optional
 import typer
 
 from clearcli import __version__
-from clearcli.errors import EXIT_CODES, EXIT_INTERNAL, ClearError
+from clearcli.errors import EXIT_CODES, EXIT_INTERNAL, EXIT_INTERRUPTED, ClearError
 
 _EXIT_HELP = "\n\n".join(f"{code}: {text}" for code, text in EXIT_CODES.items())
 
@@ -123,7 +123,7 @@ def main() -> None:
         sys.exit(exc.exit_code)
     except KeyboardInterrupt:
         sys.stderr.write("clear: interrupted\n")
-        sys.exit(130)
+        sys.exit(EXIT_INTERRUPTED)
     except Exception as exc:  # a bug: one line unless the user asks for the traceback
         if os.environ.get("CLEAR_DEBUG"):
             raise

@@ -20,6 +20,7 @@ EXIT_OUTPUT = 8  # an output could not be written (exists without --force, not w
 EXIT_PARTIAL = 9  # a log was read only in part (truncated/corrupt after complete frames)
 EXIT_PARTIAL_PLAN = 10  # the plan removes some objects; the others are left, with reasons
 EXIT_BATCH_FAILED = 11  # a batch ran, and some of its frames failed (their codes in their lines)
+EXIT_INTERRUPTED = 130  # Ctrl-C (128 + SIGINT, as shells report it)
 
 EXIT_CODES: dict[int, str] = {
     EXIT_OK: "success (plan: every object removed, an empty table included)",
@@ -34,6 +35,7 @@ EXIT_CODES: dict[int, str] = {
     EXIT_PARTIAL: "log read only in part: truncated or corrupt after the frames reported",
     EXIT_PARTIAL_PLAN: "partial plan: it removes some objects; the others are left, each with its reason",
     EXIT_BATCH_FAILED: "batch (several frames): some frames failed; each one's code and message are in its line",
+    EXIT_INTERRUPTED: "interrupted (Ctrl-C); a batch still prints the summary of what finished",
 }
 
 

@@ -29,7 +29,7 @@ from typing import Any, Callable, Mapping, Sequence
 from clearcli.batch.sources import BadInput, FrameRef, check_unique_names, expand
 from clearcli.batch.work import MARK, OUTPUT_KINDS, Job, run_job
 from clearcli.commands.batchopts import is_batch  # noqa: F401  (re-exported)
-from clearcli.errors import EXIT_BATCH_FAILED, EXIT_NO_PLAN, EXIT_OK, EXIT_PARTIAL_PLAN, InputError
+from clearcli.errors import EXIT_BATCH_FAILED, EXIT_INTERRUPTED, EXIT_NO_PLAN, EXIT_OK, EXIT_PARTIAL_PLAN, InputError
 
 BATCH_SCHEMA_VERSION = 1
 # Exit codes that are results, not failures.
@@ -272,7 +272,7 @@ def run_batch(
         _print_table(rows, summary, stdout)
     if interrupted:
         stderr.print("clear: interrupted; the summary covers the frames that finished", markup=False)
-        return 130
+        return EXIT_INTERRUPTED
     return EXIT_OK if failed == 0 else EXIT_BATCH_FAILED
 
 
