@@ -3,10 +3,11 @@
 1. finite points, outlier removal (filters.py; range-scaled radius by default)
 2. the table: RANSAC planes, the support surface among them, its 2D convex hull, the
    polygonal prism of points above it (table.py)
-3. supervoxels (VCCS, supervoxels.py) and LCCP merging (lccp.py); planar cuts through
-   concave seams left inside LCCP segments (cuts.py, after CPC); then two merges of
-   ours: pieces of one object cut apart by a nearer one (occlusion.py, organized
-   frames) and the inner and outer walls of a container (rims.py)
+3. supervoxels (VCCS, supervoxels.py) and LCCP merging (lccp.py); then the
+   refinements of refine.STAGES, one signature each: planar cuts through concave seams
+   left inside LCCP segments (cuts.py, after CPC), pieces of one object cut apart by a
+   nearer one (occlusion.py, organized frames), two tops at two heights (steps.py), and
+   the inner and outer walls of a container (rims.py)
 4. minimum-size filter (visible area in voxels, and a point count)
 
 Every stage is its own function; `segment` chains them and times each one.
@@ -137,6 +138,7 @@ def segment(frame: Frame, settings: SegmentSettings) -> Segmentation:
     """
     from clearcli.perception.filters import clean_mask
     from clearcli.perception.lccp import lccp_segments
+    from clearcli.perception.refine import RefineContext, refine
     from clearcli.perception.supervoxels import compute_supervoxels, voxelize
     from clearcli.perception.table import find_table, table_and_prism
 
@@ -169,6 +171,7 @@ def segment(frame: Frame, settings: SegmentSettings) -> Segmentation:
     obj_pts = pts[prism_mask]
     objects: list[SegmentedObject] = []
     timings["supervoxels"] = timings["lccp"] = timings["cuts"] = timings["merge"] = 0.0
+    timings["occlusion"] = timings["steps"] = timings["rims"] = 0.0
     if obj_pts.shape[0] >= 4:
         if fit.camera_is_origin:
             viewpoint = np.zeros(3)
@@ -187,41 +190,11 @@ def segment(frame: Frame, settings: SegmentSettings) -> Segmentation:
         seg_of_sv = lccp_segments(sv, seg_settings)
         t4 = time.perf_counter()
         timings["lccp"] = t4 - t3
-        if settings.planar_cuts:
-            from clearcli.perception.cuts import planar_cuts
 
-            seg_of_sv = planar_cuts(seg_of_sv, sv, vox.centroids, fit.plane.normal, seg_settings)
-            t4 = time.perf_counter()
-            timings["cuts"] = t4 - t3 - timings["lccp"]
-
-        if settings.occlusion_merge and organized and frame.shape is not None:
-            from clearcli.perception.occlusion import merge_occluded
-
-            min_vox = max(1, int(settings.min_object_area_m2 / settings.voxel_m**2))
-            seg_of_sv = merge_occluded(
-                seg_of_sv, sv.centroids, sv.normals, sv.edges, sv.n_voxels, points, frame.shape,
-                settings.occlusion_max_gap_m, settings.voxel_m, min_vox, fit.plane.height_of(sv.centroids),
-            )
-        seg_of_voxel = seg_of_sv[sv.voxel_label]
-        voxel_height = fit.plane.height_of(vox.centroids)
-        if settings.step_split:
-            from clearcli.perception.steps import step_splits
-
-            seg_of_voxel = step_splits(
-                seg_of_voxel, sv, vox.centroids, voxel_height, vox.edges, fit.plane.normal, seg_settings
-            )
-        if settings.rim_merge:
-            from clearcli.perception.rims import merge_rims
-
-            seg_of_voxel = merge_rims(
-                seg_of_voxel, vox.centroids, voxel_height, settings.rim_tolerance_m,
-                settings.rim_contact_m,
-                voxel_is_top=(np.abs(sv.normals @ fit.plane.normal) >= np.cos(np.radians(settings.step_max_tilt_deg)))[
-                    sv.voxel_label
-                ],
-            )
-        t5 = time.perf_counter()
-        timings["merge"] = t5 - t4
+        # refinements after LCCP, each a stage of refine.STAGES
+        ctx = RefineContext(frame, organized, vox, sv, fit.plane, settings, seg_settings)
+        seg_of_voxel = refine(seg_of_sv[sv.voxel_label], ctx, timings)
+        timings["merge"] = sum(timings[k] for k in ("occlusion", "steps", "rims"))
 
         # 4. size filter
         seg_of_point = seg_of_voxel[vox.point_voxel]
@@ -242,7 +215,9 @@ def segment(frame: Frame, settings: SegmentSettings) -> Segmentation:
             # the prism's lower bound grew with range: so does "resting on the table"
             noise = settings.prism_noise_per_m2 * float(np.min(np.einsum("ij,ij->i", p, p))) if fit.camera_is_origin else 0.0
             objects.append(make_object(obj_idx[members], p, fit.plane, rests + noise))
-    timings["objects"] = time.perf_counter() - t0 - sum(timings.values())
+    timings["objects"] = time.perf_counter() - t0 - sum(
+        v for k, v in timings.items() if k not in ("occlusion", "steps", "rims")  # (in "merge")
+    )
     timings["total"] = time.perf_counter() - t0
     return Segmentation(
         n_points=frame.n_points,

@@ -1,0 +1,135 @@
+"""The refinements after LCCP, as a list of stages with one signature.
+
+Each stage takes the segment of every voxel and a `RefineContext` (the frame, the
+voxels, the supervoxels, the table plane, the settings) and returns the segment of
+every voxel. `segment()` runs `STAGES` in order, times each, and skips a stage that is
+switched off, or that needs the pixel grid on an unorganized cloud (so the result is
+the result with that stage off). A new refinement is a module and one entry here.
+
+The stages, in order:
+  cuts       planar cuts through rising seams (cuts.py; after CPC)      supervoxel level
+  occlusion  pieces of one object cut apart by a nearer one (occlusion.py) supervoxel level,
+                                                                         pixel grid
+  steps      two tops at two heights on either side of a line (steps.py)  voxel level
+  rims       a container's inner and outer walls (rims.py)                voxel level
+Supervoxel-level stages see one segment per supervoxel (the voxel labels are constant
+within a supervoxel until the first voxel-level stage; they come first).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from functools import cached_property
+from typing import Callable
+
+import numpy as np
+
+from clearcli.io.frames import Frame
+from clearcli.perception.settings import SegmentSettings
+from clearcli.perception.supervoxels import Supervoxels, VoxelCloud
+from clearcli.perception.types import TablePlane
+
+
+@dataclass(frozen=True)
+class RefineContext:
+    frame: Frame  # the whole frame: stages on the pixel grid read it
+    organized: bool  # the frame's pixel grid is usable
+    vox: VoxelCloud  # voxels of the points above the table
+    sv: Supervoxels
+    plane: TablePlane
+    settings: SegmentSettings  # as given
+    scaled: SegmentSettings  # as the supervoxels used them (fitted to an unorganized cloud's density)
+
+    @cached_property
+    def voxel_height(self) -> np.ndarray:
+        """(V,) height of each voxel centroid above the table."""
+        return self.plane.height_of(self.vox.centroids)
+
+    @cached_property
+    def first_voxel(self) -> np.ndarray:
+        """(S,) one voxel of each supervoxel (to read a supervoxel's segment)."""
+        n_sv = self.sv.centroids.shape[0]
+        first = np.zeros(n_sv, dtype=np.int64)
+        order = np.arange(self.sv.voxel_label.size)[::-1]
+        first[self.sv.voxel_label[::-1]] = order
+        return first
+
+
+Run = Callable[[np.ndarray, RefineContext], np.ndarray]
+
+
+@dataclass(frozen=True)
+class Stage:
+    name: str  # its key in the timings
+    enabled: Callable[[SegmentSettings], bool]
+    run: Run
+    needs_grid: bool = False  # the pixel grid of an organized frame
+
+
+def _per_supervoxel(fn: Callable[[np.ndarray, RefineContext], np.ndarray]) -> Run:
+    """A supervoxel-level stage as a voxel-level one."""
+
+    def run(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
+        seg_of_sv = fn(seg_of_voxel[ctx.first_voxel], ctx)
+        return np.asarray(seg_of_sv)[ctx.sv.voxel_label]
+
+    return run
+
+
+def _cuts(seg_of_sv: np.ndarray, ctx: RefineContext) -> np.ndarray:
+    from clearcli.perception.cuts import planar_cuts
+
+    return planar_cuts(seg_of_sv, ctx.sv, ctx.vox.centroids, ctx.plane.normal, ctx.scaled)
+
+
+def _occlusion(seg_of_sv: np.ndarray, ctx: RefineContext) -> np.ndarray:
+    from clearcli.perception.occlusion import merge_occluded
+
+    s = ctx.settings
+    min_vox = max(1, int(s.min_object_area_m2 / s.voxel_m**2))
+    sv = ctx.sv
+    return merge_occluded(
+        seg_of_sv, sv.centroids, sv.normals, sv.edges, sv.n_voxels, ctx.frame.points, ctx.frame.shape,
+        s.occlusion_max_gap_m, s.voxel_m, min_vox, ctx.plane.height_of(sv.centroids),
+    )
+
+
+def _steps(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
+    from clearcli.perception.steps import step_splits
+
+    return step_splits(seg_of_voxel, ctx.sv, ctx.vox.centroids, ctx.voxel_height, ctx.vox.edges, ctx.plane.normal, ctx.scaled)
+
+
+def _rims(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
+    from clearcli.perception.rims import merge_rims
+
+    s = ctx.settings
+    top = np.abs(ctx.sv.normals @ ctx.plane.normal) >= np.cos(np.radians(s.step_max_tilt_deg))
+    return merge_rims(
+        seg_of_voxel, ctx.vox.centroids, ctx.voxel_height, s.rim_tolerance_m, s.rim_contact_m,
+        voxel_is_top=top[ctx.sv.voxel_label],
+    )
+
+
+STAGES: tuple[Stage, ...] = (
+    Stage("cuts", lambda s: s.planar_cuts, _per_supervoxel(_cuts)),
+    Stage("occlusion", lambda s: s.occlusion_merge, _per_supervoxel(_occlusion), needs_grid=True),
+    Stage("steps", lambda s: s.step_split, _steps),
+    Stage("rims", lambda s: s.rim_merge, _rims),
+)
+
+
+def refine(
+    seg_of_voxel: np.ndarray,
+    ctx: RefineContext,
+    timings: dict[str, float],
+    stages: tuple[Stage, ...] = STAGES,
+) -> np.ndarray:
+    """Run the enabled stages in order; each one's seconds go to ``timings[name]``."""
+    for stage in stages:
+        t0 = time.perf_counter()
+        if stage.enabled(ctx.settings) and (ctx.organized or not stage.needs_grid):
+            seg_of_voxel = stage.run(seg_of_voxel, ctx)
+        timings[stage.name] = time.perf_counter() - t0
+    return seg_of_voxel
