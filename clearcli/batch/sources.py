@@ -1,7 +1,7 @@
 """From the inputs a user names (files and folders) to the frames a batch works on.
 
-A folder is searched (recursively, sorted by name, numbers in names by value) for `.pcd`, `.mcap` and `.bag` files; a
-folder holding `metadata.yaml` is one rosbag2 bag. A log contributes frame 0, or
+A folder is searched (recursively, sorted by name, numbers in names by value) for
+`.pcd`, `.mcap` and `.bag` files; a folder holding `metadata.yaml` is one rosbag2 bag. A log contributes frame 0, or
 ``--frame N``, or every N-th frame with ``--every N``. Each frame gets the name its
 outputs carry in ``--out-dir``: the input's stem, plus ``_f<index>`` for a log.
 
@@ -68,14 +68,18 @@ def _files_in(folder: Path) -> list[Path]:
 
 
 def _is_log(path: Path) -> bool:
-    if path.is_dir():
+    """A log (frames named with their index): MCAP, ROS 1 bag, rosbag2 (folder, .db3,
+    metadata.yaml); told by content, as `io.read.sniff` does."""
+    from clearcli.io.read import MCAP_MAGIC, ROSBAG1_MAGIC, ROSBAG2_METADATA, SQLITE_MAGIC
+
+    if path.is_dir() or path.name == ROSBAG2_METADATA:
         return True
     try:
         with open(path, "rb") as fp:
             head = fp.read(16)
     except OSError:
-        return path.suffix.lower() in (".mcap", ".bag")
-    return head.startswith(b"\x89MCAP") or head.startswith(b"#ROSBAG")
+        return path.suffix.lower() in (".mcap", ".bag", ".db3")
+    return head.startswith((MCAP_MAGIC, ROSBAG1_MAGIC, SQLITE_MAGIC))
 
 
 def count_frames(path: Path, topic: str | None) -> tuple[int, Exception | None]:
