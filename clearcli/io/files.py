@@ -42,17 +42,16 @@ def check_output_path(path: Path, force: bool, inputs: tuple[Path, ...] = ()) ->
 
 
 @contextlib.contextmanager
-def atomic_output(path: Path, mode: str = "wb") -> Iterator[Any]:
-    """Write to a temporary file beside ``path`` and move it into place only when whole."""
-    path = Path(path)
+def _temporary_beside(path: Path, prefix: str, suffix: str) -> Iterator[tuple[int, str]]:
+    """(fd, name) of a new temporary beside ``path``, moved onto it when the block ends
+    normally and removed when it does not (an error, Ctrl-C, SIGTERM's SystemExit)."""
     parent = path.parent if str(path.parent) else Path(".")
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=parent)
+        fd, tmp = tempfile.mkstemp(prefix=prefix, suffix=suffix, dir=parent)
     except OSError as exc:
         raise OutputError(f"{path}: cannot write ({exc.strerror})") from None
     try:
-        with os.fdopen(fd, mode) as handle:
-            yield handle
+        yield fd, tmp
         os.chmod(tmp, _default_mode())
         os.replace(tmp, path)
     except BaseException:
@@ -62,20 +61,18 @@ def atomic_output(path: Path, mode: str = "wb") -> Iterator[Any]:
 
 
 @contextlib.contextmanager
-def atomic_path(path: Path) -> Iterator[Path]:
-    """Like `atomic_output`, for writers that want a path (open3d, matplotlib)."""
+def atomic_output(path: Path, mode: str = "wb") -> Iterator[Any]:
+    """Write to a temporary file beside ``path`` and move it into place only when whole."""
     path = Path(path)
-    parent = path.parent if str(path.parent) else Path(".")
-    try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=parent)
-    except OSError as exc:
-        raise OutputError(f"{path}: cannot write ({exc.strerror})") from None
-    os.close(fd)
-    try:
+    with _temporary_beside(path, f".{path.name}.", PART_SUFFIX) as (fd, _tmp):
+        with os.fdopen(fd, mode) as handle:
+            yield handle
+
+
+@contextlib.contextmanager
+def atomic_path(path: Path) -> Iterator[Path]:
+    """Like `atomic_output`, for writers that want a path (pypcd4, matplotlib)."""
+    path = Path(path)
+    with _temporary_beside(path, f".{path.stem}.", path.suffix) as (fd, tmp):
+        os.close(fd)
         yield Path(tmp)
-        os.chmod(tmp, _default_mode())
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise
