@@ -28,7 +28,6 @@ from typing import Any, Callable, Mapping, Sequence
 
 from clearcli.batch.sources import BadInput, FrameRef, check_unique_names, expand
 from clearcli.batch.work import MARK, OUTPUT_KINDS, Job, run_job
-from clearcli.commands.batchopts import is_batch  # noqa: F401  (re-exported)
 from clearcli.errors import EXIT_BATCH_FAILED, EXIT_INTERRUPTED, EXIT_NO_PLAN, EXIT_OK, EXIT_PARTIAL_PLAN, InputError
 
 BATCH_SCHEMA_VERSION = 1
@@ -274,6 +273,26 @@ def run_batch(
         stderr.print("clear: interrupted; the summary covers the frames that finished", markup=False)
         return EXIT_INTERRUPTED
     return EXIT_OK if failed == 0 else EXIT_BATCH_FAILED
+
+
+def run_command_batch(
+    command: str,
+    inputs: Sequence[Path],
+    options: Mapping[str, Any],
+    *,
+    outputs: str | None = None,
+    jobs: int | None = None,
+    on_line: Callable[[dict[str, Any]], None] | None = None,
+    extra_summary: Callable[[Sequence[dict[str, Any]]], dict[str, Any]] | None = None,
+    render: Callable[[Sequence[dict[str, Any]], Mapping[str, Any]], None] | None = None,
+    **fields: Any,
+) -> int:
+    """A subcommand's batch from its flags: ``outputs`` as given to --outputs, ``jobs``
+    None for every core; the other `BatchRequest` fields by name."""
+    req = BatchRequest(
+        command, inputs, options, outputs=parse_outputs(command, outputs), jobs=jobs or default_jobs(), **fields
+    )
+    return run_batch(req, on_line=on_line, extra_summary=extra_summary, render=render)
 
 
 def _print_table(rows: Sequence[Mapping[str, Any]], summary: Mapping[str, Any], out: Any) -> None:

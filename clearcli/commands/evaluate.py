@@ -112,7 +112,7 @@ def dataset_cmd(
     label files in --pred): a per-frame table (objects true/predicted, precision,
     recall, F1 at IoU >= 0.5, mean best IoU, over/under-segmentation, time), the means,
     and per-group means with --groups. Runs on every core, or on Ray, like every batch."""
-    from clearcli.batch.run import BatchRequest, default_jobs, parse_outputs, run_batch
+    from clearcli.batch.run import run_command_batch
     from clearcli.commands.common import check_output_path, stdout
     from clearcli.evaluate.dataset import load_groups, summarise, write_csv, write_png
 
@@ -162,15 +162,14 @@ def dataset_cmd(
         )
 
     collected: list[dict[str, Any]] = []
-    req = BatchRequest(
+    code = run_command_batch(
         "evaluate", inputs,
         {"settings": None if settings is None else str(settings), "pred": None if pred is None else str(pred),
          "groups": group_map},
-        frame=frame_index, every=every, topic=topic, out_dir=out_dir,
-        outputs=parse_outputs("evaluate", outputs_kinds), force=force, resume=resume,
-        jobs=jobs or default_jobs(), ray=ray, fail_fast=fail_fast, json_out=json_out,
+        outputs=outputs_kinds, jobs=jobs, on_line=collected.append, extra_summary=extra, render=render,
+        frame=frame_index, every=every, topic=topic, out_dir=out_dir, force=force, resume=resume,
+        ray=ray, fail_fast=fail_fast, json_out=json_out,
     )
-    code = run_batch(req, on_line=collected.append, extra_summary=extra, render=render)
     docs = docs_of(collected)
     if csv_out is not None:
         write_csv(csv_out, docs)

@@ -264,13 +264,12 @@ def info_cmd(
     from clearcli.errors import PartialLogError
 
     if bo.is_batch(inputs, every, out_dir, ray):
-        from clearcli.batch.run import BatchRequest, default_jobs, run_batch
+        from clearcli.batch.run import run_command_batch
 
-        req = BatchRequest(
-            "info", inputs, {}, frame=frame, every=every, topic=topic, out_dir=out_dir, resume=resume,
-            jobs=jobs or default_jobs(), ray=ray, fail_fast=fail_fast, json_out=json_out,
-        )
-        raise typer.Exit(run_batch(req))
+        raise typer.Exit(run_command_batch(
+            "info", inputs, {}, jobs=jobs, frame=frame, every=every, topic=topic, out_dir=out_dir, resume=resume,
+            ray=ray, fail_fast=fail_fast, json_out=json_out,
+        ))
     file = inputs[0]
 
     info = describe_file(file, topic, frame)

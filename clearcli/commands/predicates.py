@@ -151,17 +151,15 @@ def predicates_cmd(
 
 
     if bo.is_batch(inputs, every, out_dir, ray):
-        from clearcli.batch.run import BatchRequest, default_jobs, parse_outputs, run_batch
+        from clearcli.batch.run import run_command_batch
 
         bo.single_only(**{"-o": output, "--png": png})
-        req = BatchRequest(
+        raise typer.Exit(run_command_batch(
             "predicates", inputs,
             {"settings": None if settings is None else str(settings), "ground_truth": ground_truth},
-            frame=frame_index, every=every, topic=topic, out_dir=out_dir,
-            outputs=parse_outputs("predicates", outputs_kinds), force=force, resume=resume,
-            jobs=jobs or default_jobs(), ray=ray, fail_fast=fail_fast, json_out=json_out,
-        )
-        raise typer.Exit(run_batch(req))
+            outputs=outputs_kinds, jobs=jobs, frame=frame_index, every=every, topic=topic, out_dir=out_dir,
+            force=force, resume=resume, ray=ray, fail_fast=fail_fast, json_out=json_out,
+        ))
     frame = inputs[0]
     cfg = load_settings(settings)
     for out in (output, png):

@@ -125,17 +125,15 @@ def segment_cmd(
         occlusion_merge=occlusion_merge,
     )
     if bo.is_batch(inputs, every, out_dir, ray):
-        from clearcli.batch.run import BatchRequest, default_jobs, parse_outputs, run_batch
+        from clearcli.batch.run import run_command_batch
 
         bo.single_only(**{"-o": labels_out, "--png": png})
-        req = BatchRequest(
+        raise typer.Exit(run_command_batch(
             "segment", inputs,
             {"settings": None if settings_file is None else str(settings_file), "overrides": {"segment": flags}},
-            frame=frame_index, every=every, topic=topic, out_dir=out_dir,
-            outputs=parse_outputs("segment", outputs_kinds), force=force, resume=resume,
-            jobs=jobs or default_jobs(), ray=ray, fail_fast=fail_fast, json_out=json_out,
-        )
-        raise typer.Exit(run_batch(req))
+            outputs=outputs_kinds, jobs=jobs, frame=frame_index, every=every, topic=topic, out_dir=out_dir,
+            force=force, resume=resume, ray=ray, fail_fast=fail_fast, json_out=json_out,
+        ))
     frame_path = inputs[0]
     for out in (labels_out, png):
         if out is not None:
