@@ -84,17 +84,19 @@ def _is_log(path: Path) -> bool:
 
 def count_frames(path: Path, topic: str | None) -> tuple[int, Exception | None]:
     """Point-cloud frames in a log, and the PartialLogError that ended it early, if any.
-    An intact MCAP log is counted from its summary; anything else is read through."""
+    An intact log or bag is counted from its summary (index); a damaged one is read
+    through to its break."""
     from clearcli.errors import PartialLogError
+    from clearcli.io.mcap import choose_topic
     from clearcli.io.read import iter_frames, sniff
 
-    if not path.is_dir() and sniff(path) == "mcap":
-        from clearcli.io.mcap import choose_topic, read_summary
-
-        summary = read_summary(path)
-        if summary.damage is None:
-            chosen = choose_topic(summary, topic)
-            return sum(ch.message_count for ch in summary.channels if ch.topic == chosen), None
+    if sniff(path) == "mcap":
+        from clearcli.io.mcap import read_summary as summary_of
+    else:
+        from clearcli.io.rosbag import read_bag_summary as summary_of
+    summary = summary_of(path)
+    if summary.damage is None:
+        return summary.count(choose_topic(summary, topic)), None
     n = 0
     try:
         for _ in iter_frames(path, topic):
