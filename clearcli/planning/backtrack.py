@@ -47,6 +47,7 @@ but can still be pushed out of the way.
 
 from __future__ import annotations
 
+import functools
 import time
 from dataclasses import dataclass
 from typing import Callable, Iterable, Mapping, Sequence
@@ -160,26 +161,19 @@ def solve(
 
 
 def _task(objects: Sequence[str], facts: Iterable[Fact], goal: Sequence[str], push_costs, formulation: str):  # type: ignore[no-untyped-def]
-    """The grounded task and a function running Fast Downward on it: the SAS+ task
-    straight into the search component when available (no translator: it only
-    re-grounds what is grounded already), else the PDDL text through the driver."""
-    from clearcli.planning.compile import compile_strips
-
-    if formulation == "positive" and hasattr(downward, "run_sas"):
+    """The grounded task and a function running Fast Downward on it. The positive form
+    goes as SAS+ straight into the search component (the translator would only ground
+    again what is grounded already); the negative one, which needs the translator to
+    compile its negative preconditions away, as PDDL through the driver."""
+    if formulation == "positive":
         from clearcli.planning.sas import compile_sas
 
         sas = compile_sas(objects, facts, goal, push_costs)
+        return functools.partial(downward.run_sas, sas.text), sas
+    from clearcli.planning.compile import compile_strips
 
-        def run_sas(**kw):  # type: ignore[no-untyped-def]
-            return downward.run_sas(sas.text, **kw)
-
-        return run_sas, sas
-    task = compile_strips(objects, facts, goal, push_costs, positive=formulation == "positive")
-
-    def run_pddl(**kw):  # type: ignore[no-untyped-def]
-        return downward.run_downward(task.domain, task.problem, **kw)
-
-    return run_pddl, task
+    task = compile_strips(objects, facts, goal, push_costs, positive=False)
+    return functools.partial(downward.run_downward, task.domain, task.problem), task
 
 
 def action_cost(action: Action, push_costs: Mapping[tuple[str, str], int]) -> int:
