@@ -3,6 +3,15 @@
     .venv/bin/python benchmarks/segment.py [--data ../shared/data/mosd] [--key=value ...]
     .venv/bin/python benchmarks/segment.py --sim-clutter 90 [--key=value ...]
 
+After the mOSD frames it scores the self-made scene families of `clearcli.sim.families`
+(small objects on and against larger ones, rows with 3/5/10 mm gaps running away from
+the camera and across the line of sight, dense mixes, open containers), each rendered
+like a Kinect frame, on the report seeds 1000-1099 (`--seeds choose` for 0-99, the
+seeds settings are chosen on; `--families-only` skips mOSD; `--n-seeds N` takes the
+first N). Per family: mean F1, mean best IoU, over- and under-segmented objects per
+render, the share of renders segmented exactly right ("right": every object matched at
+IoU >= 0.5 and nothing more predicted) and the median time.
+
 `--key=value` overrides a SegmentSettings field (e.g. --concavity_tolerance_deg=15) to
 compare choices. `--sim-clutter N` instead scores N simulated clutter scenes
 (`clearcli.sim.scene.clutter(4 + s % 7, s)`, s = 100..., many touching pairs) with the
@@ -51,7 +60,7 @@ def _categories() -> list[tuple[str, list[str]]]:
 
 
 CATEGORIES: list[tuple[str, list[str]]] = _categories()
-STAGES = ("filter", "table", "supervoxels", "lccp", "cuts", "merge", "objects", "total")
+STAGES = ("filter", "table", "edges", "supervoxels", "lccp", "cuts", "merge", "objects", "total")
 
 
 def _settings(overrides: list[str]) -> SegmentSettings:
@@ -94,14 +103,50 @@ def sim_clutter(n_scenes: int, settings: SegmentSettings) -> None:
     )
 
 
+def families(settings: SegmentSettings, seeds: range) -> None:
+    from clearcli.sim.camera import render
+    from clearcli.sim.families import FAMILIES
+
+    segment(render(FAMILIES["small_on_large"](0), seed=0), settings)  # warm-up
+    print(f"self-made families, seeds {seeds.start}-{seeds.stop - 1} ({len(seeds)} renders each):")
+    print(f"  {'family':22s} {'F1':>6s} {'IoU':>6s} {'over':>5s} {'under':>5s} {'right':>6s} {'time ms':>8s}")
+    for name, build in FAMILIES.items():
+        f1, iou, over, under, right, wall = [], [], [], [], [], []
+        for seed in seeds:
+            frame = render(build(seed), seed=seed)
+            t0 = time.perf_counter()
+            seg = segment(frame, settings)
+            wall.append(time.perf_counter() - t0)
+            sc = score(seg.labels(), frame.fields["label"])
+            f1.append(sc.f1)
+            iou.append(sc.mean_best_iou)
+            over.append(sc.over_segmented)
+            under.append(sc.under_segmented)
+            right.append(sc.true_positives == sc.n_true == sc.n_pred)
+        print(
+            f"  {name:22s} {np.mean(f1):6.3f} {np.mean(iou):6.3f} {np.mean(over):5.2f} {np.mean(under):5.2f} "
+            f"{100 * np.mean(right):5.0f}% {np.median(wall) * 1000:8.0f}"
+        )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--data", type=Path, default=REPO.parent / "shared" / "data" / "mosd")
     parser.add_argument("--sim-clutter", type=int, default=0, metavar="N")
+    parser.add_argument("--seeds", choices=("report", "choose"), default="report")
+    parser.add_argument("--n-seeds", type=int, default=100)
+    parser.add_argument("--families-only", action="store_true")
     args, rest = parser.parse_known_args()
     settings = _settings(rest)
     if args.sim_clutter:
         sim_clutter(args.sim_clutter, settings)
+        return
+    from clearcli.sim.families import CHOOSE_SEEDS, REPORT_SEEDS
+
+    seeds = REPORT_SEEDS if args.seeds == "report" else CHOOSE_SEEDS
+    seeds = seeds[: args.n_seeds]
+    if args.families_only:
+        families(settings, seeds)
         return
     changed = {
         f.name: getattr(settings, f.name)
@@ -154,6 +199,8 @@ def main() -> None:
     peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(f"peak memory (resident, whole process): {peak_mb:.0f} MB")
     print(f"overall mean F1 over all {len(every)} frames: {np.mean([r[1] for r in every]):.3f}")
+    print()
+    families(settings, seeds)
 
 
 if __name__ == "__main__":

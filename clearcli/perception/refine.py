@@ -12,6 +12,9 @@ The stages, in order:
                                                                          pixel grid
   steps      two tops at two heights on either side of a line (steps.py)  voxel level
   rims       a container's inner and outer walls (rims.py)                voxel level
+Before the supervoxels, `edges.py` cuts the voxel adjacency at depth discontinuities
+of the pixel grid (stage "edges", organized frames only): it changes the graph every
+later step walks, so it runs on the voxels, not on segments.
 Supervoxel-level stages see one segment per supervoxel (the voxel labels are constant
 within a supervoxel until the first voxel-level stage; they come first).
 """

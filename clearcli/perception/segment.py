@@ -171,7 +171,7 @@ def segment(frame: Frame, settings: SegmentSettings) -> Segmentation:
     obj_pts = pts[prism_mask]
     objects: list[SegmentedObject] = []
     timings["supervoxels"] = timings["lccp"] = timings["cuts"] = timings["merge"] = 0.0
-    timings["occlusion"] = timings["steps"] = timings["rims"] = 0.0
+    timings["occlusion"] = timings["steps"] = timings["rims"] = timings["edges"] = 0.0
     if obj_pts.shape[0] >= 4:
         if fit.camera_is_origin:
             viewpoint = np.zeros(3)
@@ -184,9 +184,16 @@ def segment(frame: Frame, settings: SegmentSettings) -> Segmentation:
         if not organized:
             seg_settings = _fit_to_density(obj_pts, settings)
         vox = voxelize(obj_pts, seg_settings.voxel_m, colors)
+        t_edges = time.perf_counter()
+        if organized and settings.depth_edges:
+            from clearcli.perception.edges import cut_depth_edges
+
+            min_piece = max(1, int(settings.depth_edge_min_piece_m2 / seg_settings.voxel_m**2))
+            vox = cut_depth_edges(vox, points, frame.shape, obj_idx, settings.depth_edge_rel, min_piece)
+        timings["edges"] = time.perf_counter() - t_edges
         sv = compute_supervoxels(vox, viewpoint, seg_settings)
         t3 = time.perf_counter()
-        timings["supervoxels"] = t3 - t2
+        timings["supervoxels"] = t3 - t2 - timings["edges"]
         seg_of_sv = lccp_segments(sv, seg_settings)
         t4 = time.perf_counter()
         timings["lccp"] = t4 - t3

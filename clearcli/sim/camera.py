@@ -241,6 +241,8 @@ def _intersect(obj: SceneObject, origin_table: np.ndarray, rays_table: np.ndarra
     d = _apply_rotation(R_obj.T, rays_table)
     if isinstance(obj, Box):
         t, normal_local = _intersect_box(o, d, obj.size_x_m / 2, obj.size_y_m / 2, obj.size_z_m)
+    elif isinstance(obj, Cylinder) and obj.is_open:
+        t, normal_local = _intersect_open_cylinder(o, d, obj.radius_m, obj.height_m, obj.wall_m, obj.floor_m)
     elif isinstance(obj, Cylinder):
         t, normal_local = _intersect_cylinder(o, d, obj.radius_m, obj.height_m)
     else:  # pragma: no cover - the Scene type admits only these two
@@ -292,6 +294,48 @@ def _intersect_cylinder(o: np.ndarray, d: np.ndarray, r: float, h: float) -> tup
         cap_ok = np.isfinite(t_cap) & (t_cap > 0) & (x * x + y * y <= r * r) & (t_cap < best_t)
         best_t = np.where(cap_ok, t_cap, best_t)
         normal[cap_ok] = (0.0, 0.0, cap_nz)
+    return best_t, normal
+
+
+def _intersect_open_cylinder(
+    o: np.ndarray, d: np.ndarray, r: float, h: float, wall: float, floor: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """An open container: outer side (z in [0, h]), the rim (annulus at z = h), the inner
+    side seen from inside (z in [floor, h]) and the inner floor (disc at z = floor).
+
+    The nearest of these along each ray is the visible surface: a ray reaches the inner
+    side or floor only through the opening, as every other way in crosses the outer
+    side or the rim first."""
+    n = d.shape[0]
+    r_in = max(r - wall, 1e-4)
+    a = d[:, 0] ** 2 + d[:, 1] ** 2
+    b = 2.0 * (o[0] * d[:, 0] + o[1] * d[:, 1])
+    best_t = np.full(n, np.inf)
+    normal = np.zeros((n, 3))
+
+    def take(t: np.ndarray, ok: np.ndarray, nrm: np.ndarray) -> None:
+        nonlocal best_t
+        better = ok & (t > 0) & (t < best_t)
+        best_t = np.where(better, t, best_t)
+        normal[better] = nrm[better] if nrm.ndim == 2 else nrm
+
+    with np.errstate(divide="ignore", invalid="ignore"):
+        for radius, sign, z_lo in ((r, -1.0, 0.0), (r_in, 1.0, floor)):
+            c = o[0] ** 2 + o[1] ** 2 - radius * radius
+            disc = b * b - 4.0 * a * c
+            t = (-b + sign * np.sqrt(disc)) / (2.0 * a)  # outer: entering; inner: leaving
+            p = o + t[:, None] * d
+            ok = (disc >= 0) & (a > 1e-12) & (p[:, 2] >= z_lo) & (p[:, 2] <= h)
+            nrm = np.zeros((n, 3))
+            nrm[:, :2] = -sign * p[:, :2] / radius  # outward outside, inward inside
+            take(t, ok, nrm)
+        for cap_z, r_lo, r_hi in ((h, r_in, r), (floor, 0.0, r_in)):
+            t = (cap_z - o[2]) / d[:, 2]
+            x = o[0] + t * d[:, 0]
+            y = o[1] + t * d[:, 1]
+            rr = x * x + y * y
+            ok = np.isfinite(t) & (rr >= r_lo * r_lo) & (rr <= r_hi * r_hi) & (d[:, 2] < 0)
+            take(t, ok, np.array([0.0, 0.0, 1.0]))
     return best_t, normal
 
 

@@ -115,7 +115,11 @@ class Box:
 
 @dataclass(frozen=True)
 class Cylinder:
-    """An upright cylinder; pose as for `Box` (yaw is kept only so that moves are uniform)."""
+    """An upright cylinder; pose as for `Box` (yaw is kept only so that moves are uniform).
+
+    ``wall_m`` > 0 makes it an open container (a cup, a bowl with straight sides): no
+    top cap, a wall that thick, and a floor inside ``floor_m`` above its base. 0 is a
+    solid, closed cylinder (a can)."""
 
     object_id: int
     radius_m: float
@@ -124,6 +128,12 @@ class Cylinder:
     y_m: float
     yaw_rad: float = 0.0
     base_z_m: float = 0.0
+    wall_m: float = 0.0
+    floor_m: float = 0.005
+
+    @property
+    def is_open(self) -> bool:
+        return self.wall_m > 0.0
 
     @property
     def top_z_m(self) -> float:

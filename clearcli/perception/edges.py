@@ -1,0 +1,127 @@
+"""Stage 3a': depth discontinuities on the pixel grid cut the voxel adjacency (ours,
+after the depth-discontinuity edges of PCL's OrganizedEdgeBase).
+
+Two objects of equal height standing a few millimetres apart are one surface to a 5 mm
+voxel grid: their tops are coplanar, the grid's 26-neighbourhood bridges the gap, and
+LCCP sees only flat, convex adjacencies. In an organized frame the gap is plain to see:
+the pixels between the two tops look through to the table, centimetres farther, or lost
+their depth. So, before the supervoxels:
+
+1. The object points' pixels are joined to their 8 neighbours when both are object
+   points and their ranges differ by at most ``depth_edge_rel`` of the nearer range
+   (PCL's relative threshold: it grows with the depth noise and with the depth step of
+   a surface seen at a slant). The connected pieces of that pixel graph are the
+   surfaces the image shows unbroken.
+2. Each voxel takes the piece most of its points are in.
+3. A voxel adjacency between two voxels of different pieces is dropped, when both pieces
+   are large enough to be objects (``depth_edge_min_piece_m2`` of voxels); a piece of a
+   few stray pixels (a flying pixel at a silhouette) cuts nothing.
+
+Objects that touch stay joined: at a contact the depth is continuous. A nearer object
+hiding part of a farther one breaks the farther one's pixels apart too, but those
+pieces are also apart in space unless the occluder is thin; `occlusion.py` joins
+pieces that continue each other behind a nearer object, after LCCP.
+
+Skipped on an unorganized cloud (no pixel grid): the result then equals the result with
+the stage off.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from clearcli.perception.supervoxels import VoxelCloud
+
+# 4 of the 8 neighbour offsets (row, column): each undirected pixel pair found once
+_PIXEL_OFFSETS = ((0, 1), (1, 0), (1, 1), (1, -1))
+
+
+def _components(n: int, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    graph = coo_matrix((np.ones(a.shape[0], dtype=np.int8), (a, b)), shape=(n, n))
+    return connected_components(graph, directed=False)[1]
+
+
+def pixel_pieces(points: np.ndarray, shape: tuple[int, int], point_index: np.ndarray, rel: float) -> np.ndarray:
+    """(M,) piece of each of the M points ``point_index`` (flat pixel indices into the
+    organized ``points`` of ``shape``): connected over 8-neighbour pixels of the set whose
+    ranges differ by at most ``rel`` times the nearer one."""
+    height, width = shape
+    m = point_index.shape[0]
+    where = np.full(height * width, -1, dtype=np.int64)
+    where[point_index] = np.arange(m)
+    img = where.reshape(height, width)
+    rng = np.linalg.norm(points[point_index].astype(np.float64), axis=1)
+    src, dst = [], []
+    for dv, du in _PIXEL_OFFSETS:
+        a = img[: height - dv, max(0, -du) : width - max(0, du)]
+        b = img[dv:, max(0, du) : width - max(0, -du)]
+        a, b = a.ravel(), b.ravel()
+        both = (a >= 0) & (b >= 0)
+        a, b = a[both], b[both]
+        ra, rb = rng[a], rng[b]
+        near = np.abs(ra - rb) <= rel * np.minimum(ra, rb)
+        src.append(a[near])
+        dst.append(b[near])
+    return _components(m, np.concatenate(src), np.concatenate(dst))
+
+
+def _voxel_piece(point_voxel: np.ndarray, point_piece: np.ndarray, n_voxels: int) -> np.ndarray:
+    """(V,) the piece most of each voxel's points are in (ties: the lower piece)."""
+    key = point_voxel.astype(np.int64) * (int(point_piece.max()) + 1) + point_piece
+    uniq, count = np.unique(key, return_counts=True)
+    n_pieces = int(point_piece.max()) + 1
+    vox, piece = uniq // n_pieces, uniq % n_pieces
+    order = np.lexsort((piece, -count, vox))
+    first = np.ones(order.shape[0], dtype=bool)
+    first[1:] = vox[order[1:]] != vox[order[:-1]]
+    out = np.zeros(n_voxels, dtype=np.int64)
+    out[vox[order[first]]] = piece[order[first]]
+    return out
+
+
+def _join_small(piece: np.ndarray, large: np.ndarray, edges: np.ndarray) -> np.ndarray:
+    """A voxel of a small piece (stray pixels at a silhouette) joins the large piece most
+    of its adjacent voxels are in: it would otherwise bridge the cut it stands in."""
+    both = np.concatenate([edges, edges[:, ::-1]])
+    want = ~large[piece[both[:, 0]]] & large[piece[both[:, 1]]]
+    if not want.any():
+        return piece
+    v, p = both[want, 0], piece[both[want, 1]]
+    n_pieces = int(piece.max()) + 1
+    uniq, count = np.unique(v * n_pieces + p, return_counts=True)
+    vv, pp = uniq // n_pieces, uniq % n_pieces
+    order = np.lexsort((pp, -count, vv))
+    first = np.ones(order.shape[0], dtype=bool)
+    first[1:] = vv[order[1:]] != vv[order[:-1]]
+    out = piece.copy()
+    out[vv[order[first]]] = pp[order[first]]
+    return out
+
+
+def cut_depth_edges(
+    vox: VoxelCloud,
+    points: np.ndarray,
+    shape: tuple[int, int],
+    point_index: np.ndarray,
+    rel: float,
+    min_piece_voxels: int,
+) -> VoxelCloud:
+    """``vox`` without the adjacencies that cross a depth discontinuity between two
+    large pieces (module docstring). ``point_index``: the frame index of each voxelized
+    point, in the order of ``vox.point_voxel``."""
+    if vox.edges.shape[0] == 0 or point_index.size == 0:
+        return vox
+    piece_of_point = pixel_pieces(points, shape, point_index, rel)
+    piece = _voxel_piece(vox.point_voxel, piece_of_point, vox.n_voxels)
+    large = np.bincount(piece) >= min_piece_voxels
+    piece = _join_small(piece, large, vox.edges)
+    a, b = piece[vox.edges[:, 0]], piece[vox.edges[:, 1]]
+    cut = (a != b) & large[a] & large[b]
+    if not cut.any():
+        return vox
+    return dataclasses.replace(vox, edges=vox.edges[~cut])

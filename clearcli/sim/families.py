@@ -1,0 +1,219 @@
+"""Families of self-made scenes that test segmentation where it is hardest for clearing:
+small objects (the 3-7 cm a gripper takes) on and against larger ones, equal-height
+objects across narrow gaps, dense mixes, and open containers.
+
+Every family is a pure function ``family(seed) -> Scene``: sizes and poses drawn from
+``seed``, the same seed giving the same scene. `FAMILIES` names them for the benchmark
+and tests. Choose settings on seeds 0-99 (`CHOOSE_SEEDS`) and report on 1000-1099
+(`REPORT_SEEDS`), which are not looked at while choosing.
+
+Frames and conventions are those of `clearcli.sim.scene` (table frame: z up, +y away
+from the camera).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from functools import partial
+from typing import Callable
+
+import numpy as np
+
+from clearcli.sim.scene import (
+    MAX_WIDTH_M,
+    MIN_WIDTH_M,
+    Box,
+    Cylinder,
+    Scene,
+    SceneObject,
+    _in_region,
+    _place_touching,
+    make_scene,
+    objects_overlap,
+)
+
+CHOOSE_SEEDS = range(0, 100)
+REPORT_SEEDS = range(1000, 1100)
+
+# Gaps of the rows (m): 3 mm is about one depth step of the sensor at 0.9 m seen across
+# the line of sight, 10 mm is two voxels.
+GAPS_M = (0.003, 0.005, 0.010)
+
+
+def _small(rng: np.random.Generator, object_id: int, max_height_m: float = 0.12) -> SceneObject:
+    """A graspable object: a box or a cylinder 3-7 cm wide."""
+    height = float(rng.uniform(0.04, max_height_m))
+    yaw = float(rng.uniform(-math.pi / 2, math.pi / 2))
+    if rng.random() < 0.4:
+        radius = float(rng.uniform(MIN_WIDTH_M, MAX_WIDTH_M)) / 2
+        return Cylinder(object_id, round(radius, 4), round(height, 4), 0.0, 0.0, round(yaw, 4))
+    sx, sy = rng.uniform(MIN_WIDTH_M, MAX_WIDTH_M, size=2)
+    return Box(object_id, round(float(sx), 4), round(float(sy), 4), round(height, 4), 0.0, 0.0, round(yaw, 4))
+
+
+def _inside(inner: SceneObject, outer: Box, margin_m: float) -> bool:
+    """Is the footprint of ``inner`` within the top of box ``outer`` (``margin_m`` in)?"""
+    c, s = math.cos(outer.yaw_rad), math.sin(outer.yaw_rad)
+    rel = inner.footprint() - np.array([outer.x_m, outer.y_m])
+    local = rel @ np.array([[c, -s], [s, c]])  # rotate by -yaw
+    return bool(
+        (np.abs(local[:, 0]) <= outer.size_x_m / 2 - margin_m).all()
+        and (np.abs(local[:, 1]) <= outer.size_y_m / 2 - margin_m).all()
+    )
+
+
+def _flat_box(rng: np.random.Generator, object_id: int) -> Box:
+    """A large flat box (a tray, a board game): 16-26 x 12-18 x 3-5 cm."""
+    return Box(
+        object_id,
+        round(float(rng.uniform(0.16, 0.26)), 4),
+        round(float(rng.uniform(0.12, 0.18)), 4),
+        round(float(rng.uniform(0.03, 0.05)), 4),
+        round(float(rng.uniform(-0.08, 0.08)), 4),
+        round(float(rng.uniform(-0.05, 0.05)), 4),
+        round(float(rng.uniform(-0.5, 0.5)), 4),
+    )
+
+
+def _on_top(rng: np.random.Generator, small: SceneObject, lower: Box) -> SceneObject:
+    """``small`` standing at a random place on the top of ``lower``, wholly on it."""
+    c, s = math.cos(lower.yaw_rad), math.sin(lower.yaw_rad)
+    for _ in range(200):
+        lx = rng.uniform(-lower.size_x_m / 2, lower.size_x_m / 2)
+        ly = rng.uniform(-lower.size_y_m / 2, lower.size_y_m / 2)
+        cand = replace(
+            small,
+            x_m=round(float(lower.x_m + c * lx - s * ly), 4),
+            y_m=round(float(lower.y_m + s * lx + c * ly), 4),
+            base_z_m=lower.top_z_m,
+        )
+        if _inside(cand, lower, 0.005):
+            return cand
+    raise ValueError("no room on the lower object")  # pragma: no cover - sizes always fit
+
+
+def small_on_large(seed: int) -> Scene:
+    """One graspable object standing on a large flat box."""
+    rng = np.random.default_rng(seed)
+    lower = _flat_box(rng, 0)
+    upper = _on_top(rng, _small(rng, 1, max_height_m=0.10), lower)
+    return make_scene(f"small_on_large({seed})", [lower, upper])
+
+
+def small_against_tall(seed: int) -> Scene:
+    """A graspable object touching a taller, larger one, on the side the camera sees (in
+    front or to a side, never hidden behind it)."""
+    rng = np.random.default_rng(seed)
+    tall_h = float(rng.uniform(0.15, 0.25))
+    if rng.random() < 0.3:
+        tall: SceneObject = Cylinder(0, round(float(rng.uniform(0.04, 0.06)), 4), round(tall_h, 4), 0.0, 0.05)
+    else:
+        tall = Box(
+            0, round(float(rng.uniform(0.08, 0.16)), 4), round(float(rng.uniform(0.06, 0.10)), 4),
+            round(tall_h, 4), 0.0, 0.05, round(float(rng.uniform(-0.4, 0.4)), 4),
+        )
+    small = _small(rng, 1, max_height_m=min(0.12, 0.7 * tall_h))
+    # -y is towards the camera: in front is -90 degrees; keep within 75 degrees of it
+    direction = -math.pi / 2 + float(rng.uniform(-1.3, 1.3))
+    if isinstance(tall, Box) and isinstance(small, Box) and rng.random() < 0.5:
+        small = replace(small, yaw_rad=tall.yaw_rad)  # face to face
+    return make_scene(f"small_against_tall({seed})", [tall, _place_touching(small, tall, direction)])
+
+
+def gap_row(seed: int, gap_m: float, away: bool) -> Scene:
+    """Two or three boxes of equal height 5 cm wide across the gaps, ``gap_m`` apart.
+
+    ``away``: the gaps run away from the camera (boxes side by side along x, the table
+    seen through the gap); else across the line of sight (boxes one behind the other)."""
+    rng = np.random.default_rng(seed)
+    n = 2 + int(rng.random() < 0.3)
+    height = round(float(rng.uniform(0.05, 0.12)), 4)
+    width = 0.05
+    yaw = float(rng.uniform(-0.08, 0.08))  # within 5 degrees of the named direction
+    x0, y0 = float(rng.uniform(-0.08, 0.08)), float(rng.uniform(-0.05, 0.05))
+    u = np.array([math.cos(yaw), math.sin(yaw)]) if away else np.array([-math.sin(yaw), math.cos(yaw)])
+    objs: list[SceneObject] = []
+    for k in range(n):
+        length = round(float(rng.uniform(0.05, 0.10)), 4)
+        offset = (k - (n - 1) / 2) * (width + gap_m)
+        sx, sy = (width, length) if away else (length, width)
+        objs.append(Box(k, sx, sy, height, round(float(x0 + offset * u[0]), 5), round(float(y0 + offset * u[1]), 5), yaw))
+    way = "away" if away else "across"
+    return make_scene(f"gap_row({seed}, {gap_m * 1000:.0f} mm, {way})", objs)
+
+
+def dense_mix(seed: int) -> Scene:
+    """6-10 objects: one or two large boxes (flat or tall), small objects on them, against
+    them and against each other, the rest apart."""
+    rng = np.random.default_rng(seed)
+    placed: list[SceneObject] = []
+    n_large = 1 + int(rng.random() < 0.5)
+    n_total = int(rng.integers(6, 11))
+    for object_id in range(n_total):
+        if object_id < n_large:
+            obj: SceneObject = _flat_box(rng, object_id)
+            if rng.random() < 0.4:  # a tall one instead (a cereal box)
+                obj = replace(obj, size_x_m=round(obj.size_x_m * 0.6, 4), size_y_m=0.07,
+                              size_z_m=round(float(rng.uniform(0.15, 0.25)), 4))
+        else:
+            obj = _small(rng, object_id)
+        for _attempt in range(300):
+            roll = rng.random()
+            flats = [p for p in placed if isinstance(p, Box) and p.size_z_m <= 0.05 and p.base_z_m == 0.0]
+            if object_id >= n_large and flats and roll < 0.25:
+                lower = flats[int(rng.integers(len(flats)))]
+                small = replace(obj, size_z_m=min(obj.size_z_m, 0.08)) if isinstance(obj, Box) else obj
+                try:
+                    cand = _on_top(rng, small, lower)
+                except ValueError:
+                    continue
+            elif placed and roll < 0.65:
+                anchor = placed[int(rng.integers(len(placed)))]
+                if anchor.base_z_m > 0:
+                    continue
+                cand = _place_touching(obj, anchor, float(rng.uniform(-math.pi, math.pi)))
+            else:
+                cand = replace(obj, x_m=float(rng.uniform(-0.2, 0.2)), y_m=float(rng.uniform(-0.13, 0.13)))
+            if not _in_region(cand.footprint()):
+                continue
+            others = [p for p in placed if not (cand.base_z_m > 0 and p.top_z_m == cand.base_z_m)]
+            clearance = 0.0 if roll < 0.65 else 0.015
+            if any(objects_overlap(cand, p, clearance) for p in others if p is not cand):
+                continue
+            if cand.base_z_m > 0 and any(
+                p.base_z_m == cand.base_z_m and objects_overlap(replace(cand, base_z_m=0.0), replace(p, base_z_m=0.0))
+                for p in placed
+            ):
+                continue
+            placed.append(cand)
+            break
+    return make_scene(f"dense_mix({seed})", placed)
+
+
+def open_container(seed: int) -> Scene:
+    """An open cylindrical container (a mug, a deep bowl, a tin): 7-12 cm across, 6-12 cm
+    tall, walls 3-6 mm thick, alone near the middle of the table."""
+    rng = np.random.default_rng(seed)
+    cup = Cylinder(
+        0,
+        round(float(rng.uniform(0.035, 0.06)), 4),
+        round(float(rng.uniform(0.06, 0.12)), 4),
+        round(float(rng.uniform(-0.12, 0.12)), 4),
+        round(float(rng.uniform(-0.08, 0.08)), 4),
+        wall_m=round(float(rng.uniform(0.003, 0.006)), 4),
+    )
+    return make_scene(f"open_container({seed})", [cup])
+
+
+FAMILIES: dict[str, Callable[[int], Scene]] = {
+    "small_on_large": small_on_large,
+    "small_against_tall": small_against_tall,
+    **{
+        f"gap_{g * 1000:.0f}mm_{way}": partial(gap_row, gap_m=g, away=way == "away")
+        for way in ("away", "across")
+        for g in GAPS_M
+    },
+    "dense_mix": dense_mix,
+    "open_container": open_container,
+}

@@ -1,0 +1,153 @@
+"""Self-made scene families (clearcli.sim.families) and the depth-edge stage
+(clearcli.perception.edges) that splits equal-height objects across narrow gaps.
+
+Seed sweeps here use the report seeds (1000-...), never the ones settings were chosen on.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from clearcli.evaluate.segmentation import score
+from clearcli.io.frames import Frame
+from clearcli.perception.settings import SegmentSettings
+from clearcli.sim.camera import DepthNoise, render
+from clearcli.sim.families import FAMILIES, REPORT_SEEDS, gap_row, open_container
+from clearcli.sim.scene import Box, Cylinder, make_scene, objects_overlap
+
+S = SegmentSettings()
+SWEEP = list(REPORT_SEEDS[:6])
+
+
+def _right(frame: Frame, settings: SegmentSettings = S) -> bool:
+    """Every object matched at IoU >= 0.5 and nothing more predicted."""
+    from clearcli.perception.segment import segment
+
+    sc = score(segment(frame, settings).labels(), frame.fields["label"])
+    return sc.true_positives == sc.n_true == sc.n_pred
+
+
+@pytest.mark.parametrize("name", sorted(FAMILIES))
+def test_families_are_deterministic_and_physical(name: str) -> None:
+    for seed in (3, 1004):
+        a, b = FAMILIES[name](seed), FAMILIES[name](seed)
+        assert a == b and a.n_objects >= 1
+        objs = a.objects
+        for i in range(len(objs)):
+            for j in range(i + 1, len(objs)):
+                # touching is allowed (gap below the bisection tolerance), overlapping not
+                assert not objects_overlap(objs[i], objs[j], clearance_m=-0.001), (name, seed, i, j)
+        # stacked objects stand on the top of the one below
+        for o in objs:
+            if o.base_z_m > 0:
+                assert any(abs(p.top_z_m - o.base_z_m) < 1e-9 for p in objs if p is not o)
+
+
+def test_gap_rows_have_the_named_gap_and_direction() -> None:
+    for away in (True, False):
+        scene = gap_row(7, 0.005, away)
+        a, b = scene.objects[0], scene.objects[1]
+        assert a.size_z_m == b.size_z_m
+        centre_step = np.hypot(b.x_m - a.x_m, b.y_m - a.y_m)
+        assert centre_step == pytest.approx(0.05 + 0.005, abs=1e-4)  # 5 cm wide + the gap
+        # away: side by side along the table's x (the gap runs along y, away from the camera)
+        along_x = abs(b.x_m - a.x_m) > abs(b.y_m - a.y_m)
+        assert along_x == away
+
+
+def test_open_container_shows_its_inside() -> None:
+    """The virtual Kinect sees into an open container: points inside the wall and a
+    centimetre or more below the rim (the inner wall, the floor where it shows), which a
+    closed cylinder of that size has none of."""
+    scene = open_container(2)
+    cup = scene.objects[0]
+    assert isinstance(cup, Cylinder) and cup.is_open
+    closed = make_scene("closed", [replace(cup, wall_m=0.0)])
+
+    def inside_below_rim(sc) -> int:  # type: ignore[no-untyped-def]
+        from clearcli.sim.scene import invert_transform
+
+        frame = render(sc, seed=0, noise=DepthNoise(enabled=False))  # exact depth
+        pts = frame.points[frame.fields["label"] == 10].astype(np.float64)
+        T = invert_transform(sc.T_camera_table)
+        p = pts @ T[:3, :3].T + T[:3, 3]
+        r = np.hypot(p[:, 0] - cup.x_m, p[:, 1] - cup.y_m)
+        return int(np.count_nonzero((r < cup.radius_m - cup.wall_m / 2) & (p[:, 2] < cup.height_m - 0.01)))
+
+    assert inside_below_rim(scene) > 200
+    assert inside_below_rim(closed) == 0
+
+
+def test_pixel_pieces_by_hand() -> None:
+    """Two flat patches at 1.0 m with a column between them seeing 1.1 m (the table
+    through a gap): two pieces at 2 % (a 10 cm jump is 10 %), one at 20 %."""
+    from clearcli.perception.edges import pixel_pieces
+
+    h, w = 4, 7
+    z = np.full((h, w), 1.0)
+    z[:, 3] = 1.1
+    u, v = np.meshgrid(np.arange(w) - 3.0, np.arange(h) - 1.5)
+    pts = np.stack([u * 0.002 * z, v * 0.002 * z, z], axis=-1).reshape(-1, 3)
+    idx = np.arange(h * w)
+    idx = idx[(idx % w) != 3]  # the gap column is table, not an object point
+    assert len(np.unique(pixel_pieces(pts, (h, w), idx, 0.02))) == 2
+    # with the gap column among the object points it joins nothing at 2 %, all at 20 %
+    every = np.arange(h * w)
+    assert len(np.unique(pixel_pieces(pts, (h, w), every, 0.02))) == 3
+    assert len(np.unique(pixel_pieces(pts, (h, w), every, 0.2))) == 1
+
+
+@pytest.mark.parametrize("gap_m", [0.005, 0.010])
+def test_depth_edges_split_gaps_running_away(gap_m: float) -> None:
+    """The issue's target (>= 95 % of renders split) on a small sweep of report seeds,
+    all but one exactly right; with the stage off most of them merge, so the stage is
+    what splits them."""
+    frames = [render(gap_row(s, gap_m, True), seed=s) for s in SWEEP]
+    assert sum(_right(f) for f in frames) >= len(frames) - 1
+    off = replace(S, depth_edges=False)
+    if gap_m == 0.005:
+        assert sum(_right(f, off) for f in frames) <= len(frames) // 2
+
+
+def test_depth_edges_keep_single_objects_whole() -> None:
+    """A box, a can and an open container alone: one object each, with the stage on,
+    over several renders; and the stage changes no label of the container."""
+    from clearcli.perception.segment import segment
+
+    singles = [
+        make_scene("box", [Box(0, 0.05, 0.04, 0.08, x_m=0.05, y_m=0.0, yaw_rad=0.5)]),
+        make_scene("can", [Cylinder(0, 0.033, 0.12, x_m=-0.08, y_m=0.03)]),
+    ]
+    for scene in singles:
+        for seed in SWEEP[:4]:
+            assert _right(render(scene, seed=seed)), (scene.name, seed)
+    off = replace(S, depth_edges=False)
+    for seed in SWEEP[:4]:
+        frame = render(open_container(seed), seed=seed)
+        assert np.array_equal(segment(frame, S).labels(), segment(frame, off).labels())
+
+
+def test_depth_edges_skipped_on_an_unorganized_cloud() -> None:
+    from clearcli.perception.segment import segment
+
+    frame = render(gap_row(1001, 0.005, True), seed=1001)
+    finite = np.isfinite(frame.points).all(axis=1)
+    flat = Frame(points=frame.points[finite], shape=None, source="unorganized")
+    on = segment(flat, S)
+    off = segment(flat, replace(S, depth_edges=False))
+    assert np.array_equal(on.labels(), off.labels())
+    assert on.timings_s["edges"] < 0.01 and "edges" in segment(frame, S).timings_s
+
+
+@pytest.mark.parametrize("name", ["small_on_large", "small_against_tall", "open_container"])
+def test_family_targets_on_a_seed_sweep(name: str) -> None:
+    """Small objects on or against larger ones, and open containers, on report seeds.
+
+    The issue's targets are every render (small objects) and >= 95 % (containers); over
+    100 report renders we reach less (see benchmarks/segment.py), so this asserts the
+    level reached, 5 of these 6, to catch a regression."""
+    frames = [render(FAMILIES[name](s), seed=s) for s in SWEEP]
+    assert sum(_right(f) for f in frames) >= 5
