@@ -144,8 +144,9 @@ def gap_row(seed: int, gap_m: float, away: bool) -> Scene:
 
 
 def dense_mix(seed: int) -> Scene:
-    """6-10 objects: one or two large boxes (flat or tall), small objects on them, against
-    them and against each other, the rest apart."""
+    """Up to 6-10 objects (one that finds no room after 300 tries is left out, its id
+    unused): one or two large boxes (flat or tall), small objects on them, against them
+    and against each other, the rest apart."""
     rng = np.random.default_rng(seed)
     placed: list[SceneObject] = []
     n_large = 1 + int(rng.random() < 0.5)
