@@ -248,13 +248,19 @@ def test_ctrl_c_stops_cleanly(tmp_path: Path) -> None:
     exit 130, the summary of what finished, no worker left, no temporary left."""
     out = tmp_path / "out"
     # many frames: on a loaded machine the signal can come late, and the batch must
-    # still be running when it does (it finished first once under load: exit 0)
+    # still be running when it does
     frames = [tmp_path / f"f{k}.pcd" for k in range(len(FRAMES) * 10)]
     for f, src in zip(frames, FRAMES * 10):
         f.write_bytes(src.read_bytes())
     args = [sys.executable, "-m", "clearcli.cli", "plan", *map(str, frames), "--json", "--jobs", "2",
             "--out-dir", str(out), "--outputs", "plan,problem,png"]
-    proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    # SIGINT back to its default in the child: a test run started in the background of
+    # a non-interactive shell (`cmd &`) inherits SIGINT ignored, and Python then keeps
+    # ignoring it, as a shell's background job should (the batch ran to the end: exit 0)
+    proc = subprocess.Popen(
+        args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
     deadline = time.time() + 300
     while time.time() < deadline and not (out.exists() and list(out.glob("*.json"))):
         time.sleep(0.05)
