@@ -481,17 +481,23 @@ def iter_mcap_frames(path: Path, topic: str | None = None) -> Iterator[Frame]:
         yield frame
 
 
-def read_mcap_frame(path: Path, topic: str | None = None, index: int = 0) -> Frame:
-    """Frame `index` (from 0) of the point-cloud topic; only that message is decoded."""
-    path = Path(path)
-    summary = read_summary(path)
-    topic = choose_topic(summary, topic)
+def require_frame_index(path: Path, summary: McapSummary, topic: str, index: int) -> None:
+    """InputError unless frame ``index`` of ``topic`` exists (past the end of a damaged
+    log is left to the reader, which stops at the damage)."""
     total = summary.count(topic)
     if index < 0 or (summary.damage is None and index >= total):
         raise InputError(
             f"{path}: --frame {index} does not exist: {topic} has {total} frame{'s' if total != 1 else ''}"
             + (f" (0..{total - 1})" if total else "")
         )
+
+
+def read_mcap_frame(path: Path, topic: str | None = None, index: int = 0) -> Frame:
+    """Frame `index` (from 0) of the point-cloud topic; only that message is decoded."""
+    path = Path(path)
+    summary = read_summary(path)
+    topic = choose_topic(summary, topic)
+    require_frame_index(path, summary, topic, index)
     decoders = _Decoders()
     seen = 0
     for i, schema, channel, message in _guarded(path, summary, topic):

@@ -47,6 +47,7 @@ from clearcli.io.mcap import (
     foxglove_frame,
     pointcloud2_frame,
     quat_matrix,
+    require_frame_index,
     error_reason,
 )
 
@@ -690,12 +691,7 @@ def read_bag_frame(path: Path, topic: str | None = None, index: int = 0) -> Fram
     path = Path(path)
     summary = read_bag_summary(path)
     topic = choose_bag_topic(summary, topic)
-    total = summary.count(topic)
-    if index < 0 or (summary.damage is None and index >= total):
-        raise InputError(
-            f"{path}: --frame {index} does not exist: {topic} has {_plural(total, 'frame')}"
-            + (f" (0..{total - 1})" if total else "")
-        )
+    require_frame_index(path, summary, topic, index)
     decoders = _Decoders(ros1=summary.format == "rosbag1")
     for i, raw in _guarded(summary, topic, skip_to=index):
         if i == index:
