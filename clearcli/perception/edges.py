@@ -32,18 +32,10 @@ import dataclasses
 
 import numpy as np
 
-from clearcli.perception.supervoxels import VoxelCloud
+from clearcli.perception.supervoxels import VoxelCloud, _components
 
 # 4 of the 8 neighbour offsets (row, column): each undirected pixel pair found once
 _PIXEL_OFFSETS = ((0, 1), (1, 0), (1, 1), (1, -1))
-
-
-def _components(n: int, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
-    graph = coo_matrix((np.ones(a.shape[0], dtype=np.int8), (a, b)), shape=(n, n))
-    return connected_components(graph, directed=False)[1]
 
 
 def pixel_pieces(points: np.ndarray, shape: tuple[int, int], point_index: np.ndarray, rel: float) -> np.ndarray:
@@ -67,7 +59,7 @@ def pixel_pieces(points: np.ndarray, shape: tuple[int, int], point_index: np.nda
         near = np.abs(ra - rb) <= rel * np.minimum(ra, rb)
         src.append(a[near])
         dst.append(b[near])
-    return _components(m, np.concatenate(src), np.concatenate(dst))
+    return _components(m, np.stack([np.concatenate(src), np.concatenate(dst)], axis=1))
 
 
 def _voxel_piece(point_voxel: np.ndarray, point_piece: np.ndarray, n_voxels: int) -> np.ndarray:
