@@ -191,10 +191,13 @@ def test_low_object_grasp_keeps_fingertips_above_table(height: float) -> None:
 
 
 def test_push_poses_and_paths() -> None:
-    # default: the two half-turns of the documented yaw, then those of the other yaw
-    _, plain = one_box(Box((0.0, 0.0), BOX))
+    # the two half-turns of the documented yaw, then those of the other yaw (raised
+    # contacts switched off here: tests/test_clearing.py counts those)
+    _, plain = one_box(Box((0.0, 0.0), BOX), settings_from_dict({"push": {"raised_fingertips_m": []}}))
     assert all(len(plain.pushes[d].candidates) == 4 for d in ("dir1", "dir2", "dir3", "dir4"))
-    state, obj = one_box(Box((0.0, 0.0), BOX), settings_from_dict({"push": {"lateral_shift": True}}))
+    state, obj = one_box(
+        Box((0.0, 0.0), BOX), settings_from_dict({"push": {"lateral_shift": True, "raised_fingertips_m": []}})
+    )
     n = state.table.normal
     for d, along, extent in (("dir1", 0.025, 0.10), ("dir3", 0.015, 0.05)):
         push = obj.pushes[d]

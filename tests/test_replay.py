@@ -506,21 +506,26 @@ def test_world_grasp_never_holds_an_object_too_wide_or_too_narrow() -> None:
     assert {world_grasp(fits, 0, 0.07, rng, closing_width_m=0.03)[1] for _ in range(20)} <= {"removed", "slipped"}
 
 
-def test_cleared_truly_does_not_take_the_planners_word_for_widths() -> None:
+def test_cleared_truly_is_the_worlds_judgment_not_the_planners() -> None:
     from clearcli.sim.episode import EpisodeResult
 
     base = EpisodeResult(scene="s", seed=0, n_objects=3, steps=(), end="no_plan", remaining=(1, 2), unreachable=(1, 2))
     # the planner called 1 too wide and 2 out of reach: the old criterion passes either way
     claimed = dataclasses.replace(base, claimed_ungraspable=(1,))
     assert claimed.cleared_reachable and not claimed.cleared_truly and claimed.false_ungraspable == (1,)
-    # the world agrees that 1 is too wide: cleared (2 is out of reach: the arm has no motion)
+    # the world agrees that 1 is too wide, but its own arm reaches 2: not cleared
     truly = dataclasses.replace(claimed, truly_ungraspable=(1,))
-    assert truly.cleared_truly and truly.false_ungraspable == ()
+    assert not truly.cleared_truly and truly.false_ungraspable == ()
+    # ... and when the world's arm cannot reach 2 either: cleared
+    world = dataclasses.replace(truly, world_unreachable=(2,))
+    assert world.cleared_truly
+    # the world's verdict alone counts: the planner's "unreachable" list is not needed
+    assert dataclasses.replace(world, unreachable=()).cleared_truly
     # out of reach because the robot pushed it there: not excused
-    assert not dataclasses.replace(truly, moved=(2,)).cleared_truly
-    # a stuck object is never excused, nor is anything when the budget ran out
-    assert not dataclasses.replace(truly, remaining=(1, 2, 3)).cleared_truly
-    assert not dataclasses.replace(truly, end="budget").cleared_truly
+    assert not dataclasses.replace(world, moved=(2,)).cleared_truly
+    # anything else left is never excused, nor is anything when the budget ran out
+    assert not dataclasses.replace(world, remaining=(1, 2, 3)).cleared_truly
+    assert not dataclasses.replace(world, end="budget").cleared_truly
 
 
 def test_simulate_command_writes_a_replayable_log(tmp_path: Path, capsys, monkeypatch) -> None:

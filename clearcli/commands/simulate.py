@@ -9,7 +9,7 @@ import typer
 
 from clearcli.commands.basic import SettingsOpt
 
-SCENES = ("clutter", "isolated_box", "two_touching_boxes", "box_on_box")
+SCENES = ("clutter", "dense", "isolated_box", "two_touching_boxes", "box_on_box", "deadlock_row")
 
 
 def simulate_cmd(
@@ -17,7 +17,7 @@ def simulate_cmd(
     seed: Annotated[int, typer.Option("--seed", help="Seeds the scene, the world's noise and the camera.")] = 0,
     objects: Annotated[int, typer.Option("--objects", min=1, max=20, help="Objects of a clutter scene.")] = 6,
     scene: Annotated[
-        str, typer.Option("--scene", help=f"Scene: {', '.join(SCENES)} (clutter uses --objects, --seed).")
+        str, typer.Option("--scene", help=f"Scene: {', '.join(SCENES)} (clutter and dense use --objects, --seed).")
     ] = "clutter",
     max_actions: Annotated[int, typer.Option("--max-actions", min=1, help="Action budget.")] = 40,
     no_push_memory: Annotated[
@@ -45,7 +45,10 @@ def simulate_cmd(
         raise SettingsError(f"--scene {scene!r}: unknown; choose one of {', '.join(SCENES)}")
     check_output_path(out, force)
     try:
-        world = scenes.clutter(objects, seed) if scene == "clutter" else getattr(scenes, scene)()
+        if scene in ("clutter", "dense"):
+            world = getattr(scenes, scene)(objects, seed)
+        else:
+            world = getattr(scenes, scene)()
     except ValueError as exc:
         raise SettingsError(f"--scene {scene}: {exc}") from None
     with stderr.status("simulating", spinner="dots") if not json_out else _nothing():

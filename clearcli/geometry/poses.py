@@ -7,7 +7,8 @@ under a half-turn about its approach axis, so every pose has two candidates (x, 
 
 Grasp: the closing direction is across the footprint's narrowest width (the thesis: across
 the first principal direction; for a nearly square footprint that can be its diagonal),
-with the other yaw (a quarter turn) as an alternative when that side fits the opening;
+with the other yaw (a quarter turn) as an alternative when that side fits the opening,
+and (``offcentre_fraction``) the centred grasp moved towards either end of the object;
 pushes carry the other gripper yaw as an alternative too, and the predicates stage keeps,
 per action, the yaw the neighbours block least. The approach
 follows the top surface's third principal axis pointing into the table (straight down for
@@ -27,7 +28,9 @@ does not also push a neighbour beside a long object), orthogonal for dir3/dir4; 
 object's rear face along the push, centred on the object across it. Alternatives: the
 other yaw, and (``lateral_shift``) the contact moved towards either end of the rear face,
 ``contact_edge_margin_m`` short of it: beside a tall neighbour the wrist may clear it
-there. Pre-push: ``approach_m`` above the push pose. Push length: ``pushing_step`` times the object's extent
+there; and the same push with the contact raised (``raised_fingertips_m``, where the
+object stays upright, `raised_contact_lifts`): beside a tall neighbour the arm's wrist
+clears it only then. Pre-push: ``approach_m`` above the push pose. Push length: ``pushing_step`` times the object's extent
 along the direction, at most ``push_length_limit_m``; the gripper path is cut into steps of
 at most ``path_resolution_m``; retreat: ``approach_m`` above the end.
 """
@@ -46,6 +49,8 @@ from clearcli.geometry.settings import PushSettings
 
 DIRECTION_NAMES: tuple[str, ...] = ("dir1", "dir2", "dir3", "dir4")
 UP = np.array([0.0, 0.0, 1.0])
+# a raised push contact must still meet this much of the object's rear face (m)
+MIN_CONTACT_BAND_M = 0.015
 
 
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -106,7 +111,11 @@ class PushGeometry:
 
 
 def grasp_geometry(
-    obj: ObjectGeometry, gripper: GripperModel, push: PushSettings, max_tilt_deg: float
+    obj: ObjectGeometry,
+    gripper: GripperModel,
+    push: PushSettings,
+    max_tilt_deg: float,
+    offcentre_fraction: float = 0.0,
 ) -> GraspGeometry:
     half = gripper.settings.closing_region_height_m / 2.0
     tilt = math.degrees(math.acos(float(np.clip(obj.top_normal @ UP, -1.0, 1.0))))
@@ -138,6 +147,22 @@ def grasp_geometry(
             lift = _moved(T, push.approach_m * UP)
             cands.append((pre, T, lift))
         grasps.append(GraspGeometry(candidates=tuple(cands), closing_dir=x, approach=approach, width_m=width))
+    # Off-centre grasps: the fingers moved along the object's length, closing across the
+    # same width, up to ``offcentre_fraction`` of the length from the middle and no
+    # closer than 5 mm to an end: a short neighbour against one part of a long box's
+    # side blocks the centred grasp but not the other end.
+    along2 = np.array([-across2[1], across2[0]])
+    length = float(np.ptp(obj.footprint @ along2))
+    reach = min(offcentre_fraction * length, length / 2.0 - gripper.settings.finger_width_m / 2.0 - 0.005)
+    if offcentre_fraction > 0.0 and reach >= 0.01:
+        centred = grasps[0]
+        a3 = np.array([along2[0], along2[1], 0.0])
+        a3 = a3 - float(a3 @ approach) * approach
+        a3 = a3 / np.linalg.norm(a3)
+        for sign in (1.0, -1.0):
+            offset = sign * reach * a3
+            cands = tuple(tuple(_moved(T, offset) for T in seq) for seq in centred.candidates)
+            grasps.append(dataclasses.replace(centred, candidates=cands))
     return dataclasses.replace(grasps[0], alternatives=tuple(grasps[1:]))
 
 
@@ -187,6 +212,8 @@ def push_geometry(obj: ObjectGeometry, gripper: GripperModel, push: PushSettings
         centre_across = float((across.max() + across.min()) / 2.0 - c[:2] @ side[:2])
         yaws = []
         shifted = []
+        raised: list[PushGeometry] = []
+        lifts = raised_contact_lifts(push, g.closing_region_height_m, extent, obj.top_height_m)
         for along in (parallel, not parallel):  # the documented yaw first, then the other
             x = d if along else _cross(UP, d)
             half_along = half_parallel if along else half_across
@@ -209,7 +236,34 @@ def push_geometry(obj: ObjectGeometry, gripper: GripperModel, push: PushSettings
                     candidates=seq_pose,
                 )
                 (yaws if k == 0 else shifted).append(geometry)
-        out[name] = dataclasses.replace(yaws[0], alternatives=tuple(yaws[1:] + shifted))
+                if k == 0:
+                    raised.extend(
+                        dataclasses.replace(
+                            geometry, candidates=_push_sequence(x, start + np.array([0.0, 0.0, lift]), up_approach, translations, n)
+                        )
+                        for lift in lifts
+                    )
+        out[name] = dataclasses.replace(yaws[0], alternatives=tuple(yaws[1:] + raised + shifted))
+    return out
+
+
+def raised_contact_lifts(push: PushSettings, closing_region_m: float, extent_along_m: float, height_m: float) -> list[float]:
+    """How far above the standard push each raised push contact is (m): fingertips at
+    each of ``raised_fingertips_m`` where the fingers still meet at least
+    ``MIN_CONTACT_BAND_M`` of the object's rear face and the object stays upright. A box
+    pushed at height h_c (the middle of the contact band) by a horizontal force, with
+    table friction mu, tips over its front edge when mu h_c exceeds half its length
+    along the push; so h_c stays under that length / (2 mu). Beside a tall neighbour the
+    arm's wrist, 0.115 m above the closing point, clears it only when the contact is
+    higher (the thesis's pushes were all at the table)."""
+    base = push.fingertips_above_table_m
+    out = []
+    for tips in push.raised_fingertips_m:
+        band_top = min(tips + closing_region_m, height_m)
+        contact = (tips + band_top) / 2.0
+        if tips <= base or band_top - tips < MIN_CONTACT_BAND_M or contact * push.table_friction > extent_along_m / 2.0:
+            continue
+        out.append(float(tips - base))
     return out
 
 

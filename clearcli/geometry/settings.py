@@ -43,6 +43,16 @@ class PushSettings:
     # no outcome, and they cost the predicates stage 14 ms on mOSD test57 (42 -> 56 ms).
     lateral_shift: bool = False
     contact_edge_margin_m: float = 0.005
+    # Push alternatives with the fingertips this high above the table (m), tried by the
+    # IK check when the standard push's arm hits a neighbour: the wrist capsule's lowest
+    # point is ~0.08 m above the fingertips, so beside a box 0.10-0.15 m tall only a
+    # raised contact clears it (most deadlocks in simulated rows of boxes: the arm
+    # sliding a box along a tall neighbour). Kept where the contact stays on the
+    # object's lower half and the object does not tip (``table_friction``). () = off.
+    raised_fingertips_m: tuple[float, ...] = (0.03, 0.05, 0.07)
+    # friction coefficient of objects on the table (cardboard, plastic on wood ~0.3-0.5),
+    # for the tipping rule of raised pushes
+    table_friction: float = 0.4
 
 
 @dataclass(frozen=True)
@@ -68,6 +78,10 @@ class PredicateSettings:
     # is within this angle of the table's downward normal; beyond it, straight down
     # (a PCA dominated by a visible side must not tilt the gripper into the table)
     max_grasp_tilt_deg: float = 30.0
+    # Grasp alternatives with the fingers moved along the object's length by up to this
+    # fraction of it (and 5 mm short of its ends): beside a short neighbour that blocks
+    # the centred grasp of a long box, the other end may be free. 0 = centred only.
+    grasp_offcentre_fraction: float = 0.3
     # points this far below the object's top count as its top surface (Kinect noise ~5 mm)
     top_surface_band_m: float = 0.01
     # objects are modelled from the highest point of each footprint cell of this size:

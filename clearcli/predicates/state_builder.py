@@ -70,7 +70,7 @@ def compute_state(frame: Frame, seg: Segmentation, settings: "Settings | None" =
     timings["models"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    grasps = [grasp_geometry(g, gripper, s.push, ps.max_grasp_tilt_deg) for g in geoms]
+    grasps = [grasp_geometry(g, gripper, s.push, ps.max_grasp_tilt_deg, ps.grasp_offcentre_fraction) for g in geoms]
     pushes = [push_geometry(g, gripper, s.push) for g in geoms]
     timings["poses"] = time.perf_counter() - t0
 

@@ -96,6 +96,9 @@ class EpisodeResult:
     # Of those, the ones the robot moved (pushed, or shoved with another): when such an
     # object ends out of reach, the robot put it there.
     moved: tuple[int, ...] = ()
+    # Of those, the ones the world's own arm cannot reach on their true pose
+    # (`clearcli.sim.reach`), whatever the planner said of them.
+    world_unreachable: tuple[int, ...] = ()
 
     @property
     def actions(self) -> int:
@@ -113,15 +116,13 @@ class EpisodeResult:
 
     @property
     def cleared_truly(self) -> bool:
-        """Every object left is one the robot truly cannot take: too wide or narrow for
-        the gripper in the world (not by the planner's noisy model of it), or one the
-        planner found no arm motion for (out of reach, or the arm would hit something
-        whatever it does) and that the robot did not move there itself.
-        ``cleared_reachable`` takes the planner's word for the widths too, so a model that
-        wrongly finds an object too wide passes it, as does a push that carries an object
-        out of the arm's reach."""
-        out_of_reach = set(self.unreachable) - set(self.claimed_ungraspable) - set(self.moved)
-        excused = set(self.truly_ungraspable) | out_of_reach
+        """Judged by the world alone: every object left is one the robot truly cannot
+        take, because its gripper cannot hold it (true width beyond the opening or under
+        the closing width) or its arm has no motion to a top-down grasp of it where it
+        truly stands (`clearcli.sim.reach`), unless the robot pushed it there. What the
+        planner called unreachable or too wide excuses nothing: a planner cannot look
+        better by giving up. ``cleared_reachable`` is the older, planner-trusting figure."""
+        excused = set(self.truly_ungraspable) | (set(self.world_unreachable) - set(self.moved))
         return self.end != "budget" and set(self.remaining) <= excused
 
     @property
@@ -464,7 +465,21 @@ class Episode:
                     if math.dist((o.x_m, o.y_m), start_xy[o.object_id]) > MOVED_M
                 )
             ),
+            world_unreachable=self._world_unreachable(too_wide_or_narrow),
         )
+
+    def _world_unreachable(self, ungraspable: tuple[int, ...]) -> tuple[int, ...]:
+        """The objects left that the world's own arm cannot reach (the gripper can hold
+        them: those are ``truly_ungraspable``)."""
+        left = [o for o in self.scene.objects if o.object_id not in ungraspable]
+        T_base_camera = self.session.pipeline.T_base_camera
+        if not left or T_base_camera is None:
+            return ()
+        from clearcli.sim.reach import WorldReach, T_base_table_of
+
+        settings = self.session.pipeline.settings
+        reach = WorldReach(T_base_table_of(T_base_camera, self.scene), settings.gripper, settings.push)
+        return tuple(sorted(o.object_id for o in left if reach.why_not(o)))
 
     def _act(self, frame: "Frame", report: "FrameReport", index: int) -> tuple[StepRecord, tuple[int, ...]]:
         result = report.result

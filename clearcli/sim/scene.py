@@ -239,6 +239,21 @@ CLUTTER_MIN_GAP_M = 0.015
 CONTACT_TOLERANCE_M = 0.0002
 
 
+def deadlock_row() -> Scene:
+    """Two 12 x 5 x 12 cm boxes touching along their long sides, and beside them a box
+    too wide for the gripper (9 cm) and taller (18 cm), touching too. Each of the pair
+    blocks the other's grasp; a push across the row needs the gripper between two
+    boxes or runs into one; a push along the row, at the table, brings the arm's wrist
+    into the neighbour beside it. The thesis's model has no plan here (every object
+    "blocked by objects that cannot be moved"); a push with the contact raised clears
+    the wrist (`clearcli.geometry.poses.raised_contact_lifts`)."""
+    yaw = math.pi / 2  # long sides along the table's y, away from the camera
+    a = Box(0, 0.12, 0.05, 0.12, x_m=-0.05, y_m=0.05, yaw_rad=yaw)
+    b = Box(1, 0.12, 0.05, 0.12, x_m=0.0, y_m=0.05, yaw_rad=yaw)
+    c = Box(2, 0.12, 0.09, 0.18, x_m=0.07, y_m=0.05, yaw_rad=yaw)
+    return make_scene("deadlock_row", [a, b, c])
+
+
 def polygons_overlap(a: np.ndarray, b: np.ndarray, clearance_m: float = 0.0) -> bool:
     """Separating-axis test of two convex polygons, treating gaps < clearance as overlap."""
     for poly in (a, b):
@@ -331,6 +346,72 @@ def clutter(n_objects: int, seed: int) -> Scene:
         else:
             raise ValueError(f"clutter({n_objects}, seed={seed}): no room for object {object_id}")
     return make_scene(f"clutter({n_objects}, seed={seed})", placed)
+
+
+def dense(n_objects: int, seed: int) -> Scene:
+    """Up to ``n_objects`` objects packed in rows and blocks: two to four boxes of one
+    length standing side by side, touching along their long sides (a row), or four in a
+    2 x 2 block, with the rest placed as `clutter` places them. A row of long boxes is
+    where the thesis's model deadlocks: each box blocks its neighbours' grasps, and every
+    push that would free one starts or ends against another. An object that finds no
+    room after 300 tries is left out (its id unused). Deterministic from ``seed``."""
+    rng = np.random.default_rng(seed)
+    placed: list[SceneObject] = []
+    object_id = 0
+    tries = 0
+    while object_id < n_objects and tries < 60:
+        tries += 1
+        left = n_objects - object_id
+        kind = rng.random()
+        if left >= 2 and kind < 0.75:
+            # a row (or a 2 x 2 block) of boxes sharing a length and a yaw
+            block = left >= 4 and kind < 0.2
+            count = 4 if block else int(rng.integers(2, min(4, left) + 1))
+            length = float(rng.uniform(0.08, 0.14)) if rng.random() < 0.6 else float(rng.uniform(MIN_WIDTH_M, MAX_WIDTH_M))
+            yaw = float(rng.uniform(-math.pi / 2, math.pi / 2))
+            cx, cy = float(rng.uniform(-CLUTTER_HALF_X_M, CLUTTER_HALF_X_M)), float(rng.uniform(-CLUTTER_HALF_Y_M, CLUTTER_HALF_Y_M))
+            widths = rng.uniform(MIN_WIDTH_M, MAX_WIDTH_M, size=count)
+            heights = rng.uniform(0.04, 0.15, size=count)
+            gaps = rng.uniform(0.0, 0.002, size=count)  # touching, or a hair apart
+            along, across = _rot2(yaw) @ np.array([1.0, 0.0]), _rot2(yaw) @ np.array([0.0, 1.0])
+            group: list[SceneObject] = []
+            per_row = 2 if block else count
+            for r in range((count + per_row - 1) // per_row):
+                offset = -0.5 * float(widths[:per_row].sum())
+                for c in range(per_row):
+                    i = r * per_row + c
+                    if i >= count:
+                        break
+                    if block:
+                        # a block's boxes share a width too, so the rows line up
+                        widths[i] = widths[c]
+                    w = float(widths[i])
+                    pos = np.array([cx, cy]) + across * (offset + w / 2) + along * r * (length + float(gaps[i]))
+                    offset += w + float(gaps[i])
+                    group.append(Box(object_id + i, round(length, 4), round(w, 4), round(float(heights[i]), 4),
+                                     float(pos[0]), float(pos[1]), round(yaw, 4)))
+            if all(_in_region(o.footprint()) for o in group) and not any(
+                polygons_overlap(o.footprint(), p.footprint(), CLUTTER_MIN_GAP_M) for o in group for p in placed
+            ):
+                placed.extend(group)
+                object_id += len(group)
+            continue
+        obj = _random_object(rng, object_id)
+        for _attempt in range(300):
+            if placed and rng.random() < CLUTTER_TOUCH_FRACTION:
+                anchor_obj = placed[int(rng.integers(len(placed)))]
+                cand = _place_touching(obj, anchor_obj, float(rng.uniform(-math.pi, math.pi)))
+                others = [p for p in placed if p is not anchor_obj]
+            else:
+                cand = replace(obj, x_m=float(rng.uniform(-CLUTTER_HALF_X_M, CLUTTER_HALF_X_M)),
+                               y_m=float(rng.uniform(-CLUTTER_HALF_Y_M, CLUTTER_HALF_Y_M)))
+                others = placed
+            poly = cand.footprint()
+            if _in_region(poly) and not any(polygons_overlap(poly, p.footprint(), CLUTTER_MIN_GAP_M) for p in others):
+                placed.append(cand)
+                break
+        object_id += 1
+    return make_scene(f"dense({n_objects}, seed={seed})", placed)
 
 
 # ---------------------------------------------------------------------------------------
