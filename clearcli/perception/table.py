@@ -31,6 +31,12 @@ _RANSAC_SAMPLE = 30000
 _NOISE_PER_M2 = 0.005
 _RANSAC_EVAL = 1000
 _RANSAC_CHUNK = 50
+# Off-plane points within this of a candidate's hull boundary count neither as standing on
+# it nor as behind it: they show its edge, not what it holds. The sides of a slab seen over
+# its edge (a board as big as the table) lie there below its top, and the table in front
+# of a wall (or of a big box's front face) lies there off the wall's bottom edge; both
+# within a few mm. What stands on a table, or under one seen from below, is inside.
+_EDGE_BAND_M = 0.02
 
 
 @dataclass(frozen=True, eq=False)
@@ -310,7 +316,7 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
             np.abs(h) <= _SCORE_HEIGHT_M
         )
         ins = np.zeros(loose.shape[0], dtype=bool)
-        ins[band] = inside_convex(project(loose[band], basis) - origin @ basis.T, poly)
+        ins[band] = inside_convex(project(loose[band], basis) - origin @ basis.T, poly, -_EDGE_BAND_M)
         above = int((ins & (h > 0)).sum())
         below = int((ins & (h < 0)).sum())
         if camera_is_origin:
