@@ -11,7 +11,7 @@ _CACHE: dict[str, dict[str, Any]] = {}
 # (objects, seed) of clutter scenes whose session pushes an object and ends cleared with
 # today's stages; the first that still does is used, so that a change in the predicates
 # or the planner does not quietly take the push out of the tests.
-CANDIDATES = ((5, 8), (7, 3), (7, 7))
+CANDIDATES = ((6, 1), (5, 8), (7, 3), (7, 7))
 
 
 def _moved_most(outcome: str) -> bool:

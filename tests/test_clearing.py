@@ -251,3 +251,41 @@ def test_no_offcentre_alternatives_on_a_short_object() -> None:
     # 5 x 5 cm: the quarter-turned grasp only (5 cm: 1.5 cm max < 5 mm past the finger's
     # half width); 14 x 5 cm: no quarter turn (14 cm > the opening), two off-centre
     assert counts == [1, 2]
+
+
+# --- a scene that truly cannot be cleared --------------------------------------------------------
+
+
+def test_hemmed_in_scene_ends_with_no_plan_and_the_reason_without_spinning() -> None:
+    """A 9 cm box hemmed in on all four sides by boxes too wide for the gripper too (the
+    middle one the tallest: lower, the front box would hide part of it from the camera)."""
+    from clearcli.pipeline import Pipeline
+    from clearcli.replay.session import ReplayOptions, Session
+    from clearcli.sim.episode import Episode, truth_segment
+
+    centre = S.Box(0, 0.09, 0.09, 0.12, x_m=0.0, y_m=0.05)
+    ring = [
+        S.Box(1, 0.09, 0.09, 0.06, x_m=0.0915, y_m=0.05),
+        S.Box(2, 0.09, 0.09, 0.06, x_m=-0.0915, y_m=0.05),
+        S.Box(3, 0.09, 0.09, 0.06, x_m=0.0, y_m=0.05 + 0.0915),
+        S.Box(4, 0.09, 0.09, 0.06, x_m=0.0, y_m=0.05 - 0.0915),
+    ]
+    world = S.make_scene("hemmed_in", [centre, *ring])
+    settings = _settings()
+    pipeline, state = _state(world, settings)
+    with pytest.raises(NoPlanError, match="too wide") as err:
+        pipeline.plan(state)
+    plan = err.value.plan  # type: ignore[attr-defined]
+    # every object seen is left with its reason: too wide (the box behind the tall one
+    # may be hidden from the camera altogether)
+    assert not plan.actions and len(state.objects) >= 4
+    assert len(plan.left) == len(state.objects) and {left.reason for left in plan.left} == {"ungraspable"}
+    assert plan.replans <= plan.max_backtracks == settings.plan.max_backtracks
+    # the closed loop stops at the first frame, "no plan", with the reason; the world
+    # agrees that nothing there fits the gripper, so the session counts as cleared
+    episode = Episode(world, Session(Pipeline(settings, segment_fn=truth_segment), ReplayOptions()), seed=0, max_actions=40)
+    frames = sum(1 for _ in episode)
+    result = episode.result
+    assert result is not None and frames == 1 and result.end == "no_plan" and result.actions == 0
+    assert "too wide" in result.reason
+    assert set(result.truly_ungraspable) == {0, 1, 2, 3, 4} and result.cleared_truly

@@ -297,7 +297,9 @@ def test_cli_predicates_json_problem_png_and_domain(tmp_path) -> None:
     obj = doc["objects"][0]
     assert set(obj["directions"]) == {"dir1", "dir2", "dir3", "dir4"}
     assert np.allclose(np.linalg.norm(obj["directions"]["dir1"]), 1.0, atol=1e-5)
-    assert len(obj["grasp_poses"]) == 2 and np.array(obj["grasp_poses"][0]).shape == (4, 4)
+    # the two half-turns, then IK fallbacks (another yaw, off-centre grasps)
+    assert len(obj["grasp_poses"]) >= 2 and len(obj["grasp_poses"]) % 2 == 0
+    assert np.array(obj["grasp_poses"][0]).shape == (4, 4)
     assert "(on o1 o0)" in out.read_text()
     assert png.read_bytes()[:4] == b"\x89PNG"
     # no clobbering without --force

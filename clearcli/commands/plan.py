@@ -41,6 +41,8 @@ plan); errors (3, 4, 6, 8) are one line on stderr.
     learnt_later              [{"after_step": k, "fact": [...]}]: learnt in the scene the
                               first k actions leave (not in the problem file)
     replans                   Fast Downward calls made by backtracking
+    max_backtracks            the bound on those calls ([plan] max_backtracks): planning
+                              ends with a plan, a proof there is none, or an error there
     backtracking              [{"plan", "cost", "feasible", "failed_step", "reason",
                               "learnt", "prefix"}] per call
     first_action              null, or {"action", "candidate", "T_base_gripper": [[4x4]...],
@@ -125,6 +127,7 @@ def plan_payload(plan: Any, source: str, frame_id: str, pose_source: str, unit_c
         "ik_unfeasible": [list(f) for f in sorted(plan.ik_facts)],
         "learnt_later": [{"after_step": k, "fact": list(f)} for k, f in plan.learnt_later],
         "replans": int(plan.replans),
+        "max_backtracks": int(plan.max_backtracks),
         "backtracking": [
             {
                 "plan": [a.pddl() for a in s.plan],

@@ -13,7 +13,7 @@
         "principal_axes": [[3],[3],[3]], # rows: 1st, 2nd direction on the table, normal
         "height_m": float, "grasp_width_m": float,
         "directions": {"dir1": [3], ...},  # unit push directions (compare by vector)
-        "grasp_poses": [[4x4], [4x4]],   # T_camera_gripper, one per half-turn
+        "grasp_poses": [[4x4], ...],     # T_camera_gripper: the grasp's two half-turns, then the IK fallbacks (other yaw, off-centre)
         "push": {"dir1": {"length_m": float, "start_poses": [[4x4], [4x4]]}, ...}}, ...],
      "facts": ["(on o1 o0)", ...],       # PDDL atoms, sorted
      "skipped": [{"segment_index": int, "reason": str}, ...],

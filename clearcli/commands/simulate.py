@@ -73,6 +73,7 @@ def simulate_cmd(
         "remaining": list(result.remaining),
         "unreachable": list(result.unreachable),
         "actions": result.actions,
+        "max_actions": max_actions,
         "actions_per_object": {str(k): v for k, v in sorted(result.actions_per_object.items())},
         "back_and_forth": result.back_and_forth,
         "steps": [

@@ -312,6 +312,7 @@ def backtrack(
             deadline=solved.deadline,
             learnt_later=tuple(learnt_later),
             left=left,
+            max_backtracks=max_backtracks,
         )
 
     if precheck is not None:

@@ -93,6 +93,9 @@ class Plan:
     # in the --problem file (they do not hold in the recorded scene; see backtrack.py).
     learnt_later: tuple[tuple[int, Fact], ...] = ()
     left: tuple[LeftObject, ...] = ()  # every object not removed, with the reason
+    # The bound on the rounds of planning and IK checking ([plan] max_backtracks): the
+    # loop ends with a plan, a proof that none exists, or an error at this bound.
+    max_backtracks: int = 0
 
     @property
     def status(self) -> str:
