@@ -149,9 +149,22 @@ def whole_plan(runs: int) -> None:
         from clearcli.robot.placement import placement_from_settings
 
         frm = read_frame(pcd, None, 0)
-        state = compute_state(frm, segment(frm, s.segment), s)
+        seg = segment(frm, s.segment)
+        # Per action family: the alternatives out of mutual blocking (raised push
+        # contacts, off-centre grasps) add IK fallback candidates; the thesis's poses alone
+        # first. The robot placement is the default's for all four.
+        state = compute_state(frm, seg, s)
         T, _ = placement_from_settings(s.robot, state)
-        _plan_both_ways(f"mOSD test57 ({len(state.objects)} objects)", state, s, T, runs)
+        thesis_push = dataclasses.replace(s.push, raised_fingertips_m=())
+        thesis_pred = dataclasses.replace(s.predicates, grasp_offcentre_fraction=0.0)
+        for family, fs in (
+            ("thesis poses", dataclasses.replace(s, push=thesis_push, predicates=thesis_pred)),
+            ("+ raised pushes", dataclasses.replace(s, predicates=thesis_pred)),
+            ("+ off-centre grasps", dataclasses.replace(s, push=thesis_push)),
+            ("both (default)", s),
+        ):
+            fstate = compute_state(frm, seg, fs)
+            _plan_both_ways(f"test57 ({len(fstate.objects)}), {family}", fstate, fs, T, runs)
     else:
         print(f"  ({pcd} not here: mOSD test57 skipped)")
     for label, state, settings in (
