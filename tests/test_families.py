@@ -151,3 +151,22 @@ def test_family_targets_on_a_seed_sweep(name: str) -> None:
     level reached, 5 of these 6, to catch a regression."""
     frames = [render(FAMILIES[name](s), seed=s) for s in SWEEP]
     assert sum(_right(f) for f in frames) >= 5
+
+
+@pytest.mark.parametrize("seed", [0, 2, 3])
+def test_step_split_separates_narrow_boxes_of_three_heights_in_a_row(seed: int) -> None:
+    """`scene.dense(3, 65)`: three 3-3.6 cm-wide boxes touching side by side, 7.5, 4.3
+    and 14.4 cm tall, as narrow as one 3 cm supervoxel seed, so top patches straddle the
+    seams. The step split must not count those seam voxels against its line (steps.py);
+    counting them (the band set to 0) merges the row on these renders."""
+    from clearcli.perception import steps
+    from clearcli.sim.scene import dense
+
+    frame = render(dense(3, 65), seed=seed)
+    assert _right(frame)
+    band = steps._SEAM_BAND_VOXELS
+    try:
+        steps._SEAM_BAND_VOXELS = 0.0
+        assert not _right(frame)
+    finally:
+        steps._SEAM_BAND_VOXELS = band

@@ -15,7 +15,8 @@ Per segment (every round, every segment):
    ``min_object_area_m2``;
 3. the vertical plane that best separates the two tops' voxels in the table plane (90
    directions, every threshold, counted errors); accepted when at most
-   ``step_max_error`` of the smaller top lies on the wrong side. One object's tops at two
+   ``step_max_error`` of the smaller top lies on the wrong side, not counting voxels
+   within 1.5 voxels of the line (a top patch straddles the seam). One object's tops at two
    heights do not pass this: the inside bottom of a bowl or a mug is surrounded by its
    rim, so no line separates them;
 4. every voxel of the segment goes to the side of the plane it is on (voxels, not
@@ -31,6 +32,7 @@ from clearcli.perception.settings import SegmentSettings
 from clearcli.perception.supervoxels import Supervoxels
 
 _N_DIRECTIONS = 90  # 2 degree steps over half a turn
+_SEAM_BAND_VOXELS = 1.5
 
 
 def best_separating_line(xy: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray, float, int]:
@@ -130,8 +132,14 @@ def step_splits(
                 continue
             k = int(np.argmax(np.where(ok, gaps, -np.inf)))
             is_upper = np.isin(patch, order[k + 1 :])
-            normal2, offset, errors = best_separating_line(xy[tops], is_upper)
+            normal2, offset, _ = best_separating_line(xy[tops], is_upper)
             smaller = min(int(is_upper.sum()), int((~is_upper).sum()))
+            # Misplaced top voxels within a voxel and a half of the line are the seam's
+            # (a top patch straddles it when the tops are as narrow as a seed, ~3 cm): they
+            # say nothing against a step. Those farther away do (a bowl's inside bottom,
+            # ringed by its rim, leaves many far on the wrong side of any line).
+            dist = xy[tops] @ normal2 - offset
+            errors = int((((dist > 0) != is_upper) & (np.abs(dist) > _SEAM_BAND_VOXELS * settings.voxel_m)).sum())
             if errors > settings.step_max_error * smaller:
                 continue
             side = xy[members] @ normal2 > offset
