@@ -281,11 +281,162 @@ def test_hemmed_in_scene_ends_with_no_plan_and_the_reason_without_spinning() -> 
     assert not plan.actions and len(state.objects) >= 4
     assert len(plan.left) == len(state.objects) and {left.reason for left in plan.left} == {"ungraspable"}
     assert plan.replans <= plan.max_backtracks == settings.plan.max_backtracks
-    # the closed loop stops at the first frame, "no plan", with the reason; the world
-    # agrees that nothing there fits the gripper, so the session counts as cleared
+    # the closed loop may push each of them to see whether it is two objects merged (at
+    # most once along each of its two axes: [plan] probe_max_width_m), then stops with
+    # "no plan" and the reason, well before the action budget; the world agrees that
+    # nothing there fits the gripper, so the session counts as cleared
     episode = Episode(world, Session(Pipeline(settings, segment_fn=truth_segment), ReplayOptions()), seed=0, max_actions=40)
     frames = sum(1 for _ in episode)
     result = episode.result
-    assert result is not None and frames == 1 and result.end == "no_plan" and result.actions == 0
-    assert "too wide" in result.reason
+    assert result is not None and result.end == "no_plan" and "too wide" in result.reason
+    assert frames == result.actions + 1 and result.actions < 40 // 2
+    probes = [r["plan"]["probe"] for r in episode.reports if r["plan"] and r["plan"]["probe"] is not None]
+    assert probes and max(probes.count(p) for p in set(probes)) <= 2  # per track
+    # a grasp the world refuses (the box behind, half hidden, looks narrower than it is)
+    # is tried at most [plan] max_failed_grasps times in a row
+    run = longest = 0
+    previous = ""
+    for step in result.steps:
+        run = run + 1 if step.action.startswith("(grasp") and step.action == previous else 1
+        previous = step.action
+        if step.action.startswith("(grasp"):
+            longest = max(longest, run)
+    assert longest <= settings.plan.max_failed_grasps
+    # without probing: no action at all
+    no_probe = dataclasses.replace(settings, plan=dataclasses.replace(settings.plan, probe_max_width_m=0.0))
+    episode = Episode(world, Session(Pipeline(no_probe, segment_fn=truth_segment), ReplayOptions()), seed=0, max_actions=40)
+    assert sum(1 for _ in episode) == 1 and episode.result is not None and episode.result.actions == 0
     assert set(result.truly_ungraspable) == {0, 1, 2, 3, 4} and result.cleared_truly
+
+
+# --- the world's contacts and the gripper's opening ------------------------------------------------
+
+
+def test_push_contacts_by_hand() -> None:
+    from clearcli.sim.episode import push_contacts
+
+    # two 4 cm boxes side by side along x (faces at x = -0.04, 0, 0.04), 6 cm long along y
+    a = S.Box(0, 0.04, 0.06, 0.08, x_m=-0.02, y_m=0.0)
+    b = S.Box(1, 0.04, 0.06, 0.08, x_m=0.02, y_m=0.0)
+    c = S.Box(2, 0.04, 0.04, 0.08, x_m=0.0, y_m=0.2)  # far ahead
+    scene = S.make_scene("pair", [a, b, c])
+    up = np.array([0.0, 1.0])
+    # fingers 1.5 cm to either side of x = -0.02, 3 cm behind the rear faces (y = -0.03)
+    assert push_contacts(scene, np.array([-0.02, -0.06]), up, 0.015, 0.1) == [0]
+    assert push_contacts(scene, np.array([0.02, -0.06]), up, 0.015, 0.1) == [1]
+    # centred on the seam: both, the one overlapped more (equal here: the first) first
+    assert sorted(push_contacts(scene, np.array([0.0, -0.06]), up, 0.015, 0.1)) == [0, 1]
+    # 4 mm over the seam onto b: b alone (a overlapped by less than 5 mm)
+    assert push_contacts(scene, np.array([0.019, -0.06]), up, 0.015, 0.1) == [1]
+    # beside both: nothing; and c only within reach
+    assert push_contacts(scene, np.array([0.2, -0.06]), up, 0.015, 0.1) == []
+    assert push_contacts(scene, np.array([0.0, 0.1]), up, 0.015, 0.2) == [2]
+    assert push_contacts(scene, np.array([0.0, 0.1]), up, 0.015, 0.05) == []
+
+
+def test_grasp_contacts_and_opening_by_hand() -> None:
+    from clearcli.geometry.gripper import gripper_model
+    from clearcli.predicates.relations import grasp_opening_m
+    from clearcli.sim.episode import grasp_contacts
+
+    g = gripper_model(GripperSettings())  # opens to 7 cm, closes to 3 cm
+    assert grasp_opening_m(0.04, g, 0.01) == pytest.approx(0.06)  # 4 + 2 x 1 cm
+    assert grasp_opening_m(0.041, g, 0.01) == pytest.approx(0.065)  # rounded up to 5 mm
+    assert grasp_opening_m(0.055, g, 0.01) == pytest.approx(0.07)  # at most the opening
+    assert grasp_opening_m(0.005, g, 0.01) == pytest.approx(0.03)  # at least the closing width
+    assert grasp_opening_m(0.04, g, 0.0) == pytest.approx(0.07)  # 0: fully
+    # a 4 cm box and a neighbour whose face is at x = 0.040 (2 cm from the box)
+    box = S.Box(0, 0.04, 0.04, 0.08, x_m=0.0, y_m=0.0)
+    near = S.Box(1, 0.04, 0.04, 0.08, x_m=0.060, y_m=0.0)
+    scene = S.make_scene("near", [box, near])
+    tcp = np.array([0.0, 0.0, 0.0575])
+    tips = 0.0575 - 0.0225
+    x = np.array([1.0, 0.0, 0.0])
+    # fully open, a finger spans x = 0.035-0.045: it comes down on the neighbour (by
+    # 5 mm, more than the 3 mm a finger nudges aside)
+    assert grasp_contacts(scene, tcp, x, 0.07, 0.03, tips) == [0, 1]
+    # opened to 6 cm (finger at 0.030-0.040): only the box
+    assert grasp_contacts(scene, tcp, x, 0.06, 0.03, tips) == [0]
+    # a neighbour 2 mm into the finger's path is nudged aside (face at 0.043)
+    nudged = S.make_scene("nudged", [box, S.Box(1, 0.04, 0.04, 0.08, x_m=0.063, y_m=0.0)])
+    assert grasp_contacts(nudged, tcp, x, 0.07, 0.03, tips) == [0]
+    # a neighbour reaching in between the fingers (face at 0.03) is squeezed too
+    inside = S.make_scene("inside", [box, S.Box(1, 0.04, 0.04, 0.08, x_m=0.05, y_m=0.0)])
+    assert grasp_contacts(inside, tcp, x, 0.07, 0.03, tips) == [0, 1]
+    # closing along y: the neighbour is beside the fingers, not under or between them
+    assert grasp_contacts(scene, tcp, np.array([0.0, 1.0, 0.0]), 0.07, 0.03, tips) == [0]
+    # a neighbour lower than the fingertips is not touched
+    low = S.make_scene("low", [box, S.Box(1, 0.04, 0.04, 0.03, x_m=0.05, y_m=0.0)])
+    assert grasp_contacts(low, tcp, x, 0.07, 0.03, tips) == [0]
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_block_grasp_follows_the_opening(seed: int) -> None:
+    """A 3 cm box (o0, nearer the camera) and, 3.2 cm from its side across its width, a
+    4 cm box as tall (o1). The model's hulls come out 3-4 mm wider each side than the
+    boxes. Fully open, the near finger spans 3.5-4.5 cm from o0's middle and comes down
+    on o1 (its hull from ~4.3 cm); opened to the modelled width (~3.8 cm) + 2 x 1 cm,
+    rounded up to 6 cm, it spans 3.0-4.0 cm and fits."""
+    box = S.Box(0, 0.08, 0.03, 0.08, x_m=0.0, y_m=0.05)
+    near = S.Box(1, 0.08, 0.04, 0.08, x_m=0.0, y_m=0.05 + 0.067)
+    world = S.make_scene("gap", [box, near])
+
+    def blocked(clearance: float) -> bool:
+        s = Settings()
+        s = dataclasses.replace(
+            s, predicates=dataclasses.replace(s.predicates, grasp_opening_clearance_m=clearance, grasp_offcentre_fraction=0.0)
+        )
+        _, state = _state(world, s, seed)
+        return ("block_grasp", "o1", "o0") in state.facts
+
+    assert blocked(0.0)
+    assert not blocked(0.01)
+
+
+# --- probing a segment that may be two objects --------------------------------------------------------
+
+
+def _merged_pair() -> S.Scene:
+    yaw = 0.4
+    a = S.Box(0, 0.12, 0.045, 0.065, x_m=0.0, y_m=0.05, yaw_rad=yaw)
+    b = S.Box(1, 0.12, 0.05, 0.065, x_m=-math.sin(yaw) * 0.0476, y_m=0.05 + math.cos(yaw) * 0.0476, yaw_rad=yaw)
+    return S.make_scene("merged_pair", [a, b])
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_probe_push_separates_a_merged_pair_and_the_session_clears(seed: int) -> None:
+    from clearcli.pipeline import Pipeline
+    from clearcli.replay.session import ReplayOptions, Session
+    from clearcli.sim.episode import Episode
+
+    # two 6.5 cm-tall boxes touching along their long sides: one 9.5 cm-wide segment
+    settings = _settings()
+    episode = Episode(_merged_pair(), Session(Pipeline(settings), ReplayOptions()), seed=seed, max_actions=12)
+    for _ in episode:
+        pass
+    result = episode.result
+    assert result is not None and result.end == "cleared" and result.cleared_truly
+    probes = [r["plan"]["probe"] for r in episode.reports if r["plan"] and r["plan"]["probe"] is not None]
+    assert 1 <= len(probes) <= 2 and all(s.action.startswith("(push") for s in result.steps[: len(probes)])
+    # without probing the same session ends at once: "too wide"
+    off = dataclasses.replace(settings, plan=dataclasses.replace(settings.plan, probe_max_width_m=0.0))
+    episode = Episode(_merged_pair(), Session(Pipeline(off), ReplayOptions()), seed=seed, max_actions=12)
+    for _ in episode:
+        pass
+    assert episode.result is not None and episode.result.end == "no_plan" and episode.result.actions == 0
+    assert "too wide" in episode.result.reason and not episode.result.cleared_truly
+
+
+def test_probe_candidates_exclude_what_fits_and_what_is_far_too_wide() -> None:
+    from clearcli.planning.probe import probe_candidates
+    from clearcli.planning.types import Plan
+
+    _, state = _state(S.make_scene("three", [
+        S.Box(0, 0.05, 0.05, 0.08, x_m=-0.15, y_m=0.05),  # fits the gripper
+        S.Box(1, 0.10, 0.10, 0.08, x_m=0.0, y_m=0.05),  # 10 cm: may be two
+        S.Box(2, 0.20, 0.20, 0.05, x_m=0.2, y_m=0.05),  # 20 cm: more than two of the widest
+    ]), _settings())
+    by_width = sorted(state.objects, key=lambda o: o.grasp_width_m)
+    plan = Plan(actions=(), cost=0, optimal=True, first=None, ik_facts=frozenset(), unreachable=(), replans=0,
+                ungraspable=tuple(o.name for o in by_width))
+    assert probe_candidates(state, plan, 0.07, 0.14) == [by_width[1].name]

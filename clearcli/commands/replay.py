@@ -6,7 +6,9 @@ envelope ({"schema": "clear.replay", "version": 1, ...}) with a "type":
            status (ok | cleared | no_table | no_plan | failed), objects [{id, name,
            centroid_m, extents_m, new}], gone [ids], first_action {kind, id, name,
            direction, unit_vector, push_length_m} or null, plan_length, plan (actions
-           with ids, cost, optimal, replans, unreachable/ungraspable/stuck ids) or null,
+           with ids, cost, optimal, replans, unreachable/ungraspable/stuck ids, probe:
+           the id of an object pushed to see whether it is two merged ones, else null)
+           or null,
            execution (did the previous first action happen: action, id, outcome
            done|failed, detail, moved_along_m) or null, undoes_push, timings_s by stage,
            error and stage when the frame was not planned.

@@ -3,7 +3,8 @@
 ;
 ; Predicates
 ;   (on ?a ?b)               a stands on b
-;   (block_grasp ?a ?b)      a blocks grasping b: the open gripper at b's grasp pose hits a
+;   (block_grasp ?a ?b)      a blocks grasping b: the open gripper at b's grasp pose hits a,
+;                            or a reaches into the region its fingers close over
 ;   (block_dir ?a ?b ?d)     a blocks pushing b along d: b's swept volume or the closed
 ;                            gripper at b's push pose hits a
 ;   (removed ?o)             o was grasped and taken off the table (the goal)

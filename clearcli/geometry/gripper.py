@@ -55,6 +55,18 @@ class GripperModel:
     settings: GripperSettings
     open_boxes: GripperBoxes
     closed_boxes: GripperBoxes
+    # The open gripper's collision volume: its boxes and the closing region between the
+    # fingers (the opening along x, a finger's width along y, the closing region's
+    # height along z). Another object in there is squeezed with the target when the
+    # fingers close: it blocks the grasp as surely as one the fingers hit on the way down.
+    open_collision_boxes: GripperBoxes | None = None
+
+    def collision_boxes(self, closed: bool) -> GripperBoxes:
+        """What the collision checks use: the closed gripper, or the open one with its
+        closing region."""
+        if closed:
+            return self.closed_boxes
+        return self.open_collision_boxes if self.open_collision_boxes is not None else self.open_boxes
 
     @property
     def fingertip_z_m(self) -> float:
@@ -89,7 +101,7 @@ class GripperModel:
         """python-fcl collision objects of the gripper at pose T (frame of T)."""
         import fcl
 
-        boxes = self.boxes(closed)
+        boxes = self.collision_boxes(closed)
         R = T[:3, :3]
         # the box shapes are shared by every pose (fcl objects only hold a reference)
         shapes = _fcl_boxes(tuple(map(tuple, boxes.half_extents.tolist())))
@@ -137,13 +149,20 @@ def gripper_model(s: GripperSettings | None = None) -> GripperModel:
     return _gripper_model(s or GripperSettings())
 
 
-@lru_cache(maxsize=16)
+@lru_cache(maxsize=64)
 def _gripper_model(s: GripperSettings) -> GripperModel:
     check_gripper_settings(s)
-    model = GripperModel(
-        settings=s, open_boxes=_boxes(s, s.opening_width_m), closed_boxes=_boxes(s, s.closing_width_m)
+    open_boxes = _boxes(s, s.opening_width_m)
+    region = GripperBoxes(
+        centers=np.vstack([open_boxes.centers, [[0.0, 0.0, 0.0]]]),
+        half_extents=np.vstack(
+            [open_boxes.half_extents, [[s.opening_width_m / 2.0, s.finger_width_m / 2.0, s.closing_region_height_m / 2.0]]]
+        ),
     )
-    for b in (model.open_boxes, model.closed_boxes):
+    model = GripperModel(
+        settings=s, open_boxes=open_boxes, closed_boxes=_boxes(s, s.closing_width_m), open_collision_boxes=region
+    )
+    for b in (model.open_boxes, model.closed_boxes, region):
         b.centers.setflags(write=False)
         b.half_extents.setflags(write=False)
     return model

@@ -82,6 +82,11 @@ class PredicateSettings:
     # fraction of it (and 5 mm short of its ends): beside a short neighbour that blocks
     # the centred grasp of a long box, the other end may be free. 0 = centred only.
     grasp_offcentre_fraction: float = 0.3
+    # Before a grasp the gripper opens to the object's width plus this on either side
+    # (rounded up to 5 mm, at most the full opening), not fully: its fingers then fit
+    # gaps between neighbours that a fully open gripper hits, and a neighbour in the
+    # closing region counts as blocking (it would be squeezed too). 0 = open fully.
+    grasp_opening_clearance_m: float = 0.01
     # points this far below the object's top count as its top surface (Kinect noise ~5 mm)
     top_surface_band_m: float = 0.01
     # objects are modelled from the highest point of each footprint cell of this size:

@@ -37,3 +37,13 @@ class PlanSettings:
     # the planner's model takes a pushed object as graspable anywhere, and a push
     # towards the robot's base can carry it out of the arm's reach for good.
     push_lookahead: bool = True
+    # Closed loops only (replay, simulate): when nothing else can be done, an object
+    # modelled wider than the gripper's opening but at most this wide (two of the widest
+    # objects the gripper holds, side by side) is pushed once, to see whether it is two
+    # objects the segmentation merged (clearcli/planning/probe.py). 0 = never.
+    probe_max_width_m: float = 0.14
+    # Closed loops only: after this many grasps of one object in a row that did not take
+    # it (slipped, or closed on another object too), its grasp counts as infeasible where
+    # it stands (ik_unfeasible_grasp): the planner pushes it first, or gives it up, rather
+    # than retry the same grasp until the action budget runs out.
+    max_failed_grasps: int = 3

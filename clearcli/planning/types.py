@@ -96,6 +96,9 @@ class Plan:
     # The bound on the rounds of planning and IK checking ([plan] max_backtracks): the
     # loop ends with a plan, a proof that none exists, or an error at this bound.
     max_backtracks: int = 0
+    # A closed loop's probing push (clearcli/planning/probe.py): the object pushed to see
+    # whether it is two merged objects; "" for a plan of the model's own.
+    probe: str = ""
 
     @property
     def status(self) -> str:

@@ -184,7 +184,7 @@ def overlap_matrix(boxes_a: np.ndarray, boxes_b: np.ndarray, margin: float = 0.0
 
 def gripper_part_boxes(gripper: GripperModel, closed: bool, poses: np.ndarray) -> np.ndarray:
     """(P, B, 2, 3) boxes of the B gripper parts at each of the P poses (P, 4, 4)."""
-    corners = gripper.boxes(closed).corners().reshape(-1, 3)  # (B*8, 3)
+    corners = gripper.collision_boxes(closed).corners().reshape(-1, 3)  # (B*8, 3)
     moved = np.einsum("pij,kj->pki", poses[:, :3, :3], corners) + poses[:, None, :3, 3]
     moved = moved.reshape(len(poses), -1, 8, 3)
     return np.stack([moved.min(axis=2), moved.max(axis=2)], axis=2)
@@ -223,17 +223,57 @@ def _allowed(n: int, exclude: set[tuple[int, int]]) -> np.ndarray:
     return ok
 
 
+OPENING_STEP_M = 0.005
+
+
+def grasp_opening_m(width_m: float, gripper: GripperModel, clearance_m: float) -> float:
+    """How far the gripper opens for a grasp across ``width_m``: the width and
+    ``clearance_m`` on either side, rounded up to 5 mm, within the closing width and the
+    full opening. A gripper that opens only as far as it needs puts its fingers into
+    gaps between neighbours that a fully open one hits. ``clearance_m`` <= 0: fully."""
+    s = gripper.settings
+    if clearance_m <= 0.0:
+        return s.opening_width_m
+    wanted = math.ceil((width_m + 2.0 * clearance_m) / OPENING_STEP_M - 1e-9) * OPENING_STEP_M
+    return float(min(s.opening_width_m, max(s.closing_width_m, wanted)))
+
+
+def _grasp_hits(
+    gripper: GripperModel,
+    poses: np.ndarray,
+    openings: Sequence[float],
+    objects: Sequence[ObjectGeometry],
+    allowed: np.ndarray,
+) -> list[tuple[int, int]]:
+    """`_gripper_hits` of the open gripper, each pose with its own opening."""
+    from clearcli.geometry.gripper import gripper_model
+
+    hits: list[tuple[int, int]] = []
+    openings_arr = np.asarray(openings, dtype=float)
+    for opening in np.unique(openings_arr):
+        rows = np.flatnonzero(openings_arr == opening)
+        model = gripper
+        if abs(float(opening) - gripper.settings.opening_width_m) > 1e-9:
+            model = gripper_model(dataclasses.replace(gripper.settings, opening_width_m=float(opening)))
+        for p, i in _gripper_hits(model, False, poses[rows], objects, allowed[rows]):
+            hits.append((int(rows[p]), i))
+    return hits
+
+
 def block_grasp_pairs(
     objects: Sequence[ObjectGeometry],
     grasps: Sequence[GraspGeometry],
     gripper: GripperModel,
     exclude: set[tuple[int, int]],
+    clearance_m: float = 0.0,
 ) -> set[tuple[int, int]]:
-    """(a, b): the open gripper at b's grasp pose collides with a (thesis 4.4.1)."""
+    """(a, b): the open gripper at b's grasp pose collides with a, or a reaches into the
+    closing region between its fingers (thesis 4.4.1, plus the squeeze)."""
     if not objects:
         return set()
     poses = np.stack([g.T_grasp for g in grasps])
-    hits = _gripper_hits(gripper, False, poses, objects, _allowed(len(objects), exclude))
+    openings = [grasp_opening_m(g.width_m, gripper, clearance_m) for g in grasps]
+    hits = _grasp_hits(gripper, poses, openings, objects, _allowed(len(objects), exclude))
     return {(a, b) for b, a in hits}
 
 
@@ -242,6 +282,7 @@ def least_blocked_grasps(
     grasps: Sequence[GraspGeometry],
     gripper: GripperModel,
     exclude: set[tuple[int, int]],
+    clearance_m: float = 0.0,
 ) -> list[GraspGeometry]:
     """Each grasp as the gripper yaw (the grasp or one of its ``alternatives``) whose
     open gripper hits the fewest other objects, the first on ties. The gripper turns
@@ -255,7 +296,8 @@ def least_blocked_grasps(
         options = (dataclasses.replace(grasp, alternatives=()), *grasp.alternatives)
         if len(options) > 1:
             poses = np.stack([g.T_grasp for g in options])
-            hits = _gripper_hits(gripper, False, poses, objects, np.repeat(allowed[b : b + 1], len(options), axis=0))
+            openings = [grasp_opening_m(g.width_m, gripper, clearance_m) for g in options]
+            hits = _grasp_hits(gripper, poses, openings, objects, np.repeat(allowed[b : b + 1], len(options), axis=0))
             out.append(_with_fallbacks(options, hits))
         else:
             out.append(options[0])

@@ -90,11 +90,11 @@ def compute_state(frame: Frame, seg: Segmentation, settings: "Settings | None" =
     timings["on"] = time.perf_counter() - t0
     exclude = rel.related(on)
     # the gripper yaw of each grasp and push that the neighbours block least
-    grasps = rel.least_blocked_grasps(geoms, grasps, gripper, exclude)
+    grasps = rel.least_blocked_grasps(geoms, grasps, gripper, exclude, ps.grasp_opening_clearance_m)
     pushes = rel.least_blocked_pushes(geoms, pushes, gripper, exclude)
 
     t0 = time.perf_counter()
-    facts.update(("block_grasp", names[a], names[b]) for a, b in rel.block_grasp_pairs(geoms, grasps, gripper, exclude))
+    facts.update(("block_grasp", names[a], names[b]) for a, b in rel.block_grasp_pairs(geoms, grasps, gripper, exclude, ps.grasp_opening_clearance_m))
     timings["block_grasp"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()

@@ -10,6 +10,7 @@ expected effect, and the summary's counters.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
@@ -107,6 +108,9 @@ class FrameReport:
             "unreachable": [ids.get(n, n) for n in plan.unreachable],
             "ungraspable": [ids.get(n, n) for n in getattr(plan, "ungraspable", ())],
             "stuck": [ids.get(n, n) for n in getattr(plan, "stuck", ())],
+            # a probing push (planning/probe.py): the id of the object pushed to see whether
+            # it is two merged ones, else null
+            "probe": ids.get(plan.probe, plan.probe) if getattr(plan, "probe", "") else None,
         }
 
     def to_json(self) -> dict[str, Any]:
@@ -267,6 +271,10 @@ class Session:
         self.effect: ExpectedEffect | None = None
         self.frame_count = 0  # frames processed: the tracker's clock
         self.summary = Summary()
+        # track id -> grasps in a row that did not take it
+        self.failed_grasps: dict[int, int] = {}
+        # track id -> push axes tried on it to see whether it comes apart (probe.py)
+        self.probed: dict[int, frozenset[str]] = {}
 
     def step(self, frame: "Frame", index: int, time_s: float = 0.0, read_s: float = 0.0) -> FrameReport:
         clock = self.frame_count
@@ -288,6 +296,10 @@ class Session:
                 # what the last action did changes what this frame may plan
                 if execution.outcome == "done" and self.effect.kind == "grasp":
                     self.memory = push_memory.forget(self.memory, {self.effect.track_id})
+                if self.effect.kind == "grasp" and execution.outcome != "done":
+                    self.failed_grasps[self.effect.track_id] = self.failed_grasps.get(self.effect.track_id, 0) + 1
+                elif self.effect.kind == "push" and execution.outcome == "done":
+                    self.failed_grasps.pop(self.effect.track_id, None)  # it stands elsewhere now
                 elif execution.outcome != "done" and self.effect.kind == "push":
                     self.memory = push_memory.mark_failed(self.memory, self.effect.track_id)
 
@@ -295,6 +307,10 @@ class Session:
             assignment: Assignment = found["assignment"]
             ids = {o.name: assignment.ids[o.segment_index] for o in state.objects}
             found["ids_by_name"] = ids
+            limit = self.pipeline.settings.plan.max_failed_grasps
+            failed = {("ik_unfeasible_grasp", n) for n, tid in ids.items() if limit > 0 and self.failed_grasps.get(tid, 0) >= limit}
+            if failed - state.facts:
+                state = dataclasses.replace(state, facts=state.facts | failed)
             if not options.push_memory:
                 return state
             return push_memory.apply_memory(state, ids, self.memory, options.memory)
@@ -302,9 +318,38 @@ class Session:
         result = self.pipeline.run(
             frame, adjust=adjust, on_segmentation=on_segmentation, catch_internal=not options.fail_fast
         )
+        if result.status == NO_PLAN:
+            result = self._probe(result, found)
         report = self._report(frame, index, time_s, read_s, result, found)
         self._account(report, found)
         return report
+
+    def _probe(self, result: FrameResult, found: dict[str, Any]) -> FrameResult:
+        """Nothing to do: push once an object too wide for the gripper that may be two
+        merged ones (clearcli/planning/probe.py), if there is one; else ``result``."""
+        settings = self.pipeline.settings
+        state, plan = result.state, result.plan
+        ids: dict[str, int] = found.get("ids_by_name", {})
+        if settings.plan.probe_max_width_m <= 0 or state is None or plan is None or not plan.ungraspable:
+            return result
+        T_base_camera = plan.T_base_camera if plan.T_base_camera is not None else self.pipeline.T_base_camera
+        if T_base_camera is None:
+            return result
+        from clearcli.planning.probe import probe_push
+
+        t0 = time.perf_counter()
+        tried = {name: self.probed[tid] for name, tid in ids.items() if tid in self.probed}
+        probe = probe_push(state, plan, settings, T_base_camera, tried=tried)
+        timings = dict(result.timings_s)
+        timings["plan"] = timings.get("plan", 0.0) + time.perf_counter() - t0
+        if probe is None:
+            return dataclasses.replace(result, timings_s=timings)
+        if probe.probe in ids:
+            from clearcli.planning.probe import AXES
+
+            tid = ids[probe.probe]
+            self.probed[tid] = self.probed.get(tid, frozenset()) | {AXES[str(probe.actions[0].direction)]}
+        return dataclasses.replace(result, status=OK, plan=probe, error="", stage="", exception=None, timings_s=timings)
 
     def _report(
         self,

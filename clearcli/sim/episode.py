@@ -23,7 +23,7 @@ import dataclasses
 import math
 from collections import Counter
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Iterator
+from typing import TYPE_CHECKING, Any, Iterator, Sequence
 
 import numpy as np
 
@@ -35,6 +35,9 @@ if TYPE_CHECKING:
     from clearcli.replay.session import FrameReport, Session
 
 BASE_FRAME = "wam_base"
+# A neighbour that reaches less than this (m) into the space the open fingers take is
+# nudged aside as they come down and close; more, and the grasp takes nothing.
+GRASP_TOLERANCE_M = 0.003
 # An object whose centre ends farther than this from where it started was moved by the
 # robot (a slipped grasp displaces it by ~4 mm, so this only counts pushes and shoves).
 MOVED_M = 0.01
@@ -184,6 +187,44 @@ def world_grasp(
     return without_object(scene, k), "removed"
 
 
+def aligned_width(obj: SceneObject, closing_table: np.ndarray) -> float:
+    """The object's width across the closing direction once the fingers have squared it:
+    a box's size along its axis nearest that direction, a cylinder's diameter."""
+    if isinstance(obj, Cylinder):
+        return 2.0 * obj.radius_m
+    x = np.asarray(closing_table[:2], dtype=float)
+    x /= max(float(np.linalg.norm(x)), 1e-12)
+    along_local_x = abs(math.cos(obj.yaw_rad) * x[0] + math.sin(obj.yaw_rad) * x[1])
+    return obj.size_x_m if along_local_x >= math.sqrt(0.5) else obj.size_y_m
+
+
+def grasp_contacts(
+    scene: Scene,
+    tcp_table: np.ndarray,
+    closing_table: np.ndarray,
+    opening_m: float,
+    finger_width_m: float,
+    tips_z_m: float,
+    finger_thickness_m: float = 0.01,
+) -> list[int]:
+    """Indices of the objects the open fingers meet when the gripper comes down: the
+    footprints that meet the rectangle the fingers and the space between them span (the
+    opening and both fingers' thickness along the closing direction, a finger's width
+    across), among objects taller than the fingertips. More than one: the fingers come
+    down on a neighbour, or close on it with the target."""
+    from clearcli.sim.scene import polygons_overlap
+
+    x = np.asarray(closing_table[:2], dtype=float)
+    x /= max(float(np.linalg.norm(x)), 1e-12)
+    y = np.array([-x[1], x[0]])
+    c = np.asarray(tcp_table[:2], dtype=float)
+    # a neighbour reaching in by less than a few mm is pushed aside by the finger
+    hx = opening_m / 2.0 + finger_thickness_m - GRASP_TOLERANCE_M
+    hy = finger_width_m / 2.0 - GRASP_TOLERANCE_M
+    rect = np.array([c - hx * x - hy * y, c + hx * x - hy * y, c + hx * x + hy * y, c - hx * x + hy * y])
+    return [i for i, o in enumerate(scene.objects) if o.top_z_m > tips_z_m and polygons_overlap(rect, o.footprint())]
+
+
 def separation(a: np.ndarray, b: np.ndarray) -> np.ndarray | None:
     """The shortest translation of convex polygon ``b`` (2D) that ends its overlap with
     ``a`` (separating-axis method), or None when they do not overlap."""
@@ -230,18 +271,53 @@ def _shove(scene: Scene, mover: int, fixed: frozenset[int], depth: int) -> Scene
     return scene
 
 
+def push_contacts(
+    scene: Scene, start_xy: np.ndarray, direction_table: np.ndarray, half_width_m: float, reach_m: float
+) -> list[int]:
+    """Indices of the objects the gripper's front meets first as it advances from
+    ``start_xy`` along ``direction_table`` (table frame), its front ``half_width_m`` to
+    either side, at most ``reach_m``: the first one met, and any other met within 5 mm
+    of it that the front overlaps by 5 mm or more (the fingers straddle two objects)."""
+    d = np.asarray(direction_table[:2], dtype=float)
+    d /= max(float(np.linalg.norm(d)), 1e-12)
+    n = np.array([-d[1], d[0]])
+    p0 = np.asarray(start_xy[:2], dtype=float)
+    hits: list[tuple[float, float, int]] = []
+    for i, obj in enumerate(scene.objects):
+        poly = obj.footprint()
+        # the polygon's boundary, densely: where it enters the strip the front sweeps
+        edges = np.roll(poly, -1, axis=0) - poly
+        t = np.linspace(0.0, 1.0, 40, endpoint=False)
+        pts = (poly[:, None, :] + t[None, :, None] * edges[:, None, :]).reshape(-1, 2) - p0
+        along, across = pts @ d, pts @ n
+        inside = np.abs(across) <= half_width_m
+        if not inside.any():
+            continue
+        first = float(along[inside].min())
+        if -0.01 <= first <= reach_m:
+            overlap = float(min(across[inside].max(), half_width_m) - max(across[inside].min(), -half_width_m))
+            hits.append((first, overlap, i))
+    if not hits:
+        return []
+    hits.sort()
+    first_at = hits[0][0]
+    met = [h for h in hits if h[0] <= first_at + 0.005 and (h is hits[0] or h[1] >= 0.005)]
+    met.sort(key=lambda h: -h[1])  # the one the front overlaps most first
+    return [i for _, _, i in met]
+
+
 def world_push(
     scene: Scene,
-    k: int,
+    k: "int | Sequence[int]",
     direction_table: np.ndarray,
     length_m: float,
     rng: np.random.Generator,
     params: WorldParams = WorldParams(),
 ) -> tuple[Scene, str]:
-    """Slide object ``k`` along ``direction_table`` (2D, table frame) for ``length_m``,
-    in steps, its heading and yaw drifting; what it runs into is shoved out of its way,
-    and the push stops (the gripper stalls) when that would need a chain of more than
-    two shoves."""
+    """Slide object ``k`` (or the objects ``k``, side by side under the fingers, as one)
+    along ``direction_table`` (2D, table frame) for ``length_m``, in steps, heading and
+    yaw drifting; what it runs into is shoved out of its way, and the push stops (the
+    gripper stalls) when that would need a chain of more than two shoves."""
     d = np.asarray(direction_table[:2], dtype=float)
     d /= max(float(np.linalg.norm(d)), 1e-12)
     steps = max(1, int(math.ceil(length_m / params.push_step_m)))
@@ -249,23 +325,32 @@ def world_push(
     moved = 0.0
     spin = float(rng.choice([-1.0, 1.0]))  # which way this push tends to turn the object
     before = {o.object_id: (o.x_m, o.y_m) for o in scene.objects}
-    pushed_id = scene.objects[k].object_id
+    members = [k] if isinstance(k, (int, np.integer)) else list(k)
+    pushed_ids = {scene.objects[i].object_id for i in members}
     for _ in range(steps):
         heading = _rot2(math.radians(float(rng.normal(0.0, params.heading_noise_deg)))) @ d
-        obj = scene.objects[k]
         turn = spin * abs(float(rng.normal(0.0, math.radians(params.yaw_noise_deg))))
-        trial = with_object_pose(scene, k, obj.x_m + heading[0] * step, obj.y_m + heading[1] * step, obj.yaw_rad + turn)
-        shoved = _shove(trial, k, frozenset(), depth=2)
+        trial = scene
+        for i in members:
+            obj = trial.objects[i]
+            trial = with_object_pose(trial, i, obj.x_m + heading[0] * step, obj.y_m + heading[1] * step, obj.yaw_rad + turn)
+        fixed = frozenset(members)
+        shoved: Scene | None = trial
+        for i in members:
+            shoved = _shove(shoved, i, fixed - {i}, depth=2) if shoved is not None else None
         if shoved is None:
-            break  # jammed: the object stays where the last step left it
+            break  # jammed: the objects stay where the last step left them
         scene = shoved
         moved += step
-        if not on_table(scene, scene.objects[k]):
-            return without_object(scene, k), f"fell off after {moved:.3f} m"
+        off = [i for i in members if not on_table(scene, scene.objects[i])]
+        if off:
+            for i in sorted(off, reverse=True):
+                scene = without_object(scene, i)
+            return scene, f"fell off after {moved:.3f} m"
     displaced = sorted(
         o.object_id
         for o in scene.objects
-        if o.object_id != pushed_id and math.dist((o.x_m, o.y_m), before[o.object_id]) > 0.002
+        if o.object_id not in pushed_ids and math.dist((o.x_m, o.y_m), before[o.object_id]) > 0.002
     )
     fallen = [i for i, o in enumerate(scene.objects) if not on_table(scene, o)]
     for i in reversed(fallen):
@@ -481,6 +566,53 @@ class Episode:
         reach = WorldReach(T_base_table_of(T_base_camera, self.scene), settings.gripper, settings.push)
         return tuple(sorted(o.object_id for o in left if reach.why_not(o)))
 
+    def _grasp_contacts(
+        self, report: "FrameReport", model: Any, gripper: Any
+    ) -> tuple[list[int], np.ndarray, float] | None:
+        """The objects between the fingers (`grasp_contacts`), the closing direction
+        (table frame, 2D) and how far the robot opened the gripper (the planner's rule,
+        `relations.grasp_opening_m`); None without a grasp pose."""
+        from clearcli.geometry.gripper import gripper_model
+        from clearcli.predicates.relations import grasp_opening_m
+
+        plan = report.result.plan
+        checked = plan.first if plan is not None else None
+        if checked is not None and plan is not None and plan.T_base_camera is not None and len(checked.T_base_gripper) > 1:
+            T_camera_grasp = np.linalg.inv(np.asarray(plan.T_base_camera, dtype=float)) @ np.asarray(checked.T_base_gripper[1])
+        elif model.grasp_candidates:
+            T_camera_grasp = np.asarray(model.grasp_candidates[0][1], dtype=float)
+        else:
+            return None
+        T = np.linalg.inv(self.scene.T_camera_table) @ T_camera_grasp
+        tips_z = float(T[2, 3]) - gripper.closing_region_height_m / 2.0
+        clearance = self.session.pipeline.settings.predicates.grasp_opening_clearance_m
+        opening = grasp_opening_m(float(model.grasp_width_m), gripper_model(gripper), clearance)
+        closing = T[:2, 0] / max(float(np.linalg.norm(T[:2, 0])), 1e-12)
+        held = grasp_contacts(
+            self.scene, T[:3, 3], T[:3, 0], opening, gripper.finger_width_m, tips_z, gripper.finger_thickness_m
+        )
+        return held, closing, opening
+
+    def _push_contacts(
+        self, report: "FrameReport", push: Any, direction_table: np.ndarray, T_table_camera: np.ndarray
+    ) -> list[int] | None:
+        """The objects the fingers meet (`push_contacts`), None when the push has no pose."""
+        if not push.candidates:
+            return None
+        T_table_start = T_table_camera @ _start_pose_camera(report, push)
+        gripper = self.session.pipeline.settings.gripper
+        d = np.asarray(direction_table[:2], dtype=float)
+        d /= max(float(np.linalg.norm(d)), 1e-12)
+        closing = T_table_start[:2, 0]
+        pair_half = gripper.closing_width_m / 2.0 + gripper.finger_thickness_m
+        if abs(float(closing @ d)) >= math.cos(math.radians(45.0)):
+            front, half_width = pair_half, gripper.finger_width_m / 2.0  # closing along the push
+        else:
+            front, half_width = gripper.finger_width_m / 2.0, pair_half
+        start = T_table_start[:2, 3] + front * d
+        reach = float(push.push_length_m) + 0.1
+        return push_contacts(self.scene, start, d, half_width, reach)
+
     def _act(self, frame: "Frame", report: "FrameReport", index: int) -> tuple[StepRecord, tuple[int, ...]]:
         result = report.result
         n = len(self.scene.objects)
@@ -523,14 +655,49 @@ class Episode:
             outcome = "missed: no object there"
         elif first.kind == "grasp":
             gripper = self.session.pipeline.settings.gripper
-            self.scene, outcome = world_grasp(
-                self.scene, k, gripper.opening_width_m, self.rng, self.params, gripper.closing_width_m
-            )
+            # The world closes the fingers on what lies between them, not on what the
+            # planner meant: two objects merged into one segment are both in there.
+            found = self._grasp_contacts(report, model, gripper)
+            held, closing, opening = found if found is not None else (None, None, gripper.opening_width_m)
+            if held is not None and len(held) > 1:
+                outcome = "closed on " + ", ".join(str(self.scene.objects[i].object_id) for i in held) + " at once: nothing taken"
+            elif held is not None and not held:
+                outcome = "missed: nothing between the fingers"
+            else:
+                k = held[0] if held else k
+                wid = self.scene.objects[k].object_id
+                label = f"(grasp {wid})"
+                # the width the closing fingers square the object to: its side nearest
+                # the closing direction (a box's) or its diameter
+                across = aligned_width(self.scene.objects[k], closing) if closing is not None else 0.0
+                if across > opening:
+                    outcome = f"the fingers, open {opening:.3f} m, came down on it ({across:.3f} m across)"
+                else:
+                    self.scene, outcome = world_grasp(
+                        self.scene, k, gripper.opening_width_m, self.rng, self.params, gripper.closing_width_m
+                    )
         else:
             push = model.pushes[first.direction or ""]
-            R_table_camera = np.linalg.inv(self.scene.T_camera_table)[:3, :3]
-            direction = R_table_camera @ np.asarray(push.unit_vector, dtype=float)
-            self.scene, outcome = world_push(self.scene, k, direction, float(push.push_length_m), self.rng, self.params)
+            T_table_camera = np.linalg.inv(self.scene.T_camera_table)
+            direction = T_table_camera[:3, :3] @ np.asarray(push.unit_vector, dtype=float)
+            # The world moves what the gripper's fingers meet, not what the planner meant:
+            # for a segment that is two objects merged, the one nearer the fingers (or
+            # both, when the fingers straddle them).
+            contacts = self._push_contacts(report, push, direction, T_table_camera)
+            if contacts is None:
+                contacts = [k]
+            if not contacts:
+                outcome = "missed: the fingers met nothing"
+            else:
+                k = contacts[0]
+                wid = self.scene.objects[k].object_id
+                label = f"(push {wid} {first.direction})"
+                straddled = [self.scene.objects[i].object_id for i in contacts[1:]]
+                self.scene, outcome = world_push(
+                    self.scene, contacts if len(contacts) > 1 else k, direction, float(push.push_length_m), self.rng, self.params
+                )
+                if straddled:
+                    outcome += ", with " + ", ".join(map(str, straddled)) + " under the fingers too"
         record = StepRecord(
             frame_index=index,
             status=report.status,
@@ -545,6 +712,16 @@ class Episode:
             seen=seen,
         )
         return record, unreachable
+
+
+def _start_pose_camera(report: "FrameReport", push: Any) -> np.ndarray:
+    """The push's start pose (camera frame): the candidate the IK check chose, else the
+    model's first."""
+    plan = report.result.plan
+    checked = plan.first if plan is not None else None
+    if checked is not None and plan is not None and plan.T_base_camera is not None and len(checked.T_base_gripper) > 1:
+        return np.linalg.inv(np.asarray(plan.T_base_camera, dtype=float)) @ np.asarray(checked.T_base_gripper[1])
+    return np.asarray(push.candidates[0][1], dtype=float)
 
 
 def static_transforms(T_base_camera: np.ndarray, frame_id: str) -> list[Any]:
