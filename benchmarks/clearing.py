@@ -3,6 +3,7 @@
     .venv/bin/python benchmarks/clearing.py                       # both sets, both modes
     .venv/bin/python benchmarks/clearing.py --set choose --mode truth --n 40
     .venv/bin/python benchmarks/clearing.py --seeds 1017,1033 -v  # a few sessions, each step
+    .venv/bin/python benchmarks/clearing.py --set choose --settings thesis.toml  # ablation
 
 Seed sets: ``choose`` is 0-99, the seeds looked at while choosing the planner's
 behaviour and defaults; ``report`` is 1000-1099, run only to report. Seed s makes a
@@ -86,14 +87,15 @@ def left_reasons(r: Any) -> Counter:
     return out
 
 
-def run_session(seed: int, mode: str) -> dict[str, Any]:
+def run_session(seed: int, mode: str, settings_path: str = "") -> dict[str, Any]:
     from clearcli.pipeline import Pipeline
     from clearcli.replay.session import ReplayOptions, Session
-    from clearcli.settings import Settings
+    from clearcli.settings import Settings, load_settings
     from clearcli.sim.episode import Episode, truth_segment
 
     world = session_scene(seed)
-    pipeline = Pipeline(Settings(), segment_fn=truth_segment if mode == "truth" else None)
+    settings = load_settings(Path(settings_path)) if settings_path else Settings()
+    pipeline = Pipeline(settings, segment_fn=truth_segment if mode == "truth" else None)
     episode = Episode(world, Session(pipeline, ReplayOptions(push_memory=True)), seed=seed, max_actions=MAX_ACTIONS)
     t0 = time.perf_counter()
     for _ in episode:
@@ -122,7 +124,7 @@ def run_session(seed: int, mode: str) -> dict[str, Any]:
     }
 
 
-def _run(args: tuple[int, str]) -> dict[str, Any]:
+def _run(args: tuple[int, str, str]) -> dict[str, Any]:
     return run_session(*args)
 
 
@@ -186,6 +188,7 @@ def main() -> None:
     ap.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
     ap.add_argument("--json", default="", help="write every session's record to this file")
     ap.add_argument("-v", "--verbose", action="store_true", help="print the steps of sessions not cleared")
+    ap.add_argument("--settings", default="", help="a settings TOML (as `clear --settings`), for ablations")
     args = ap.parse_args()
 
     if args.seeds:
@@ -194,7 +197,7 @@ def main() -> None:
         names = tuple(SETS) if args.set == "both" else (args.set,)
         groups = {k: list(SETS[k])[: args.n] for k in names}
     modes = MODES if args.mode == "both" else (args.mode,)
-    work = [(seed, mode) for group in groups.values() for mode in modes for seed in group]
+    work = [(seed, mode, args.settings) for group in groups.values() for mode in modes for seed in group]
     t0 = time.perf_counter()
     with ProcessPoolExecutor(max_workers=max(1, args.jobs)) as pool:
         rows = list(pool.map(_run, work, chunksize=1))

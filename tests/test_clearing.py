@@ -440,3 +440,46 @@ def test_probe_candidates_exclude_what_fits_and_what_is_far_too_wide() -> None:
     plan = Plan(actions=(), cost=0, optimal=True, first=None, ik_facts=frozenset(), unreachable=(), replans=0,
                 ungraspable=tuple(o.name for o in by_width))
     assert probe_candidates(state, plan, 0.07, 0.14) == [by_width[1].name]
+
+
+def test_off_seam_moves_the_push_contact_towards_either_end_of_the_face() -> None:
+    from clearcli.planning.probe import off_seam
+
+    _, state = _state(S.make_scene("wide", [S.Box(0, 0.12, 0.10, 0.06, x_m=0.0, y_m=0.05)]), _settings())
+    obj = state.objects[0]
+    gripper = GripperSettings()
+    for d in ("dir1", "dir3"):
+        moved = off_seam(state, obj.name, d, gripper).by_name(obj.name).pushes[d]
+        push = obj.pushes[d]
+        assert len(moved.candidates) == 2 * len(push.candidates)
+        across = float(obj.extents_m[1] if d == "dir1" else obj.extents_m[0])
+        for k, seq in enumerate(push.candidates):
+            closing = np.asarray(seq[1])[:3, 0]
+            along = abs(float(closing @ np.asarray(push.unit_vector))) >= 0.7
+            contact_half = 0.015 if along else 0.025  # a finger's width, or the closed pair
+            reach = across / 2 - contact_half - 0.005
+            for sign, shifted in zip((1.0, -1.0), moved.candidates[2 * k : 2 * k + 2]):
+                offset = np.asarray(shifted[1])[:3, 3] - np.asarray(seq[1])[:3, 3]
+                # across the push, in the table plane, by the reach
+                assert abs(float(offset @ np.asarray(push.unit_vector))) < 1e-9
+                assert abs(float(offset @ state.table.normal)) < 1e-9
+                assert float(np.linalg.norm(offset)) == pytest.approx(reach, abs=1e-9)
+    # a face too narrow to move the contact by 1 cm: unchanged
+    _, narrow = _state(S.make_scene("narrow", [S.Box(0, 0.12, 0.04, 0.06, x_m=0.0, y_m=0.05)]), _settings())
+    o = narrow.objects[0]
+    assert off_seam(narrow, o.name, "dir1", gripper).by_name(o.name).pushes["dir1"].candidates == o.pushes["dir1"].candidates
+
+
+def test_budget_spent_on_the_last_object_counts_as_cleared() -> None:
+    from clearcli.pipeline import Pipeline
+    from clearcli.replay.session import ReplayOptions, Session
+    from clearcli.sim.episode import Episode, truth_segment
+
+    world = S.make_scene("one", [S.Box(0, 0.05, 0.04, 0.08, x_m=0.0, y_m=0.05)])
+    episode = Episode(world, Session(Pipeline(_settings(), segment_fn=truth_segment), ReplayOptions()), seed=3, max_actions=1)
+    for _ in episode:
+        pass
+    result = episode.result
+    # (4 cm across: far from the 7 cm opening, a grasp of it never slips)
+    assert result is not None and result.actions == 1 and result.remaining == ()
+    assert result.end == "cleared" and result.cleared_truly

@@ -504,7 +504,7 @@ def make_plan(
     """Plan for ``state`` (SymbolicState) with the WAM at ``T_base_camera`` (else from
     ``[robot] camera_pose`` or derived from the table, see clearcli/robot/placement.py).
     ``check``: "whole" or "first" (default ``[plan] check``)."""
-    from clearcli.robot.kinematics import WamKinematics, make_obstacles
+    from clearcli.robot.kinematics import kinematics_from_settings, make_obstacles
     from clearcli.robot.placement import placement_from_settings
 
     robot = settings.robot  # type: ignore[attr-defined]
@@ -513,13 +513,7 @@ def make_plan(
     if T_base_camera is None:
         T_base_camera, _ = placement_from_settings(robot, state)
     T_base_camera = np.asarray(T_base_camera, dtype=float)
-    kin = WamKinematics(
-        damping=robot.ik_damping,
-        max_iterations=robot.ik_max_iterations,
-        tolerance_m=robot.ik_tolerance_m,
-        tolerance_rad=robot.ik_tolerance_rad,
-        n_seeds=robot.ik_seeds,
-    )
+    kin = kinematics_from_settings(robot)
     obstacles = make_obstacles(state, T_base_camera, robot.collision_margin_m)
     checker = IKActionChecker(state, T_base_camera, kin, obstacles, push_lookahead=plan_s.push_lookahead)
 

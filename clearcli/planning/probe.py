@@ -102,7 +102,7 @@ def probe_push(
     the seam of two merged objects drives the nearer into the other (they stay together),
     one along the seam slides it past."""
     from clearcli.planning.feasibility import IKActionChecker
-    from clearcli.robot.kinematics import WamKinematics, make_obstacles
+    from clearcli.robot.kinematics import kinematics_from_settings, make_obstacles
 
     tried = tried or {}
     names = [
@@ -113,13 +113,7 @@ def probe_push(
     if not names:
         return None
     robot = settings.robot
-    kin = WamKinematics(
-        damping=robot.ik_damping,
-        max_iterations=robot.ik_max_iterations,
-        tolerance_m=robot.ik_tolerance_m,
-        tolerance_rad=robot.ik_tolerance_rad,
-        n_seeds=robot.ik_seeds,
-    )
+    kin = kinematics_from_settings(robot)
     T = np.asarray(T_base_camera, dtype=float)
     obstacles = make_obstacles(state, T, robot.collision_margin_m)
     for name in names:

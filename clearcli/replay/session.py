@@ -20,6 +20,7 @@ import numpy as np
 
 from clearcli.errors import ClearError, PartialLogError
 from clearcli.pipeline import CLEARED, FAILED, NO_PLAN, NO_TABLE, OK, FrameResult, Pipeline
+from clearcli.predicates.state import DIRECTIONS
 from clearcli.replay import memory as push_memory
 from clearcli.replay.memory import MemoryParams, PushMemory, PushRecord
 from clearcli.replay.tracking import (
@@ -310,7 +311,15 @@ class Session:
             limit = self.pipeline.settings.plan.max_failed_grasps
             failed = {("ik_unfeasible_grasp", n) for n, tid in ids.items() if limit > 0 and self.failed_grasps.get(tid, 0) >= limit}
             if failed - state.facts:
+                from clearcli.planning.probe import off_seam
+
                 state = dataclasses.replace(state, facts=state.facts | failed)
+                # a grasp that keeps taking nothing may be closing on two objects the
+                # segmentation merged: push such an object with the fingers off the
+                # middle of its face, where they meet one of the two
+                for _, name in sorted(failed):
+                    for d in DIRECTIONS:
+                        state = off_seam(state, name, d, self.pipeline.settings.gripper)
             if not options.push_memory:
                 return state
             return push_memory.apply_memory(state, ids, self.memory, options.memory)

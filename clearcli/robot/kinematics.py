@@ -533,6 +533,17 @@ class WamKinematics:
         return float(np.linalg.norm(plate)) <= REACH_TOOL_PLATE_M + slack_m
 
 
+def kinematics_from_settings(robot: Any) -> WamKinematics:
+    """The WAM model with the IK search of ``[robot]`` (`RobotSettings`)."""
+    return WamKinematics(
+        damping=robot.ik_damping,
+        max_iterations=robot.ik_max_iterations,
+        tolerance_m=robot.ik_tolerance_m,
+        tolerance_rad=robot.ik_tolerance_rad,
+        n_seeds=robot.ik_seeds,
+    )
+
+
 # -- collision helpers -----------------------------------------------------------------
 
 

@@ -514,8 +514,9 @@ class Episode:
             if record.action:
                 actions += 1
             if actions >= self.max_actions:
-                end = "budget"
-                # the last frame shows where the budget left the table
+                # the last frame shows where the budget left the table (the last action
+                # may have cleared it)
+                end = "budget" if self.scene.objects else "cleared"
                 index += 1
                 yield self.render(index)
                 break
