@@ -5,12 +5,18 @@ frame (segment, predicates, plan, with tracking and push memory, exactly as `cle
 replay` would), and carries out the plan's first action on the scene, not on the
 planner's model of it:
 
-* a push slides the object along the push direction in small steps, its heading and
-  yaw drifting with seeded noise; an object it runs into is shoved along with it, and
-  the push stops early when that one is blocked in turn or the pushed object would
-  leave the table (then it falls off and is gone);
-* a grasp takes the object away, except that a grasp across a width close to the
+* a push moves what the fingers meet as they advance from the push's start pose (for a
+  segment that is two objects, the nearer one, or both when the fingers straddle their
+  seam), along the push direction in small steps, heading and yaw drifting with seeded
+  noise; an object it runs into is shoved along with it, and the push stops early when
+  that one is blocked in turn or the pushed object would leave the table (then it
+  falls off and is gone);
+* a grasp takes the object between the fingers away, unless another object lies under
+  or between the open fingers by more than ``GRASP_TOLERANCE_M`` (nothing is taken), or
+  the object is wider than the gripper was opened; a grasp across a width close to the
   gripper's opening slips now and then (the object stays, slightly moved).
+
+What is left at the end is judged by the world too (`clearcli.sim.reach`).
 
 Then the next frame is rendered, until the table is clear, no plan exists, or the
 action budget runs out. The frames go to a ROS 2 PointCloud2 MCAP (with the labels the
