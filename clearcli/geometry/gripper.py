@@ -143,6 +143,19 @@ def check_gripper_settings(s: GripperSettings, where: str = "[gripper]") -> None
         )
 
 
+def push_contact_halves(s: GripperSettings, closing_dir: np.ndarray, push_dir: np.ndarray) -> tuple[float, float]:
+    """(half size along the push, half size across it) of the closed finger pair whose
+    closing direction is ``closing_dir``: the pair (closing width and both fingers'
+    thickness) along the closing direction, a finger's width across it."""
+    x = np.asarray(closing_dir, dtype=float)
+    d = np.asarray(push_dir, dtype=float)
+    cos = abs(float(x @ d)) / max(float(np.linalg.norm(x) * np.linalg.norm(d)), 1e-12)
+    pair_half = s.closing_width_m / 2.0 + s.finger_thickness_m
+    if cos >= np.sqrt(0.5):  # closing along the push
+        return pair_half, s.finger_width_m / 2.0
+    return s.finger_width_m / 2.0, pair_half
+
+
 def gripper_model(s: GripperSettings | None = None) -> GripperModel:
     """The open and closed gripper models for the given dimensions (default: IRI).
     One model per settings value, built once (its arrays are read-only)."""

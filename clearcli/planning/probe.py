@@ -25,6 +25,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from clearcli.geometry.gripper import push_contact_halves
 from clearcli.planning.types import Action, CheckedAction, Plan
 from clearcli.predicates.state import DIRECTIONS, SymbolicState
 
@@ -69,11 +70,9 @@ def off_seam(state: SymbolicState, name: str, direction: str, gripper: Any) -> S
     side = np.cross(normal, u)
     side /= max(float(np.linalg.norm(side)), 1e-12)
     across_m = float(obj.extents_m[1] if direction in ("dir1", "dir2") else obj.extents_m[0])
-    pair_half = gripper.closing_width_m / 2.0 + gripper.finger_thickness_m
     variants = []
     for seq in push.candidates:
-        closing = np.asarray(seq[1], dtype=float)[:3, 0]
-        contact_half = gripper.finger_width_m / 2.0 if abs(float(closing @ u)) >= 0.7 else pair_half
+        _, contact_half = push_contact_halves(gripper, np.asarray(seq[1], dtype=float)[:3, 0], u)
         reach = across_m / 2.0 - contact_half - EDGE_MARGIN_M
         if reach < 0.01:
             variants.append(seq)

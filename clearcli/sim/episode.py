@@ -570,7 +570,9 @@ class Episode:
         from clearcli.sim.reach import WorldReach, T_base_table_of
 
         settings = self.session.pipeline.settings
-        reach = WorldReach(T_base_table_of(T_base_camera, self.scene), settings.gripper, settings.push)
+        reach = WorldReach(
+            T_base_table_of(T_base_camera, self.scene), settings.gripper, settings.push, table=self.scene.table
+        )
         return tuple(sorted(o.object_id for o in left if reach.why_not(o)))
 
     def _grasp_contacts(
@@ -582,13 +584,8 @@ class Episode:
         from clearcli.geometry.gripper import gripper_model
         from clearcli.predicates.relations import grasp_opening_m
 
-        plan = report.result.plan
-        checked = plan.first if plan is not None else None
-        if checked is not None and plan is not None and plan.T_base_camera is not None and len(checked.T_base_gripper) > 1:
-            T_camera_grasp = np.linalg.inv(np.asarray(plan.T_base_camera, dtype=float)) @ np.asarray(checked.T_base_gripper[1])
-        elif model.grasp_candidates:
-            T_camera_grasp = np.asarray(model.grasp_candidates[0][1], dtype=float)
-        else:
+        T_camera_grasp = _chosen_pose_camera(report, model.grasp_candidates)
+        if T_camera_grasp is None:
             return None
         T = np.linalg.inv(self.scene.T_camera_table) @ T_camera_grasp
         tips_z = float(T[2, 3]) - gripper.closing_region_height_m / 2.0
@@ -604,18 +601,15 @@ class Episode:
         self, report: "FrameReport", push: Any, direction_table: np.ndarray, T_table_camera: np.ndarray
     ) -> list[int] | None:
         """The objects the fingers meet (`push_contacts`), None when the push has no pose."""
-        if not push.candidates:
+        from clearcli.geometry.gripper import push_contact_halves
+
+        T_camera_start = _chosen_pose_camera(report, push.candidates)
+        if T_camera_start is None:
             return None
-        T_table_start = T_table_camera @ _start_pose_camera(report, push)
-        gripper = self.session.pipeline.settings.gripper
+        T_table_start = T_table_camera @ T_camera_start
         d = np.asarray(direction_table[:2], dtype=float)
         d /= max(float(np.linalg.norm(d)), 1e-12)
-        closing = T_table_start[:2, 0]
-        pair_half = gripper.closing_width_m / 2.0 + gripper.finger_thickness_m
-        if abs(float(closing @ d)) >= math.cos(math.radians(45.0)):
-            front, half_width = pair_half, gripper.finger_width_m / 2.0  # closing along the push
-        else:
-            front, half_width = gripper.finger_width_m / 2.0, pair_half
+        front, half_width = push_contact_halves(self.session.pipeline.settings.gripper, T_table_start[:2, 0], d)
         start = T_table_start[:2, 3] + front * d
         reach = float(push.push_length_m) + 0.1
         return push_contacts(self.scene, start, d, half_width, reach)
@@ -701,7 +695,7 @@ class Episode:
                 label = f"(push {wid} {first.direction})"
                 straddled = [self.scene.objects[i].object_id for i in contacts[1:]]
                 self.scene, outcome = world_push(
-                    self.scene, contacts if len(contacts) > 1 else k, direction, float(push.push_length_m), self.rng, self.params
+                    self.scene, contacts, direction, float(push.push_length_m), self.rng, self.params
                 )
                 if straddled:
                     outcome += ", with " + ", ".join(map(str, straddled)) + " under the fingers too"
@@ -721,14 +715,16 @@ class Episode:
         return record, unreachable
 
 
-def _start_pose_camera(report: "FrameReport", push: Any) -> np.ndarray:
-    """The push's start pose (camera frame): the candidate the IK check chose, else the
-    model's first."""
+def _chosen_pose_camera(report: "FrameReport", candidates: Any) -> np.ndarray | None:
+    """The first action's grasp or push-start pose (camera frame): of the candidate the
+    IK check chose, else the model's first of ``candidates``; None without either."""
     plan = report.result.plan
     checked = plan.first if plan is not None else None
     if checked is not None and plan is not None and plan.T_base_camera is not None and len(checked.T_base_gripper) > 1:
         return np.linalg.inv(np.asarray(plan.T_base_camera, dtype=float)) @ np.asarray(checked.T_base_gripper[1])
-    return np.asarray(push.candidates[0][1], dtype=float)
+    if not candidates:
+        return None
+    return np.asarray(candidates[0][1], dtype=float)
 
 
 def static_transforms(T_base_camera: np.ndarray, frame_id: str) -> list[Any]:

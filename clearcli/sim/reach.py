@@ -27,7 +27,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from clearcli.sim.scene import Box, Cylinder
+from clearcli.robot.kinematics import capsule_spheres
+from clearcli.sim.scene import Box, Cylinder, Table
 
 if TYPE_CHECKING:
     from clearcli.geometry.settings import GripperSettings, PushSettings
@@ -76,7 +77,8 @@ def grasp_poses_T_table_tcp(
 
 class WorldReach:
     """``reachable(scene, k)``: whether the world's arm can grasp object ``k`` where it
-    truly stands. ``T_base_table`` places the robot (the world's, fixed for a session)."""
+    truly stands. ``T_base_table`` places the robot (the world's, fixed for a session);
+    ``table`` is the table top the arm must stay above."""
 
     def __init__(
         self,
@@ -84,12 +86,13 @@ class WorldReach:
         gripper: "GripperSettings",
         push: "PushSettings",
         params: WorldReachParams = WorldReachParams(),
+        table: Table = Table(),
     ) -> None:
         from clearcli.robot.kinematics import WamKinematics
 
         self.T_base_table = np.asarray(T_base_table, dtype=float)
         self.T_table_base = np.linalg.inv(self.T_base_table)
-        self.gripper, self.push, self.params = gripper, push, params
+        self.gripper, self.push, self.params, self.table = gripper, push, params, table
         self.kin = WamKinematics(max_iterations=params.max_iterations)
         rng = np.random.default_rng(20261122)
         self.seeds = rng.uniform(self.kin.lower, self.kin.upper, size=(params.n_seeds, self.kin.model.nq))
@@ -101,20 +104,17 @@ class WorldReach:
         starts = ([warm] if warm is not None else []) + list(self.seeds)
         for q0 in starts:
             q = self.kin._solve_from(target, np.asarray(q0, dtype=float))
-            if q is not None and self.kin._within_tolerance(target, q) and self._clear_of_table(q, T_base_tcp):
+            if q is not None and self.kin._within_tolerance(target, q) and self._clear_of_table(q):
                 return q
         return None
 
-    def _clear_of_table(self, q: np.ndarray, T_base_tcp: np.ndarray) -> bool:
-        from clearcli.robot.kinematics import capsule_spheres
-
+    def _clear_of_table(self, q: np.ndarray) -> bool:
         a, b, r = self.kin.capsules(q)
         centres, radii = capsule_spheres(a, b, r)
         c_table = centres @ self.T_table_base[:3, :3].T + self.T_table_base[:3, 3]
         # only where over the table top (the arm's base stands beside the table, lower)
-        from clearcli.sim.scene import TABLE_SIZE_X_M, TABLE_SIZE_Y_M
-
-        over = (np.abs(c_table[:, 0]) <= TABLE_SIZE_X_M / 2 + radii) & (np.abs(c_table[:, 1]) <= TABLE_SIZE_Y_M / 2 + radii)
+        half_x, half_y = self.table.size_x_m / 2, self.table.size_y_m / 2
+        over = (np.abs(c_table[:, 0]) <= half_x + radii) & (np.abs(c_table[:, 1]) <= half_y + radii)
         return not bool(np.any(over & (c_table[:, 2] < radii + self.params.table_margin_m)))
 
     def grasp_motion(self, obj: "SceneObject") -> tuple[np.ndarray, np.ndarray] | None:
