@@ -559,7 +559,7 @@ def test_refinement_stages_run_from_one_list() -> None:
     from clearcli.perception.segment import segment
     from utils import FIXTURES
 
-    assert [s.name for s in STAGES] == ["cuts", "occlusion", "steps", "rims"]
+    assert [s.name for s in STAGES] == ["stacks", "cuts", "occlusion", "steps", "rims", "rings"]
     assert [s.name for s in STAGES if s.needs_grid] == ["occlusion"]
     frame = read_frame(FIXTURES / "clutter10.pcd")
     seg = segment(frame, SegmentSettings())

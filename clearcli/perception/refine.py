@@ -7,11 +7,13 @@ switched off, or that needs the pixel grid on an unorganized cloud (so the resul
 the result with that stage off). A new refinement is a module and one entry here.
 
 The stages, in order:
+  stacks     an object standing on another's top (stacks.py)             supervoxel level
   cuts       planar cuts through rising seams (cuts.py; after CPC)      supervoxel level
   occlusion  pieces of one object cut apart by a nearer one (occlusion.py) supervoxel level,
                                                                          pixel grid
   steps      two tops at two heights on either side of a line (steps.py)  voxel level
   rims       a container's inner and outer walls (rims.py)                voxel level
+  rings      ... and those that do not touch: two arcs of one rim (rings.py) voxel level
 Before the supervoxels, `edges.py` cuts the voxel adjacency at depth discontinuities
 of the pixel grid (stage "edges", organized frames only): it changes the graph every
 later step walks, so it runs on the voxels, not on segments.
@@ -80,6 +82,21 @@ def _per_supervoxel(fn: Callable[[np.ndarray, RefineContext], np.ndarray]) -> Ru
     return run
 
 
+def _stacks(seg_of_sv: np.ndarray, ctx: RefineContext) -> np.ndarray:
+    from clearcli.perception.stacks import stack_splits
+
+    seg_of_voxel = stack_splits(
+        seg_of_sv[ctx.sv.voxel_label], ctx.sv, ctx.vox.centroids, ctx.voxel_height, ctx.vox.edges,
+        ctx.plane.normal, ctx.scaled,
+    )
+    # back to supervoxels, each to the segment of most of its voxels: the patch at the
+    # upper object's foot, mostly lower top, stays with the lower object
+    n_seg = int(seg_of_voxel.max()) + 1
+    votes = np.zeros((ctx.sv.centroids.shape[0], n_seg), dtype=np.int64)
+    np.add.at(votes, (ctx.sv.voxel_label, seg_of_voxel), 1)
+    return np.unique(votes.argmax(axis=1), return_inverse=True)[1]
+
+
 def _cuts(seg_of_sv: np.ndarray, ctx: RefineContext) -> np.ndarray:
     from clearcli.perception.cuts import planar_cuts
 
@@ -115,11 +132,29 @@ def _rims(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
     )
 
 
+def _rings(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
+    from clearcli.perception.rings import merge_rings
+    from clearcli.perception.table import plane_basis
+
+    s = ctx.settings
+    up = ctx.plane.normal / np.linalg.norm(ctx.plane.normal)
+    basis = plane_basis(up)
+    wall = np.abs(ctx.sv.normals @ up) < np.cos(np.radians(s.step_max_tilt_deg))
+    min_vox = max(1, int(s.min_object_area_m2 / ctx.scaled.voxel_m**2))
+    return merge_rings(
+        seg_of_voxel, ctx.vox.centroids @ basis.T, ctx.voxel_height, ctx.sv.voxel_label,
+        ctx.sv.normals @ basis.T, ctx.sv.centroids @ basis.T, wall, s.rim_tolerance_m,
+        s.ring_max_radius_m, s.ring_max_residual, s.ring_min_cover_deg, min_vox,
+    )
+
+
 STAGES: tuple[Stage, ...] = (
+    Stage("stacks", lambda s: s.stack_split, _per_supervoxel(_stacks)),
     Stage("cuts", lambda s: s.planar_cuts, _per_supervoxel(_cuts)),
     Stage("occlusion", lambda s: s.occlusion_merge, _per_supervoxel(_occlusion), needs_grid=True),
     Stage("steps", lambda s: s.step_split, _steps),
     Stage("rims", lambda s: s.rim_merge, _rims),
+    Stage("rings", lambda s: s.ring_merge, _rings),
 )
 
 

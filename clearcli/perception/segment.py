@@ -138,7 +138,7 @@ def segment(frame: Frame, settings: SegmentSettings) -> Segmentation:
     """
     from clearcli.perception.filters import clean_mask
     from clearcli.perception.lccp import lccp_segments
-    from clearcli.perception.refine import RefineContext, refine
+    from clearcli.perception.refine import STAGES, RefineContext, refine
     from clearcli.perception.supervoxels import compute_supervoxels, voxelize
     from clearcli.perception.table import find_table, table_and_prism
 
@@ -170,8 +170,9 @@ def segment(frame: Frame, settings: SegmentSettings) -> Segmentation:
     obj_idx = idx[prism_mask]
     obj_pts = pts[prism_mask]
     objects: list[SegmentedObject] = []
-    timings["supervoxels"] = timings["lccp"] = timings["cuts"] = timings["merge"] = 0.0
-    timings["occlusion"] = timings["steps"] = timings["rims"] = timings["edges"] = 0.0
+    # "merge": the refinements after the planar cuts, together (each is also timed apart)
+    merged_stages = tuple(st.name for st in STAGES if st.name != "cuts")
+    timings.update(dict.fromkeys(("supervoxels", "lccp", "merge", "edges", *(st.name for st in STAGES)), 0.0))
     if obj_pts.shape[0] >= 4:
         if fit.camera_is_origin:
             viewpoint = np.zeros(3)
@@ -201,7 +202,7 @@ def segment(frame: Frame, settings: SegmentSettings) -> Segmentation:
         # refinements after LCCP, each a stage of refine.STAGES
         ctx = RefineContext(frame, organized, vox, sv, fit.plane, settings, seg_settings)
         seg_of_voxel = refine(seg_of_sv[sv.voxel_label], ctx, timings)
-        timings["merge"] = sum(timings[k] for k in ("occlusion", "steps", "rims"))
+        timings["merge"] = sum(timings[k] for k in merged_stages)
 
         # 4. size filter
         seg_of_point = seg_of_voxel[vox.point_voxel]
@@ -223,7 +224,7 @@ def segment(frame: Frame, settings: SegmentSettings) -> Segmentation:
             noise = settings.prism_noise_per_m2 * float(np.min(np.einsum("ij,ij->i", p, p))) if fit.camera_is_origin else 0.0
             objects.append(make_object(obj_idx[members], p, fit.plane, rests + noise))
     timings["objects"] = time.perf_counter() - t0 - sum(
-        v for k, v in timings.items() if k not in ("occlusion", "steps", "rims")  # (in "merge")
+        v for k, v in timings.items() if k not in merged_stages  # (in "merge")
     )
     timings["total"] = time.perf_counter() - t0
     return Segmentation(

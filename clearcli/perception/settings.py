@@ -139,6 +139,10 @@ class SegmentSettings:
     step_min_m: float = 0.008
     # share of the smaller top's voxels a separating line may leave on the wrong side
     step_max_error: float = 0.03
+    # --- 3b'''. stacks (ours; see stacks.py) -------------------------------------------
+    # split off an object standing on a lower top of its segment: a top step_min_m or
+    # more above a top of at least min_object_area_m2, standing inside it
+    stack_split: bool = True
     # --- 3c. occluded pieces (ours) -------------------------------------------------------
     # join two segments when a nearer object hides the gap between them and their
     # surfaces continue each other (organized frames only; see occlusion.py)
@@ -150,6 +154,20 @@ class SegmentSettings:
     rim_merge: bool = True
     rim_tolerance_m: float = 0.015
     rim_contact_m: float = 0.02
+    # join a container's inner and outer walls that do not touch: their top bands are
+    # two arcs of one circle, the inner wall facing its centre, the outer facing away
+    # (rings.py)
+    ring_merge: bool = True
+    # the largest rim radius (m): a wide bowl or pot
+    ring_max_radius_m: float = 0.15
+    # RMS distance of the bands from the circle, as a share of its radius. On the 45
+    # mOSD learn frames and 400 renders of the choose seeds (0-99) of four families:
+    # the walls of one container 0.03-0.07, any other pair of segments with tops at one
+    # height 0.12 or more
+    ring_max_residual: float = 0.1
+    # the two bands together go at least this far round the centre (degrees): one
+    # container's walls 290-360, other pairs fitting the circle within 0.15 at most 260
+    ring_min_cover_deg: float = 270.0
     # --- 4. final filter ----------------------------------------------------------------
     # smallest object kept, as visible surface area (m^2, counted in occupied voxels) so
     # that a far object is not dropped for being sampled sparsely. 10 cm^2 ~ 40 voxels:

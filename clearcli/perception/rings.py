@@ -1,0 +1,148 @@
+"""Stage 3d' (ours, not in the thesis): join a container's inner and outer walls that do
+not touch.
+
+Seen from a Kinect at the usual 30-50 degrees above the table, an open container (a
+bowl, a mug, a pot) shows its near OUTER wall and, over the near rim, its far INNER
+wall. LCCP keeps them apart (the inner wall is concave), and `rims.py` joins them only
+where the two come within a couple of centimetres of each other near their tops. They
+often do not: the rim's ends, seen edge-on, are the pixels the outlier filter and the
+depth edges drop, and the near rim is far (a container's diameter) from the inner wall
+seen above it. What stays plain is their shape from above: the top bands of the two
+walls are two arcs of ONE circle (the rim), and the inner wall faces that circle's
+centre while the outer wall faces away from it.
+
+For two segments whose tops lie within ``rim_tolerance_m`` of each other:
+1. each segment's rim band: its voxels within ``rim_tolerance_m`` of its top, in the
+   table plane;
+2. one circle fitted to both bands (algebraic least squares); kept when its radius is
+   between ``_MIN_RADIUS_M`` and ``ring_max_radius_m``, every band point lies within
+   ``ring_max_residual`` of the radius on average (RMS, as a share of it: a filled top
+   of a can or a box fits a circle badly), and the two bands together go at least
+   ``ring_min_cover_deg`` round the centre (two arcs of one rim, not one arc);
+3. joined when one segment's surface faces the centre (its supervoxel normals, in the
+   table plane, point towards it on average: an inner wall) and the other's faces away
+   (an outer wall). Two cans side by side both face away from any centre between them.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+_MIN_RADIUS_M = 0.015
+# average facing (cosine between a wall's in-plane normal and the direction to the
+# centre) an inner wall must reach, and an outer wall go below the negative of
+_MIN_FACING = 0.3
+_ANGLE_BINS = 36
+
+
+def fit_circle(xy: np.ndarray) -> tuple[np.ndarray, float]:
+    """(centre (2,), radius) of the least-squares circle through ``xy`` (N, 2) (Kasa's
+    algebraic fit: linear in the centre and r^2 - |c|^2)."""
+    a = np.column_stack([2.0 * xy, np.ones(xy.shape[0])])
+    b = (xy**2).sum(axis=1)
+    sol, *_ = np.linalg.lstsq(a, b, rcond=None)
+    centre = sol[:2]
+    r2 = float(sol[2] + centre @ centre)
+    return centre, float(np.sqrt(max(r2, 0.0)))
+
+
+def ring_pair(
+    band_a: np.ndarray,
+    band_b: np.ndarray,
+    normals_a: np.ndarray,
+    points_a: np.ndarray,
+    normals_b: np.ndarray,
+    points_b: np.ndarray,
+    max_radius_m: float,
+    max_residual: float,
+    min_cover_deg: float,
+) -> bool:
+    """Are two segments the inner and outer walls of one container? ``band_*`` (N, 2):
+    their rim bands in the table plane; ``normals_*`` / ``points_*`` (K, 2): their
+    supervoxels' in-plane normals and centroids."""
+    if band_a.shape[0] < 3 or band_b.shape[0] < 3:
+        return False
+    both = np.vstack([band_a, band_b])
+    centre, radius = fit_circle(both)
+    if not (_MIN_RADIUS_M <= radius <= max_radius_m):
+        return False
+    resid = np.linalg.norm(both - centre, axis=1) - radius
+    if np.sqrt(np.mean(resid**2)) > max_residual * radius:
+        return False
+    ang = np.arctan2(both[:, 1] - centre[1], both[:, 0] - centre[0])
+    bins = np.unique(np.floor((ang + np.pi) / (2 * np.pi) * _ANGLE_BINS).astype(np.int64) % _ANGLE_BINS)
+    if bins.size * 360.0 / _ANGLE_BINS < min_cover_deg:
+        return False
+
+    def facing(normals: np.ndarray, points: np.ndarray) -> float:
+        to_centre = centre - points
+        to_centre /= np.maximum(np.linalg.norm(to_centre, axis=1, keepdims=True), 1e-9)
+        n = normals / np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-9)
+        return float(np.mean(np.einsum("ij,ij->i", n, to_centre)))
+
+    fa, fb = facing(normals_a, points_a), facing(normals_b, points_b)
+    return (fa >= _MIN_FACING and fb <= -_MIN_FACING) or (fb >= _MIN_FACING and fa <= -_MIN_FACING)
+
+
+def merge_rings(
+    seg_of_voxel: np.ndarray,
+    voxel_xy: np.ndarray,
+    voxel_height: np.ndarray,
+    voxel_label: np.ndarray,
+    sv_normals_xy: np.ndarray,
+    sv_xy: np.ndarray,
+    sv_is_wall: np.ndarray,
+    tolerance_m: float,
+    max_radius_m: float,
+    max_residual: float,
+    min_cover_deg: float,
+    min_voxels: int,
+) -> np.ndarray:
+    """(V,) segment per voxel after joining inner and outer walls of containers.
+
+    ``voxel_xy`` (V, 2) and ``voxel_height`` (V,): the voxels in the table plane and
+    above it; ``voxel_label`` (V,): their supervoxels, whose in-plane normals and
+    centroids are ``sv_normals_xy`` / ``sv_xy`` (S, 2); only supervoxels flagged
+    ``sv_is_wall`` (not a top face) count for facing. Segments of fewer than
+    ``min_voxels`` voxels are left alone."""
+    n_seg = int(seg_of_voxel.max()) + 1 if seg_of_voxel.size else 0
+    if n_seg < 2:
+        return seg_of_voxel
+    sizes = np.bincount(seg_of_voxel, minlength=n_seg)
+    top = np.full(n_seg, -np.inf)
+    np.maximum.at(top, seg_of_voxel, voxel_height)
+    cand = [s for s in range(n_seg) if sizes[s] >= min_voxels]
+    band = {s: voxel_xy[(seg_of_voxel == s) & (voxel_height >= top[s] - tolerance_m)] for s in cand}
+    walls: dict[int, np.ndarray] = {}
+    for s in cand:
+        svs = np.unique(voxel_label[seg_of_voxel == s])
+        walls[s] = svs[sv_is_wall[svs]]
+    lo = {s: voxel_xy[seg_of_voxel == s].min(axis=0) for s in cand}
+    hi = {s: voxel_xy[seg_of_voxel == s].max(axis=0) for s in cand}
+    parent = np.arange(n_seg)
+
+    def root(i: int) -> int:
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    for i, a in enumerate(cand):
+        for b in cand[i + 1 :]:
+            if root(a) == root(b) or abs(top[a] - top[b]) > tolerance_m:
+                continue
+            # the two must lie on one rim: their boxes in the plane within a diameter
+            gap = np.maximum(0.0, np.maximum(lo[a] - hi[b], lo[b] - hi[a]))
+            if float(np.linalg.norm(gap)) > max_radius_m:
+                continue
+            wa, wb = walls[a], walls[b]
+            if wa.size == 0 or wb.size == 0:
+                continue
+            if ring_pair(
+                band[a], band[b], sv_normals_xy[wa], sv_xy[wa], sv_normals_xy[wb], sv_xy[wb],
+                max_radius_m, max_residual, min_cover_deg,
+            ):
+                parent[root(b)] = root(a)
+    final = np.array([root(s) for s in range(n_seg)])[seg_of_voxel]
+    _, out = np.unique(final, return_inverse=True)
+    return out.astype(np.int64)

@@ -1,0 +1,147 @@
+"""Stage 3b''' (ours, not in the thesis): split off an object standing on another's top.
+
+A small box or can standing on a tray or a flat box meets the lower top in a concave
+seam that LCCP should keep apart. It does not always: a supervoxel at the foot of the
+small object holds some of its side and some of the lower top, its normal and centroid
+a blend of both, and its adjacency to the side face then passes as convex; one such
+adjacency joins the two objects. The tops tell them apart: a horizontal face standing
+centimetres above a larger horizontal face of the same segment, and lying inside it
+(the lower top spreads around the foot of the upper object). The steps stage cannot
+see this (no line separates a top from the top around it), nor can the planar cuts
+(the seam closes around the small object).
+
+Per segment:
+1. its top patches (supervoxels whose normal is within ``step_max_tilt_deg`` of the
+   table's, at their mean height), grouped into levels wherever consecutive heights
+   differ by at least ``step_min_m``;
+2. for a lower level L of at least ``min_object_area_m2`` and a higher level U: the
+   candidate upper object is every voxel of the segment more than half a step above L,
+   connected over the voxel adjacency (through such voxels) to U's top voxels;
+3. accepted when at least ``_MIN_INSIDE`` of the candidate lies within the convex hull
+   of L's top voxels in the table plane (a voxel's width of slack), and both the
+   candidate and the rest hold at least ``cut_min_side_m2``. One object's two levels
+   do not pass: a bowl's or a mug's inside bottom lies inside its walls, not the walls
+   inside the bottom; a box beside a lower box stands outside the lower top (the steps
+   stage's case);
+4. the candidate becomes a segment of its own; repeated while some level splits off.
+
+It runs first of the refinements, on LCCP's segments (the planar cuts would otherwise
+cut the lower object in two along the upper one's side), and like them hands back whole
+supervoxels: each goes to the side holding most of its voxels, so the patch at the
+upper object's foot, mostly lower top, stays with the lower object.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from clearcli.perception.settings import SegmentSettings
+from clearcli.perception.supervoxels import Supervoxels
+
+# share of the candidate upper object that must stand within the lower top's hull
+_MIN_INSIDE = 0.9
+
+
+def _levels(h: np.ndarray, min_step_m: float) -> np.ndarray:
+    """Level index of each height: sorted heights split where consecutive ones differ by
+    at least ``min_step_m``."""
+    order = np.argsort(h)
+    breaks = np.concatenate([[0], (np.diff(h[order]) >= min_step_m).astype(np.int64)])
+    level = np.empty(h.size, dtype=np.int64)
+    level[order] = np.cumsum(breaks)
+    return level
+
+
+def _inside_hull(xy: np.ndarray, hull_xy: np.ndarray, slack_m: float) -> np.ndarray:
+    """(N,) are the points ``xy`` within ``slack_m`` of the convex hull of ``hull_xy``?"""
+    from scipy.spatial import ConvexHull, QhullError
+
+    try:
+        hull = ConvexHull(hull_xy)
+    except (QhullError, ValueError):
+        return np.zeros(xy.shape[0], dtype=bool)
+    # hull.equations rows (a, b, c): a x + b y + c <= 0 inside, (a, b) a unit normal
+    signed = xy @ hull.equations[:, :2].T + hull.equations[:, 2]
+    return (signed <= slack_m).all(axis=1)
+
+
+def _component(seed_mask: np.ndarray, allowed: np.ndarray, edges: np.ndarray) -> np.ndarray:
+    """(V,) voxels reachable from ``seed_mask`` through ``allowed`` voxels."""
+    from clearcli.perception.supervoxels import _components
+
+    keep = allowed[edges[:, 0]] & allowed[edges[:, 1]]
+    comp = _components(allowed.size, edges[keep])
+    seeds = np.unique(comp[seed_mask & allowed])
+    return allowed & np.isin(comp, seeds)
+
+
+def stack_splits(
+    seg_of_voxel: np.ndarray,
+    sv: Supervoxels,
+    voxel_centroids: np.ndarray,
+    voxel_height: np.ndarray,
+    voxel_edges: np.ndarray,
+    up: np.ndarray,
+    settings: SegmentSettings,
+) -> np.ndarray:
+    """(V,) segment of every voxel after splitting off objects standing on a lower top
+    of their segment, 0..G-1. Arguments as for `steps.step_splits`."""
+    from clearcli.perception.table import plane_basis
+
+    seg = np.asarray(seg_of_voxel, dtype=np.int64).copy()
+    if seg.size == 0 or voxel_edges.shape[0] == 0:
+        return seg
+    up = up / np.linalg.norm(up)
+    xy = voxel_centroids @ plane_basis(up).T
+    top_sv = np.abs(sv.normals @ up) >= np.cos(np.radians(settings.step_max_tilt_deg))
+    top = top_sv[sv.voxel_label]
+    min_level_vox = settings.min_object_area_m2 / settings.voxel_m**2
+    min_side_vox = settings.cut_min_side_m2 / settings.voxel_m**2
+    # only segments with two top levels can split: edges within a segment, once
+    same = seg[voxel_edges[:, 0]] == seg[voxel_edges[:, 1]]
+    edges_in = voxel_edges[same]
+    next_label = int(seg.max()) + 1
+    pending = np.unique(seg).tolist()
+    while pending:
+        s = pending.pop()
+        members = seg == s
+        tops = np.flatnonzero(members & top)
+        if tops.size < 2:
+            continue
+        _, patch = np.unique(sv.voxel_label[tops], return_inverse=True)
+        n_vox = np.bincount(patch)
+        h_patch = np.bincount(patch, weights=voxel_height[tops]) / n_vox
+        level_of_patch = _levels(h_patch, settings.step_min_m)
+        n_levels = int(level_of_patch.max()) + 1
+        if n_levels < 2:
+            continue
+        level = level_of_patch[patch]  # per top voxel
+        level_vox = np.bincount(level, minlength=n_levels)
+        level_h = np.bincount(level, weights=voxel_height[tops], minlength=n_levels) / np.maximum(level_vox, 1)
+        split = None
+        for lo in range(n_levels - 1):
+            if level_vox[lo] < min_level_vox:
+                continue
+            above = members & (voxel_height > level_h[lo] + 0.5 * settings.step_min_m)
+            lower_xy = xy[tops[level == lo]]
+            for hi in range(n_levels - 1, lo, -1):
+                seed = np.zeros(seg.size, dtype=bool)
+                seed[tops[level == hi]] = True
+                cand = _component(seed, above, edges_in)
+                n_cand = int(cand.sum())
+                if n_cand < min_side_vox or int(members.sum()) - n_cand < min_side_vox:
+                    continue
+                inside = _inside_hull(xy[cand], lower_xy, settings.voxel_m)
+                if inside.mean() >= _MIN_INSIDE:
+                    split = cand
+                    break
+            if split is not None:
+                break
+        if split is None:
+            continue
+        seg[split] = next_label
+        edges_in = edges_in[seg[edges_in[:, 0]] == seg[edges_in[:, 1]]]
+        pending += [s, next_label]  # either may hold another stack
+        next_label += 1
+    _, out = np.unique(seg, return_inverse=True)
+    return out.astype(np.int64)
