@@ -57,8 +57,23 @@ def convex_edges(sv: Supervoxels, settings: SegmentSettings) -> np.ndarray:
     return ok & is_convex
 
 
-def lccp_segments(sv: Supervoxels, settings: SegmentSettings) -> np.ndarray:
-    """(S,) segment index of every supervoxel, 0..G-1."""
+def lccp_segments(
+    sv: Supervoxels,
+    settings: SegmentSettings,
+    sv_low_m: np.ndarray | None = None,
+    sv_high_m: np.ndarray | None = None,
+    up: np.ndarray | None = None,
+) -> np.ndarray:
+    """(S,) segment index of every supervoxel, 0..G-1.
+
+    With ``sv_low_m`` and ``sv_high_m`` (S,), the heights above the table of each
+    supervoxel's lowest and highest voxel, and ``up``, the table's normal: a small
+    segment that stands on the table (reaches within ``standing_max_m`` of it), has a
+    top face of its own (a supervoxel within ``step_max_tilt_deg`` of level) and a top
+    at another height than every segment it touches (by ``step_min_m``: a piece of a
+    box's top and front cut off by an object standing on the box is at the box's
+    height) is a whole small object, not a piece of a larger one, and keeps its own
+    segment when it holds at least ``min_object_area_m2`` of surface."""
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
@@ -72,7 +87,22 @@ def lccp_segments(sv: Supervoxels, settings: SegmentSettings) -> np.ndarray:
     # "small" also by area: the connectivity step of the supervoxels can leave a small
     # patch in several pieces, which would count as several supervoxels
     min_voxels = int(settings.min_segment_supervoxels * (settings.seed_m / settings.voxel_m) ** 2)
-    return merge_small_segments(seg, sv.edges, settings.min_segment_supervoxels, sv.n_voxels, min_voxels)
+    keep = None
+    if sv_low_m is not None and sv_high_m is not None and up is not None and settings.keep_standing_small:
+        n_seg = int(seg.max()) + 1
+        top = np.abs(sv.normals @ (up / np.linalg.norm(up))) >= np.cos(np.radians(settings.step_max_tilt_deg))
+        low = np.full(n_seg, np.inf)
+        np.minimum.at(low, seg, sv_low_m)
+        high = np.full(n_seg, -np.inf)
+        np.maximum.at(high, seg, sv_high_m)
+        has_top = np.bincount(seg, weights=top.astype(np.float64), minlength=n_seg) > 0
+        area = np.bincount(seg, weights=sv.n_voxels, minlength=n_seg) * settings.voxel_m**2
+        keep = (low <= settings.standing_max_m) & has_top & (area >= settings.min_object_area_m2)
+        a, b = seg[sv.edges[:, 0]], seg[sv.edges[:, 1]]
+        level = (a != b) & (np.abs(high[a] - high[b]) < settings.step_min_m)
+        keep[a[level]] = False
+        keep[b[level]] = False
+    return merge_small_segments(seg, sv.edges, settings.min_segment_supervoxels, sv.n_voxels, min_voxels, keep)
 
 
 def rejoin_pieces(
@@ -97,10 +127,11 @@ def merge_small_segments(
     min_size: int,
     sv_voxels: np.ndarray | None = None,
     min_voxels: int = 0,
+    keep: np.ndarray | None = None,
 ) -> np.ndarray:
     """Segments with fewer than ``min_size`` supervoxels (or fewer than ``min_voxels``
     voxels) join their largest adjacent segment (PCL's rule), smallest first; isolated
-    small segments stay."""
+    small segments stay, and so do those flagged in ``keep`` (G,)."""
     seg = seg.copy()
     if (min_size <= 1 and min_voxels <= 0) or sv_edges.shape[0] == 0:
         _, seg = np.unique(seg, return_inverse=True)
@@ -126,6 +157,8 @@ def merge_small_segments(
         neighbours.setdefault(t, set()).add(s)
     for s in np.argsort(size, kind="stable").tolist():
         if (size[s] >= min_size and vox[s] >= min_voxels) or root(s) != s:
+            continue
+        if keep is not None and keep[s]:
             continue
         roots = {root(t) for t in neighbours.get(s, ())} - {s}
         if not roots:

@@ -14,6 +14,7 @@ The stages, in order:
   steps      two tops at two heights on either side of a line (steps.py)  voxel level
   rims       a container's inner and outer walls (rims.py)                voxel level
   rings      ... and those that do not touch: two arcs of one rim (rings.py) voxel level
+  fragments  strips of a face seen edge-on, apart from their object (fragments.py) voxel level
 Before the supervoxels, `edges.py` cuts the voxel adjacency at depth discontinuities
 of the pixel grid (stage "edges", organized frames only): it changes the graph every
 later step walks, so it runs on the voxels, not on segments.
@@ -148,6 +149,19 @@ def _rings(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
     )
 
 
+def _fragments(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
+    from clearcli.perception.fragments import join_fragments
+
+    s = ctx.scaled
+    up = ctx.plane.normal / np.linalg.norm(ctx.plane.normal)
+    top = np.abs(ctx.sv.normals @ up) >= np.cos(np.radians(s.step_max_tilt_deg))
+    min_segment_voxels = int(s.min_segment_supervoxels * (s.seed_m / s.voxel_m) ** 2)
+    return join_fragments(
+        seg_of_voxel, ctx.vox.centroids, ctx.vox.edges, top[ctx.sv.voxel_label], min_segment_voxels,
+        ctx.settings.fragment_join_m,
+    )
+
+
 STAGES: tuple[Stage, ...] = (
     Stage("stacks", lambda s: s.stack_split, _per_supervoxel(_stacks)),
     Stage("cuts", lambda s: s.planar_cuts, _per_supervoxel(_cuts)),
@@ -155,6 +169,7 @@ STAGES: tuple[Stage, ...] = (
     Stage("steps", lambda s: s.step_split, _steps),
     Stage("rims", lambda s: s.rim_merge, _rims),
     Stage("rings", lambda s: s.ring_merge, _rings),
+    Stage("fragments", lambda s: s.fragment_join_m > 0, _fragments),
 )
 
 

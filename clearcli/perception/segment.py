@@ -195,7 +195,12 @@ def segment(frame: Frame, settings: SegmentSettings) -> Segmentation:
         sv = compute_supervoxels(vox, viewpoint, seg_settings)
         t3 = time.perf_counter()
         timings["supervoxels"] = t3 - t2 - timings["edges"]
-        seg_of_sv = lccp_segments(sv, seg_settings)
+        voxel_h = fit.plane.height_of(vox.centroids)
+        sv_low = np.full(sv.centroids.shape[0], np.inf)
+        np.minimum.at(sv_low, sv.voxel_label, voxel_h)
+        sv_high = np.full(sv.centroids.shape[0], -np.inf)
+        np.maximum.at(sv_high, sv.voxel_label, voxel_h)
+        seg_of_sv = lccp_segments(sv, seg_settings, sv_low, sv_high, fit.plane.normal)
         t4 = time.perf_counter()
         timings["lccp"] = t4 - t3
 

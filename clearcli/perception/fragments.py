@@ -1,0 +1,60 @@
+"""Stage 3e (ours, not in the thesis): join the fragments of a face seen edge-on.
+
+A face seen within a few degrees of edge-on steps centimetres in range from pixel to
+pixel; the outlier filter (which wants neighbours within a range-scaled radius) keeps
+only scattered strips of it, and each strip comes out as a small segment of its own,
+touching nothing, a few millimetres from the object it belongs to. Such a FRAGMENT is a
+segment smaller than LCCP's smallest segment (``min_segment_supervoxels`` seeds) with
+no top face (no supervoxel within ``step_max_tilt_deg`` of level: a small object
+standing apart has one) and no voxel adjacency to another segment. It joins the segment
+of the nearest voxel outside it when that is within ``fragment_join_m``; farther away
+it is left alone (the size filter drops it if it is tiny).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def join_fragments(
+    seg_of_voxel: np.ndarray,
+    voxel_centroids: np.ndarray,
+    voxel_edges: np.ndarray,
+    voxel_is_top: np.ndarray,
+    max_fragment_voxels: int,
+    max_gap_m: float,
+) -> np.ndarray:
+    """(V,) segment per voxel after joining fragments to their nearest segment."""
+    from scipy.spatial import cKDTree
+
+    seg = np.asarray(seg_of_voxel, dtype=np.int64)
+    n_seg = int(seg.max()) + 1 if seg.size else 0
+    if n_seg < 2:
+        return seg
+    size = np.bincount(seg, minlength=n_seg)
+    has_top = np.bincount(seg, weights=voxel_is_top.astype(np.float64), minlength=n_seg) > 0
+    a, b = seg[voxel_edges[:, 0]], seg[voxel_edges[:, 1]]
+    touches = np.zeros(n_seg, dtype=bool)
+    touches[a[a != b]] = True
+    touches[b[a != b]] = True
+    fragment = (size < max_fragment_voxels) & ~has_top & ~touches
+    if not fragment.any() or fragment.all():
+        return seg
+    rest = ~fragment[seg]
+    tree = cKDTree(voxel_centroids[rest])
+    rest_seg = seg[rest]
+    out = seg.copy()
+    frag_vox = np.flatnonzero(fragment[seg])
+    dist, nearest = tree.query(voxel_centroids[frag_vox], distance_upper_bound=max_gap_m)
+    found = np.isfinite(dist)
+    # each fragment to the segment of its voxel nearest to any other segment
+    target = np.full(n_seg, -1, dtype=np.int64)
+    best = np.full(n_seg, np.inf)
+    for v, d, k in zip(frag_vox[found].tolist(), dist[found].tolist(), nearest[found].tolist()):
+        f = seg[v]
+        if d < best[f]:
+            best[f], target[f] = d, rest_seg[k]
+    joined = target >= 0
+    out[joined[seg]] = target[seg[joined[seg]]]
+    _, out = np.unique(out, return_inverse=True)
+    return out.astype(np.int64)
