@@ -5,6 +5,9 @@
     .venv/bin/python benchmarks/clearing.py --seeds 1017,1033 -v  # a few sessions, each step
     .venv/bin/python benchmarks/clearing.py --set choose --settings thesis.toml  # ablation
 
+``--scenes clutter`` runs `scene.clutter(3 + s % 10, s)` instead (3-12 objects) and counts
+the sessions that end with an object merged with another by the segmenter (or missed).
+
 Seed sets: ``choose`` is 0-99, the seeds looked at while choosing the planner's
 behaviour and defaults; ``report`` is 1000-1099, run only to report. Seed s makes a
 scene of 3 + s % 13 objects (3-15): odd seeds `scene.dense` (boxes in rows and 2 x 2
@@ -50,10 +53,12 @@ MODES = ("truth", "segmenter")
 MAX_ACTIONS = 40
 
 
-def session_scene(seed: int) -> Any:
+def session_scene(seed: int, kind: str = "mixed") -> Any:
     from clearcli.sim import scene as scenes
 
-    n_objects = 3 + seed % 13
+    n_objects = 3 + seed % (10 if kind == "clutter" else 13)
+    if kind == "clutter":  # issue 12's population: clutter of 3-12 objects
+        return scenes.clutter(n_objects, seed)
     if seed % 2:
         return scenes.dense(n_objects, seed)
     try:
@@ -87,13 +92,13 @@ def left_reasons(r: Any) -> Counter:
     return out
 
 
-def run_session(seed: int, mode: str, settings_path: str = "") -> dict[str, Any]:
+def run_session(seed: int, mode: str, settings_path: str = "", kind: str = "mixed") -> dict[str, Any]:
     from clearcli.pipeline import Pipeline
     from clearcli.replay.session import ReplayOptions, Session
     from clearcli.settings import Settings, load_settings
     from clearcli.sim.episode import Episode, truth_segment
 
-    world = session_scene(seed)
+    world = session_scene(seed, kind)
     settings = load_settings(Path(settings_path)) if settings_path else Settings()
     pipeline = Pipeline(settings, segment_fn=truth_segment if mode == "truth" else None)
     episode = Episode(world, Session(pipeline, ReplayOptions(push_memory=True)), seed=seed, max_actions=MAX_ACTIONS)
@@ -124,7 +129,7 @@ def run_session(seed: int, mode: str, settings_path: str = "") -> dict[str, Any]
     }
 
 
-def _run(args: tuple[int, str, str]) -> dict[str, Any]:
+def _run(args: tuple[int, str, str, str]) -> dict[str, Any]:
     return run_session(*args)
 
 
@@ -157,6 +162,8 @@ def report(label: str, rows: list[dict[str, Any]], verbose: bool) -> dict[str, A
         f"95th percentile {p95:.3f} s, max {max(plan_s) if plan_s else 0:.3f} s over {len(plan_s)} frames"
     )
     print("    objects left: " + ("; ".join(f"{k}: {v}" for k, v in sorted(left.items())) or "none"))
+    merged = [r["seed"] for r in rows if r["left"].get("merged with another or missed by the segmenter")]
+    print(f"    sessions ending with objects merged with another or missed by the segmenter: {len(merged)}/{n} {merged}")
     for r in rows:
         if not r["cleared"]:
             print(f"    not cleared: seed {r['seed']} {r['scene']} end {r['end']} left {r['left']}: {r['reason'][:160]}")
@@ -176,6 +183,7 @@ def report(label: str, rows: list[dict[str, Any]], verbose: bool) -> dict[str, A
         "plan_s_median": statistics.median(plan_s) if plan_s else 0.0,
         "plan_s_p95": p95,
         "not_cleared": [r["seed"] for r in rows if not r["cleared"]],
+        "sessions_ending_merged": merged,
     }
 
 
@@ -189,6 +197,11 @@ def main() -> None:
     ap.add_argument("--json", default="", help="write every session's record to this file")
     ap.add_argument("-v", "--verbose", action="store_true", help="print the steps of sessions not cleared")
     ap.add_argument("--settings", default="", help="a settings TOML (as `clear --settings`), for ablations")
+    ap.add_argument(
+        "--scenes", choices=("mixed", "clutter"), default="mixed",
+        help="mixed: dense and clutter of 3-15 objects (above); clutter: `scene.clutter(3 + s %% 10, s)`, "
+        "3-12 objects (issue 12's sessions: do touching objects merged by the segmenter end them?)",
+    )
     args = ap.parse_args()
 
     if args.seeds:
@@ -197,7 +210,7 @@ def main() -> None:
         names = tuple(SETS) if args.set == "both" else (args.set,)
         groups = {k: list(SETS[k])[: args.n] for k in names}
     modes = MODES if args.mode == "both" else (args.mode,)
-    work = [(seed, mode, args.settings) for group in groups.values() for mode in modes for seed in group]
+    work = [(seed, mode, args.settings, args.scenes) for group in groups.values() for mode in modes for seed in group]
     t0 = time.perf_counter()
     with ProcessPoolExecutor(max_workers=max(1, args.jobs)) as pool:
         rows = list(pool.map(_run, work, chunksize=1))

@@ -150,7 +150,11 @@ def planar_cuts(
     side_face = up_cos <= np.sin(np.radians(settings.cut_max_tilt_deg))
     top_side = (top[e[:, 0]] & side_face[e[:, 1]]) | (side_face[e[:, 0]] & top[e[:, 1]])
     rising = np.zeros_like(concave)
-    pick = concave & top_side
+    # both patches of a seam at least a quarter of a seed cell (a 1.5 cm square at the
+    # defaults): the few voxels of a side at a small object's foot, left in the segment
+    # of the top it stands on, are not a wall to cut along
+    min_patch = 0.25 * (settings.seed_m / settings.voxel_m) ** 2
+    pick = concave & top_side & (np.minimum(sv.n_voxels[e[:, 0]], sv.n_voxels[e[:, 1]]) >= min_patch)
     rising[pick] = seam_rise(sv, voxel_centroids, e[pick]) >= settings.cut_min_rise_m
     cut_any = False
     for _ in range(settings.cut_max_rounds):
