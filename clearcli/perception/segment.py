@@ -3,11 +3,15 @@
 1. finite points, outlier removal (filters.py; range-scaled radius by default)
 2. the table: RANSAC planes, the support surface among them, its 2D convex hull, the
    polygonal prism of points above it (table.py)
-3. supervoxels (VCCS, supervoxels.py) and LCCP merging (lccp.py); then the
-   refinements of refine.STAGES, one signature each: planar cuts through concave seams
-   left inside LCCP segments (cuts.py, after CPC), pieces of one object cut apart by a
-   nearer one (occlusion.py, organized frames), two tops at two heights (steps.py), and
-   the inner and outer walls of a container (rims.py)
+3. supervoxels (VCCS, supervoxels.py) after cutting the voxel adjacency at depth
+   discontinuities (edges.py, organized frames), and LCCP merging (lccp.py; a small
+   segment standing on the table with a top of its own is kept); then the refinements
+   of refine.STAGES, one signature each: an object standing on another's top split off
+   (stacks.py), planar cuts through rising seams (cuts.py, after CPC), pieces of one
+   object cut apart by a nearer one (occlusion.py, organized frames), two tops at two
+   heights (steps.py), a container's inner and outer walls joined where they touch at
+   the rim (rims.py) or form one rim from above (rings.py), and strips of a face seen
+   edge-on joined to their object (fragments.py)
 4. minimum-size filter (visible area in voxels, and a point count)
 
 Every stage is its own function; `segment` chains them and times each one.
