@@ -269,8 +269,10 @@ def test_ring_pair_by_hand() -> None:
 def test_small_objects_standing_against_taller_ones_keep_their_segment() -> None:
     """small_against_tall renders where the small object shows less surface than LCCP's
     smallest segment (5 seeds, 45 cm^2) and was folded into the taller one: kept with
-    `keep_standing_small`, folded without it."""
+    `keep_standing_small`, folded without it; and two dense mixes where the same
+    happens among several objects."""
     frames = [render(FAMILIES["small_against_tall"](s), seed=s) for s in (29, 64)]
+    frames += [render(FAMILIES["dense_mix"](s), seed=s) for s in (26, 81)]
     assert all(_right(f) for f in frames)
     off = replace(S, keep_standing_small=False)
     assert not any(_right(f, off) for f in frames)
@@ -293,3 +295,15 @@ def test_fragments_of_a_face_seen_edge_on_join_their_object() -> None:
     apart = make_scene("apart", [Box(0, 0.10, 0.08, 0.20, x_m=0.0, y_m=0.05), Box(1, 0.04, 0.04, 0.05, x_m=0.0, y_m=-0.02)])
     for seed in range(3):
         assert _right(render(apart, seed=seed))
+
+
+def test_stacks_join_the_top_an_object_stands_on_when_lccp_cuts_it_around_its_foot(monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """small_on_large(84): a can standing at a flat box's front edge; LCCP cuts the box's
+    top in two around the can's foot. `join_supports` makes it one box again; without it
+    the box is two objects."""
+    from clearcli.perception import stacks
+
+    frame = render(FAMILIES["small_on_large"](84), seed=84)
+    assert _right(frame)
+    monkeypatch.setattr(stacks, "join_supports", lambda seg, *args: seg)
+    assert not _right(frame)

@@ -84,12 +84,10 @@ def _per_supervoxel(fn: Callable[[np.ndarray, RefineContext], np.ndarray]) -> Ru
 
 
 def _stacks(seg_of_sv: np.ndarray, ctx: RefineContext) -> np.ndarray:
-    from clearcli.perception.stacks import stack_splits
+    from clearcli.perception.stacks import join_supports, stack_splits
 
-    seg_of_voxel = stack_splits(
-        seg_of_sv[ctx.sv.voxel_label], ctx.sv, ctx.vox.centroids, ctx.voxel_height, ctx.vox.edges,
-        ctx.plane.normal, ctx.scaled,
-    )
+    args = (ctx.sv, ctx.vox.centroids, ctx.voxel_height, ctx.vox.edges, ctx.plane.normal, ctx.scaled)
+    seg_of_voxel = join_supports(stack_splits(seg_of_sv[ctx.sv.voxel_label], *args), *args)
     # back to supervoxels, each to the segment of most of its voxels: the patch at the
     # upper object's foot, mostly lower top, stays with the lower object
     n_seg = int(seg_of_voxel.max()) + 1

@@ -25,6 +25,12 @@ Per segment:
    stage's case);
 4. the candidate becomes a segment of its own; repeated while some level splits off.
 
+The other way round, LCCP sometimes cuts the LOWER object in two around the upper one's
+foot (the top on either side of a can standing at a box's edge, joined only through
+blended patches at the can's foot). Two touching segments that both hold a top at the
+height the upper object stands at (within ``step_min_m``), and that the upper object
+stands on (its foot inside the hull of their tops), are one object: `join_supports`.
+
 It runs first of the refinements, on LCCP's segments (the planar cuts would otherwise
 cut the lower object in two along the upper one's side), and like them hands back whole
 supervoxels: each goes to the side holding most of its voxels, so the patch at the
@@ -144,4 +150,64 @@ def stack_splits(
         pending += [s, next_label]  # either may hold another stack
         next_label += 1
     _, out = np.unique(seg, return_inverse=True)
+    return out.astype(np.int64)
+
+
+def join_supports(
+    seg_of_voxel: np.ndarray,
+    sv: Supervoxels,
+    voxel_centroids: np.ndarray,
+    voxel_height: np.ndarray,
+    voxel_edges: np.ndarray,
+    up: np.ndarray,
+    settings: SegmentSettings,
+) -> np.ndarray:
+    """(V,) segment of every voxel after joining touching segments that are pieces of
+    the one top another object stands on (module docstring), 0..G-1."""
+    from clearcli.perception.table import plane_basis
+
+    seg = np.asarray(seg_of_voxel, dtype=np.int64)
+    n_seg = int(seg.max()) + 1 if seg.size else 0
+    if n_seg < 3 or voxel_edges.shape[0] == 0:
+        return seg
+    up = up / np.linalg.norm(up)
+    xy = voxel_centroids @ plane_basis(up).T
+    top = (np.abs(sv.normals @ up) >= np.cos(np.radians(settings.step_max_tilt_deg)))[sv.voxel_label]
+    a, b = seg[voxel_edges[:, 0]], seg[voxel_edges[:, 1]]
+    cross = a != b
+    pairs = np.unique(np.stack([np.minimum(a[cross], b[cross]), np.maximum(a[cross], b[cross])], 1), axis=0)
+    touching = {(int(x), int(y)) for x, y in pairs.tolist()}
+    neighbours: dict[int, set[int]] = {}
+    for x, y in touching:
+        neighbours.setdefault(x, set()).add(y)
+        neighbours.setdefault(y, set()).add(x)
+    foot = np.full(n_seg, np.inf)
+    np.minimum.at(foot, seg, voxel_height)
+    min_level_vox = settings.min_object_area_m2 / settings.voxel_m**2
+    parent = np.arange(n_seg)
+
+    def root(i: int) -> int:
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    for upper in range(n_seg):
+        h = foot[upper]
+        if not np.isfinite(h) or h <= settings.standing_max_m:
+            continue  # stands on the table
+        near = [
+            s for s in sorted(neighbours.get(upper, ()))
+            if int((top & (seg == s) & (np.abs(voxel_height - h) <= settings.step_min_m)).sum()) >= min_level_vox
+        ]
+        for i, s1 in enumerate(near):
+            for s2 in near[i + 1 :]:
+                if (s1, s2) not in touching or root(s1) == root(s2):
+                    continue
+                level = top & np.isin(seg, (s1, s2)) & (np.abs(voxel_height - h) <= settings.step_min_m)
+                inside = _inside_hull(xy[seg == upper], xy[level], settings.voxel_m)
+                if inside.mean() >= _MIN_INSIDE:
+                    parent[root(s2)] = root(s1)
+    final = np.array([root(s) for s in range(n_seg)])[seg]
+    _, out = np.unique(final, return_inverse=True)
     return out.astype(np.int64)
