@@ -210,6 +210,18 @@ def main() -> None:
         names = tuple(SETS) if args.set == "both" else (args.set,)
         groups = {k: list(SETS[k])[: args.n] for k in names}
     modes = MODES if args.mode == "both" else (args.mode,)
+    if args.scenes == "clutter":  # a seed whose clutter finds no room for every object is left out
+        def builds(seed: int) -> bool:
+            try:
+                session_scene(seed, "clutter")
+            except ValueError:
+                return False
+            return True
+
+        skipped = sorted({s for g in groups.values() for s in g if not builds(s)})
+        if skipped:
+            print(f"seeds left out (no room in the clutter for every object): {skipped}")
+        groups = {k: [s for s in g if s not in skipped] for k, g in groups.items()}
     work = [(seed, mode, args.settings, args.scenes) for group in groups.values() for mode in modes for seed in group]
     t0 = time.perf_counter()
     with ProcessPoolExecutor(max_workers=max(1, args.jobs)) as pool:

@@ -105,6 +105,19 @@ def lccp_segments(
     return merge_small_segments(seg, sv.edges, settings.min_segment_supervoxels, sv.n_voxels, min_voxels, keep)
 
 
+def join_pairs(seg: np.ndarray, pairs: list[tuple[int, int]] | np.ndarray, n_seg: int) -> np.ndarray:
+    """``seg`` (labels 0..n_seg-1) with every pair of segments in ``pairs`` joined (and
+    what they chain to), renumbered 0..G-1 in order of first label."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    p = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+    graph = coo_matrix((np.ones(p.shape[0], dtype=np.int8), (p[:, 0], p[:, 1])), shape=(n_seg, n_seg))
+    comp = connected_components(graph, directed=False)[1]
+    _, out = np.unique(comp[seg], return_inverse=True)
+    return out.astype(np.int64)
+
+
 def rejoin_pieces(
     seg: np.ndarray,
     edges: np.ndarray,

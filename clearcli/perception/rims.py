@@ -35,6 +35,8 @@ def merge_rims(
     sides of a container loses its depth, so the two walls need not be adjacent)."""
     from scipy.spatial import cKDTree
 
+    from clearcli.perception.lccp import join_pairs
+
     n_seg = int(seg_of_voxel.max()) + 1 if seg_of_voxel.size else 0
     if n_seg < 2:
         return seg_of_voxel
@@ -59,18 +61,4 @@ def merge_rims(
     n_contacts = np.bincount(inv)
     n_top = np.bincount(inv, weights=at_top.astype(np.float64))
     join = (n_contacts >= _MIN_CONTACTS) & (n_top >= _MIN_SHARE_AT_TOP * n_contacts)
-    parent = np.arange(n_seg)
-
-    def root(i: int) -> int:
-        while parent[i] != i:
-            parent[i] = parent[parent[i]]
-            i = parent[i]
-        return i
-
-    for k in uniq[join].tolist():
-        s, t = root(k // n_seg), root(k % n_seg)
-        if s != t:
-            parent[t] = s
-    final = np.array([root(s) for s in range(n_seg)])[seg_of_voxel]
-    _, out = np.unique(final, return_inverse=True)
-    return out.astype(np.int64)
+    return join_pairs(seg_of_voxel, np.stack([uniq[join] // n_seg, uniq[join] % n_seg], axis=1), n_seg)

@@ -105,6 +105,8 @@ def merge_rings(
     centroids are ``sv_normals_xy`` / ``sv_xy`` (S, 2); only supervoxels flagged
     ``sv_is_wall`` (not a top face) count for facing. Segments of fewer than
     ``min_voxels`` voxels are left alone."""
+    from clearcli.perception.lccp import join_pairs
+
     n_seg = int(seg_of_voxel.max()) + 1 if seg_of_voxel.size else 0
     if n_seg < 2:
         return seg_of_voxel
@@ -119,17 +121,10 @@ def merge_rings(
         walls[s] = svs[sv_is_wall[svs]]
     lo = {s: voxel_xy[seg_of_voxel == s].min(axis=0) for s in cand}
     hi = {s: voxel_xy[seg_of_voxel == s].max(axis=0) for s in cand}
-    parent = np.arange(n_seg)
-
-    def root(i: int) -> int:
-        while parent[i] != i:
-            parent[i] = parent[parent[i]]
-            i = parent[i]
-        return i
-
+    joined: list[tuple[int, int]] = []
     for i, a in enumerate(cand):
         for b in cand[i + 1 :]:
-            if root(a) == root(b) or abs(top[a] - top[b]) > tolerance_m:
+            if abs(top[a] - top[b]) > tolerance_m:
                 continue
             # the two must lie on one rim: their boxes in the plane within a diameter
             gap = np.maximum(0.0, np.maximum(lo[a] - hi[b], lo[b] - hi[a]))
@@ -142,7 +137,5 @@ def merge_rings(
                 band[a], band[b], sv_normals_xy[wa], sv_xy[wa], sv_normals_xy[wb], sv_xy[wb],
                 max_radius_m, max_residual, min_cover_deg,
             ):
-                parent[root(b)] = root(a)
-    final = np.array([root(s) for s in range(n_seg)])[seg_of_voxel]
-    _, out = np.unique(final, return_inverse=True)
-    return out.astype(np.int64)
+                joined.append((a, b))
+    return join_pairs(seg_of_voxel, joined, n_seg)

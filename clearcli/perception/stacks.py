@@ -164,6 +164,7 @@ def join_supports(
 ) -> np.ndarray:
     """(V,) segment of every voxel after joining touching segments that are pieces of
     the one top another object stands on (module docstring), 0..G-1."""
+    from clearcli.perception.lccp import join_pairs
     from clearcli.perception.table import plane_basis
 
     seg = np.asarray(seg_of_voxel, dtype=np.int64)
@@ -184,13 +185,7 @@ def join_supports(
     foot = np.full(n_seg, np.inf)
     np.minimum.at(foot, seg, voxel_height)
     min_level_vox = settings.min_object_area_m2 / settings.voxel_m**2
-    parent = np.arange(n_seg)
-
-    def root(i: int) -> int:
-        while parent[i] != i:
-            parent[i] = parent[parent[i]]
-            i = parent[i]
-        return i
+    joined: list[tuple[int, int]] = []
 
     for upper in range(n_seg):
         h = foot[upper]
@@ -202,12 +197,10 @@ def join_supports(
         ]
         for i, s1 in enumerate(near):
             for s2 in near[i + 1 :]:
-                if (s1, s2) not in touching or root(s1) == root(s2):
+                if (s1, s2) not in touching:
                     continue
                 level = top & np.isin(seg, (s1, s2)) & (np.abs(voxel_height - h) <= settings.step_min_m)
                 inside = _inside_hull(xy[seg == upper], xy[level], settings.voxel_m)
                 if inside.mean() >= _MIN_INSIDE:
-                    parent[root(s2)] = root(s1)
-    final = np.array([root(s) for s in range(n_seg)])[seg]
-    _, out = np.unique(final, return_inverse=True)
-    return out.astype(np.int64)
+                    joined.append((s1, s2))
+    return join_pairs(seg, joined, n_seg)
