@@ -470,6 +470,64 @@ def test_off_seam_moves_the_push_contact_towards_either_end_of_the_face() -> Non
     assert off_seam(narrow, o.name, "dir1", gripper).by_name(o.name).pushes["dir1"].candidates == o.pushes["dir1"].candidates
 
 
+def test_off_centre_first_tries_either_end_of_the_object_after_a_failed_grasp() -> None:
+    """A 12 cm box (4 cm wide): its off-centre grasps (30 % of the length, 3.6 cm from
+    the middle) come first, one end after an odd number of failures, the other after an
+    even one; the centred grasps follow. A box too short to move the grasp by 1 cm keeps
+    its order."""
+    from clearcli.planning.probe import off_centre_first
+
+    _, state = _state(S.make_scene("long", [S.Box(0, 0.12, 0.04, 0.06, x_m=0.0, y_m=0.05)]), _settings())
+    obj = state.objects[0]
+    pos = lambda seq: np.asarray(seq[1])[:3, 3]  # noqa: E731
+    centre = pos(obj.grasp_candidates[0])
+    ends = []
+    for failures in (1, 2):
+        moved = off_centre_first(state, obj.name, failures).by_name(obj.name).grasp_candidates
+        assert len(moved) == len(obj.grasp_candidates)
+        offset = pos(moved[0]) - centre
+        assert float(np.linalg.norm(offset)) == pytest.approx(0.3 * 0.12, abs=2e-3)
+        ends.append(offset)
+        # the centred grasp is still there, after every off-centre one
+        k = next(i for i, seq in enumerate(moved) if np.linalg.norm(pos(seq) - centre) < 1e-9)
+        assert all(np.linalg.norm(pos(seq) - centre) >= 0.01 for seq in moved[:k])
+    assert float(ends[0] @ ends[1]) < 0  # the two ends
+    _, short = _state(S.make_scene("short", [S.Box(0, 0.04, 0.035, 0.06, x_m=0.0, y_m=0.05)]), _settings())
+    o = short.objects[0]
+    assert off_centre_first(short, o.name, 1).by_name(o.name).grasp_candidates == o.grasp_candidates
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_two_boxes_merged_end_to_end_are_taken_after_one_failed_grasp(seed: int) -> None:
+    """Two boxes of one height (4.7 cm) touching end to end are one segment (no depth cue
+    splits them): the centred grasp closes on both at their seam and takes nothing. The
+    next grasp tries an end first ([plan] regrasp_off_centre) and takes one box: three
+    actions. Without it the same grasp is retried until it counts as infeasible, then
+    pushed and retried (10 or more actions, or the budget)."""
+    from clearcli.pipeline import Pipeline
+    from clearcli.replay.session import ReplayOptions, Session
+    from clearcli.sim.episode import Episode
+
+    world = S.make_scene("end to end", [
+        S.Box(0, 0.055, 0.044, 0.047, x_m=-0.0275, y_m=0.05),
+        S.Box(1, 0.065, 0.044, 0.047, x_m=0.0325, y_m=0.05),
+    ])
+    settings = Settings()
+    results = {}
+    for on in (True, False):
+        plan = dataclasses.replace(settings.plan, regrasp_off_centre=on)
+        episode = Episode(world, Session(Pipeline(dataclasses.replace(settings, plan=plan)), ReplayOptions(push_memory=True)),
+                          seed=seed, max_actions=12)
+        for _ in episode:
+            pass
+        assert episode.result is not None
+        results[on] = episode.result
+    on, off = results[True], results[False]
+    assert "at once" in on.steps[0].outcome  # the segmenter merged them
+    assert on.cleared_truly and on.actions == 3
+    assert off.actions >= 10
+
+
 def test_budget_spent_on_the_last_object_counts_as_cleared() -> None:
     from clearcli.pipeline import Pipeline
     from clearcli.replay.session import ReplayOptions, Session

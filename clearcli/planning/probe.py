@@ -56,6 +56,30 @@ AXES = {"dir1": "first", "dir2": "first", "dir3": "second", "dir4": "second"}
 EDGE_MARGIN_M = 0.005
 
 
+def off_centre_first(state: SymbolicState, name: str, failures: int) -> SymbolicState:
+    """``state`` with the grasps of ``name`` moved off its middle tried first (the
+    off-centre grasps of `geometry.poses.grasp_geometry`, one end after ``failures``
+    odd, the other after even): a grasp that took nothing may have closed at the seam of
+    two objects the segmentation merged end to end, and a grasp towards either end
+    closes on one of them. Unchanged when the object has no off-centre grasp."""
+    obj = state.by_name(name)
+    cands = obj.grasp_candidates
+    if len(cands) < 2:
+        return state
+    pos = np.array([np.asarray(seq[1], dtype=float)[:3, 3] for seq in cands])
+    offset = pos - pos[0]
+    dist = np.linalg.norm(offset, axis=1)
+    off = np.flatnonzero(dist >= 0.01)
+    if off.size == 0:
+        return state
+    axis = offset[off[0]] / dist[off[0]]
+    side = np.sign(offset[off] @ axis) * (1.0 if failures % 2 else -1.0)
+    first = [int(k) for k in off[np.argsort(-side, kind="stable")]]
+    order = first + [k for k in range(len(cands)) if k not in set(first)]
+    moved = dataclasses.replace(obj, grasp_candidates=tuple(cands[k] for k in order))
+    return dataclasses.replace(state, objects=tuple(moved if o.name == name else o for o in state.objects))
+
+
 def off_seam(state: SymbolicState, name: str, direction: str, gripper: Any) -> SymbolicState:
     """``state`` with the push of ``name`` along ``direction`` moved off the middle of its
     rear face, towards either end (5 mm short of it): fingers centred on a segment that

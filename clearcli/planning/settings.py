@@ -47,3 +47,8 @@ class PlanSettings:
     # it stands (ik_unfeasible_grasp): the planner pushes it first, or gives it up, rather
     # than retry the same grasp until the action budget runs out.
     max_failed_grasps: int = 3
+    # Closed loops only: after a grasp that did not take its object, the next grasps of
+    # it try the fingers towards either end first (its off-centre grasps, one end then
+    # the other): a grasp at the middle of a segment that is two objects merged end to
+    # end closes on both at their seam.
+    regrasp_off_centre: bool = True

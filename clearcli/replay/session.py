@@ -320,6 +320,13 @@ class Session:
                 for _, name in sorted(failed):
                     for d in DIRECTIONS:
                         state = off_seam(state, name, d, self.pipeline.settings.gripper)
+            if self.pipeline.settings.plan.regrasp_off_centre:
+                from clearcli.planning.probe import off_centre_first
+
+                for name, tid in sorted(ids.items()):
+                    failures = self.failed_grasps.get(tid, 0)
+                    if 0 < failures and ("ik_unfeasible_grasp", name) not in state.facts:
+                        state = off_centre_first(state, name, failures)
             if not options.push_memory:
                 return state
             return push_memory.apply_memory(state, ids, self.memory, options.memory)
