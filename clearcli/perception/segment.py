@@ -174,7 +174,7 @@ def segment(frame: Frame, settings: SegmentSettings) -> Segmentation:
     obj_idx = idx[prism_mask]
     obj_pts = pts[prism_mask]
     objects: list[SegmentedObject] = []
-    # "merge": the refinements after the planar cuts, together (each is also timed apart)
+    # "merge": every refinement but the planar cuts, together (each is also timed apart)
     merged_stages = tuple(st.name for st in STAGES if st.name != "cuts")
     timings.update(dict.fromkeys(("supervoxels", "lccp", "merge", "edges", *(st.name for st in STAGES)), 0.0))
     if obj_pts.shape[0] >= 4:
