@@ -112,7 +112,7 @@ def main() -> None:
         _run_terminal_clear()
         return
     if "--ray" in sys.argv:
-        from clearcli.commands.batchopts import ray_argv
+        from clearcli.commands.options import ray_argv
 
         sys.argv = ray_argv(sys.argv)
     app = make_app(_command_named(sys.argv[1:]))

@@ -188,3 +188,62 @@ class Pipeline:
                 stage="plan",
             )
         return done(OK, segmentation=segmentation, state=state, plan=plan)
+
+
+# --- one frame from a file, stage by stage: what the tasks (clearcli/tasks/) call -------
+# Only this module chains the stages; a task picks how far to go and serialises.
+
+
+def read(path: Any, topic: str | None = None, index: int = 0) -> "Frame":
+    from clearcli.io.read import read_frame
+
+    return read_frame(path, topic, index)
+
+
+def segmented(frame: "Frame", settings: "Settings") -> "Segmentation":
+    from clearcli.perception.segment import segment
+
+    return segment(frame, settings.segment)
+
+
+def truth_segmentation(frame: "Frame", path: Any) -> "Segmentation":
+    """The segmentation the frame's own 'label' field gives (mOSD ground truth)."""
+    from clearcli.errors import InputError
+    from clearcli.predicates.synthetic import segmentation_from_labels
+
+    if "label" not in frame.fields:
+        raise InputError(f"{path}: --ground-truth needs a 'label' field, and this frame has none")
+    return segmentation_from_labels(frame)
+
+
+def stated(frame: "Frame", segmentation: "Segmentation", settings: "Settings") -> "SymbolicState":
+    from clearcli.predicates.state_builder import compute_state
+
+    return compute_state(frame, segmentation, settings)
+
+
+@dataclass(frozen=True, eq=False)
+class Planned:
+    """A frame planned: the plan (also when nothing can be done: then ``no_plan`` holds
+    the error that says why), the robot's placement and where it came from."""
+
+    plan: "Plan"
+    T_base_camera: np.ndarray | None
+    pose_source: str
+    no_plan: NoPlanError | None = None
+
+
+def planned(state: "SymbolicState", settings: "Settings", camera_pose: str | None, check: str | None) -> Planned:
+    """Place the robot (``camera_pose`` as given on the command line, else [robot]'s
+    rules), then plan with every action IK-checked (``check``: None for [plan] check)."""
+    from clearcli.planning.backtrack import make_plan
+    from clearcli.robot.placement import placement_from_settings
+
+    T_base_camera, pose_source = placement_from_settings(settings.robot, state, camera_pose)
+    try:
+        plan = make_plan(state, settings, T_base_camera, check=check)
+    except NoPlanError as err:
+        if getattr(err, "plan", None) is None:
+            raise
+        return Planned(err.plan, T_base_camera, pose_source, err)  # type: ignore[attr-defined]
+    return Planned(plan, T_base_camera, pose_source)

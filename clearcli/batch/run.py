@@ -27,7 +27,7 @@ from pathlib import Path
 from typing import Any, Callable, Mapping, Sequence
 
 from clearcli.batch.sources import BadInput, FrameRef, check_unique_names, expand
-from clearcli.batch.work import MARK, OUTPUT_KINDS, Job, run_job
+from clearcli.batch.work import MARK, Job, run_job
 from clearcli.errors import EXIT_BATCH_FAILED, EXIT_INTERRUPTED, EXIT_NO_PLAN, EXIT_OK, EXIT_PARTIAL_PLAN, InputError
 
 BATCH_SCHEMA_VERSION = 1
@@ -35,11 +35,15 @@ BATCH_SCHEMA_VERSION = 1
 RESULT_CODES = (EXIT_OK, EXIT_NO_PLAN, EXIT_PARTIAL_PLAN)
 
 
+SETTINGS_FILE = "settings.toml"
+
+
 @dataclass
 class BatchRequest:
     command: str
     inputs: Sequence[Path]
-    options: Mapping[str, Any] = field(default_factory=dict)  # for the jobs (plain values)
+    request: Any  # the task's Request (clearcli.tasks), settings resolved and checked
+    made_by: Mapping[str, Any] = field(default_factory=dict)  # provenance (clearcli.provenance.stamp)
     frame: int | None = None
     every: int | None = None
     topic: str | None = None
@@ -54,7 +58,9 @@ class BatchRequest:
 
 
 def parse_outputs(command: str, text: str | None) -> tuple[str, ...]:
-    allowed = OUTPUT_KINDS[command]
+    from clearcli import tasks
+
+    allowed = tasks.load(command).OUTPUTS
     if not text:
         return ()
     kinds = tuple(k.strip() for k in text.split(",") if k.strip())
@@ -75,7 +81,7 @@ def default_jobs() -> int:
         return max(1, os.cpu_count() or 1)
 
 
-def _clean_stale(out_dir: Path, name: str, resume: bool, force: bool) -> bool:
+def _clean_stale(out_dir: Path, name: str, resume: bool, force: bool, made_by: Mapping[str, Any]) -> bool:
     """Before a frame runs: remove the temporaries killed writes left (hidden
     ``.<name>.*``, only ever ours). With ``--resume``, a frame with its mark is done (True)
     and the outputs of one without are an unfinished run's: removed. With ``--force``,
@@ -85,8 +91,9 @@ def _clean_stale(out_dir: Path, name: str, resume: bool, force: bool) -> bool:
         p.unlink(missing_ok=True)
     mark = out_dir / MARK.format(name=name)
     if resume:
-        if mark.is_file():
+        if mark.is_file() and not (force and _made_otherwise(mark, made_by)):
             return True
+        mark.unlink(missing_ok=True)
         for p in out_dir.glob(f"{name}.*"):
             p.unlink(missing_ok=True)
     elif force:
@@ -101,8 +108,62 @@ def _line_for_bad(item: BadInput) -> dict[str, Any]:
     }
 
 
-def _public(line: Mapping[str, Any]) -> dict[str, Any]:
-    return {"schema": "clear.batch", "version": BATCH_SCHEMA_VERSION, **{k: v for k, v in line.items() if not k.startswith("_")}}
+def _public(line: Mapping[str, Any], made_by: Mapping[str, Any]) -> dict[str, Any]:
+    from clearcli.provenance import envelope
+
+    return envelope("batch", BATCH_SCHEMA_VERSION, {k: v for k, v in line.items() if not k.startswith("_")}, made_by)
+
+
+def settings_record(req: BatchRequest) -> str:
+    """What ``settings.toml`` in --out-dir holds: who made the results, for which command,
+    and the resolved settings that command reads (TOML that --settings reads back)."""
+    from clearcli.settings import READS, settings_to_toml
+
+    m = req.made_by
+    head = (
+        f"# results of `clear {req.command}` made by clear {m.get('version')} ({m.get('source')}); "
+        f"settings digest {m.get('settings_digest')}\n"
+    )
+    settings = getattr(req.request, "settings", None)
+    if settings is None:
+        return head
+    return head + settings_to_toml(settings, READS[req.command])
+
+
+def _made_otherwise(mark: Path, made_by: Mapping[str, Any]) -> bool:
+    try:
+        line = json.loads(mark.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return True
+    return line.get("clear") != dict(made_by)
+
+
+def claim_out_dir(req: BatchRequest) -> None:
+    """Make sure the results in --out-dir are all made alike: the folder's
+    ``settings.toml`` must match this batch's (same command, version, source and
+    settings), else one line, exit 3, before any work. ``--force`` takes the folder over:
+    with ``--resume`` it redoes only the frames made otherwise (`_clean_stale`), and keeps
+    the rest. A folder with results but no record is treated as made otherwise."""
+    from clearcli.io.files import atomic_output
+
+    assert req.out_dir is not None
+    record = settings_record(req)
+    path = req.out_dir / SETTINGS_FILE
+    try:
+        old = path.read_text(encoding="utf-8") if path.is_file() else None
+    except (OSError, UnicodeDecodeError):
+        old = ""
+    has_results = any(req.out_dir.glob("*.json"))
+    if (old is not None and old != record) or (old is None and has_results):
+        if not req.force:
+            what = f"{path} records other settings or another version" if old is not None else "it holds results with no settings.toml"
+            raise InputError(
+                f"--out-dir {req.out_dir}: {what} than this `clear {req.command}`; "
+                "use another folder, or --force to redo what was made otherwise (with --resume: only those frames)"
+            )
+    if old != record:
+        with atomic_output(path, "w") as handle:
+            handle.write(record)
 
 
 def _short(line: Mapping[str, Any]) -> str:
@@ -145,6 +206,7 @@ def run_batch(
         if req.out_dir.exists() and not req.out_dir.is_dir():
             raise InputError(f"--out-dir {req.out_dir}: exists and is not a folder")
         req.out_dir.mkdir(parents=True, exist_ok=True)
+        claim_out_dir(req)
     elif req.outputs or req.resume:
         raise InputError("--outputs and --resume need --out-dir DIR")
 
@@ -159,7 +221,7 @@ def run_batch(
         assert isinstance(it, FrameRef)
         if req.out_dir is not None:
             mark = req.out_dir / MARK.format(name=it.name)
-            if _clean_stale(req.out_dir, it.name, req.resume, req.force):
+            if _clean_stale(req.out_dir, it.name, req.resume, req.force, req.made_by):
                 try:
                     lines[k] = {**json.loads(mark.read_text(encoding="utf-8")), "_resumed": True}
                     skipped += 1
@@ -168,7 +230,7 @@ def run_batch(
                     mark.unlink(missing_ok=True)  # unreadable: do the frame again
         job_at.append(k)
         jobs.append(
-            Job(req.command, it.source, it.index, it.name, dict(req.options, topic=req.topic),
+            Job(req.command, req.request, it.source, it.index, it.name, dict(req.made_by), req.topic,
                 None if req.out_dir is None else str(req.out_dir), req.outputs, req.force)
         )
 
@@ -197,7 +259,7 @@ def run_batch(
             if on_line is not None:
                 on_line(line)
             if req.json_out:
-                sys.stdout.write(json.dumps(_public(line), separators=(",", ":"), allow_nan=False) + "\n")
+                sys.stdout.write(json.dumps(_public(line, req.made_by), separators=(",", ":"), allow_nan=False) + "\n")
                 sys.stdout.flush()
             else:
                 rows.append(line)
@@ -263,7 +325,7 @@ def run_batch(
     if extra_summary is not None:
         summary.update(extra_summary([ln for ln in lines if ln is not None]))
     if req.json_out:
-        sys.stdout.write(json.dumps(_public(summary), separators=(",", ":")) + "\n")
+        sys.stdout.write(json.dumps(_public(summary, req.made_by), separators=(",", ":")) + "\n")
         sys.stdout.flush()
     elif render is not None:
         render(rows, summary)
@@ -278,7 +340,7 @@ def run_batch(
 def run_command_batch(
     command: str,
     inputs: Sequence[Path],
-    options: Mapping[str, Any],
+    request: Any,
     *,
     outputs: str | None = None,
     jobs: int | None = None,
@@ -289,8 +351,11 @@ def run_command_batch(
 ) -> int:
     """A subcommand's batch from its flags: ``outputs`` as given to --outputs, ``jobs``
     None for every core; the other `BatchRequest` fields by name."""
+    from clearcli.provenance import stamp
+
+    made_by = stamp(getattr(request, "settings", None), command)
     req = BatchRequest(
-        command, inputs, options, outputs=parse_outputs(command, outputs), jobs=jobs or default_jobs(), **fields
+        command, inputs, request, made_by, outputs=parse_outputs(command, outputs), jobs=jobs or default_jobs(), **fields
     )
     return run_batch(req, on_line=on_line, extra_summary=extra_summary, render=render)
 

@@ -1,17 +1,13 @@
-"""`clear info`, `clear settings`, and the "not yet" placeholders."""
+"""`clear settings`, and the "not yet" placeholders."""
 
 from __future__ import annotations
 
-from pathlib import Path
 from typing import Annotated, Any, Callable, Optional
 
 import typer
 
+from clearcli.commands import options as bo
 from clearcli.errors import NotYetError
-
-SettingsOpt = Annotated[
-    Optional[Path], typer.Option("--settings", help="TOML settings file (see `clear settings`).")
-]
 
 
 def not_yet(name: str) -> Callable[..., Any]:
@@ -22,8 +18,14 @@ def not_yet(name: str) -> Callable[..., Any]:
     return _cmd
 
 
-def settings_cmd(settings: SettingsOpt = None) -> None:
-    """Print the settings (defaults, or FILE merged over them) as TOML."""
-    from clearcli.settings import load_settings, settings_to_toml
+def settings_cmd(
+    settings: bo.SettingsFile = None,
+    sets: bo.Set = None,
+    ranges: Annotated[bool, typer.Option("--ranges", help="Say each key's accepted values in a comment.")] = False,
+) -> None:
+    """Print every setting as TOML: the defaults, or FILE and each --set merged over them
+    (the resolved tree a command would use). Every value is checked first: a bad one is
+    one line naming the key, the value and the accepted range (exit 3)."""
+    from clearcli.settings import settings_to_toml
 
-    typer.echo(settings_to_toml(load_settings(settings)), nl=False)
+    typer.echo(settings_to_toml(bo.resolve_settings(settings, sets), ranges=ranges), nl=False)

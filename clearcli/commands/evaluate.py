@@ -23,7 +23,7 @@ from typing import Annotated, Any, Optional
 
 import typer
 
-from clearcli.commands import batchopts as bo
+from clearcli.commands import options as bo
 
 evaluate_app = typer.Typer(
     name="evaluate",
@@ -36,16 +36,6 @@ evaluate_app = typer.Typer(
 LabelOutputs = bo.outputs_option(("labels",))
 
 
-def _labels_of(path: Path, what: str) -> "object":
-    from clearcli.errors import InputError
-    from clearcli.io.read import read_frame
-
-    frame = read_frame(path)
-    if "label" not in frame.fields:
-        raise InputError(f"{path}: the {what} has no `label` field (fields: {', '.join(frame.fields) or 'none'})")
-    return frame.fields["label"]
-
-
 @evaluate_app.command("segmentation")
 def segmentation_cmd(
     pred: Annotated[Path, typer.Argument(help="Predicted labels: a PCD written by `clear segment -o`.")],
@@ -55,27 +45,18 @@ def segmentation_cmd(
     """Object-level scores of a labelled segmentation against ground truth: one-to-one
     matching by IoU (Hungarian), precision/recall/F1 at IoU >= 0.5, mean best IoU,
     over- and under-segmentation counts."""
-    import numpy as np
-
     from clearcli.commands.common import print_json, stdout
-    from clearcli.errors import InputError
-    from clearcli.evaluate.segmentation import score
+    from clearcli.tasks.evaluate import score_files
 
-    p = np.asarray(_labels_of(pred, "prediction")).ravel()
-    t = np.asarray(_labels_of(truth, "ground truth")).ravel()
-    if p.shape != t.shape:
-        raise InputError(
-            f"{pred}: {p.size} points but {truth} has {t.size}; both must be the same frame"
-        )
-    result = score(p, t)
+    doc = score_files(pred, truth)
     if json_out:
-        print_json("evaluate.segmentation", {"pred": str(pred), "truth": str(truth), **result.as_dict()})
+        print_json("evaluate.segmentation", 1, doc, None, "evaluate")
         return
     stdout.print(
-        f"objects: {result.n_true} true, {result.n_pred} predicted, {result.true_positives} matched at IoU >= 0.5\n"
-        f"precision {result.precision:.3f}  recall {result.recall:.3f}  F1 {result.f1:.3f}  "
-        f"mean best IoU {result.mean_best_iou:.3f}\n"
-        f"over-segmented true objects {result.over_segmented}, under-segmenting predictions {result.under_segmented}"
+        f"objects: {doc['n_true']} true, {doc['n_pred']} predicted, {doc['true_positives']} matched at IoU >= 0.5\n"
+        f"precision {doc['precision']:.3f}  recall {doc['recall']:.3f}  F1 {doc['f1']:.3f}  "
+        f"mean best IoU {doc['mean_best_iou']:.3f}\n"
+        f"over-segmented true objects {doc['over_segmented']}, under-segmenting predictions {doc['under_segmented']}"
     )
 
 
@@ -96,10 +77,11 @@ def dataset_cmd(
     json_out: Annotated[bool, typer.Option("--json", help="JSON lines: one per frame, then the summary.")] = False,
     csv_out: Annotated[Optional[Path], typer.Option("--csv", help="Write the per-frame table as CSV.")] = None,
     png: Annotated[Optional[Path], typer.Option("--png", help="Draw the per-frame F1 as a bar chart.")] = None,
-    force: Annotated[bool, typer.Option("--force", help="Overwrite existing output files.")] = False,
-    settings: Annotated[Optional[Path], typer.Option("--settings", help="TOML settings file (see `clear settings`).")] = None,
-    topic: Annotated[Optional[str], typer.Option("--topic", help="Log topic with the point clouds.")] = None,
-    frame_index: Annotated[int, typer.Option("--frame", help="Frame index in a log.", min=0)] = 0,
+    force: bo.Force = False,
+    settings: bo.SettingsFile = None,
+    sets: bo.Set = None,
+    topic: bo.Topic = None,
+    frame_index: bo.FrameIndex = 0,
     every: bo.Every = None,
     out_dir: bo.OutDir = None,
     outputs_kinds: LabelOutputs = None,
@@ -114,7 +96,10 @@ def dataset_cmd(
     and per-group means with --groups. Runs on every core, or on Ray, like every batch."""
     from clearcli.batch.run import run_command_batch
     from clearcli.commands.common import check_output_path, stdout
-    from clearcli.evaluate.dataset import load_groups, summarise, write_csv, write_png
+    from clearcli.tasks import evaluate as task
+    from clearcli.tasks.evaluate import load_groups, summarise, write_csv, write_png
+
+    cfg = bo.resolve_settings(settings, sets)
 
     for out in (csv_out, png):
         if out is not None:
@@ -163,9 +148,7 @@ def dataset_cmd(
 
     collected: list[dict[str, Any]] = []
     code = run_command_batch(
-        "evaluate", inputs,
-        {"settings": None if settings is None else str(settings), "pred": None if pred is None else str(pred),
-         "groups": group_map},
+        "evaluate", inputs, task.Request(cfg, pred=pred, groups=group_map),
         outputs=outputs_kinds, jobs=jobs, on_line=collected.append, extra_summary=extra, render=render,
         frame=frame_index, every=every, topic=topic, out_dir=out_dir, force=force, resume=resume,
         ray=ray, fail_fast=fail_fast, json_out=json_out,

@@ -59,93 +59,10 @@ from typing import Annotated, Any, Optional
 
 import typer
 
-from clearcli.commands import batchopts as bo
+from clearcli.commands import options as bo
 from clearcli.commands.common import stderr, stdout
 
 PlanOutputs = bo.outputs_option(("problem", "domain", "plan", "png"))
-
-PLAN_SCHEMA_VERSION = 2
-
-
-def _round(a: Any, nd: int = 6) -> Any:
-    import numpy as np
-
-    return np.round(np.asarray(a, dtype=float), nd).tolist()
-
-
-def plan_payload(plan: Any, source: str, frame_id: str, pose_source: str, unit_cost: bool = True) -> dict[str, Any]:
-    first = None
-    if plan.first is not None:
-        first = {
-            "action": plan.first.action.pddl(),
-            "candidate": plan.first.candidate,
-            "T_base_gripper": [_round(T) for T in plan.first.T_base_gripper],
-            "joints_rad": [_round(q) for q in plan.first.joint_solutions],
-        }
-    checked = list(plan.checked) + [None] * (len(plan.actions) - len(plan.checked))
-    steps = []
-    for a, c in zip(plan.actions, checked):
-        steps.append(
-            {
-                "kind": a.kind,
-                "object": a.obj,
-                "direction": a.direction,
-                "checked": c is not None,
-                "candidate": None if c is None else int(c.candidate),
-                "joints_rad": None if c is None else [_round(q) for q in c.joint_solutions],
-            }
-        )
-    left = [
-        {
-            "object": x.name,
-            "reason": x.reason,
-            "detail": x.detail,
-            "actions": dict(x.actions),
-            "blockers": list(x.blockers),
-            "width_m": None if x.width_m is None else round(float(x.width_m), 4),
-        }
-        for x in plan.left
-    ]
-    return {
-        "source": source,
-        "frame_id": frame_id,
-        "status": plan.status,
-        "actions": [a.pddl() for a in plan.actions],
-        "steps": steps,
-        "check": plan.check,
-        "cost": int(plan.cost),
-        "unit_cost": bool(unit_cost),
-        "optimal": bool(plan.optimal),
-        "deadline": bool(plan.deadline),
-        "search": plan.search,
-        "goal": list(plan.goal),
-        "left": left,
-        "no_plan_reason": None,
-        "unreachable": list(plan.unreachable),
-        "stuck": list(plan.stuck),
-        "ungraspable": list(plan.ungraspable),
-        "ik_unfeasible": [list(f) for f in sorted(plan.ik_facts)],
-        "learnt_later": [{"after_step": k, "fact": list(f)} for k, f in plan.learnt_later],
-        "replans": int(plan.replans),
-        "max_backtracks": int(plan.max_backtracks),
-        "backtracking": [
-            {
-                "plan": [a.pddl() for a in s.plan],
-                "cost": s.cost,
-                "feasible": s.feasible,
-                "failed_step": s.failed_step,
-                "reason": s.reason,
-                "learnt": [list(f) for f in s.learnt],
-                "prefix": s.prefix,
-            }
-            for s in plan.steps
-        ],
-        "first_action": first,
-        "T_base_camera": None if plan.T_base_camera is None else _round(plan.T_base_camera),
-        "camera_pose_source": pose_source,
-        "timings_s": {k: round(float(v), 4) for k, v in plan.timings_s.items()},
-    }
-
 
 def print_plan(payload: dict[str, Any]) -> None:
     def out(text: str) -> None:
@@ -203,7 +120,7 @@ def plan_cmd(
     ] = None,
     json_out: Annotated[bool, typer.Option("--json", help="Machine-readable output (schema clear.plan, version 2).")] = False,
     png: Annotated[Optional[Path], typer.Option("--png", help="Draw the scene and the plan to this PNG.")] = None,
-    force: Annotated[bool, typer.Option("--force", help="Overwrite existing output files.")] = False,
+    force: bo.Force = False,
     first_only: Annotated[
         bool,
         typer.Option(
@@ -211,7 +128,8 @@ def plan_cmd(
             help="IK-check only the plan's first action (the thesis's Algorithm 1); default: every action.",
         ),
     ] = False,
-    settings: Annotated[Optional[Path], typer.Option("--settings", help="TOML settings file (see `clear settings`).")] = None,
+    settings: bo.SettingsFile = None,
+    sets: bo.Set = None,
     camera_pose: Annotated[
         Optional[str],
         typer.Option(
@@ -231,8 +149,8 @@ def plan_cmd(
             min=0.1,
         ),
     ] = None,
-    topic: Annotated[Optional[str], typer.Option("--topic", help="MCAP topic with the point clouds.")] = None,
-    frame_index: Annotated[int, typer.Option("--frame", help="Frame index in an MCAP log.", min=0)] = 0,
+    topic: bo.Topic = None,
+    frame_index: bo.FrameIndex = 0,
     every: bo.Every = None,
     out_dir: bo.OutDir = None,
     outputs_kinds: PlanOutputs = None,
@@ -248,107 +166,40 @@ def plan_cmd(
     Exit 0: every object removed. Exit 10: some removed, the others left (listed with
     reasons). Exit 5: nothing can be done. -o, --problem and --domain are written for all
     three (problem and domain first, the plan file last)."""
-    from clearcli.commands.common import check_output_path
+    from clearcli.commands.common import check_output_path, print_json
     from clearcli.errors import EXIT_NO_PLAN, InputError
-    from clearcli.settings import load_settings, override
+    from clearcli.tasks import plan as task
+    from clearcli.tasks.base import Outputs, Source
 
-
+    cfg = bo.resolve_settings(settings, sets, "plan", time_limit_s=time_limit)
+    request = task.Request(cfg, camera_pose=camera_pose, first_only=first_only)
     if bo.is_batch(inputs, every, out_dir, ray):
         from clearcli.batch.run import run_command_batch
 
         bo.single_only(**{"-o": output, "--problem": problem, "--domain": domain, "--png": png})
         raise typer.Exit(run_command_batch(
-            "plan", inputs,
-            {"settings": None if settings is None else str(settings), "overrides": {"plan": {"time_limit_s": time_limit}},
-             "camera_pose": camera_pose, "first_only": first_only},
+            "plan", inputs, request,
             outputs=outputs_kinds, jobs=jobs, frame=frame_index, every=every, topic=topic, out_dir=out_dir,
             force=force, resume=resume, ray=ray, fail_fast=fail_fast, json_out=json_out,
         ))
     frame = inputs[0]
-    cfg = load_settings(settings)
-    cfg = override(cfg, "plan", time_limit_s=time_limit)
     outputs = [p for p in (problem, domain, output, png) if p is not None]
     for p in outputs:
         check_output_path(p, force, (frame,))
     resolved = [Path(p).resolve() for p in outputs]
     if len(set(resolved)) != len(resolved):
         raise InputError("-o, --problem, --domain and --png must name different files")
-    payload, code = plan_frame(
-        frame, frame_index, cfg, topic=topic, camera_pose=camera_pose, first_only=first_only,
-        problem=problem, domain=domain, output=output, png=png,
+    request = task.Request(
+        cfg, camera_pose=camera_pose, first_only=first_only,
+        outputs=Outputs.of(problem=problem, domain=domain, plan=output, png=png),
     )
+    outcome = task.run(request, Source(str(frame), frame_index, topic))
+    payload, code = outcome.payload, outcome.exit_code
     if json_out:
-        from clearcli.commands.common import print_json
-
-        print_json("plan", payload, version=PLAN_SCHEMA_VERSION)
+        print_json(outcome.schema, outcome.version, payload, cfg, "plan")
     else:
         print_plan(payload)
     if code == EXIT_NO_PLAN:
         stderr.print(f"clear: {payload['no_plan_reason']}", markup=False, highlight=False)
     if code != 0:
         raise typer.Exit(code)
-
-
-def plan_frame(
-    frame: Path,
-    frame_index: int,
-    cfg: Any,
-    *,
-    topic: str | None = None,
-    camera_pose: str | None = None,
-    first_only: bool = False,
-    problem: Path | None = None,
-    domain: Path | None = None,
-    output: Path | None = None,
-    png: Path | None = None,
-) -> tuple[dict[str, Any], int]:
-    """One frame planned: its clear.plan payload and exit code (0 complete, 10 partial,
-    5 nothing can be done), the output files written. Errors raise ClearError."""
-    from clearcli.errors import EXIT_NO_PLAN, EXIT_OK, EXIT_PARTIAL_PLAN, NoPlanError
-    from clearcli.io.read import read_frame
-    from clearcli.perception.segment import segment
-    from clearcli.planning.backtrack import make_plan
-    from clearcli.predicates.state_builder import compute_state
-    from clearcli.robot.placement import placement_from_settings
-
-    frm = read_frame(frame, topic, frame_index)
-    seg = segment(frm, cfg.segment)
-    state = compute_state(frm, seg, cfg)
-    T_base_camera, pose_source = placement_from_settings(cfg.robot, state, camera_pose)
-    no_plan: NoPlanError | None = None
-    try:
-        plan = make_plan(state, cfg, T_base_camera, check="first" if first_only else None)
-    except NoPlanError as err:
-        if getattr(err, "plan", None) is None:
-            raise
-        no_plan, plan = err, err.plan  # type: ignore[attr-defined]
-    payload = plan_payload(plan, str(frame), getattr(frm, "frame_id", ""), pose_source, not state.push_costs)
-    write_plan_files(state, plan, problem=problem, domain=domain, output=output)
-    if png is not None:
-        from clearcli.io.files import atomic_path
-        from clearcli.render.plan_png import render_plan
-
-        with atomic_path(png) as tmp:
-            render_plan(tmp, frm, state, plan)
-    if no_plan is not None:
-        payload["no_plan_reason"] = str(no_plan)
-        return payload, EXIT_NO_PLAN
-    return payload, EXIT_PARTIAL_PLAN if plan.status == "partial" else EXIT_OK
-
-
-def write_plan_files(state: Any, plan: Any, *, problem: Path | None, domain: Path | None, output: Path | None) -> None:
-    """The problem (and domain) first, the plan file last, each written whole or not at
-    all: a plan file on disk means its problem is complete."""
-    from clearcli.commands.common import atomic_output
-    from clearcli.planning.pddl import domain_for, write_plan, write_problem
-
-    if problem is not None:
-        text = write_problem(state, goal_objects=plan.goal, extra_facts=plan.ik_facts)
-        with atomic_output(problem, "w") as handle:
-            handle.write(text)
-    if domain is not None:
-        with atomic_output(domain, "w") as handle:
-            handle.write(domain_for(state))
-    if output is not None:
-        with atomic_output(output, "w") as handle:
-            handle.write(write_plan(plan.actions, plan.cost, unit_cost=not state.push_costs))

@@ -28,87 +28,41 @@ from typing import Annotated, Any, Optional
 
 import typer
 
-from clearcli.commands import batchopts as bo
+from clearcli.commands import options as bo
 from clearcli.commands.common import stderr, stdout
 
 PredicateOutputs = bo.outputs_option(("problem", "png"))
 
 
-def _matrix(a: Any) -> list:
-    import numpy as np
-
-    return np.round(np.asarray(a, dtype=float), 6).tolist()
-
-
-def predicates_payload(state: Any) -> dict[str, Any]:
-    from clearcli.planning.pddl import fact_to_pddl
-
-    objects = []
-    for o in state.objects:
-        objects.append(
-            {
-                "name": o.name,
-                "segment_index": int(o.segment_index),
-                "centroid": _matrix(o.centroid),
-                "extents_m": _matrix(o.extents_m),
-                "principal_axes": _matrix(o.principal_axes),
-                "height_m": round(float(o.height_m), 6),
-                "grasp_width_m": round(float(o.grasp_width_m), 6),
-                "directions": {d: _matrix(p.unit_vector) for d, p in o.pushes.items()},
-                "grasp_poses": [_matrix(c[1]) for c in o.grasp_candidates],
-                "push": {
-                    d: {"length_m": round(float(p.push_length_m), 6), "start_poses": [_matrix(c[1]) for c in p.candidates]}
-                    for d, p in o.pushes.items()
-                },
-            }
-        )
-    return {
-        "source": state.source,
-        "frame": "sensor (optical)",
-        "table": {
-            "normal": _matrix(state.table.normal),
-            "offset": round(float(state.table.offset), 6),
-            "polygon": _matrix(state.table_polygon),
-        },
-        "objects": objects,
-        "facts": sorted(fact_to_pddl(f) for f in state.facts),
-        "skipped": [{"segment_index": int(i), "reason": r} for i, r in state.skipped],
-        "push_costs": {f"{o} {d}": int(c) for (o, d), c in sorted(state.push_costs.items())},
-        "timings_s": {k: round(float(v), 6) for k, v in state.timings_s.items()},
-    }
-
-
-def print_state(state: Any) -> None:
+def print_state(doc: dict[str, Any]) -> None:
     """Rich tables: the objects, then the facts grouped by kind."""
     from rich.table import Table
 
-    from clearcli.planning.pddl import fact_to_pddl
-
-    t = Table(title=f"objects ({state.source})" if state.source else "objects")
+    t = Table(title=f"objects ({doc['source']})" if doc["source"] else "objects")
     for col in ("name", "segment", "centroid (m)", "size (m)", "height (m)", "grasp width (m)"):
         t.add_column(col)
-    for o in state.objects:
-        c, e = o.centroid, o.extents_m
+    for o in doc["objects"]:
+        c, e = o["centroid"], o["extents_m"]
         t.add_row(
-            o.name,
-            str(o.segment_index),
+            o["name"],
+            str(o["segment_index"]),
             f"{c[0]:+.3f} {c[1]:+.3f} {c[2]:+.3f}",
             f"{e[0]:.3f} x {e[1]:.3f}",
-            f"{o.height_m:.3f}",
-            f"{o.grasp_width_m:.3f}",
+            f"{o['height_m']:.3f}",
+            f"{o['grasp_width_m']:.3f}",
         )
     stdout.print(t)
     kinds = ("on", "block_grasp", "block_dir", "ungraspable", "push_off_table")
-    f = Table(title=f"facts ({len(state.facts)})")
+    f = Table(title=f"facts ({len(doc['facts'])})")
     f.add_column("predicate")
     f.add_column("n", justify="right")
     f.add_column("atoms")
     for kind in kinds:
-        atoms = sorted(fact_to_pddl(x) for x in state.facts if x[0] == kind)
+        atoms = sorted(x for x in doc["facts"] if x.startswith(f"({kind} ") or x == f"({kind})")
         f.add_row(kind, str(len(atoms)), " ".join(atoms) if atoms else "-")
     stdout.print(f)
     # left-out segments were already reported on stderr by the stage's logger warning
-    total = state.timings_s.get("total")
+    total = doc["timings_s"].get("total")
     if total is not None:
         stderr.print(f"predicates: {1000 * total:.1f} ms", markup=False)
 
@@ -120,10 +74,11 @@ def predicates_cmd(
     ] = None,
     json_out: Annotated[bool, typer.Option("--json", help="Machine-readable output (schema clear.predicates).")] = False,
     png: Annotated[Optional[Path], typer.Option("--png", help="Draw the top view with hulls, pushes, grasps, blocks.")] = None,
-    settings: Annotated[Optional[Path], typer.Option("--settings", help="TOML settings file (see `clear settings`).")] = None,
-    force: Annotated[bool, typer.Option("--force", help="Overwrite existing output files.")] = False,
-    topic: Annotated[Optional[str], typer.Option("--topic", help="MCAP topic with the point clouds.")] = None,
-    frame_index: Annotated[int, typer.Option("--frame", help="Frame index in an MCAP log.", min=0)] = 0,
+    settings: bo.SettingsFile = None,
+    sets: bo.Set = None,
+    force: bo.Force = False,
+    topic: bo.Topic = None,
+    frame_index: bo.FrameIndex = 0,
     ground_truth: Annotated[
         bool,
         typer.Option(
@@ -142,64 +97,33 @@ def predicates_cmd(
     """Objects and symbolic facts of FRAME (on, block_grasp, block_dir, ungraspable,
     push_off_table): runs segmentation, models each object, computes the predicates; -o
     writes the PDDL problem for the domain `clear domain` prints."""
-    from clearcli.commands.common import atomic_output, atomic_path, check_output_path
+    from clearcli.commands.common import check_output_path, print_json
     from clearcli.errors import InputError
-    from clearcli.io.read import read_frame
-    from clearcli.planning.pddl import write_problem
-    from clearcli.predicates.state_builder import compute_state
-    from clearcli.settings import load_settings
+    from clearcli.tasks import predicates as task
+    from clearcli.tasks.base import Outputs, Source
 
-
+    cfg = bo.resolve_settings(settings, sets)
     if bo.is_batch(inputs, every, out_dir, ray):
         from clearcli.batch.run import run_command_batch
 
         bo.single_only(**{"-o": output, "--png": png})
         raise typer.Exit(run_command_batch(
-            "predicates", inputs,
-            {"settings": None if settings is None else str(settings), "ground_truth": ground_truth},
+            "predicates", inputs, task.Request(cfg, ground_truth=ground_truth),
             outputs=outputs_kinds, jobs=jobs, frame=frame_index, every=every, topic=topic, out_dir=out_dir,
             force=force, resume=resume, ray=ray, fail_fast=fail_fast, json_out=json_out,
         ))
     frame = inputs[0]
-    cfg = load_settings(settings)
     for out in (output, png):
         if out is not None:
             check_output_path(out, force, (frame,))
     if output is not None and png is not None and Path(output).resolve() == Path(png).resolve():
         raise InputError(f"{output}: -o and --png name the same file")
-    frm = read_frame(frame, topic, frame_index)
-    if ground_truth:
-        seg = ground_truth_segmentation(frm, frame)
-    else:
-        from clearcli.perception.segment import segment
-
-        seg = segment(frm, cfg.segment)
-    state = compute_state(frm, seg, cfg)
-    if output is not None:
-        text = write_problem(state)
-        with atomic_output(output, "w") as handle:
-            handle.write(text)
-    if png is not None:
-        from clearcli.render.predicates_png import render_predicates_png
-
-        with atomic_path(png) as tmp:
-            render_predicates_png(state, tmp, title=str(frame))
+    request = task.Request(cfg, ground_truth=ground_truth, outputs=Outputs.of(problem=output, png=png))
+    outcome = task.run(request, Source(str(frame), frame_index, topic))
     if json_out:
-        from clearcli.commands.common import print_json
-
-        print_json("predicates", predicates_payload(state))
+        print_json(outcome.schema, outcome.version, outcome.payload, cfg, "predicates")
     else:
-        print_state(state)
-
-
-def ground_truth_segmentation(frm: Any, path: Path) -> Any:
-    """The segmentation the frame's own 'label' field gives (mOSD ground truth)."""
-    from clearcli.errors import InputError
-    from clearcli.predicates.synthetic import segmentation_from_labels
-
-    if "label" not in frm.fields:
-        raise InputError(f"{path}: --ground-truth needs a 'label' field, and this frame has none")
-    return segmentation_from_labels(frm)
+        print_state(outcome.payload)
 
 
 def domain_cmd(
@@ -209,6 +133,6 @@ def domain_cmd(
     ] = False,
 ) -> None:
     """Print the PDDL domain (types obj/direction; actions grasp and push)."""
-    from clearcli.planning.pddl import domain_text
+    from clearcli.tasks.domain import domain_text
 
     typer.echo(domain_text(clearance_costs=clearance_cost), nl=False)

@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING, Annotated, Any, Iterator, Optional
 
 import typer
 
-from clearcli.commands.basic import SettingsOpt
+from clearcli.commands import options as bo
 
 if TYPE_CHECKING:
     from clearcli.io.frames import Frame
@@ -67,99 +67,47 @@ def replay_cmd(
         Optional[str],
         typer.Option("--base-frame", help="Robot base frame to look up in the log's /tf_static or /tf."),
     ] = None,
-    settings: SettingsOpt = None,
+    settings: bo.SettingsFile = None,
+    sets: bo.Set = None,
 ) -> None:
     """Replay a recorded clearing session: segment, predicates and plan on every frame,
     with object ids stable across frames, a check of whether each planned action
     happened, and no pushing back and forth. Progress on stderr; a summary at the end."""
     from clearcli.commands.common import check_output_path, print_json, stderr, stdout
-    from clearcli.errors import PartialLogError, SettingsError
-    from clearcli.io.read import iter_frames, sniff
-    from clearcli.pipeline import Pipeline
-    from clearcli.replay.session import BASE_FRAMES, ReplayOptions, Session, base_camera_from_log, replay
-    from clearcli.settings import load_settings
+    from clearcli.errors import SettingsError
+    from clearcli.tasks import replay as task
 
-    config = load_settings(settings)
+    config = bo.resolve_settings(settings, sets, "replay", push_memory=False if no_push_memory else None)
     if from_s is not None and to_s is not None and to_s < from_s:
         raise SettingsError(f"--to {to_s} is before --from {from_s}")
-    kind = sniff(log)
-    log_start_s: float | None = None
-    total: int | None = None
-    if kind == "mcap":
-        from clearcli.io.mcap import choose_topic, read_summary
-
-        summary = read_summary(log)
-        topic = choose_topic(summary, topic)
-        if summary.start_ns is not None:
-            log_start_s = summary.start_ns / 1e9
-        total = summary.count(topic) or None
-    else:
-        total = 1
     if out is not None:
         check_output_path(out, force, inputs=(log,))
+    request = task.Request(config, every=every, from_s=from_s, to_s=to_s, fail_fast=fail_fast, base_frame=base_frame, out=out)
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-    pipeline = Pipeline(config)
-    options = ReplayOptions(
-        every=every, from_s=from_s, to_s=to_s, fail_fast=fail_fast, push_memory=not no_push_memory
+    progress = Progress(
+        TextColumn("replay"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TimeElapsedColumn(),
+        TextColumn("{task.description}"),
+        console=stderr,
+        transient=True,
+        disable=json_out,
     )
-    session = Session(pipeline, options)
-    bases = (base_frame,) if base_frame else BASE_FRAMES
+    with progress:
+        bar = progress.add_task("", total=None)
 
-    def frames() -> Iterator["Frame"]:
-        first = True
-        for frame in iter_frames(log, topic):
-            if first and kind == "mcap" and not config.robot.camera_pose:
-                T, base = base_camera_from_log(log, frame.frame_id, bases)
-                if T is not None:
-                    pipeline.T_base_camera = T
-                    stderr.print(f"robot base: {base} -> {frame.frame_id} from the log's transforms")
-                elif base_frame:
-                    stderr.print(
-                        f"robot base: no transform {base_frame} -> {frame.frame_id} in the log; "
-                        "placing the robot by the plan stage's rules"
-                    )
-            first = False
-            yield frame
+        def on_report(report: "FrameReport", frames_read: int, total: int | None) -> None:
+            if json_out:
+                print_json(task.SCHEMA, task.VERSION, report.to_json(), config, "replay")
+            progress.update(bar, total=total, completed=frames_read, description=_brief(report))
 
-    partial: PartialLogError | None = None
-
-    def run(sink: Any) -> None:
-        nonlocal partial
-        from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
-
-        progress = Progress(
-            TextColumn("replay"),
-            BarColumn(),
-            MofNCompleteColumn(),
-            TimeElapsedColumn(),
-            TextColumn("{task.description}"),
-            console=stderr,
-            transient=True,
-            disable=json_out,
+        result, partial = task.run(
+            request, log, topic, on_report, lambda text: stderr.print(text, markup=False, highlight=False)
         )
-        with progress:
-            task = progress.add_task("", total=total)
-            try:
-                for report in replay(frames(), session, log_start_s):
-                    if json_out:
-                        print_json("replay", report.to_json())
-                    if sink is not None:
-                        sink.write(report, report.frame)
-                    progress.update(task, completed=session.summary.frames_read, description=_brief(report))
-            except PartialLogError as exc:
-                partial = exc
-
-    if out is not None:
-        from clearcli.replay.annotate import AnnotatedLog
-
-        with AnnotatedLog(out, log if kind == "mcap" else None, topic, config) as annotated:
-            run(annotated)
-    else:
-        run(None)
-
-    result = session.summary
     if json_out:
-        print_json("replay", result.to_json())
+        print_json(task.SCHEMA, task.VERSION, result.to_json(), config, "replay")
     else:
         _print_summary(result, stdout, out)
     if partial is not None:

@@ -28,46 +28,9 @@ from typing import Annotated, Any, Optional
 
 import typer
 
-from clearcli.commands import batchopts as bo
-from clearcli.commands.basic import SettingsOpt
+from clearcli.commands import options as bo
 
 SegmentOutputs = bo.outputs_option(("labels", "png"))
-
-
-def _vec(a: Any) -> list[float]:
-    return [round(float(x), 6) for x in a]
-
-
-def segmentation_payload(seg: Any) -> dict[str, Any]:
-    """The JSON payload (without envelope) of a Segmentation."""
-    return {
-        "source": seg.source,
-        "frame_id": seg.frame_id,
-        "stamp_s": float(seg.stamp_s),
-        "n_points": int(seg.n_points),
-        "table": {
-            "normal": _vec(seg.table.normal),
-            "offset": round(float(seg.table.offset), 6),
-            "polygon": [_vec(p) for p in seg.table_polygon],
-            "n_points": int(seg.table_indices.shape[0]),
-        },
-        "objects": [
-            {
-                "id": k,
-                "label": 10 * (k + 1),
-                "n_points": obj.n_points,
-                "centroid": _vec(obj.centroid),
-                "obb": {
-                    "center": _vec(obj.obb_center),
-                    "axes": [_vec(a) for a in obj.obb_axes],
-                    "extents": _vec(obj.obb_extents),
-                },
-                "principal_axes": [_vec(a) for a in obj.principal_axes],
-            }
-            for k, obj in enumerate(seg.objects)
-        ],
-        "timings_s": {k: round(float(v), 6) for k, v in seg.timings_s.items()},
-    }
 
 
 def segment_cmd(
@@ -77,10 +40,11 @@ def segment_cmd(
         Optional[Path], typer.Option("-o", "--output", help="Write a PCD of the frame with a `label` field.")
     ] = None,
     png: Annotated[Optional[Path], typer.Option("--png", help="Write a picture of the segmentation.")] = None,
-    settings_file: SettingsOpt = None,
-    force: Annotated[bool, typer.Option("--force", help="Overwrite existing output files.")] = False,
-    topic: Annotated[Optional[str], typer.Option("--topic", help="MCAP: the point-cloud topic.")] = None,
-    frame_index: Annotated[int, typer.Option("--frame", help="MCAP: frame number, from 0.")] = 0,
+    settings_file: bo.SettingsFile = None,
+    sets: bo.Set = None,
+    force: bo.Force = False,
+    topic: bo.Topic = None,
+    frame_index: bo.FrameIndex = 0,
     voxel_m: Annotated[Optional[float], typer.Option("--voxel-m", help="Supervoxel voxel size (m).")] = None,
     seed_m: Annotated[Optional[float], typer.Option("--seed-m", help="Supervoxel seed spacing (m).")] = None,
     concavity_deg: Annotated[
@@ -110,10 +74,8 @@ def segment_cmd(
     """Find the table and segment the objects on it (thesis 4.1): a summary table, or
     --json; -o writes the labels (0 none, 1 table, 10(k+1) object k) as a PCD."""
     from clearcli.commands.common import check_output_path, print_json, stderr, stdout
-    from clearcli.io.read import read_frame
-    from clearcli.perception.segment import segment
-    from clearcli.settings import load_settings, override
-
+    from clearcli.tasks import segment as task
+    from clearcli.tasks.base import Outputs, Source
 
     flags = dict(
         voxel_m=voxel_m,
@@ -124,13 +86,13 @@ def segment_cmd(
         outlier_method=outlier_method,
         occlusion_merge=occlusion_merge,
     )
+    settings = bo.resolve_settings(settings_file, sets, "segment", **flags)
     if bo.is_batch(inputs, every, out_dir, ray):
         from clearcli.batch.run import run_command_batch
 
         bo.single_only(**{"-o": labels_out, "--png": png})
         raise typer.Exit(run_command_batch(
-            "segment", inputs,
-            {"settings": None if settings_file is None else str(settings_file), "overrides": {"segment": flags}},
+            "segment", inputs, task.Request(settings),
             outputs=outputs_kinds, jobs=jobs, frame=frame_index, every=every, topic=topic, out_dir=out_dir,
             force=force, resume=resume, ray=ray, fail_fast=fail_fast, json_out=json_out,
         ))
@@ -138,42 +100,31 @@ def segment_cmd(
     for out in (labels_out, png):
         if out is not None:
             check_output_path(out, force, (frame_path,))
-    settings = override(load_settings(settings_file), "segment", **flags)
-    frame = read_frame(frame_path, topic, frame_index)
-    seg = segment(frame, settings.segment)
-
-    if labels_out is not None:
-        from clearcli.io.pcd import write_pcd
-
-        write_pcd(labels_out, frame, seg.labels())
-    if png is not None:
-        from clearcli.commands.common import atomic_path
-        from clearcli.render.segment_png import render_segmentation
-
-        with atomic_path(png) as tmp:
-            render_segmentation(tmp, frame, seg)
-
+    outcome = task.run(
+        task.Request(settings, Outputs.of(labels=labels_out, png=png)), Source(str(frame_path), frame_index, topic)
+    )
+    doc = outcome.payload
     if json_out:
-        print_json("segmentation", segmentation_payload(seg))
+        print_json(outcome.schema, outcome.version, doc, settings, "segment")
         return
     from rich.table import Table
 
-    n = seg.table.normal
+    n = doc["table"]["normal"]
     stdout.print(
-        f"[bold]{seg.source}[/bold]: table normal ({n[0]:.3f}, {n[1]:.3f}, {n[2]:.3f}), "
-        f"camera {seg.table.offset:.3f} m above it, {seg.table_indices.shape[0]} table points, "
-        f"{len(seg.objects)} object(s)"
+        f"[bold]{doc['source']}[/bold]: table normal ({n[0]:.3f}, {n[1]:.3f}, {n[2]:.3f}), "
+        f"camera {doc['table']['offset']:.3f} m above it, {doc['table']['n_points']} table points, "
+        f"{len(doc['objects'])} object(s)"
     )
-    if seg.objects:
+    if doc["objects"]:
         table = Table("id", "label", "points", "centroid (m)", "box extents (m)")
-        for k, obj in enumerate(seg.objects):
-            c, e = obj.centroid, obj.obb_extents
+        for obj in doc["objects"]:
+            c, e = obj["centroid"], obj["obb"]["extents"]
             table.add_row(
-                str(k), str(10 * (k + 1)), str(obj.n_points),
+                str(obj["id"]), str(obj["label"]), str(obj["n_points"]),
                 f"{c[0]:+.3f} {c[1]:+.3f} {c[2]:+.3f}", f"{e[0]:.3f} x {e[1]:.3f} x {e[2]:.3f}",
             )
         stdout.print(table)
-    times = ", ".join(f"{k} {v * 1000:.0f} ms" for k, v in seg.timings_s.items())
+    times = ", ".join(f"{k} {v * 1000:.0f} ms" for k, v in doc["timings_s"].items())
     stdout.print(f"timings: {times}")
     for out, what in ((labels_out, "labels"), (png, "picture")):
         if out is not None:

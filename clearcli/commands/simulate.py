@@ -7,9 +7,9 @@ from typing import Annotated, Any
 
 import typer
 
-from clearcli.commands.basic import SettingsOpt
+from clearcli.commands import options as bo
 
-SCENES = ("clutter", "dense", "isolated_box", "two_touching_boxes", "box_on_box", "deadlock_row")
+SCENES = ("clutter", "dense", "isolated_box", "two_touching_boxes", "box_on_box", "deadlock_row")  # tasks/simulate.py
 
 
 def simulate_cmd(
@@ -29,70 +29,36 @@ def simulate_cmd(
     ] = False,
     force: Annotated[bool, typer.Option("--force", help="Overwrite OUT if it exists.")] = False,
     json_out: Annotated[bool, typer.Option("--json", help="Machine-readable summary.")] = False,
-    settings: SettingsOpt = None,
+    settings: bo.SettingsFile = None,
+    sets: bo.Set = None,
 ) -> None:
     """Simulate a clearing session: plan on a rendered frame, carry out the first action
     in a world that slides, turns and slips, render again, until the table is clear, no
     plan exists or the budget runs out. The frames go to OUT for `clear replay`."""
     from clearcli.commands.common import check_output_path, print_json, stderr, stdout
-    from clearcli.errors import SettingsError
-    from clearcli.settings import load_settings
-    from clearcli.sim import scene as scenes
-    from clearcli.sim.episode import record_session
+    from clearcli.tasks import simulate as task
 
-    config = load_settings(settings)
-    if scene not in SCENES:
-        raise SettingsError(f"--scene {scene!r}: unknown; choose one of {', '.join(SCENES)}")
+    config = bo.resolve_settings(settings, sets, "replay", push_memory=False if no_push_memory else None)
+    request = task.Request(
+        config, scene=scene, objects=objects, seed=seed, max_actions=max_actions,
+        push_memory=config.replay.push_memory, truth_segmentation=truth_segmentation,
+    )
+    task.check(request)
     check_output_path(out, force)
-    try:
-        if scene in ("clutter", "dense"):
-            world = getattr(scenes, scene)(objects, seed)
-        else:
-            world = getattr(scenes, scene)()
-    except ValueError as exc:
-        raise SettingsError(f"--scene {scene}: {exc}") from None
     with stderr.status("simulating", spinner="dots") if not json_out else _nothing():
-        count, result = record_session(
-            out,
-            world,
-            config,
-            seed=seed,
-            max_actions=max_actions,
-            push_memory=not no_push_memory,
-            truth_segmentation=truth_segmentation,
-        )
-    payload: dict[str, Any] = {
-        "out": str(out),
-        "frames": count,
-        "scene": world.name,
-        "seed": seed,
-        "objects": result.n_objects,
-        "end": result.end,
-        "cleared_reachable": result.cleared_reachable,
-        "cleared_truly": result.cleared_truly,
-        "remaining": list(result.remaining),
-        "unreachable": list(result.unreachable),
-        "actions": result.actions,
-        "max_actions": max_actions,
-        "actions_per_object": {str(k): v for k, v in sorted(result.actions_per_object.items())},
-        "back_and_forth": result.back_and_forth,
-        "steps": [
-            {"frame": s.frame_index, "status": s.status, "action": s.action or None, "outcome": s.outcome or None}
-            for s in result.steps
-        ],
-    }
+        payload = task.run(request, out)
     if json_out:
-        print_json("simulate", payload)
+        print_json(task.SCHEMA, task.VERSION, payload, config, "simulate")
         return
-    for s in result.steps:
-        if s.action:
-            stdout.print(f"frame {s.frame_index}: {s.action} -> {s.outcome}")
+    for s in payload["steps"]:
+        if s["action"]:
+            stdout.print(f"frame {s['frame']}: {s['action']} -> {s['outcome']}")
         else:
-            stdout.print(f"frame {s.frame_index}: {s.status}")
+            stdout.print(f"frame {s['frame']}: {s['status']}")
     stdout.print(
-        f"{out}: {count} frames, {result.n_objects} objects, end: {result.end}, "
-        f"{result.actions} actions, left: {', '.join(map(str, result.remaining)) or 'none'}"
-        + (f" (unreachable: {', '.join(map(str, result.unreachable))})" if result.unreachable else "")
+        f"{out}: {payload['frames']} frames, {payload['objects']} objects, end: {payload['end']}, "
+        f"{payload['actions']} actions, left: {', '.join(map(str, payload['remaining'])) or 'none'}"
+        + (f" (unreachable: {', '.join(map(str, payload['unreachable']))})" if payload["unreachable"] else "")
     )
 
 

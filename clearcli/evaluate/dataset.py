@@ -66,47 +66,6 @@ def _labels(frame: Any, path: str, what: str) -> np.ndarray:
     return np.asarray(frame.fields["label"]).ravel()
 
 
-def evaluate_frame(job: Any, settings: Any) -> dict[str, Any]:
-    """One labelled frame scored: segmented here, or its labels read from ``pred``."""
-    from clearcli.evaluate.segmentation import score
-    from clearcli.io.read import read_frame
-
-    frame = read_frame(Path(job.source), job.options.get("topic"), job.index)
-    truth = _labels(frame, job.source, "ground truth")
-    pred_dir = job.options.get("pred")
-    elapsed = 0.0
-    if pred_dir:
-        from clearcli.batch.work import OUTPUT_FILES
-
-        pred_path = Path(pred_dir) / OUTPUT_FILES["labels"].format(name=job.name)
-        if not pred_path.is_file():
-            raise InputError(f"{pred_path}: no predicted labels for {job.source} (named as --out-dir names them)")
-        pred = _labels(read_frame(pred_path), str(pred_path), "prediction")
-    else:
-        from clearcli.perception.segment import segment
-
-        t0 = time.perf_counter()
-        seg = segment(frame, settings.segment)
-        elapsed = time.perf_counter() - t0
-        pred = seg.labels()
-        out = job.output_path("labels")
-        if out is not None:
-            from clearcli.io.pcd import write_pcd
-
-            write_pcd(out, frame, pred)
-    if pred.shape != truth.shape:
-        raise InputError(f"{job.source}: {pred.size} predicted labels for {truth.size} points; not the same frame")
-    result = score(pred, truth)
-    groups = job.options.get("groups") or {}
-    return {
-        "source": job.source,
-        "name": job.name,
-        "group": group_of(job.source, groups),
-        **{k: v for k, v in result.as_dict().items() if k not in ("matched_iou", "true_ids", "pred_ids")},
-        "time_s": round(elapsed, 4),
-    }
-
-
 SUMMARY_KEYS = ("precision", "recall", "f1", "mean_best_iou")
 
 

@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 
 from clearcli.errors import SettingsError
-from clearcli.geometry.settings import GripperSettings
+from clearcli.settings.geometry import GripperSettings
 
 
 @dataclass(frozen=True, eq=False)

@@ -45,7 +45,7 @@ import numpy as np
 
 from clearcli.geometry.gripper import GripperModel
 from clearcli.geometry.models import ObjectGeometry
-from clearcli.geometry.settings import PushSettings
+from clearcli.settings.geometry import PushSettings
 
 DIRECTION_NAMES: tuple[str, ...] = ("dir1", "dir2", "dir3", "dir4")
 UP = np.array([0.0, 0.0, 1.0])

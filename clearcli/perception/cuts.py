@@ -42,7 +42,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from clearcli.perception.settings import SegmentSettings
+from clearcli.settings.segment import SegmentSettings
 from clearcli.perception.supervoxels import Supervoxels
 
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from clearcli.perception.settings import SegmentSettings
+from clearcli.settings.segment import SegmentSettings
 
 
 def finite_mask(points: np.ndarray) -> np.ndarray:

@@ -32,7 +32,7 @@ from typing import Callable
 import numpy as np
 
 from clearcli.io.frames import Frame
-from clearcli.perception.settings import SegmentSettings
+from clearcli.settings.segment import SegmentSettings
 from clearcli.perception.supervoxels import Supervoxels, VoxelCloud
 from clearcli.perception.types import TablePlane
 

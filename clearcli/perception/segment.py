@@ -25,7 +25,7 @@ import numpy as np
 
 from clearcli.errors import SceneError
 from clearcli.io.frames import Frame
-from clearcli.perception.settings import SegmentSettings
+from clearcli.settings.segment import SegmentSettings
 from clearcli.perception.types import Segmentation, SegmentedObject, TablePlane
 
 

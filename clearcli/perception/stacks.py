@@ -41,7 +41,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from clearcli.perception.settings import SegmentSettings
+from clearcli.settings.segment import SegmentSettings
 from clearcli.perception.supervoxels import Supervoxels
 
 # share of the candidate upper object that must stand within the lower top's hull

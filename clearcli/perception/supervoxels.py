@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from clearcli.perception.settings import SegmentSettings
+from clearcli.settings.segment import SegmentSettings
 
 # 13 of the 26 neighbour offsets: each undirected adjacency found once
 _HALF_OFFSETS = np.array(

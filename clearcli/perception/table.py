@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from clearcli.errors import SceneError
-from clearcli.perception.settings import SegmentSettings
+from clearcli.settings.segment import SegmentSettings
 from clearcli.perception.types import TablePlane
 
 # Height band (m) in which points count as "standing on" a candidate plane when scoring

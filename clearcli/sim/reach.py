@@ -31,7 +31,7 @@ from clearcli.robot.kinematics import capsule_spheres
 from clearcli.sim.scene import Box, Cylinder, Table
 
 if TYPE_CHECKING:
-    from clearcli.geometry.settings import GripperSettings, PushSettings
+    from clearcli.settings.geometry import GripperSettings, PushSettings
     from clearcli.sim.scene import Scene, SceneObject
 
 

@@ -10,83 +10,87 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from clearcli.settings.fields import Section, param
+
 
 @dataclass(frozen=True)
-class SegmentSettings:
+class SegmentSettings(Section):
+    NAME = "segment"
+
     # --- 1. outlier removal ------------------------------------------------------------
     # "depth_radius" (ours): a point survives when at least `outlier_min_neighbors` of its
     # neighbours lie within a radius that grows linearly with the range, so far points
     # (sparser, noisier) are judged by the same standard as near ones. "statistical": the
     # original fixed-k statistical removal (k = outlier_k, std multiplier outlier_std),
     # kept for comparison; it drops most points beyond 1 m. "none": no removal.
-    outlier_method: str = "depth_radius"
-    outlier_k: int = 10
-    outlier_std: float = 1.0
+    outlier_method: str = param("depth_radius", choices=("depth_radius", "statistical", "none"))
+    outlier_k: int = param(10, ge=1, le=100)
+    outlier_std: float = param(1.0, gt=0, le=10)
     # radius at 1 m range (m); scaled by the range. ~6 Kinect pixel footprints at 1 m:
     # wide enough for depth noise on slanted surfaces, narrow enough to isolate the
     # "flying pixels" between a foreground edge and the background.
-    outlier_radius_at_1m_m: float = 0.01
+    outlier_radius_at_1m_m: float = param(0.01, gt=0, le=0.1)
     # neighbours needed (of the 8 pixel neighbours for organized frames, within the
     # radius for unorganized ones)
-    outlier_min_neighbors: int = 2
+    outlier_min_neighbors: int = param(2, ge=0, le=50)
     # --- 2. table plane (RANSAC) -------------------------------------------------------
-    plane_distance_m: float = 0.01
+    plane_distance_m: float = param(0.01, gt=0, le=0.1)
     # planes tried one after the other (table, floor, walls, big flat objects); the
     # support surface is the one with the most object points standing on it
-    plane_candidates: int = 4
-    ransac_iterations: int = 300
+    plane_candidates: int = param(4, ge=1, le=20)
+    ransac_iterations: int = param(300, ge=1, le=10000)
     # grid cell (m) used to find the largest connected piece of a plane's inliers
-    table_cell_m: float = 0.02
+    table_cell_m: float = param(0.02, ge=0.002, le=0.2)
     # pieces of the table plane within this gap (m) of its largest piece are table too:
     # objects and their shadows cut the visible table into pieces
-    table_join_gap_m: float = 0.5
+    table_join_gap_m: float = param(0.5, ge=0, le=5)
     # smallest table (m^2) accepted: about an A3 sheet
-    table_min_area_m2: float = 0.1
+    table_min_area_m2: float = param(0.1, ge=0, le=10)
     # the support surface is at most this far (m) from the camera (camera frames only):
     # a table to clear is within reach of a robot beside the sensor, not a far wall
-    table_max_distance_m: float = 3.0
+    table_max_distance_m: float = param(3.0, gt=0, le=20)
     # polygonal prism: heights above the table kept as object points. The lower bound
     # grows with the squared range (depth noise does: ~3 sigma of a Kinect's), so a
     # rough or far table surface does not turn into a carpet of small "objects".
-    prism_min_height_m: float = 0.01
-    prism_noise_per_m2: float = 0.005
-    prism_max_height_m: float = 2.0
+    prism_min_height_m: float = param(0.01, ge=0.001, le=0.1)
+    prism_noise_per_m2: float = param(0.005, ge=0, le=0.1)
+    prism_max_height_m: float = param(2.0, gt=0, le=5)
     # objects may reach this far (m) outside the convex hull of the visible table points:
     # an object at the far edge hides the table behind it, so the hull edge cuts it
-    hull_margin_m: float = 0.05
+    hull_margin_m: float = param(0.05, ge=0, le=0.5)
     # --- 3. supervoxels (VCCS) ---------------------------------------------------------
-    voxel_m: float = 0.005
+    voxel_m: float = param(0.005, ge=0.001, le=0.05)
     # 0.03 (library default) rather than the deployed 0.02: larger patches have steadier
     # normals on curved objects; mean F1 on the learn frames 0.932 against 0.923
-    seed_m: float = 0.03
-    color_importance: float = 0.0
-    spatial_importance: float = 1.0
-    normal_importance: float = 4.0
+    seed_m: float = param(0.03, ge=0.005, le=0.2)
+    color_importance: float = param(0.0, ge=0, le=100)
+    spatial_importance: float = param(1.0, ge=0, le=100)
+    normal_importance: float = param(4.0, ge=0, le=100)
     # radius (m) of the neighbourhood for voxel normals
-    normal_radius_m: float = 0.015
+    normal_radius_m: float = param(0.015, ge=0.002, le=0.1)
     # assignment/update rounds of the supervoxel clustering
-    supervoxel_iterations: int = 2
+    supervoxel_iterations: int = param(2, ge=1, le=50)
     # --- 3a'. depth discontinuities (ours, after PCL's OrganizedEdgeBase; edges.py) ---
     # cut the voxel adjacency where the pixel grid shows a jump in depth: objects of
     # equal height a few millimetres apart (organized frames only)
-    depth_edges: bool = True
+    depth_edges: bool = param(True)
     # a jump: ranges of neighbouring pixels differing by more than this share of the
     # nearer (PCL's default, 0.02: 18 mm at 0.9 m, where a top seen at 42 degrees steps
     # ~2 mm a pixel and the depth noise is ~2 mm; a table seen through a gap is 5-15 cm
     # farther)
-    depth_edge_rel: float = 0.02
+    depth_edge_rel: float = param(0.02, gt=0, le=1)
     # both sides of a cut hold at least this much surface (m^2, in voxels): half the
     # smallest object kept, so stray pixels cut nothing
-    depth_edge_min_piece_m2: float = 0.0005
+    depth_edge_min_piece_m2: float = param(0.0005, ge=0, le=0.1)
     # --- 3b. LCCP ----------------------------------------------------------------------
     # 30 rather than the deployed 15: bowls, mugs and cans have concave connections
     # between neighbouring patches of one object; mean F1 on the learn frames 15: 0.87,
     # 25: 0.91, 30: 0.92, 35: 0.92 (seed 0.02); boxes' creases stay at ~90 degrees
-    concavity_tolerance_deg: float = 30.0
-    smoothness_check: bool = True
-    smoothness_threshold: float = 0.1
-    sanity_criterion: bool = True
-    min_segment_supervoxels: int = 5
+    concavity_tolerance_deg: float = param(30.0, ge=0, le=90)
+    smoothness_check: bool = param(True)
+    smoothness_threshold: float = param(0.1, ge=0, le=1)
+    sanity_criterion: bool = param(True)
+    min_segment_supervoxels: int = param(5, ge=0, le=1000)
     # ... except a small segment standing on the table (its lowest voxel within
     # standing_max_m of it) with a top face of its own, higher or lower by step_min_m
     # than every segment it touches: a whole small object (a 3 x 3 x 4 cm box shows ~30
@@ -94,8 +98,8 @@ class SegmentSettings:
     # along a larger object's edges have no top, or do not reach the table; a piece of
     # a box cut off by an object standing on it is at the box's height. On the choose
     # seeds: small objects against taller ones split in 97 -> 99 of 100 renders.
-    keep_standing_small: bool = True
-    standing_max_m: float = 0.02
+    keep_standing_small: bool = param(True)
+    standing_max_m: float = param(0.02, ge=0, le=0.2)
     # --- 3b'. planar cuts (after CPC, Schoeler et al. 2015; see cuts.py) ---------------
     # cut LCCP segments along vertical planes through a seam where a lower object's top
     # meets a taller one's side: two touching boxes with coplanar front faces are one
@@ -104,88 +108,94 @@ class SegmentSettings:
     # clutter scenes it splits 6 more touching pairs and no single object (mean F1
     # 0.885 -> 0.892). Held out, it costs test55 one object cut in two (all 50 frames
     # 0.957 -> 0.955).
-    planar_cuts: bool = True
+    planar_cuts: bool = param(True)
     # a seam: LCCP keeps the two patches apart and their normals differ by at least
     # this; LCCP's own tolerance
-    cut_concave_deg: float = 30.0
+    cut_concave_deg: float = param(30.0, ge=0, le=90)
     # a rising seam: a top face and a side face (normals within this of the table's
     # normal and of the table plane): the seam of touching objects standing on a table
-    cut_max_tilt_deg: float = 30.0
+    cut_max_tilt_deg: float = param(30.0, ge=0, le=90)
     # ... where one patch reaches this far (m) out of the other's plane: the simulated
     # pair's seam 10-13 mm, the odd patch straddling a box's edge 0-4 mm (noise)
-    cut_min_rise_m: float = 0.008
+    cut_min_rise_m: float = param(0.008, ge=0, le=0.1)
     # weighted share of rising seams among the adjacencies a plane crosses. The coplanar
     # front faces of the simulated pair cross 4-6 flat adjacencies per seam: 0.12-0.33
     # on 12 renders; the best candidates on the learn frames otherwise reach 0.06
-    cut_min_score: float = 0.1
+    cut_min_score: float = param(0.1, ge=0, le=1)
     # a convex crease the plane crosses counts this much more than a flat adjacency
     # against the cut (the plane runs along an object's edge, not between objects)
-    cut_crease_weight: float = 3.0
+    cut_crease_weight: float = param(3.0, ge=0, le=100)
     # the plane must cross all the rising seams of its segment (1.0): on the learn
     # frames the planes leaving some whole cut bowls, mugs and boxes along their edges
-    cut_min_explained: float = 1.0
+    cut_min_explained: float = param(1.0, ge=0, le=1)
     # at least this share of the other adjacencies the plane crosses are flat (normals
     # within cut_flat_deg): simulated pairs 0.83-1.0, learn-frame objects with all their
     # seams crossed (cans, mugs) at most 0.40 among candidates scoring >= 0.1
-    cut_flat_deg: float = 10.0
-    cut_min_flat_share: float = 0.6
+    cut_flat_deg: float = param(10.0, ge=0, le=90)
+    cut_min_flat_share: float = param(0.6, ge=0, le=1)
     # a cut must cross at least this many seams (rising or not): one is a noisy patch
-    cut_min_concave_edges: int = 2
+    cut_min_concave_edges: int = param(2, ge=1, le=1000)
     # each side of a cut keeps at least this much visible surface (m^2; 2x the smallest
     # object kept) and LCCP's smallest segment, so a cut does not shave a rim off
-    cut_min_side_m2: float = 0.002
+    cut_min_side_m2: float = param(0.002, ge=0, le=0.1)
     # rounds of cuts (each cuts every segment at most once): a segment joining more than
     # two objects needs more than one
-    cut_max_rounds: int = 3
+    cut_max_rounds: int = param(3, ge=0, le=20)
     # --- 3b''. steps between tops (ours; see steps.py) ---------------------------------
     # split a segment whose horizontal tops stand at two heights on either side of a
     # line: two touching objects of different heights
-    step_split: bool = True
+    step_split: bool = param(True)
     # a top patch: normal within this of the table's
-    step_max_tilt_deg: float = 20.0
+    step_max_tilt_deg: float = param(20.0, ge=0, le=90)
     # the smallest step (m) between two tops: 3-4 times the depth noise of a patch's
     # mean height at 1 m, and what cut_min_rise_m asks of a seam
-    step_min_m: float = 0.008
+    step_min_m: float = param(0.008, gt=0, le=0.1)
     # share of the smaller top's voxels a separating line may leave on the wrong side
-    step_max_error: float = 0.03
+    step_max_error: float = param(0.03, ge=0, le=0.5)
     # --- 3b'''. stacks (ours; see stacks.py) -------------------------------------------
     # split off an object standing on a lower top of its segment: a top step_min_m or
     # more above a top of at least min_object_area_m2, standing inside it
-    stack_split: bool = True
+    stack_split: bool = param(True)
     # --- 3c. occluded pieces (ours) -------------------------------------------------------
     # join two segments when a nearer object hides the gap between them and their
     # surfaces continue each other (organized frames only; see occlusion.py)
-    occlusion_merge: bool = True
-    occlusion_max_gap_m: float = 0.25
+    occlusion_merge: bool = param(True)
+    occlusion_max_gap_m: float = param(0.25, ge=0, le=2)
     # join a container's inner wall to its outer wall: segments that come within
     # rim_contact_m of each other only within rim_tolerance_m of the top of both (the
     # rim; see rims.py)
-    rim_merge: bool = True
-    rim_tolerance_m: float = 0.015
-    rim_contact_m: float = 0.02
+    rim_merge: bool = param(True)
+    rim_tolerance_m: float = param(0.015, ge=0, le=0.1)
+    rim_contact_m: float = param(0.02, ge=0, le=0.1)
     # join a container's inner and outer walls that do not touch: their top bands are
     # two arcs of one circle, the inner wall facing its centre, the outer facing away
     # (rings.py)
-    ring_merge: bool = True
+    ring_merge: bool = param(True)
     # the largest rim radius (m): a wide bowl or pot
-    ring_max_radius_m: float = 0.15
+    ring_max_radius_m: float = param(0.15, gt=0, le=1)
     # RMS distance of the bands from the circle, as a share of its radius. On the 45
     # mOSD learn frames and 400 renders of the choose seeds (0-99) of four families:
     # the walls of one container 0.03-0.07, any other pair of segments with tops at one
     # height 0.12 or more
-    ring_max_residual: float = 0.1
+    ring_max_residual: float = param(0.1, gt=0, le=1)
     # the two bands together go at least this far round the centre (degrees): one
     # container's walls 290-360, other pairs fitting the circle within 0.15 at most 260
-    ring_min_cover_deg: float = 270.0
+    ring_min_cover_deg: float = param(270.0, ge=0, le=360)
     # join a fragment (a small segment with no top face, touching nothing: a strip of
     # a face seen edge-on that the outlier filter thinned) to the nearest segment
     # within this distance (m; 0 = off): three voxels
-    fragment_join_m: float = 0.015
+    fragment_join_m: float = param(0.015, ge=0, le=0.1)
     # --- 4. final filter ----------------------------------------------------------------
     # smallest object kept, as visible surface area (m^2, counted in occupied voxels) so
     # that a far object is not dropped for being sampled sparsely. 10 cm^2 ~ 40 voxels:
     # the top of the smallest graspable object (3 x 3 cm) is about this.
-    min_object_area_m2: float = 0.001
+    min_object_area_m2: float = param(0.001, ge=0, le=1)
     # and as a point count (0 = off); the original used 200 points, which drops far
     # objects with a Kinect, so this is only a guard against specks.
-    min_object_points: int = 50
+    min_object_points: int = param(50, ge=0, le=100000)
+
+    def cross_checks(self) -> None:
+        if self.seed_m < self.voxel_m:
+            self.fail("seed_m", f"must be at least voxel_m ({self.voxel_m:g})")
+        if self.prism_max_height_m <= self.prism_min_height_m:
+            self.fail("prism_max_height_m", f"must be above prism_min_height_m ({self.prism_min_height_m:g})")

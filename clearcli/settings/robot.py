@@ -4,34 +4,44 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from clearcli.settings.fields import Section, param
+
 
 @dataclass(frozen=True)
-class RobotSettings:
+class RobotSettings(Section):
+    NAME = "robot"
+
     # T_base_camera as x y z qx qy qz qw of the points' frame in the WAM base frame;
     # empty = derive from the table (see clearcli/robot/placement.py).
-    camera_pose: tuple[float, ...] = ()
-    ik_seeds: int = 8
-    ik_tolerance_m: float = 0.001
-    ik_tolerance_rad: float = 0.01
+    camera_pose: tuple[float, ...] = param((), ge=-100, le=100, lengths=(0, 7))
+    ik_seeds: int = param(8, ge=1, le=200)
+    ik_tolerance_m: float = param(0.001, gt=0, le=0.1)
+    ik_tolerance_rad: float = param(0.01, gt=0, le=1)
     # Damped least squares: 0.05 keeps steps bounded near singularities (the straight-up
     # home pose) while still converging in ~20 iterations far from them.
-    ik_damping: float = 0.05
-    ik_max_iterations: int = 150
+    ik_damping: float = param(0.05, gt=0, le=10)
+    ik_max_iterations: int = param(150, ge=1, le=10000)
     # The default placement puts the WAM footprint this far outside the table edge
     # nearest the camera: about the radius of the WAM base, so the base clears the table.
-    base_outside_edge_m: float = 0.10
+    base_outside_edge_m: float = param(0.10, ge=0, le=2)
     # ...and at least this far (on the table plane) from every object's centroid: the
     # visible table edge can be a crop with objects right at it, and a WAM cannot reach
     # down beside its own base (top grasps fail there in IK).
-    base_min_object_distance_m: float = 0.30
+    base_min_object_distance_m: float = param(0.30, ge=0, le=2)
     # ...and farther back, up to this from the nearest object, while the farthest stays
     # within base_max_object_distance_m: a push towards the base starts 5-15 cm nearer
     # than its object, and top-down poses with the wrist centre within ~0.26 m of the
     # shoulder axis have no IK (measured on the simulated sessions' failures).
-    base_preferred_object_distance_m: float = 0.40
+    base_preferred_object_distance_m: float = param(0.40, ge=0, le=2)
     # the WAM's tool plate reaches 0.915 m from the shoulder; top grasps of tall objects
     # need some of it
-    base_max_object_distance_m: float = 0.85
+    base_max_object_distance_m: float = param(0.85, gt=0, le=2)
     # Arm links must keep this clearance from the table plane and from other objects'
     # hulls (the gripper itself is checked by the predicates: block_grasp, block_dir).
-    collision_margin_m: float = 0.01
+    collision_margin_m: float = param(0.01, ge=0, le=0.2)
+
+    def cross_checks(self) -> None:
+        if self.camera_pose and sum(v * v for v in self.camera_pose[3:]) < 1e-6:
+            self.fail("camera_pose", "its quaternion (the last four numbers) must not be zero")
+        if self.base_max_object_distance_m < self.base_min_object_distance_m:
+            self.fail("base_max_object_distance_m", f"must be at least base_min_object_distance_m ({self.base_min_object_distance_m:g})")

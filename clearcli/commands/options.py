@@ -1,4 +1,6 @@
-"""The options every frame command shares for batches (see clearcli/batch/run.py)."""
+"""The options the commands share, defined once: settings (`--settings`, `--set`), the
+frame to read (`--topic`, `--frame`), outputs (`--force`, `--json`) and batches (see
+clearcli/batch/run.py)."""
 
 from __future__ import annotations
 
@@ -6,6 +8,25 @@ from pathlib import Path
 from typing import Annotated, Any, Optional
 
 import typer
+
+SettingsFile = Annotated[
+    Optional[Path], typer.Option("--settings", help="TOML settings file (see `clear settings`).")
+]
+Set = Annotated[
+    Optional[list[str]],
+    typer.Option(
+        "--set",
+        help="Override one setting, SECTION.KEY=VALUE (repeatable; checked like the file), "
+        "e.g. --set segment.voxel_m=0.004. See `clear settings`.",
+        metavar="SECTION.KEY=VALUE",
+    ),
+]
+Topic = Annotated[
+    Optional[str],
+    typer.Option("--topic", help="Logs (MCAP, ROS 1 bag, rosbag2): the point-cloud topic, when there are several."),
+]
+FrameIndex = Annotated[int, typer.Option("--frame", help="Logs: which frame of the topic (from 0).", min=0)]
+Force = Annotated[bool, typer.Option("--force", help="Overwrite existing output files.")]
 
 Inputs = Annotated[
     list[Path],
@@ -37,6 +58,17 @@ Ray = Annotated[
     ),
 ]
 FailFast = Annotated[bool, typer.Option("--fail-fast", help="Batch: stop at the first frame that fails.")]
+
+
+def resolve_settings(path: Path | None, sets: list[str] | None, section: str | None = None, **flags: Any) -> Any:
+    """The resolved settings tree, checked before any frame is read: defaults, the file,
+    each --set, then the command's own flags (aliases of --set in ``section``)."""
+    from clearcli.settings import load_settings, override
+
+    settings = load_settings(path, sets or ())
+    if section is not None:
+        settings = override(settings, section, **flags)
+    return settings
 
 
 def is_batch(inputs: Any, every: int | None, out_dir: Path | None, ray: str | None) -> bool:

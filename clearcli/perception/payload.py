@@ -1,0 +1,50 @@
+"""A Segmentation as the payload of schema ``clear.segmentation`` (documented in the
+README and `clearcli/commands/segment.py`)."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+from clearcli.rounding import rounded, timings
+
+if TYPE_CHECKING:
+    from clearcli.perception.types import Segmentation
+
+SCHEMA = "segmentation"
+VERSION = 1
+
+
+def label_of(k: int) -> int:
+    """The label object k carries in a labels PCD (0 none, 1 table, 10 (k + 1) objects)."""
+    return 10 * (k + 1)
+
+
+def segmentation_payload(seg: "Segmentation") -> dict[str, Any]:
+    return {
+        "source": seg.source,
+        "frame_id": seg.frame_id,
+        "stamp_s": float(seg.stamp_s),
+        "n_points": int(seg.n_points),
+        "table": {
+            "normal": rounded(seg.table.normal),
+            "offset": rounded(seg.table.offset),
+            "polygon": rounded(seg.table_polygon),
+            "n_points": int(seg.table_indices.shape[0]),
+        },
+        "objects": [
+            {
+                "id": k,
+                "label": label_of(k),
+                "n_points": obj.n_points,
+                "centroid": rounded(obj.centroid),
+                "obb": {
+                    "center": rounded(obj.obb_center),
+                    "axes": rounded(obj.obb_axes),
+                    "extents": rounded(obj.obb_extents),
+                },
+                "principal_axes": rounded(obj.principal_axes),
+            }
+            for k, obj in enumerate(seg.objects)
+        ],
+        "timings_s": timings(seg.timings_s),
+    }

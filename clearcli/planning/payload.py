@@ -1,0 +1,130 @@
+"""The JSON payloads of the planning layer: a symbolic state (schema
+``clear.predicates``, its facts in PDDL) and a plan (schema ``clear.plan``). One home for
+both, so that `clear predicates`, `clear plan` and a batch's lines serialise alike."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+from clearcli.planning.pddl import fact_to_pddl
+from clearcli.rounding import rounded, timings
+
+if TYPE_CHECKING:
+    from clearcli.planning.types import Plan
+    from clearcli.predicates.state import SymbolicState
+
+PREDICATES_SCHEMA, PREDICATES_VERSION = "predicates", 1
+# version 1 had no status/left, and its optimal and steps meant less
+PLAN_SCHEMA, PLAN_VERSION = "plan", 2
+
+
+def predicates_payload(state: "SymbolicState") -> dict[str, Any]:
+    """The payload of schema ``clear.predicates``."""
+    objects = []
+    for o in state.objects:
+        objects.append(
+            {
+                "name": o.name,
+                "segment_index": int(o.segment_index),
+                "centroid": rounded(o.centroid),
+                "extents_m": rounded(o.extents_m),
+                "principal_axes": rounded(o.principal_axes),
+                "height_m": rounded(o.height_m),
+                "grasp_width_m": rounded(o.grasp_width_m),
+                "directions": {d: rounded(p.unit_vector) for d, p in o.pushes.items()},
+                "grasp_poses": [rounded(c[1]) for c in o.grasp_candidates],
+                "push": {
+                    d: {"length_m": rounded(p.push_length_m), "start_poses": [rounded(c[1]) for c in p.candidates]}
+                    for d, p in o.pushes.items()
+                },
+            }
+        )
+    return {
+        "source": state.source,
+        "frame": "sensor (optical)",
+        "table": {
+            "normal": rounded(state.table.normal),
+            "offset": rounded(state.table.offset),
+            "polygon": rounded(state.table_polygon),
+        },
+        "objects": objects,
+        "facts": sorted(fact_to_pddl(f) for f in state.facts),
+        "skipped": [{"segment_index": int(i), "reason": r} for i, r in state.skipped],
+        "push_costs": {f"{o} {d}": int(c) for (o, d), c in sorted(state.push_costs.items())},
+        "timings_s": timings(state.timings_s),
+    }
+
+
+def plan_payload(plan: "Plan", source: str, frame_id: str, pose_source: str, unit_cost: bool) -> dict[str, Any]:
+    """The payload of schema ``clear.plan`` (documented in `clearcli/commands/plan.py`)."""
+    first = None
+    if plan.first is not None:
+        first = {
+            "action": plan.first.action.pddl(),
+            "candidate": plan.first.candidate,
+            "T_base_gripper": [rounded(T) for T in plan.first.T_base_gripper],
+            "joints_rad": [rounded(q) for q in plan.first.joint_solutions],
+        }
+    checked = list(plan.checked) + [None] * (len(plan.actions) - len(plan.checked))
+    steps = []
+    for a, c in zip(plan.actions, checked):
+        steps.append(
+            {
+                "kind": a.kind,
+                "object": a.obj,
+                "direction": a.direction,
+                "checked": c is not None,
+                "candidate": None if c is None else int(c.candidate),
+                "joints_rad": None if c is None else [rounded(q) for q in c.joint_solutions],
+            }
+        )
+    left = [
+        {
+            "object": x.name,
+            "reason": x.reason,
+            "detail": x.detail,
+            "actions": dict(x.actions),
+            "blockers": list(x.blockers),
+            "width_m": None if x.width_m is None else rounded(x.width_m, 4),
+        }
+        for x in plan.left
+    ]
+    return {
+        "source": source,
+        "frame_id": frame_id,
+        "status": plan.status,
+        "actions": [a.pddl() for a in plan.actions],
+        "steps": steps,
+        "check": plan.check,
+        "cost": int(plan.cost),
+        "unit_cost": bool(unit_cost),
+        "optimal": bool(plan.optimal),
+        "deadline": bool(plan.deadline),
+        "search": plan.search,
+        "goal": list(plan.goal),
+        "left": left,
+        "no_plan_reason": None,
+        "unreachable": list(plan.unreachable),
+        "stuck": list(plan.stuck),
+        "ungraspable": list(plan.ungraspable),
+        "ik_unfeasible": [list(f) for f in sorted(plan.ik_facts)],
+        "learnt_later": [{"after_step": k, "fact": list(f)} for k, f in plan.learnt_later],
+        "replans": int(plan.replans),
+        "max_backtracks": int(plan.max_backtracks),
+        "backtracking": [
+            {
+                "plan": [a.pddl() for a in s.plan],
+                "cost": s.cost,
+                "feasible": s.feasible,
+                "failed_step": s.failed_step,
+                "reason": s.reason,
+                "learnt": [list(f) for f in s.learnt],
+                "prefix": s.prefix,
+            }
+            for s in plan.steps
+        ],
+        "first_action": first,
+        "T_base_camera": None if plan.T_base_camera is None else rounded(plan.T_base_camera),
+        "camera_pose_source": pose_source,
+        "timings_s": timings(plan.timings_s),
+    }

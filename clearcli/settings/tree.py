@@ -1,0 +1,181 @@
+"""The settings tree: one registered section per stage, read from TOML and `--set`.
+
+`Settings` holds every section; `SECTIONS` (name -> class) is the registry, in the order
+`clear settings` prints them. A section's defaults and ranges live in its class only
+(clearcli/settings/<area>.py). Loading order: defaults, then `--settings FILE`, then each
+`--set section.key=value`, then a command's own flags (aliases of `--set`); every value
+is checked as its section is built (fields.py), before any frame is read. Unknown
+sections or keys are an error: a typo must not be silently ignored.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Iterable, Mapping
+
+from clearcli.errors import SettingsError
+from clearcli.settings.geometry import GripperSettings, PredicateSettings, PushSettings
+from clearcli.settings.plan import PlanSettings
+from clearcli.settings.replay import MemoryParams, ReplaySettings, TrackingParams
+from clearcli.settings.robot import RobotSettings
+from clearcli.settings.segment import SegmentSettings
+from clearcli.settings.sim import DepthNoise, PinholeCamera, WorldParams, WorldReachParams
+
+
+@dataclass(frozen=True)
+class Settings:
+    segment: SegmentSettings = field(default_factory=SegmentSettings)
+    gripper: GripperSettings = field(default_factory=GripperSettings)
+    push: PushSettings = field(default_factory=PushSettings)
+    predicates: PredicateSettings = field(default_factory=PredicateSettings)
+    plan: PlanSettings = field(default_factory=PlanSettings)
+    robot: RobotSettings = field(default_factory=RobotSettings)
+    replay: ReplaySettings = field(default_factory=ReplaySettings)
+    tracking: TrackingParams = field(default_factory=TrackingParams)
+    memory: MemoryParams = field(default_factory=MemoryParams)
+    world: WorldParams = field(default_factory=WorldParams)
+    world_reach: WorldReachParams = field(default_factory=WorldReachParams)
+    camera: PinholeCamera = field(default_factory=PinholeCamera)
+    depth_noise: DepthNoise = field(default_factory=DepthNoise)
+
+
+# The registry: section name -> its class, in the order of `Settings`' fields.
+SECTIONS: dict[str, type] = {f.name: f.default_factory for f in dataclasses.fields(Settings)}  # type: ignore[misc]
+assert all(cls.NAME == name for name, cls in SECTIONS.items())  # type: ignore[attr-defined]
+
+# The sections each command reads: what its provenance digest covers.
+READS: dict[str, tuple[str, ...]] = {
+    "info": (),
+    "segment": ("segment",),
+    "evaluate": ("segment",),
+    "predicates": ("segment", "gripper", "push", "predicates"),
+    "plan": ("segment", "gripper", "push", "predicates", "plan", "robot"),
+    "replay": ("segment", "gripper", "push", "predicates", "plan", "robot", "replay", "tracking", "memory"),
+    "simulate": tuple(SECTIONS),
+}
+
+
+def _section(name: str, base: Any, values: Mapping[str, Any]) -> Any:
+    cls = SECTIONS[name]
+    known = {f.name for f in dataclasses.fields(cls)}
+    unknown = sorted(set(values) - known)
+    if unknown:
+        raise SettingsError(
+            f"settings: unknown key(s) {', '.join(unknown)} in [{name}]; known: {', '.join(sorted(known))}"
+        )
+    return dataclasses.replace(base, **values)  # checked by Section.__post_init__
+
+
+def settings_from_dict(data: Mapping[str, Any], base: Settings | None = None) -> Settings:
+    """``base`` (defaults when None) with the sections and keys of ``data`` replaced."""
+    base = base or Settings()
+    unknown = sorted(set(data) - set(SECTIONS))
+    if unknown:
+        raise SettingsError(f"settings: unknown section(s) {', '.join(unknown)}; known: {', '.join(SECTIONS)}")
+    changes: dict[str, Any] = {}
+    for name, values in data.items():
+        if not isinstance(values, Mapping):
+            raise SettingsError(f"settings: [{name}] must be a table of keys")
+        if values:
+            changes[name] = _section(name, getattr(base, name), values)
+    return dataclasses.replace(base, **changes) if changes else base
+
+
+def parse_set(text: str) -> tuple[str, str, Any]:
+    """``section.key=value`` -> (section, key, value). The value is read as TOML (numbers,
+    true/false, [lists], "strings", nan, inf); a bare word is a string."""
+    name, sep, raw = text.partition("=")
+    section, dot, key = name.strip().partition(".")
+    if not sep or not dot or not section or not key:
+        raise SettingsError(f"--set {text!r}: expected SECTION.KEY=VALUE, e.g. --set segment.voxel_m=0.005")
+    raw = raw.strip()
+    try:
+        value = tomllib.loads(f"v = {raw}")["v"]
+    except tomllib.TOMLDecodeError:
+        if not raw or any(c in raw for c in "[]{}\"'=,"):
+            raise SettingsError(f"--set {text!r}: {raw!r} is not a value (a number, true/false, a [list] or a word)") from None
+        value = raw
+    return section.strip(), key.strip(), value
+
+
+def apply_sets(settings: Settings, sets: Iterable[str]) -> Settings:
+    data: dict[str, dict[str, Any]] = {}
+    for text in sets:
+        section, key, value = parse_set(text)
+        data.setdefault(section, {})[key] = value
+    return settings_from_dict(data, base=settings) if data else settings
+
+
+def read_settings_file(path: Path) -> dict[str, Any]:
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise SettingsError(f"{path}: settings file not found") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise SettingsError(f"{path}: cannot read settings file ({exc})") from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SettingsError(f"{path}: not valid TOML ({exc})") from None
+
+
+def load_settings(path: Path | None = None, sets: Iterable[str] = ()) -> Settings:
+    """Defaults, updated by the TOML file at ``path`` when given, then by each ``--set``."""
+    settings = Settings()
+    if path is not None:
+        try:
+            settings = settings_from_dict(read_settings_file(path))
+        except SettingsError as exc:
+            if str(path) in str(exc):
+                raise
+            raise SettingsError(f"{path}: {exc}") from None
+    return apply_sets(settings, sets)
+
+
+def override(settings: Settings, section: str, **values: Any) -> Settings:
+    """Settings with the non-None ``values`` replaced in ``section`` (a command's flags)."""
+    given = {k: v for k, v in values.items() if v is not None}
+    if not given:
+        return settings
+    return settings_from_dict({section: given}, base=settings)
+
+
+def _toml_value(value: Any) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, (int, float)):
+        return repr(value)
+    if isinstance(value, str):
+        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    raise TypeError(f"cannot write {value!r} as TOML")
+
+
+def settings_to_toml(settings: Settings, sections: Iterable[str] | None = None, ranges: bool = False) -> str:
+    """The tree (or the named sections) as TOML that `--settings FILE` reads back; with
+    ``ranges``, each key's accepted values as a comment."""
+    from clearcli.settings.fields import range_of
+
+    lines = ["# clear settings; pass with --settings FILE. Lengths in metres, angles in degrees."]
+    for name in SECTIONS if sections is None else sections:
+        section = getattr(settings, name)
+        lines.append("")
+        lines.append(f"[{name}]")
+        for f in dataclasses.fields(section):
+            text = f"{f.name} = {_toml_value(getattr(section, f.name))}"
+            if ranges and not isinstance(getattr(section, f.name), bool):
+                text += f"  # {range_of(type(section), f.name).describe()}"
+            lines.append(text)
+    return "\n".join(lines) + "\n"
+
+
+def digest(settings: Settings, sections: Iterable[str]) -> str:
+    """A short hash of the named sections' resolved values: two results with the same
+    digest were made with the same settings for what that command reads."""
+    text = settings_to_toml(settings, tuple(sections))
+    return "sha256:" + hashlib.sha256(text.encode("utf-8")).hexdigest()[:16]

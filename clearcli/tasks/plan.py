@@ -1,0 +1,68 @@
+"""`plan`: segment -> predicates -> plan, every action IK-checked; the plan's files."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from clearcli.settings import Settings
+from clearcli.tasks.base import NO_OUTPUTS, Outcome, Outputs, Source
+
+OUTPUTS = ("problem", "domain", "plan", "png")
+
+
+@dataclass(frozen=True)
+class Request:
+    settings: Settings
+    camera_pose: str | None = None  # --camera-pose: 'x y z qx qy qz qw' or 'thesis'
+    first_only: bool = False  # check the first action only (the thesis's Algorithm 1)
+    outputs: Outputs = NO_OUTPUTS
+
+
+def run(request: Request, source: Source) -> Outcome:
+    """The clear.plan payload and exit code (0 complete, 10 partial, 5 nothing can be
+    done), the output files written. Errors raise ClearError."""
+    from clearcli import pipeline
+    from clearcli.errors import EXIT_NO_PLAN, EXIT_OK, EXIT_PARTIAL_PLAN
+    from clearcli.planning.payload import PLAN_SCHEMA, PLAN_VERSION, plan_payload
+
+    frame = pipeline.read(source.path, source.topic, source.index)
+    seg = pipeline.segmented(frame, request.settings)
+    state = pipeline.stated(frame, seg, request.settings)
+    done = pipeline.planned(state, request.settings, request.camera_pose, "first" if request.first_only else None)
+    plan = done.plan
+    payload = plan_payload(plan, str(source.path), getattr(frame, "frame_id", ""), done.pose_source, not state.push_costs)
+    out = request.outputs
+    write_plan_files(state, plan, problem=out.get("problem"), domain=out.get("domain"), output=out.get("plan"))
+    png = out.get("png")
+    if png is not None:
+        from clearcli.io.files import atomic_path
+        from clearcli.render.plan_png import render_plan
+
+        with atomic_path(png) as tmp:
+            render_plan(tmp, frame, state, plan)
+    if done.no_plan is not None:
+        payload["no_plan_reason"] = str(done.no_plan)
+        code = EXIT_NO_PLAN
+    else:
+        code = EXIT_PARTIAL_PLAN if plan.status == "partial" else EXIT_OK
+    return Outcome(PLAN_SCHEMA, PLAN_VERSION, payload, code, out.all())
+
+
+def write_plan_files(state: Any, plan: Any, *, problem: Path | None, domain: Path | None, output: Path | None) -> None:
+    """The problem (and domain) first, the plan file last, each written whole or not at
+    all: a plan file on disk means its problem is complete."""
+    from clearcli.io.files import atomic_output
+    from clearcli.planning.pddl import domain_for, write_plan, write_problem
+
+    if problem is not None:
+        text = write_problem(state, goal_objects=plan.goal, extra_facts=plan.ik_facts)
+        with atomic_output(problem, "w") as handle:
+            handle.write(text)
+    if domain is not None:
+        with atomic_output(domain, "w") as handle:
+            handle.write(domain_for(state))
+    if output is not None:
+        with atomic_output(output, "w") as handle:
+            handle.write(write_plan(plan.actions, plan.cost, unit_cost=not state.push_costs))

@@ -1,0 +1,46 @@
+"""`predicates`: object models, grasp and push poses and the symbolic facts of a frame."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from clearcli.settings import Settings
+from clearcli.tasks.base import NO_OUTPUTS, Outcome, Outputs, Source
+
+OUTPUTS = ("problem", "png")
+
+
+@dataclass(frozen=True)
+class Request:
+    settings: Settings
+    ground_truth: bool = False  # the frame's own 'label' field instead of segmentation
+    outputs: Outputs = NO_OUTPUTS
+
+
+def run(request: Request, source: Source) -> Outcome:
+    from clearcli import pipeline
+    from clearcli.planning.payload import PREDICATES_SCHEMA, PREDICATES_VERSION, predicates_payload
+
+    frame = pipeline.read(source.path, source.topic, source.index)
+    if request.ground_truth:
+        seg = pipeline.truth_segmentation(frame, source.path)
+    else:
+        seg = pipeline.segmented(frame, request.settings)
+    state = pipeline.stated(frame, seg, request.settings)
+    problem = request.outputs.get("problem")
+    if problem is not None:
+        from clearcli.io.files import atomic_output
+        from clearcli.planning.pddl import write_problem
+
+        text = write_problem(state)
+        with atomic_output(problem, "w") as handle:
+            handle.write(text)
+    png = request.outputs.get("png")
+    if png is not None:
+        from clearcli.io.files import atomic_path
+        from clearcli.render.predicates_png import render_predicates_png
+
+        with atomic_path(png) as tmp:
+            render_predicates_png(state, tmp, title=str(source.path))
+    payload = predicates_payload(state)
+    return Outcome(PREDICATES_SCHEMA, PREDICATES_VERSION, payload, 0, request.outputs.all())

@@ -1,0 +1,106 @@
+"""`replay`: the whole pipeline over a recorded session, frame by frame, with stable
+object ids, execution monitoring and push memory; optionally an annotated log."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Callable, Iterator
+
+from clearcli.settings import Settings
+
+if TYPE_CHECKING:
+    from clearcli.errors import PartialLogError
+    from clearcli.io.frames import Frame
+    from clearcli.replay.session import FrameReport, Summary
+
+SCHEMA, VERSION = "replay", 1
+
+
+@dataclass(frozen=True)
+class Request:
+    settings: Settings
+    every: int = 1  # every N-th frame of the log
+    from_s: float | None = None  # seconds from the start of the log
+    to_s: float | None = None
+    fail_fast: bool = False
+    base_frame: str | None = None  # the log's name of the robot base frame (its /tf_static)
+    out: Path | None = None  # an annotated MCAP to write
+
+
+def run(
+    request: Request,
+    log: Path,
+    topic: str | None,
+    on_report: Callable[["FrameReport", int, int | None], None],
+    note: Callable[[str], None],
+) -> tuple["Summary", "PartialLogError | None"]:
+    """Replay ``log``; ``on_report`` sees each frame's report (with frames read so far
+    and the topic's frame count when known), ``note`` gets remarks for people. Returns
+    the summary, and the error that ended a damaged log early (the caller raises it
+    after printing)."""
+    from clearcli.errors import PartialLogError
+    from clearcli.io.read import iter_frames, sniff
+    from clearcli.pipeline import Pipeline
+    from clearcli.replay.session import BASE_FRAMES, ReplayOptions, Session, base_camera_from_log, replay
+
+    config = request.settings
+    kind = sniff(log)
+    log_start_s: float | None = None
+    total: int | None = None
+    if kind == "mcap":
+        from clearcli.io.mcap import choose_topic, read_summary
+
+        summary = read_summary(log)
+        topic = choose_topic(summary, topic)
+        if summary.start_ns is not None:
+            log_start_s = summary.start_ns / 1e9
+        total = summary.count(topic) or None
+    else:
+        total = 1
+
+    pipeline = Pipeline(config)
+    options = ReplayOptions(
+        every=request.every, from_s=request.from_s, to_s=request.to_s, fail_fast=request.fail_fast,
+        push_memory=config.replay.push_memory, stop_when_cleared=config.replay.stop_when_cleared,
+        tracking=config.tracking, memory=config.memory,
+    )
+    session = Session(pipeline, options)
+    bases = (request.base_frame,) if request.base_frame else BASE_FRAMES
+
+    def frames() -> Iterator["Frame"]:
+        first = True
+        for frame in iter_frames(log, topic):
+            if first and kind == "mcap" and not config.robot.camera_pose:
+                T, base = base_camera_from_log(log, frame.frame_id, bases)
+                if T is not None:
+                    pipeline.T_base_camera = T
+                    note(f"robot base: {base} -> {frame.frame_id} from the log's transforms")
+                elif request.base_frame:
+                    note(
+                        f"robot base: no transform {request.base_frame} -> {frame.frame_id} in the log; "
+                        "placing the robot by the plan stage's rules"
+                    )
+            first = False
+            yield frame
+
+    partial: PartialLogError | None = None
+
+    def go(sink: Any) -> None:
+        nonlocal partial
+        try:
+            for report in replay(frames(), session, log_start_s):
+                on_report(report, session.summary.frames_read, total)
+                if sink is not None:
+                    sink.write(report, report.frame)
+        except PartialLogError as exc:
+            partial = exc
+
+    if request.out is not None:
+        from clearcli.replay.annotate import AnnotatedLog
+
+        with AnnotatedLog(request.out, log if kind == "mcap" else None, topic, config) as annotated:
+            go(annotated)
+    else:
+        go(None)
+    return session.summary, partial

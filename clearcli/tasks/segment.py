@@ -1,0 +1,38 @@
+"""`segment`: the table and one point set per object, optionally a labels PCD and a picture."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from clearcli.settings import Settings
+from clearcli.tasks.base import NO_OUTPUTS, Outcome, Outputs, Source
+
+SCHEMA, VERSION = "segmentation", 1
+OUTPUTS = ("labels", "png")
+
+
+@dataclass(frozen=True)
+class Request:
+    settings: Settings
+    outputs: Outputs = NO_OUTPUTS
+
+
+def run(request: Request, source: Source) -> Outcome:
+    from clearcli import pipeline
+    from clearcli.perception.payload import segmentation_payload
+
+    frame = pipeline.read(source.path, source.topic, source.index)
+    seg = pipeline.segmented(frame, request.settings)
+    labels = request.outputs.get("labels")
+    if labels is not None:
+        from clearcli.io.pcd import write_pcd
+
+        write_pcd(labels, frame, seg.labels())
+    png = request.outputs.get("png")
+    if png is not None:
+        from clearcli.io.files import atomic_path
+        from clearcli.render.segment_png import render_segmentation
+
+        with atomic_path(png) as tmp:
+            render_segmentation(tmp, frame, seg)
+    return Outcome(SCHEMA, VERSION, segmentation_payload(seg), 0, request.outputs.all())
