@@ -87,6 +87,8 @@ def ray_throughput(files: list[Path], pool_wall: float) -> None:
 
 def memory(files: list[Path], passes: int) -> None:
     from clearcli.batch.run import BatchRequest, run_batch
+    from clearcli.settings import Settings
+    from clearcli.tasks import plan as task
 
     rss: dict[int, list[tuple[int, float]]] = {}
     seen = [0]
@@ -99,7 +101,7 @@ def memory(files: list[Path], passes: int) -> None:
     import contextlib
     import io
 
-    req = BatchRequest("plan", list(files) * passes, {}, jobs=2, json_out=True)
+    req = BatchRequest("plan", list(files) * passes, task.Request(Settings()), jobs=2, json_out=True)
     with contextlib.redirect_stdout(io.StringIO()):
         t0 = time.perf_counter()
         run_batch(req, on_line=on_line)

@@ -42,7 +42,7 @@ sys.path.insert(0, str(REPO))
 from clearcli.evaluate.segmentation import score  # noqa: E402
 from clearcli.io.read import read_frame  # noqa: E402
 from clearcli.perception.segment import segment  # noqa: E402
-from clearcli.perception.settings import SegmentSettings  # noqa: E402
+from clearcli.settings.segment import SegmentSettings  # noqa: E402
 
 def _categories() -> list[tuple[str, list[str]]]:
     """mOSD's categories from the groups file `clear evaluate dataset --groups mosd` uses."""

@@ -20,7 +20,7 @@ import pytest
 
 from clearcli.errors import NoPlanError
 from clearcli.geometry.poses import raised_contact_lifts
-from clearcli.geometry.settings import GripperSettings, PushSettings
+from clearcli.settings.geometry import GripperSettings, PushSettings
 from clearcli.settings import Settings
 from clearcli.sim import scene as S
 

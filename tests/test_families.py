@@ -13,7 +13,7 @@ import pytest
 
 from clearcli.evaluate.segmentation import score
 from clearcli.io.frames import Frame
-from clearcli.perception.settings import SegmentSettings
+from clearcli.settings.segment import SegmentSettings
 from clearcli.sim.camera import DepthNoise, render
 from clearcli.sim.families import FAMILIES, REPORT_SEEDS, gap_row, open_container
 from clearcli.sim.scene import Box, Cylinder, make_scene, objects_overlap

@@ -8,7 +8,7 @@ import pytest
 from clearcli.errors import SettingsError
 from clearcli.geometry.gripper import gripper_model, load_gripper_settings
 from clearcli.geometry.models import DegenerateObject, TableFrame, build_object, column_tops
-from clearcli.geometry.settings import GripperSettings
+from clearcli.settings.geometry import GripperSettings
 from clearcli.perception.types import TablePlane
 from clearcli.predicates.state_builder import compute_state
 from clearcli.predicates.synthetic import Box, camera_pose, make_scene

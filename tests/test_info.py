@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from clearcli.commands.info import describe_file
+from clearcli.io.describe import describe_file
 from clearcli.errors import EXIT_INPUT, EXIT_PARTIAL
 from clearcli.io.pcd import read_pcd
 from utils import REPO, shared_path

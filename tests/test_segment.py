@@ -14,7 +14,7 @@ import pytest
 from clearcli.errors import SceneError
 from clearcli.evaluate.segmentation import score
 from clearcli.io.frames import Frame
-from clearcli.perception.settings import SegmentSettings
+from clearcli.settings.segment import SegmentSettings
 from utils import shared_path
 
 S = SegmentSettings()

@@ -26,7 +26,7 @@ from clearcli.io.frames import Frame
 from clearcli.io.pcd import write_pcd
 from clearcli.io.read import read_frame
 from clearcli.perception.segment import segment
-from clearcli.perception.settings import SegmentSettings
+from clearcli.settings.segment import SegmentSettings
 from clearcli.perception.types import Segmentation
 from clearcli.sim.camera import render
 from clearcli.sim.scene import TABLE_SIZE_X_M, TABLE_SIZE_Y_M, Box, Cylinder, Scene, make_scene

@@ -197,7 +197,7 @@ def run_batch(
     """Run the batch; print lines (or the progress bar and table); the exit code.
     ``extra_summary`` adds keys to the summary from every frame's line; ``render``
     replaces the summary table for people."""
-    from clearcli.commands.common import stderr, stdout
+    from clearcli.console import stderr, stdout
 
     t0 = time.perf_counter()
     items = expand(req.inputs, frame=req.frame, every=req.every, topic=req.topic)
