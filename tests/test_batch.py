@@ -88,7 +88,8 @@ def test_bad_inputs_reported_each_in_its_line(tmp_path: Path) -> None:
     # fails the same way again: --resume does not retry it); nothing half-written
     names = sorted(p.name for p in out.iterdir())
     good = [f"{s}.{e}" for s in ("isolated_box", "two_touching_boxes") for e in ("json", "plan", "problem.pddl")]
-    assert names == sorted(good + ["corrupt.json", "cut_f0.json", "empty.json", "notes.json"])
+    # (and settings.toml: what made the results)
+    assert names == sorted(good + ["corrupt.json", "cut_f0.json", "empty.json", "notes.json", "settings.toml"])
 
 
 SLOW_WRITES = '''
@@ -138,7 +139,7 @@ def test_sigkill_during_a_write_then_resume(tmp_path: Path) -> None:
         assert (out / name).stat().st_mtime_ns == mtime
     assert not [p for p in out.glob(".*")]  # no stale temporary
     assert sorted(p.name for p in out.iterdir()) == sorted(
-        f"{p.stem}.{ext}" for p in FRAMES for ext in ("json", "plan", "problem.pddl")
+        [f"{p.stem}.{ext}" for p in FRAMES for ext in ("json", "plan", "problem.pddl")] + ["settings.toml"]
     )
     for p in FRAMES:  # every plan file is whole
         assert (out / f"{p.stem}.plan").read_text().splitlines()[-1].startswith("; cost = ")

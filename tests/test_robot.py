@@ -170,10 +170,13 @@ def test_camera_pose_parsing() -> None:
 
 
 def test_default_placement_from_table() -> None:
+    """With no step back (preferred distance 0, a valid setting) the footprint stands
+    just outside the near edge."""
     import plan_scenes as ps
+    from clearcli.settings.robot import RobotSettings
 
     state = ps.clutter(3)
-    T, src = placement.resolve_T_base_camera(None, state, 0.10)
+    T, src = placement.resolve_T_base_camera(None, state, RobotSettings(base_preferred_object_distance_m=0.0))
     assert src == "default from table"
     # Rebuild the scene's world frame: the table is z = 0, near edge x = 0, camera above
     # x = -0.05; the footprint should be at x = -0.10 (just outside the near edge),
@@ -201,9 +204,12 @@ def test_default_placement_steps_back_within_reach(
     near_x: float, far_x: float, preferred: float, footprint_x: float
 ) -> None:
     import plan_scenes as ps
+    from clearcli.settings.robot import RobotSettings
 
     state = ps.scene({"a": ps.Box(near_x, 0.0), "b": ps.Box(far_x, 0.0)})
-    T, _ = placement.resolve_T_base_camera(None, state, 0.10, 0.30, preferred, 0.85)
+    robot = RobotSettings(base_outside_edge_m=0.10, base_min_object_distance_m=0.30,
+                          base_preferred_object_distance_m=preferred, base_max_object_distance_m=0.85)
+    T, _ = placement.resolve_T_base_camera(None, state, robot)
     T_world_base = ps.T_WORLD_CAMERA @ np.linalg.inv(T)
     np.testing.assert_allclose(T_world_base[:3, 3], [footprint_x, 0.0, 0.346], atol=1e-3)
 

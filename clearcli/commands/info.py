@@ -89,7 +89,7 @@ def _print_table(info: dict[str, Any]) -> None:
             kv.add_row(key, value)
         stdout.print(kv)
         return
-    m = log_part(info)
+    m = info.get("mcap") or info.get("bag")
     assert m is not None
     if info["format"] == "rosbag1":
         kv.add_row("format", f"ROS 1 bag, {'indexed' if m['indexed'] else 'index missing: records scanned'}")

@@ -81,11 +81,11 @@ def default_T_base_camera(
     table_normal: np.ndarray,
     table_offset: float,
     table_polygon: np.ndarray,
-    object_centroids: np.ndarray | None = None,
-    outside_edge_m: float = 0.10,
-    min_object_distance_m: float = 0.30,
-    preferred_object_distance_m: float = 0.0,
-    max_object_distance_m: float = 0.85,
+    object_centroids: np.ndarray | None,
+    outside_edge_m: float,
+    min_object_distance_m: float,
+    preferred_object_distance_m: float,
+    max_object_distance_m: float,
 ) -> np.ndarray:
     """Footprint just outside the table edge nearest the camera, facing the objects, and
     at least ``min_object_distance_m`` from every object's centroid (on the plane); then
@@ -155,12 +155,15 @@ def default_T_base_camera(
 def resolve_T_base_camera(
     camera_pose: Sequence[float] | str | None,
     state: object | None = None,
-    outside_edge_m: float = 0.10,
-    min_object_distance_m: float = 0.30,
-    preferred_object_distance_m: float = 0.0,
-    max_object_distance_m: float = 0.85,
+    robot: object | None = None,
 ) -> tuple[np.ndarray, str]:
-    """T_base_camera and where it came from ("given", "thesis", "default from table")."""
+    """T_base_camera and where it came from ("given", "thesis", "default from table");
+    the default placement follows ``robot`` (the [robot] settings; their defaults when
+    None: the distances have one home, clearcli/settings/robot.py)."""
+    if robot is None:
+        from clearcli.settings.robot import RobotSettings
+
+        robot = RobotSettings()
     if isinstance(camera_pose, str):
         if camera_pose.strip().lower() == "thesis":
             return thesis_T_base_camera(), "thesis"
@@ -181,10 +184,10 @@ def resolve_T_base_camera(
         state.table.offset,  # type: ignore[attr-defined]
         state.table_polygon,  # type: ignore[attr-defined]
         centroids,
-        outside_edge_m,
-        min_object_distance_m,
-        preferred_object_distance_m,
-        max_object_distance_m,
+        robot.base_outside_edge_m,  # type: ignore[attr-defined]
+        robot.base_min_object_distance_m,  # type: ignore[attr-defined]
+        robot.base_preferred_object_distance_m,  # type: ignore[attr-defined]
+        robot.base_max_object_distance_m,  # type: ignore[attr-defined]
     )
     return T, "default from table"
 
@@ -195,11 +198,4 @@ def placement_from_settings(
     """`resolve_T_base_camera` with the [robot] settings' placement rule; ``camera_pose``
     (a command-line value) overrides ``robot.camera_pose``."""
     pose = camera_pose if camera_pose is not None else (getattr(robot, "camera_pose", None) or None)
-    return resolve_T_base_camera(
-        pose,
-        state,
-        robot.base_outside_edge_m,  # type: ignore[attr-defined]
-        robot.base_min_object_distance_m,  # type: ignore[attr-defined]
-        robot.base_preferred_object_distance_m,  # type: ignore[attr-defined]
-        robot.base_max_object_distance_m,  # type: ignore[attr-defined]
-    )
+    return resolve_T_base_camera(pose, state, robot)
