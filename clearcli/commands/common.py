@@ -5,7 +5,6 @@ Only light imports here (typer, rich): `clear --help` must stay fast.
 
 from __future__ import annotations
 
-import sys
 from typing import Any, Mapping
 
 from clearcli.console import stderr, stdout  # noqa: F401  (re-exported)

@@ -12,7 +12,6 @@ categories ships as `clearcli/data/mosd_groups.toml` (``--groups mosd``).
 from __future__ import annotations
 
 import fnmatch
-import time
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 

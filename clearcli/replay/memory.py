@@ -21,6 +21,7 @@ import numpy as np
 
 from clearcli.predicates.state import SymbolicState
 from clearcli.replay.tracking import Vec3
+from clearcli.settings.replay import MemoryParams  # noqa: F401  ([memory]: defaults and ranges)
 
 
 @dataclass(frozen=True)
@@ -31,25 +32,6 @@ class PushRecord:
     # False once monitoring saw that the push did not move the object (jammed): then
     # the same push again is what would loop, not its reverse.
     moved: bool = True
-
-
-@dataclass(frozen=True)
-class MemoryParams:
-    # Pushes remembered per object: the last one is what a loop undoes; three also catch
-    # a square dance (push, sideways, back, sideways back).
-    per_object: int = 3
-    # Objects remembered at most (bounded state over a long log); the oldest go first.
-    max_objects: int = 64
-    # Pushes older than this many frames are forgotten: by then the scene has changed.
-    horizon_frames: int = 30
-    # A push undoes a remembered one when its direction is within this angle of the
-    # reverse: push directions come from PCA and wobble between frames, and a push
-    # 45 degrees off the reverse still brings the object mostly back.
-    reverse_angle_deg: float = 60.0
-    # Added cost per remembered push a candidate would undo. Costs without memory are 1
-    # per action (up to ~150 with the clearance cost), so a whole plan of other actions
-    # for a cluttered table stays cheaper than one undoing push.
-    reverse_penalty: int = 200
 
 
 @dataclass(frozen=True)

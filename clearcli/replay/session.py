@@ -53,8 +53,9 @@ class ReplayOptions:
     fail_fast: bool = False  # a failed frame ends the replay (raises)
     push_memory: bool = True  # False: the thesis's behaviour, for control runs
     stop_when_cleared: bool = True  # a frame with an empty table ends the session
-    tracking: TrackingParams = TrackingParams()
-    memory: MemoryParams = MemoryParams()
+    # None: the pipeline's settings' [tracking] and [memory] (their one home)
+    tracking: TrackingParams | None = None
+    memory: MemoryParams | None = None
 
 
 @dataclass(frozen=True)
@@ -266,7 +267,12 @@ class Session:
 
     def __init__(self, pipeline: Pipeline, options: ReplayOptions = ReplayOptions()) -> None:
         self.pipeline = pipeline
-        self.options = options
+        settings = pipeline.settings
+        self.options = dataclasses.replace(
+            options,
+            tracking=options.tracking if options.tracking is not None else settings.tracking,
+            memory=options.memory if options.memory is not None else settings.memory,
+        )
         self.tracker = TrackerState()
         self.memory = PushMemory()
         self.effect: ExpectedEffect | None = None

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 from typing import Iterable, Sequence
 
 import numpy as np
+from clearcli.settings.replay import TrackingParams  # noqa: F401  ([tracking]: defaults and ranges)
 
 Vec3 = tuple[float, float, float]
 
@@ -67,36 +68,6 @@ class ExpectedEffect:
     unit_vector: Vec3 | None = None  # push direction on the table, sensor frame
     push_length_m: float = 0.0
     extents_m: Vec3 = (0.0, 0.0, 0.0)  # the pushed object's box, for its swept path
-
-
-@dataclass(frozen=True)
-class TrackingParams:
-    # Weight of the size difference (m per m). Single-view boxes wobble by a centimetre
-    # or two between frames, and grow by several when a neighbour in front is taken
-    # away; half weight keeps such an object's id (on six simulated sessions with the
-    # real segmenter: 2 new ids for known objects in 195 observations, 4 at weight 1).
-    shape_weight: float = 0.5
-    # Largest cost still matched. Objects here are 3-15 cm apart in clutter and do not
-    # move unless an action moves them; 7 cm leaves room for segmentation jitter and a
-    # neighbour nudged by a push, without letting an object take its neighbour's id.
-    gate_m: float = 0.07
-    # A pushed object may land up to this far from the push segment (turning, sliding).
-    push_slack_m: float = 0.04
-    # Extra cost to keep the id of an object that was just grasped: only an object still
-    # in place (a failed grasp) should take it.
-    grasped_penalty_m: float = 0.03
-    # A track unseen for this many frames is forgotten (bounded state); until then an
-    # object that reappears (briefly occluded or missed by segmentation) keeps its id.
-    max_missing_frames: int = 3
-    # A push counts as done when the object moved along the push direction by at least
-    # this fraction of the push length (real pushes stop short at contacts).
-    push_done_fraction: float = 0.5
-    # Second chance for what the first pass leaves: an object that moved although no
-    # action was expected to move it (shoved by a neighbour's push, or a recorded action
-    # other than the replayed plan's) keeps its id when it is within this distance and
-    # its size matches within `rematch_shape_m`; a push is ~5-15 cm here.
-    rematch_distance_m: float = 0.15
-    rematch_shape_m: float = 0.015
 
 
 @dataclass(frozen=True)

@@ -13,12 +13,13 @@ projects back exactly onto its pixel grid.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 
 import numpy as np
 
 from clearcli.io.frames import LABEL_NONE, LABEL_TABLE, Frame, object_label
 from clearcli.sim.scene import Box, Cylinder, Scene, SceneObject, invert_transform
+from clearcli.settings.sim import DepthNoise, PinholeCamera  # noqa: F401  ([camera], [depth_noise])
+
 
 FRAME_ID = "camera_rgb_optical_frame"
 
@@ -44,58 +45,7 @@ OBJECT_RGB: tuple[tuple[int, int, int], ...] = (
 )
 
 
-@dataclass(frozen=True)
-class PinholeCamera:
-    """Intrinsics of the Kinect's (registered) depth camera."""
-
-    width: int = 640
-    height: int = 480
-    fx: float = 525.0
-    fy: float = 525.0
-    cx: float = 319.5
-    cy: float = 239.5
-
-    def ray_directions(self) -> np.ndarray:
-        """(H*W, 3) per-pixel ray directions scaled to z = 1, row-major (v, then u):
-        a point at depth z on pixel (u, v) is z * ray."""
-        u = np.arange(self.width, dtype=np.float64)
-        v = np.arange(self.height, dtype=np.float64)
-        uu, vv = np.meshgrid(u, v)
-        rays = np.empty((self.height * self.width, 3))
-        rays[:, 0] = ((uu - self.cx) / self.fx).ravel()
-        rays[:, 1] = ((vv - self.cy) / self.fy).ravel()
-        rays[:, 2] = 1.0
-        return rays
-
-    def project(self, points_camera: np.ndarray) -> np.ndarray:
-        """(N, 3) camera-frame points -> (N, 2) pixel coordinates (u, v), not rounded."""
-        p = np.asarray(points_camera, dtype=np.float64)
-        return np.stack(
-            [self.fx * p[:, 0] / p[:, 2] + self.cx, self.fy * p[:, 1] / p[:, 2] + self.cy], axis=1
-        )
-
-
 KINECT = PinholeCamera()
-
-
-@dataclass(frozen=True)
-class DepthNoise:
-    """Kinect depth errors. ``enabled=False`` renders exact depth."""
-
-    enabled: bool = True
-    # Nguyen et al. 2012, axial noise of the Kinect v1, fitted for 0.4-3 m.
-    sigma_base_m: float = 0.0012
-    sigma_quadratic_per_m: float = 0.0019
-    sigma_reference_z_m: float = 0.4
-    # Disparity: the Kinect reports disparity in 1/8 px over a ~7.5 cm baseline.
-    baseline_m: float = 0.075
-    disparity_step_px: float = 0.125
-    # Pixels behind a depth edge of more than this lose their depth with this probability.
-    dropout_edge_m: float = 0.01
-    dropout_probability: float = 0.35
-
-    def sigma_m(self, z_m: np.ndarray) -> np.ndarray:
-        return self.sigma_base_m + self.sigma_quadratic_per_m * (z_m - self.sigma_reference_z_m) ** 2
 
 
 def render(

@@ -34,6 +34,7 @@ from typing import TYPE_CHECKING, Any, Iterator, Sequence
 import numpy as np
 
 from clearcli.sim.scene import Cylinder, Scene, SceneObject, with_object_pose, without_object
+from clearcli.settings.sim import WorldParams  # noqa: F401  ([world]: defaults and ranges)
 
 if TYPE_CHECKING:
     from clearcli.io.frames import Frame
@@ -47,25 +48,6 @@ GRASP_TOLERANCE_M = 0.003
 # An object whose centre ends farther than this from where it started was moved by the
 # robot (a slipped grasp displaces it by ~4 mm, so this only counts pushes and shoves).
 MOVED_M = 0.01
-
-
-@dataclass(frozen=True)
-class WorldParams:
-    """How the simulated world departs from the planner's model."""
-
-    # Push: the object advances in steps of this length.
-    push_step_m: float = 0.005
-    # Heading noise per step (degrees) and yaw turn per step (always the same way within
-    # one push): a pushed box turns a degree or two per centimetre when the contact is
-    # off its centre.
-    heading_noise_deg: float = 1.0
-    yaw_noise_deg: float = 0.8
-    # A grasp across a width within this margin of the gripper's opening slips with
-    # this probability.
-    tight_grasp_margin_m: float = 0.01
-    tight_grasp_fail_probability: float = 0.5
-    # Seconds between frames (the thesis's actions take a few seconds each).
-    frame_interval_s: float = 1.0
 
 
 @dataclass(frozen=True)
@@ -442,14 +424,15 @@ class Episode:
         session: "Session",
         seed: int = 0,
         max_actions: int = 40,
-        params: WorldParams = WorldParams(),
+        params: WorldParams | None = None,
         start_s: float = 0.0,
     ) -> None:
         self.scene = scene
         self.session = session
         self.seed = seed
         self.max_actions = max_actions
-        self.params = params
+        # None: the session's settings' [world] (its one home)
+        self.params = params if params is not None else session.pipeline.settings.world
         self.start_s = start_s
         self.rng = np.random.default_rng(seed)
         self.steps: list[StepRecord] = []
@@ -459,7 +442,12 @@ class Episode:
     def render(self, index: int) -> "Frame":
         from clearcli.sim.camera import render
 
-        frame = render(self.scene, seed=self.seed * 1000 + index, stamp_s=self.start_s + index * self.params.frame_interval_s)
+        # the camera and its noise as the settings say ([camera], [depth_noise])
+        settings = self.session.pipeline.settings
+        frame = render(
+            self.scene, seed=self.seed * 1000 + index, stamp_s=self.start_s + index * self.params.frame_interval_s,
+            noise=settings.depth_noise, camera=settings.camera,
+        )
         return dataclasses.replace(frame, source=f"{self.scene.name}#{index}")
 
     def robot_placement(self, frame: "Frame") -> np.ndarray:
@@ -571,7 +559,8 @@ class Episode:
 
         settings = self.session.pipeline.settings
         reach = WorldReach(
-            T_base_table_of(T_base_camera, self.scene), settings.gripper, settings.push, table=self.scene.table
+            T_base_table_of(T_base_camera, self.scene), settings.gripper, settings.push,
+            params=settings.world_reach, table=self.scene.table,
         )
         return tuple(sorted(o.object_id for o in left if reach.why_not(o)))
 
@@ -750,8 +739,11 @@ def record_session(
     from clearcli.replay.session import ReplayOptions, Session
 
     pipeline = Pipeline(settings, segment_fn=truth_segment if truth_segmentation else None)
-    session = Session(pipeline, ReplayOptions(push_memory=push_memory, stop_when_cleared=True))
-    episode = Episode(world, session, seed=seed, max_actions=max_actions)
+    options = ReplayOptions(
+        push_memory=push_memory, stop_when_cleared=True, tracking=settings.tracking, memory=settings.memory
+    )
+    session = Session(pipeline, options)
+    episode = Episode(world, session, seed=seed, max_actions=max_actions, params=settings.world)
     first = episode.render(0)
     T_base_camera = episode.robot_placement(first)
     count = write_pointcloud2_mcap(path, episode, tf_static=static_transforms(T_base_camera, first.frame_id))

@@ -22,26 +22,17 @@ object's true pose and size (`clearcli.sim.scene`), with a different IK:
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from clearcli.robot.kinematics import capsule_spheres
 from clearcli.sim.scene import Box, Cylinder, Table
+from clearcli.settings.sim import WorldReachParams  # noqa: F401  ([world_reach])
 
 if TYPE_CHECKING:
     from clearcli.settings.geometry import GripperSettings, PushSettings
     from clearcli.sim.scene import Scene, SceneObject
-
-
-@dataclass(frozen=True)
-class WorldReachParams:
-    n_seeds: int = 24  # the planner's fallback solver uses 8
-    n_yaws: int = 8  # cylinders: closing directions tried over a half-turn
-    max_iterations: int = 200
-    # the arm's links (capsules) must stay this far above the table top where over it
-    table_margin_m: float = 0.0
 
 
 def grasp_poses_T_table_tcp(
