@@ -32,7 +32,7 @@ MOSD = REPO.parent / "shared" / "data" / "mosd"
 
 
 def frames(n: int | None) -> list[Path]:
-    from clearcli.batch.sources import natural_key
+    from clearcli.tasks.sources import natural_key
 
     files = sorted(MOSD.glob("learn/*.pcd"), key=natural_key) + sorted(MOSD.glob("test/*.pcd"), key=natural_key)
     return files[:n] if n else files

@@ -48,7 +48,7 @@ def _categories() -> list[tuple[str, list[str]]]:
     """mOSD's categories from the groups file `clear evaluate dataset --groups mosd` uses."""
     import fnmatch
 
-    from clearcli.batch.sources import natural_key
+    from clearcli.tasks.sources import natural_key
     from clearcli.evaluate.dataset import load_groups
 
     names = [f"learn/learn{i}.pcd" for i in range(45)] + [f"test/test{i}.pcd" for i in (44, 46, 47, 55, 57)]

@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING, Any, Callable, Mapping
 import numpy as np
 
 from clearcli.errors import ClearError, NoPlanError, SceneError
+from clearcli.status import FrameStatus
 
 if TYPE_CHECKING:
     from clearcli.io.frames import Frame
@@ -33,12 +34,9 @@ SegmentFn = Callable[["Frame", Any], "Segmentation"]
 StateFn = Callable[["Frame", "Segmentation", "Settings"], "SymbolicState"]
 PlanFn = Callable[..., "Plan"]
 
-# Statuses of one frame, in the order a replay reports them.
-OK = "ok"  # planned: the plan's first action is what the robot would do next
-CLEARED = "cleared"  # the table holds no object: nothing left to do
-NO_TABLE = "no_table"  # no usable table in the frame: skipped
-NO_PLAN = "no_plan"  # objects remain but no action can be taken (reason in the error)
-FAILED = "failed"  # a stage failed on this frame (error says which and why)
+# Statuses of one frame (clearcli/status.py), by their short names.
+OK, CLEARED, NO_TABLE = FrameStatus.OK, FrameStatus.CLEARED, FrameStatus.NO_TABLE
+NO_PLAN, FAILED = FrameStatus.NO_PLAN, FrameStatus.FAILED
 
 
 @dataclass(frozen=True, eq=False)

@@ -94,7 +94,7 @@ def test_bad_inputs_reported_each_in_its_line(tmp_path: Path) -> None:
 
 SLOW_WRITES = '''
 import time
-import clearcli.io.files as files
+import clearcli.files as files
 _orig = files.atomic_output
 import contextlib
 @contextlib.contextmanager

@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Mapping, Sequence
 
-from clearcli.batch.sources import BadInput, FrameRef, check_unique_names, expand
+from clearcli.tasks.sources import BadInput, FrameRef, check_unique_names, expand
 from clearcli.batch.work import MARK, Job, run_job
 from clearcli.errors import EXIT_BATCH_FAILED, EXIT_INTERRUPTED, EXIT_NO_PLAN, EXIT_OK, EXIT_PARTIAL_PLAN, InputError
 
@@ -144,7 +144,7 @@ def claim_out_dir(req: BatchRequest) -> None:
     settings), else one line, exit 3, before any work. ``--force`` takes the folder over:
     with ``--resume`` it redoes only the frames made otherwise (`_clean_stale`), and keeps
     the rest. A folder with results but no record is treated as made otherwise."""
-    from clearcli.io.files import atomic_output
+    from clearcli.files import atomic_output
 
     assert req.out_dir is not None
     record = settings_record(req)

@@ -46,7 +46,7 @@ class Job:
 
 def _check_outputs(job: Job) -> None:
     """Refuse to overwrite a frame's outputs or its mark (without --force): exit 8."""
-    from clearcli.io.files import check_output_path
+    from clearcli.files import check_output_path
 
     paths = [job.output_path(kind) for kind in job.outputs] + [job.mark_path()]
     for p in paths:
@@ -109,7 +109,7 @@ def run_job(job: Job) -> dict[str, Any]:
 def write_mark(mark: Path, line: Mapping[str, Any]) -> None:
     """The frame's line as ``<name>.json``, whole or not at all: written last, it says
     that every output of the frame is complete."""
-    from clearcli.io.files import atomic_output
+    from clearcli.files import atomic_output
 
     with atomic_output(mark, "w") as handle:
         handle.write(json.dumps(line, separators=(",", ":"), allow_nan=False) + "\n")

@@ -8,7 +8,7 @@ from __future__ import annotations
 from typing import Any, Mapping
 
 from clearcli.console import stderr, stdout  # noqa: F401  (re-exported)
-from clearcli.io.files import atomic_output, atomic_path, check_output_path  # noqa: F401  (re-exported)
+from clearcli.files import atomic_output, atomic_path, check_output_path  # noqa: F401  (re-exported)
 
 
 def print_json(schema: str, version: int, payload: Mapping[str, Any], settings: Any, command: str) -> None:

@@ -24,7 +24,7 @@ All coordinates in metres in the sensor frame of the input.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated, Any, Optional
+from typing import Annotated, Optional
 
 import typer
 

@@ -96,7 +96,7 @@ def write_csv(path: Path, docs: Sequence[Mapping[str, Any]]) -> None:
     import csv
     import io
 
-    from clearcli.io.files import atomic_output
+    from clearcli.files import atomic_output
 
     cols = ["source", "group", "n_true", "n_pred", "true_positives", "precision", "recall", "f1",
             "mean_best_iou", "over_segmented", "under_segmented", "time_s"]
@@ -116,7 +116,7 @@ def write_png(path: Path, docs: Sequence[Mapping[str, Any]]) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from clearcli.io.files import atomic_path
+    from clearcli.files import atomic_path
 
     names = [Path(d["source"]).stem for d in docs]
     groups = [d.get("group") or "" for d in docs]

@@ -653,7 +653,7 @@ def write_pointcloud2_mcap(
     """
     from mcap_ros2.writer import Writer
 
-    from clearcli.io.files import atomic_output
+    from clearcli.files import atomic_output
 
     path = Path(path)
     label_iter = iter(labels) if labels is not None else None

@@ -238,7 +238,7 @@ def write_pcd(path: Path, frame: Frame, labels: np.ndarray | None = None) -> Non
     """
     import pypcd4
 
-    from clearcli.io.files import atomic_path
+    from clearcli.files import atomic_path
 
     path = Path(path)
     n = frame.n_points

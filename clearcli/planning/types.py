@@ -9,6 +9,8 @@ import numpy as np
 
 from clearcli.predicates.state import Fact
 
+from clearcli.status import PlanStatus
+
 
 @dataclass(frozen=True)
 class Action:
@@ -101,8 +103,8 @@ class Plan:
     probe: str = ""
 
     @property
-    def status(self) -> str:
+    def status(self) -> PlanStatus:
         """complete: every object removed; partial: some left; no_plan: nothing to do."""
         if not self.left:
-            return "complete"
-        return "partial" if self.actions and self.goal else "no_plan"
+            return PlanStatus.COMPLETE
+        return PlanStatus.PARTIAL if self.actions and self.goal else PlanStatus.NO_PLAN

@@ -498,7 +498,7 @@ class AnnotatedLog:
     def __enter__(self) -> "AnnotatedLog":
         from mcap.writer import CompressionType, Writer
 
-        from clearcli.io.files import atomic_output
+        from clearcli.files import atomic_output
 
         try:
             handle = self._stack.enter_context(atomic_output(self.out_path))

@@ -37,7 +37,7 @@ def run(request: Request, source: Source) -> Outcome:
     write_plan_files(state, plan, problem=out.get("problem"), domain=out.get("domain"), output=out.get("plan"))
     png = out.get("png")
     if png is not None:
-        from clearcli.io.files import atomic_path
+        from clearcli.files import atomic_path
         from clearcli.render.plan_png import render_plan
 
         with atomic_path(png) as tmp:
@@ -53,7 +53,7 @@ def run(request: Request, source: Source) -> Outcome:
 def write_plan_files(state: Any, plan: Any, *, problem: Path | None, domain: Path | None, output: Path | None) -> None:
     """The problem (and domain) first, the plan file last, each written whole or not at
     all: a plan file on disk means its problem is complete."""
-    from clearcli.io.files import atomic_output
+    from clearcli.files import atomic_output
     from clearcli.planning.pddl import domain_for, write_plan, write_problem
 
     if problem is not None:

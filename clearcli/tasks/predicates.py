@@ -29,7 +29,7 @@ def run(request: Request, source: Source) -> Outcome:
     state = pipeline.stated(frame, seg, request.settings)
     problem = request.outputs.get("problem")
     if problem is not None:
-        from clearcli.io.files import atomic_output
+        from clearcli.files import atomic_output
         from clearcli.planning.pddl import write_problem
 
         text = write_problem(state)
@@ -37,7 +37,7 @@ def run(request: Request, source: Source) -> Outcome:
             handle.write(text)
     png = request.outputs.get("png")
     if png is not None:
-        from clearcli.io.files import atomic_path
+        from clearcli.files import atomic_path
         from clearcli.render.predicates_png import render_predicates_png
 
         with atomic_path(png) as tmp:

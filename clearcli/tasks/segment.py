@@ -30,7 +30,7 @@ def run(request: Request, source: Source) -> Outcome:
         write_pcd(labels, frame, seg.labels())
     png = request.outputs.get("png")
     if png is not None:
-        from clearcli.io.files import atomic_path
+        from clearcli.files import atomic_path
         from clearcli.render.segment_png import render_segmentation
 
         with atomic_path(png) as tmp:
