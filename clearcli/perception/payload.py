@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
+from clearcli.io.frames import object_label
 from clearcli.rounding import rounded, timings
 
 if TYPE_CHECKING:
@@ -12,11 +13,6 @@ if TYPE_CHECKING:
 
 SCHEMA = "segmentation"
 VERSION = 1
-
-
-def label_of(k: int) -> int:
-    """The label object k carries in a labels PCD (0 none, 1 table, 10 (k + 1) objects)."""
-    return 10 * (k + 1)
 
 
 def segmentation_payload(seg: "Segmentation") -> dict[str, Any]:
@@ -34,7 +30,7 @@ def segmentation_payload(seg: "Segmentation") -> dict[str, Any]:
         "objects": [
             {
                 "id": k,
-                "label": label_of(k),
+                "label": object_label(k),
                 "n_points": obj.n_points,
                 "centroid": rounded(obj.centroid),
                 "obb": {

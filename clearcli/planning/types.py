@@ -8,7 +8,6 @@ from typing import Mapping
 import numpy as np
 
 from clearcli.predicates.state import Fact
-
 from clearcli.status import PlanStatus
 
 

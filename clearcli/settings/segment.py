@@ -64,7 +64,7 @@ class SegmentSettings(Section):
     # normals on curved objects; mean F1 on the learn frames 0.932 against 0.923
     seed_m: float = param(0.03, ge=0.005, le=0.2)
     color_importance: float = param(0.0, ge=0, le=100)
-    spatial_importance: float = param(1.0, ge=0, le=100)
+    spatial_importance: float = param(1.0, gt=0, le=100)
     normal_importance: float = param(4.0, ge=0, le=100)
     # radius (m) of the neighbourhood for voxel normals
     normal_radius_m: float = param(0.015, ge=0.002, le=0.1)
