@@ -11,8 +11,6 @@ sections or keys are an error: a typo must not be silently ignored.
 from __future__ import annotations
 
 import dataclasses
-import hashlib
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterable, Mapping
@@ -92,6 +90,8 @@ def parse_set(text: str) -> tuple[str, str, Any]:
     section, dot, key = name.strip().partition(".")
     if not sep or not dot or not section or not key:
         raise SettingsError(f"--set {text!r}: expected SECTION.KEY=VALUE, e.g. --set segment.voxel_m=0.005")
+    import tomllib
+
     raw = raw.strip()
     try:
         value = tomllib.loads(f"v = {raw}")["v"]
@@ -111,6 +111,8 @@ def apply_sets(settings: Settings, sets: Iterable[str]) -> Settings:
 
 
 def read_settings_file(path: Path) -> dict[str, Any]:
+    import tomllib
+
     try:
         text = Path(path).read_text(encoding="utf-8")
     except FileNotFoundError:
@@ -177,5 +179,7 @@ def settings_to_toml(settings: Settings, sections: Iterable[str] | None = None, 
 def digest(settings: Settings, sections: Iterable[str]) -> str:
     """A short hash of the named sections' resolved values: two results with the same
     digest were made with the same settings for what that command reads."""
+    import hashlib
+
     text = settings_to_toml(settings, tuple(sections))
     return "sha256:" + hashlib.sha256(text.encode("utf-8")).hexdigest()[:16]
