@@ -96,7 +96,8 @@ def run_session(seed: int, mode: str, settings_path: str = "", kind: str = "mixe
     from clearcli.pipeline import Pipeline
     from clearcli.replay.session import ReplayOptions, Session
     from clearcli.settings import Settings, load_settings
-    from clearcli.sim.episode import Episode, truth_segment
+    from clearcli.sim.episode import Episode
+    from clearcli.sim.truth import truth_segment
 
     world = session_scene(seed, kind)
     settings = load_settings(Path(settings_path)) if settings_path else Settings()

@@ -179,7 +179,8 @@ def run_sessions(n_sessions: int, push_memory: bool, truth: bool, max_actions: i
     from clearcli.replay.session import ReplayOptions, Session
     from clearcli.settings import Settings
     from clearcli.sim import scene as scenes
-    from clearcli.sim.episode import Episode, truth_segment
+    from clearcli.sim.episode import Episode
+    from clearcli.sim.truth import truth_segment
 
     results = []
     seed = -1

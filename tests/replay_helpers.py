@@ -33,7 +33,9 @@ def simulated_session(directory: Path) -> dict[str, Any]:
     from clearcli.replay.session import Session
     from clearcli.settings import Settings
     from clearcli.sim import scene as scenes
-    from clearcli.sim.episode import Episode, static_transforms, truth_segment
+    from clearcli.sim.episode import Episode
+    from clearcli.sim.record import static_transforms
+    from clearcli.sim.truth import truth_segment
 
     made: dict[str, Any] = {}
     for n_objects, seed in CANDIDATES:

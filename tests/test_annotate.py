@@ -36,7 +36,7 @@ def _run(capsys, monkeypatch, *args: str) -> tuple[int, str, str]:
 @pytest.fixture
 def truth_segmentation(monkeypatch: pytest.MonkeyPatch) -> None:
     import clearcli.pipeline as pipeline
-    from clearcli.sim.episode import truth_segment
+    from clearcli.sim.truth import truth_segment
 
     monkeypatch.setattr(pipeline, "_default_segment", lambda: truth_segment)
 

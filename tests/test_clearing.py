@@ -60,7 +60,7 @@ def test_raised_contact_heights_by_hand() -> None:
 def _state(scene: S.Scene, settings: Settings, seed: int = 1):  # type: ignore[no-untyped-def]
     from clearcli.pipeline import Pipeline
     from clearcli.sim.camera import render
-    from clearcli.sim.episode import truth_segment
+    from clearcli.sim.truth import truth_segment
 
     pipeline = Pipeline(settings, segment_fn=truth_segment)
     frame = render(scene, seed=seed)
@@ -128,7 +128,7 @@ def test_raised_push_not_offered_where_the_object_would_tip() -> None:
     def n_options(world: S.Scene) -> dict[str, int]:
         from clearcli.geometry.models import build_from_columns, object_columns
         from clearcli.sim.camera import render
-        from clearcli.sim.episode import truth_segment
+        from clearcli.sim.truth import truth_segment
 
         frame = render(world, seed=4)
         seg = truth_segment(frame)
@@ -231,7 +231,7 @@ def test_no_offcentre_alternatives_on_a_short_object() -> None:
     from clearcli.geometry.models import TableFrame, build_from_columns, object_columns
     from clearcli.geometry.poses import grasp_geometry
     from clearcli.sim.camera import render
-    from clearcli.sim.episode import truth_segment
+    from clearcli.sim.truth import truth_segment
 
     settings = Settings()
     gripper = gripper_model(settings.gripper)
@@ -261,7 +261,8 @@ def test_hemmed_in_scene_ends_with_no_plan_and_the_reason_without_spinning() -> 
     middle one the tallest: lower, the front box would hide part of it from the camera)."""
     from clearcli.pipeline import Pipeline
     from clearcli.replay.session import ReplayOptions, Session
-    from clearcli.sim.episode import Episode, truth_segment
+    from clearcli.sim.episode import Episode
+    from clearcli.sim.truth import truth_segment
 
     centre = S.Box(0, 0.09, 0.09, 0.12, x_m=0.0, y_m=0.05)
     ring = [
@@ -313,7 +314,7 @@ def test_hemmed_in_scene_ends_with_no_plan_and_the_reason_without_spinning() -> 
 
 
 def test_push_contacts_by_hand() -> None:
-    from clearcli.sim.episode import push_contacts
+    from clearcli.sim.physics import push_contacts
 
     # two 4 cm boxes side by side along x (faces at x = -0.04, 0, 0.04), 6 cm long along y
     a = S.Box(0, 0.04, 0.06, 0.08, x_m=-0.02, y_m=0.0)
@@ -337,7 +338,7 @@ def test_push_contacts_by_hand() -> None:
 def test_grasp_contacts_and_opening_by_hand() -> None:
     from clearcli.geometry.gripper import gripper_model
     from clearcli.predicates.relations import grasp_opening_m
-    from clearcli.sim.episode import grasp_contacts
+    from clearcli.sim.physics import grasp_contacts
 
     g = gripper_model(GripperSettings())  # opens to 7 cm, closes to 3 cm
     assert grasp_opening_m(0.04, g, 0.01) == pytest.approx(0.06)  # 4 + 2 x 1 cm
@@ -531,7 +532,8 @@ def test_two_boxes_merged_end_to_end_are_taken_after_one_failed_grasp(seed: int)
 def test_budget_spent_on_the_last_object_counts_as_cleared() -> None:
     from clearcli.pipeline import Pipeline
     from clearcli.replay.session import ReplayOptions, Session
-    from clearcli.sim.episode import Episode, truth_segment
+    from clearcli.sim.episode import Episode
+    from clearcli.sim.truth import truth_segment
 
     world = S.make_scene("one", [S.Box(0, 0.05, 0.04, 0.08, x_m=0.0, y_m=0.05)])
     episode = Episode(world, Session(Pipeline(_settings(), segment_fn=truth_segment), ReplayOptions()), seed=3, max_actions=1)

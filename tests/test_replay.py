@@ -27,7 +27,7 @@ from clearcli.replay.session import (
 )
 from clearcli.settings import Settings
 from clearcli.sim import scene as scenes
-from clearcli.sim.episode import truth_segment, world_object_of
+from clearcli.sim.truth import truth_segment, world_object_of
 from replay_helpers import simulated_session
 from utils import REPO, shared_path
 
@@ -433,7 +433,8 @@ def test_user_errors_are_one_line_with_their_exit_codes(tmp_path: Path) -> None:
 
 
 def test_world_push_slides_shoves_and_stalls() -> None:
-    from clearcli.sim.episode import WorldParams, separation, world_push
+    from clearcli.sim.episode import WorldParams
+    from clearcli.sim.physics import separation, world_push
     from clearcli.sim.scene import Box, make_scene
 
     quiet = WorldParams(heading_noise_deg=0.0, yaw_noise_deg=0.0)
@@ -463,7 +464,7 @@ def test_world_push_slides_shoves_and_stalls() -> None:
 
 
 def test_world_push_turns_the_object_with_seeded_noise() -> None:
-    from clearcli.sim.episode import world_push
+    from clearcli.sim.physics import world_push
     from clearcli.sim.scene import Box, make_scene
 
     alone = make_scene("alone", [Box(0, 0.05, 0.04, 0.08, x_m=0.0, y_m=0.0)])
@@ -476,7 +477,7 @@ def test_world_push_turns_the_object_with_seeded_noise() -> None:
 
 
 def test_world_grasp_of_a_tight_object_slips_sometimes() -> None:
-    from clearcli.sim.episode import world_grasp
+    from clearcli.sim.physics import world_grasp
     from clearcli.sim.scene import Box, make_scene
 
     rng = np.random.default_rng(1)
@@ -490,7 +491,7 @@ def test_world_grasp_of_a_tight_object_slips_sometimes() -> None:
 
 
 def test_world_grasp_never_holds_an_object_too_wide_or_too_narrow() -> None:
-    from clearcli.sim.episode import truly_ungraspable, world_grasp
+    from clearcli.sim.physics import truly_ungraspable, world_grasp
     from clearcli.sim.scene import Box, Cylinder, make_scene
 
     rng = np.random.default_rng(2)

@@ -145,8 +145,8 @@ def plan_cmd(
         typer.Option(
             "--time-limit",
             help="Seconds for the whole planning, backtracking included. When it runs out with a plan "
-            "whose actions all check out, that plan is printed with deadline true; with none, exit 6.",
-            min=0.1,
+            "whose actions all check out, that plan is printed with deadline true; with none, exit 6. "
+            "An alias of --set plan.time_limit_s=SECONDS (checked like it).",
         ),
     ] = None,
     topic: bo.Topic = None,

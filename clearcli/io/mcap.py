@@ -40,7 +40,7 @@ from clearcli.io.pointfields import (
     records_from_blob,
 )
 
-from clearcli.io.read import MCAP_MAGIC  # noqa: E402  (the signatures live with the sniffer)
+from clearcli.io.sniff import MCAP_MAGIC  # noqa: E402
 DEFAULT_TOPIC = "/camera/depth_registered/points"
 DEFAULT_FRAME_ID = "camera_rgb_optical_frame"
 

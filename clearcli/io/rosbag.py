@@ -51,7 +51,7 @@ from clearcli.io.mcap import (
     error_reason,
 )
 
-from clearcli.io.read import ROSBAG1_MAGIC, ROSBAG2_METADATA  # noqa: E402
+from clearcli.io.sniff import ROSBAG1_MAGIC, ROSBAG2_METADATA  # noqa: E402
 TF_TOPICS = ("/tf_static", "/tf")
 
 BagFormat = Literal["rosbag1", "rosbag2"]

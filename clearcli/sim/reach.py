@@ -6,7 +6,7 @@ on would reward a planner for giving up. So the world judges by itself, from the
 object's true pose and size (`clearcli.sim.scene`), with a different IK:
 
 * **Can the gripper hold it?** Its narrowest width is within the gripper's opening
-  and above its closing width (`episode.truly_ungraspable`).
+  and above its closing width (`physics.truly_ungraspable`).
 * **Does an arm motion reach it?** A top-down grasp of the object standing alone (the
   other objects can be moved out of the way; the table cannot): the closing point half
   the closing region below its top, the fingertips at least ``fingertips_above_table_m``
@@ -125,7 +125,7 @@ class WorldReach:
     def why_not(self, obj: "SceneObject") -> str:
         """Empty when the gripper can hold ``obj`` and some top-down grasp of it has an
         arm motion; else why not."""
-        from clearcli.sim.episode import truly_ungraspable
+        from clearcli.sim.physics import truly_ungraspable
 
         if truly_ungraspable(obj, self.gripper.opening_width_m, self.gripper.closing_width_m):
             return "the gripper cannot hold it (narrowest width beyond the opening or under the closing width)"

@@ -35,7 +35,7 @@ def run(request: Request, out: Path) -> dict[str, Any]:
     """Simulate and write the log to ``out``; the summary payload."""
     from clearcli.errors import SettingsError
     from clearcli.sim import scene as scenes
-    from clearcli.sim.episode import record_session
+    from clearcli.sim.record import record_session
 
     check(request)
     try:

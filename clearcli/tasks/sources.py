@@ -70,7 +70,7 @@ def _files_in(folder: Path) -> list[Path]:
 def _is_log(path: Path) -> bool:
     """A log (frames named with their index): MCAP, ROS 1 bag, rosbag2 (folder, .db3,
     metadata.yaml); told by content, as `io.read.sniff` does."""
-    from clearcli.io.read import MCAP_MAGIC, ROSBAG1_MAGIC, ROSBAG2_METADATA, SQLITE_MAGIC
+    from clearcli.io.sniff import MCAP_MAGIC, ROSBAG1_MAGIC, ROSBAG2_METADATA, SQLITE_MAGIC
 
     if path.is_dir() or path.name == ROSBAG2_METADATA:
         return True

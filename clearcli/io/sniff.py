@@ -1,0 +1,73 @@
+"""What a file is, told by its first bytes, not its name: PCD, MCAP, a ROS 1 bag, or a
+rosbag2 bag (a folder holding `metadata.yaml`, that file itself, or a `.db3` file).
+
+The signatures live here, below every reader, so that telling a PCD apart imports no log
+reader and the readers can share them without importing each other.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Literal
+
+from clearcli.errors import InputError
+
+_SNIFF_BYTES = 64
+# File signatures.
+MCAP_MAGIC = b"\x89MCAP0\r\n"
+ROSBAG1_MAGIC = b"#ROSBAG"
+SQLITE_MAGIC = b"SQLite format 3\x00"
+ROSBAG2_METADATA = "metadata.yaml"
+FileKind = Literal["pcd", "mcap", "rosbag1", "rosbag2"]
+
+
+def _directory_kind(path: Path) -> FileKind:
+    if (path / ROSBAG2_METADATA).is_file():
+        return "rosbag2"
+    try:
+        storage = sorted(p.name for p in path.iterdir() if p.suffix in (".db3", ".mcap"))
+    except OSError:
+        storage = []
+    hint = (
+        f"; it holds {', '.join(storage[:3])}{' ...' if len(storage) > 3 else ''}: pass that file instead"
+        if storage
+        else ""
+    )
+    raise InputError(
+        f"{path}: is a directory without {ROSBAG2_METADATA} (not a rosbag2 bag); "
+        f"expected a .pcd, .mcap or .bag file or a rosbag2 folder{hint}"
+    )
+
+
+def sniff(path: Path) -> FileKind:
+    """"pcd", "mcap", "rosbag1" (a ROS 1 bag) from the file's first bytes (not its name), or
+    "rosbag2" for a rosbag2 folder, its metadata.yaml or a .db3 file; InputError otherwise."""
+    from clearcli.io.pcd import looks_like_pcd
+
+    path = Path(path)
+    if path.is_dir():
+        return _directory_kind(path)
+    try:
+        with open(path, "rb") as fp:
+            head = fp.read(_SNIFF_BYTES)
+    except FileNotFoundError:
+        raise InputError(f"{path}: file not found") from None
+    except IsADirectoryError:
+        return _directory_kind(path)
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read ({exc.strerror})") from None
+    if not head:
+        raise InputError(f"{path}: empty file (0 bytes); expected a PCD or MCAP file or a bag")
+    if head.startswith(MCAP_MAGIC):
+        return "mcap"
+    if head.startswith(ROSBAG1_MAGIC):
+        return "rosbag1"
+    if head.startswith(SQLITE_MAGIC) or (
+        path.name == ROSBAG2_METADATA and head.lstrip().startswith(b"rosbag2_bagfile_information")
+    ):
+        return "rosbag2"
+    if looks_like_pcd(head):
+        return "pcd"
+    if path.suffix.lower() == ".pcd":
+        raise InputError(f"{path}: not a PCD file (it does not start with a PCD header)")
+    raise InputError(f"{path}: not an MCAP file, a ROS bag or a PCD file (unrecognised first bytes)")
