@@ -88,7 +88,8 @@ def fd_table(sizes: list[int], seeds: int, lifted_limit_s: float) -> None:
 def ik_per_action() -> None:
     from clearcli.planning.feasibility import IKActionChecker
     from clearcli.planning.types import Action, CheckedAction
-    from clearcli.robot.kinematics import WamKinematics, make_obstacles
+    from clearcli.robot.collision import make_obstacles
+    from clearcli.robot.kinematics import WamKinematics
 
     state = ps.clutter(9)
     kin = WamKinematics()

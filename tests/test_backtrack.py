@@ -203,7 +203,8 @@ def test_random_states_with_random_ik_failures(seed: int) -> None:
 
 def test_ik_checker_on_scene_grasp_and_push() -> None:
     state = ps.clutter(3)
-    from clearcli.robot.kinematics import WamKinematics, make_obstacles
+    from clearcli.robot.collision import make_obstacles
+    from clearcli.robot.kinematics import WamKinematics
 
     kin = WamKinematics()
     checker = IKActionChecker(state, ps.T_BASE_CAMERA, kin, make_obstacles(state, ps.T_BASE_CAMERA))
@@ -260,7 +261,8 @@ def test_push_lookahead_rejects_a_push_that_leaves_the_object_out_of_reach(x: fl
     shoulder's axis it ends at 0.22 m, where the WAM folded past its limits has no
     top-down grasp; from 0.40 m it ends at 0.30 m and stays graspable. The push itself
     has arm motions either way."""
-    from clearcli.robot.kinematics import WamKinematics, make_obstacles
+    from clearcli.robot.collision import make_obstacles
+    from clearcli.robot.kinematics import WamKinematics
 
     state = ps.scene({"o0": ps.Box(x, 0.0, size=(0.10, 0.05, 0.08))})
     kin = WamKinematics()

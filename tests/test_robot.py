@@ -10,14 +10,8 @@ import pytest
 
 from clearcli.errors import SettingsError
 from clearcli.robot import placement
-from clearcli.robot.kinematics import (
-    REACH_TOOL_PLATE_M,
-    Obstacles,
-    WamKinematics,
-    capsule_spheres,
-    half_turn,
-    hull_planes,
-)
+from clearcli.robot.collision import Obstacles, capsule_spheres, hull_planes
+from clearcli.robot.kinematics import REACH_TOOL_PLATE_M, WamKinematics, half_turn
 from utils import shared_path
 
 

@@ -39,7 +39,7 @@ A log or bag broken after complete frames is described, then the command exits 9
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Any, Optional
+from typing import Annotated, Any
 
 import typer
 

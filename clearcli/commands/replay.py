@@ -32,7 +32,6 @@ import typer
 from clearcli.commands import options as bo
 
 if TYPE_CHECKING:
-    from clearcli.io.frames import Frame
     from clearcli.replay.session import FrameReport, Summary
 
 

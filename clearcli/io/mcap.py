@@ -29,6 +29,7 @@ import numpy as np
 
 from clearcli.errors import InputError, OutputError, PartialLogError
 from clearcli.io.frames import Frame
+from clearcli.transforms import matrix_to_quat, quat_to_matrix
 from clearcli.io.pointfields import (
     FOXGLOVE_TYPE_NAMES,
     FOXGLOVE_TYPES,
@@ -349,18 +350,14 @@ def pointcloud2_frame(msg: Any, log_time_ns: int, source: str) -> Frame:
 
 
 def quat_matrix(q: Sequence[float]) -> np.ndarray:
-    x, y, z, w = q
-    norm = x * x + y * y + z * z + w * w
-    if norm == 0.0:
+    """A message's (x, y, z, w) orientation as a rotation; all zeros (an unset pose) is
+    the identity."""
+    if not any(float(v) for v in q):
         return np.eye(3)
-    s = 2.0 / norm
-    return np.array(
-        [
-            [1 - s * (y * y + z * z), s * (x * y - z * w), s * (x * z + y * w)],
-            [s * (x * y + z * w), 1 - s * (x * x + z * z), s * (y * z - x * w)],
-            [s * (x * z - y * w), s * (y * z + x * w), 1 - s * (x * x + y * y)],
-        ]
-    )
+    try:
+        return quat_to_matrix(q)
+    except ValueError:
+        raise InputError(f"pose orientation {list(q)} is not a rotation (not finite)") from None
 
 
 def foxglove_frame(msg: Any, log_time_ns: int, source: str) -> Frame:
@@ -555,28 +552,6 @@ def _time(stamp_s: float) -> dict[str, int]:
     return {"sec": int(sec), "nanosec": int(nanosec)}
 
 
-def _matrix_quat(R: np.ndarray) -> tuple[float, float, float, float]:
-    """Rotation matrix -> (x, y, z, w), w >= 0 (Shepperd's method, numerically safe)."""
-    m = np.asarray(R, dtype=float)
-    trace = m[0, 0] + m[1, 1] + m[2, 2]
-    if trace > 0:
-        s = 2.0 * np.sqrt(trace + 1.0)
-        w, x, y, z = 0.25 * s, (m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s
-    elif m[0, 0] > m[1, 1] and m[0, 0] > m[2, 2]:
-        s = 2.0 * np.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2])
-        w, x, y, z = (m[2, 1] - m[1, 2]) / s, 0.25 * s, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s
-    elif m[1, 1] > m[2, 2]:
-        s = 2.0 * np.sqrt(1.0 + m[1, 1] - m[0, 0] - m[2, 2])
-        w, x, y, z = (m[0, 2] - m[2, 0]) / s, (m[0, 1] + m[1, 0]) / s, 0.25 * s, (m[1, 2] + m[2, 1]) / s
-    else:
-        s = 2.0 * np.sqrt(1.0 + m[2, 2] - m[0, 0] - m[1, 1])
-        w, x, y, z = (m[1, 0] - m[0, 1]) / s, (m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, 0.25 * s
-    q = np.array([x, y, z, w])
-    q /= np.linalg.norm(q)
-    if q[3] < 0:
-        q = -q
-    return float(q[0]), float(q[1]), float(q[2]), float(q[3])
-
 
 def _pointcloud2_dict(frame: Frame, labels: np.ndarray | None) -> dict[str, Any]:
     n = frame.n_points
@@ -621,7 +596,7 @@ def _tf_dict(transforms: Sequence[StaticTransform]) -> dict[str, Any]:
     out = []
     for tf in transforms:
         T = np.asarray(tf.T_parent_child, dtype=float)
-        x, y, z, w = _matrix_quat(T[:3, :3])
+        x, y, z, w = matrix_to_quat(T[:3, :3])
         out.append(
             {
                 "header": {"stamp": _time(tf.stamp_s), "frame_id": tf.parent_frame},

@@ -504,7 +504,8 @@ def make_plan(
     """Plan for ``state`` (SymbolicState) with the WAM at ``T_base_camera`` (else from
     ``[robot] camera_pose`` or derived from the table, see clearcli/robot/placement.py).
     ``check``: "whole" or "first" (default ``[plan] check``)."""
-    from clearcli.robot.kinematics import kinematics_from_settings, make_obstacles
+    from clearcli.robot.collision import make_obstacles
+    from clearcli.robot.kinematics import kinematics_from_settings
     from clearcli.robot.placement import placement_from_settings
 
     robot = settings.robot  # type: ignore[attr-defined]

@@ -91,12 +91,12 @@ EMPTY = SceneContext()
 
 
 def context_obstacles(base: Any, ctx: SceneContext, T_base_camera: np.ndarray) -> Any:
-    """The arm's obstacles (`kinematics.Obstacles`, robot base frame) in ``ctx``:
+    """The arm's obstacles (`collision.Obstacles`, robot base frame) in ``ctx``:
     grasped objects left out, pushed ones translated (a hull's face planes move by
     n.s, its box by s)."""
     if not ctx.removed and not ctx.shifts:
         return base
-    from clearcli.robot.kinematics import Obstacles
+    from clearcli.robot.collision import Obstacles
 
     R = np.asarray(T_base_camera, dtype=float)[:3, :3]
     shifts = {n: R @ np.asarray(s, dtype=float) for n, s in ctx.shifts}
@@ -126,7 +126,7 @@ def check_sequence(kin: Any, obstacles: Any, poses_base: Sequence[np.ndarray], t
     solved from the previous one's solution. A collision with objects does not stop the
     check: every object the motion hits is collected (what backtracking learns), unless
     a later pose has no solution at all."""
-    from clearcli.robot.kinematics import capsule_spheres
+    from clearcli.robot.collision import capsule_spheres
 
     n = len(poses_base)
     for i, T in enumerate(poses_base):

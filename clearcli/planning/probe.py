@@ -125,7 +125,8 @@ def probe_push(
     the seam of two merged objects drives the nearer into the other (they stay together),
     one along the seam slides it past."""
     from clearcli.planning.feasibility import IKActionChecker
-    from clearcli.robot.kinematics import kinematics_from_settings, make_obstacles
+    from clearcli.robot.collision import make_obstacles
+    from clearcli.robot.kinematics import kinematics_from_settings
 
     tried = tried or {}
     names = [

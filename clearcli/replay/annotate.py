@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING, Any, Iterator
 import numpy as np
 
 from clearcli.errors import OutputError
+from clearcli.transforms import matrix_to_quat
 
 if TYPE_CHECKING:
     from clearcli.io.frames import Frame
@@ -228,16 +229,8 @@ def _vec(v: Any) -> dict[str, float]:
 
 
 def _quat_from_matrix(R: np.ndarray) -> dict[str, float]:
-    from scipy.spatial.transform import Rotation
-
-    # project onto SO(3) first: PCA axes and poses from other stages may be a hair off
-    u, _, vt = np.linalg.svd(np.asarray(R, dtype=float))
-    R = u @ vt
-    if np.linalg.det(R) < 0:
-        u[:, -1] *= -1
-        R = u @ vt
-    x, y, z, w = Rotation.from_matrix(R).as_quat()
-    return {"x": float(x), "y": float(y), "z": float(z), "w": float(w)}
+    x, y, z, w = matrix_to_quat(R)  # projected onto SO(3) first: PCA axes may be a hair off
+    return {"x": x, "y": y, "z": z, "w": w}
 
 
 def _pose(T: np.ndarray) -> dict[str, Any]:

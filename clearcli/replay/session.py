@@ -552,15 +552,10 @@ def _field(msg: Any, *names: str) -> Any:
 
 
 def _transform_matrix(translation: Any, rotation: Any) -> np.ndarray:
-    from scipy.spatial.transform import Rotation
+    from clearcli.transforms import pose_to_matrix
 
     q = [float(_field(rotation, k) or 0.0) for k in ("x", "y", "z", "w")]
-    if not np.isfinite(q).all() or np.linalg.norm(q) < 1e-9:
-        raise ValueError("zero quaternion")
-    T = np.eye(4)
-    T[:3, :3] = Rotation.from_quat(q).as_matrix()
-    T[:3, 3] = [float(_field(translation, k) or 0.0) for k in ("x", "y", "z")]
-    return T
+    return pose_to_matrix([float(_field(translation, k) or 0.0) for k in ("x", "y", "z")], q)
 
 
 def read_transforms(path: Any, max_messages: int = 1000) -> dict[tuple[str, str], np.ndarray]:

@@ -1,5 +1,5 @@
 """Forward/inverse kinematics of the WAM (our URDF, Pinocchio) and the arm's collision
-capsules; the feasibility check of one planner action (thesis 4.3).
+capsules at a joint configuration. What the capsules may hit is `clearcli.robot.collision`.
 
 Frames: ``base`` is the WAM's DH frame 0 at the shoulder (z up, x towards the table by
 default placement), ``tcp`` the gripper closing point (z = approach, x = closing
@@ -10,7 +10,7 @@ must start fast.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Sequence
 
@@ -542,123 +542,3 @@ def kinematics_from_settings(robot: Any) -> WamKinematics:
         tolerance_rad=robot.ik_tolerance_rad,
         n_seeds=robot.ik_seeds,
     )
-
-
-# -- collision helpers -----------------------------------------------------------------
-
-
-def hull_planes(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """(F,4) outward face planes (n, d) with n.x + d <= 0 inside the convex hull."""
-    v = np.asarray(vertices, dtype=float)
-    f = np.asarray(faces, dtype=int)
-    if len(v) == 0 or len(f) == 0:
-        return np.zeros((0, 4))
-    a, b, c = v[f[:, 0]], v[f[:, 1]], v[f[:, 2]]
-    n = np.cross(b - a, c - a)
-    norm = np.linalg.norm(n, axis=1)
-    keep = norm > 1e-12
-    n = n[keep] / norm[keep, None]
-    a = a[keep]
-    d = -np.einsum("ij,ij->i", n, a)
-    inside = v.mean(axis=0)
-    flip = n @ inside + d > 0
-    n[flip] *= -1
-    d[flip] *= -1
-    return np.column_stack([n, d])
-
-
-def capsule_spheres(a: np.ndarray, b: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Spheres covering capsules, spaced at half a radius: (S,3) centres, (S,) radii."""
-    centres, radii = [], []
-    for p, q, rad in zip(a, b, r):
-        n = max(2, int(math.ceil(np.linalg.norm(q - p) / (0.5 * rad))) + 1)
-        t = np.linspace(0.0, 1.0, n)[:, None]
-        centres.append(p + t * (q - p))
-        radii.append(np.full(n, rad))
-    return np.concatenate(centres), np.concatenate(radii)
-
-
-@dataclass
-class Obstacles:
-    """Table plane and object hulls in the robot base frame."""
-
-    table_normal: np.ndarray  # (3,) up
-    table_offset: float  # n.x + d = height above the table
-    names: tuple[str, ...] = ()
-    planes: tuple[np.ndarray, ...] = ()  # (F,4) per object
-    boxes: tuple[tuple[np.ndarray, np.ndarray], ...] = ()  # AABB per object
-    margin_m: float = 0.01
-
-    def collisions(self, centres: np.ndarray, radii: np.ndarray, ignore: Sequence[str] = ()) -> list[str]:
-        """What the spheres touch: "table" and/or object names."""
-        hit: list[str] = []
-        heights = centres @ self.table_normal + self.table_offset
-        if np.any(heights < radii + self.margin_m):
-            hit.append("table")
-        reach = radii + self.margin_m
-        for name, planes, (lo, hi) in zip(self.names, self.planes, self.boxes):
-            if name in ignore or len(planes) == 0:
-                continue
-            near = np.all((centres + reach[:, None] > lo) & (centres - reach[:, None] < hi), axis=1)
-            if not np.any(near):
-                continue
-            # Largest face-plane distance: a lower bound of the true distance, so this
-            # errs towards "collides" near the hull's edges and corners.
-            dist = np.max(centres[near] @ planes[:, :3].T + planes[:, 3], axis=1)
-            if np.any(dist < reach[near]):
-                hit.append(name)
-        return hit
-
-
-@dataclass
-class PoseCheck:
-    ok: bool
-    joints: tuple[np.ndarray, ...] = ()
-    reason: str = ""
-
-
-@dataclass
-class SequenceChecker:
-    """IK + collision check of a gripper pose sequence (pre-pose ... retreat)."""
-
-    kin: WamKinematics
-    obstacles: Obstacles
-    timings: dict[str, float] = field(default_factory=dict)
-
-    def check(self, poses_base: Sequence[np.ndarray], target: str) -> PoseCheck:
-        for i, T in enumerate(poses_base):
-            if not self.kin.reachable(T):
-                return PoseCheck(False, reason=f"pose {i + 1}/{len(poses_base)} beyond the arm's reach")
-        joints: list[np.ndarray] = []
-        warm: np.ndarray | None = None
-        for i, T in enumerate(poses_base):
-            q = self.kin.ik(T, warm)  # the warm start first, then the seeds
-            if q is None:
-                return PoseCheck(False, reason=f"no IK solution for pose {i + 1}/{len(poses_base)}")
-            a, b, r = self.kin.capsules(q)
-            centres, radii = capsule_spheres(a, b, r)
-            hit = self.obstacles.collisions(centres, radii, ignore=(target,))
-            if hit:
-                return PoseCheck(False, reason=f"arm collides with {', '.join(hit)} at pose {i + 1}/{len(poses_base)}")
-            joints.append(q)
-            warm = q
-        return PoseCheck(True, tuple(joints))
-
-
-def make_obstacles(state: Any, T_base_camera: np.ndarray, margin_m: float = 0.01) -> Obstacles:
-    """Table and object hulls of a SymbolicState, moved into the base frame."""
-    R, t = T_base_camera[:3, :3], T_base_camera[:3, 3]
-    n_cam = np.asarray(state.table.normal, dtype=float)
-    n = R @ n_cam
-    # A point on the table in the camera frame: -d n; moved to the base frame.
-    p = R @ (-float(state.table.offset) * n_cam) + t
-    names, planes, boxes = [], [], []
-    for obj in state.objects:
-        v = np.asarray(obj.hull_vertices, dtype=float)
-        if len(v) == 0:
-            continue
-        vb = v @ R.T + t
-        names.append(obj.name)
-        planes.append(hull_planes(vb, obj.hull_faces))
-        boxes.append((vb.min(axis=0), vb.max(axis=0)))
-    return Obstacles(n, float(-n @ p), tuple(names), tuple(planes), tuple(boxes), margin_m)

@@ -22,9 +22,9 @@ from typing import Sequence
 
 import numpy as np
 
+from clearcli import transforms
 from clearcli.errors import SettingsError
-
-SHOULDER_ABOVE_FOOTPRINT_M = 0.346
+from clearcli.robot.kinematics import SHOULDER_ABOVE_FOOTPRINT_M
 
 # Thesis extrinsic: estirabot_link_base -> camera_link (x y z, qx qy qz qw).
 THESIS_BASE_CAMERA_LINK = (0.9014760, -0.0594, 0.7251720, -0.641407, 0.032404, 0.772933, 0.011045)
@@ -33,31 +33,16 @@ THESIS_BASE_CAMERA_LINK = (0.9014760, -0.0594, 0.7251720, -0.641407, 0.032404, 0
 R_CAMERA_LINK_OPTICAL = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
 
 
-def quat_to_matrix(qx: float, qy: float, qz: float, qw: float) -> np.ndarray:
-    q = np.array([qw, qx, qy, qz], dtype=float)
-    norm = np.linalg.norm(q)
-    if not np.isfinite(norm) or norm < 1e-9:
-        raise SettingsError("camera pose: the quaternion must be non-zero")
-    w, x, y, z = q / norm
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-        ]
-    )
-
-
 def pose_to_matrix(pose: Sequence[float]) -> np.ndarray:
     """x y z qx qy qz qw -> 4x4."""
     if len(pose) != 7 or not all(np.isfinite(float(v)) for v in pose):
         raise SettingsError(
             f"camera pose: expected 7 finite numbers x y z qx qy qz qw, got {list(pose)!r}"
         )
-    T = np.eye(4)
-    T[:3, :3] = quat_to_matrix(*[float(v) for v in pose[3:]])
-    T[:3, 3] = [float(v) for v in pose[:3]]
-    return T
+    try:
+        return transforms.pose_to_matrix(pose[:3], pose[3:])
+    except ValueError:
+        raise SettingsError("camera pose: the quaternion must be non-zero") from None
 
 
 def thesis_T_base_camera() -> np.ndarray:

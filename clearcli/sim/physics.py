@@ -9,6 +9,8 @@ from typing import Sequence
 
 import numpy as np
 
+from clearcli.transforms import rot2
+
 from clearcli.settings.sim import WorldParams
 from clearcli.sim.scene import Cylinder, Scene, SceneObject, with_object_pose, without_object
 
@@ -16,10 +18,6 @@ from clearcli.sim.scene import Cylinder, Scene, SceneObject, with_object_pose, w
 # nudged aside as they come down and close; more, and the grasp takes nothing.
 GRASP_TOLERANCE_M = 0.003
 
-
-def _rot2(angle: float) -> np.ndarray:
-    c, s = math.cos(angle), math.sin(angle)
-    return np.array([[c, -s], [s, c]])
 
 
 def grasp_width_m(obj: SceneObject) -> float:
@@ -203,7 +201,7 @@ def world_push(
     members = [k] if isinstance(k, (int, np.integer)) else list(k)
     pushed_ids = {scene.objects[i].object_id for i in members}
     for _ in range(steps):
-        heading = _rot2(math.radians(float(rng.normal(0.0, params.heading_noise_deg)))) @ d
+        heading = rot2(math.radians(float(rng.normal(0.0, params.heading_noise_deg)))) @ d
         turn = spin * abs(float(rng.normal(0.0, math.radians(params.yaw_noise_deg))))
         trial = scene
         for i in members:

@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from clearcli.robot.kinematics import capsule_spheres
+from clearcli.robot.collision import capsule_spheres
 from clearcli.sim.scene import Box, Cylinder, Table
 from clearcli.settings.sim import WorldReachParams  # noqa: F401  ([world_reach])
 

@@ -24,6 +24,8 @@ from typing import Union
 
 import numpy as np
 
+from clearcli.transforms import rot2
+
 # Camera placement like the mOSD frames: the Kinect there is ~0.59 m above the table,
 # its optical axis 37-42 degrees below the horizontal. We take the middle of that.
 CAMERA_HEIGHT_M = 0.62
@@ -110,7 +112,7 @@ class Box:
         """(4, 2) corners of its footprint on the table, counter-clockwise."""
         hx, hy = self.size_x_m / 2, self.size_y_m / 2
         local = np.array([[-hx, -hy], [hx, -hy], [hx, hy], [-hx, hy]])
-        return local @ _rot2(self.yaw_rad).T + np.array([self.x_m, self.y_m])
+        return local @ rot2(self.yaw_rad).T + np.array([self.x_m, self.y_m])
 
 
 @dataclass(frozen=True)
@@ -174,10 +176,6 @@ class Scene:
 def _rows(T: np.ndarray) -> tuple[tuple[float, ...], ...]:
     return tuple(tuple(float(v) for v in row) for row in np.asarray(T))
 
-
-def _rot2(yaw: float) -> np.ndarray:
-    c, s = math.cos(yaw), math.sin(yaw)
-    return np.array([[c, -s], [s, c]])
 
 
 def make_scene(
@@ -373,7 +371,7 @@ def dense(n_objects: int, seed: int) -> Scene:
             widths = rng.uniform(MIN_WIDTH_M, MAX_WIDTH_M, size=count)
             heights = rng.uniform(0.04, 0.15, size=count)
             gaps = rng.uniform(0.0, 0.002, size=count)  # touching, or a hair apart
-            along, across = _rot2(yaw) @ np.array([1.0, 0.0]), _rot2(yaw) @ np.array([0.0, 1.0])
+            along, across = rot2(yaw) @ np.array([1.0, 0.0]), rot2(yaw) @ np.array([0.0, 1.0])
             group: list[SceneObject] = []
             per_row = 2 if block else count
             for r in range((count + per_row - 1) // per_row):
@@ -441,7 +439,7 @@ def _check_index(scene: Scene, k: int) -> None:
 def object_pose_T_table_object(obj: SceneObject) -> np.ndarray:
     """T_table_object: the object frame has its origin at the bottom-face centre, z up."""
     T = np.eye(4)
-    T[:2, :2] = _rot2(obj.yaw_rad)
+    T[:2, :2] = rot2(obj.yaw_rad)
     T[:3, 3] = (obj.x_m, obj.y_m, obj.base_z_m)
     return T
 

@@ -1,0 +1,92 @@
+"""What the arm may hit: the table plane and the objects' convex hulls, in the robot's base
+frame, tested against spheres covering the arm's capsules (the IK check of thesis 4.3)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Sequence
+
+import numpy as np
+
+
+def hull_planes(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """(F,4) outward face planes (n, d) with n.x + d <= 0 inside the convex hull."""
+    v = np.asarray(vertices, dtype=float)
+    f = np.asarray(faces, dtype=int)
+    if len(v) == 0 or len(f) == 0:
+        return np.zeros((0, 4))
+    a, b, c = v[f[:, 0]], v[f[:, 1]], v[f[:, 2]]
+    n = np.cross(b - a, c - a)
+    norm = np.linalg.norm(n, axis=1)
+    keep = norm > 1e-12
+    n = n[keep] / norm[keep, None]
+    a = a[keep]
+    d = -np.einsum("ij,ij->i", n, a)
+    inside = v.mean(axis=0)
+    flip = n @ inside + d > 0
+    n[flip] *= -1
+    d[flip] *= -1
+    return np.column_stack([n, d])
+
+
+def capsule_spheres(a: np.ndarray, b: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Spheres covering capsules, spaced at half a radius: (S,3) centres, (S,) radii."""
+    centres, radii = [], []
+    for p, q, rad in zip(a, b, r):
+        n = max(2, int(math.ceil(np.linalg.norm(q - p) / (0.5 * rad))) + 1)
+        t = np.linspace(0.0, 1.0, n)[:, None]
+        centres.append(p + t * (q - p))
+        radii.append(np.full(n, rad))
+    return np.concatenate(centres), np.concatenate(radii)
+
+
+@dataclass
+class Obstacles:
+    """Table plane and object hulls in the robot base frame."""
+
+    table_normal: np.ndarray  # (3,) up
+    table_offset: float  # n.x + d = height above the table
+    names: tuple[str, ...] = ()
+    planes: tuple[np.ndarray, ...] = ()  # (F,4) per object
+    boxes: tuple[tuple[np.ndarray, np.ndarray], ...] = ()  # AABB per object
+    margin_m: float = 0.01
+
+    def collisions(self, centres: np.ndarray, radii: np.ndarray, ignore: Sequence[str] = ()) -> list[str]:
+        """What the spheres touch: "table" and/or object names."""
+        hit: list[str] = []
+        heights = centres @ self.table_normal + self.table_offset
+        if np.any(heights < radii + self.margin_m):
+            hit.append("table")
+        reach = radii + self.margin_m
+        for name, planes, (lo, hi) in zip(self.names, self.planes, self.boxes):
+            if name in ignore or len(planes) == 0:
+                continue
+            near = np.all((centres + reach[:, None] > lo) & (centres - reach[:, None] < hi), axis=1)
+            if not np.any(near):
+                continue
+            # Largest face-plane distance: a lower bound of the true distance, so this
+            # errs towards "collides" near the hull's edges and corners.
+            dist = np.max(centres[near] @ planes[:, :3].T + planes[:, 3], axis=1)
+            if np.any(dist < reach[near]):
+                hit.append(name)
+        return hit
+
+
+def make_obstacles(state: Any, T_base_camera: np.ndarray, margin_m: float = 0.01) -> Obstacles:
+    """Table and object hulls of a SymbolicState, moved into the base frame."""
+    R, t = T_base_camera[:3, :3], T_base_camera[:3, 3]
+    n_cam = np.asarray(state.table.normal, dtype=float)
+    n = R @ n_cam
+    # A point on the table in the camera frame: -d n; moved to the base frame.
+    p = R @ (-float(state.table.offset) * n_cam) + t
+    names, planes, boxes = [], [], []
+    for obj in state.objects:
+        v = np.asarray(obj.hull_vertices, dtype=float)
+        if len(v) == 0:
+            continue
+        vb = v @ R.T + t
+        names.append(obj.name)
+        planes.append(hull_planes(vb, obj.hull_faces))
+        boxes.append((vb.min(axis=0), vb.max(axis=0)))
+    return Obstacles(n, float(-n @ p), tuple(names), tuple(planes), tuple(boxes), margin_m)
