@@ -68,7 +68,7 @@ def make_session_frames(n_objects: int, seed: int, max_frames: int) -> list:
 
 
 def write_repeated(path: Path, frames: list, count: int) -> None:
-    from clearcli.io.mcap import write_pointcloud2_mcap
+    from clearcli.io.mcap_write import write_pointcloud2_mcap
 
     def stream():
         for i in range(count):

@@ -28,7 +28,7 @@ def simulated_session(directory: Path) -> dict[str, Any]:
     path, frame count, the episode's result and T_base_camera."""
     if "session" in _CACHE and _CACHE["session"]["path"].exists():
         return _CACHE["session"]
-    from clearcli.io.mcap import write_pointcloud2_mcap
+    from clearcli.io.mcap_write import write_pointcloud2_mcap
     from clearcli.pipeline import Pipeline
     from clearcli.replay.session import Session
     from clearcli.settings import Settings

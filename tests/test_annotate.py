@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from clearcli.errors import EXIT_OUTPUT
-from clearcli.replay.annotate import (
+from clearcli.replay.foxglove import (
     PLAN_TOPIC,
     PREDICATES_TOPIC,
     SCENE_TOPIC,
@@ -197,7 +197,7 @@ def test_id_colours_differ_and_arrows_point_along_their_direction() -> None:
 
 def test_frame_without_segmentation_only_clears_the_scene() -> None:
     from clearcli.pipeline import FrameResult
-    from clearcli.replay.session import FrameReport
+    from clearcli.replay.report import FrameReport
 
     report = FrameReport(index=3, stamp_s=2.5, time_s=1.0, result=FrameResult(status="no_table"))
     update = scene_update(report, "camera")

@@ -80,7 +80,7 @@ def test_simulated_session_fixture_matches_regeneration(regenerated: Path) -> No
     for a, b in zip(committed, fresh):
         _assert_close(a, b)
     # and the robot's place (/tf_static), which the placement rule decides
-    from clearcli.replay.session import read_transforms
+    from clearcli.io.tf import read_transforms
 
     tf_committed = read_transforms(_committed("simulated_session.mcap"))
     tf_fresh = read_transforms(regenerated / "simulated_session.mcap")

@@ -10,7 +10,8 @@ import pytest
 
 from clearcli.errors import ClearError, InputError, PartialLogError, SceneError
 from clearcli.io.frames import Frame
-from clearcli.io.mcap import StaticTransform, read_summary, write_pointcloud2_mcap
+from clearcli.io.mcap import read_summary
+from clearcli.io.mcap_write import StaticTransform, write_pointcloud2_mcap
 from clearcli.io.pcd import read_pcd, write_pcd
 from clearcli.io.pointfields import pack_rgb_float, unpack_rgb
 from clearcli.io.read import iter_frames, read_frame, require_finite

@@ -18,13 +18,8 @@ from clearcli.perception.types import Segmentation, SegmentedObject, TablePlane
 from clearcli.pipeline import Pipeline
 from clearcli.planning.types import Action, Plan
 from clearcli.predicates.state import ObjectModel, PushModel, SymbolicState
-from clearcli.replay.session import (
-    ReplayOptions,
-    Session,
-    base_camera_from_log,
-    lookup_transform,
-    replay,
-)
+from clearcli.io.tf import base_camera_from_log, lookup_transform
+from clearcli.replay.session import ReplayOptions, Session, replay
 from clearcli.settings import Settings
 from clearcli.sim import scene as scenes
 from clearcli.sim.truth import truth_segment, world_object_of

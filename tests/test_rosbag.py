@@ -483,7 +483,7 @@ def test_static_transforms(tmp_path: Path, kind: str) -> None:
 @pytest.mark.parametrize("kind", ["ros1", "rosbag2"])
 def test_replay_places_the_robot_from_a_bags_tf_static(tmp_path: Path, kind: str) -> None:
     """`replay` reads where the robot stands from a bag's /tf_static, as from an MCAP's."""
-    from clearcli.replay.session import base_camera_from_log
+    from clearcli.io.tf import base_camera_from_log
 
     tf = ("wam_link_base", "camera_rgb_optical_frame", [0.1, -0.2, 0.5], [0.0, 0.0, 0.0, 1.0])
     if kind == "ros1":

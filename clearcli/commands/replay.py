@@ -32,7 +32,7 @@ import typer
 from clearcli.commands import options as bo
 
 if TYPE_CHECKING:
-    from clearcli.replay.session import FrameReport, Summary
+    from clearcli.replay.report import FrameReport, Summary
 
 
 def replay_cmd(

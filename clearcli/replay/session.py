@@ -11,21 +11,19 @@ expected effect, and the summary's counters.
 from __future__ import annotations
 
 import dataclasses
-import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Iterable, Iterator, Mapping
 
-import numpy as np
 
 from clearcli.errors import ClearError, PartialLogError
 from clearcli.pipeline import CLEARED, FAILED, NO_PLAN, NO_TABLE, OK, FrameResult, Pipeline
 from clearcli.predicates.state import DIRECTIONS
 from clearcli.replay import memory as push_memory
 from clearcli.replay.memory import MemoryParams, PushMemory, PushRecord
+from clearcli.replay.report import FrameReport, ObjectReport, Summary
 from clearcli.replay.tracking import (
     Assignment,
-    ExecutionReport,
     ExpectedEffect,
     Observation,
     TrackerState,
@@ -42,7 +40,6 @@ if TYPE_CHECKING:
     from clearcli.planning.types import Action
     from clearcli.predicates.state import SymbolicState
 
-STAGES = ("read", "segment", "predicates", "plan", "total")
 
 
 @dataclass(frozen=True)
@@ -56,130 +53,6 @@ class ReplayOptions:
     # None: the pipeline's settings' [tracking] and [memory] (their one home)
     tracking: TrackingParams | None = None
     memory: MemoryParams | None = None
-
-
-@dataclass(frozen=True)
-class ObjectReport:
-    track_id: int
-    name: str  # the name in this frame's state ("" when predicates did not run)
-    segment_index: int
-    centroid_m: tuple[float, float, float]
-    extents_m: tuple[float, float, float]
-    new: bool
-
-
-@dataclass(frozen=True, eq=False)
-class FrameReport:
-    index: int  # position of the frame on its topic (0-based), as the reader counts
-    stamp_s: float
-    time_s: float  # seconds from the start of the log
-    result: FrameResult
-    objects: tuple[ObjectReport, ...] = ()
-    gone: tuple[int, ...] = ()
-    execution: ExecutionReport | None = None
-    undoes_push: bool = False  # the first action pushes an object back where it came from
-    timings_s: Mapping[str, float] = field(default_factory=dict)
-    frame: "Frame | None" = None  # the frame itself, for writers (not in the JSON)
-
-    @property
-    def status(self) -> str:
-        return self.result.status
-
-    @property
-    def ids_by_name(self) -> dict[str, int]:
-        return {o.name: o.track_id for o in self.objects if o.name}
-
-    def first_action(self) -> "Action | None":
-        plan = self.result.plan
-        if plan is None or not plan.actions:
-            return None
-        return plan.actions[0]
-
-    def plan_json(self) -> dict[str, Any] | None:
-        """The plan with track ids (the same dict goes to the annotated log)."""
-        plan = self.result.plan
-        if plan is None:
-            return None
-        ids = self.ids_by_name
-        return {
-            "frame": self.index,
-            "actions": [action_json(a, ids) for a in plan.actions],
-            "cost": int(plan.cost),
-            "optimal": bool(plan.optimal),
-            "replans": int(plan.replans),
-            "unreachable": [ids.get(n, n) for n in plan.unreachable],
-            "ungraspable": [ids.get(n, n) for n in getattr(plan, "ungraspable", ())],
-            "stuck": [ids.get(n, n) for n in getattr(plan, "stuck", ())],
-            # a probing push (planning/probe.py): the id of the object pushed to see whether
-            # it is two merged ones, else null
-            "probe": ids.get(plan.probe, plan.probe) if getattr(plan, "probe", "") else None,
-        }
-
-    def to_json(self) -> dict[str, Any]:
-        """One `frame` line of `clear replay --json` (without the envelope)."""
-        first = self.first_action()
-        first_json = None
-        if first is not None:
-            first_json = action_json(first, self.ids_by_name)
-            state = self.result.state
-            if first.kind == "push" and state is not None and first.direction is not None:
-                push = state.by_name(first.obj).pushes.get(first.direction)
-                if push is not None:
-                    first_json["unit_vector"] = [round(float(v), 6) for v in push.unit_vector]
-                    first_json["push_length_m"] = round(float(push.push_length_m), 6)
-        plan = self.result.plan
-        return {
-            "type": "frame",
-            "index": self.index,
-            "stamp_s": _finite(self.stamp_s),
-            "time_s": _finite(self.time_s),
-            "status": self.status,
-            "objects": [
-                {
-                    "id": o.track_id,
-                    "name": o.name,
-                    "centroid_m": [round(v, 5) for v in o.centroid_m],
-                    "extents_m": [round(v, 5) for v in o.extents_m],
-                    "new": o.new,
-                }
-                for o in self.objects
-            ],
-            "gone": list(self.gone),
-            "first_action": first_json,
-            "plan_length": len(plan.actions) if plan is not None else 0,
-            "plan": self.plan_json(),
-            "execution": execution_json(self.execution),
-            "undoes_push": self.undoes_push,
-            "timings_s": {k: round(float(v), 6) for k, v in self.timings_s.items()},
-            "error": self.result.error or None,
-            "stage": self.result.stage or None,
-        }
-
-
-def _finite(value: float) -> float | None:
-    return float(value) if math.isfinite(value) else None
-
-
-def action_json(action: "Action", ids_by_name: Mapping[str, int]) -> dict[str, Any]:
-    out: dict[str, Any] = {"kind": action.kind, "id": ids_by_name.get(action.obj), "name": action.obj}
-    if action.direction is not None:
-        out["direction"] = action.direction
-    return out
-
-
-def execution_json(report: ExecutionReport | None) -> dict[str, Any] | None:
-    if report is None:
-        return None
-    out: dict[str, Any] = {
-        "action": report.action,
-        "id": report.track_id,
-        "outcome": report.outcome,
-        "detail": report.detail,
-    }
-    if report.moved_along_m is not None:
-        out["moved_along_m"] = round(report.moved_along_m, 5)
-        out["moved_across_m"] = round(float(report.moved_across_m or 0.0), 5)
-    return out
 
 
 def observations_of(segmentation: "Segmentation") -> list[Observation]:
@@ -213,53 +86,6 @@ def expected_effect(
             extents_m=extents,
         )
     return ExpectedEffect(kind="grasp", track_id=track_id, start_centroid=start, action=label, extents_m=extents)
-
-
-@dataclass
-class Summary:
-    """Counters over the whole replay (a fixed number of fields: bounded)."""
-
-    frames_read: int = 0
-    frames: int = 0  # processed
-    ok: int = 0
-    cleared: bool = False
-    no_table: int = 0
-    no_plan: int = 0
-    failed: int = 0
-    objects_seen: int = 0
-    grasps: int = 0
-    pushes: int = 0
-    executions_done: int = 0
-    executions_failed: int = 0
-    back_and_forth: int = 0
-    unreachable_ids: set[int] = field(default_factory=set)
-    time_s: dict[str, float] = field(default_factory=lambda: {s: 0.0 for s in STAGES})
-    stopped: str = ""  # why the log ended early (a partial log), "" when read whole
-    wall_s: float = 0.0
-
-    def to_json(self) -> dict[str, Any]:
-        n = max(self.frames, 1)
-        return {
-            "type": "summary",
-            "frames_read": self.frames_read,
-            "frames": self.frames,
-            "ok": self.ok,
-            "cleared": self.cleared,
-            "no_table": self.no_table,
-            "no_plan": self.no_plan,
-            "failed": self.failed,
-            "objects_seen": self.objects_seen,
-            "actions": self.grasps + self.pushes,
-            "grasps": self.grasps,
-            "pushes": self.pushes,
-            "executions": {"done": self.executions_done, "failed": self.executions_failed},
-            "back_and_forth": self.back_and_forth,
-            "unreachable": sorted(self.unreachable_ids),
-            "time_s": {k: round(v, 6) for k, v in self.time_s.items()},
-            "mean_time_s": {k: round(v / n, 6) for k, v in self.time_s.items()},
-            "frames_per_s": round(self.frames / self.wall_s, 4) if self.wall_s > 0 else None,
-            "stopped": self.stopped or None,
-        }
 
 
 class Session:
@@ -536,113 +362,3 @@ def replay(
         if close is not None:
             close()
 
-
-# --- where the robot stands: a log's /tf_static or /tf ---------------------------------
-
-# Names the robot base frame goes by in WAM setups (IRI's and the ROS WAM packages), and
-# the generic ROS one last; `--base-frame` picks another.
-BASE_FRAMES = ("wam_base", "wam_link_base", "iri_wam_link_base", "estirabot_link_base", "link_base", "base_link")
-TF_TOPICS = ("/tf_static", "/tf")
-
-
-def _field(msg: Any, *names: str) -> Any:
-    from clearcli.io.mcap import message_field
-
-    return message_field(msg, *names)
-
-
-def _transform_matrix(translation: Any, rotation: Any) -> np.ndarray:
-    from clearcli.transforms import pose_to_matrix
-
-    q = [float(_field(rotation, k) or 0.0) for k in ("x", "y", "z", "w")]
-    return pose_to_matrix([float(_field(translation, k) or 0.0) for k in ("x", "y", "z")], q)
-
-
-def read_transforms(path: Any, max_messages: int = 1000) -> dict[tuple[str, str], np.ndarray]:
-    """T_parent_child of every (parent, child) pair on the log's /tf_static and /tf
-    (the first seen of each; a session's camera does not move). Reads at most
-    ``max_messages`` transform messages, so a long /tf costs little. A log without them,
-    or whose transforms cannot be decoded, gives {}. ROS bags: `io.rosbag.read_bag_transforms`."""
-    from clearcli.io.mcap import MessageDecoders, read_summary
-    from clearcli.io.read import sniff
-
-    try:
-        if sniff(path) in ("rosbag1", "rosbag2"):
-            from clearcli.io.rosbag import read_bag_transforms
-
-            return read_bag_transforms(path, max_messages)
-        summary = read_summary(path)
-    except ClearError:
-        return {}
-    topics = [t for t, _ in summary.topics() if t in TF_TOPICS]
-    if not topics:
-        return {}
-    from mcap.reader import NonSeekingReader, SeekingReader
-
-    found: dict[tuple[str, str], np.ndarray] = {}
-    decoders = MessageDecoders()
-    try:
-        with open(path, "rb") as fp:
-            reader: Any = SeekingReader(fp) if summary.indexed else NonSeekingReader(fp)
-            for count, (schema, channel, message) in enumerate(reader.iter_messages(topics=topics)):
-                if count >= max_messages:
-                    break
-                try:
-                    msg = decoders.decode(schema, channel, message.data)
-                except Exception:
-                    continue
-                items = _field(msg, "transforms")
-                for tf in items if items is not None else [msg]:
-                    try:
-                        header = _field(tf, "header")
-                        parent = _field(header, "frame_id") if header is not None else _field(tf, "parent_frame_id")
-                        child = _field(tf, "child_frame_id")
-                        inner = _field(tf, "transform") or tf
-                        T = _transform_matrix(_field(inner, "translation"), _field(inner, "rotation"))
-                    except Exception:
-                        continue
-                    if parent and child:
-                        found.setdefault((str(parent).lstrip("/"), str(child).lstrip("/")), T)
-    except Exception:  # a damaged log: whatever was read before the damage
-        pass
-    return found
-
-
-def lookup_transform(transforms: Mapping[tuple[str, str], np.ndarray], target: str, source: str) -> np.ndarray | None:
-    """T_target_source by chaining the transforms (either way along each edge); None when
-    the two frames are not connected."""
-    target, source = target.lstrip("/"), source.lstrip("/")
-    if target == source:
-        return np.eye(4)
-    edges: dict[str, list[tuple[str, np.ndarray]]] = {}
-    for (parent, child), T in transforms.items():
-        edges.setdefault(parent, []).append((child, T))  # T_parent_child
-        edges.setdefault(child, []).append((parent, np.linalg.inv(T)))  # T_child_parent
-    # breadth first from the target: T_target_node accumulates along the way
-    best: dict[str, np.ndarray] = {target: np.eye(4)}
-    queue = [target]
-    while queue:
-        node = queue.pop(0)
-        for nxt, T_node_next in edges.get(node, []):
-            if nxt not in best:
-                best[nxt] = best[node] @ T_node_next
-                if nxt == source:
-                    return best[nxt]
-                queue.append(nxt)
-    return None
-
-
-def base_camera_from_log(
-    path: Any, frame_id: str, base_frames: tuple[str, ...] = BASE_FRAMES
-) -> tuple[np.ndarray | None, str]:
-    """(T_base_camera, the base frame's name) from the log's transforms, or (None, "")."""
-    if not frame_id:
-        return None, ""
-    transforms = read_transforms(path)
-    if not transforms:
-        return None, ""
-    for base in base_frames:
-        T = lookup_transform(transforms, base, frame_id)
-        if T is not None:
-            return T, base
-    return None, ""

@@ -40,7 +40,8 @@ from clearcli.sim.truth import world_object_of
 
 if TYPE_CHECKING:
     from clearcli.io.frames import Frame
-    from clearcli.replay.session import FrameReport, Session
+    from clearcli.replay.report import FrameReport
+    from clearcli.replay.session import Session
 
 # An object whose centre ends farther than this from where it started was moved by the
 # robot (a slipped grasp displaces it by ~4 mm, so this only counts pushes and shoves).

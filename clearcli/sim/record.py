@@ -15,7 +15,7 @@ BASE_FRAME = "wam_base"
 
 
 def static_transforms(T_base_camera: np.ndarray, frame_id: str) -> list[Any]:
-    from clearcli.io.mcap import StaticTransform
+    from clearcli.io.mcap_write import StaticTransform
 
     return [StaticTransform(parent_frame=BASE_FRAME, child_frame=frame_id, T_parent_child=np.asarray(T_base_camera))]
 
@@ -32,7 +32,7 @@ def record_session(
 ) -> tuple[int, "EpisodeResult"]:
     """Run a closed-loop episode on ``world`` and write its frames, with the robot base
     on /tf_static, to the MCAP at ``path``; returns (frames written, the episode's result)."""
-    from clearcli.io.mcap import write_pointcloud2_mcap
+    from clearcli.io.mcap_write import write_pointcloud2_mcap
     from clearcli.pipeline import Pipeline
     from clearcli.replay.session import ReplayOptions, Session
 

@@ -12,7 +12,7 @@ from clearcli.settings import Settings
 if TYPE_CHECKING:
     from clearcli.errors import PartialLogError
     from clearcli.io.frames import Frame
-    from clearcli.replay.session import FrameReport, Summary
+    from clearcli.replay.report import FrameReport, Summary
 
 SCHEMA, VERSION = "replay", 1
 
@@ -42,7 +42,8 @@ def run(
     from clearcli.errors import PartialLogError
     from clearcli.io.read import iter_frames, sniff
     from clearcli.pipeline import Pipeline
-    from clearcli.replay.session import BASE_FRAMES, ReplayOptions, Session, base_camera_from_log, replay
+    from clearcli.io.tf import BASE_FRAMES, base_camera_from_log
+    from clearcli.replay.session import ReplayOptions, Session, replay
 
     config = request.settings
     kind = sniff(log)
