@@ -16,7 +16,18 @@ import pytest
 import plan_scenes as ps
 from clearcli.errors import PlannerError
 from clearcli.planning import downward
-from clearcli.planning.backtrack import solve
+from clearcli.planning import solve as solving
+from clearcli.settings.plan import PlanSettings
+
+
+def solve(*args, **given):
+    """`solving.solve` with [plan]'s search bounds unless the test gives its own."""
+    p = PlanSettings()
+    bounds = dict(
+        time_limit_s=p.time_limit_s, optimal_max_objects=p.optimal_max_objects, optimal_time_s=p.optimal_time_s,
+        anytime_time_s=p.anytime_time_s, formulation=p.formulation,
+    )
+    return solving.solve(*args, **{**bounds, **given})
 from clearcli.planning.compile import compile_strips, ground_actions, random_facts, removable_objects
 from clearcli.planning.downward import run_downward, run_sas
 from clearcli.planning.sas import compile_sas

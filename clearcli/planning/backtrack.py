@@ -47,162 +47,22 @@ but can still be pushed out of the way.
 
 from __future__ import annotations
 
-import functools
 import time
-from dataclasses import dataclass
-from typing import Callable, Iterable, Mapping, Sequence
+from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
 from clearcli.errors import NoPlanError, PlannerError, SettingsError
-from clearcli.planning import downward
 from clearcli.planning.compile import removable_objects
 from clearcli.planning.feasibility import EMPTY, IKActionChecker, Infeasible, SceneContext, gripper_opening_text
+from clearcli.planning.solve import Solved, action_cost, action_space, deadline_error, progress, solve
 from clearcli.planning.types import Action, BacktrackStep, CheckedAction, LeftObject, Plan
-from clearcli.predicates.state import DIRECTIONS, Fact, SymbolicState
+from clearcli.predicates.state import Fact, SymbolicState
 
 # check(action, context) -> CheckedAction, or Infeasible with the reason
 Checker = Callable[[Action, SceneContext], "CheckedAction | Infeasible"]
 
 CHECK_MODES = ("whole", "first")
-
-
-@dataclass(frozen=True)
-class Solved:
-    actions: tuple[Action, ...]
-    cost: int
-    optimal: bool
-    config: str
-    time_s: float
-    deadline: bool = False  # the overall time limit cut the anytime search short
-
-
-def _deadline_error(time_limit_s: float) -> PlannerError:
-    return PlannerError(
-        f"no plan with every action checked within the time limit of {time_limit_s:g} s "
-        "(--time-limit, [plan] time_limit_s): raise it"
-    )
-
-
-def solve(
-    objects: Sequence[str],
-    facts: Iterable[Fact],
-    goal: Sequence[str],
-    push_costs: Mapping[tuple[str, str], int] | None,
-    *,
-    time_limit_s: float = 30.0,
-    optimal_max_objects: int = 40,
-    optimal_time_s: float = 10.0,
-    anytime_time_s: float = 5.0,
-    formulation: str = "positive",
-    deadline_at: float | None = None,
-) -> Solved | None:
-    """One Fast Downward plan for removing ``goal`` (None when proven impossible).
-
-    Optimal A* + LM-cut up to ``optimal_max_objects`` goal objects, for at most
-    ``optimal_time_s``; beyond that, or when the optimal search runs out of time, LAMA
-    (anytime) within ``anytime_time_s``. Both end by ``deadline_at`` (perf_counter
-    seconds; default now + ``time_limit_s``): LAMA stopped by it returns its best plan
-    so far with ``deadline=True``.
-    """
-    if formulation not in ("positive", "negative"):
-        raise SettingsError(f"settings: [plan] formulation must be \"positive\" or \"negative\", got {formulation!r}")
-    if not goal:
-        return Solved((), 0, True, "", 0.0)
-    if deadline_at is None:
-        deadline_at = time.perf_counter() + time_limit_s
-    run, task = _task(objects, facts, goal, push_costs, formulation)
-    result = None
-    remaining = deadline_at - time.perf_counter()
-    if remaining <= 0:
-        raise _deadline_error(time_limit_s)
-    if len(goal) <= optimal_max_objects:
-        # Leave LAMA half of what is left when the deadline is the tighter bound.
-        limit = min(optimal_time_s, remaining if remaining > optimal_time_s + anytime_time_s else remaining / 2)
-        try:
-            result = run(search=downward.OPTIMAL, time_limit_s=limit)
-        except PlannerError as exc:
-            if "timed out" not in str(exc):
-                raise
-            result = None
-    deadline = False
-    if result is None:
-        remaining = deadline_at - time.perf_counter()
-        if remaining <= 0.05:
-            raise _deadline_error(time_limit_s)
-        limit = min(anytime_time_s, remaining)
-        try:
-            result = run(alias=downward.ANYTIME_ALIAS, time_limit_s=limit)
-        except PlannerError as exc:
-            if "timed out" in str(exc) and limit < anytime_time_s:
-                raise _deadline_error(time_limit_s) from None
-            raise
-        deadline = bool(getattr(result, "timed_out", False)) and limit < anytime_time_s
-    if result.unsolvable:
-        return None
-    actions: list[Action] = []
-    removed: set[str] = set()
-    cost = result.cost
-    costs = push_costs or {}
-    for step in result.steps:
-        if step[0] not in task.actions:
-            raise PlannerError(f"Fast Downward returned an unknown action {step[0]!r}")
-        action = task.actions[step[0]]
-        if action.obj in removed:
-            # The grounded form leaves out the lifted domain's (not (removed ?o)): acting
-            # on a removed object changes nothing that matters, so an anytime plan that
-            # does it is the same plan without that step.
-            cost -= action_cost(action, costs)
-            continue
-        if action.kind == "grasp":
-            removed.add(action.obj)
-        actions.append(action)
-    return Solved(tuple(actions), cost, result.optimal and not deadline, result.config, result.time_s, deadline)
-
-
-def _task(objects: Sequence[str], facts: Iterable[Fact], goal: Sequence[str], push_costs, formulation: str):  # type: ignore[no-untyped-def]
-    """The grounded task and a function running Fast Downward on it. The positive form
-    goes as SAS+ straight into the search component (the translator would only ground
-    again what is grounded already); the negative one, which needs the translator to
-    compile its negative preconditions away, as PDDL through the driver."""
-    if formulation == "positive":
-        from clearcli.planning.sas import compile_sas
-
-        sas = compile_sas(objects, facts, goal, push_costs)
-        return functools.partial(downward.run_sas, sas.text), sas
-    from clearcli.planning.compile import compile_strips
-
-    task = compile_strips(objects, facts, goal, push_costs, positive=False)
-    return functools.partial(downward.run_downward, task.domain, task.problem), task
-
-
-def action_cost(action: Action, push_costs: Mapping[tuple[str, str], int]) -> int:
-    return 1 if action.kind == "grasp" else int(push_costs.get((action.obj, str(action.direction)), 1))
-
-
-def action_space(state_facts: frozenset[Fact], obj: str, directions: Sequence[str] = DIRECTIONS) -> list[Action]:
-    """The actions the model allows for ``obj`` at all (static facts excluded)."""
-    out = []
-    if ("ungraspable", obj) not in state_facts:
-        out.append(Action("grasp", obj))
-    for d in directions:
-        if ("push_off_table", obj, d) not in state_facts:
-            out.append(Action("push", obj, d))
-    return out
-
-
-def progress(facts: frozenset[Fact], action: Action) -> frozenset[Fact]:
-    """The facts after ``action``, by the lifted domain's effects (pddl/domain.pddl)."""
-    o = action.obj
-    if action.kind == "grasp":
-        # o is gone: every fact that names it goes with it (what the domain deletes, plus
-        # facts of others about o, which no action can consult any more)
-        return frozenset(f for f in facts if o not in f[1:])
-    return frozenset(
-        f
-        for f in facts
-        if not (f[0] in ("block_dir", "block_grasp") and o in f[1:3]) and f != ("ik_unfeasible_grasp", o)
-    )
 
 
 def _label(action: Action) -> str:
@@ -213,12 +73,12 @@ def backtrack(
     state: SymbolicState,
     check: Checker,
     *,
-    time_limit_s: float = 30.0,
-    optimal_max_objects: int = 40,
-    optimal_time_s: float = 10.0,
-    anytime_time_s: float = 5.0,
-    max_backtracks: int = 200,
-    formulation: str = "positive",
+    time_limit_s: float | None = None,
+    optimal_max_objects: int | None = None,
+    optimal_time_s: float | None = None,
+    anytime_time_s: float | None = None,
+    max_backtracks: int | None = None,
+    formulation: str | None = None,
     goal_objects: Sequence[str] | None = None,
     precheck: Callable[[Action], str] | None = None,
     mode: str = "whole",
@@ -227,7 +87,17 @@ def backtrack(
     """Backtracking with ``check`` as HASIKSOLUTION, on every action (``mode="whole"``) or
     the first (``"first"``). Raises NoPlanError when nothing can be removed (the reason
     in the message, the result in ``error.plan``), PlannerError when the search fails or
-    ``time_limit_s`` (the whole planning) ends without a checked plan."""
+    ``time_limit_s`` (the whole planning) ends without a checked plan. A search bound
+    left None is [plan]'s (clearcli/settings/plan.py: the one home of its default)."""
+    from clearcli.settings.plan import PlanSettings
+
+    defaults = PlanSettings()
+    time_limit_s = defaults.time_limit_s if time_limit_s is None else time_limit_s
+    optimal_max_objects = defaults.optimal_max_objects if optimal_max_objects is None else optimal_max_objects
+    optimal_time_s = defaults.optimal_time_s if optimal_time_s is None else optimal_time_s
+    anytime_time_s = defaults.anytime_time_s if anytime_time_s is None else anytime_time_s
+    max_backtracks = defaults.max_backtracks if max_backtracks is None else max_backtracks
+    formulation = defaults.formulation if formulation is None else formulation
     if mode not in CHECK_MODES:
         raise SettingsError(f"settings: [plan] check must be one of {', '.join(CHECK_MODES)}, got {mode!r}")
     t_start = time.perf_counter()
@@ -340,7 +210,7 @@ def backtrack(
                 f"backtracking gave up after {len(steps)} replans; raise [plan] max_backtracks"
             )
         if time.perf_counter() >= deadline_at:
-            raise _deadline_error(time_limit_s)
+            raise deadline_error(time_limit_s)
         t0 = time.perf_counter()
         solved = solve(
             base_names(),
