@@ -35,8 +35,9 @@ import numpy as np
 
 from clearcli.errors import InputError, PartialLogError
 from clearcli.io.frames import Frame
-from clearcli.io.mcap import POINTCLOUD2_SCHEMAS, ChannelInfo, McapSummary, error_reason, require_frame_index
-from clearcli.io.messages import foxglove_frame, pointcloud2_frame, quat_matrix
+from clearcli.io.mcap import ChannelInfo, McapSummary, error_reason, require_frame_index
+from clearcli.io.bag_messages import BagDecoders, bag_frame
+from clearcli.io.messages import quat_matrix
 from clearcli.io.ros1 import Damage, Ros1Msg, Ros1Stream
 from clearcli.io.sniff import ROSBAG1_MAGIC, ROSBAG2_METADATA
 
@@ -268,80 +269,6 @@ def choose_bag_topic(summary: BagSummary, topic: str | None) -> str:
     return choose_topic(summary, topic)
 
 
-# --- decoding ---------------------------------------------------------------------------
-
-
-# Type stores by (ros1, type, definition), for the whole process: building one and
-# generating its deserialisers costs tens of milliseconds, more than reading a frame.
-_STORES: dict[tuple[bool, str, str], Any] = {}
-_STANDARD: dict[bool, Any] = {}
-
-
-class _Decoders:
-    """rosbags type stores, one per message definition, built lazily and kept.
-
-    A type is taken from the definition the bag carries when there is one (a ROS 1
-    connection always has it; newer rosbag2 bags too), else from the standard types of
-    ROS 1 Noetic / the latest ROS 2.
-    """
-
-    def __init__(self, ros1: bool) -> None:
-        self.ros1 = ros1
-
-    def _standard_store(self) -> Any:
-        from rosbags.typesys import Stores, get_typestore
-
-        if self.ros1 not in _STANDARD:
-            _STANDARD[self.ros1] = get_typestore(Stores.ROS1_NOETIC if self.ros1 else Stores.LATEST)
-        return _STANDARD[self.ros1]
-
-    def _store(self, msgtype: str, msgdef: str, fmt: str) -> Any:
-        key = (self.ros1, msgtype, msgdef)
-        store = _STORES.get(key)
-        if store is None:
-            store = self._standard_store()
-            if msgdef and (self.ros1 or msgtype not in store.fielddefs):
-                from rosbags.typesys import Stores, get_types_from_idl, get_types_from_msg, get_typestore
-
-                try:
-                    own = get_typestore(Stores.EMPTY)
-                    types = get_types_from_idl(msgdef) if fmt == "IDL" else get_types_from_msg(msgdef, msgtype)
-                    own.register(types)
-                    if msgtype in own.fielddefs:
-                        store = own
-                except Exception:  # an unparsable definition: the standard types, if they have it
-                    pass
-            _STORES[key] = store
-        return store
-
-    def decode(self, msgtype: str, msgdef: str, fmt: str, data: bytes | memoryview) -> Any:
-        store = self._store(msgtype, msgdef, fmt)
-        if self.ros1:
-            return store.deserialize_ros1(data, msgtype)
-        return store.deserialize_cdr(data, msgtype)
-
-
-def _frame(decoders: _Decoders, msgtype: str, msgdef: str, fmt: str, data: bytes | memoryview,
-           time_ns: int, source: str) -> Frame:
-    msg = decoders.decode(msgtype, msgdef, fmt, data)
-    if msgtype in POINTCLOUD2_SCHEMAS:
-        return pointcloud2_frame(_ZeroCopy(msg), time_ns, source)
-    return foxglove_frame(_ZeroCopy(msg), time_ns, source)
-
-
-class _ZeroCopy:
-    """A deserialised message whose `data` (a NumPy uint8 array) reads as a memoryview,
-    so that the point blob is viewed in place rather than copied to bytes first."""
-
-    def __init__(self, msg: Any) -> None:
-        self._msg = msg
-        data = getattr(msg, "data", b"")
-        self.data = memoryview(data) if isinstance(data, np.ndarray) and data.flags.c_contiguous else data
-
-    def __getattr__(self, name: str) -> Any:
-        return getattr(self._msg, name)
-
-
 # --- iteration --------------------------------------------------------------------------
 
 # One raw message: (normalised type, definition, definition format, data, log time ns).
@@ -448,9 +375,9 @@ def _guarded(summary: BagSummary, topic: str, skip_to: int = 0) -> Iterator[tupl
         it.close()
 
 
-def _decode(decoders: _Decoders, summary: BagSummary, topic: str, index: int, raw: _Raw) -> Frame:
+def _decode(decoders: BagDecoders, summary: BagSummary, topic: str, index: int, raw: _Raw) -> Frame:
     msgtype, msgdef, fmt, data, time_ns = raw
-    return _frame(decoders, msgtype, msgdef, fmt, data, time_ns, f"{summary.path.name}#{index} {topic}")
+    return bag_frame(decoders, msgtype, msgdef, fmt, data, time_ns, f"{summary.path.name}#{index} {topic}")
 
 
 def iter_bag_frames(path: Path, topic: str | None = None) -> Iterator[Frame]:
@@ -458,7 +385,7 @@ def iter_bag_frames(path: Path, topic: str | None = None) -> Iterator[Frame]:
     path = Path(path)
     summary = read_bag_summary(path)
     topic = choose_bag_topic(summary, topic)
-    decoders = _Decoders(ros1=summary.format == "rosbag1")
+    decoders = BagDecoders(ros1=summary.format == "rosbag1")
     for index, raw in _guarded(summary, topic):
         try:
             frame = _decode(decoders, summary, topic, index, raw)
@@ -473,7 +400,7 @@ def read_bag_frame(path: Path, topic: str | None = None, index: int = 0) -> Fram
     summary = read_bag_summary(path)
     topic = choose_bag_topic(summary, topic)
     require_frame_index(path, summary, topic, index)
-    decoders = _Decoders(ros1=summary.format == "rosbag1")
+    decoders = BagDecoders(ros1=summary.format == "rosbag1")
     for i, raw in _guarded(summary, topic, skip_to=index):
         if i == index:
             try:
@@ -500,7 +427,7 @@ def read_bag_transforms(path: Path, max_messages: int = 1000) -> dict[tuple[str,
         summary = read_bag_summary(Path(path))
     except InputError:
         return {}
-    decoders = _Decoders(ros1=summary.format == "rosbag1")
+    decoders = BagDecoders(ros1=summary.format == "rosbag1")
     found: dict[tuple[str, str], np.ndarray] = {}
     budget = max_messages
     present = dict(summary.topics())
