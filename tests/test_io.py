@@ -297,9 +297,11 @@ def test_pcd_truncation_fuzz_only_clear_errors(tmp_path: Path) -> None:
         flipped[int(rng.integers(len(data)))] = int(rng.integers(256))
         path.write_bytes(bytes(flipped))
         try:
-            read_frame(path)
+            back = read_frame(path)
         except ClearError:
-            pass
+            continue
+        # a flip the reader accepts changed a value, never how many points there are
+        assert back.n_points == frame.n_points
 
 
 # --- MCAP: shared logs -----------------------------------------------------------------
@@ -480,18 +482,43 @@ def test_write_pointcloud2_mosd_equals_source(tmp_path: Path) -> None:
     assert np.array_equal(back.fields["label"], frame.fields["label"])
 
 
-def test_mcap_truncation_fuzz_only_clear_errors(tmp_path: Path) -> None:
-    frames = [_small_frame(), _small_frame(2, 3)]
+def _big_frame(seed: int) -> Frame:
+    """An organized frame of ~1 MB of random points (incompressible): three of them fill
+    more than one of the writer's chunks."""
+    rng = np.random.default_rng(seed)
+    points = rng.uniform(-1, 1, (300 * 280, 3)).astype(np.float32)
+    return Frame(points=points, colors=None, shape=(300, 280), fields={}, stamp_s=float(seed), frame_id="cam", source="big")
+
+
+def test_mcap_truncation_fuzz_reads_every_whole_frame_or_errs(tmp_path: Path) -> None:
+    """A log cut anywhere gives the frames wholly before the cut, each equal to what was
+    written, and says it is damaged (PartialLogError) when it lost any; with no whole frame
+    it is an InputError. Never silently fewer frames, never zero frames without an error."""
+    frames = [_big_frame(k) for k in range(3)]
     good = tmp_path / "good.mcap"
     write_pointcloud2_mcap(good, frames)
     data = good.read_bytes()
     path = tmp_path / "cut.mcap"
-    for end in range(0, len(data), 41):
-        path.write_bytes(data[:end])
+    counts = []
+    for end in np.linspace(0, len(data), 160).astype(int):
+        path.write_bytes(data[: int(end)])
+        got: list[Frame] = []
+        error: ClearError | None = None
         try:
-            list(iter_frames(path))
-        except ClearError:
-            pass
+            for f in iter_frames(path):
+                got.append(f)
+        except ClearError as exc:
+            error = exc
+        for f, want in zip(got, frames):  # every frame read is whole and in order
+            assert np.array_equal(f.points, want.points) and f.stamp_s == want.stamp_s
+        if len(got) < len(frames):
+            assert error is not None, f"cut at {end}: {len(got)} frames and no error"
+            assert isinstance(error, PartialLogError if got else InputError), (end, type(error))
+        counts.append(len(got))
+    assert counts == sorted(counts)  # a longer prefix never reads fewer frames
+    # the frames of a chunk are read as soon as the chunk is whole: cuts between chunks
+    # give the first frames (the writer's chunks hold one or two of these frames)
+    assert counts[0] == 0 and counts[-1] == 3 and {1, 2} & set(counts)
 
 
 def test_pointcloud2_blob_big_endian_with_row_padding() -> None:
