@@ -7,7 +7,7 @@ from __future__ import annotations
 import pytest
 
 from golden import goldens
-from utils import shared_path
+from helpers import shared_path
 
 NEEDS_SHARED = {"mosd": "mosd/learn/learn0.pcd", "uois": "scenes/uois_realsense/uois_image_0000.pcd"}
 

@@ -9,7 +9,15 @@ import math
 import pytest
 
 from clearcli.errors import SettingsError
-from clearcli.settings import SECTIONS, Settings, apply_sets, load_settings, parse_set, settings_from_dict, settings_to_toml
+from clearcli.settings import (
+    SECTIONS,
+    Settings,
+    apply_sets,
+    load_settings,
+    parse_set,
+    settings_from_dict,
+    settings_to_toml,
+)
 from clearcli.settings.fields import range_of
 
 

@@ -1,0 +1,24 @@
+"""Shared test helpers: where the read-only reference data lives, and how to skip without it."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[2]
+SHARED = Path(os.environ.get("CLEAR_SHARED", REPO.parent / "shared")).resolve()
+SHARED_DATA = SHARED / "data"
+FIXTURES = REPO / "fixtures"
+
+
+def shared_path(relative: str) -> Path:
+    """Path under ../shared/data; skips the test when absent, fails under CLEAR_REQUIRE_SHARED=1."""
+    path = SHARED_DATA / relative
+    if not path.exists():
+        message = f"shared data {path} is not here (../shared/data beside the checkout)"
+        if os.environ.get("CLEAR_REQUIRE_SHARED") == "1":
+            pytest.fail(message + " and CLEAR_REQUIRE_SHARED=1")
+        pytest.skip(message)
+    return path

@@ -1,0 +1,235 @@
+"""Tests of clearcli/io/pcd.py."""
+
+from __future__ import annotations
+
+import struct
+from pathlib import Path
+
+import numpy as np
+import pytest
+from helpers import SHARED_DATA, shared_path
+from helpers.io import _header, _one_line_error, _same, _small_frame
+
+from clearcli.errors import ClearError, InputError
+from clearcli.io.frames import Frame
+from clearcli.io.pcd import read_pcd, write_pcd
+from clearcli.io.read import read_frame
+
+MOSD_TEST = ["test44", "test46", "test47", "test55", "test57"]
+
+
+def _all_pcds() -> list[Path]:
+    base = shared_path("pcd_formats")
+    files = sorted(base.glob("*.pcd")) + sorted((SHARED_DATA / "mosd").rglob("*.pcd"))
+    return files
+
+
+def test_every_shared_pcd_reads_or_is_rejected_cleanly() -> None:
+    files = _all_pcds()
+    assert len(files) >= 9 + 50
+    for path in files:
+        if path.name == "stereo_left.pcd":
+            with pytest.raises(InputError, match="no x/y/z"):
+                read_pcd(path)
+            continue
+        frame = read_pcd(path)
+        assert frame.points.dtype == np.float32 and frame.points.shape == (frame.n_points, 3)
+        if frame.shape is not None:
+            assert frame.shape[0] * frame.shape[1] == frame.n_points
+        assert frame.finite_mask.sum() > 0
+
+
+def test_pcd_formats_values() -> None:
+    bun = read_pcd(shared_path("pcd_formats/bun0.pcd"))  # ascii, normals + curvature
+    assert bun.n_points == 397 and bun.shape is None and bun.colors is None
+    assert set(bun.fields) == {"normal_x", "normal_y", "normal_z", "curvature"}
+    colored = read_pcd(shared_path("pcd_formats/colored_cloud.pcd"))  # binary, rgb as U4
+    assert colored.n_points == 1000 and colored.shape == (1000, 1) and colored.colors is not None
+    assert "rgb" not in colored.fields and "curvature" in colored.fields
+    mug = read_pcd(shared_path("pcd_formats/table_scene_mug_rgb_float.pcd"))  # rgb as F4
+    assert mug.shape == (480, 640) and mug.colors is not None
+    assert int(mug.finite_mask.sum()) == 209280
+    room = read_pcd(shared_path("pcd_formats/capture0001_xyz_only_room.pcd"))
+    assert room.colors is None and room.fields == {} and room.shape == (480, 640)
+    keys = read_pcd(shared_path("pcd_formats/office1_keypoints.pcd"))
+    assert keys.n_points == 1318 and keys.fields["intensity"].dtype == np.float32
+
+
+def test_rgb_float_colours_match_open3d() -> None:
+    import open3d as o3d
+
+    path = shared_path("pcd_formats/table_scene_mug_rgb_float.pcd")
+    ours = read_pcd(path)
+    theirs = o3d.io.read_point_cloud(str(path), remove_nan_points=False)
+    assert _same(np.asarray(theirs.points).astype(np.float32), ours.points)
+    assert np.array_equal(np.round(np.asarray(theirs.colors) * 255).astype(np.uint8), ours.colors)
+
+
+def test_test57_three_encodings_identical() -> None:
+    ascii_ = read_pcd(shared_path("pcd_formats/mosd_test57_ascii.pcd"))
+    binary = read_pcd(shared_path("pcd_formats/mosd_test57_binary.pcd"))
+    compressed = read_pcd(shared_path("mosd/test/test57.pcd"))
+    for other in (ascii_, binary):
+        assert other.shape == compressed.shape == (480, 640)
+        assert _same(other.points, compressed.points)
+        assert np.array_equal(other.colors, compressed.colors)
+        assert np.array_equal(other.fields["label"], compressed.fields["label"])
+    assert int(compressed.finite_mask.sum()) == 171483
+
+
+def test_mosd_frames_organized_with_labels_and_nan_in_place() -> None:
+    for name in MOSD_TEST:
+        frame = read_pcd(shared_path(f"mosd/test/{name}.pcd"))
+        assert frame.shape == (480, 640) and frame.n_points == 640 * 480
+        labels = frame.fields["label"]
+        assert labels.dtype == np.uint32 and labels.shape == (640 * 480,)
+        finite = frame.finite_mask
+        # Invalid pixels stay where they are and carry label 0; some objects (>= 10) exist.
+        assert 0 < finite.sum() < frame.n_points
+        assert np.all(labels[~finite] == 0)
+        assert len(np.unique(labels[labels >= 10] // 10)) >= 5
+    # test57: complex clutter, 14-16 objects by the README.
+    t57 = read_pcd(shared_path("mosd/test/test57.pcd")).fields["label"]
+    assert 14 <= len(np.unique(t57[t57 >= 10] // 10)) <= 16
+
+
+def test_write_pcd_round_trip_organized(tmp_path: Path) -> None:
+    frame = _small_frame()
+    out = tmp_path / "small.pcd"
+    write_pcd(out, frame)
+    back = read_pcd(out)
+    assert back.shape == (4, 5)
+    assert _same(back.points, frame.points)
+    assert np.array_equal(back.colors, frame.colors)
+    assert np.array_equal(back.fields["label"], frame.fields["label"])
+    assert b"DATA binary_compressed" in out.read_bytes()[:400]
+    assert not [p for p in tmp_path.iterdir() if p.name != "small.pcd"]  # no temp file left
+
+
+def test_write_pcd_labels_argument_and_unorganized(tmp_path: Path) -> None:
+    base = _small_frame()
+    frame = Frame(points=base.points, colors=None, shape=None)
+    labels = np.full(frame.n_points, 7, dtype=np.int64)
+    out = tmp_path / "u.pcd"
+    write_pcd(out, frame, labels=labels)
+    back = read_pcd(out)
+    assert back.shape is None and back.colors is None
+    assert back.fields["label"].dtype == np.uint32 and set(back.fields["label"].tolist()) == {7}
+    header = out.read_bytes()[:300].decode("ascii", "replace")
+    assert "FIELDS x y z label" in header and "WIDTH 20" in header and "HEIGHT 1" in header
+
+
+def test_write_pcd_mosd_round_trip_and_open3d(tmp_path: Path) -> None:
+    import open3d as o3d
+
+    frame = read_pcd(shared_path("mosd/test/test57.pcd"))
+    out = tmp_path / "t57.pcd"
+    write_pcd(out, frame)
+    back = read_pcd(out)
+    assert _same(back.points, frame.points) and np.array_equal(back.colors, frame.colors)
+    assert np.array_equal(back.fields["label"], frame.fields["label"])
+    cloud = o3d.io.read_point_cloud(str(out), remove_nan_points=False)
+    assert len(cloud.points) == 307200 and cloud.has_colors()
+    assert _same(np.asarray(cloud.points).astype(np.float32), frame.points)
+    finite = frame.finite_mask
+    assert np.array_equal(np.round(np.asarray(cloud.colors)[finite] * 255).astype(np.uint8), frame.colors[finite])
+
+
+def _xyz(n: int) -> bytes:
+    return np.arange(3 * n, dtype="<f4").tobytes()
+
+
+def test_bad_pcd_inputs(tmp_path: Path) -> None:
+    cases: dict[str, tuple[bytes, str]] = {
+        "empty.pcd": (b"", "empty file"),
+        "garbage.pcd": (b"\x00\x01\x02binary junk", "not a PCD file"),
+        "text.pcd": (b"hello world\n", "not a PCD file"),
+        "comment_only.pcd": (b"# .PCD v0.7\n", "no DATA line"),
+        "header_cut.pcd": (_header()[:60], "no DATA line"),
+        "points_lie.pcd": (_header(n=5) + _xyz(5), r"POINTS 5 but WIDTH\*HEIGHT = 3\*1 = 3"),
+        "organized_lie.pcd": (_header(w=2, h=2, n=3) + _xyz(3), "POINTS 3 but WIDTH"),
+        "binary_short.pcd": (_header(w=4) + _xyz(3), "truncated PCD"),
+        "binary_cut_mid_point.pcd": (_header(w=3) + _xyz(3)[:-5], "truncated PCD"),
+        "compressed_no_sizes.pcd": (_header(d="binary_compressed") + b"\x01\x02", "size header is missing"),
+        "compressed_cut.pcd": (
+            _header(d="binary_compressed") + struct.pack("<II", 30, 36) + b"\x00" * 10,
+            "truncated PCD",
+        ),
+        "compressed_wrong_size.pcd": (
+            _header(d="binary_compressed") + struct.pack("<II", 4, 99) + b"\x00" * 4,
+            "unpacks to 99 bytes",
+        ),
+        "compressed_corrupt.pcd": (
+            _header(d="binary_compressed") + struct.pack("<II", 8, 36) + b"\xff" * 8,
+            "corrupt PCD",
+        ),
+        "ascii_short.pcd": (_header(d="ascii") + b"1 2 3\n4 5 6\n", "2 rows"),
+        "ascii_bad_token.pcd": (_header(d="ascii") + b"1 2 3\n4 x 6\n7 8 9\n", "bad ASCII point data"),
+        "fields_mismatch.pcd": (
+            _header().replace(b"SIZE 4 4 4", b"SIZE 4 4"), "3 FIELDS but 2 SIZE"
+        ),
+        "bad_type.pcd": (_header().replace(b"TYPE F F F", b"TYPE F F Q"), "bad PCD header"),
+        "bad_width.pcd": (_header().replace(b"WIDTH 3", b"WIDTH three"), "bad PCD header"),
+        "no_xyz.pcd": (_header().replace(b"FIELDS x y z", b"FIELDS a b c") + _xyz(3), "no x/y/z"),
+        "ros1.bag.pcd": (b"#ROSBAG V2.0\n\x00\x00", "truncated or corrupt ROS 1 bag"),
+    }
+    for name, (content, match) in cases.items():
+        path = tmp_path / name
+        path.write_bytes(content)
+        _one_line_error(path, match)
+    _one_line_error(tmp_path / "missing.pcd", "file not found")
+    with pytest.raises(InputError, match="directory"):
+        read_frame(tmp_path)
+    with pytest.raises(InputError, match="frame 1 does not exist"):
+        read_frame(shared_path("pcd_formats/bun0.pcd"), index=1)
+
+
+def test_stereo_left_has_no_xyz() -> None:
+    path = shared_path("pcd_formats/stereo_left.pcd")
+    message = _one_line_error(path, "no x/y/z fields")
+    assert "rgba" in message
+
+
+def test_pcd_count_field_and_padding(tmp_path: Path) -> None:
+    """COUNT 3 fields become (N, 3); PCL's `_` padding is dropped; compressed layout is per field."""
+    import lzf
+
+    n = 3
+    xyz = np.arange(3 * n, dtype="<f4").reshape(n, 3)
+    normal = (np.arange(3 * n, dtype="<f4") + 100).reshape(n, 3)
+    pad = np.zeros(n, dtype="<f4")
+    blocks = b"".join(np.ascontiguousarray(a).tobytes() for a in (xyz[:, 0], xyz[:, 1], xyz[:, 2], normal, pad))
+    packed = lzf.compress(blocks)
+    header = (
+        "VERSION 0.7\nFIELDS x y z normal _\nSIZE 4 4 4 4 4\nTYPE F F F F F\nCOUNT 1 1 1 3 1\n"
+        f"WIDTH {n}\nHEIGHT 1\nPOINTS {n}\nDATA binary_compressed\n"
+    ).encode()
+    path = tmp_path / "normals.pcd"
+    path.write_bytes(header + struct.pack("<II", len(packed), len(blocks)) + packed)
+    frame = read_frame(path)
+    assert np.array_equal(frame.points, xyz)
+    assert list(frame.fields) == ["normal"] and np.array_equal(frame.fields["normal"], normal)
+
+
+def test_pcd_truncation_fuzz_only_clear_errors(tmp_path: Path) -> None:
+    """Every prefix of a small PCD (and a few byte flips) gives a frame or a ClearError."""
+    frame = _small_frame(3, 4, nan_rows=())
+    good = tmp_path / "good.pcd"
+    write_pcd(good, frame)
+    data = good.read_bytes()
+    path = tmp_path / "cut.pcd"
+    for end in range(0, len(data) - 1, 3):
+        path.write_bytes(data[:end])
+        with pytest.raises(ClearError):
+            read_frame(path)
+    rng = np.random.default_rng(0)
+    for _ in range(60):
+        flipped = bytearray(data)
+        flipped[int(rng.integers(len(data)))] = int(rng.integers(256))
+        path.write_bytes(bytes(flipped))
+        try:
+            back = read_frame(path)
+        except ClearError:
+            continue
+        # a flip the reader accepts changed a value, never how many points there are
+        assert back.n_points == frame.n_points

@@ -1,0 +1,70 @@
+"""Tests of clearcli/perception/rims.py."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+
+def _column(x: float, z_lo: float, z_hi: float) -> np.ndarray:
+    """Voxel centroids of a 4 cm wide vertical strip at x (table frame: z up), 5 mm grid."""
+    z = np.arange(z_lo, z_hi + 1e-9, 0.005)
+    y = np.arange(0.0, 0.04 + 1e-9, 0.005)
+    zz, yy = np.meshgrid(z, y)
+    return np.stack([np.full(zz.size, x), yy.ravel(), zz.ravel()], axis=1)
+
+
+def _slope(x0: float, x1: float, z0: float, dz_dx: float) -> np.ndarray:
+    """Voxel centroids of a 4 cm wide strip from x0 to x1, z = z0 + dz_dx (x - x0)."""
+    x = np.arange(x0, x1 + 1e-9, 0.005)
+    y = np.arange(0.0, 0.04 + 1e-9, 0.005)
+    xx, yy = np.meshgrid(x, y)
+    return np.stack([xx.ravel(), yy.ravel(), z0 + dz_dx * (xx.ravel() - x0)], axis=1)
+
+
+@pytest.mark.parametrize(
+    "shape, joined",
+    [
+        ("rim", True),  # an inner wall going down away from A's top: a container's rim
+        ("on_top", False),  # stands on A: touches A's top with its bottom
+        ("beside", False),  # side by side: touches all the way down
+    ],
+)
+def test_rim_merge(shape: str, joined: bool) -> None:
+    from clearcli.perception.rims import merge_rims
+
+    a = _column(0.0, 0.0, 0.10)
+    b = {
+        "rim": _slope(0.015, 0.06, 0.10, -1.0),
+        "on_top": _column(0.015, 0.10, 0.14),
+        "beside": _column(0.015, 0.0, 0.10),
+    }[shape]
+    cent = np.vstack([a, b])
+    seg = np.r_[np.zeros(len(a), np.int64), np.ones(len(b), np.int64)]
+    out = merge_rims(seg, cent, cent[:, 2], tolerance_m=0.015, contact_m=0.02)
+    assert (int(out.max()) + 1 == 1) == joined
+
+
+def _flat(x0: float, x1: float, z: float) -> np.ndarray:
+    """Voxel centroids of a horizontal 4 cm wide strip from x0 to x1 at height z."""
+    return _slope(x0, x1, z, 0.0)
+
+
+def test_rim_merge_keeps_touching_tops_apart() -> None:
+    """Two tall boxes 1 cm apart whose lower parts hide each other: the camera sees two
+    tops whose edges come within the contact distance, near the top of both. Without the
+    top-face test that looks like a rim; with it, it is not one."""
+    from clearcli.perception.rims import merge_rims
+
+    a, b = _flat(0.0, 0.04, 0.10), _flat(0.05, 0.09, 0.095)
+    cent = np.vstack([a, b])
+    seg = np.r_[np.zeros(len(a), np.int64), np.ones(len(b), np.int64)]
+    joined = merge_rims(seg, cent, cent[:, 2], tolerance_m=0.015, contact_m=0.02)
+    assert int(joined.max()) == 0
+    kept = merge_rims(seg, cent, cent[:, 2], 0.015, 0.02, voxel_is_top=np.ones(len(cent), bool))
+    assert int(kept.max()) == 1
+    # a rim's walls are not top faces: still joined
+    outer, inner = _column(0.0, 0.0, 0.10), _slope(0.015, 0.06, 0.10, -1.0)
+    rim = np.vstack([outer, inner])
+    rim_seg = np.r_[np.zeros(len(outer), np.int64), np.ones(len(inner), np.int64)]
+    assert int(merge_rims(rim_seg, rim, rim[:, 2], 0.015, 0.02, voxel_is_top=np.zeros(len(rim), bool)).max()) == 0

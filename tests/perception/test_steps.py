@@ -1,0 +1,64 @@
+"""Tests of clearcli/perception/steps.py."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from helpers.segment import S
+
+from clearcli.evaluate.segmentation import score
+
+
+def test_best_separating_line_by_hand() -> None:
+    from clearcli.perception.steps import best_separating_line
+
+    # two 4 x 4 cm tops side by side along x, the upper one at x > 0.01: the line is
+    # x = 0.01 (normal +x, halfway between the grid columns at 0.0075 and 0.0125)
+    g = np.arange(0.0, 0.04, 0.005) + 0.0025
+    xx, yy = np.meshgrid(np.r_[g - 0.03, g + 0.01], g)
+    xy = np.stack([xx.ravel(), yy.ravel()], axis=1)
+    upper = xy[:, 0] > 0.01
+    normal, offset, errors = best_separating_line(xy, upper)
+    assert errors == 0
+    assert normal == pytest.approx([1.0, 0.0], abs=1e-12)
+    assert -0.0075 < offset < 0.0125  # any line in the gap between the two tops
+    assert ((xy @ normal > offset) == upper).all()
+    # the same with the upper top on the other side: the normal flips
+    normal, offset, errors = best_separating_line(xy, ~upper)
+    assert errors == 0 and normal == pytest.approx([-1.0, 0.0], abs=1e-12)
+    # a bowl: its inside bottom (a disk) surrounded by its rim (a ring): no line
+    # separates them; the best leaves at least the disk's share beyond its chord
+    t = np.linspace(0, 2 * np.pi, 72, endpoint=False)
+    ring = np.stack([0.07 * np.cos(t), 0.07 * np.sin(t)], axis=1)
+    disk = np.stack([0.03 * np.cos(t[::4]), 0.03 * np.sin(t[::4])], axis=1) * np.linspace(0.1, 1, 18)[:, None]
+    pts = np.vstack([ring, disk])
+    _, _, errors = best_separating_line(pts, np.r_[np.ones(len(ring), bool), np.zeros(len(disk), bool)])
+    assert errors >= 9  # half the disk, or most of the ring
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_step_split_separates_flush_boxes_of_different_heights(seed: int) -> None:
+    """Two boxes of the same footprint width, face to face along x, fronts and backs
+    flush, 10 and 7 cm tall: LCCP joins them through the flush faces; the step between
+    their tops separates them."""
+    from clearcli.perception.segment import segment
+    from clearcli.sim.camera import render
+    from clearcli.sim.scene import Box, make_scene
+
+    scene = make_scene(
+        "flush_pair", [Box(0, 0.05, 0.06, 0.10, x_m=-0.025, y_m=0.0), Box(1, 0.05, 0.06, 0.07, x_m=0.025, y_m=0.0)]
+    )
+    frame = render(scene, seed=seed)
+    off = score(segment(frame, replace(S, planar_cuts=False, step_split=False)).labels(), frame.fields["label"])
+    assert off.n_pred == 1
+    on = score(segment(frame, replace(S, planar_cuts=False)).labels(), frame.fields["label"])
+    assert (on.n_pred, on.true_positives) == (2, 2)
+    assert min(on.matched_iou) > 0.8
+    # the same pair at equal heights has no step: one segment (the honest limit)
+    same = make_scene(
+        "flush_pair_same", [Box(0, 0.05, 0.06, 0.10, x_m=-0.025, y_m=0.0), Box(1, 0.05, 0.06, 0.10, x_m=0.025, y_m=0.0)]
+    )
+    frame = render(same, seed=seed)
+    assert score(segment(frame, S).labels(), frame.fields["label"]).n_pred == 1

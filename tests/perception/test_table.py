@@ -1,0 +1,80 @@
+"""Tests of clearcli/perception/table.py."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from helpers.segment import (
+    S,
+    _render,
+    box_frame,  # noqa: F401  (fixtures)
+)
+
+from clearcli.errors import SceneError
+from clearcli.io.frames import Frame
+
+
+# ------------------------------------------------------------------ 2. table
+def test_table_is_the_support_not_the_floor() -> None:
+    from clearcli.perception.filters import clean_mask
+    from clearcli.perception.table import find_table, table_and_prism
+    from clearcli.sim.scene import isolated_box
+
+    scene = isolated_box()
+    frame = _render(scene, floor=True)
+    T = scene.T_camera_table
+    up = T[:3, 2]  # the table's z axis in the camera frame
+    pts = frame.points[clean_mask(frame.points, frame.shape, S)].astype(np.float64)
+    fit = find_table(pts, S, organized=True)
+    assert np.dot(fit.plane.normal, up) > 0.999
+    # the camera is 0.62 m above the table (sim placement)
+    assert fit.plane.offset == pytest.approx(-(up @ T[:3, 3]), abs=0.005)
+    table, prism, h = table_and_prism(pts, fit, S)
+    assert table.sum() > 50_000
+    assert np.all(h[prism] >= S.prism_min_height_m)
+
+
+def test_empty_table_is_zero_objects() -> None:
+    from clearcli.perception.segment import segment
+    from clearcli.sim.scene import make_scene
+
+    seg = segment(_render(make_scene("empty", [])), S)
+    assert seg.objects == ()
+    assert seg.table_indices.size > 50_000
+    assert seg.table_polygon.shape[0] >= 4
+    # the hull lies on the plane
+    assert np.abs(seg.table.height_of(seg.table_polygon)).max() < 1e-9
+
+
+def test_bad_scenes_raise_scene_error(box_frame: Frame) -> None:
+    from clearcli.perception.segment import segment
+
+    nan = Frame(points=np.full((480 * 640, 3), np.nan, np.float32), shape=(480, 640), source="nan.pcd")
+    with pytest.raises(SceneError, match="no finite points"):
+        segment(nan, S)
+    few = Frame(points=np.random.default_rng(0).normal(size=(50, 3)).astype(np.float32) + [0, 0, 1])
+    with pytest.raises(SceneError, match="no table"):
+        segment(few, S)
+    # a cloud of scattered points: no plane of table size
+    blob = Frame(points=np.random.default_rng(1).normal(scale=0.3, size=(20_000, 3)).astype(np.float32) + [0, 0, 2])
+    with pytest.raises(SceneError, match="no table"):
+        segment(blob, S)
+
+
+def test_table_seen_from_below_is_a_scene_error(box_frame: Frame) -> None:
+    from clearcli.perception.segment import segment
+
+    seg = segment(box_frame, S)
+    # mirror the box through the table plane: it now stands on the far side of the
+    # table from the camera, which is what a camera below the table would see
+    p = box_frame.points.astype(np.float64)
+    h = seg.table.height_of(p)
+    mirrored = np.where((h > 0.005)[:, None], p - 2 * h[:, None] * seg.table.normal, p).astype(np.float32)
+    with pytest.raises(SceneError, match="seen from below"):
+        segment(replace(box_frame, points=mirrored), S)
+    # an upside-down image (rows flipped): the table's top faces down the image
+    flipped = box_frame.points.reshape(480, 640, 3)[::-1].reshape(-1, 3) * np.array([1, -1, 1], np.float32)
+    with pytest.raises(SceneError, match="seen from below"):
+        segment(replace(box_frame, points=np.ascontiguousarray(flipped)), S)

@@ -1,0 +1,37 @@
+"""Tests of clearcli/robot/collision.py."""
+
+from __future__ import annotations
+
+import numpy as np
+from helpers.robot import kin  # noqa: F401  (fixtures)
+
+from clearcli.robot.collision import Obstacles, capsule_spheres, hull_planes
+from clearcli.robot.kinematics import WamKinematics
+
+
+def test_capsules_and_collisions(kin: WamKinematics) -> None:
+    q = np.zeros(7)
+    a, b, r = kin.capsules(q)
+    # at q = 0 the upper arm runs from the shoulder (origin) to the elbow (0.045, 0, 0.55)
+    np.testing.assert_allclose(a[0], [0, 0, 0], atol=1e-12)
+    np.testing.assert_allclose(b[0], [0.045, 0, 0.55], atol=1e-12)
+    centres, radii = capsule_spheres(a, b, r)
+    table_low = Obstacles(np.array([0, 0, 1.0]), 0.346, margin_m=0.01)  # table 0.346 below
+    assert table_low.collisions(centres, radii) == []
+    table_high = Obstacles(np.array([0, 0, 1.0]), -0.5, margin_m=0.01)  # a plane at z = 0.5
+    assert table_high.collisions(centres, radii) == ["table"]
+    # a box around the forearm at q = 0 (z 0.6 .. 0.85) is hit; one beside it is not
+    cube = np.array([[x, y, z] for x in (-0.05, 0.05) for y in (-0.05, 0.05) for z in (0.65, 0.75)])
+    from scipy.spatial import ConvexHull
+
+    faces = ConvexHull(cube).simplices
+    planes = hull_planes(cube, faces)
+    assert np.all(cube.mean(0) @ planes[:, :3].T + planes[:, 3] < 0)
+    obs = Obstacles(np.array([0, 0, 1.0]), 0.346, ("o0",), (planes,), ((cube.min(0), cube.max(0)),))
+    assert obs.collisions(centres, radii) == ["o0"]
+    assert obs.collisions(centres, radii, ignore=("o0",)) == []
+    moved = cube + [0.3, 0, 0]
+    obs2 = Obstacles(
+        np.array([0, 0, 1.0]), 0.346, ("o0",), (hull_planes(moved, faces),), ((moved.min(0), moved.max(0)),)
+    )
+    assert obs2.collisions(centres, radii) == []
