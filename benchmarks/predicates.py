@@ -56,7 +56,7 @@ def broad_phase_counts(frame, seg, settings) -> dict[str, int]:  # type: ignore[
 
     tf = TableFrame.from_plane(seg.table)
     g = gripper_model(settings.gripper)
-    objs = [build_object(frame.points[o.indices], tf, k) for k, o in enumerate(seg.objects)]
+    objs = [build_object(frame.points[o.indices], tf, k, settings.predicates) for k, o in enumerate(seg.objects)]
     boxes = rel.aabbs(objs)
     pairs = int(np.triu(rel.overlap_matrix(boxes, boxes), 1).sum())
     pushes = [push_geometry(o, g, settings.push) for o in objs]

@@ -33,7 +33,6 @@ evaluate_app = typer.Typer(
     rich_markup_mode=None,
 )
 
-LabelOutputs = bo.outputs_option(("labels",))
 
 
 @evaluate_app.command("segmentation")
@@ -61,6 +60,7 @@ def segmentation_cmd(
 
 
 @evaluate_app.command("dataset")
+@bo.batch_options(("labels",))
 def dataset_cmd(
     inputs: Annotated[
         list[Path],
@@ -82,19 +82,12 @@ def dataset_cmd(
     sets: bo.Set = None,
     topic: bo.Topic = None,
     frame_index: bo.FrameIndex = 0,
-    every: bo.Every = None,
-    out_dir: bo.OutDir = None,
-    outputs_kinds: LabelOutputs = None,
-    resume: bo.Resume = False,
-    jobs: bo.Jobs = None,
-    ray: bo.Ray = None,
-    fail_fast: bo.FailFast = False,
+    batch: bo.Batch = bo.Batch(),
 ) -> None:
     """Segment each labelled frame and score it against its own labels (or score the
     label files in --pred): a per-frame table (objects true/predicted, precision,
     recall, F1 at IoU >= 0.5, mean best IoU, over/under-segmentation, time), the means,
     and per-group means with --groups. Runs on every core, or on Ray, like every batch."""
-    from clearcli.batch.run import run_command_batch
     from clearcli.commands.common import check_output_path, stdout
     from clearcli.tasks import evaluate as task
     from clearcli.tasks.evaluate import load_groups, summarise, write_csv, write_png
@@ -147,11 +140,9 @@ def dataset_cmd(
         )
 
     collected: list[dict[str, Any]] = []
-    code = run_command_batch(
-        "evaluate", inputs, task.Request(cfg, pred=pred, groups=group_map),
-        outputs=outputs_kinds, jobs=jobs, on_line=collected.append, extra_summary=extra, render=render,
-        frame=frame_index, every=every, topic=topic, out_dir=out_dir, force=force, resume=resume,
-        ray=ray, fail_fast=fail_fast, json_out=json_out,
+    code = batch.run(
+        "evaluate", inputs, task.Request(cfg, pred=pred, groups=group_map), frame=frame_index, topic=topic,
+        force=force, json_out=json_out, on_line=collected.append, extra_summary=extra, render=render,
     )
     docs = docs_of(collected)
     if csv_out is not None:

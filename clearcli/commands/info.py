@@ -124,6 +124,7 @@ def _print_table(info: dict[str, Any]) -> None:
     stdout.print(channels)
 
 
+@bo.batch_options(())
 def info_cmd(
     inputs: Annotated[
         list[Path],
@@ -135,12 +136,7 @@ def info_cmd(
     json_out: Annotated[bool, typer.Option("--json", help="Machine-readable output (schema clear.info).")] = False,
     topic: bo.Topic = None,
     frame: bo.FrameIndex = 0,
-    every: bo.Every = None,
-    out_dir: bo.OutDir = None,
-    resume: bo.Resume = False,
-    jobs: bo.Jobs = None,
-    ray: bo.Ray = None,
-    fail_fast: bo.FailFast = False,
+    batch: bo.Batch = bo.Batch(),
 ) -> None:
     """What a file holds: points, fields, organized shape, finite points, bounds; for
     MCAP logs and ROS bags also the channels/topics, types, message counts and time span."""
@@ -149,13 +145,8 @@ def info_cmd(
     from clearcli.tasks import info as task
     from clearcli.tasks.base import Source
 
-    if bo.is_batch(inputs, every, out_dir, ray):
-        from clearcli.batch.run import run_command_batch
-
-        raise typer.Exit(run_command_batch(
-            "info", inputs, task.Request(), jobs=jobs, frame=frame, every=every, topic=topic, out_dir=out_dir,
-            resume=resume, ray=ray, fail_fast=fail_fast, json_out=json_out,
-        ))
+    if batch.wanted(inputs):
+        raise typer.Exit(batch.run("info", inputs, task.Request(), frame=frame, topic=topic, force=False, json_out=json_out))
     file = inputs[0]
     outcome = task.run(task.Request(), Source(str(file), frame, topic))
     info = dict(outcome.payload)

@@ -4,8 +4,11 @@ clearcli/batch/run.py)."""
 
 from __future__ import annotations
 
+import functools
+import inspect
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated, Any, Optional
+from typing import Annotated, Any, Callable, Optional
 
 import typer
 
@@ -110,3 +113,64 @@ def ray_argv(argv: list[str]) -> list[str]:
             if nxt is None or nxt.startswith("-") or Path(nxt).exists():
                 out.append("local")
     return out
+
+
+@dataclass(frozen=True)
+class Batch:
+    """The batch options of a frame command (--every, --out-dir, --outputs, --resume,
+    --jobs, --ray, --fail-fast), as `batch_options` hands them to the command."""
+
+    every: int | None = None
+    out_dir: Path | None = None
+    outputs: str | None = None
+    resume: bool = False
+    jobs: int | None = None
+    ray: str | None = None
+    fail_fast: bool = False
+
+    def wanted(self, inputs: Any) -> bool:
+        return is_batch(inputs, self.every, self.out_dir, self.ray)
+
+    def run(self, command: str, inputs: Any, request: Any, *, frame: int, topic: str | None, force: bool,
+            json_out: bool, **more: Any) -> int:
+        """The batch's exit code (clearcli/batch/run.py); ``more``: its on_line,
+        extra_summary and render hooks."""
+        from clearcli.batch.run import run_command_batch
+
+        return run_command_batch(
+            command, inputs, request, outputs=self.outputs, jobs=self.jobs, frame=frame, every=self.every,
+            topic=topic, out_dir=self.out_dir, force=force, resume=self.resume, ray=self.ray,
+            fail_fast=self.fail_fast, json_out=json_out, **more,
+        )
+
+
+def batch_options(outputs: tuple[str, ...]) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
+    """Give a frame command the batch options, declared once here: the command takes a
+    keyword ``batch: Batch`` instead of seven parameters. ``outputs``: the kinds its
+    --outputs accepts (its task's OUTPUTS)."""
+    declared: list[tuple[str, Any, Any]] = [
+        ("every", Every, None),
+        ("out_dir", OutDir, None),
+        ("outputs", outputs_option(outputs), None),
+        ("resume", Resume, False),
+        ("jobs", Jobs, None),
+        ("ray", Ray, None),
+        ("fail_fast", FailFast, False),
+    ]
+    if not outputs:
+        declared = [d for d in declared if d[0] != "outputs"]
+
+    def wrap(fn: Callable[..., Any]) -> Callable[..., Any]:
+        own = inspect.signature(fn, eval_str=True)
+        params = [p for p in own.parameters.values() if p.name != "batch"]
+        params += [inspect.Parameter(n, inspect.Parameter.KEYWORD_ONLY, default=d, annotation=a) for n, a, d in declared]
+
+        @functools.wraps(fn)
+        def command(*args: Any, **kwargs: Any) -> Any:
+            batch = Batch(**{n: kwargs.pop(n) for n, _, _ in declared})
+            return fn(*args, batch=batch, **kwargs)
+
+        command.__signature__ = own.replace(parameters=params)  # type: ignore[attr-defined]
+        return command
+
+    return wrap

@@ -62,8 +62,6 @@ import typer
 from clearcli.commands import options as bo
 from clearcli.commands.common import stderr, stdout
 
-PlanOutputs = bo.outputs_option(("problem", "domain", "plan", "png"))
-
 def print_plan(payload: dict[str, Any]) -> None:
     def out(text: str) -> None:
         stdout.print(text, markup=False, highlight=False)
@@ -100,6 +98,7 @@ def print_plan(payload: dict[str, Any]) -> None:
     out(f"camera pose: {payload['camera_pose_source']}")
 
 
+@bo.batch_options(("problem", "domain", "plan", "png"))
 def plan_cmd(
     inputs: bo.Inputs,
     output: Annotated[
@@ -151,13 +150,7 @@ def plan_cmd(
     ] = None,
     topic: bo.Topic = None,
     frame_index: bo.FrameIndex = 0,
-    every: bo.Every = None,
-    out_dir: bo.OutDir = None,
-    outputs_kinds: PlanOutputs = None,
-    resume: bo.Resume = False,
-    jobs: bo.Jobs = None,
-    ray: bo.Ray = None,
-    fail_fast: bo.FailFast = False,
+    batch: bo.Batch = bo.Batch(),
 ) -> None:
     """Plan how to clear the table in FRAME: numbered actions, every one IK-checked in the
     scene the earlier ones leave (backtracking as in the thesis's Algorithm 1, extended
@@ -173,15 +166,9 @@ def plan_cmd(
 
     cfg = bo.resolve_settings(settings, sets, "plan", time_limit_s=time_limit)
     request = task.Request(cfg, camera_pose=camera_pose, first_only=first_only)
-    if bo.is_batch(inputs, every, out_dir, ray):
-        from clearcli.batch.run import run_command_batch
-
+    if batch.wanted(inputs):
         bo.single_only(**{"-o": output, "--problem": problem, "--domain": domain, "--png": png})
-        raise typer.Exit(run_command_batch(
-            "plan", inputs, request,
-            outputs=outputs_kinds, jobs=jobs, frame=frame_index, every=every, topic=topic, out_dir=out_dir,
-            force=force, resume=resume, ray=ray, fail_fast=fail_fast, json_out=json_out,
-        ))
+        raise typer.Exit(batch.run("plan", inputs, request, frame=frame_index, topic=topic, force=force, json_out=json_out))
     frame = inputs[0]
     outputs = [p for p in (problem, domain, output, png) if p is not None]
     for p in outputs:

@@ -31,8 +31,6 @@ import typer
 from clearcli.commands import options as bo
 from clearcli.commands.common import stderr, stdout
 
-PredicateOutputs = bo.outputs_option(("problem", "png"))
-
 
 def print_state(doc: dict[str, Any]) -> None:
     """Rich tables: the objects, then the facts grouped by kind."""
@@ -67,6 +65,7 @@ def print_state(doc: dict[str, Any]) -> None:
         stderr.print(f"predicates: {1000 * total:.1f} ms", markup=False)
 
 
+@bo.batch_options(("problem", "png"))
 def predicates_cmd(
     inputs: bo.Inputs,
     output: Annotated[
@@ -86,13 +85,7 @@ def predicates_cmd(
             help="Use the frame's 'label' field (mOSD ground truth) instead of running segmentation.",
         ),
     ] = False,
-    every: bo.Every = None,
-    out_dir: bo.OutDir = None,
-    outputs_kinds: PredicateOutputs = None,
-    resume: bo.Resume = False,
-    jobs: bo.Jobs = None,
-    ray: bo.Ray = None,
-    fail_fast: bo.FailFast = False,
+    batch: bo.Batch = bo.Batch(),
 ) -> None:
     """Objects and symbolic facts of FRAME (on, block_grasp, block_dir, ungraspable,
     push_off_table): runs segmentation, models each object, computes the predicates; -o
@@ -103,15 +96,10 @@ def predicates_cmd(
     from clearcli.tasks.base import Outputs, Source
 
     cfg = bo.resolve_settings(settings, sets)
-    if bo.is_batch(inputs, every, out_dir, ray):
-        from clearcli.batch.run import run_command_batch
-
+    if batch.wanted(inputs):
         bo.single_only(**{"-o": output, "--png": png})
-        raise typer.Exit(run_command_batch(
-            "predicates", inputs, task.Request(cfg, ground_truth=ground_truth),
-            outputs=outputs_kinds, jobs=jobs, frame=frame_index, every=every, topic=topic, out_dir=out_dir,
-            force=force, resume=resume, ray=ray, fail_fast=fail_fast, json_out=json_out,
-        ))
+        request = task.Request(cfg, ground_truth=ground_truth)
+        raise typer.Exit(batch.run("predicates", inputs, request, frame=frame_index, topic=topic, force=force, json_out=json_out))
     frame = inputs[0]
     for out in (output, png):
         if out is not None:

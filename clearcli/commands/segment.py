@@ -30,9 +30,8 @@ import typer
 
 from clearcli.commands import options as bo
 
-SegmentOutputs = bo.outputs_option(("labels", "png"))
 
-
+@bo.batch_options(("labels", "png"))
 def segment_cmd(
     inputs: bo.Inputs,
     json_out: Annotated[bool, typer.Option("--json", help="Machine-readable output (schema in the docs).")] = False,
@@ -63,13 +62,7 @@ def segment_cmd(
         Optional[bool],
         typer.Option("--occlusion-merge/--no-occlusion-merge", help="Join pieces of an object cut by a nearer one."),
     ] = None,
-    every: bo.Every = None,
-    out_dir: bo.OutDir = None,
-    outputs_kinds: SegmentOutputs = None,
-    resume: bo.Resume = False,
-    jobs: bo.Jobs = None,
-    ray: bo.Ray = None,
-    fail_fast: bo.FailFast = False,
+    batch: bo.Batch = bo.Batch(),
 ) -> None:
     """Find the table and segment the objects on it (thesis 4.1): a summary table, or
     --json; -o writes the labels (0 none, 1 table, 10(k+1) object k) as a PCD."""
@@ -87,15 +80,10 @@ def segment_cmd(
         occlusion_merge=occlusion_merge,
     )
     settings = bo.resolve_settings(settings_file, sets, "segment", **flags)
-    if bo.is_batch(inputs, every, out_dir, ray):
-        from clearcli.batch.run import run_command_batch
-
+    if batch.wanted(inputs):
         bo.single_only(**{"-o": labels_out, "--png": png})
-        raise typer.Exit(run_command_batch(
-            "segment", inputs, task.Request(settings),
-            outputs=outputs_kinds, jobs=jobs, frame=frame_index, every=every, topic=topic, out_dir=out_dir,
-            force=force, resume=resume, ray=ray, fail_fast=fail_fast, json_out=json_out,
-        ))
+        request = task.Request(settings)
+        raise typer.Exit(batch.run("segment", inputs, request, frame=frame_index, topic=topic, force=force, json_out=json_out))
     frame_path = inputs[0]
     for out in (labels_out, png):
         if out is not None:

@@ -19,11 +19,14 @@ from __future__ import annotations
 
 import logging
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from clearcli.perception.types import TablePlane
+
+if TYPE_CHECKING:
+    from clearcli.settings.geometry import PredicateSettings
 
 log = logging.getLogger(__name__)
 
@@ -361,35 +364,30 @@ def build_object(
     points_camera: np.ndarray,
     frame: TableFrame,
     segment_index: int,
+    settings: "PredicateSettings",
     *,
-    min_points: int = 10,
-    min_height_m: float = 0.005,
-    top_band_m: float = 0.01,
-    cell_m: float = 0.005,
     with_fcl: bool = True,
 ) -> ObjectGeometry:
-    """Model one object from its points (sensor frame). Raises DegenerateObject."""
+    """Model one object from its points (sensor frame) as [predicates] says (its
+    min_object_points, min_object_height_m, top_surface_band_m, model_cell_m). Raises
+    DegenerateObject."""
     pts = np.asarray(points_camera, dtype=float)
-    cols = object_columns(pts, [np.arange(len(pts))], frame, cell_m)[0]
+    cols = object_columns(pts, [np.arange(len(pts))], frame, settings.model_cell_m)[0]
     if cols is None:
-        raise DegenerateObject(f"0 points (fewer than {min_points})")
-    return build_from_columns(
-        cols, segment_index, min_points=min_points, min_height_m=min_height_m, top_band_m=top_band_m,
-        cell_m=cell_m, with_fcl=with_fcl,
-    )
+        raise DegenerateObject(f"0 points (fewer than {settings.min_object_points})")
+    return build_from_columns(cols, segment_index, settings, with_fcl=with_fcl)
 
 
 def build_from_columns(
     cols: Columns,
     segment_index: int,
+    settings: "PredicateSettings",
     *,
-    min_points: int = 10,
-    min_height_m: float = 0.005,
-    top_band_m: float = 0.01,
-    cell_m: float = 0.005,
     with_fcl: bool = True,
 ) -> ObjectGeometry:
-    """Model one object from its `Columns`. Raises DegenerateObject."""
+    """Model one object from its `Columns` as [predicates] says. Raises DegenerateObject."""
+    min_points, min_height_m = settings.min_object_points, settings.min_object_height_m
+    top_band_m, cell_m = settings.top_surface_band_m, settings.model_cell_m
     from scipy.spatial import ConvexHull, QhullError
 
     if cols.n_points < min_points:

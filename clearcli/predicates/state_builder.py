@@ -50,14 +50,7 @@ def compute_state(frame: Frame, seg: Segmentation, settings: "Settings | None" =
             if cols is None:
                 raise DegenerateObject("no finite points")
             geoms.append(
-                build_from_columns(
-                    cols,
-                    k,
-                    min_points=ps.min_object_points,
-                    min_height_m=ps.min_object_height_m,
-                    top_band_m=ps.top_surface_band_m,
-                    cell_m=ps.model_cell_m,
-                )
+                build_from_columns(cols, k, ps)
             )
         except DegenerateObject as exc:
             log.warning("segment %d left out: %s", k, exc)

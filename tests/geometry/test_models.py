@@ -14,6 +14,7 @@ from clearcli.geometry.models import (
 )
 from clearcli.perception.types import TablePlane
 from clearcli.predicates.synthetic import Box
+from clearcli.settings.geometry import PredicateSettings
 
 
 # ------------------------------------------------------------------------------ table frame
@@ -75,7 +76,7 @@ def test_hull_is_solid_for_a_box_seen_from_above() -> None:
 def test_degenerate_inputs_raise() -> None:
     tf = TableFrame.from_plane(TablePlane(normal=np.array([0.0, -0.8, -0.6]), offset=0.7))
     with pytest.raises(DegenerateObject):
-        build_object(np.zeros((3, 3)), tf, 0)
+        build_object(np.zeros((3, 3)), tf, 0, PredicateSettings())
     line = np.column_stack([np.linspace(0, 0.1, 50), np.zeros(50), np.full(50, 0.5)])
     with pytest.raises(DegenerateObject):
-        build_object(line, tf, 0)
+        build_object(line, tf, 0, PredicateSettings())

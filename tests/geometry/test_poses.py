@@ -56,7 +56,7 @@ def test_raised_push_not_offered_where_the_object_would_tip() -> None:
         seg = truth_segment(frame)
         tf = TableFrame.from_plane(seg.table)
         cols = object_columns(frame.points, [o.indices for o in seg.objects], tf, settings.predicates.model_cell_m)
-        geom = build_from_columns(cols[0], 0, cell_m=settings.predicates.model_cell_m)
+        geom = build_from_columns(cols[0], 0, settings.predicates)
         pushes = push_geometry(geom, gripper, settings.push)
         return {d: 1 + len(p.alternatives) for d, p in pushes.items()}
 

@@ -60,7 +60,7 @@ def test_no_offcentre_alternatives_on_a_short_object() -> None:
         seg = truth_segment(frame)
         tf = TableFrame.from_plane(seg.table)
         cols = object_columns(frame.points, [o.indices for o in seg.objects], tf, settings.predicates.model_cell_m)
-        geom = build_from_columns(cols[0], 0, cell_m=settings.predicates.model_cell_m)
+        geom = build_from_columns(cols[0], 0, settings.predicates)
         grasp = grasp_geometry(geom, gripper, settings.push, 30.0, 0.3)
         counts.append(len(grasp.alternatives))
         if size_x > 0.1:
