@@ -1,21 +1,12 @@
-"""`clear settings`, and the "not yet" placeholders."""
+"""`clear settings`: the resolved settings tree as TOML."""
 
 from __future__ import annotations
 
-from typing import Annotated, Any, Callable, Optional
+from typing import Annotated
 
 import typer
 
 from clearcli.commands import options as bo
-from clearcli.errors import NotYetError
-
-
-def not_yet(name: str) -> Callable[..., Any]:
-    def _cmd(args: Annotated[Optional[list[str]], typer.Argument(hidden=True)] = None) -> None:
-        raise NotYetError(f"`clear {name}` is not implemented yet")
-
-    _cmd.__doc__ = f"(not implemented yet) the {name} stage."
-    return _cmd
 
 
 def settings_cmd(

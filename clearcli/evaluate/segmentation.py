@@ -27,6 +27,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from clearcli.io.frames import object_ids  # noqa: F401  (the label convention, one home)
+
 MAJORITY = 0.5
 MIN_COVER = 0.1
 
@@ -61,12 +63,6 @@ class SegmentationScore:
             "true_ids": list(self.true_ids),
             "pred_ids": list(self.pred_ids),
         }
-
-
-def object_ids(labels: np.ndarray) -> np.ndarray:
-    """(N,) object id per point: label // 10 for labels >= 10, else 0 (none/table)."""
-    lab = np.asarray(labels).astype(np.int64).ravel()
-    return np.where(lab >= 10, lab // 10, 0)
 
 
 def overlap_matrix(pred_obj: np.ndarray, true_obj: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

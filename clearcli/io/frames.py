@@ -18,6 +18,19 @@ def object_label(k: int) -> int:
     return 10 * (k + 1)
 
 
+def table_mask(labels: np.ndarray) -> np.ndarray:
+    """(N,) bool: the table's labels (ours 1, mOSD ground truth 1..9)."""
+    lab = np.asarray(labels).astype(np.int64).ravel()
+    return (lab >= LABEL_TABLE) & (lab <= 9)
+
+
+def object_ids(labels: np.ndarray) -> np.ndarray:
+    """(N,) int64 object id per label: ``label // 10`` for objects (labels >= 10: object
+    k has id k + 1), 0 for no label and the table (mOSD's 1..9 included)."""
+    lab = np.asarray(labels).astype(np.int64).ravel()
+    return np.where(lab >= 10, lab // 10, 0)
+
+
 @dataclass(frozen=True, eq=False)
 class Frame:
     """A point cloud in the sensor frame (metres; optical frame: z forward, y down).

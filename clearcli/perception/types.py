@@ -7,6 +7,8 @@ from typing import Mapping
 
 import numpy as np
 
+from clearcli.io.frames import LABEL_TABLE, object_label
+
 
 @dataclass(frozen=True, eq=False)
 class TablePlane:
@@ -69,7 +71,7 @@ class Segmentation:
     def labels(self) -> np.ndarray:
         """(n_points,) int32 labels in the project convention (0 none, 1 table, 10(k+1))."""
         out = np.zeros(self.n_points, dtype=np.int32)
-        out[self.table_indices] = 1
+        out[self.table_indices] = LABEL_TABLE
         for k, obj in enumerate(self.objects):
-            out[obj.indices] = 10 * (k + 1)
+            out[obj.indices] = object_label(k)
         return out

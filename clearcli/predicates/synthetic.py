@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from clearcli.io.frames import Frame
+from clearcli.io.frames import Frame, object_ids, table_mask
 from clearcli.perception.types import Segmentation, SegmentedObject, TablePlane
 
 
@@ -163,7 +163,7 @@ def segmentation_from_labels(frame: Frame, min_points: int = 50) -> Segmentation
     labels = np.asarray(frame.fields["label"]).reshape(-1)
     finite = frame.finite_mask
     pts = frame.points.astype(float)
-    table_idx = np.nonzero(finite & (labels >= 1) & (labels <= 9))[0]
+    table_idx = np.nonzero(finite & table_mask(labels))[0]
     tp = pts[table_idx]
     c = tp.mean(axis=0)
     _, _, vt = np.linalg.svd(tp - c, full_matrices=False)
@@ -179,10 +179,10 @@ def segmentation_from_labels(frame: Frame, min_points: int = 50) -> Segmentation
     proj = plane.project(tp)
     uv = np.column_stack([proj @ e1, proj @ e2])
     polygon = proj[ConvexHull(uv).vertices]
-    ids = labels // 10
+    ids = object_ids(labels)
     objects = []
-    for oid in np.unique(ids[finite & (labels >= 10)]):
-        idx = np.nonzero(finite & (labels >= 10) & (ids == oid))[0]
+    for oid in np.unique(ids[finite & (ids > 0)]):
+        idx = np.nonzero(finite & (ids == oid))[0]
         if len(idx) < min_points:
             continue
         objects.append(pca_object(idx.astype(np.int64), pts[idx]))

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from clearcli.io.frames import Frame
+from clearcli.io.frames import LABEL_TABLE, Frame, object_ids
 from clearcli.perception.types import Segmentation
 
 _TABLE_RGB = (0.78, 0.78, 0.78)
@@ -24,10 +24,11 @@ def _object_colors(n: int) -> np.ndarray:
 def label_colors(labels: np.ndarray, n_objects: int) -> np.ndarray:
     """(N, 3) float RGB: objects from a qualitative map, table grey, the rest pale."""
     cols = np.tile(np.array(_NONE_RGB), (labels.shape[0], 1))
-    cols[labels == 1] = _TABLE_RGB
-    obj = labels >= 10
+    cols[labels == LABEL_TABLE] = _TABLE_RGB
+    ids = object_ids(labels)
+    obj = ids > 0
     palette = _object_colors(n_objects)
-    cols[obj] = palette[(labels[obj] // 10 - 1) % palette.shape[0]]
+    cols[obj] = palette[(ids[obj] - 1) % palette.shape[0]]
     return cols
 
 

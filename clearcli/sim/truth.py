@@ -8,6 +8,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from clearcli.io.frames import object_ids, table_mask
+
 if TYPE_CHECKING:
     from clearcli.io.frames import Frame
     from clearcli.perception.types import Segmentation
@@ -23,7 +25,7 @@ def truth_segment(frame: "Frame", settings: Any = None) -> "Segmentation":
 
     labels = np.asarray(frame.fields.get("label", np.zeros(frame.n_points)), dtype=np.int64)
     finite = frame.finite_mask
-    table_idx = np.flatnonzero(finite & (labels >= 1) & (labels <= 9))
+    table_idx = np.flatnonzero(finite & table_mask(labels))
     if table_idx.size < 3:
         raise SceneError(f"{frame.source or 'frame'}: no table points in the labels")
     pts = frame.points[table_idx].astype(np.float64)
@@ -39,8 +41,9 @@ def truth_segment(frame: "Frame", settings: Any = None) -> "Segmentation":
     xy = np.stack([flat @ u, flat @ v], axis=1)
     polygon = flat[ConvexHull(xy).vertices]
     objects = []
-    obj_idx = np.flatnonzero(finite & (labels >= 10))
-    groups = labels[obj_idx] // 10
+    ids = object_ids(labels)
+    obj_idx = np.flatnonzero(finite & (ids > 0))
+    groups = ids[obj_idx]
     for g in np.unique(groups):
         members = obj_idx[groups == g]
         if members.size < 30:
@@ -63,11 +66,11 @@ def world_object_of(frame: "Frame", segmentation: "Segmentation", segment_index:
     labels = frame.fields.get("label")
     if labels is None:
         return None
-    own = np.asarray(labels)[segmentation.objects[segment_index].indices]
-    own = own[own >= 10]
+    own = object_ids(np.asarray(labels)[segmentation.objects[segment_index].indices])
+    own = own[own > 0]
     if own.size == 0:
         return None
-    return int(Counter((own // 10 - 1).tolist()).most_common(1)[0][0])
+    return int(Counter((own - 1).tolist()).most_common(1)[0][0])  # the world's id: k
 
 
 # --- the closed loop -------------------------------------------------------------------------
