@@ -18,6 +18,19 @@ def object_label(k: int) -> int:
     return 10 * (k + 1)
 
 
+def labels_to_write(frame: "Frame", labels: np.ndarray | None) -> np.ndarray | None:
+    """The (N,) labels a writer stores with ``frame``: ``labels`` when given, else the
+    frame's own ``label`` field, else None; ValueError for a wrong shape."""
+    if labels is None and "label" in frame.fields:
+        labels = frame.fields["label"]
+    if labels is None:
+        return None
+    labels = np.asarray(labels)
+    if labels.shape != (frame.n_points,):
+        raise ValueError(f"labels must have shape ({frame.n_points},), got {labels.shape}")
+    return labels
+
+
 def table_mask(labels: np.ndarray) -> np.ndarray:
     """(N,) bool: the table's labels (ours 1, mOSD ground truth 1..9)."""
     lab = np.asarray(labels).astype(np.int64).ravel()

@@ -25,7 +25,7 @@ from typing import Any, BinaryIO, Iterator
 from clearcli.errors import InputError, PartialLogError
 from clearcli.io.frames import Frame
 from clearcli.io.messages import MessageDecoders, foxglove_frame, pointcloud2_frame, schema_name
-from clearcli.io.sniff import MCAP_MAGIC
+from clearcli.io.sniff import MCAP_MAGIC, open_input
 
 DEFAULT_TOPIC = "/camera/depth_registered/points"
 DEFAULT_FRAME_ID = "camera_rgb_optical_frame"
@@ -85,14 +85,7 @@ def is_mcap(head: bytes) -> bool:
 
 
 def _open(path: Path) -> BinaryIO:
-    try:
-        fp = open(path, "rb")
-    except FileNotFoundError:
-        raise InputError(f"{path}: file not found") from None
-    except IsADirectoryError:
-        raise InputError(f"{path}: is a directory, not an MCAP file") from None
-    except OSError as exc:
-        raise InputError(f"{path}: cannot read ({exc.strerror})") from None
+    fp = open_input(path, "an MCAP file")
     head = fp.read(len(MCAP_MAGIC))
     if not is_mcap(head):
         fp.close()

@@ -11,7 +11,7 @@ from typing import Any, Iterable, Sequence
 import numpy as np
 
 from clearcli.errors import OutputError
-from clearcli.io.frames import Frame
+from clearcli.io.frames import Frame, labels_to_write
 from clearcli.io.mcap import DEFAULT_FRAME_ID, DEFAULT_TOPIC
 from clearcli.io.pointfields import pack_rgb_float
 from clearcli.transforms import matrix_to_quat
@@ -67,12 +67,8 @@ def _pointcloud2_dict(frame: Frame, labels: np.ndarray | None) -> dict[str, Any]
     ]
     if frame.colors is not None:
         cols.append(("rgb", np.dtype("<f4"), pack_rgb_float(frame.colors)))
-    if labels is None and "label" in frame.fields:
-        labels = np.asarray(frame.fields["label"])
+    labels = labels_to_write(frame, labels)
     if labels is not None:
-        labels = np.asarray(labels)
-        if labels.shape != (n,):
-            raise ValueError(f"labels must have shape ({n},), got {labels.shape}")
         cols.append(("label", np.dtype("<u4"), labels.astype(np.uint32)))
     record = np.dtype([(name, dt) for name, dt, _ in cols])
     blob = np.empty(n, dtype=record)

@@ -22,24 +22,17 @@ from typing import BinaryIO
 import numpy as np
 
 from clearcli.errors import InputError, OutputError
-from clearcli.io.frames import Frame
+from clearcli.io.frames import Frame, labels_to_write
 from clearcli.io.pointfields import frame_from_records, pack_rgb_float
+from clearcli.io.sniff import PCD_HEADER_KEYS, open_input
 
 # A PCD header is ten short lines; anything without DATA in the first 64 KiB is not a PCD.
 _MAX_HEADER_BYTES = 1 << 16
-_HEADER_KEYS = ("VERSION", "FIELDS", "SIZE", "TYPE", "COUNT", "WIDTH", "HEIGHT", "VIEWPOINT", "POINTS", "DATA")
+_HEADER_KEYS = tuple(k.decode() for k in PCD_HEADER_KEYS)
 _PCD_CODES = {("F", 4): "f4", ("F", 8): "f8", ("U", 1): "u1", ("U", 2): "u2", ("U", 4): "u4",
               ("U", 8): "u8", ("I", 1): "i1", ("I", 2): "i2", ("I", 4): "i4", ("I", 8): "i8"}
 # pypcd4 renames the PCL padding field "_" to this prefix plus random letters.
 _PYPCD4_PADDING_PREFIX = "#$%&~~"
-
-
-def looks_like_pcd(head: bytes) -> bool:
-    """Whether a file's first bytes open a PCD header: a comment or a header keyword."""
-    stripped = head.lstrip()
-    if stripped.startswith(b"#ROSBAG"):  # a ROS 1 bag also opens with "#"
-        return False
-    return stripped.startswith(b"#") or any(stripped.startswith(k.encode()) for k in _HEADER_KEYS)
 
 
 def _read_header_lines(fp: BinaryIO, path: Path) -> tuple[list[str], int]:
@@ -198,15 +191,8 @@ def read_pcd(path: Path) -> Frame:
     intensity, ...) is kept in Frame.fields. Raises InputError on anything unreadable.
     """
     path = Path(path)
-    try:
-        size = path.stat().st_size
-        fp = open(path, "rb")
-    except FileNotFoundError:
-        raise InputError(f"{path}: file not found") from None
-    except IsADirectoryError:
-        raise InputError(f"{path}: is a directory, not a PCD file") from None
-    except OSError as exc:
-        raise InputError(f"{path}: cannot read ({exc.strerror})") from None
+    fp = open_input(path, "a PCD file")
+    size = os.fstat(fp.fileno()).st_size
     with fp:
         if size == 0:
             raise InputError(f"{path}: empty file (0 bytes); expected a PCD file")
@@ -250,12 +236,8 @@ def write_pcd(path: Path, frame: Frame, labels: np.ndarray | None = None) -> Non
         arrays.append(pack_rgb_float(frame.colors))
         names.append("rgb")
         types.append(np.float32)
-    if labels is None and "label" in frame.fields:
-        labels = np.asarray(frame.fields["label"])
+    labels = labels_to_write(frame, labels)
     if labels is not None:
-        labels = np.asarray(labels)
-        if labels.shape != (n,):
-            raise ValueError(f"labels must have shape ({n},), got {labels.shape}")
         arrays.append(labels.astype(np.uint32))
         names.append("label")
         types.append(np.uint32)

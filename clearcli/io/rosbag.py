@@ -39,7 +39,7 @@ from clearcli.io.mcap import ChannelInfo, McapSummary, error_reason, require_fra
 from clearcli.io.bag_messages import BagDecoders, bag_frame
 from clearcli.io.messages import quat_matrix
 from clearcli.io.ros1 import Damage, Ros1Msg, Ros1Stream
-from clearcli.io.sniff import ROSBAG1_MAGIC, ROSBAG2_METADATA
+from clearcli.io.sniff import ROSBAG1_MAGIC, ROSBAG2_METADATA, open_input
 
 TF_TOPICS = ("/tf_static", "/tf")
 
@@ -91,14 +91,7 @@ def bag_root(path: Path) -> Path:
 
 
 def _open_file(path: Path) -> BinaryIO:
-    try:
-        return open(path, "rb")
-    except FileNotFoundError:
-        raise InputError(f"{path}: file not found") from None
-    except IsADirectoryError:
-        raise InputError(f"{path}: is a directory, not a ROS 1 bag") from None
-    except OSError as exc:
-        raise InputError(f"{path}: cannot read ({exc.strerror})") from None
+    return open_input(path, "a ROS 1 bag")
 
 
 def _ros1_channels(conns: list[tuple[int, str, str, str, int]]) -> tuple[ChannelInfo, ...]:

@@ -8,7 +8,7 @@ reader and the readers can share them without importing each other.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Literal
+from typing import BinaryIO, Literal
 
 from clearcli.errors import InputError
 
@@ -18,7 +18,30 @@ MCAP_MAGIC = b"\x89MCAP0\r\n"
 ROSBAG1_MAGIC = b"#ROSBAG"
 SQLITE_MAGIC = b"SQLite format 3\x00"
 ROSBAG2_METADATA = "metadata.yaml"
+# A PCD header opens with a comment or one of its keywords.
+PCD_HEADER_KEYS = (b"VERSION", b"FIELDS", b"SIZE", b"TYPE", b"COUNT", b"WIDTH", b"HEIGHT", b"VIEWPOINT", b"POINTS", b"DATA")
 FileKind = Literal["pcd", "mcap", "rosbag1", "rosbag2"]
+
+
+def looks_like_pcd(head: bytes) -> bool:
+    """Whether a file's first bytes open a PCD header: a comment or a header keyword."""
+    stripped = head.lstrip()
+    if stripped.startswith(b"#ROSBAG"):  # a ROS 1 bag also opens with "#"
+        return False
+    return stripped.startswith(b"#") or any(stripped.startswith(k) for k in PCD_HEADER_KEYS)
+
+
+def open_input(path: Path, what: str) -> BinaryIO:
+    """``path`` opened for reading, or one InputError saying why not; ``what`` names the
+    kind of file expected ("an MCAP file", "a PCD file", "a ROS 1 bag")."""
+    try:
+        return open(path, "rb")
+    except FileNotFoundError:
+        raise InputError(f"{path}: file not found") from None
+    except IsADirectoryError:
+        raise InputError(f"{path}: is a directory, not {what}") from None
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read ({exc.strerror})") from None
 
 
 def _directory_kind(path: Path) -> FileKind:
@@ -42,8 +65,6 @@ def _directory_kind(path: Path) -> FileKind:
 def sniff(path: Path) -> FileKind:
     """"pcd", "mcap", "rosbag1" (a ROS 1 bag) from the file's first bytes (not its name), or
     "rosbag2" for a rosbag2 folder, its metadata.yaml or a .db3 file; InputError otherwise."""
-    from clearcli.io.pcd import looks_like_pcd
-
     path = Path(path)
     if path.is_dir():
         return _directory_kind(path)
