@@ -5,7 +5,8 @@ from __future__ import annotations
 import shutil
 from pathlib import Path
 
-from cli.test_settings import REPO, clear
+from helpers import REPO
+from helpers import run_clear as clear
 
 
 def test_piped_batch_table_prints_every_cell_whole(tmp_path: Path) -> None:

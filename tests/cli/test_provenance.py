@@ -6,9 +6,10 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from cli.test_settings import CLEAR, REPO, clear  # noqa: F401
+from helpers import FIXTURES
+from helpers import run_clear as clear
 
-FRAMES = [REPO / "fixtures" / n for n in ("isolated_box.pcd", "box_on_box.pcd")]
+FRAMES = [FIXTURES / n for n in ("isolated_box.pcd", "box_on_box.pcd")]
 
 
 def _made_by(doc: dict) -> dict:

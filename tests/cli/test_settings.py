@@ -5,19 +5,14 @@ from __future__ import annotations
 
 import json
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
+from helpers import FIXTURES
+from helpers import run_clear as clear
 
-REPO = Path(__file__).resolve().parents[2]
-CLEAR = str(Path(sys.executable).with_name("clear"))
-FIXTURE = REPO / "fixtures" / "isolated_box.pcd"
-SESSION = REPO / "fixtures" / "simulated_session.mcap"
-
-
-def clear(*args: object, timeout: float = 600) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([CLEAR, *map(str, args)], capture_output=True, text=True, timeout=timeout, cwd=REPO)
+FIXTURE = FIXTURES / "isolated_box.pcd"
+SESSION = FIXTURES / "simulated_session.mcap"
 
 
 def test_settings_prints_the_resolved_tree_with_set() -> None:
@@ -101,7 +96,7 @@ def test_batch_with_a_bad_settings_file_fails_once_before_any_work(tmp_path: Pat
     bad = tmp_path / "bad.toml"
     bad.write_text("[segment]\nvoxel_m = -1\n")
     out = tmp_path / "out"
-    frames = [REPO / "fixtures" / n for n in ("isolated_box.pcd", "box_on_box.pcd", "two_touching_boxes.pcd")]
+    frames = [FIXTURES / n for n in ("isolated_box.pcd", "box_on_box.pcd", "two_touching_boxes.pcd")]
     proc = clear("plan", *frames, "--settings", bad, "--json", "--out-dir", out)
     assert proc.returncode == 3
     assert proc.stdout == ""  # no frame line: nothing ran

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import os
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -22,3 +24,10 @@ def shared_path(relative: str) -> Path:
             pytest.fail(message + " and CLEAR_REQUIRE_SHARED=1")
         pytest.skip(message)
     return path
+
+
+def run_clear(*args: object, timeout: float = 600, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
+    """The installed `clear`, as a user or a script runs it (its own process)."""
+    exe = Path(sys.executable).with_name("clear")
+    cmd = [str(exe)] if exe.exists() else [sys.executable, "-m", "clearcli.cli"]
+    return subprocess.run([*cmd, *map(str, args)], capture_output=True, text=True, timeout=timeout, cwd=cwd or REPO)
