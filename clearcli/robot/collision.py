@@ -50,7 +50,7 @@ class Obstacles:
     names: tuple[str, ...] = ()
     planes: tuple[np.ndarray, ...] = ()  # (F,4) per object
     boxes: tuple[tuple[np.ndarray, np.ndarray], ...] = ()  # AABB per object
-    margin_m: float = 0.01
+    margin_m: float = 0.01  # set by make_obstacles from [robot] collision_margin_m
 
     def collisions(self, centres: np.ndarray, radii: np.ndarray, ignore: Sequence[str] = ()) -> list[str]:
         """What the spheres touch: "table" and/or object names."""
@@ -73,8 +73,13 @@ class Obstacles:
         return hit
 
 
-def make_obstacles(state: Any, T_base_camera: np.ndarray, margin_m: float = 0.01) -> Obstacles:
-    """Table and object hulls of a SymbolicState, moved into the base frame."""
+def make_obstacles(state: Any, T_base_camera: np.ndarray, margin_m: float | None = None) -> Obstacles:
+    """Table and object hulls of a SymbolicState, moved into the base frame; the arm keeps
+    ``margin_m`` from them (None: [robot] collision_margin_m)."""
+    if margin_m is None:
+        from clearcli.settings.robot import RobotSettings
+
+        margin_m = RobotSettings().collision_margin_m
     R, t = T_base_camera[:3, :3], T_base_camera[:3, 3]
     n_cam = np.asarray(state.table.normal, dtype=float)
     n = R @ n_cam

@@ -147,13 +147,24 @@ class WamKinematics:
 
     def __init__(
         self,
-        damping: float = 0.05,
-        max_iterations: int = 150,
-        tolerance_m: float = 0.001,
-        tolerance_rad: float = 0.01,
-        n_seeds: int = 8,
+        damping: float | None = None,
+        max_iterations: int | None = None,
+        tolerance_m: float | None = None,
+        tolerance_rad: float | None = None,
+        n_seeds: int | None = None,
     ) -> None:
+        """The IK search's bounds; None: [robot]'s (clearcli/settings/robot.py, their one
+        home; `kinematics_from_settings` passes a user's)."""
         import pinocchio as pin
+
+        from clearcli.settings.robot import RobotSettings
+
+        robot = RobotSettings()
+        damping = robot.ik_damping if damping is None else damping
+        max_iterations = robot.ik_max_iterations if max_iterations is None else max_iterations
+        tolerance_m = robot.ik_tolerance_m if tolerance_m is None else tolerance_m
+        tolerance_rad = robot.ik_tolerance_rad if tolerance_rad is None else tolerance_rad
+        n_seeds = robot.ik_seeds if n_seeds is None else n_seeds
 
         self.pin = pin
         self.model = pin.buildModelFromUrdf(str(URDF_PATH))
