@@ -16,7 +16,16 @@ from typing import Annotated, Optional
 import typer
 
 from clearcli import __version__
-from clearcli.errors import EXIT_CODES, EXIT_INTERNAL, EXIT_INTERRUPTED, ClearError
+from clearcli.errors import (
+    EXIT_BROKEN_PIPE,
+    EXIT_CODES,
+    EXIT_INTERNAL,
+    EXIT_INTERRUPTED,
+    EXIT_OUTPUT,
+    EXIT_TERMINATED,
+    ClearError,
+    Terminated,
+)
 
 _EXIT_HELP = "\n\n".join(f"{code}: {text}" for code, text in EXIT_CODES.items())
 
@@ -101,6 +110,35 @@ def _run_terminal_clear() -> None:
     sys.stdout.flush()
 
 
+_TERMINATED = False
+
+
+def _install_sigterm() -> None:
+    """SIGTERM stops clear the way Ctrl-C does (clean writes, a batch's summary), exit 143."""
+    import signal
+
+    def terminated(signum: int, frame: object) -> None:
+        global _TERMINATED
+        _TERMINATED = True
+        raise Terminated()
+
+    signal.signal(signal.SIGTERM, terminated)
+
+
+def _stdout_pacified() -> bool:
+    """Whether click (typer's) met a closed stdout and wrapped it to keep quiet."""
+    return type(sys.stdout).__name__ in ("PacifyFlushWrapper", "_PacifyFlushWrapper")
+
+
+def _quiet_stdout() -> None:
+    """Point stdout at /dev/null, so that the interpreter's last flush does not fail too."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError):
+        pass
+
+
 def main() -> None:
     """Entry point of `clear` and `clearcli`: maps ClearError to its exit code."""
     if (
@@ -111,27 +149,60 @@ def main() -> None:
     ):
         _run_terminal_clear()
         return
+    _install_sigterm()
     if "--ray" in sys.argv:
         from clearcli.commands.options import ray_argv
 
         sys.argv = ray_argv(sys.argv)
     app = make_app(_command_named(sys.argv[1:]))
     try:
-        app(prog_name=Path(sys.argv[0]).name or "clear")
+        try:
+            app(prog_name=Path(sys.argv[0]).name or "clear")
+        finally:
+            if not _stdout_pacified():
+                sys.stdout.flush()  # a full disk shows here, not at the interpreter's exit
+    except SystemExit as exc:
+        # Typer turns Ctrl-C (and SIGTERM, raised as Terminated) into exit 130, and a
+        # closed stdout into exit 1 after quieting it: say which really happened.
+        if _stdout_pacified():
+            _quiet_stdout()
+            sys.exit(EXIT_BROKEN_PIPE)
+        if _TERMINATED and exc.code == EXIT_INTERRUPTED:
+            sys.stderr.write("clear: terminated\n")
+            sys.exit(EXIT_TERMINATED)
+        raise
     except ClearError as exc:
         sys.stderr.write(f"clear: error: {exc}\n")
         sys.exit(exc.exit_code)
+    except Terminated:
+        sys.stderr.write("clear: terminated\n")
+        sys.exit(EXIT_TERMINATED)
     except KeyboardInterrupt:
         sys.stderr.write("clear: interrupted\n")
         sys.exit(EXIT_INTERRUPTED)
+    except BrokenPipeError:
+        _quiet_stdout()
+        sys.exit(EXIT_BROKEN_PIPE)
+    except OSError as exc:
+        from clearcli.files import WRITE_ERRNOS
+
+        if exc.errno not in WRITE_ERRNOS:
+            _internal(exc)
+        _quiet_stdout()
+        sys.stderr.write(f"clear: error: cannot write the results to stdout ({exc.strerror or exc})\n")
+        sys.exit(EXIT_OUTPUT)
     except Exception as exc:  # a bug: one line unless the user asks for the traceback
-        if os.environ.get("CLEAR_DEBUG"):
-            raise
-        sys.stderr.write(
-            f"clear: internal error: {type(exc).__name__}: {exc} "
-            "(rerun with CLEAR_DEBUG=1 for the traceback and report it)\n"
-        )
-        sys.exit(EXIT_INTERNAL)
+        _internal(exc)
+
+
+def _internal(exc: BaseException) -> None:
+    if os.environ.get("CLEAR_DEBUG"):
+        raise exc
+    sys.stderr.write(
+        f"clear: internal error: {type(exc).__name__}: {exc} "
+        "(rerun with CLEAR_DEBUG=1 for the traceback and report it)\n"
+    )
+    sys.exit(EXIT_INTERNAL)
 
 
 if __name__ == "__main__":

@@ -21,6 +21,8 @@ EXIT_PARTIAL = 9  # a log was read only in part (truncated/corrupt after complet
 EXIT_PARTIAL_PLAN = 10  # the plan removes some objects; the others are left, with reasons
 EXIT_BATCH_FAILED = 11  # a batch ran, and some of its frames failed (their codes in their lines)
 EXIT_INTERRUPTED = 130  # Ctrl-C (128 + SIGINT, as shells report it)
+EXIT_BROKEN_PIPE = 141  # stdout closed by its reader (`clear ... | head`): 128 + SIGPIPE
+EXIT_TERMINATED = 143  # SIGTERM (what Slurm, Kubernetes and `timeout` send): 128 + 15
 
 EXIT_CODES: dict[int, str] = {
     EXIT_OK: "success (plan: every object removed, an empty table included)",
@@ -36,6 +38,8 @@ EXIT_CODES: dict[int, str] = {
     EXIT_PARTIAL_PLAN: "partial plan: it removes some objects; the others are left, each with its reason",
     EXIT_BATCH_FAILED: "batch (several frames): some frames failed; each one's code and message are in its line",
     EXIT_INTERRUPTED: "interrupted (Ctrl-C); a batch still prints the summary of what finished",
+    EXIT_BROKEN_PIPE: "stdout was closed by its reader (e.g. `| head`): ended quietly",
+    EXIT_TERMINATED: "terminated (SIGTERM); a batch still prints the summary of what finished",
 }
 
 
@@ -85,12 +89,22 @@ class NotYetError(ClearError):
 
 
 class OutputError(ClearError):
-    """An output file could not be written; nothing was changed."""
+    """An output file could not be written; nothing was changed. ``errno`` says why when
+    the system did (ENOSPC: the disk is full, and a batch stops starting frames)."""
 
     exit_code = EXIT_OUTPUT
+
+    def __init__(self, message: str, errno_: int | None = None) -> None:
+        super().__init__(message)
+        self.errno = errno_
 
 
 class PartialLogError(ClearError):
     """A log ended early or was corrupt after some complete frames."""
 
     exit_code = EXIT_PARTIAL
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised where the program is (the CLI installs the handler): it stops work
+    the way Ctrl-C does (writes clean up, a batch prints its summary), exit 143."""

@@ -15,6 +15,8 @@ import multiprocessing as mp
 import os
 import signal
 import sys
+import threading
+import time
 from collections import deque
 from dataclasses import dataclass
 from multiprocessing.connection import Connection, wait
@@ -23,13 +25,40 @@ from typing import Any, Callable, Iterator, Sequence
 from clearcli.batch.work import Job, frame_line, run_job
 
 
-def _worker(conn: Connection) -> None:
+def _die_with(parent_pid: int) -> None:
+    """End this worker when the batch that started it ends, however it ends (SIGKILL
+    included): Linux's parent-death signal, SIGTERM so that writes clean up; elsewhere a
+    thread that watches the parent. Nothing a killed batch started outlives it long
+    enough to race a --resume."""
+    try:
+        import ctypes
+
+        libc = ctypes.CDLL(None, use_errno=True)
+        PR_SET_PDEATHSIG = 1
+        libc.prctl(PR_SET_PDEATHSIG, int(signal.SIGTERM), 0, 0, 0)
+    except (OSError, AttributeError):
+        pass
+    if os.getppid() != parent_pid:  # the parent died before the line above
+        os._exit(143)
+
+    def watch() -> None:
+        while True:
+            time.sleep(0.2)
+            if os.getppid() != parent_pid:
+                os.kill(os.getpid(), signal.SIGTERM)
+                return
+
+    threading.Thread(target=watch, daemon=True).start()
+
+
+def _worker(conn: Connection, parent_pid: int) -> None:
     # One BLAS thread per worker: the workers already fill the cores, and BLAS threads
     # on top only burn CPU (measured: 0.3 s more CPU per segmented frame, same wall time).
     for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ.setdefault(var, "1")
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
+    _die_with(parent_pid)
     while True:
         try:
             msg = conn.recv()
@@ -72,7 +101,7 @@ class WorkerPool:
 
     def _start(self) -> _Slot:
         parent, child = self._ctx.Pipe()
-        proc = self._ctx.Process(target=_worker, args=(child,), daemon=True)
+        proc = self._ctx.Process(target=_worker, args=(child, os.getpid()), daemon=True)
         proc.start()
         child.close()
         return _Slot(proc, parent)

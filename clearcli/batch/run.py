@@ -20,19 +20,19 @@ without redoing or losing a frame.
 from __future__ import annotations
 
 import json
+import os
 import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Mapping, Sequence
 
-from clearcli.tasks.sources import BadInput, FrameRef, check_unique_names, expand
-from clearcli.batch.work import MARK, Job, run_job
-from clearcli.errors import EXIT_BATCH_FAILED, EXIT_INTERRUPTED, EXIT_NO_PLAN, EXIT_OK, EXIT_PARTIAL_PLAN, InputError
+from clearcli.tasks.sources import BadInput, FrameRef, Skipped, check_unique_names, expand
+from clearcli.batch.work import MARK, RESULT_CODES, Job, run_job
+from clearcli.tasks.base import OUTPUT_FILES
+from clearcli.errors import EXIT_BATCH_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_TERMINATED, InputError, Terminated
 
 BATCH_SCHEMA_VERSION = 1
-# Exit codes that are results, not failures.
-RESULT_CODES = (EXIT_OK, EXIT_NO_PLAN, EXIT_PARTIAL_PLAN)
 
 
 SETTINGS_FILE = "settings.toml"
@@ -55,6 +55,7 @@ class BatchRequest:
     ray: str | None = None
     fail_fast: bool = False
     json_out: bool = False
+    wait: bool = False  # --wait: wait for another batch writing in --out-dir instead of refusing
 
 
 def parse_outputs(command: str, text: str | None) -> tuple[str, ...]:
@@ -81,24 +82,77 @@ def default_jobs() -> int:
         return max(1, os.cpu_count() or 1)
 
 
-def _clean_stale(out_dir: Path, name: str, resume: bool, force: bool, made_by: Mapping[str, Any]) -> bool:
-    """Before a frame runs: remove the temporaries killed writes left (hidden
-    ``.<name>.*``, only ever ours). With ``--resume``, a frame with its mark is done (True)
-    and the outputs of one without are an unfinished run's: removed. With ``--force``,
+def frame_files(name: str) -> frozenset[str]:
+    """Every file name a frame named ``name`` may write in --out-dir, its mark included:
+    what it owns, by exact name (a frame ``b`` owns nothing of a frame ``b.1``)."""
+    return frozenset([*(f.format(name=name) for f in OUTPUT_FILES.values()), MARK.format(name=name)])
+
+
+def _temporaries(out_dir: Path) -> dict[str, list[Path]]:
+    """Our temporaries in ``out_dir`` (what killed writes left), by the file each was to
+    become: listed once per batch, not once per frame."""
+    from clearcli.files import temporary_target
+
+    found: dict[str, list[Path]] = {}
+    try:
+        entries = list(os.scandir(out_dir))
+    except OSError:
+        return found
+    for entry in entries:
+        if entry.name.startswith("."):
+            target = temporary_target(entry.name)
+            if target is not None:
+                found.setdefault(target, []).append(Path(entry.path))
+    return found
+
+
+def _remove_temporaries(temps: Mapping[str, list[Path]], name: str) -> None:
+    for target in frame_files(name):
+        for p in temps.get(target, ()):
+            p.unlink(missing_ok=True)
+
+
+def _clean_stale(
+    out_dir: Path, name: str, resume: bool, force: bool, made_by: Mapping[str, Any], temps: Mapping[str, list[Path]]
+) -> bool:
+    """Before a frame runs: remove the temporaries killed writes left of its own files.
+    With ``--resume``, a frame with its mark is done (True) and the outputs of one
+    without are an unfinished run's: removed, each by its exact name. With ``--force``,
     the old mark goes first, so that a mark always means complete outputs. Otherwise
     nothing the user has is touched: the frame refuses existing outputs (exit 8)."""
-    for p in out_dir.glob(f".{name}.*"):
-        p.unlink(missing_ok=True)
+    _remove_temporaries(temps, name)
     mark = out_dir / MARK.format(name=name)
     if resume:
         if mark.is_file() and not (force and _made_otherwise(mark, made_by)):
             return True
-        mark.unlink(missing_ok=True)
-        for p in out_dir.glob(f"{name}.*"):
-            p.unlink(missing_ok=True)
+        for f in frame_files(name):
+            (out_dir / f).unlink(missing_ok=True)
     elif force:
         mark.unlink(missing_ok=True)
     return False
+
+
+def _resolved(paths: Any) -> set[Path]:
+    """The real paths (links followed) of ``paths`` that exist."""
+    out: set[Path] = set()
+    for p in paths:
+        try:
+            out.add(Path(p).resolve(strict=True))
+        except (OSError, RuntimeError):
+            pass
+    return out
+
+
+def _input_among_outputs(job: Job, inputs: set[Path]) -> Path | None:
+    """The first of ``job``'s output files (its mark included) that is an input of the
+    run, through links too: another frame's ``a.labels.pcd`` must never be overwritten
+    by ``a.pcd``'s labels."""
+    if not inputs:
+        return None
+    for p in [job.output_path(kind) for kind in job.outputs] + [job.mark_path()]:
+        if p is not None and p.exists() and p.resolve() in inputs:
+            return p
+    return None
 
 
 def _line_for_bad(item: BadInput) -> dict[str, Any]:
@@ -138,6 +192,44 @@ def _made_otherwise(mark: Path, made_by: Mapping[str, Any]) -> bool:
     return line.get("clear") != dict(made_by)
 
 
+LOCK_FILE = ".clear-batch.lock"
+
+
+def lock_out_dir(out_dir: Path, command: str, wait: bool) -> Any:
+    """Take --out-dir for this batch's life: an exclusive `flock` on a file in it, which
+    the OS drops when the process ends however it ends (a SIGKILLed batch never blocks a
+    resume). A second batch refuses with one line naming the running one (exit 8), or
+    with ``wait`` waits for it. Returns the open lock file (keep it open)."""
+    import fcntl
+
+    from clearcli.errors import OutputError
+
+    path = out_dir / LOCK_FILE
+    try:
+        fp = open(path, "a+", encoding="utf-8")
+    except OSError as exc:
+        raise OutputError(f"--out-dir {out_dir}: cannot take the folder's lock {path} ({exc.strerror})") from None
+    try:
+        fcntl.flock(fp.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        fp.seek(0)
+        holder = fp.read().strip() or "another batch"
+        if not wait:
+            fp.close()
+            raise OutputError(
+                f"--out-dir {out_dir}: {holder} is writing there; wait for it to end, or pass --wait"
+            ) from None
+        from clearcli.console import stderr
+
+        stderr.print(f"clear: waiting for {holder} to end (--out-dir {out_dir})", markup=False, highlight=False)
+        fcntl.flock(fp.fileno(), fcntl.LOCK_EX)
+    fp.seek(0)
+    fp.truncate()
+    fp.write(f"`clear {command}` (pid {os.getpid()}, started {time.strftime('%Y-%m-%d %H:%M:%S')})\n")
+    fp.flush()
+    return fp
+
+
 def claim_out_dir(req: BatchRequest) -> None:
     """Make sure the results in --out-dir are all made alike: the folder's
     ``settings.toml`` must match this batch's (same command, version, source and
@@ -170,6 +262,8 @@ def _short(line: Mapping[str, Any]) -> str:
     """One cell for people: the frame's result or its error."""
     if "error" in line:
         return line["error"]["message"]
+    if "skipped" in line:
+        return f"skipped: {line['skipped']}"
     doc = line.get("document", {})
     schema = doc.get("schema", "")
     if schema == "clear.plan":
@@ -200,17 +294,26 @@ def run_batch(
     from clearcli.console import stderr, stdout
 
     t0 = time.perf_counter()
+    lock = None  # the --out-dir lock, held until the batch ends
     items = expand(req.inputs, frame=req.frame, every=req.every, topic=req.topic)
     if req.out_dir is not None:
         check_unique_names(items)
         if req.out_dir.exists() and not req.out_dir.is_dir():
             raise InputError(f"--out-dir {req.out_dir}: exists and is not a folder")
-        req.out_dir.mkdir(parents=True, exist_ok=True)
+        try:
+            req.out_dir.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            from clearcli.errors import OutputError
+
+            raise OutputError(f"--out-dir {req.out_dir}: cannot make the folder ({exc.strerror})") from None
+        lock = lock_out_dir(req.out_dir, req.command, req.wait)
         claim_out_dir(req)
     elif req.outputs or req.resume:
         raise InputError("--outputs and --resume need --out-dir DIR")
 
     lines: list[dict[str, Any] | None] = [None] * len(items)
+    temps = _temporaries(req.out_dir) if req.out_dir is not None else {}
+    inputs_of_run = _resolved({it.source for it in items}) if req.out_dir is not None else set()
     jobs: list[Job] = []
     job_at: list[int] = []
     skipped = 0
@@ -218,21 +321,33 @@ def run_batch(
         if isinstance(it, BadInput):
             lines[k] = _line_for_bad(it)
             continue
+        if isinstance(it, Skipped):
+            lines[k] = {"type": "frame", "source": it.source, "frame": 0, "name": "", "exit_code": 0,
+                        "skipped": it.reason}
+            continue
         assert isinstance(it, FrameRef)
         if req.out_dir is not None:
             mark = req.out_dir / MARK.format(name=it.name)
-            if _clean_stale(req.out_dir, it.name, req.resume, req.force, req.made_by):
+            if _clean_stale(req.out_dir, it.name, req.resume, req.force, req.made_by, temps):
                 try:
                     lines[k] = {**json.loads(mark.read_text(encoding="utf-8")), "_resumed": True}
                     skipped += 1
                     continue
                 except (OSError, ValueError):
                     mark.unlink(missing_ok=True)  # unreadable: do the frame again
+        job = Job(req.command, req.request, it.source, it.index, it.name, dict(req.made_by), req.topic,
+                  None if req.out_dir is None else str(req.out_dir), req.outputs, req.force)
+        clash = _input_among_outputs(job, inputs_of_run)
+        if clash is not None:
+            from clearcli.errors import EXIT_OUTPUT
+
+            lines[k] = _line_for_bad(BadInput(
+                it.source, f"{clash}: is an input of this batch; refusing to overwrite it (even with --force)",
+                EXIT_OUTPUT, it.index, it.name,
+            ))
+            continue
         job_at.append(k)
-        jobs.append(
-            Job(req.command, req.request, it.source, it.index, it.name, dict(req.made_by), req.topic,
-                None if req.out_dir is None else str(req.out_dir), req.outputs, req.force)
-        )
+        jobs.append(job)
 
     emitted = 0
     failed = 0
@@ -254,7 +369,7 @@ def run_batch(
             counts[code] = counts.get(code, 0) + 1
             if code not in RESULT_CODES:
                 failed += 1
-                if req.fail_fast:
+                if req.fail_fast or line.get("_stop"):
                     stopped = True
             if on_line is not None:
                 on_line(line)
@@ -267,7 +382,7 @@ def run_batch(
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
     backend = "in-process"
-    interrupted = False
+    interrupted = terminated = False
     progress = Progress(
         TextColumn(f"{req.command}"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn(),
         console=stderr, transient=True, disable=not stderr.is_terminal,
@@ -299,21 +414,23 @@ def run_batch(
                     close = getattr(results, "close", None)
                     if close is not None:
                         close()
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM (Terminated)
         interrupted = True
+        terminated = isinstance(exc, Terminated)
         emit_ready(gaps=True)
         if req.out_dir is not None:  # temporaries of writes cut short by the stop
+            left = _temporaries(req.out_dir)
             for it in items:
                 if isinstance(it, FrameRef):
-                    for p in req.out_dir.glob(f".{it.name}.*"):
-                        p.unlink(missing_ok=True)
+                    _remove_temporaries(left, it.name)
     not_done = sum(1 for k in job_at if lines[k] is None)
     summary = {
         "type": "summary",
         "frames": len(items),
-        "done": len(items) - not_done - skipped,
+        "done": len(items) - not_done - skipped - sum(1 for it in items if isinstance(it, Skipped)),
         "resumed": skipped,
         "not_done": not_done,
+        "skipped": sum(1 for it in items if isinstance(it, Skipped)),
         "failed": failed,
         "exit_codes": {str(k): v for k, v in sorted(counts.items())},
         "interrupted": interrupted,
@@ -331,9 +448,12 @@ def run_batch(
         render(rows, summary)
     else:
         _print_table(rows, summary, stdout)
+    if lock is not None:
+        lock.close()
     if interrupted:
-        stderr.print("clear: interrupted; the summary covers the frames that finished", markup=False)
-        return EXIT_INTERRUPTED
+        what = "terminated" if terminated else "interrupted"
+        stderr.print(f"clear: {what}; the summary covers the frames that finished", markup=False)
+        return EXIT_TERMINATED if terminated else EXIT_INTERRUPTED
     return EXIT_OK if failed == 0 else EXIT_BATCH_FAILED
 
 
@@ -370,7 +490,8 @@ def _print_table(rows: Sequence[Mapping[str, Any]], summary: Mapping[str, Any], 
     codes = ", ".join(f"exit {k}: {v}" for k, v in summary["exit_codes"].items())
     out.print(
         f"{summary['frames']} frames: {summary['done']} done, {summary['resumed']} resumed, "
-        f"{summary['failed']} failed, {summary['not_done']} not done ({codes}); {summary['backend']}, "
+        f"{summary['failed']} failed, {summary['not_done']} not done, {summary['skipped']} skipped ({codes}); "
+        f"{summary['backend']}, "
         f"{summary['wall_s']:.1f} s",
         markup=False, highlight=False,
     )

@@ -11,6 +11,7 @@ would give; a bug becomes an internal error (code 1), unless CLEAR_DEBUG is set.
 from __future__ import annotations
 
 import dataclasses
+import errno
 import json
 import os
 from dataclasses import dataclass
@@ -20,6 +21,9 @@ from typing import Any, Mapping
 from clearcli.tasks.base import OUTPUT_FILES, Outcome, Outputs, Source
 
 MARK = "{name}.json"
+# Exit codes that are results, not failures: complete (0), nothing can be done (5),
+# partial (10).
+RESULT_CODES = (0, 5, 10)
 
 
 @dataclass(frozen=True)
@@ -81,7 +85,7 @@ def frame_line(job: Job, outcome: Outcome | None, error: tuple[str, int] | None)
 
 def run_job(job: Job) -> dict[str, Any]:
     """One frame, start to end; the line it reports (see `frame_line`)."""
-    from clearcli.errors import EXIT_INTERNAL, EXIT_OUTPUT, ClearError, OutputError
+    from clearcli.errors import EXIT_INTERNAL, ClearError, OutputError
 
     try:
         _check_outputs(job)
@@ -91,14 +95,16 @@ def run_job(job: Job) -> dict[str, Any]:
         line = frame_line(job, _run(job), None)
     except ClearError as exc:
         line = frame_line(job, None, (str(exc), exc.exit_code))
+        if getattr(exc, "errno", None) == errno.ENOSPC:
+            line["_stop"] = "the disk is full"  # no use starting more frames
     except Exception as exc:  # a bug: the batch goes on, the line says so
         if os.environ.get("CLEAR_DEBUG"):
             raise
         line = frame_line(job, None, (f"internal error: {type(exc).__name__}: {exc}", EXIT_INTERNAL))
     mark = job.mark_path()
-    if mark is not None and line["exit_code"] not in (EXIT_INTERNAL, EXIT_OUTPUT):
-        # (a bug or a failed write may be passing: without a mark --resume does the
-        # frame again)
+    if mark is not None and line["exit_code"] in RESULT_CODES:
+        # Results only: a frame that failed (bad input, a bug, a failed write) has no
+        # mark, so --resume does it again.
         try:
             write_mark(mark, line)
         except ClearError:

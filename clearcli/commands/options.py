@@ -61,6 +61,9 @@ Ray = Annotated[
     ),
 ]
 FailFast = Annotated[bool, typer.Option("--fail-fast", help="Batch: stop at the first frame that fails.")]
+Wait = Annotated[
+    bool, typer.Option("--wait", help="Batch: when another batch is writing in --out-dir, wait for it instead of refusing.")
+]
 
 
 def resolve_settings(path: Path | None, sets: list[str] | None, section: str | None = None, **flags: Any) -> Any:
@@ -127,6 +130,7 @@ class Batch:
     jobs: int | None = None
     ray: str | None = None
     fail_fast: bool = False
+    wait: bool = False
 
     def wanted(self, inputs: Any) -> bool:
         return is_batch(inputs, self.every, self.out_dir, self.ray)
@@ -140,7 +144,7 @@ class Batch:
         return run_command_batch(
             command, inputs, request, outputs=self.outputs, jobs=self.jobs, frame=frame, every=self.every,
             topic=topic, out_dir=self.out_dir, force=force, resume=self.resume, ray=self.ray,
-            fail_fast=self.fail_fast, json_out=json_out, **more,
+            fail_fast=self.fail_fast, wait=self.wait, json_out=json_out, **more,
         )
 
 
@@ -156,6 +160,7 @@ def batch_options(outputs: tuple[str, ...]) -> Callable[[Callable[..., Any]], Ca
         ("jobs", Jobs, None),
         ("ray", Ray, None),
         ("fail_fast", FailFast, False),
+        ("wait", Wait, False),
     ]
     if not outputs:
         declared = [d for d in declared if d[0] != "outputs"]

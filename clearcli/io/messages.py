@@ -107,6 +107,17 @@ def pointcloud2_frame(msg: Any, log_time_ns: int, source: str) -> Frame:
     header = message_field(msg, "header")
     height, width = int(msg.height), int(msg.width)
     point_step, row_step = int(msg.point_step), int(msg.row_step)
+    n_bytes = len(_as_bytes(msg.data))
+    # A message checked against itself: what it says of its layout must add up to the
+    # data it carries (a height of 0 with data, a halved width, a row_step or data cut
+    # short is a damaged message, never read as if whole).
+    if height * row_step != n_bytes:
+        raise ValueError(
+            f"damaged PointCloud2: height {height} x row_step {row_step} = {height * row_step} bytes, "
+            f"but the message carries {n_bytes}"
+        )
+    if width * point_step > row_step:
+        raise ValueError(f"damaged PointCloud2: width {width} x point_step {point_step} exceeds row_step {row_step}")
     specs = []
     for f in msg.fields:
         code = ROS_DATATYPES.get(int(f.datatype))
@@ -114,7 +125,7 @@ def pointcloud2_frame(msg: Any, log_time_ns: int, source: str) -> Frame:
             continue
         specs.append(FieldSpec(str(f.name), int(f.offset), code, max(int(f.count), 1)))
     return _frame_from_blob(
-        msg.data, specs, point_step, width, height, row_step or width * point_step,
+        msg.data, specs, point_step, width, height, row_step,
         bool(msg.is_bigendian),
         shape=(height, width) if height > 1 else None,
         stamp_s=_stamp_s(message_field(header, "stamp"), log_time_ns),

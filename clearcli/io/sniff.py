@@ -7,6 +7,8 @@ reader and the readers can share them without importing each other.
 
 from __future__ import annotations
 
+import errno
+import stat
 from pathlib import Path
 from typing import BinaryIO, Literal
 
@@ -68,6 +70,15 @@ def sniff(path: Path) -> FileKind:
     path = Path(path)
     if path.is_dir():
         return _directory_kind(path)
+    try:
+        mode = path.stat().st_mode
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            raise InputError(f"{path}: a symbolic link loop; not a file") from None
+        mode = None  # missing: said below, when opening
+    if mode is not None and not stat.S_ISREG(mode):
+        # a FIFO or a device would block the read, or never end it
+        raise InputError(f"{path}: not a regular file (a FIFO, socket or device); expected a PCD, MCAP or bag file")
     try:
         with open(path, "rb") as fp:
             head = fp.read(_SNIFF_BYTES)

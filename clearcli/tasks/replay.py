@@ -104,4 +104,14 @@ def run(
             go(annotated)
     else:
         go(None)
-    return session.summary, partial
+    summary = session.summary
+    if summary.frames == 0 and summary.frames_read > 0 and partial is None:
+        from clearcli.errors import InputError
+
+        # --from/--to (or --every past the end) that select nothing: a mistake, not a
+        # replay of no frames
+        raise InputError(
+            f"{log}: --from {request.from_s} --to {request.to_s} --every {request.every} select no frame "
+            f"of the {summary.frames_read} on {topic or 'its topic'}"
+        )
+    return summary, partial

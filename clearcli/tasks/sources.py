@@ -11,6 +11,8 @@ read) becomes a `BadInput`: the batch reports it in its own line and goes on.
 
 from __future__ import annotations
 
+import errno
+import stat
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Sequence, Union
@@ -39,7 +41,16 @@ class BadInput:
     name: str = ""
 
 
-Item = Union[FrameRef, BadInput]
+@dataclass(frozen=True)
+class Skipped:
+    """An entry of a searched folder that is no frame and was not read (a FIFO, a
+    socket, a device, a link loop, a folder reached twice): reported, not a failure."""
+
+    source: str
+    reason: str
+
+
+Item = Union[FrameRef, BadInput, Skipped]
 
 
 def natural_key(path: Path) -> tuple:
@@ -53,15 +64,46 @@ def _is_rosbag2(path: Path) -> bool:
     return path.is_dir() and (path / "metadata.yaml").is_file()
 
 
-def _files_in(folder: Path) -> list[Path]:
+def _special(path: Path) -> str | None:
+    """Why ``path`` is neither a regular file nor a folder (a FIFO a recorder left, a
+    socket, a device, a link loop), or None when it is one of those."""
+    try:
+        mode = path.stat().st_mode
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            return "a symbolic link loop"
+        if path.is_symlink():
+            return "a symbolic link to nothing"
+        return None  # missing: reported as such by the caller
+    if stat.S_ISREG(mode) or stat.S_ISDIR(mode):
+        return None
+    kind = {stat.S_ISFIFO: "a FIFO (named pipe)", stat.S_ISSOCK: "a socket", stat.S_ISCHR: "a character device",
+            stat.S_ISBLK: "a block device"}
+    return next((name for test, name in kind.items() if test(mode)), "not a regular file")
+
+
+def _files_in(folder: Path, seen: set[tuple[int, int]], skipped: list["Skipped"]) -> list[Path]:
     """Frame files below ``folder``, sorted; a rosbag2 folder is one entry, hidden
-    entries (a batch's own temporaries, editors' backups) are passed over."""
+    entries (a batch's own temporaries, editors' backups) are passed over. Only regular
+    files and folders are taken; each real folder is searched once (``seen``: its device
+    and inode), so a link back up the tree is reported, not walked again."""
     found: list[Path] = []
+    try:
+        st = folder.stat()
+    except OSError:
+        return found
+    if (st.st_dev, st.st_ino) in seen:
+        skipped.append(Skipped(str(folder), "a link to a folder already searched"))
+        return found
+    seen.add((st.st_dev, st.st_ino))
     for p in sorted(folder.iterdir(), key=natural_key):
         if p.name.startswith("."):
             continue
-        if p.is_dir():
-            found.extend([p] if _is_rosbag2(p) else _files_in(p))
+        why = _special(p)
+        if why is not None:
+            skipped.append(Skipped(str(p), why))
+        elif p.is_dir():
+            found.extend([p] if _is_rosbag2(p) else _files_in(p, seen, skipped))
         elif p.suffix.lower() in FRAME_SUFFIXES:
             found.append(p)
     return found
@@ -119,9 +161,16 @@ def expand(
     items: list[Item] = []
     for raw in inputs:
         path = Path(raw)
+        seen: set[tuple[int, int]] = set()  # folders searched for this input
+        why = _special(path)
+        if why is not None:
+            items.append(Skipped(str(path), why))
+            continue
         if path.is_dir() and not _is_rosbag2(path):
-            files = _files_in(path)
-            if not files:
+            skipped: list[Skipped] = []
+            files = _files_in(path, seen, skipped)
+            items.extend(skipped)
+            if not files and not skipped:
                 items.append(BadInput(str(path), f"{path}: folder holds no .pcd, .mcap or .bag file", EXIT_INPUT))
             paths = files
         elif not path.exists():
@@ -144,6 +193,14 @@ def expand(
                 items.append(BadInput(str(p), str(exc), exc.exit_code))
                 continue
             start = frame or 0
+            if start >= n and broken is None:
+                # a selection that selects nothing is a mistake, not an empty result
+                items.append(BadInput(
+                    str(p), f"{p}: --frame {start} with --every {every} selects no frame: the log has {n} "
+                    f"frame(s) on its point-cloud topic (0-{n - 1})" if n else f"{p}: the log has no point-cloud frame",
+                    EXIT_INPUT, start, f"{stem}_f{start}",
+                ))
+                continue
             items.extend(FrameRef(str(p), k, True, f"{stem}_f{k}") for k in range(start, n, every))
             if broken is not None:  # every complete frame is in; the break is reported
                 items.append(BadInput(str(p), str(broken), broken.exit_code, n, f"{stem}_f{n}"))  # type: ignore[attr-defined]

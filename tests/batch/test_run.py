@@ -14,6 +14,11 @@ from helpers import FIXTURES
 from helpers.batch import FRAMES, clear, comparable, lines_of
 
 
+def _temporaries(out: Path) -> list[Path]:
+    """What killed writes leave in --out-dir: hidden files other than the batch lock."""
+    return [p for p in out.glob(".*") if p.name != ".clear-batch.lock"]
+
+
 def test_plan_lines_equal_single_calls_and_jobs_2_equals_jobs_1() -> None:
     one = clear("plan", *FRAMES, "--json", "--jobs", "1")
     two = clear("plan", *FRAMES, "--json", "--jobs", "2")
@@ -56,13 +61,12 @@ def test_bad_inputs_reported_each_in_its_line(tmp_path: Path) -> None:
         if single is not None:  # the message and code a single call gives
             assert single.returncode == err["exit_code"] and err["message"] in single.stderr
     assert summary["failed"] == 5 and summary["done"] == 7
-    # the good frames are complete; nothing half-written
-    # the good frames complete, the bad ones only their line (a file that cannot be read
-    # fails the same way again: --resume does not retry it); nothing half-written
+    # the good frames complete with their marks; the bad ones only their line and no
+    # mark (a mark is for results: --resume does them again); nothing half-written;
+    # settings.toml says what made the results, the lock file what is writing them
     names = sorted(p.name for p in out.iterdir())
     good = [f"{s}.{e}" for s in ("isolated_box", "two_touching_boxes") for e in ("json", "plan", "problem.pddl")]
-    # (and settings.toml: what made the results)
-    assert names == sorted(good + ["corrupt.json", "cut_f0.json", "empty.json", "notes.json", "settings.toml"])
+    assert names == sorted(good + ["settings.toml", ".clear-batch.lock"])
 
 
 SLOW_WRITES = '''
@@ -93,7 +97,7 @@ def test_sigkill_during_a_write_then_resume(tmp_path: Path) -> None:
     killed_during_write = False
     while time.time() < deadline and proc.poll() is None:
         marks = list(out.glob("*.json")) if out.exists() else []
-        parts = [p for p in out.glob(".*")] if out.exists() else []
+        parts = _temporaries(out) if out.exists() else []
         if len(marks) >= 2 and parts:  # two frames done, a third being written
             os.killpg(proc.pid, signal.SIGKILL)
             killed_during_write = True
@@ -101,7 +105,7 @@ def test_sigkill_during_a_write_then_resume(tmp_path: Path) -> None:
         time.sleep(0.01)
     proc.wait(30)
     assert killed_during_write, "the batch finished before it could be killed mid-write"
-    assert [p for p in out.glob(".*")], "a temporary of the killed write is left"
+    assert _temporaries(out), "a temporary of the killed write is left"
     done_before = {p.name: p.stat().st_mtime_ns for p in out.glob("*.json")}
     res = clear("plan", *FRAMES, "--json", "--out-dir", out, "--outputs", "plan,problem", "--resume", "--jobs", "1")
     assert res.returncode == 0, res.stderr
@@ -110,9 +114,10 @@ def test_sigkill_during_a_write_then_resume(tmp_path: Path) -> None:
     assert [r["name"] for r in rows] == [p.stem for p in FRAMES]  # no frame lost
     for name, mtime in done_before.items():  # none redone
         assert (out / name).stat().st_mtime_ns == mtime
-    assert not [p for p in out.glob(".*")]  # no stale temporary
+    assert not _temporaries(out)  # no stale temporary
     assert sorted(p.name for p in out.iterdir()) == sorted(
-        [f"{p.stem}.{ext}" for p in FRAMES for ext in ("json", "plan", "problem.pddl")] + ["settings.toml"]
+        [f"{p.stem}.{ext}" for p in FRAMES for ext in ("json", "plan", "problem.pddl")]
+        + ["settings.toml", ".clear-batch.lock"]
     )
     for p in FRAMES:  # every plan file is whole
         assert (out / f"{p.stem}.plan").read_text().splitlines()[-1].startswith("; cost = ")
@@ -161,7 +166,7 @@ def test_ctrl_c_stops_cleanly(tmp_path: Path) -> None:
     # not reap them; they run nothing)
     alive = [row for row in ps.splitlines() if row.split() and not row.split()[1].startswith("Z")]
     assert not alive, f"processes left running in the batch's group: {alive}"
-    assert not [p for p in out.glob(".*")]  # no half-written file
+    assert not _temporaries(out)  # no half-written file
     for r in rows:  # every reported frame is complete on disk
         assert (out / f"{r['name']}.json").is_file() and (out / f"{r['name']}.plan").is_file()
 
@@ -170,15 +175,15 @@ def test_out_dir_outputs_are_not_overwritten_without_force(tmp_path: Path) -> No
     out = tmp_path / "out"
     first = clear("segment", *FRAMES[:2], "--json", "--out-dir", out, "--outputs", "labels", "--jobs", "1")
     assert first.returncode == 0, first.stderr
-    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    before = {p.name: p.read_bytes() for p in out.iterdir() if p.name != ".clear-batch.lock"}
     again = clear("segment", *FRAMES[:2], "--json", "--out-dir", out, "--outputs", "labels", "--jobs", "1")
     assert again.returncode == 11
     rows, _ = lines_of(again.stdout)
     assert all(r["exit_code"] == 8 and "--force" in r["error"]["message"] for r in rows)
-    assert {p.name: p.read_bytes() for p in out.iterdir()} == before  # nothing the user had is lost
+    assert {p.name: p.read_bytes() for p in out.iterdir() if p.name != ".clear-batch.lock"} == before  # nothing lost
     forced = clear("segment", *FRAMES[:2], "--json", "--out-dir", out, "--outputs", "labels", "--force", "--jobs", "1")
     assert forced.returncode == 0
-    assert sorted(p.name for p in out.iterdir()) == sorted(before)
+    assert sorted(p.name for p in out.iterdir() if p.name != ".clear-batch.lock") == sorted(before)
 
 
 def test_every_frame_of_a_truncated_log_then_its_break(tmp_path: Path) -> None:
@@ -190,3 +195,207 @@ def test_every_frame_of_a_truncated_log_then_its_break(tmp_path: Path) -> None:
     assert [(r["frame"], r["exit_code"]) for r in rows] == [(0, 0), (1, 0), (2, 9)]
     assert "2 complete frames read" in rows[-1]["error"]["message"]
     assert [r["name"] for r in rows[:2]] == ["cut_f0", "cut_f1"]
+
+
+# --- reliability: outputs owned by exact name, one batch per folder, results only marked
+
+
+def _copy(folder: Path, names: list[str]) -> None:
+    import shutil
+
+    folder.mkdir(parents=True, exist_ok=True)
+    for n in names:
+        shutil.copy(FIXTURES / "isolated_box.pcd", folder / n)
+
+
+def test_resume_removes_only_what_a_frame_owns_by_exact_name(tmp_path: Path) -> None:
+    """Frames whose names are prefixes or glob patterns of others: resuming one never
+    touches another's files (the glob `{name}.*` of before deleted b.1's and x1's)."""
+    src, out = tmp_path / "src", tmp_path / "out"
+    names = ["b.pcd", "b.1.pcd", "x[1].pcd", "x1.pcd", "run_*.pcd", "run_a.pcd"]
+    _copy(src, names)
+    first = clear("segment", src, "--out-dir", out, "--outputs", "labels", "--json", "--jobs", "1")
+    assert first.returncode == 0, first.stderr
+    stems = [Path(n).stem for n in names]
+    for stem in stems:
+        assert (out / f"{stem}.json").is_file() and (out / f"{stem}.labels.pcd").is_file()
+    before = {p.name: p.stat().st_mtime_ns for p in out.iterdir() if not p.name.startswith(".")}
+    # an unfinished b, x[1] and run_*: no mark, a temporary of a killed write
+    for stem in ("b", "x[1]", "run_*"):
+        (out / f"{stem}.json").unlink()
+        (out / f".{stem}.json.abcd1234.part").write_text("half")
+    again = clear("segment", src, "--out-dir", out, "--outputs", "labels", "--json", "--resume", "--jobs", "1")
+    assert again.returncode == 0, again.stderr
+    rows, summary = lines_of(again.stdout)
+    assert (summary["done"], summary["resumed"]) == (3, 3)
+    after = {p.name: p.stat().st_mtime_ns for p in out.iterdir() if not p.name.startswith(".")}
+    assert set(after) == set(before)  # nothing lost
+    for stem in ("b.1", "x1", "run_a"):  # the look-alikes were not touched
+        for f in (f"{stem}.json", f"{stem}.labels.pcd"):
+            assert after[f] == before[f], f
+    assert not _temporaries(out)
+
+
+def test_a_failed_frame_has_no_mark_and_resume_does_it_again(tmp_path: Path) -> None:
+    src, out = tmp_path / "src", tmp_path / "out"
+    _copy(src, ["good.pcd"])
+    (src / "bad.pcd").write_text("VERSION .7\nnot a pcd at all\n")
+    res = clear("segment", src, "--out-dir", out, "--json", "--jobs", "1")
+    assert res.returncode == 11
+    assert (out / "good.json").is_file() and not (out / "bad.json").exists()
+    (src / "bad.pcd").write_bytes((FIXTURES / "box_on_box.pcd").read_bytes())  # fixed
+    again = clear("segment", src, "--out-dir", out, "--json", "--resume", "--jobs", "1")
+    assert again.returncode == 0, again.stderr
+    rows, summary = lines_of(again.stdout)
+    assert (summary["done"], summary["resumed"]) == (1, 1) and (out / "bad.json").is_file()
+
+
+def test_a_second_batch_on_the_folder_refuses_or_waits(tmp_path: Path) -> None:
+    from clearcli.batch.run import lock_out_dir
+
+    out = tmp_path / "out"
+    out.mkdir()
+    held = lock_out_dir(out, "plan", wait=False)  # a batch of this process holds the folder
+    try:
+        res = clear("segment", FIXTURES / "isolated_box.pcd", "--out-dir", out, "--json")
+        assert res.returncode == 8
+        line = res.stderr.strip().splitlines()
+        assert len(line) == 1 and f"pid {os.getpid()}" in line[0] and "--wait" in line[0]
+        assert not list(out.glob("*.json"))  # nothing written
+        waiting = subprocess.Popen(
+            [sys.executable, "-m", "clearcli.cli", "segment", str(FIXTURES / "isolated_box.pcd"), "--out-dir", str(out),
+             "--json", "--wait"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        )
+        time.sleep(1.5)
+        assert waiting.poll() is None  # still waiting for the lock
+    finally:
+        held.close()
+    out_text, err_text = waiting.communicate(timeout=120)
+    assert waiting.returncode == 0, err_text
+    assert "waiting for `clear plan`" in err_text and (out / "isolated_box.json").is_file()
+
+
+def test_an_output_that_is_an_input_of_the_batch_is_refused_even_with_force(tmp_path: Path) -> None:
+    """`segment DIR --out-dir DIR --outputs labels --force` must not write a.pcd's labels
+    over a.labels.pcd, another input of the run."""
+    d = tmp_path / "d"
+    _copy(d, ["a.pcd"])
+    (d / "a.labels.pcd").write_bytes((FIXTURES / "box_on_box.pcd").read_bytes())
+    kept = (d / "a.labels.pcd").read_bytes()
+    res = clear("segment", d, "--out-dir", d, "--outputs", "labels", "--force", "--json", "--jobs", "1")
+    rows, summary = lines_of(res.stdout)
+    by_name = {r["name"]: r for r in rows}
+    assert by_name["a"]["exit_code"] == 8 and "is an input of this batch" in by_name["a"]["error"]["message"]
+    assert (d / "a.labels.pcd").read_bytes() == kept
+    assert res.returncode == 11
+
+
+def test_a_full_disk_fails_the_frame_with_exit_8_and_stops_the_batch(tmp_path: Path, monkeypatch) -> None:
+    """ENOSPC while writing (injected: no small tmpfs here): that frame's line says so
+    with exit 8, nothing half-written is left, and no new frame is started."""
+    import errno
+
+    import clearcli.files as files
+    from clearcli.batch.run import BatchRequest, run_batch
+    from clearcli.settings import Settings
+    from clearcli.tasks import segment as task
+
+    def full(src: str, dst: str) -> None:
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    out = tmp_path / "out"
+
+    def batch(frames: list[Path]) -> tuple[int, list[dict]]:
+        lines: list[dict] = []
+        req = BatchRequest("segment", frames, task.Request(Settings()), out_dir=out, outputs=("labels",), jobs=1)
+        code = run_batch(req, on_line=lines.append, render=lambda rows, summary: lines.append(dict(summary)))
+        return code, lines
+
+    assert batch(FRAMES[3:])[0] == 0  # the folder, its settings.toml and one frame, written
+    monkeypatch.setattr(files.os, "replace", full)  # then the disk fills up
+    code, lines = batch(FRAMES[:3])
+    assert code == 11
+    first = lines[0]
+    assert first["exit_code"] == 8 and "No space left on device" in first["error"]["message"]
+    summary = lines[-1]
+    assert summary["not_done"] == 2 and summary["stopped_early"]
+    assert not _temporaries(out) and [p.name for p in out.glob("*.labels.pcd")] == ["clutter10.labels.pcd"]
+
+
+def test_a_name_too_long_for_the_file_system_is_exit_8(tmp_path: Path) -> None:
+    src = tmp_path / "src"
+    _copy(src, ["n" * 240 + ".pcd"])
+    res = clear("segment", src, "--out-dir", tmp_path / "out", "--outputs", "labels", "--json", "--jobs", "1")
+    rows, _ = lines_of(res.stdout)
+    assert rows[0]["exit_code"] == 8 and "File name too long" in rows[0]["error"]["message"]
+
+
+def _many_frames() -> list[str]:
+    """A batch long enough to be still running after a few seconds: the mOSD learn
+    frames, three times over."""
+    from helpers import shared_path
+
+    return [str(shared_path("mosd/learn"))] * 3
+
+
+def test_sigterm_stops_a_batch_with_its_summary_and_exit_143(tmp_path: Path) -> None:
+    frames = _many_frames()
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "clearcli.cli", "plan", *frames, "--json", "--jobs", "2"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
+    )
+    time.sleep(4.0)
+    proc.send_signal(signal.SIGTERM)
+    stdout, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 143, stderr
+    rows, summary = lines_of(stdout)
+    assert summary["interrupted"] and "terminated" in stderr and "Traceback" not in stderr
+    assert 0 < len(rows) < summary["frames"] == 135 and summary["not_done"] > 0
+
+
+def _alive_in_group(pgid: int) -> list[str]:
+    """Processes of a process group that still run (zombies, which only wait for a
+    reaper, are not counted)."""
+    ps = subprocess.run(["ps", "-o", "pid=,stat=", "-g", str(pgid)], capture_output=True, text=True).stdout
+    return [line.split()[0] for line in ps.splitlines() if line.split() and not line.split()[1].startswith("Z")]
+
+
+def test_workers_die_with_a_killed_batch(tmp_path: Path) -> None:
+    frames = _many_frames()
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "clearcli.cli", "plan", *frames, "--json", "--jobs", "2"],
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True,
+    )
+    time.sleep(3.0)
+    assert len(_alive_in_group(proc.pid)) >= 3  # the batch and its two workers (and a tracker)
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.wait(10)
+    deadline = time.time() + 5
+    left = _alive_in_group(proc.pid)
+    while left and time.time() < deadline:
+        time.sleep(0.1)
+        left = _alive_in_group(proc.pid)
+    assert not left, f"processes outlived their batch: {left}"
+
+
+def test_walking_a_folder_skips_fifos_and_link_cycles(tmp_path: Path) -> None:
+    d = tmp_path / "d"
+    _copy(d, ["a.pcd"])
+    os.mkfifo(d / "recorder.pcd")
+    (d / "again").symlink_to(".")
+    (d / "loop.pcd").symlink_to("loop.pcd")
+    res = clear("segment", d, "--json", "--jobs", "1", timeout=120)
+    assert res.returncode == 0, res.stderr
+    rows, summary = lines_of(res.stdout)
+    skipped = {Path(r["source"]).name: r["skipped"] for r in rows if "skipped" in r}
+    assert skipped == {"recorder.pcd": "a FIFO (named pipe)", "again": "a link to a folder already searched",
+                       "loop.pcd": "a symbolic link loop"}
+    assert [Path(r["source"]).name for r in rows if "document" in r] == ["a.pcd"]  # found once
+    assert summary["skipped"] == 3 and summary["failed"] == 0
+
+
+def test_a_selection_that_selects_nothing_is_exit_3_with_the_count(tmp_path: Path) -> None:
+    res = clear("plan", FIXTURES / "session.mcap", "--every", "1", "--frame", "50", "--json")
+    rows, summary = lines_of(res.stdout)
+    assert res.returncode == 11 and rows[0]["exit_code"] == 3
+    assert "selects no frame" in rows[0]["error"]["message"] and "frame(s)" in rows[0]["error"]["message"]

@@ -19,3 +19,57 @@ def test_piped_batch_table_prints_every_cell_whole(tmp_path: Path) -> None:
     assert proc.returncode == 0, proc.stderr
     assert "…" not in proc.stdout
     assert str(folder / name) in proc.stdout
+
+
+def test_a_closed_stdout_ends_quietly_with_141() -> None:
+    """`clear ... | head`: the reader goes away; clear stops without a traceback."""
+    import subprocess
+    import sys
+
+    from helpers import shared_path
+
+    cmd = [sys.executable, "-m", "clearcli.cli", "plan", str(shared_path("mosd/learn")), "--json", "--jobs", "1"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    assert proc.stdout is not None
+    proc.stdout.read(100)
+    proc.stdout.close()  # what `head -c 100` does
+    _, err = proc.communicate(timeout=300)
+    assert proc.returncode == 141, err
+    assert b"Traceback" not in err and b"internal error" not in err
+
+
+def test_a_full_stdout_is_one_line_exit_8() -> None:
+    import subprocess
+    import sys
+
+    with open("/dev/full", "w") as full:
+        proc = subprocess.run([sys.executable, "-m", "clearcli.cli", "info", str(REPO / "fixtures" / "isolated_box.pcd"),
+                               "--json"], stdout=full, stderr=subprocess.PIPE, text=True)
+    assert proc.returncode == 8
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and "No space left on device" in lines[0]
+
+
+def test_an_output_naming_a_folder_is_exit_8(tmp_path: Path) -> None:
+    res = clear("plan", REPO / "fixtures" / "isolated_box.pcd", "-o", tmp_path, "--force")
+    assert res.returncode == 8 and "is a folder" in res.stderr and "Traceback" not in res.stderr
+    res = clear("replay", REPO / "fixtures" / "simulated_session.mcap", "--out", tmp_path, "--force")
+    assert res.returncode == 8 and "is a folder" in res.stderr
+
+
+def test_sigterm_stops_a_single_call_with_143(tmp_path: Path) -> None:
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    out = tmp_path / "sim.mcap"
+    proc = subprocess.Popen([sys.executable, "-m", "clearcli.cli", "simulate", str(out), "--scene", "dense",
+                             "--objects", "16", "--max-actions", "40"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True)
+    time.sleep(2.5)
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 143, err
+    assert err.strip().splitlines()[-1] == "clear: terminated"
+    assert not out.exists() and not [p for p in tmp_path.iterdir()]  # nothing half-written

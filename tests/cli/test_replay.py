@@ -136,3 +136,10 @@ def test_user_errors_are_one_line_with_their_exit_codes(tmp_path: Path) -> None:
         assert result.returncode == EXIT_INPUT and "point-cloud topic" in result.stderr
     result = _clear_subprocess("replay", str(tmp_path / "missing.mcap"), "--from", "3", "--to", "1")
     assert result.returncode == EXIT_INPUT and "--to" in result.stderr
+
+
+def test_from_and_to_that_select_nothing_are_exit_3(tmp_path: Path) -> None:
+    from helpers import FIXTURES, run_clear
+
+    res = run_clear("replay", FIXTURES / "simulated_session.mcap", "--from", "1000")
+    assert res.returncode == 3 and "select no frame" in res.stderr and "7" in res.stderr

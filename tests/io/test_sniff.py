@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
 from helpers import shared_path
 from helpers.io import _one_line_error, _same
 
@@ -30,3 +31,17 @@ def test_magic_decides_not_the_extension(tmp_path: Path) -> None:
     junk = tmp_path / "junk.mcap"
     junk.write_bytes(b"\x89MCAQ garbage" * 10)
     _one_line_error(junk, "not an MCAP file")
+
+
+def test_a_fifo_or_a_link_loop_is_refused_not_read(tmp_path: Path) -> None:
+    import os
+
+    from clearcli.errors import InputError
+    from clearcli.io.sniff import sniff
+
+    os.mkfifo(tmp_path / "pipe.pcd")
+    with pytest.raises(InputError, match="not a regular file"):
+        sniff(tmp_path / "pipe.pcd")  # would block for ever if opened
+    (tmp_path / "loop.pcd").symlink_to("loop.pcd")
+    with pytest.raises(InputError, match="symbolic link loop"):
+        sniff(tmp_path / "loop.pcd")
