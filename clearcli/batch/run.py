@@ -1,8 +1,9 @@
 """A batch: many frames in one call, on every core (`--jobs`) or a Ray cluster (`--ray`).
 
 Output: with ``--json``, one line per frame in input order (``{"type": "frame", "source",
-"frame", "name", "exit_code", "document" | "error"}``: the document a single call prints,
-or its error with the message and exit code a single call gives), then one summary line
+"frame", "name", "exit_code", "document" | "error" | "skipped"}``: the document a single
+call prints, or its error with the message and exit code a single call gives, or why an
+entry of a searched folder was not read), then one summary line
 (``{"type": "summary", ...}``); schema ``clear.batch`` version 1 on every line. Without it,
 a progress bar on stderr and a summary table on stdout. A frame that fails is reported
 and the batch goes on (``--fail-fast`` stops starting new ones). Partial plans (10) and

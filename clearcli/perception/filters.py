@@ -63,15 +63,22 @@ def depth_radius_mask(
     p = points[idx].astype(np.float64)
     if p.shape[0] == 0:
         return finite
+    out = np.zeros(points.shape[0], dtype=bool)
+    if min_neighbors <= 0:
+        out[idx] = True
+        return out
     tree = cKDTree(p)
     # a cloud that is not a camera's (range from the origin means nothing, e.g. a z-up
     # cloud in the table's frame, or one thinned on a grid): never judge a point by a
     # radius under 2.5 typical point spacings
     spacing = float(np.median(tree.query(p[:: max(1, p.shape[0] // 2000)], k=2)[0][:, 1]))
     radius = np.maximum(radius_at_1m_m * np.linalg.norm(p, axis=1), 2.5 * spacing)
-    counts = tree.query_ball_point(p, radius, return_length=True) - 1  # minus itself
-    out = np.zeros(points.shape[0], dtype=bool)
-    out[idx] = counts >= min_neighbors
+    # At least m neighbours within the radius <=> the m-th nearest other point is within
+    # it: a k-nearest query with k = m + 1 (the point itself first) costs the same
+    # however dense the cloud is, where counting every point in the ball grew with the
+    # density (merged views, dense scanners: minutes for a few million points).
+    dist, _ = tree.query(p, k=min_neighbors + 1, distance_upper_bound=float(radius.max()) * (1 + 1e-9), workers=-1)
+    out[idx] = dist[:, min_neighbors] <= radius
     return out
 
 
