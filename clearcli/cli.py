@@ -11,11 +11,9 @@ import os
 import shutil
 import sys
 from pathlib import Path
-from typing import Annotated, Optional
+from typing import TYPE_CHECKING, Any
 
-import typer
-
-from clearcli import __version__
+from clearcli import __version__, interrupts
 from clearcli.errors import (
     EXIT_BROKEN_PIPE,
     EXIT_CODES,
@@ -27,22 +25,10 @@ from clearcli.errors import (
     Terminated,
 )
 
+if TYPE_CHECKING:
+    import typer
+
 _EXIT_HELP = "\n\n".join(f"{code}: {text}" for code, text in EXIT_CODES.items())
-
-
-def _version(value: bool) -> None:
-    if value:
-        typer.echo(f"clear {__version__}")
-        raise typer.Exit(0)
-
-
-def _root(
-    version: Annotated[
-        Optional[bool],
-        typer.Option("--version", callback=_version, is_eager=True, help="Print the version and exit."),
-    ] = None,
-) -> None:
-    pass
 
 
 def make_app(only: str | None = None) -> typer.Typer:
@@ -52,7 +38,30 @@ def make_app(only: str | None = None) -> typer.Typer:
     and building their click commands is start-up time spent on nothing. `app` (this
     module's attribute, built on first use) has them all, for tests and embedding.
     """
+    # typer is imported here, not at the top: `main` holds Ctrl-C/SIGTERM first (clearcli/interrupts.py)
+    from typing import Annotated, Optional
+
+    import typer
+
     from clearcli.commands import registry
+
+    def _version(value: bool) -> None:
+        if value:
+            typer.echo(f"clear {__version__}")
+            raise typer.Exit(0)
+
+    def _root(version: Optional[bool] = None) -> None:
+        pass
+
+    # real objects, not this module's postponed strings: typer resolves them in the
+    # module's globals, where typer is not (see above)
+    _root.__annotations__ = {
+        "version": Annotated[
+            Optional[bool],
+            typer.Option("--version", callback=_version, is_eager=True, help="Print the version and exit."),
+        ],
+        "return": None,
+    }
 
     app = typer.Typer(
         name="clear",
@@ -69,11 +78,32 @@ def make_app(only: str | None = None) -> typer.Typer:
     app.callback()(_root)
     for name, target, kwargs in registry.COMMANDS:
         if only is None or name == only:
-            app.command(name, **kwargs)(registry.load(target))
+            app.command(name, **kwargs)(_releasing(registry.load(target)))
     for name, target in registry.GROUPS:
         if only is None or name == only:
-            app.add_typer(registry.load(target), name=name)
+            group = registry.load(target)
+            for info in group.registered_commands:
+                info.callback = _releasing(info.callback)
+            app.add_typer(group, name=name)
     return app
+
+
+def _releasing(fn: Any) -> Any:
+    """``fn``, releasing held signals on entry (clearcli/interrupts.py), unless it does so
+    itself at a better point (a command with batch options: inside the batch's run, so a
+    signal at start-up still gets a batch's summary)."""
+    import functools
+
+    if fn is None or getattr(fn, "releases_interrupts", False) or getattr(fn, "_clear_releasing", False):
+        return fn
+
+    @functools.wraps(fn)
+    def command(*args: Any, **kwargs: Any) -> Any:
+        interrupts.release()
+        return fn(*args, **kwargs)
+
+    command._clear_releasing = True  # type: ignore[attr-defined]
+    return command
 
 
 _full_app: typer.Typer | None = None
@@ -110,21 +140,6 @@ def _run_terminal_clear() -> None:
     sys.stdout.flush()
 
 
-_TERMINATED = False
-
-
-def _install_sigterm() -> None:
-    """SIGTERM stops clear the way Ctrl-C does (clean writes, a batch's summary), exit 143."""
-    import signal
-
-    def terminated(signum: int, frame: object) -> None:
-        global _TERMINATED
-        _TERMINATED = True
-        raise Terminated()
-
-    signal.signal(signal.SIGTERM, terminated)
-
-
 def _stdout_pacified() -> bool:
     """Whether click (typer's) met a closed stdout and wrapped it to keep quiet."""
     return type(sys.stdout).__name__ in ("PacifyFlushWrapper", "_PacifyFlushWrapper")
@@ -149,27 +164,29 @@ def main() -> None:
     ):
         _run_terminal_clear()
         return
-    _install_sigterm()
-    if "--ray" in sys.argv:
-        from clearcli.commands.options import ray_argv
-
-        sys.argv = ray_argv(sys.argv)
-    app = make_app(_command_named(sys.argv[1:]))
+    interrupts.hold()  # until the command can answer a signal properly (clearcli/interrupts.py)
     try:
         try:
+            if "--ray" in sys.argv:
+                from clearcli.commands.options import ray_argv
+
+                sys.argv = ray_argv(sys.argv)
+            app = make_app(_command_named(sys.argv[1:]))
             app(prog_name=Path(sys.argv[0]).name or "clear")
         finally:
             if not _stdout_pacified():
                 sys.stdout.flush()  # a full disk shows here, not at the interpreter's exit
+            interrupts.release()  # a signal no command released (--help, a usage error): exit 130/143
     except SystemExit as exc:
         # Typer turns Ctrl-C (and SIGTERM, raised as Terminated) into exit 130, and a
         # closed stdout into exit 1 after quieting it: say which really happened.
         if _stdout_pacified():
             _quiet_stdout()
             sys.exit(EXIT_BROKEN_PIPE)
-        if _TERMINATED and exc.code == EXIT_INTERRUPTED:
-            sys.stderr.write("clear: terminated\n")
-            sys.exit(EXIT_TERMINATED)
+        if exc.code == EXIT_INTERRUPTED and interrupts.untold():
+            terminated = interrupts.terminated()
+            sys.stderr.write("clear: terminated\n" if terminated else "clear: interrupted\n")
+            sys.exit(EXIT_TERMINATED if terminated else EXIT_INTERRUPTED)
         raise
     except ClearError as exc:
         sys.stderr.write(f"clear: error: {exc}\n")

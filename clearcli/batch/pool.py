@@ -22,6 +22,7 @@ from dataclasses import dataclass
 from multiprocessing.connection import Connection, wait
 from typing import Any, Callable, Iterator, Sequence
 
+from clearcli import interrupts
 from clearcli.batch.work import Job, frame_line, run_job
 
 
@@ -102,7 +103,11 @@ class WorkerPool:
     def _start(self) -> _Slot:
         parent, child = self._ctx.Pipe()
         proc = self._ctx.Process(target=_worker, args=(child, os.getpid()), daemon=True)
-        proc.start()
+        # A signal raised in the parent half-way through start() leaves the new
+        # interpreter reading a cut pickle (a traceback on stderr): the start is held
+        # together, and a signal that came meanwhile is raised right after it.
+        with interrupts.deferred():
+            proc.start()
         child.close()
         return _Slot(proc, parent)
 

@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Mapping, Sequence
 
+from clearcli import interrupts
 from clearcli.tasks.sources import BadInput, FrameRef, Skipped, check_unique_names, expand
 from clearcli.batch.work import MARK, RESULT_CODES, Job, run_job
 from clearcli.tasks.base import OUTPUT_FILES
@@ -296,60 +297,11 @@ def run_batch(
 
     t0 = time.perf_counter()
     lock = None  # the --out-dir lock, held until the batch ends
-    items = expand(req.inputs, frame=req.frame, every=req.every, topic=req.topic)
-    if req.out_dir is not None:
-        check_unique_names(items)
-        if req.out_dir.exists() and not req.out_dir.is_dir():
-            raise InputError(f"--out-dir {req.out_dir}: exists and is not a folder")
-        try:
-            req.out_dir.mkdir(parents=True, exist_ok=True)
-        except OSError as exc:
-            from clearcli.errors import OutputError
-
-            raise OutputError(f"--out-dir {req.out_dir}: cannot make the folder ({exc.strerror})") from None
-        lock = lock_out_dir(req.out_dir, req.command, req.wait)
-        claim_out_dir(req)
-    elif req.outputs or req.resume:
-        raise InputError("--outputs and --resume need --out-dir DIR")
-
-    lines: list[dict[str, Any] | None] = [None] * len(items)
-    temps = _temporaries(req.out_dir) if req.out_dir is not None else {}
-    inputs_of_run = _resolved({it.source for it in items}) if req.out_dir is not None else set()
-    jobs: list[Job] = []
+    # What the summary reports, however early a signal stops the batch.
+    items: list[Any] = []
+    lines: list[dict[str, Any] | None] = []
     job_at: list[int] = []
     skipped = 0
-    for k, it in enumerate(items):
-        if isinstance(it, BadInput):
-            lines[k] = _line_for_bad(it)
-            continue
-        if isinstance(it, Skipped):
-            lines[k] = {"type": "frame", "source": it.source, "frame": 0, "name": "", "exit_code": 0,
-                        "skipped": it.reason}
-            continue
-        assert isinstance(it, FrameRef)
-        if req.out_dir is not None:
-            mark = req.out_dir / MARK.format(name=it.name)
-            if _clean_stale(req.out_dir, it.name, req.resume, req.force, req.made_by, temps):
-                try:
-                    lines[k] = {**json.loads(mark.read_text(encoding="utf-8")), "_resumed": True}
-                    skipped += 1
-                    continue
-                except (OSError, ValueError):
-                    mark.unlink(missing_ok=True)  # unreadable: do the frame again
-        job = Job(req.command, req.request, it.source, it.index, it.name, dict(req.made_by), req.topic,
-                  None if req.out_dir is None else str(req.out_dir), req.outputs, req.force)
-        clash = _input_among_outputs(job, inputs_of_run)
-        if clash is not None:
-            from clearcli.errors import EXIT_OUTPUT
-
-            lines[k] = _line_for_bad(BadInput(
-                it.source, f"{clash}: is an input of this batch; refusing to overwrite it (even with --force)",
-                EXIT_OUTPUT, it.index, it.name,
-            ))
-            continue
-        job_at.append(k)
-        jobs.append(job)
-
     emitted = 0
     failed = 0
     stopped = False
@@ -389,6 +341,58 @@ def run_batch(
         console=stderr, transient=True, disable=not stderr.is_terminal,
     )
     try:
+        interrupts.release()  # a Ctrl-C/SIGTERM held since start-up stops here, with a summary
+        items = expand(req.inputs, frame=req.frame, every=req.every, topic=req.topic)
+        if req.out_dir is not None:
+            check_unique_names(items)
+            if req.out_dir.exists() and not req.out_dir.is_dir():
+                raise InputError(f"--out-dir {req.out_dir}: exists and is not a folder")
+            try:
+                req.out_dir.mkdir(parents=True, exist_ok=True)
+            except OSError as exc:
+                from clearcli.errors import OutputError
+
+                raise OutputError(f"--out-dir {req.out_dir}: cannot make the folder ({exc.strerror})") from None
+            lock = lock_out_dir(req.out_dir, req.command, req.wait)
+            claim_out_dir(req)
+        elif req.outputs or req.resume:
+            raise InputError("--outputs and --resume need --out-dir DIR")
+
+        lines = [None] * len(items)
+        temps = _temporaries(req.out_dir) if req.out_dir is not None else {}
+        inputs_of_run = _resolved({it.source for it in items}) if req.out_dir is not None else set()
+        jobs: list[Job] = []
+        for k, it in enumerate(items):
+            if isinstance(it, BadInput):
+                lines[k] = _line_for_bad(it)
+                continue
+            if isinstance(it, Skipped):
+                lines[k] = {"type": "frame", "source": it.source, "frame": 0, "name": "", "exit_code": 0,
+                            "skipped": it.reason}
+                continue
+            assert isinstance(it, FrameRef)
+            if req.out_dir is not None:
+                mark = req.out_dir / MARK.format(name=it.name)
+                if _clean_stale(req.out_dir, it.name, req.resume, req.force, req.made_by, temps):
+                    try:
+                        lines[k] = {**json.loads(mark.read_text(encoding="utf-8")), "_resumed": True}
+                        skipped += 1
+                        continue
+                    except (OSError, ValueError):
+                        mark.unlink(missing_ok=True)  # unreadable: do the frame again
+            job = Job(req.command, req.request, it.source, it.index, it.name, dict(req.made_by), req.topic,
+                      None if req.out_dir is None else str(req.out_dir), req.outputs, req.force)
+            clash = _input_among_outputs(job, inputs_of_run)
+            if clash is not None:
+                from clearcli.errors import EXIT_OUTPUT
+
+                lines[k] = _line_for_bad(BadInput(
+                    it.source, f"{clash}: is an input of this batch; refusing to overwrite it (even with --force)",
+                    EXIT_OUTPUT, it.index, it.name,
+                ))
+                continue
+            job_at.append(k)
+            jobs.append(job)
         with progress:
             task = progress.add_task("frames", total=len(jobs))
             emit_ready()
@@ -424,14 +428,16 @@ def run_batch(
             for it in items:
                 if isinstance(it, FrameRef):
                     _remove_temporaries(left, it.name)
-    not_done = sum(1 for k in job_at if lines[k] is None)
+    n_skipped = sum(1 for it in items if isinstance(it, Skipped))
+    done = sum(1 for ln in lines if ln is not None and not ln.get("_resumed") and "skipped" not in ln)
+    not_done = len(items) - done - skipped - n_skipped  # a stop during the set-up leaves frames never looked at
     summary = {
         "type": "summary",
         "frames": len(items),
-        "done": len(items) - not_done - skipped - sum(1 for it in items if isinstance(it, Skipped)),
+        "done": done,
         "resumed": skipped,
         "not_done": not_done,
-        "skipped": sum(1 for it in items if isinstance(it, Skipped)),
+        "skipped": n_skipped,
         "failed": failed,
         "exit_codes": {str(k): v for k, v in sorted(counts.items())},
         "interrupted": interrupted,
@@ -454,6 +460,7 @@ def run_batch(
     if interrupted:
         what = "terminated" if terminated else "interrupted"
         stderr.print(f"clear: {what}; the summary covers the frames that finished", markup=False)
+        interrupts.told()
         return EXIT_TERMINATED if terminated else EXIT_INTERRUPTED
     return EXIT_OK if failed == 0 else EXIT_BATCH_FAILED
 

@@ -12,6 +12,8 @@ from typing import Annotated, Any, Callable, Optional
 
 import typer
 
+from clearcli import interrupts
+
 SettingsFile = Annotated[
     Optional[Path], typer.Option("--settings", help="TOML settings file (see `clear settings`).")
 ]
@@ -173,9 +175,12 @@ def batch_options(outputs: tuple[str, ...]) -> Callable[[Callable[..., Any]], Ca
         @functools.wraps(fn)
         def command(*args: Any, **kwargs: Any) -> Any:
             batch = Batch(**{n: kwargs.pop(n) for n, _, _ in declared})
+            if not batch.wanted(kwargs.get("inputs", args[0] if args else ())):
+                interrupts.release()  # one frame: Ctrl-C from here on; a batch releases in its run
             return fn(*args, batch=batch, **kwargs)
 
         command.__signature__ = own.replace(parameters=params)  # type: ignore[attr-defined]
+        command.releases_interrupts = True  # type: ignore[attr-defined]
         return command
 
     return wrap

@@ -399,3 +399,39 @@ def test_a_selection_that_selects_nothing_is_exit_3_with_the_count(tmp_path: Pat
     rows, summary = lines_of(res.stdout)
     assert res.returncode == 11 and rows[0]["exit_code"] == 3
     assert "selects no frame" in rows[0]["error"]["message"] and "frame(s)" in rows[0]["error"]["message"]
+
+
+def _catches(pid: int, signum: int) -> bool:
+    """Whether process ``pid`` has a handler for ``signum`` (its SigCgt mask): clear
+    holds SIGINT/SIGTERM from its first line, so this says its start-up has begun."""
+    try:
+        status = Path(f"/proc/{pid}/status").read_text()
+    except OSError:
+        return False
+    mask = next(int(line.split()[1], 16) for line in status.splitlines() if line.startswith("SigCgt:"))
+    return bool(mask >> (signum - 1) & 1)
+
+
+def test_a_signal_during_start_up_still_gives_the_summary_and_its_exit_code(tmp_path: Path) -> None:
+    if not Path("/proc/self/status").is_file():
+        import pytest
+
+        pytest.skip("needs Linux's /proc to see when start-up begins")
+    for signum, code, word in ((signal.SIGTERM, 143, "terminated"), (signal.SIGINT, 130, "interrupted")):
+        out = tmp_path / f"out-{code}"
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "clearcli.cli", "plan", str(FIXTURES), "--json", "--out-dir", str(out)],
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        )
+        deadline = time.time() + 10
+        # SIGTERM's handler, not SIGINT's: Python catches SIGINT from its own start
+        while not _catches(proc.pid, signal.SIGTERM) and time.time() < deadline:
+            time.sleep(0.002)
+        proc.send_signal(signum)  # while typer, the command and the settings load
+        stdout, stderr = proc.communicate(timeout=60)
+        assert proc.returncode == code, stderr
+        assert "Traceback" not in stderr and "Exception" not in stderr and word in stderr
+        rows, summary = lines_of(stdout)
+        assert summary["interrupted"] and summary["done"] == len(rows) and summary["not_done"] == summary["frames"] - len(rows)
+        if out.exists():  # no temporaries
+            assert [p.name for p in out.iterdir() if p.name.startswith(".")] in ([], [".clear-batch.lock"])
