@@ -5,7 +5,9 @@ from __future__ import annotations
 import shutil
 from pathlib import Path
 
-from helpers import REPO
+import pytest
+
+from helpers import FIXTURES, REPO
 from helpers import run_clear as clear
 
 
@@ -73,3 +75,33 @@ def test_sigterm_stops_a_single_call_with_143(tmp_path: Path) -> None:
     assert proc.returncode == 143, err
     assert err.strip().splitlines()[-1] == "clear: terminated"
     assert not out.exists() and not [p for p in tmp_path.iterdir()]  # nothing half-written
+
+
+def test_a_folder_that_cannot_be_written_is_one_line_exit_8(tmp_path: Path) -> None:
+    """Permission denied / a read-only file system: bad output, not a bug (exit 8)."""
+    locked = tmp_path / "locked"
+    locked.mkdir()
+    locked.chmod(0o555)
+    if _writable(locked):  # root ignores the mode: /sys (read-only for every user) instead
+        locked = Path("/sys")
+        if not locked.is_dir() or _writable(locked):
+            pytest.skip("no folder here that this user cannot write")
+    box = FIXTURES / "isolated_box.pcd"
+    for args in (("-o", locked / "a.plan"), ("--json", "--out-dir", locked / "out")):
+        res = clear("plan", box, *args)
+        assert res.returncode == 8, res.stderr
+        lines = res.stderr.strip().splitlines()
+        assert len(lines) == 1 and str(locked) in lines[0] and "Traceback" not in res.stderr
+        assert "internal error" not in res.stderr
+    assert not list(locked.glob("a.plan*"))
+
+
+def _writable(folder: Path) -> bool:
+    """Whether a file can really be made in ``folder`` (os.access says yes to root)."""
+    probe = folder / ".clear-write-probe"
+    try:
+        probe.touch()
+    except OSError:
+        return False
+    probe.unlink()
+    return True
