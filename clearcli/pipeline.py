@@ -192,10 +192,12 @@ class Pipeline:
 # Only this module chains the stages; a task picks how far to go and serialises.
 
 
-def read(path: Any, topic: str | None = None, index: int = 0) -> "Frame":
+def read(path: Any, topic: str | None = None, index: int = 0, settings: "Settings | None" = None,
+         color: Any = None) -> "Frame":
+    """Frame ``index`` of ``path``; ``settings`` ([images]) and ``color`` serve depth images."""
     from clearcli.io.read import read_frame
 
-    return read_frame(path, topic, index)
+    return read_frame(path, topic, index, settings.images if settings is not None else None, color)
 
 
 def segmented(frame: "Frame", settings: "Settings") -> "Segmentation":

@@ -342,7 +342,9 @@ def run_batch(
     )
     try:
         interrupts.release()  # a Ctrl-C/SIGTERM held since start-up stops here, with a summary
-        items = expand(req.inputs, frame=req.frame, every=req.every, topic=req.topic)
+        cfg = getattr(req.request, "settings", None)
+        items = expand(req.inputs, frame=req.frame, every=req.every, topic=req.topic,
+                       images=cfg.images if cfg is not None else None)
         if req.out_dir is not None:
             check_unique_names(items)
             if req.out_dir.exists() and not req.out_dir.is_dir():

@@ -89,6 +89,19 @@ def _print_table(info: dict[str, Any]) -> None:
             kv.add_row(key, value)
         stdout.print(kv)
         return
+    if info["format"] == "depth-image":
+        im = info["image"]
+        k = im["intrinsics"]
+        kv.add_row("format", f"depth image, {im['width']} x {im['height']}, {im['depth_scale_m']:g} m per unit if integer")
+        rng = (f"{im['depth_min_m']:.3f} .. {im['depth_max_m']:.3f} m" if im["valid_pixels"] else "none")
+        kv.add_row("depth", f"{_fmt_int(im['valid_pixels'])} pixels with a reading, {rng}")
+        dist = f", {k['distortion_model']} distortion corrected" if k["distorted"] else ""
+        kv.add_row("intrinsics", f"fx {k['fx']:g} fy {k['fy']:g} cx {k['cx']:g} cy {k['cy']:g}{dist} ({k['source']})")
+        kv.add_row("colour", im["color"] or "none (no --color, and no <stem>_color image beside it)")
+        for key, value in _frame_rows(info["frame"]):
+            kv.add_row(key, value)
+        stdout.print(kv)
+        return
     m = info.get("mcap") or info.get("bag")
     assert m is not None
     if info["format"] == "rosbag1":
@@ -136,6 +149,9 @@ def info_cmd(
     json_out: Annotated[bool, typer.Option("--json", help="Machine-readable output (schema clear.info).")] = False,
     topic: bo.Topic = None,
     frame: bo.FrameIndex = 0,
+    intrinsics: bo.Intrinsics = None,
+    color: bo.Color = None,
+    depth_scale: bo.DepthScale = None,
     batch: bo.Batch = bo.Batch(),
 ) -> None:
     """What a file holds: points, fields, organized shape, finite points, bounds; for
@@ -145,13 +161,16 @@ def info_cmd(
     from clearcli.tasks import info as task
     from clearcli.tasks.base import Source
 
+    settings = bo.with_images(bo.resolve_settings(None, None), intrinsics, depth_scale)
+    request = task.Request(settings=settings)
     if batch.wanted(inputs):
-        raise typer.Exit(batch.run("info", inputs, task.Request(), frame=frame, topic=topic, force=False, json_out=json_out))
+        bo.no_color_in_batch(color)
+        raise typer.Exit(batch.run("info", inputs, request, frame=frame, topic=topic, force=False, json_out=json_out))
     file = inputs[0]
-    outcome = task.run(task.Request(), Source(str(file), frame, topic))
+    outcome = task.run(request, Source(str(file), frame, topic, color=str(color) if color else None))
     info = dict(outcome.payload)
     if json_out:
-        print_json(outcome.schema, outcome.version, info, None, "info")
+        print_json(outcome.schema, outcome.version, info, settings, "info")
     else:
         _print_table(info)
     log = info.get("mcap") or info.get("bag")

@@ -62,6 +62,26 @@ Ray = Annotated[
         metavar="[ADDRESS]",
     ),
 ]
+Intrinsics = Annotated[
+    Optional[str],
+    typer.Option(
+        "--intrinsics",
+        help="Depth images: the camera's intrinsics, a file (ROS camera_info YAML, Open3D JSON, camera_params.json) "
+        'or "fx fy cx cy"; default: the intrinsics file beside the image ([images] intrinsics).',
+    ),
+]
+Color = Annotated[
+    Optional[Path],
+    typer.Option(
+        "--color",
+        help="Depth image: its colour image (registered to the depth, same size); default: the image the naming "
+        "rule pairs with it (<stem>_depth.png -> <stem>_color.png).",
+    ),
+]
+DepthScale = Annotated[
+    Optional[float],
+    typer.Option("--depth-scale", help="Integer depth images: metres per unit (default 0.001: millimetres; [images] depth_scale_m)."),
+]
 FailFast = Annotated[bool, typer.Option("--fail-fast", help="Batch: stop at the first frame that fails.")]
 Wait = Annotated[
     bool, typer.Option("--wait", help="Batch: when another batch is writing in --out-dir, wait for it instead of refusing.")
@@ -77,6 +97,33 @@ def resolve_settings(path: Path | None, sets: list[str] | None, section: str | N
     if section is not None:
         settings = override(settings, section, **flags)
     return settings
+
+
+def with_images(settings: Any, intrinsics: str | None, depth_scale: float | None) -> Any:
+    """``settings`` with the depth-image flags applied ([images]: --intrinsics, --depth-scale).
+    An intrinsics file is recorded by its absolute path, so that batch workers (and the
+    results' settings.toml) find the same file wherever they run."""
+    from clearcli.settings import override
+
+    if intrinsics is not None and intrinsics.strip() and Path(intrinsics).exists():
+        intrinsics = str(Path(intrinsics).resolve())
+    if intrinsics:
+        from clearcli.tasks.sources import check_intrinsics
+
+        check_intrinsics(intrinsics)  # a bad file or string: one line, exit 3, before any frame
+    return override(settings, "images", intrinsics=intrinsics, depth_scale_m=depth_scale)
+
+
+def no_color_in_batch(color: Path | None) -> None:
+    """--color names one file: a batch pairs images by the naming rule instead."""
+    from clearcli.errors import InputError
+
+    if color is not None:
+        raise InputError(
+            "--color names the colour image of one depth image; with several frames each depth image "
+            "<stem>_depth.png is paired with <stem>_color.png beside it (the naming rule: [images] "
+            "depth_suffix and color_suffix)"
+        )
 
 
 def is_batch(inputs: Any, every: int | None, out_dir: Path | None, ray: str | None) -> bool:

@@ -150,6 +150,9 @@ def plan_cmd(
     ] = None,
     topic: bo.Topic = None,
     frame_index: bo.FrameIndex = 0,
+    intrinsics: bo.Intrinsics = None,
+    color: bo.Color = None,
+    depth_scale: bo.DepthScale = None,
     batch: bo.Batch = bo.Batch(),
 ) -> None:
     """Plan how to clear the table in FRAME: numbered actions, every one IK-checked in the
@@ -164,15 +167,16 @@ def plan_cmd(
     from clearcli.tasks import plan as task
     from clearcli.tasks.base import Outputs, Source
 
-    cfg = bo.resolve_settings(settings, sets, "plan", time_limit_s=time_limit)
+    cfg = bo.with_images(bo.resolve_settings(settings, sets, "plan", time_limit_s=time_limit), intrinsics, depth_scale)
     request = task.Request(cfg, camera_pose=camera_pose, first_only=first_only)
     if batch.wanted(inputs):
+        bo.no_color_in_batch(color)
         bo.single_only(**{"-o": output, "--problem": problem, "--domain": domain, "--png": png})
         raise typer.Exit(batch.run("plan", inputs, request, frame=frame_index, topic=topic, force=force, json_out=json_out))
     frame = inputs[0]
     outputs = [p for p in (problem, domain, output, png) if p is not None]
     for p in outputs:
-        check_output_path(p, force, (frame,))
+        check_output_path(p, force, (frame, *([color] if color else [])))
     resolved = [Path(p).resolve() for p in outputs]
     if len(set(resolved)) != len(resolved):
         raise InputError("-o, --problem, --domain and --png must name different files")
@@ -180,7 +184,7 @@ def plan_cmd(
         cfg, camera_pose=camera_pose, first_only=first_only,
         outputs=Outputs.of(problem=problem, domain=domain, plan=output, png=png),
     )
-    outcome = task.run(request, Source(str(frame), frame_index, topic))
+    outcome = task.run(request, Source(str(frame), frame_index, topic, color=str(color) if color else None))
     payload, code = outcome.payload, outcome.exit_code
     if json_out:
         print_json(outcome.schema, outcome.version, payload, cfg, "plan")

@@ -85,6 +85,9 @@ def predicates_cmd(
             help="Use the frame's 'label' field (mOSD ground truth) instead of running segmentation.",
         ),
     ] = False,
+    intrinsics: bo.Intrinsics = None,
+    color: bo.Color = None,
+    depth_scale: bo.DepthScale = None,
     batch: bo.Batch = bo.Batch(),
 ) -> None:
     """Objects and symbolic facts of FRAME (on, block_grasp, block_dir, ungraspable,
@@ -95,19 +98,20 @@ def predicates_cmd(
     from clearcli.tasks import predicates as task
     from clearcli.tasks.base import Outputs, Source
 
-    cfg = bo.resolve_settings(settings, sets)
+    cfg = bo.with_images(bo.resolve_settings(settings, sets), intrinsics, depth_scale)
     if batch.wanted(inputs):
+        bo.no_color_in_batch(color)
         bo.single_only(**{"-o": output, "--png": png})
         request = task.Request(cfg, ground_truth=ground_truth)
         raise typer.Exit(batch.run("predicates", inputs, request, frame=frame_index, topic=topic, force=force, json_out=json_out))
     frame = inputs[0]
     for out in (output, png):
         if out is not None:
-            check_output_path(out, force, (frame,))
+            check_output_path(out, force, (frame, *([color] if color else [])))
     if output is not None and png is not None and Path(output).resolve() == Path(png).resolve():
         raise InputError(f"{output}: -o and --png name the same file")
     request = task.Request(cfg, ground_truth=ground_truth, outputs=Outputs.of(problem=output, png=png))
-    outcome = task.run(request, Source(str(frame), frame_index, topic))
+    outcome = task.run(request, Source(str(frame), frame_index, topic, color=str(color) if color else None))
     if json_out:
         print_json(outcome.schema, outcome.version, outcome.payload, cfg, "predicates")
     else:

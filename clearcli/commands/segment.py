@@ -62,6 +62,9 @@ def segment_cmd(
         Optional[bool],
         typer.Option("--occlusion-merge/--no-occlusion-merge", help="Join pieces of an object cut by a nearer one."),
     ] = None,
+    intrinsics: bo.Intrinsics = None,
+    color: bo.Color = None,
+    depth_scale: bo.DepthScale = None,
     batch: bo.Batch = bo.Batch(),
 ) -> None:
     """Find the table and segment the objects on it (thesis 4.1): a summary table, or
@@ -79,17 +82,18 @@ def segment_cmd(
         outlier_method=outlier_method,
         occlusion_merge=occlusion_merge,
     )
-    settings = bo.resolve_settings(settings_file, sets, "segment", **flags)
+    settings = bo.with_images(bo.resolve_settings(settings_file, sets, "segment", **flags), intrinsics, depth_scale)
     if batch.wanted(inputs):
+        bo.no_color_in_batch(color)
         bo.single_only(**{"-o": labels_out, "--png": png})
         request = task.Request(settings)
         raise typer.Exit(batch.run("segment", inputs, request, frame=frame_index, topic=topic, force=force, json_out=json_out))
     frame_path = inputs[0]
     for out in (labels_out, png):
         if out is not None:
-            check_output_path(out, force, (frame_path,))
+            check_output_path(out, force, (frame_path, *([color] if color else [])))
     outcome = task.run(
-        task.Request(settings, Outputs.of(labels=labels_out, png=png)), Source(str(frame_path), frame_index, topic)
+        task.Request(settings, Outputs.of(labels=labels_out, png=png)), Source(str(frame_path), frame_index, topic, color=str(color) if color else None)
     )
     doc = outcome.payload
     if json_out:

@@ -1,4 +1,4 @@
-"""One way in: a path (PCD, MCAP or a bag, told apart by content) -> frames.
+"""One way in: a path (PCD, MCAP, a bag or a depth image, told apart by content) -> frames.
 
 PCD and MCAP files and ROS 1 bags (`#ROSBAG`) are told apart by their first bytes, not
 their names; a folder holding `metadata.yaml` (or that file itself, or a `.db3` SQLite
@@ -16,20 +16,39 @@ stage that needs points calls `require_finite(frame)`, which raises SceneError (
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Iterator
+from typing import TYPE_CHECKING, Iterator
 
 from clearcli.errors import InputError, SceneError
 from clearcli.io.frames import Frame
 from clearcli.io.sniff import sniff
 
+if TYPE_CHECKING:
+    from clearcli.settings.images import ImageSettings
 
-def read_frame(path: Path, topic: str | None = None, index: int = 0) -> Frame:
-    """Frame `index` (from 0) of the file at `path`; a PCD holds exactly one frame.
+
+def read_frame(
+    path: Path,
+    topic: str | None = None,
+    index: int = 0,
+    images: "ImageSettings | None" = None,
+    color: Path | None = None,
+) -> Frame:
+    """Frame `index` (from 0) of the file at `path`; a PCD or a depth image holds exactly
+    one frame.
 
     `topic` picks the point-cloud topic of a log or bag holding several; ignored for PCD.
+    `images` ([images] settings) and `color` (its colour image) serve depth images.
     """
     path = Path(path)
     kind = sniff(path)
+    if color is not None and kind != "image":
+        raise InputError(f"--color {color}: only a depth image takes a colour image; {path} is a {kind} file")
+    if kind == "image":
+        if index != 0:
+            raise InputError(f"{path}: --frame {index} does not exist: a depth image holds 1 frame (0)")
+        from clearcli.io.images import read_image_frame
+
+        return read_image_frame(path, images, color)
     if kind == "pcd":
         if index != 0:
             raise InputError(f"{path}: --frame {index} does not exist: a PCD file holds 1 frame (0)")
@@ -45,10 +64,15 @@ def read_frame(path: Path, topic: str | None = None, index: int = 0) -> Frame:
     return read_mcap_frame(path, topic, index)
 
 
-def iter_frames(path: Path, topic: str | None = None) -> Iterator[Frame]:
+def iter_frames(path: Path, topic: str | None = None, images: "ImageSettings | None" = None) -> Iterator[Frame]:
     """Every frame of the file, one at a time (a log or bag is streamed, never loaded whole)."""
     path = Path(path)
     kind = sniff(path)
+    if kind == "image":
+        from clearcli.io.images import read_image_frame
+
+        yield read_image_frame(path, images)
+        return
     if kind == "pcd":
         from clearcli.io.pcd import read_pcd
 

@@ -20,9 +20,12 @@ MCAP_MAGIC = b"\x89MCAP0\r\n"
 ROSBAG1_MAGIC = b"#ROSBAG"
 SQLITE_MAGIC = b"SQLite format 3\x00"
 ROSBAG2_METADATA = "metadata.yaml"
+PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+TIFF_MAGICS = (b"II*\x00", b"MM\x00*")
+NPY_MAGIC = b"\x93NUMPY"
 # A PCD header opens with a comment or one of its keywords.
 PCD_HEADER_KEYS = (b"VERSION", b"FIELDS", b"SIZE", b"TYPE", b"COUNT", b"WIDTH", b"HEIGHT", b"VIEWPOINT", b"POINTS", b"DATA")
-FileKind = Literal["pcd", "mcap", "rosbag1", "rosbag2"]
+FileKind = Literal["pcd", "mcap", "rosbag1", "rosbag2", "image"]
 
 
 def looks_like_pcd(head: bytes) -> bool:
@@ -65,8 +68,9 @@ def _directory_kind(path: Path) -> FileKind:
 
 
 def sniff(path: Path) -> FileKind:
-    """"pcd", "mcap", "rosbag1" (a ROS 1 bag) from the file's first bytes (not its name), or
-    "rosbag2" for a rosbag2 folder, its metadata.yaml or a .db3 file; InputError otherwise."""
+    """"pcd", "mcap", "rosbag1" (a ROS 1 bag), "image" (PNG, TIFF, NPY: a depth image) from
+    the file's first bytes (not its name), or "rosbag2" for a rosbag2 folder, its
+    metadata.yaml or a .db3 file; InputError otherwise."""
     path = Path(path)
     if path.is_dir():
         return _directory_kind(path)
@@ -98,8 +102,14 @@ def sniff(path: Path) -> FileKind:
         path.name == ROSBAG2_METADATA and head.lstrip().startswith(b"rosbag2_bagfile_information")
     ):
         return "rosbag2"
+    if head.startswith(PNG_MAGIC) or head.startswith(TIFF_MAGICS) or head.startswith(NPY_MAGIC):
+        return "image"  # a depth image (clearcli/io/images.py)
     if looks_like_pcd(head):
         return "pcd"
     if path.suffix.lower() == ".pcd":
         raise InputError(f"{path}: not a PCD file (it does not start with a PCD header)")
-    raise InputError(f"{path}: not an MCAP file, a ROS bag or a PCD file (unrecognised first bytes)")
+    if path.suffix.lower() in (".png", ".tif", ".tiff", ".npy"):
+        raise InputError(f"{path}: not a {path.suffix[1:].upper()} file (unrecognised first bytes); is it truncated or renamed?")
+    raise InputError(
+        f"{path}: not an MCAP file, a ROS bag, a PCD file or a depth image (unrecognised first bytes)"
+    )

@@ -30,8 +30,11 @@ class Range:
     choices: tuple[str, ...] = ()
     max_items: int | None = None
     lengths: tuple[int, ...] = ()  # allowed tuple lengths (empty: any up to max_items)
+    text: str = ""  # free text (a path, a name): what it may be, checked where it is used
 
     def describe(self) -> str:
+        if self.text:
+            return self.text
         if self.choices:
             return "one of " + ", ".join(repr(c) for c in self.choices)
         parts = []
@@ -57,7 +60,7 @@ class Range:
 
 def param(default: Any, **bounds: Any) -> Any:
     """A setting: its default and its range (``ge``, ``gt``, ``le``, ``lt``, ``choices``,
-    ``max_items``, ``lengths``)."""
+    ``max_items``, ``lengths``; ``text`` for free text, saying what it may be)."""
     if "choices" in bounds:
         bounds["choices"] = tuple(bounds["choices"])
     if "lengths" in bounds:

@@ -17,6 +17,7 @@ from typing import Any, Iterable, Mapping
 
 from clearcli.errors import SettingsError
 from clearcli.settings.geometry import GripperSettings, PredicateSettings, PushSettings
+from clearcli.settings.images import ImageSettings
 from clearcli.settings.plan import PlanSettings
 from clearcli.settings.replay import MemoryParams, ReplaySettings, TrackingParams
 from clearcli.settings.robot import RobotSettings
@@ -39,6 +40,7 @@ class Settings:
     world_reach: WorldReachParams = field(default_factory=WorldReachParams)
     camera: PinholeCamera = field(default_factory=PinholeCamera)
     depth_noise: DepthNoise = field(default_factory=DepthNoise)
+    images: ImageSettings = field(default_factory=ImageSettings)
 
 
 # The registry: section name -> its class, in the order of `Settings`' fields.
@@ -47,12 +49,12 @@ assert all(cls.NAME == name for name, cls in SECTIONS.items())  # type: ignore[a
 
 # The sections each command reads: what its provenance digest covers.
 READS: dict[str, tuple[str, ...]] = {
-    "info": (),
-    "segment": ("segment",),
-    "evaluate": ("segment",),
-    "predicates": ("segment", "gripper", "push", "predicates"),
-    "plan": ("segment", "gripper", "push", "predicates", "plan", "robot"),
-    "replay": ("segment", "gripper", "push", "predicates", "plan", "robot", "replay", "tracking", "memory"),
+    "info": ("images",),
+    "segment": ("images", "segment"),
+    "evaluate": ("images", "segment"),
+    "predicates": ("images", "segment", "gripper", "push", "predicates"),
+    "plan": ("images", "segment", "gripper", "push", "predicates", "plan", "robot"),
+    "replay": ("images", "segment", "gripper", "push", "predicates", "plan", "robot", "replay", "tracking", "memory"),
     "simulate": tuple(SECTIONS),
 }
 

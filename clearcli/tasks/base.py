@@ -24,13 +24,15 @@ OUTPUT_FILES: dict[str, str] = {
 
 @dataclass(frozen=True)
 class Source:
-    """One frame: a file (PCD, MCAP, bag), the frame's index on its topic, and the name
-    its outputs take in a batch."""
+    """One frame: a file (PCD, MCAP, bag, depth image), the frame's index on its topic,
+    the name its outputs take in a batch, and a depth image's colour image when named
+    (--color; else the naming rule pairs one)."""
 
     path: Path
     index: int = 0
     topic: str | None = None
     name: str = ""
+    color: str | None = None
 
 
 @dataclass(frozen=True)

@@ -42,7 +42,7 @@ def run(request: Request, source: Source) -> Outcome:
     from clearcli.evaluate.segmentation import score
 
     name = source.name or Path(source.path).stem
-    frame = pipeline.read(source.path, source.topic, source.index)
+    frame = pipeline.read(source.path, source.topic, source.index, request.settings, source.color)
     truth = _labels(frame, source.path, "ground truth")
     elapsed = 0.0
     if request.pred is not None:

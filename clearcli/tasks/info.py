@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from clearcli.settings import Settings
 from clearcli.tasks.base import NO_OUTPUTS, Outcome, Outputs, Source
 
 SCHEMA, VERSION = "info", 1
@@ -13,13 +14,14 @@ OUTPUTS: tuple[str, ...] = ()
 @dataclass(frozen=True)
 class Request:
     outputs: Outputs = NO_OUTPUTS
-    settings: None = None  # info reads no settings
+    settings: Settings | None = None  # [images] only: how depth images are read
 
 
 def run(request: Request, source: Source) -> Outcome:
     from clearcli.errors import EXIT_PARTIAL
     from clearcli.io.describe import describe_file, log_part
 
-    info = describe_file(source.path, source.topic, source.index)
+    images = request.settings.images if request.settings is not None else None
+    info = describe_file(source.path, source.topic, source.index, images, source.color)
     log = log_part(info)
     return Outcome(SCHEMA, VERSION, info, 0 if log is None or log["complete"] else EXIT_PARTIAL)

@@ -27,7 +27,7 @@ def run(request: Request, source: Source) -> Outcome:
     from clearcli.errors import EXIT_NO_PLAN, EXIT_OK, EXIT_PARTIAL_PLAN
     from clearcli.planning.payload import PLAN_SCHEMA, PLAN_VERSION, plan_payload
 
-    frame = pipeline.read(source.path, source.topic, source.index)
+    frame = pipeline.read(source.path, source.topic, source.index, request.settings, source.color)
     seg = pipeline.segmented(frame, request.settings)
     state = pipeline.stated(frame, seg, request.settings)
     done = pipeline.planned(state, request.settings, request.camera_pose, "first" if request.first_only else None)

@@ -21,7 +21,7 @@ def run(request: Request, source: Source) -> Outcome:
     from clearcli import pipeline
     from clearcli.planning.payload import PREDICATES_SCHEMA, PREDICATES_VERSION, predicates_payload
 
-    frame = pipeline.read(source.path, source.topic, source.index)
+    frame = pipeline.read(source.path, source.topic, source.index, request.settings, source.color)
     if request.ground_truth:
         seg = pipeline.truth_segmentation(frame, source.path)
     else:

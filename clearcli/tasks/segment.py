@@ -21,7 +21,7 @@ def run(request: Request, source: Source) -> Outcome:
     from clearcli import pipeline
     from clearcli.perception.payload import segmentation_payload
 
-    frame = pipeline.read(source.path, source.topic, source.index)
+    frame = pipeline.read(source.path, source.topic, source.index, request.settings, source.color)
     seg = pipeline.segmented(frame, request.settings)
     labels = request.outputs.get("labels")
     if labels is not None:

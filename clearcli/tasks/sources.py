@@ -1,9 +1,13 @@
 """From the inputs a user names (files and folders) to the frames a batch works on.
 
 A folder is searched (recursively, sorted by name, numbers in names by value) for
-`.pcd`, `.mcap` and `.bag` files; a folder holding `metadata.yaml` is one rosbag2 bag. A log contributes frame 0, or
+`.pcd`, `.mcap` and `.bag` files and depth images named by the naming rule
+(`<stem>_depth.png|.tif|.tiff|.npy`; the suffix is [images] depth_suffix): a colour image
+`<stem>_color.png` is never taken for a frame, it goes with its depth image. A folder
+holding `metadata.yaml` is one rosbag2 bag. A log contributes frame 0, or
 ``--frame N``, or every N-th frame with ``--every N``. Each frame gets the name its
-outputs carry in ``--out-dir``: the input's stem, plus ``_f<index>`` for a log.
+outputs carry in ``--out-dir``: the input's stem (a depth image's without the depth
+suffix: `uois_0003_depth.png` -> `uois_0003`), plus ``_f<index>`` for a log.
 
 What cannot be expanded (a missing file, a folder with no frames, a log that cannot be
 read) becomes a `BadInput`: the batch reports it in its own line and goes on.
@@ -15,7 +19,10 @@ import errno
 import stat
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Sequence, Union
+from typing import TYPE_CHECKING, Any, Sequence, Union
+
+if TYPE_CHECKING:
+    from clearcli.settings.images import ImageSettings
 
 FRAME_SUFFIXES = (".pcd", ".mcap", ".bag")
 
@@ -82,7 +89,14 @@ def _special(path: Path) -> str | None:
     return next((name for test, name in kind.items() if test(mode)), "not a regular file")
 
 
-def _files_in(folder: Path, seen: set[tuple[int, int]], skipped: list["Skipped"]) -> list[Path]:
+def _is_depth_image(path: Path, depth_suffix: str) -> bool:
+    """A depth image by the naming rule (a folder search takes only these)."""
+    from clearcli.io.images import IMAGE_SUFFIXES
+
+    return path.suffix.lower() in IMAGE_SUFFIXES and path.stem.endswith(depth_suffix)
+
+
+def _files_in(folder: Path, seen: set[tuple[int, int]], skipped: list["Skipped"], depth_suffix: str = "_depth") -> list[Path]:
     """Frame files below ``folder``, sorted; a rosbag2 folder is one entry, hidden
     entries (a batch's own temporaries, editors' backups) are passed over. Only regular
     files and folders are taken; each real folder is searched once (``seen``: its device
@@ -103,8 +117,8 @@ def _files_in(folder: Path, seen: set[tuple[int, int]], skipped: list["Skipped"]
         if why is not None:
             skipped.append(Skipped(str(p), why))
         elif p.is_dir():
-            found.extend([p] if _is_rosbag2(p) else _files_in(p, seen, skipped))
-        elif p.suffix.lower() in FRAME_SUFFIXES:
+            found.extend([p] if _is_rosbag2(p) else _files_in(p, seen, skipped, depth_suffix))
+        elif p.suffix.lower() in FRAME_SUFFIXES or _is_depth_image(p, depth_suffix):
             found.append(p)
     return found
 
@@ -154,9 +168,14 @@ def expand(
     frame: int | None = None,
     every: int | None = None,
     topic: str | None = None,
+    images: "ImageSettings | None" = None,
 ) -> list[Item]:
-    """The frames of ``inputs`` in order (folders expanded), and the inputs that fail."""
+    """The frames of ``inputs`` in order (folders expanded), and the inputs that fail.
+    ``images``: the naming rule of depth images ([images]; defaults when None)."""
     from clearcli.errors import EXIT_INPUT, ClearError
+    from clearcli.io.images import _settings, frame_name
+
+    images = _settings(images)
 
     items: list[Item] = []
     for raw in inputs:
@@ -168,10 +187,13 @@ def expand(
             continue
         if path.is_dir() and not _is_rosbag2(path):
             skipped: list[Skipped] = []
-            files = _files_in(path, seen, skipped)
+            files = _files_in(path, seen, skipped, images.depth_suffix)
             items.extend(skipped)
             if not files and not skipped:
-                items.append(BadInput(str(path), f"{path}: folder holds no .pcd, .mcap or .bag file", EXIT_INPUT))
+                items.append(BadInput(
+                    str(path), f"{path}: folder holds no .pcd, .mcap or .bag file and no depth image named "
+                    f"<stem>{images.depth_suffix}.png (.tif, .npy)", EXIT_INPUT,
+                ))
             paths = files
         elif not path.exists():
             items.append(BadInput(str(path), f"{path}: file not found", EXIT_INPUT))
@@ -181,7 +203,8 @@ def expand(
         for p in paths:
             stem = p.name if p.is_dir() else p.stem
             if not _is_log(p):
-                items.append(FrameRef(str(p), 0, False, stem))
+                name = frame_name(p, images) if _is_depth_image(p, images.depth_suffix) else stem
+                items.append(FrameRef(str(p), 0, False, name))
                 continue
             if every is None:
                 k = frame or 0
@@ -205,6 +228,14 @@ def expand(
             if broken is not None:  # every complete frame is in; the break is reported
                 items.append(BadInput(str(p), str(broken), broken.exit_code, n, f"{stem}_f{n}"))  # type: ignore[attr-defined]
     return items
+
+
+def check_intrinsics(spec: str) -> None:
+    """Read the intrinsics ``spec`` (a file or "fx fy cx cy") once, before any frame: a bad
+    one is one InputError (exit 3), not one per frame."""
+    from clearcli.io.intrinsics import read_intrinsics
+
+    read_intrinsics(spec)
 
 
 def check_unique_names(items: Sequence[Item]) -> None:

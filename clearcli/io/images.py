@@ -1,0 +1,193 @@
+"""Depth images from files -> an organized `Frame`, as a camera's point cloud would be.
+
+A depth frame is a 16-bit PNG (integer units, `[images] depth_scale_m` metres each:
+millimetres by default), a 32-bit float TIFF (metres) or an NPY array (float: metres;
+integer: units as a PNG). Its intrinsics come from `[images] intrinsics` (`--intrinsics`:
+a file or "fx fy cx cy") or else from the one intrinsics file beside it. Its colour
+comes from `--color`, or else from the image the naming rule pairs with it
+(`<stem>_depth.png` -> `<stem>_color.png`, both suffixes in [images]).
+
+The frame is what the PCD path gives for the same data: (height x width) points in the
+optical frame, NaN where the depth is 0, colour per pixel (clearcli/io/intrinsics.py
+holds the back-projection, and why its arithmetic is float32).
+
+Every bad input is one InputError naming the file and what to do: a colour image given
+as depth, a truncated or non-image file, sizes that differ, intrinsics for another
+resolution, an all-zero depth image.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from clearcli.errors import InputError
+from clearcli.io.frames import Frame
+
+if TYPE_CHECKING:
+    from clearcli.io.intrinsics import CameraModel
+    from clearcli.settings.images import ImageSettings
+
+# Suffixes of depth images a folder search takes (with the depth suffix in the name).
+IMAGE_SUFFIXES = (".png", ".tif", ".tiff", ".npy")
+# File names an intrinsics file beside the images may have, in the order they are tried.
+INTRINSICS_NAMES = (
+    "camera_info.yaml", "camera_info.yml", "camera_params.json", "intrinsics.json",
+    "intrinsic.json", "camera_intrinsic.json", "camera.yaml", "camera.json",
+)
+
+
+def _settings(images: "ImageSettings | None") -> "ImageSettings":
+    if images is None:
+        from clearcli.settings.images import ImageSettings
+
+        return ImageSettings()
+    return images
+
+
+def _open_image(path: Path, what: str):  # -> PIL.Image.Image
+    from PIL import Image, UnidentifiedImageError
+
+    try:
+        image = Image.open(path)
+        image.load()  # decode now: a truncated file fails here, not half-way into a stage
+    except FileNotFoundError:
+        raise InputError(f"{path}: file not found") from None
+    except UnidentifiedImageError:
+        raise InputError(f"{path}: not an image file (PNG or TIFF) although it was given as {what}") from None
+    except (OSError, SyntaxError, ValueError) as exc:
+        raise InputError(f"{path}: a damaged or truncated image ({exc}); record or copy it again") from None
+    return image
+
+
+def _units_to_m(raw: np.ndarray, scale_m: float) -> np.ndarray:
+    """Integer depth units -> float32 metres. Dividing by the units per metre when that is
+    a whole number (1000 for millimetres) gives the same floats as a PCD written from the
+    same data; multiplying by 0.001 is 1 ulp off on most points."""
+    per_m = 1.0 / scale_m
+    if abs(per_m - round(per_m)) < 1e-9 * per_m:
+        return raw.astype(np.float32) / np.float32(round(per_m))
+    return raw.astype(np.float32) * np.float32(scale_m)
+
+
+def read_depth_m(path: Path, scale_m: float) -> np.ndarray:
+    """(H, W) float32 depth in metres of a depth image file; 0 or NaN = no reading."""
+    path = Path(path)
+    from clearcli.io.sniff import NPY_MAGIC
+
+    try:
+        with open(path, "rb") as fp:
+            is_npy = fp.read(len(NPY_MAGIC)) == NPY_MAGIC
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read ({exc.strerror})") from None
+    if is_npy:
+        try:
+            raw = np.load(path, allow_pickle=False)
+        except (ValueError, OSError, EOFError) as exc:
+            raise InputError(f"{path}: not a readable NPY array ({exc})") from None
+    else:
+        image = _open_image(path, "a depth image")
+        mode = image.mode
+        if mode in ("RGB", "RGBA", "P", "L", "LA", "CMYK", "YCbCr", "1"):
+            raise InputError(
+                f"{path}: an 8-bit {mode} image, not a depth image (16-bit PNG in millimetres, float TIFF or NPY in "
+                "metres); if it is the colour image, give its depth image and this one with --color"
+            )
+        raw = np.asarray(image)
+    if raw.ndim == 3 and raw.shape[2] == 1:
+        raw = raw[:, :, 0]
+    if raw.ndim != 2:
+        raise InputError(f"{path}: an array of shape {raw.shape}, not one (height, width) depth image")
+    if raw.dtype.kind == "f":
+        depth = raw.astype(np.float32)
+    elif raw.dtype.kind in "ui":
+        depth = _units_to_m(raw, scale_m)
+    else:
+        raise InputError(f"{path}: depth of type {raw.dtype}; expected 16-bit integers or float metres")
+    return depth
+
+
+def read_color(path: Path) -> np.ndarray:
+    """(H, W, 3) uint8 RGB of a colour image file."""
+    path = Path(path)
+    image = _open_image(path, "a colour image")
+    if image.mode not in ("RGB", "RGBA", "P", "L", "LA"):
+        raise InputError(f"{path}: a {image.mode} image, not an 8-bit colour image; give the colour PNG")
+    return np.asarray(image if image.mode == "RGB" else image.convert("RGB"))
+
+
+def color_pair(depth_path: Path, images: "ImageSettings") -> Path | None:
+    """The colour image the naming rule pairs with ``depth_path`` (`<stem><depth_suffix>.x`
+    -> `<stem><color_suffix>.png|.jpg|.x`), when it exists."""
+    stem = depth_path.stem
+    if not stem.endswith(images.depth_suffix):
+        return None
+    base = stem[: len(stem) - len(images.depth_suffix)] + images.color_suffix
+    for suffix in (".png", ".jpg", ".jpeg", depth_path.suffix):
+        candidate = depth_path.with_name(base + suffix)
+        if candidate.is_file():
+            return candidate
+    return None
+
+
+def frame_name(path: Path, images: "ImageSettings | None" = None) -> str:
+    """The name a depth image's outputs take: its stem without the depth suffix."""
+    suffix = _settings(images).depth_suffix
+    stem = path.stem
+    return stem[: len(stem) - len(suffix)] if stem.endswith(suffix) and len(stem) > len(suffix) else stem
+
+
+def find_intrinsics(depth_path: Path, images: "ImageSettings") -> "CameraModel":
+    """The intrinsics for ``depth_path``: [images] intrinsics when set, else the one
+    intrinsics file beside it (several that disagree: an error asking which)."""
+    from clearcli.io.intrinsics import read_intrinsics
+
+    if images.intrinsics:
+        return read_intrinsics(images.intrinsics)
+    found = [depth_path.parent / n for n in INTRINSICS_NAMES if (depth_path.parent / n).is_file()]
+    if not found:
+        raise InputError(
+            f"{depth_path}: a depth image needs the camera's intrinsics: give --intrinsics FILE (ROS camera_info "
+            f"YAML, Open3D JSON, camera_params.json) or --intrinsics \"fx fy cx cy\", or put one of "
+            f"{', '.join(INTRINSICS_NAMES[:3])} beside it"
+        )
+    models = [read_intrinsics(p) for p in found]
+    first = models[0]
+    for p, m in zip(found[1:], models[1:]):
+        same = (m.fx, m.fy, m.cx, m.cy, m.width, m.height, m.distorted) == (
+            first.fx, first.fy, first.cx, first.cy, first.width, first.height, first.distorted
+        ) and (not m.distorted or (m.distortion_model, m.distortion) == (first.distortion_model, first.distortion))
+        if not same:
+            raise InputError(
+                f"{depth_path}: the intrinsics files beside it disagree ({found[0].name}, {p.name}); "
+                "name the right one with --intrinsics"
+            )
+    return first
+
+
+def read_image_frame(path: Path, images: "ImageSettings | None" = None, color: Path | None = None) -> Frame:
+    """The organized frame of the depth image at ``path`` (see the module)."""
+    from clearcli.io.intrinsics import back_project
+
+    path = Path(path)
+    images = _settings(images)
+    depth = read_depth_m(path, images.depth_scale_m)
+    h, w = depth.shape
+    if not np.any(np.isfinite(depth) & (depth > 0)):
+        raise InputError(f"{path}: every pixel of the depth image is 0 (no reading); is it the right file?")
+    model = find_intrinsics(path, images)
+    model.check_size(w, h, f"{path} ({w} x {h})")
+    points = back_project(depth, model)
+    color_path = Path(color) if color is not None else color_pair(path, images)
+    colors = None
+    if color_path is not None:
+        rgb = read_color(color_path)
+        if rgb.shape[:2] != (h, w):
+            raise InputError(
+                f"{color_path}: the colour image is {rgb.shape[1]} x {rgb.shape[0]} but its depth image {path} is "
+                f"{w} x {h}; give the colour image registered to the depth (aligned_depth_to_color)"
+            )
+        colors = np.ascontiguousarray(rgb.reshape(-1, 3))
+    return Frame(points=points, colors=colors, shape=(h, w), source=str(path))

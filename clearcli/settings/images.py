@@ -1,0 +1,31 @@
+"""Depth and colour images as input: section [images] (every frame-reading command)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from clearcli.settings.fields import Section, param
+
+
+@dataclass(frozen=True)
+class ImageSettings(Section):
+    NAME = "images"
+
+    # The camera's intrinsics for depth images read from files: a ROS calibration YAML,
+    # an Open3D PinholeCameraIntrinsic JSON, a camera_params.json (fx, fy, x_offset,
+    # y_offset) or "fx fy cx cy". Empty: the one intrinsics file beside the depth image
+    # (`--intrinsics` sets it). Logs carry their own (CameraInfo).
+    intrinsics: str = param("", text='"", an intrinsics file, or "fx fy cx cy"')
+    # Metres per unit of an integer depth image (16-bit PNG, uint16 NPY, 16UC1 messages):
+    # millimetres, as RealSense, Kinect and most datasets write them. Float images are metres.
+    depth_scale_m: float = param(0.001, gt=0, le=10)
+    # The naming rule for folders of image pairs: `<stem><depth_suffix>.png` is a depth
+    # frame, `<stem><color_suffix>.png` its colour image; outputs are named `<stem>`.
+    depth_suffix: str = param("_depth", text="a non-empty name ending")
+    color_suffix: str = param("_color", text="a name ending other than depth_suffix")
+
+    def cross_checks(self) -> None:
+        if not self.depth_suffix:
+            self.fail("depth_suffix", "must not be empty (a folder's colour images would be taken for depth)")
+        if self.color_suffix == self.depth_suffix:
+            self.fail("color_suffix", "must differ from depth_suffix")

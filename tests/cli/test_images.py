@@ -1,0 +1,64 @@
+"""Depth images on the command line: single frames, folders of pairs, `info`, bad flags."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+from helpers import run_clear as clear
+from helpers import shared_path
+
+
+def test_a_folder_of_pairs_is_a_batch_named_by_the_pairs_stems(tmp_path: Path) -> None:
+    folder = shared_path("rgbd/uois")
+    out = tmp_path / "out"
+    res = clear("segment", folder, "--json", "--out-dir", out, "--jobs", "2")
+    assert res.returncode == 0, res.stderr
+    lines = [json.loads(x) for x in res.stdout.splitlines()]
+    frames, summary = lines[:-1], lines[-1]
+    # nine depth images; the colour images go with them, never frames of their own
+    assert [f["name"] for f in frames] == [f"uois_{k:04d}" for k in range(9)]
+    assert all(f["source"].endswith("_depth.png") for f in frames) and summary["done"] == 9
+    assert sorted(p.name for p in out.glob("*.json")) == [f"uois_{k:04d}.json" for k in range(9)]
+    # the same objects as the point clouds of the same frames
+    pcds = clear("segment", shared_path("scenes/uois_realsense"), "--json", "--jobs", "2")
+    by_pcd = [len(json.loads(x)["document"]["objects"]) for x in pcds.stdout.splitlines()[:-1]]
+    assert [len(f["document"]["objects"]) for f in frames] == by_pcd
+
+
+def test_color_with_several_frames_points_at_the_naming_rule(tmp_path: Path) -> None:
+    folder = shared_path("rgbd/uois")
+    res = clear("plan", folder, "--color", folder / "uois_0000_color.png")
+    assert res.returncode == 3 and "naming rule" in res.stderr and len(res.stderr.strip().splitlines()) == 1
+
+
+def test_info_says_size_depth_range_intrinsics_and_colour() -> None:
+    depth = shared_path("rgbd/uois/uois_0003_depth.png")
+    res = clear("info", depth, "--json")
+    assert res.returncode == 0, res.stderr
+    doc = json.loads(res.stdout)
+    image = doc["image"]
+    assert doc["format"] == "depth-image" and (image["width"], image["height"]) == (640, 480)
+    assert 0.3 < image["depth_min_m"] < image["depth_max_m"] < 5.0
+    assert image["intrinsics"]["fx"] == 612.937 and image["color"].endswith("uois_0003_color.png")
+    assert doc["frame"]["organized"] and doc["frame"]["has_colors"]
+
+
+def test_single_frame_flags_intrinsics_color_and_depth_scale(tmp_path: Path) -> None:
+    src = shared_path("rgbd/uois")
+    depth = tmp_path / "frame.png"  # no naming rule, no intrinsics file beside it
+    shutil.copy(src / "uois_0003_depth.png", depth)
+    res = clear("segment", depth, "--json")
+    assert res.returncode == 3 and "--intrinsics" in res.stderr
+    res = clear("segment", depth, "--json", "--intrinsics", "612.937 613.173 322.549 248.158",
+                "--color", src / "uois_0003_color.png")
+    assert res.returncode == 0, res.stderr
+    want = clear("segment", shared_path("scenes/uois_realsense/uois_image_0003.pcd"), "--json")
+    assert json.loads(res.stdout)["objects"] == json.loads(want.stdout)["objects"]
+    for bad in (("--intrinsics", "0 613 322 248"), ("--intrinsics", "nope.yaml"), ("--depth-scale", "0"),
+                ("--depth-scale", "nan")):
+        res = clear("segment", depth, *bad)
+        assert res.returncode == 3 and len(res.stderr.strip().splitlines()) == 1, (bad, res.stderr)
+    res = clear("segment", shared_path("scenes/uois_realsense/uois_image_0003.pcd"), "--color", src / "uois_0003_color.png")
+    assert res.returncode == 3 and "only a depth image takes a colour image" in res.stderr
