@@ -16,10 +16,17 @@ JSON schema (`clear info --json`), envelope {"schema": "clear.info", "version": 
               duration_s: float | null,
               channels: [{topic, schema, schema_encoding, message_encoding,
                           message_count, point_cloud: bool}],
-              pointcloud_topics: [str],
+              pointcloud_topics: [str] (with no point-cloud topic: the depth image topics),
               pointcloud_topic: str | null (the topic frames are read from: --topic, or the
-                                only point-cloud topic; null when none or ambiguous),
-              frame_count: int | null (messages on pointcloud_topic)}
+                                only point-cloud topic, else the only depth image topic;
+                                null when none or ambiguous),
+              frame_count: int | null (messages on pointcloud_topic),
+              image_streams: [{topic, depth: bool, encoding, width, height}] (MCAP: each
+                             image topic, from its first message)}
+    image:   (format "depth-image" only: a depth image file)
+             {width, height, depth_scale_m, valid_pixels, depth_min_m, depth_max_m,
+              intrinsics: {fx, fy, cx, cy, width, height, distortion_model, distorted,
+                           source}, color: path of the colour image | null}
     bag:     (formats "rosbag1" and "rosbag2") the same keys as `mcap` (profile "ros1" or
              "ros2"; channel schema = the message type; indexed false when a ROS 1 bag's
              index is missing and its records were scanned), plus
@@ -117,7 +124,9 @@ def _print_table(info: dict[str, Any]) -> None:
         kv.add_row("damage", f"the {'log' if info['format'] == 'mcap' else 'bag'} breaks {m['damage']}")
     if m["pointcloud_topic"]:
         n_frames = m["frame_count"]
-        kv.add_row("point cloud", f"{m['pointcloud_topic']} ({n_frames} frame{'s' if n_frames != 1 else ''})")
+        depth = any(im["topic"] == m["pointcloud_topic"] for im in m.get("image_streams", []))
+        kv.add_row("depth images" if depth else "point cloud",
+                   f"{m['pointcloud_topic']} ({n_frames} frame{'s' if n_frames != 1 else ''})")
     elif m["pointcloud_topics"]:
         kv.add_row("point cloud", f"several topics ({', '.join(m['pointcloud_topics'])}): choose with --topic")
     else:
@@ -126,6 +135,9 @@ def _print_table(info: dict[str, Any]) -> None:
         kv.add_row("frame", str(info["frame"]["index"]))
         for key, value in _frame_rows(info["frame"]):
             kv.add_row(key, value)
+    for im in m.get("image_streams", []):
+        size = f"{im['width']} x {im['height']}" if im["width"] else "?"
+        kv.add_row("image", f"{im['topic']}: {im['encoding'] or '?'}, {size}" + ("  <- depth" if im["topic"] == m["pointcloud_topic"] else ""))
     stdout.print(kv)
     channels = Table(title="channels" if info["format"] == "mcap" else "topics", title_justify="left")
     for col in ("topic", "schema" if info["format"] == "mcap" else "type", "encoding", "messages", ""):

@@ -114,6 +114,8 @@ def describe_file(path: Path, topic: str | None = None, index: int = 0, images: 
         summary = read_bag_summary(path)
         read_one = read_bag_frame
     candidates = summary.pointcloud_topics()
+    if not candidates and kind == "mcap":
+        candidates = summary.depth_topics()  # no point cloud: depth images are the frames
     chosen: str | None = None
     if topic is not None or len(candidates) == 1:
         chosen = choose_topic(summary, topic)
@@ -142,6 +144,7 @@ def describe_file(path: Path, topic: str | None = None, index: int = 0, images: 
         ],
         "pointcloud_topics": candidates,
         "pointcloud_topic": chosen,
+        "image_streams": _image_streams(path, summary) if kind == "mcap" else [],
         "frame_count": summary.count(chosen) if chosen is not None else None,
     }
     frame_part = None
@@ -149,11 +152,36 @@ def describe_file(path: Path, topic: str | None = None, index: int = 0, images: 
         if summary.count(chosen) == 0 and index == 0:
             frame_part = None  # the channel exists but holds no message yet
         else:
-            frame_part = describe_frame(read_one(path, chosen, index), index)
+            extra = {"images": images} if kind == "mcap" else {}
+            frame_part = describe_frame(read_one(path, chosen, index, **extra), index)
     if kind != "mcap":
         mcap_part["storage"] = summary.storage
         return {"file": str(path), "format": kind, "bag": mcap_part, "frame": frame_part}
     return {"file": str(path), "format": "mcap", "mcap": mcap_part, "frame": frame_part}
+
+
+def _image_streams(path: Path, summary: Any) -> list[dict[str, Any]]:
+    """Each image topic of a log: its encoding and size (from its first message), and
+    whether it is read as depth."""
+    from clearcli.io.mcap import raw_messages
+    from clearcli.io.messages import MessageDecoders, message_field
+
+    decoders = MessageDecoders()
+    streams = []
+    depth = set(summary.depth_topics())
+    for topic in summary.image_topics():
+        entry: dict[str, Any] = {"topic": topic, "depth": topic in depth, "encoding": None, "width": None, "height": None}
+        try:
+            for schema, channel, message in raw_messages(path, summary, topic):
+                msg = decoders.decode(schema, channel, message.data)
+                entry.update(encoding=str(message_field(msg, "encoding", default="")),
+                             width=int(message_field(msg, "width", default=0)),
+                             height=int(message_field(msg, "height", default=0)))
+                break
+        except Exception:  # a damaged log: the channel list says what is known
+            pass
+        streams.append(entry)
+    return streams
 
 
 def log_part(info: dict[str, Any]) -> dict[str, Any] | None:

@@ -24,6 +24,7 @@ from typing import Any, BinaryIO, Iterator
 
 from clearcli.errors import InputError, PartialLogError
 from clearcli.io.frames import Frame
+from clearcli.io.image_messages import CAMERA_INFO_SCHEMAS, COMPRESSED_SCHEMAS, IMAGE_SCHEMAS
 from clearcli.io.messages import MessageDecoders, foxglove_frame, pointcloud2_frame, schema_name
 from clearcli.io.sniff import MCAP_MAGIC, open_input
 
@@ -75,6 +76,14 @@ class McapSummary:
 
     def pointcloud_topics(self) -> list[str]:
         return [topic for topic, schema in self.topics() if schema in POINTCLOUD_SCHEMAS]
+
+    def image_topics(self) -> list[str]:
+        return [topic for topic, schema in self.topics() if schema in IMAGE_SCHEMAS]
+
+    def depth_topics(self) -> list[str]:
+        """Image topics that hold depth by the drivers' naming (RealSense
+        `.../aligned_depth_to_color/image_raw`, Azure Kinect `/depth/image_raw`)."""
+        return [t for t in self.image_topics() if "depth" in t.lower()]
 
     def count(self, topic: str) -> int:
         return sum(ch.message_count for ch in self.channels if ch.topic == topic)
@@ -204,12 +213,23 @@ def _topic_list(summary: Any) -> str:
 def choose_topic(summary: Any, topic: str | None) -> str:
     """The point-cloud topic to read: `topic` if given (checked), else the only one there is.
     ``summary``: an `McapSummary`, or a bag's summary (`clearcli.io.rosbag.BagSummary`):
-    anything with ``path``, ``topics()``, ``pointcloud_topics()`` and ``damage``."""
+    anything with ``path``, ``topics()``, ``pointcloud_topics()`` and ``damage``.
+
+    An MCAP log with no point-cloud topic may hold depth images instead: its one depth
+    image topic is read (`--topic` names it when there are several)."""
     path = summary.path
+    images = hasattr(summary, "depth_topics")
     if topic is not None:
         types = dict(summary.topics())
         if topic not in types:
             raise InputError(f"{path}: no topic {topic!r}; topics: {_topic_list(summary)}")
+        if images and types[topic] in IMAGE_SCHEMAS:
+            return topic  # a depth image topic (its encoding is checked when read)
+        if types[topic] in COMPRESSED_SCHEMAS:
+            raise InputError(
+                f"{path}: topic {topic} holds compressed images ({types[topic]}); clear reads raw depth images "
+                "(sensor_msgs/Image 16UC1 or 32FC1): record the raw topic, or decompress the log first"
+            )
         if types[topic] not in POINTCLOUD_SCHEMAS:
             raise InputError(
                 f"{path}: topic {topic} has type {types[topic] or 'unknown'}, not a point cloud "
@@ -223,8 +243,20 @@ def choose_topic(summary: Any, topic: str | None) -> str:
             f"{path}: truncated or corrupt {what}: it breaks {summary.damage} before any "
             f"point-cloud topic; topics seen: {_topic_list(summary)}"
         )
+    if not candidates and images and summary.depth_topics():
+        candidates = summary.depth_topics()
+        if len(candidates) > 1:
+            raise InputError(f"{path}: several depth image topics ({', '.join(candidates)}); choose one with --topic")
+        return candidates[0]
     if not candidates:
-        raise InputError(f"no point-cloud topic in {path}; topics: {_topic_list(summary)}")
+        compressed = [t for t, s in summary.topics() if s in COMPRESSED_SCHEMAS and "depth" in t.lower()]
+        if compressed:
+            raise InputError(
+                f"{path}: depth is recorded only compressed ({', '.join(compressed)}); clear reads raw depth images "
+                "(sensor_msgs/Image 16UC1 or 32FC1): record the raw topic, or decompress the log first"
+            )
+        hint = "; for an image topic holding depth, name it with --topic" if images and summary.image_topics() else ""
+        raise InputError(f"no point-cloud topic in {path}; topics: {_topic_list(summary)}{hint}")
     if len(candidates) > 1:
         raise InputError(
             f"{path}: several point-cloud topics ({', '.join(candidates)}); choose one with --topic"
@@ -235,9 +267,15 @@ def choose_topic(summary: Any, topic: str | None) -> str:
 # --- decoding -------------------------------------------------------------------------
 
 
-def _message_frame(decoders: MessageDecoders, schema: Any, channel: Any, message: Any, index: int, path: Path) -> Frame:
+def _message_frame(decoders: MessageDecoders, schema: Any, channel: Any, message: Any, index: int, path: Path,
+                   images: Any = None, summary: "McapSummary | None" = None) -> Frame:
     source = f"{path.name}#{index} {channel.topic}"
     msg = decoders.decode(schema, channel, message.data)
+    if schema_name(schema) in IMAGE_SCHEMAS:
+        from clearcli.io.mcap_images import depth_frame
+
+        assert summary is not None
+        return depth_frame(path, summary, decoders, channel.topic, msg, message.log_time, source, images)
     if schema_name(schema) in POINTCLOUD2_SCHEMAS:
         return pointcloud2_frame(msg, message.log_time, source)
     return foxglove_frame(msg, message.log_time, source)
@@ -287,7 +325,7 @@ def _raise_damage(path: Path, topic: str, complete: int, reason: str) -> None:
     )
 
 
-def iter_mcap_frames(path: Path, topic: str | None = None) -> Iterator[Frame]:
+def iter_mcap_frames(path: Path, topic: str | None = None, images: Any = None) -> Iterator[Frame]:
     """Every frame of the point-cloud topic, decoded one message at a time."""
     path = Path(path)
     summary = read_summary(path)
@@ -295,8 +333,8 @@ def iter_mcap_frames(path: Path, topic: str | None = None) -> Iterator[Frame]:
     decoders = MessageDecoders()
     for index, schema, channel, message in _guarded(path, summary, topic):
         try:
-            frame = _message_frame(decoders, schema, channel, message, index, path)
-        except Exception as exc:
+            frame = _message_frame(decoders, schema, channel, message, index, path, images, summary)
+        except Exception as exc:  # bad input included: exit 3 at the first frame, 9 after complete ones
             _raise_damage(path, topic, index, f"message {index} cannot be decoded: {error_reason(exc)}")
         yield frame
 
@@ -312,7 +350,7 @@ def require_frame_index(path: Path, summary: McapSummary, topic: str, index: int
         )
 
 
-def read_mcap_frame(path: Path, topic: str | None = None, index: int = 0) -> Frame:
+def read_mcap_frame(path: Path, topic: str | None = None, index: int = 0, images: Any = None) -> Frame:
     """Frame `index` (from 0) of the point-cloud topic; only that message is decoded."""
     path = Path(path)
     summary = read_summary(path)
@@ -324,7 +362,9 @@ def read_mcap_frame(path: Path, topic: str | None = None, index: int = 0) -> Fra
         seen = i + 1
         if i == index:
             try:
-                return _message_frame(decoders, schema, channel, message, index, path)
+                return _message_frame(decoders, schema, channel, message, index, path, images, summary)
+            except InputError:
+                raise
             except Exception as exc:
                 raise InputError(f"{path}: frame {index} of {topic} cannot be decoded ({error_reason(exc)})") from None
     if summary.damage is not None:

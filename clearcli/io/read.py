@@ -61,7 +61,7 @@ def read_frame(
         return read_bag_frame(path, topic, index)
     from clearcli.io.mcap import read_mcap_frame
 
-    return read_mcap_frame(path, topic, index)
+    return read_mcap_frame(path, topic, index, images)
 
 
 def iter_frames(path: Path, topic: str | None = None, images: "ImageSettings | None" = None) -> Iterator[Frame]:
@@ -85,7 +85,7 @@ def iter_frames(path: Path, topic: str | None = None, images: "ImageSettings | N
         return
     from clearcli.io.mcap import iter_mcap_frames
 
-    yield from iter_mcap_frames(path, topic)
+    yield from iter_mcap_frames(path, topic, images)
 
 
 def require_finite(frame: Frame, min_points: int = 1) -> Frame:

@@ -62,3 +62,19 @@ def test_single_frame_flags_intrinsics_color_and_depth_scale(tmp_path: Path) -> 
         assert res.returncode == 3 and len(res.stderr.strip().splitlines()) == 1, (bad, res.stderr)
     res = clear("segment", shared_path("scenes/uois_realsense/uois_image_0003.pcd"), "--color", src / "uois_0003_color.png")
     assert res.returncode == 3 and "only a depth image takes a colour image" in res.stderr
+
+
+def test_plan_and_replay_read_the_rgbd_recording() -> None:
+    log = shared_path("rgbd/uois_realsense_ros2.mcap")
+    res = clear("plan", log, "--frame", "3", "--json")
+    want = clear("plan", shared_path("scenes/uois_realsense/uois_image_0003.pcd"), "--json")
+    assert res.returncode == want.returncode, res.stderr
+    got, expected = json.loads(res.stdout), json.loads(want.stdout)
+    assert got["actions"] == expected["actions"] and got["left"] == expected["left"]
+    res = clear("replay", log, "--json")
+    assert res.returncode == 0, res.stderr
+    lines = [json.loads(x) for x in res.stdout.splitlines()]
+    assert lines[-1]["frames"] == 9 and len(lines) == 10
+    res = clear("info", log, "--json")
+    streams = json.loads(res.stdout)["mcap"]["image_streams"]
+    assert {(s["encoding"], s["depth"]) for s in streams} == {("16UC1", True), ("rgb8", False)}

@@ -1,0 +1,155 @@
+"""A depth image message of an MCAP log -> a `Frame`, with its camera info and its colour.
+
+Depth images come with their `CameraInfo` on the sibling `camera_info` topic (the
+drivers' layout: `.../image_raw` beside `.../camera_info`); the camera info recorded last
+before the image is used (a log may start with the image: then the first one). Colour is
+attached only when a colour image of the same time stamp is *registered* to the depth:
+the same frame id, as a driver's `aligned_depth_to_color` gives, and the same size. A
+colour stream in another frame (unregistered) is left out with a note on stderr, never
+painted on wrongly.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from clearcli.errors import InputError
+from clearcli.io.frames import Frame
+from clearcli.io.image_messages import CAMERA_INFO_SCHEMAS, IMAGE_SCHEMAS, camera_model, color_rgb, depth_m, header_of, stamp_ns
+from clearcli.io.messages import _stamp_s
+
+if TYPE_CHECKING:
+    from clearcli.io.mcap import McapSummary
+    from clearcli.io.messages import MessageDecoders
+
+# Colour within this log time of its depth image is looked at for a stamp that matches
+# exactly (drivers publish the pair within milliseconds; a log's order may interleave).
+_COLOR_WINDOW_NS = 1_000_000_000
+_noted: set[tuple[str, str]] = set()
+# (log path, camera info topic, mtime, size) -> [(log time ns, CameraModel)], read once per log
+_infos: dict[tuple[str, str, int, int], list[tuple[int, Any]]] = {}
+
+
+def _note(path: Path, text: str) -> None:
+    """Say ``text`` on stderr once per log (a replay reads hundreds of frames)."""
+    if (str(path), text) in _noted:
+        return
+    _noted.add((str(path), text))
+    from clearcli.console import stderr
+
+    stderr.print(f"clear: note: {path.name}: {text}", markup=False, highlight=False)
+
+
+def camera_info_topic(summary: "McapSummary", depth_topic: str) -> str:
+    """The camera info of ``depth_topic``: its sibling `camera_info`, else the one camera
+    info topic in the same namespace."""
+    types = dict(summary.topics())
+    parent = depth_topic.rsplit("/", 1)[0]
+    sibling = f"{parent}/camera_info"
+    if types.get(sibling) in CAMERA_INFO_SCHEMAS:
+        return sibling
+    near = [t for t, s in types.items() if s in CAMERA_INFO_SCHEMAS and t.startswith(parent + "/")]
+    if len(near) == 1:
+        return near[0]
+    infos = [t for t, s in types.items() if s in CAMERA_INFO_SCHEMAS]
+    raise InputError(
+        f"{summary.path}: no camera info for the depth images on {depth_topic} (expected {sibling}"
+        + (f"; camera info topics: {', '.join(infos)}" if infos else "; the log holds none")
+        + "); record the camera_info topic with the images"
+    )
+
+
+def _camera_at(path: Path, summary: "McapSummary", decoders: "MessageDecoders", topic: str, log_time_ns: int) -> Any:
+    from clearcli.io.mcap import raw_messages
+
+    try:
+        st = path.stat()
+        key = (str(path.resolve()), topic, st.st_mtime_ns, st.st_size)  # a rewritten log is read again
+    except OSError:
+        key = (str(path), topic, 0, 0)
+    if key not in _infos:
+        models: list[tuple[int, Any]] = []
+        for schema, channel, message in raw_messages(path, summary, topic):
+            msg = decoders.decode(schema, channel, message.data)
+            models.append((int(message.log_time), camera_model(msg, f"{path.name} {topic}")))
+        _infos[key] = sorted(models, key=lambda m: m[0])
+    models = _infos[key]
+    if not models:
+        raise InputError(f"{path}: {topic} holds no message; the depth images have no camera info")
+    before = [m for t, m in models if t <= log_time_ns]
+    return before[-1] if before else models[0][1]
+
+
+def _color_topics(summary: "McapSummary", depth_topic: str) -> list[str]:
+    """Colour image topics, those named colour/rgb first."""
+    others = [t for t in summary.image_topics() if t != depth_topic and "depth" not in t.lower()]
+    return sorted(others, key=lambda t: not any(w in t.lower() for w in ("color", "colour", "rgb")))
+
+
+def _registered_color(
+    path: Path, summary: "McapSummary", decoders: "MessageDecoders", depth_topic: str, frame_id: str,
+    depth_stamp_ns: int, log_time_ns: int, shape: tuple[int, int],
+) -> np.ndarray | None:
+    topics = _color_topics(summary, depth_topic)
+    if not topics:
+        return None
+    if not summary.indexed:
+        _note(path, "the log has no index: colour is left out (depth only)")
+        return None
+    from mcap.reader import SeekingReader
+
+    from clearcli.io.mcap import _open
+
+    with _open(path) as fp:
+        reader = SeekingReader(fp)
+        for topic in topics:
+            for schema, channel, message in reader.iter_messages(
+                topics=[topic], starting_at=max(0, log_time_ns - _COLOR_WINDOW_NS), ending_at=log_time_ns + _COLOR_WINDOW_NS
+            ):
+                if schema is None or schema.name not in IMAGE_SCHEMAS:
+                    continue
+                msg = decoders.decode(schema, channel, message.data)
+                if stamp_ns(msg, int(message.log_time)) != depth_stamp_ns:
+                    continue
+                color_frame = header_of(msg)[1]
+                if color_frame != frame_id:
+                    _note(path, f"colour on {topic} is in frame {color_frame!r}, not registered to the depth "
+                                f"({frame_id!r}): left out; record aligned depth (aligned_depth_to_color) for colour")
+                    return None
+                rgb = color_rgb(msg, f"{path.name} {topic}")
+                if rgb is None:
+                    continue
+                if rgb.shape[:2] != shape:
+                    _note(path, f"colour on {topic} is {rgb.shape[1]} x {rgb.shape[0]}, the depth "
+                                f"{shape[1]} x {shape[0]}: not registered, left out")
+                    return None
+                return rgb
+    return None
+
+
+def depth_frame(
+    path: Path, summary: "McapSummary", decoders: "MessageDecoders", topic: str, msg: Any, log_time_ns: int,
+    source: str, images: Any = None,
+) -> Frame:
+    """The organized frame of one depth image message (see the module)."""
+    from clearcli.io.images import _settings
+    from clearcli.io.intrinsics import back_project
+
+    images = _settings(images)
+    depth = depth_m(msg, source, images.depth_scale_m)
+    h, w = depth.shape
+    model = _camera_at(path, summary, decoders, camera_info_topic(summary, topic), log_time_ns)
+    model.check_size(w, h, f"the depth image {source}")
+    stamp, frame_id = header_of(msg)
+    colors = _registered_color(path, summary, decoders, topic, frame_id, stamp_ns(msg, log_time_ns), log_time_ns, (h, w))
+    return Frame(
+        points=back_project(depth, model),
+        colors=None if colors is None else colors.reshape(-1, 3),
+        shape=(h, w),
+        stamp_s=_stamp_s(stamp, log_time_ns),
+        frame_id=frame_id,
+        source=source,
+    )
