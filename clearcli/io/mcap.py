@@ -275,7 +275,7 @@ def _message_frame(decoders: MessageDecoders, schema: Any, channel: Any, message
         from clearcli.io.mcap_images import depth_frame
 
         assert summary is not None
-        return depth_frame(path, summary, decoders, channel.topic, msg, message.log_time, source, images)
+        return depth_frame(LogAccess(path, summary), decoders, channel.topic, msg, message.log_time, source, images)
     if schema_name(schema) in POINTCLOUD2_SCHEMAS:
         return pointcloud2_frame(msg, message.log_time, source)
     return foxglove_frame(msg, message.log_time, source)
@@ -297,6 +297,24 @@ def raw_messages(path: Path, summary: McapSummary, topic: str) -> Iterator[tuple
             reader = NonSeekingReader(fp)
             # File order: sorting by log time would hold the whole log in memory.
             yield from reader.iter_messages(topics=[topic], log_time_order=False)
+
+
+class LogAccess:
+    """A log's messages by topic, for readers that pair messages of several topics (a
+    depth image with its camera info and colour: clearcli/io/mcap_images.py)."""
+
+    def __init__(self, path: Path, summary: McapSummary) -> None:
+        self.path, self.summary = path, summary
+
+    def messages(self, topic: str) -> Iterator[tuple[Any, Any, Any]]:
+        return raw_messages(self.path, self.summary, topic)
+
+    def window(self, topic: str, start_ns: int, end_ns: int) -> Iterator[tuple[Any, Any, Any]]:
+        """Messages of ``topic`` logged in [start_ns, end_ns] (an indexed log: seeks)."""
+        from mcap.reader import SeekingReader
+
+        with _open(self.path) as fp:
+            yield from SeekingReader(fp).iter_messages(topics=[topic], starting_at=start_ns, ending_at=end_ns)
 
 
 def _guarded(path: Path, summary: McapSummary, topic: str) -> Iterator[tuple[int, Any, Any, Any]]:

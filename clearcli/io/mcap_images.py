@@ -11,6 +11,7 @@ painted on wrongly.
 
 from __future__ import annotations
 
+from contextlib import closing
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -22,7 +23,7 @@ from clearcli.io.image_messages import CAMERA_INFO_SCHEMAS, IMAGE_SCHEMAS, camer
 from clearcli.io.messages import _stamp_s
 
 if TYPE_CHECKING:
-    from clearcli.io.mcap import McapSummary
+    from clearcli.io.mcap import LogAccess, McapSummary
     from clearcli.io.messages import MessageDecoders
 
 # Colour within this log time of its depth image is looked at for a stamp that matches
@@ -62,9 +63,8 @@ def camera_info_topic(summary: "McapSummary", depth_topic: str) -> str:
     )
 
 
-def _camera_at(path: Path, summary: "McapSummary", decoders: "MessageDecoders", topic: str, log_time_ns: int) -> Any:
-    from clearcli.io.mcap import raw_messages
-
+def _camera_at(log: "LogAccess", decoders: "MessageDecoders", topic: str, log_time_ns: int) -> Any:
+    path = log.path
     try:
         st = path.stat()
         key = (str(path.resolve()), topic, st.st_mtime_ns, st.st_size)  # a rewritten log is read again
@@ -72,7 +72,7 @@ def _camera_at(path: Path, summary: "McapSummary", decoders: "MessageDecoders", 
         key = (str(path), topic, 0, 0)
     if key not in _infos:
         models: list[tuple[int, Any]] = []
-        for schema, channel, message in raw_messages(path, summary, topic):
+        for schema, channel, message in log.messages(topic):
             msg = decoders.decode(schema, channel, message.data)
             models.append((int(message.log_time), camera_model(msg, f"{path.name} {topic}")))
         _infos[key] = sorted(models, key=lambda m: m[0])
@@ -90,25 +90,19 @@ def _color_topics(summary: "McapSummary", depth_topic: str) -> list[str]:
 
 
 def _registered_color(
-    path: Path, summary: "McapSummary", decoders: "MessageDecoders", depth_topic: str, frame_id: str,
+    log: "LogAccess", decoders: "MessageDecoders", depth_topic: str, frame_id: str,
     depth_stamp_ns: int, log_time_ns: int, shape: tuple[int, int],
 ) -> np.ndarray | None:
+    path, summary = log.path, log.summary
     topics = _color_topics(summary, depth_topic)
     if not topics:
         return None
     if not summary.indexed:
         _note(path, "the log has no index: colour is left out (depth only)")
         return None
-    from mcap.reader import SeekingReader
-
-    from clearcli.io.mcap import _open
-
-    with _open(path) as fp:
-        reader = SeekingReader(fp)
-        for topic in topics:
-            for schema, channel, message in reader.iter_messages(
-                topics=[topic], starting_at=max(0, log_time_ns - _COLOR_WINDOW_NS), ending_at=log_time_ns + _COLOR_WINDOW_NS
-            ):
+    for topic in topics:
+        with closing(log.window(topic, max(0, log_time_ns - _COLOR_WINDOW_NS), log_time_ns + _COLOR_WINDOW_NS)) as window:
+            for schema, channel, message in window:
                 if schema is None or schema.name not in IMAGE_SCHEMAS:
                     continue
                 msg = decoders.decode(schema, channel, message.data)
@@ -131,7 +125,7 @@ def _registered_color(
 
 
 def depth_frame(
-    path: Path, summary: "McapSummary", decoders: "MessageDecoders", topic: str, msg: Any, log_time_ns: int,
+    log: "LogAccess", decoders: "MessageDecoders", topic: str, msg: Any, log_time_ns: int,
     source: str, images: Any = None,
 ) -> Frame:
     """The organized frame of one depth image message (see the module)."""
@@ -141,10 +135,10 @@ def depth_frame(
     images = _settings(images)
     depth = depth_m(msg, source, images.depth_scale_m)
     h, w = depth.shape
-    model = _camera_at(path, summary, decoders, camera_info_topic(summary, topic), log_time_ns)
+    model = _camera_at(log, decoders, camera_info_topic(log.summary, topic), log_time_ns)
     model.check_size(w, h, f"the depth image {source}")
     stamp, frame_id = header_of(msg)
-    colors = _registered_color(path, summary, decoders, topic, frame_id, stamp_ns(msg, log_time_ns), log_time_ns, (h, w))
+    colors = _registered_color(log, decoders, topic, frame_id, stamp_ns(msg, log_time_ns), log_time_ns, (h, w))
     return Frame(
         points=back_project(depth, model),
         colors=None if colors is None else colors.reshape(-1, 3),
