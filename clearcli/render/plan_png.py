@@ -13,7 +13,11 @@ from typing import Any
 import numpy as np
 
 
-def render_plan(path: Path, frame: Any, state: Any, plan: Any) -> None:
+def render_plan(path: Path, frame: Any, state: Any, plan: Any, seg: Any = None) -> None:
+    """Write the plan picture at ``path``: the objects from above in the robot's base
+    frame, coloured by what the plan does with them, pushes as arrows; beside it, when
+    the frame has colour and ``seg`` is given, the camera's picture with the same
+    objects outlined in the same colours and named with their plan steps."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -24,7 +28,13 @@ def render_plan(path: Path, frame: Any, state: Any, plan: Any) -> None:
 
     T = plan.T_base_camera if plan.T_base_camera is not None else np.eye(4)
     R, t = T[:3, :3], T[:3, 3]
-    fig, ax = plt.subplots(figsize=(7, 7), dpi=110)
+    from clearcli.render.camera import has_camera_picture
+
+    with_camera = seg is not None and has_camera_picture(frame)
+    if with_camera:
+        fig, (ax_cam, ax) = plt.subplots(1, 2, figsize=(14, 7), dpi=110)
+    else:
+        fig, ax = plt.subplots(figsize=(7, 7), dpi=110)
     poly = np.asarray(state.table_polygon, dtype=float).reshape(-1, 3) @ R.T + t
     if len(poly) >= 3:
         ax.fill(poly[:, 0], poly[:, 1], color="#e8e2d0", zorder=0, label="table")
@@ -55,6 +65,18 @@ def render_plan(path: Path, frame: Any, state: Any, plan: Any) -> None:
         c = xy.mean(axis=0)
         label = obj.name + (f" [{','.join(steps[obj.name])}]" if obj.name in steps else "")
         ax.text(c[0], c[1], label, ha="center", va="center", fontsize=8, zorder=4)
+    if with_camera:
+        from matplotlib.colors import to_rgb
+
+        from clearcli.render.camera import draw_camera_view
+
+        objs = [o for o in state.objects if 0 <= o.segment_index < len(seg.objects)]
+        draw_camera_view(
+            ax_cam, frame, [seg.objects[o.segment_index].indices for o in objs],
+            [to_rgb(colours.get(o.name, "#3a6ea5")) for o in objs],
+            [o.name + (f" [{','.join(steps[o.name])}]" if o.name in steps else "") for o in objs],
+        )
+        ax_cam.set_title("camera view (colour; objects outlined, [plan steps])", fontsize=9)
     for i, a in enumerate(plan.actions, 1):
         if a.kind != "push":
             continue

@@ -46,8 +46,17 @@ def render_segmentation(path: Path, frame: Frame, seg: Segmentation, title: str 
     finite = np.isfinite(frame.points).all(axis=1)
     fig, (ax_cam, ax_top) = plt.subplots(1, 2, figsize=(13, 5.2), dpi=100)
 
-    # camera view
-    if frame.shape is not None and frame.shape[0] > 1:
+    # camera view: the colour image with the segments outlined, when the frame has one
+    from clearcli.render.camera import draw_camera_view, has_camera_picture
+
+    palette = _object_colors(n_obj)
+    if has_camera_picture(frame):
+        draw_camera_view(
+            ax_cam, frame, [o.indices for o in seg.objects],
+            [palette[k % palette.shape[0]] for k in range(n_obj)], [str(k) for k in range(n_obj)],
+        )
+        ax_cam.set_title("camera view (colour, segments outlined)")
+    elif frame.shape is not None and frame.shape[0] > 1:
         h, w = frame.shape
         img = cols.reshape(h, w, 3).copy()
         img[~finite.reshape(h, w)] = 1.0
@@ -65,7 +74,7 @@ def render_segmentation(path: Path, frame: Frame, seg: Segmentation, title: str 
             ax_cam.set_title("x-y view")
         ax_cam.set_aspect("equal")
     for k, obj in enumerate(seg.objects):
-        if frame.shape is not None and frame.shape[0] > 1:
+        if frame.shape is not None and frame.shape[0] > 1 and not has_camera_picture(frame):
             rows, cols_ = np.divmod(obj.indices, frame.shape[1])
             ax_cam.text(cols_.mean(), rows.mean(), str(k), ha="center", va="center", fontsize=9, weight="bold")
     if not ax_cam.get_title():

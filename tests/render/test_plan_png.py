@@ -26,7 +26,8 @@ def test_plan_picture_draws_the_table_and_the_objects_it_removes(tmp_path: Path)
     out = task.run(task.Request(Settings(), outputs=Outputs.of(png=png)), Source(str(FIXTURES / "two_touching_boxes.pcd")))
     assert out.payload["status"] == "complete" and len(out.payload["goal"]) == 2
     img = matplotlib.image.imread(png)
-    assert img.shape[:2] == (770, 770)  # 7 x 7 inches at 110 dpi
+    # the fixture has colour: the camera's picture (7 x 7 inches) beside the top view (7 x 7) at 110 dpi
+    assert img.shape[:2] == (770, 1540)
     assert _pixels_near(img, TABLE_RGB) > 2000
     # both boxes in the goal's colour, drawn at alpha 0.75 over the table
     over_table = tuple(0.75 * g + 0.25 * t for g, t in zip(GOAL_RGB, TABLE_RGB))

@@ -36,5 +36,7 @@ def test_picture_shows_the_object_in_its_colour(tmp_path: Path) -> None:
     assert len(out.payload["objects"]) == 1 and out.written == (png,)
     img = matplotlib.image.imread(png)
     assert img.shape[:2] == (520, 1300)  # 13 x 5.2 inches at 100 dpi
-    assert _pixels_near(img, TAB20_FIRST) > 500  # the box, in object 0's colour
+    # the box in object 0's colour: filled in the top view, outlined over the camera's
+    # own colours in the camera view (the fixture has colour)
+    assert _pixels_near(img, TAB20_FIRST) > 200
     assert _pixels_near(img, (0.78, 0.78, 0.78)) > 5000  # the table
