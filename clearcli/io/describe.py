@@ -103,18 +103,21 @@ def describe_file(path: Path, topic: str | None = None, index: int = 0, images: 
 
     # A log (MCAP) or a bag: the same summary attributes, topic rules and frame reading.
     if kind == "mcap":
-        from clearcli.io.mcap import choose_topic, read_mcap_frame, read_summary
+        from clearcli.io.mcap import LogAccess, choose_topic, read_mcap_frame, read_summary
 
         summary: Any = read_summary(path)
         read_one: Any = read_mcap_frame
+        access: Any = LogAccess(path, summary)
     else:
+        from clearcli.io.bag_messages import BagDecoders
+        from clearcli.io.rosbag import BagAccess, read_bag_frame, read_bag_summary
         from clearcli.io.rosbag import choose_bag_topic as choose_topic  # type: ignore[assignment]
-        from clearcli.io.rosbag import read_bag_frame, read_bag_summary
 
         summary = read_bag_summary(path)
         read_one = read_bag_frame
+        access = BagAccess(summary, BagDecoders(ros1=summary.format == "rosbag1"))
     candidates = summary.pointcloud_topics()
-    if not candidates and kind == "mcap":
+    if not candidates:
         candidates = summary.depth_topics()  # no point cloud: depth images are the frames
     chosen: str | None = None
     if topic is not None or len(candidates) == 1:
@@ -144,7 +147,7 @@ def describe_file(path: Path, topic: str | None = None, index: int = 0, images: 
         ],
         "pointcloud_topics": candidates,
         "pointcloud_topic": chosen,
-        "image_streams": _image_streams(path, summary) if kind == "mcap" else [],
+        "image_streams": _image_streams(access),
         "frame_count": summary.count(chosen) if chosen is not None else None,
     }
     frame_part = None
@@ -152,28 +155,25 @@ def describe_file(path: Path, topic: str | None = None, index: int = 0, images: 
         if summary.count(chosen) == 0 and index == 0:
             frame_part = None  # the channel exists but holds no message yet
         else:
-            extra = {"images": images} if kind == "mcap" else {}
-            frame_part = describe_frame(read_one(path, chosen, index, **extra), index)
+            frame_part = describe_frame(read_one(path, chosen, index, images), index)
     if kind != "mcap":
         mcap_part["storage"] = summary.storage
         return {"file": str(path), "format": kind, "bag": mcap_part, "frame": frame_part}
     return {"file": str(path), "format": "mcap", "mcap": mcap_part, "frame": frame_part}
 
 
-def _image_streams(path: Path, summary: Any) -> list[dict[str, Any]]:
-    """Each image topic of a log: its encoding and size (from its first message), and
-    whether it is read as depth."""
-    from clearcli.io.mcap import raw_messages
-    from clearcli.io.messages import MessageDecoders, message_field
+def _image_streams(access: Any) -> list[dict[str, Any]]:
+    """Each image topic of a log or bag: its encoding and size (from its first message),
+    and whether it is read as depth."""
+    from clearcli.io.messages import message_field
 
-    decoders = MessageDecoders()
     streams = []
+    summary = access.summary
     depth = set(summary.depth_topics())
     for topic in summary.image_topics():
         entry: dict[str, Any] = {"topic": topic, "depth": topic in depth, "encoding": None, "width": None, "height": None}
         try:
-            for schema, channel, message in raw_messages(path, summary, topic):
-                msg = decoders.decode(schema, channel, message.data)
+            for _, msg, _ in access.decoded(topic):
                 entry.update(encoding=str(message_field(msg, "encoding", default="")),
                              width=int(message_field(msg, "width", default=0)),
                              height=int(message_field(msg, "height", default=0)))

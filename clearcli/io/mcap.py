@@ -275,7 +275,7 @@ def _message_frame(decoders: MessageDecoders, schema: Any, channel: Any, message
         from clearcli.io.mcap_images import depth_frame
 
         assert summary is not None
-        return depth_frame(LogAccess(path, summary), decoders, channel.topic, msg, message.log_time, source, images)
+        return depth_frame(LogAccess(path, summary, decoders), channel.topic, msg, message.log_time, source, images)
     if schema_name(schema) in POINTCLOUD2_SCHEMAS:
         return pointcloud2_frame(msg, message.log_time, source)
     return foxglove_frame(msg, message.log_time, source)
@@ -300,21 +300,29 @@ def raw_messages(path: Path, summary: McapSummary, topic: str) -> Iterator[tuple
 
 
 class LogAccess:
-    """A log's messages by topic, for readers that pair messages of several topics (a
-    depth image with its camera info and colour: clearcli/io/mcap_images.py)."""
+    """A log's decoded messages by topic, for readers that pair messages of several
+    topics (a depth image with its camera info and colour: clearcli/io/mcap_images.py).
+    The bag readers offer the same (`clearcli.io.rosbag.BagAccess`)."""
 
-    def __init__(self, path: Path, summary: McapSummary) -> None:
+    def __init__(self, path: Path, summary: McapSummary, decoders: MessageDecoders | None = None) -> None:
         self.path, self.summary = path, summary
+        self.decoders = decoders or MessageDecoders()
+        self.can_seek = summary.indexed
 
-    def messages(self, topic: str) -> Iterator[tuple[Any, Any, Any]]:
-        return raw_messages(self.path, self.summary, topic)
+    def decoded(self, topic: str) -> Iterator[tuple[str, Any, int]]:
+        """(schema name, message, log time ns) of ``topic``."""
+        for schema, channel, message in raw_messages(self.path, self.summary, topic):
+            yield schema_name(schema), self.decoders.decode(schema, channel, message.data), int(message.log_time)
 
-    def window(self, topic: str, start_ns: int, end_ns: int) -> Iterator[tuple[Any, Any, Any]]:
-        """Messages of ``topic`` logged in [start_ns, end_ns] (an indexed log: seeks)."""
+    def window(self, topic: str, start_ns: int, end_ns: int) -> Iterator[tuple[str, Any, int]]:
+        """The same for messages logged in [start_ns, end_ns] (seeks: the log is indexed)."""
         from mcap.reader import SeekingReader
 
         with _open(self.path) as fp:
-            yield from SeekingReader(fp).iter_messages(topics=[topic], starting_at=start_ns, ending_at=end_ns)
+            for schema, channel, message in SeekingReader(fp).iter_messages(
+                topics=[topic], starting_at=start_ns, ending_at=end_ns
+            ):
+                yield schema_name(schema), self.decoders.decode(schema, channel, message.data), int(message.log_time)
 
 
 def _guarded(path: Path, summary: McapSummary, topic: str) -> Iterator[tuple[int, Any, Any, Any]]:

@@ -1,4 +1,7 @@
-"""A depth image message of an MCAP log -> a `Frame`, with its camera info and its colour.
+"""A depth image message of a log (MCAP, ROS 1 bag, rosbag2) -> a `Frame`, with its
+camera info and its colour. The log is reached through an access value (`decoded(topic)`,
+`window(topic, start, end)`, `can_seek`, `path`, `summary`): clearcli.io.mcap.LogAccess,
+clearcli.io.rosbag.BagAccess.
 
 Depth images come with their `CameraInfo` on the sibling `camera_info` topic (the
 drivers' layout: `.../image_raw` beside `.../camera_info`); the camera info recorded last
@@ -24,7 +27,6 @@ from clearcli.io.messages import _stamp_s
 
 if TYPE_CHECKING:
     from clearcli.io.mcap import LogAccess, McapSummary
-    from clearcli.io.messages import MessageDecoders
 
 # Colour within this log time of its depth image is looked at for a stamp that matches
 # exactly (drivers publish the pair within milliseconds; a log's order may interleave).
@@ -63,7 +65,7 @@ def camera_info_topic(summary: "McapSummary", depth_topic: str) -> str:
     )
 
 
-def _camera_at(log: "LogAccess", decoders: "MessageDecoders", topic: str, log_time_ns: int) -> Any:
+def _camera_at(log: "LogAccess", topic: str, log_time_ns: int) -> Any:
     path = log.path
     try:
         st = path.stat()
@@ -72,9 +74,8 @@ def _camera_at(log: "LogAccess", decoders: "MessageDecoders", topic: str, log_ti
         key = (str(path), topic, 0, 0)
     if key not in _infos:
         models: list[tuple[int, Any]] = []
-        for schema, channel, message in log.messages(topic):
-            msg = decoders.decode(schema, channel, message.data)
-            models.append((int(message.log_time), camera_model(msg, f"{path.name} {topic}")))
+        for _, msg, log_time in log.decoded(topic):
+            models.append((log_time, camera_model(msg, f"{path.name} {topic}")))
         _infos[key] = sorted(models, key=lambda m: m[0])
     models = _infos[key]
     if not models:
@@ -90,23 +91,22 @@ def _color_topics(summary: "McapSummary", depth_topic: str) -> list[str]:
 
 
 def _registered_color(
-    log: "LogAccess", decoders: "MessageDecoders", depth_topic: str, frame_id: str,
+    log: "LogAccess", depth_topic: str, frame_id: str,
     depth_stamp_ns: int, log_time_ns: int, shape: tuple[int, int],
 ) -> np.ndarray | None:
     path, summary = log.path, log.summary
     topics = _color_topics(summary, depth_topic)
     if not topics:
         return None
-    if not summary.indexed:
+    if not log.can_seek:
         _note(path, "the log has no index: colour is left out (depth only)")
         return None
     for topic in topics:
         with closing(log.window(topic, max(0, log_time_ns - _COLOR_WINDOW_NS), log_time_ns + _COLOR_WINDOW_NS)) as window:
-            for schema, channel, message in window:
-                if schema is None or schema.name not in IMAGE_SCHEMAS:
+            for schema, msg, log_time in window:
+                if schema not in IMAGE_SCHEMAS:
                     continue
-                msg = decoders.decode(schema, channel, message.data)
-                if stamp_ns(msg, int(message.log_time)) != depth_stamp_ns:
+                if stamp_ns(msg, log_time) != depth_stamp_ns:
                     continue
                 color_frame = header_of(msg)[1]
                 if color_frame != frame_id:
@@ -125,7 +125,7 @@ def _registered_color(
 
 
 def depth_frame(
-    log: "LogAccess", decoders: "MessageDecoders", topic: str, msg: Any, log_time_ns: int,
+    log: "LogAccess", topic: str, msg: Any, log_time_ns: int,
     source: str, images: Any = None,
 ) -> Frame:
     """The organized frame of one depth image message (see the module)."""
@@ -135,10 +135,10 @@ def depth_frame(
     images = _settings(images)
     depth = depth_m(msg, source, images.depth_scale_m)
     h, w = depth.shape
-    model = _camera_at(log, decoders, camera_info_topic(log.summary, topic), log_time_ns)
+    model = _camera_at(log, camera_info_topic(log.summary, topic), log_time_ns)
     model.check_size(w, h, f"the depth image {source}")
     stamp, frame_id = header_of(msg)
-    colors = _registered_color(log, decoders, topic, frame_id, stamp_ns(msg, log_time_ns), log_time_ns, (h, w))
+    colors = _registered_color(log, topic, frame_id, stamp_ns(msg, log_time_ns), log_time_ns, (h, w))
     return Frame(
         points=back_project(depth, model),
         colors=None if colors is None else colors.reshape(-1, 3),

@@ -58,7 +58,7 @@ def read_frame(
     if kind in ("rosbag1", "rosbag2"):
         from clearcli.io.rosbag import read_bag_frame
 
-        return read_bag_frame(path, topic, index)
+        return read_bag_frame(path, topic, index, images)
     from clearcli.io.mcap import read_mcap_frame
 
     return read_mcap_frame(path, topic, index, images)
@@ -81,7 +81,7 @@ def iter_frames(path: Path, topic: str | None = None, images: "ImageSettings | N
     if kind in ("rosbag1", "rosbag2"):
         from clearcli.io.rosbag import iter_bag_frames
 
-        yield from iter_bag_frames(path, topic)
+        yield from iter_bag_frames(path, topic, images)
         return
     from clearcli.io.mcap import iter_mcap_frames
 

@@ -36,7 +36,8 @@ import numpy as np
 from clearcli.errors import InputError, PartialLogError
 from clearcli.io.frames import Frame
 from clearcli.io.mcap import ChannelInfo, McapSummary, error_reason, require_frame_index
-from clearcli.io.bag_messages import BagDecoders, bag_frame
+from clearcli.io.bag_messages import BagDecoders, _ZeroCopy, bag_frame
+from clearcli.io.image_messages import IMAGE_SCHEMAS
 from clearcli.io.messages import quat_matrix
 from clearcli.io.ros1 import Damage, Ros1Msg, Ros1Stream
 from clearcli.io.sniff import ROSBAG1_MAGIC, ROSBAG2_METADATA, open_input
@@ -368,12 +369,47 @@ def _guarded(summary: BagSummary, topic: str, skip_to: int = 0) -> Iterator[tupl
         it.close()
 
 
-def _decode(decoders: BagDecoders, summary: BagSummary, topic: str, index: int, raw: _Raw) -> Frame:
+class BagAccess:
+    """A bag's decoded messages by topic (what `clearcli.io.mcap.LogAccess` is for a log),
+    for a depth image's camera info and colour (clearcli/io/mcap_images.py)."""
+
+    def __init__(self, summary: BagSummary, decoders: BagDecoders) -> None:
+        self.path, self.summary, self.decoders = summary.path, summary, decoders
+        self.can_seek = summary.format == "rosbag2" or summary.indexed
+
+    def _decoded(self, msgtype: str, msgdef: str, fmt: str, data: Any, time_ns: int) -> tuple[str, Any, int]:
+        return msgtype, _ZeroCopy(self.decoders.decode(msgtype, msgdef, fmt, data)), int(time_ns)
+
+    def decoded(self, topic: str) -> Iterator[tuple[str, Any, int]]:
+        for _, (msgtype, msgdef, fmt, data, time_ns) in _raw_messages(self.summary, topic):
+            yield self._decoded(msgtype, msgdef, fmt, data, time_ns)
+
+    def window(self, topic: str, start_ns: int, end_ns: int) -> Iterator[tuple[str, Any, int]]:
+        """Messages of ``topic`` logged in [start_ns, end_ns], through the bag's index."""
+        reader = _rosbag2_reader(self.path) if self.summary.format == "rosbag2" else _ros1_reader(self.path)
+        if reader is None:
+            return
+        try:
+            conns = [c for c in reader.connections if c.topic == topic]
+            for conn, time_ns, data in reader.messages(connections=conns, start=start_ns, stop=end_ns + 1):
+                fmt = "MSG" if self.summary.format == "rosbag1" else conn.msgdef.format.name
+                yield self._decoded(conn.msgtype, conn.msgdef.data, fmt, data, time_ns)
+        finally:
+            reader.close()
+
+
+def _decode(decoders: BagDecoders, summary: BagSummary, topic: str, index: int, raw: _Raw, images: Any = None) -> Frame:
     msgtype, msgdef, fmt, data, time_ns = raw
-    return bag_frame(decoders, msgtype, msgdef, fmt, data, time_ns, f"{summary.path.name}#{index} {topic}")
+    source = f"{summary.path.name}#{index} {topic}"
+    if msgtype in IMAGE_SCHEMAS:
+        from clearcli.io.mcap_images import depth_frame
+
+        msg = _ZeroCopy(decoders.decode(msgtype, msgdef, fmt, data))
+        return depth_frame(BagAccess(summary, decoders), topic, msg, int(time_ns), source, images)
+    return bag_frame(decoders, msgtype, msgdef, fmt, data, time_ns, source)
 
 
-def iter_bag_frames(path: Path, topic: str | None = None) -> Iterator[Frame]:
+def iter_bag_frames(path: Path, topic: str | None = None, images: Any = None) -> Iterator[Frame]:
     """Every frame of the point-cloud topic, decoded one message at a time."""
     path = Path(path)
     summary = read_bag_summary(path)
@@ -381,13 +417,13 @@ def iter_bag_frames(path: Path, topic: str | None = None) -> Iterator[Frame]:
     decoders = BagDecoders(ros1=summary.format == "rosbag1")
     for index, raw in _guarded(summary, topic):
         try:
-            frame = _decode(decoders, summary, topic, index, raw)
+            frame = _decode(decoders, summary, topic, index, raw, images)
         except Exception as exc:
             _raise_damage(summary, topic, index, f"message {index} cannot be decoded: {error_reason(exc)}")
         yield frame
 
 
-def read_bag_frame(path: Path, topic: str | None = None, index: int = 0) -> Frame:
+def read_bag_frame(path: Path, topic: str | None = None, index: int = 0, images: Any = None) -> Frame:
     """Frame `index` (from 0) of the point-cloud topic; only that message is decoded."""
     path = Path(path)
     summary = read_bag_summary(path)
@@ -397,7 +433,9 @@ def read_bag_frame(path: Path, topic: str | None = None, index: int = 0) -> Fram
     for i, raw in _guarded(summary, topic, skip_to=index):
         if i == index:
             try:
-                return _decode(decoders, summary, topic, index, raw)
+                return _decode(decoders, summary, topic, index, raw, images)
+            except InputError:
+                raise
             except Exception as exc:
                 raise InputError(f"{path}: frame {index} of {topic} cannot be decoded ({error_reason(exc)})") from None
     total = summary.count(topic)
