@@ -91,6 +91,11 @@ def color_rgb(msg: Any, where: str) -> np.ndarray | None:
     return np.ascontiguousarray(pixels[:, :, list(order)])
 
 
+def _numbers(value: Any) -> list[float]:
+    """A message's float array (a list, a tuple or a NumPy array from rosbags) as a list."""
+    return [] if value is None else [float(v) for v in np.asarray(value, dtype=np.float64).ravel()]
+
+
 def camera_model(msg: Any, where: str) -> Any:
     """The `CameraModel` of a CameraInfo / CameraCalibration message."""
     from clearcli.io.intrinsics import from_camera_info
@@ -98,7 +103,7 @@ def camera_model(msg: Any, where: str) -> Any:
     roi = message_field(msg, "roi")
     return from_camera_info(
         int(message_field(msg, "width", default=0)), int(message_field(msg, "height", default=0)),
-        list(message_field(msg, "k", "K", default=[]) or []), list(message_field(msg, "d", "D", default=[]) or []),
+        _numbers(message_field(msg, "k", "K")), _numbers(message_field(msg, "d", "D")),
         str(message_field(msg, "distortion_model", default="") or ""),
         int(message_field(msg, "binning_x", default=0) or 0), int(message_field(msg, "binning_y", default=0) or 0),
         None if roi is None else (

@@ -47,17 +47,22 @@ def _note(path: Path, text: str) -> None:
 
 
 def camera_info_topic(summary: "McapSummary", depth_topic: str) -> str:
-    """The camera info of ``depth_topic``: its sibling `camera_info`, else the one camera
-    info topic in the same namespace."""
+    """The camera info of ``depth_topic``: its sibling `camera_info` (ROS drivers), else
+    the one camera info topic in the nearest enclosing namespace that has exactly one
+    (RealSense SDK bags: `.../Depth_0/image/data` -> `.../Depth_0/info/camera_info`)."""
     types = dict(summary.topics())
     parent = depth_topic.rsplit("/", 1)[0]
     sibling = f"{parent}/camera_info"
     if types.get(sibling) in CAMERA_INFO_SCHEMAS:
         return sibling
-    near = [t for t, s in types.items() if s in CAMERA_INFO_SCHEMAS and t.startswith(parent + "/")]
-    if len(near) == 1:
-        return near[0]
     infos = [t for t, s in types.items() if s in CAMERA_INFO_SCHEMAS]
+    while parent:
+        near = [t for t in infos if t.startswith(parent + "/")]
+        if len(near) == 1:
+            return near[0]
+        if near:
+            break  # several in this namespace: which is ambiguous
+        parent = parent.rsplit("/", 1)[0]
     raise InputError(
         f"{summary.path}: no camera info for the depth images on {depth_topic} (expected {sibling}"
         + (f"; camera info topics: {', '.join(infos)}" if infos else "; the log holds none")
@@ -101,6 +106,13 @@ def _registered_color(
     if not log.can_seek:
         _note(path, "the log has no index: colour is left out (depth only)")
         return None
+    if depth_topic.startswith("/device_"):
+        # A RealSense SDK recording keeps each sensor's raw stream: colour from another
+        # sensor, in its own optics, never aligned to depth (the SDK aligns at run time).
+        # Registering it needs the recorded extrinsics and a reprojection; until then it
+        # is left out rather than painted on the wrong pixels.
+        _note(path, "a RealSense SDK recording: colour is another sensor's, not registered to depth; left out")
+        return None
     for topic in topics:
         with closing(log.window(topic, max(0, log_time_ns - _COLOR_WINDOW_NS), log_time_ns + _COLOR_WINDOW_NS)) as window:
             for schema, msg, log_time in window:
@@ -109,6 +121,10 @@ def _registered_color(
                 if stamp_ns(msg, log_time) != depth_stamp_ns:
                     continue
                 color_frame = header_of(msg)[1]
+                if not frame_id or not color_frame:
+                    _note(path, f"colour on {topic} and the depth carry no frame ids: their registration cannot be "
+                                "told, so colour is left out")
+                    return None
                 if color_frame != frame_id:
                     _note(path, f"colour on {topic} is in frame {color_frame!r}, not registered to the depth "
                                 f"({frame_id!r}): left out; record aligned depth (aligned_depth_to_color) for colour")
@@ -124,6 +140,28 @@ def _registered_color(
     return None
 
 
+def _recorded_depth_units(log: "LogAccess", depth_topic: str) -> float | None:
+    """Metres per depth unit as the recording states it: a RealSense SDK bag keeps the
+    sensor's "Depth Units" option (`/device_0/sensor_0/option/Depth Units/value`) beside
+    the stream; None when the log does not say (then [images] depth_scale_m)."""
+    parts = depth_topic.split("/")
+    sensor = "/".join(parts[:3]) if len(parts) > 3 and parts[1].startswith("device_") else None
+    if sensor is None:
+        return None
+    option = f"{sensor}/option/Depth Units/value"
+    if option not in dict(log.summary.topics()):
+        return None
+    from clearcli.io.messages import message_field
+
+    for _, msg, _ in log.decoded(option):
+        # a float32 in the bag: 0.001 arrives as 0.0010000000475; seven digits are what it holds
+        value = float(f"{float(message_field(msg, 'data', default=0.0) or 0.0):.7g}")
+        if not (value > 0 and value < 1):
+            raise InputError(f"{log.path}: {option} is {value}, not a depth unit in metres; give --depth-scale")
+        return value
+    return None
+
+
 def depth_frame(
     log: "LogAccess", topic: str, msg: Any, log_time_ns: int,
     source: str, images: Any = None,
@@ -133,7 +171,7 @@ def depth_frame(
     from clearcli.io.intrinsics import back_project
 
     images = _settings(images)
-    depth = depth_m(msg, source, images.depth_scale_m)
+    depth = depth_m(msg, source, _recorded_depth_units(log, topic) or images.depth_scale_m)
     h, w = depth.shape
     model = _camera_at(log, camera_info_topic(log.summary, topic), log_time_ns)
     model.check_size(w, h, f"the depth image {source}")

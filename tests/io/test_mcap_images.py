@@ -111,3 +111,62 @@ def test_a_damaged_image_after_whole_frames_ends_the_log_with_exit_9(tmp_path: P
         for frame in iter_frames(log):
             got.append(frame)
     assert len(got) == 2
+
+
+@pytest.mark.parametrize("kind", ["ros1", "rosbag2-sqlite3", "rosbag2-mcap"])
+def test_bags_with_depth_and_colour_images_read_as_the_pcd(tmp_path: Path, kind: str) -> None:
+    from helpers.rgbd_logs import write_rgbd_bag
+
+    depth, color, want = _uois(3)
+    path = tmp_path / ("b.bag" if kind == "ros1" else "b2")
+    write_rgbd_bag(path, [depth, depth], [color, color], ros1=kind == "ros1", storage=kind.rsplit("-", 1)[-1])
+    frames = list(iter_frames(path))
+    assert len(frames) == 2
+    for frame in frames + [read_frame(path, None, 1)]:
+        np.testing.assert_array_equal(frame.points, want.points)
+        np.testing.assert_array_equal(frame.colors, want.colors)
+
+
+def test_a_realsense_sdk_recording_reads_depth_with_its_units_and_leaves_unregistered_colour_out(tmp_path: Path) -> None:
+    from helpers.rgbd_logs import write_realsense_sdk_bag
+
+    depth, color, want = _uois(3)
+    # depth stored in units of 0.1 mm, as the sensor's Depth Units option records it
+    log = write_realsense_sdk_bag(tmp_path / "rs.bag", [depth * 10], [color], depth_units=0.0001)
+    frame = read_frame(log)
+    np.testing.assert_allclose(frame.points, want.points, rtol=1e-6, atol=1e-7, equal_nan=True)
+    assert frame.colors is None  # another sensor, no registration recorded for it: left out, not painted on
+
+
+def test_foxglove_raw_images_with_a_calibration(tmp_path: Path) -> None:
+    from helpers.rgbd_logs import write_foxglove_json_mcap
+
+    depth, color, want = _uois(3)
+    log = write_foxglove_json_mcap(tmp_path / "fox.mcap", depth.astype(np.float32) / np.float32(1000), color)
+    frame = read_frame(log)
+    np.testing.assert_array_equal(frame.points, want.points)
+    np.testing.assert_array_equal(frame.colors, want.colors)
+
+
+def test_ros1_messages_in_an_mcap_log(tmp_path: Path) -> None:
+    from helpers.rgbd_logs import write_ros1_mcap
+
+    depth, color, want = _uois(3)
+    frame = read_frame(write_ros1_mcap(tmp_path / "r1.mcap", depth, color))
+    np.testing.assert_array_equal(frame.points, want.points)
+    np.testing.assert_array_equal(frame.colors, want.colors)
+
+
+def test_compressed_depth_is_refused_by_name(tmp_path: Path) -> None:
+    from mcap.writer import Writer
+
+    log = tmp_path / "c.mcap"
+    with open(log, "wb") as fp:
+        writer = Writer(fp)
+        writer.start(profile="", library="tests")
+        schema = writer.register_schema("sensor_msgs/msg/CompressedImage", "jsonschema", b"{}")
+        ch = writer.register_channel("/camera/depth/image_raw/compressedDepth", "json", schema)
+        writer.add_message(ch, log_time=1, publish_time=1, data=b'{"format": "16UC1; compressedDepth png"}')
+        writer.finish()
+    with pytest.raises(InputError, match="compressed.*record the raw topic"):
+        read_frame(log)
