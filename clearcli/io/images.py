@@ -167,23 +167,44 @@ def find_intrinsics(depth_path: Path, images: "ImageSettings") -> "CameraModel":
     return first
 
 
+_executor = None
+
+
+def _decoder():  # -> concurrent.futures.ThreadPoolExecutor
+    """One helper thread for decoding colour images, made on first use."""
+    global _executor
+    if _executor is None:
+        from concurrent.futures import ThreadPoolExecutor
+
+        _executor = ThreadPoolExecutor(max_workers=1, thread_name_prefix="clear-colour")
+    return _executor
+
+
 def read_image_frame(path: Path, images: "ImageSettings | None" = None, color: Path | None = None) -> Frame:
     """The organized frame of the depth image at ``path`` (see the module)."""
     from clearcli.io.intrinsics import back_project
 
     path = Path(path)
     images = _settings(images)
-    depth = read_depth_m(path, images.depth_scale_m)
-    h, w = depth.shape
-    if not np.any(np.isfinite(depth) & (depth > 0)):
-        raise InputError(f"{path}: every pixel of the depth image is 0 (no reading); is it the right file?")
-    model = find_intrinsics(path, images)
-    model.check_size(w, h, f"{path} ({w} x {h})")
-    points = back_project(depth, model)
     color_path = Path(color) if color is not None else color_pair(path, images)
+    # The colour PNG decodes in a second thread while the depth is read and projected:
+    # zlib lets go of the GIL, and the two decodes are most of a pair's reading time.
+    pending = _decoder().submit(read_color, color_path) if color_path is not None else None
+    try:
+        depth = read_depth_m(path, images.depth_scale_m)
+        h, w = depth.shape
+        if not np.any(np.isfinite(depth) & (depth > 0)):
+            raise InputError(f"{path}: every pixel of the depth image is 0 (no reading); is it the right file?")
+        model = find_intrinsics(path, images)
+        model.check_size(w, h, f"{path} ({w} x {h})")
+        points = back_project(depth, model)
+    except BaseException:
+        if pending is not None:
+            pending.cancel()
+        raise
     colors = None
-    if color_path is not None:
-        rgb = read_color(color_path)
+    if pending is not None:
+        rgb = pending.result()
         if rgb.shape[:2] != (h, w):
             raise InputError(
                 f"{color_path}: the colour image is {rgb.shape[1]} x {rgb.shape[0]} but its depth image {path} is "
