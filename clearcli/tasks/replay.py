@@ -71,7 +71,7 @@ def run(
 
     def frames() -> Iterator["Frame"]:
         first = True
-        for frame in iter_frames(log, topic):
+        for frame in iter_frames(log, topic, config.images):
             if first and kind == "mcap" and not config.robot.camera_pose:
                 T, base = base_camera_from_log(log, frame.frame_id, bases)
                 if T is not None:
