@@ -26,7 +26,8 @@ WRITE_ERRNOS = frozenset(
     getattr(errno, n) for n in ("ENOSPC", "EDQUOT", "EROFS", "EACCES", "EPERM", "ENAMETOOLONG", "EIO", "ENOENT", "EFBIG")
     if hasattr(errno, n)
 )
-_TEMPORARY = re.compile(r"^\.(?P<target>.+)\.[a-z0-9_]{8}(?:\.part|\.[A-Za-z0-9]+)$")
+# DOTALL and \Z: a file name may hold a newline, and its temporary is ours all the same
+_TEMPORARY = re.compile(r"\.(?P<target>.+)\.[a-z0-9_]{8}(?:\.part|\.[A-Za-z0-9]+)\Z", re.DOTALL)
 
 
 def temporary_target(name: str) -> str | None:

@@ -212,7 +212,7 @@ def test_resume_removes_only_what_a_frame_owns_by_exact_name(tmp_path: Path) -> 
     """Frames whose names are prefixes or glob patterns of others: resuming one never
     touches another's files (the glob `{name}.*` of before deleted b.1's and x1's)."""
     src, out = tmp_path / "src", tmp_path / "out"
-    names = ["b.pcd", "b.1.pcd", "x[1].pcd", "x1.pcd", "run_*.pcd", "run_a.pcd"]
+    names = ["b.pcd", "b.1.pcd", "x[1].pcd", "x1.pcd", "run_*.pcd", "run_a.pcd", "a b.pcd", "grün.pcd", "new\nline.pcd"]
     _copy(src, names)
     first = clear("segment", src, "--out-dir", out, "--outputs", "labels", "--json", "--jobs", "1")
     assert first.returncode == 0, first.stderr
@@ -221,16 +221,16 @@ def test_resume_removes_only_what_a_frame_owns_by_exact_name(tmp_path: Path) -> 
         assert (out / f"{stem}.json").is_file() and (out / f"{stem}.labels.pcd").is_file()
     before = {p.name: p.stat().st_mtime_ns for p in out.iterdir() if not p.name.startswith(".")}
     # an unfinished b, x[1] and run_*: no mark, a temporary of a killed write
-    for stem in ("b", "x[1]", "run_*"):
+    for stem in ("b", "x[1]", "run_*", "new\nline"):
         (out / f"{stem}.json").unlink()
         (out / f".{stem}.json.abcd1234.part").write_text("half")
     again = clear("segment", src, "--out-dir", out, "--outputs", "labels", "--json", "--resume", "--jobs", "1")
     assert again.returncode == 0, again.stderr
     rows, summary = lines_of(again.stdout)
-    assert (summary["done"], summary["resumed"]) == (3, 3)
+    assert (summary["done"], summary["resumed"]) == (4, 5)
     after = {p.name: p.stat().st_mtime_ns for p in out.iterdir() if not p.name.startswith(".")}
     assert set(after) == set(before)  # nothing lost
-    for stem in ("b.1", "x1", "run_a"):  # the look-alikes were not touched
+    for stem in ("b.1", "x1", "run_a", "a b", "grün"):  # the look-alikes and the rest were not touched
         for f in (f"{stem}.json", f"{stem}.labels.pcd"):
             assert after[f] == before[f], f
     assert not _temporaries(out)
