@@ -5,15 +5,18 @@ each labelled frame segmented and scored against its own labels, on every core o
 Ray (clearcli/batch/run.py). With --json, one `clear.batch` line per frame whose
 document is `clear.evaluate.frame` (source, name, group, n_true, n_pred,
 true_positives, precision, recall, f1, mean_best_iou, over_segmented, under_segmented,
-time_s), then the summary line with "evaluation": {"all": {frames, mean_precision,
-mean_recall, mean_f1, mean_best_iou, over_segmented, under_segmented, median_time_s},
-"groups": {name: the same}}.
+the OSD/OCID metrics overlap_precision, overlap_recall, overlap_f, boundary_precision,
+boundary_recall, boundary_f (null for unorganized frames) and objects_f75 (definitions:
+clearcli/evaluate/osd.py), time_s), then the summary line with "evaluation": {"all":
+{frames, mean_precision, mean_recall, mean_f1, mean_best_iou, mean_<each OSD metric>
+(Boundary over organized frames; null when none), over_segmented, under_segmented,
+median_time_s}, "groups": {name: the same}}.
 
 `clear evaluate segmentation PRED TRUTH [--json]`; JSON envelope
 {"schema": "clear.evaluate.segmentation", "version": 1, ...} with the fields of
 `clearcli.evaluate.segmentation.SegmentationScore` (n_true, n_pred, true_positives,
 precision, recall, f1, mean_best_iou, over_segmented, under_segmented, matched_iou,
-true_ids, pred_ids) plus "pred" and "truth" (the paths).
+true_ids, pred_ids), the OSD/OCID metrics as above, plus "pred" and "truth" (the paths).
 """
 
 from __future__ import annotations
@@ -55,7 +58,11 @@ def segmentation_cmd(
         f"objects: {doc['n_true']} true, {doc['n_pred']} predicted, {doc['true_positives']} matched at IoU >= 0.5\n"
         f"precision {doc['precision']:.3f}  recall {doc['recall']:.3f}  F1 {doc['f1']:.3f}  "
         f"mean best IoU {doc['mean_best_iou']:.3f}\n"
-        f"over-segmented true objects {doc['over_segmented']}, under-segmenting predictions {doc['under_segmented']}"
+        f"over-segmented true objects {doc['over_segmented']}, under-segmenting predictions {doc['under_segmented']}\n"
+        f"OSD/OCID: Overlap P/R/F {doc['overlap_precision']:.3f}/{doc['overlap_recall']:.3f}/{doc['overlap_f']:.3f}  "
+        + (f"Boundary P/R/F {doc['boundary_precision']:.3f}/{doc['boundary_recall']:.3f}/{doc['boundary_f']:.3f}  "
+           if doc["boundary_f"] is not None else "Boundary - (not an organized frame)  ")
+        + f"objects with F >= 0.75: {doc['objects_f75']:.3f}"
     )
 
 
@@ -112,25 +119,34 @@ def dataset_cmd(
     def render(rows: Any, summary: Any) -> None:
         from rich.table import Table
 
-        table = Table("frame", "group", "true", "pred", "P", "R", "F1", "IoU", "over", "under", "ms")
+        def num(v: Any) -> str:
+            return "-" if v is None else f"{v:.3f}"
+
+        table = Table("frame", "group", "true", "pred", "P", "R", "F1", "IoU", "Ov F", "Bd F", "F>=.75", "over",
+                      "under", "ms")
         for ln in rows:
             d = ln.get("document")
             if d is None:
-                table.add_row(str(ln["source"]), "", "", "", "", "", "", "", "", "", ln["error"]["message"])
+                table.add_row(str(ln["source"]), *[""] * 12, ln["error"]["message"])
                 continue
             table.add_row(
                 Path(d["source"]).name, d.get("group") or "", str(d["n_true"]), str(d["n_pred"]),
                 f"{d['precision']:.3f}", f"{d['recall']:.3f}", f"{d['f1']:.3f}", f"{d['mean_best_iou']:.3f}",
+                num(d.get("overlap_f")), num(d.get("boundary_f")), num(d.get("objects_f75")),
                 str(d["over_segmented"]), str(d["under_segmented"]), f"{1000 * d['time_s']:.0f}",
             )
         stdout.print(table)
         ev = summary["evaluation"]
-        means = Table("frames", "n", "mean F1", "mean IoU", "mean P", "mean R", "over", "under", "median ms")
+        means = Table("frames", "n", "mean F1", "mean IoU", "mean P", "mean R", "Overlap P/R/F", "Boundary P/R/F",
+                      "F>=.75", "over", "under", "median ms")
         for label, m in [("all", ev["all"])] + list(ev.get("groups", {}).items()):
             if m["frames"]:
                 means.add_row(
                     label, str(m["frames"]), f"{m['mean_f1']:.3f}", f"{m['mean_best_iou']:.3f}",
-                    f"{m['mean_precision']:.3f}", f"{m['mean_recall']:.3f}", str(m["over_segmented"]),
+                    f"{m['mean_precision']:.3f}", f"{m['mean_recall']:.3f}",
+                    "/".join(num(m.get(f"mean_overlap_{k}")) for k in ("precision", "recall", "f")),
+                    "/".join(num(m.get(f"mean_boundary_{k}")) for k in ("precision", "recall", "f")),
+                    num(m.get("mean_objects_f75")), str(m["over_segmented"]),
                     str(m["under_segmented"]), f"{1000 * m['median_time_s']:.0f}",
                 )
         stdout.print(means)

@@ -66,6 +66,9 @@ def _labels(frame: Any, path: str, what: str) -> np.ndarray:
 
 
 SUMMARY_KEYS = ("precision", "recall", "f1", "mean_best_iou")
+# The OSD/OCID metrics (clearcli/evaluate/osd.py); Boundary over organized frames only.
+OSD_KEYS = ("overlap_precision", "overlap_recall", "overlap_f", "boundary_precision", "boundary_recall",
+            "boundary_f", "objects_f75")
 
 
 def summarise(docs: Sequence[Mapping[str, Any]], groups: Mapping[str, Sequence[str]]) -> dict[str, Any]:
@@ -77,6 +80,9 @@ def summarise(docs: Sequence[Mapping[str, Any]], groups: Mapping[str, Sequence[s
         out: dict[str, Any] = {"frames": len(rows)}
         for k in SUMMARY_KEYS:
             out[f"mean_{k}" if not k.startswith("mean") else k] = round(float(np.mean([r[k] for r in rows])), 4)
+        for k in OSD_KEYS:
+            values = [r[k] for r in rows if r.get(k) is not None]
+            out[f"mean_{k}"] = round(float(np.mean(values)), 4) if values else None
         out["over_segmented"] = int(sum(r["over_segmented"] for r in rows))
         out["under_segmented"] = int(sum(r["under_segmented"] for r in rows))
         times = [r["time_s"] for r in rows]
@@ -99,7 +105,7 @@ def write_csv(path: Path, docs: Sequence[Mapping[str, Any]]) -> None:
     from clearcli.files import atomic_output
 
     cols = ["source", "group", "n_true", "n_pred", "true_positives", "precision", "recall", "f1",
-            "mean_best_iou", "over_segmented", "under_segmented", "time_s"]
+            "mean_best_iou", "over_segmented", "under_segmented", *OSD_KEYS, "time_s"]
     buf = io.StringIO()
     w = csv.writer(buf)
     w.writerow(cols)

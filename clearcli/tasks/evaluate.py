@@ -63,11 +63,14 @@ def run(request: Request, source: Source) -> Outcome:
     if pred.shape != truth.shape:
         raise InputError(f"{source.path}: {pred.size} predicted labels for {truth.size} points; not the same frame")
     result = score(pred, truth)
+    from clearcli.evaluate.osd import osd_metrics
+
     payload = {
         "source": str(source.path),
         "name": name,
         "group": group_of(str(source.path), request.groups),
         **{k: v for k, v in result.as_dict().items() if k not in ("matched_iou", "true_ids", "pred_ids")},
+        **osd_metrics(pred, truth, frame.shape).as_dict(),
         "time_s": round(elapsed, 4),
     }
     return Outcome(SCHEMA, VERSION, payload, 0, request.outputs.all())
@@ -80,8 +83,11 @@ def score_files(pred: Path, truth: Path) -> dict[str, Any]:
     from clearcli.errors import InputError
     from clearcli.evaluate.segmentation import score
 
+    from clearcli.evaluate.osd import osd_metrics
+
     p = _labels(pipeline.read(pred), pred, "prediction")
-    t = _labels(pipeline.read(truth), truth, "ground truth")
+    truth_frame = pipeline.read(truth)
+    t = _labels(truth_frame, truth, "ground truth")
     if p.shape != t.shape:
         raise InputError(f"{pred}: {p.size} points but {truth} has {t.size}; both must be the same frame")
-    return {"pred": str(pred), "truth": str(truth), **score(p, t).as_dict()}
+    return {"pred": str(pred), "truth": str(truth), **score(p, t).as_dict(), **osd_metrics(p, t, truth_frame.shape).as_dict()}

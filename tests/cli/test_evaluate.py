@@ -79,3 +79,21 @@ def test_cli_evaluate_segmentation(tmp_path: Path) -> None:
     write_pcd(tmp_path / "plain.pcd", Frame(points=pts))
     res = _clear("evaluate", "segmentation", str(tmp_path / "plain.pcd"), str(tmp_path / "t.pcd"))
     assert res.returncode == 3 and "label" in res.stderr
+
+
+def test_dataset_reports_the_osd_metrics_per_frame_and_in_the_means() -> None:
+    import json
+
+    from helpers import run_clear, shared_path
+
+    frames = [shared_path("mosd/test/test57.pcd"), shared_path("mosd/learn/learn0.pcd")]
+    res = run_clear("evaluate", "dataset", *frames, "--json", "--jobs", "1")
+    assert res.returncode == 0, res.stderr
+    lines = [json.loads(x) for x in res.stdout.splitlines()]
+    docs, summary = [ln["document"] for ln in lines[:-1]], lines[-1]["evaluation"]["all"]
+    for d in docs:
+        for k in ("overlap_precision", "overlap_recall", "overlap_f", "boundary_precision", "boundary_recall",
+                  "boundary_f", "objects_f75"):
+            assert 0.0 <= d[k] <= 1.0, (k, d[k])  # organized mOSD frames: Boundary too
+    assert summary["mean_boundary_f"] == round(sum(d["boundary_f"] for d in docs) / 2, 4)
+    assert summary["mean_overlap_f"] == round(sum(d["overlap_f"] for d in docs) / 2, 4)
