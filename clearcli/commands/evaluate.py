@@ -7,10 +7,11 @@ document is `clear.evaluate.frame` (source, name, group, n_true, n_pred,
 true_positives, precision, recall, f1, mean_best_iou, over_segmented, under_segmented,
 the OSD/OCID metrics overlap_precision, overlap_recall, overlap_f, boundary_precision,
 boundary_recall, boundary_f (null for unorganized frames) and objects_f75 (definitions:
-clearcli/evaluate/osd.py), time_s), then the summary line with "evaluation": {"all":
+clearcli/evaluate/osd.py), exact: {objects, right, merged, split, missed, spurious,
+verdicts: [per true object]} (clearcli/evaluate/exact.py), time_s), then the summary line with "evaluation": {"all":
 {frames, mean_precision, mean_recall, mean_f1, mean_best_iou, mean_<each OSD metric>
-(Boundary over organized frames; null when none), over_segmented, under_segmented,
-median_time_s}, "groups": {name: the same}}.
+(Boundary over organized frames; null when none), exact: {the counts summed},
+over_segmented, under_segmented, median_time_s}, "groups": {name: the same}}.
 
 `clear evaluate segmentation PRED TRUTH [--json]`; JSON envelope
 {"schema": "clear.evaluate.segmentation", "version": 1, ...} with the fields of

@@ -83,6 +83,9 @@ def summarise(docs: Sequence[Mapping[str, Any]], groups: Mapping[str, Sequence[s
         for k in OSD_KEYS:
             values = [r[k] for r in rows if r.get(k) is not None]
             out[f"mean_{k}"] = round(float(np.mean(values)), 4) if values else None
+        exact = [r["exact"] for r in rows if "exact" in r]
+        if exact:  # objects exactly right, and what went wrong with the others (clearcli/evaluate/exact.py)
+            out["exact"] = {k: int(sum(e[k] for e in exact)) for k in ("objects", "right", "merged", "split", "missed", "spurious")}
         out["over_segmented"] = int(sum(r["over_segmented"] for r in rows))
         out["under_segmented"] = int(sum(r["under_segmented"] for r in rows))
         times = [r["time_s"] for r in rows]

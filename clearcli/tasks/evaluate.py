@@ -63,6 +63,7 @@ def run(request: Request, source: Source) -> Outcome:
     if pred.shape != truth.shape:
         raise InputError(f"{source.path}: {pred.size} predicted labels for {truth.size} points; not the same frame")
     result = score(pred, truth)
+    from clearcli.evaluate.exact import exact_report
     from clearcli.evaluate.osd import osd_metrics
 
     payload = {
@@ -71,6 +72,7 @@ def run(request: Request, source: Source) -> Outcome:
         "group": group_of(str(source.path), request.groups),
         **{k: v for k, v in result.as_dict().items() if k not in ("matched_iou", "true_ids", "pred_ids")},
         **osd_metrics(pred, truth, frame.shape).as_dict(),
+        "exact": exact_report(pred, truth).as_dict(),
         "time_s": round(elapsed, 4),
     }
     return Outcome(SCHEMA, VERSION, payload, 0, request.outputs.all())
