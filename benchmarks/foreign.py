@@ -13,7 +13,8 @@ vertices, as read off `--grid`). An object's points are the finite pixels inside
 polygon that stand more than 8 mm above the support plane (a RANSAC plane fitted here to
 the finite points outside every polygon, within 2 m), so a polygon drawn a little wide
 takes no table; where polygons overlap (a can in a bowl) the later object takes the
-pixels; `fill = true` marks a container (a bowl), whose floor may stand less than 8 mm
+pixels; `above_m` lowers the 8 mm for an object lying flat (a marker, 3 mm: the
+polygon must then be tight, the table's noise is a few millimetres); `fill = true` marks a container (a bowl), whose floor may stand less than 8 mm
 above the table: it takes what lies above the plane within its silhouette's convex hull.
 `--show` draws the resulting masks over the colour image to check them.
 
@@ -84,7 +85,7 @@ def load(name: str):  # -> (Frame, labels (N,) int64, spec dict)
     labels = np.zeros(h * w, dtype=np.int64)
     labels[finite & (np.abs(height) < 0.01)] = LABEL_TABLE
     for k, obj in enumerate(spec["object"]):  # later objects take overlapping pixels
-        mask = inside[k] & finite & (height > ABOVE_PLANE_M)
+        mask = inside[k] & finite & (height > float(obj.get("above_m", ABOVE_PLANE_M)))
         if obj.get("fill") and mask.any():
             # a container: its floor may stand less than 8 mm above the table; take what
             # lies above the plane within the silhouette's convex hull
