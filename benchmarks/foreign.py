@@ -3,6 +3,7 @@
     .venv/bin/python benchmarks/foreign.py                 # report part: per frame and totals
     .venv/bin/python benchmarks/foreign.py --part choose   # the part settings may be chosen on
     .venv/bin/python benchmarks/foreign.py --part all
+    .venv/bin/python benchmarks/foreign.py --part choose --set segment.color_importance=0.5
     .venv/bin/python benchmarks/foreign.py --show uois_image_0003 [--out picture.png]
     .venv/bin/python benchmarks/foreign.py --grid uois_image_0003   # the colour image with a pixel grid, to label
 
@@ -163,14 +164,16 @@ def grid(name: str, out: Path) -> None:
     print(out)
 
 
-def report(part: str) -> None:
+def report(part: str, sets: list[str] | None = None) -> None:
     from clearcli import pipeline
     from clearcli.evaluate.exact import exact_report
     from clearcli.evaluate.osd import osd_metrics
     from clearcli.evaluate.segmentation import score
     from clearcli.settings import Settings
 
-    settings = Settings()
+    from clearcli.settings import apply_sets
+
+    settings = apply_sets(Settings(), sets or ())
     totals = dict(objects=0, right=0, merged=0, split=0, missed=0, spurious=0)
     print(f"{'frame':34s} {'obj':>4s} {'right':>5s} {'merged':>6s} {'split':>5s} {'missed':>6s} {'spur':>5s}"
           f" {'F1':>6s} {'Ov F':>6s} {'Bd F':>6s}")
@@ -196,13 +199,15 @@ def main() -> None:
     parser.add_argument("--show", metavar="FRAME")
     parser.add_argument("--grid", metavar="FRAME")
     parser.add_argument("--out", type=Path)
+    parser.add_argument("--set", action="append", default=[], metavar="SECTION.KEY=VALUE",
+                        help="a setting to try (as clear's --set); choose on --part choose only")
     args = parser.parse_args()
     if args.show:
         show(args.show, args.out or Path(f"/tmp/{args.show}_labels.png"))
     elif args.grid:
         grid(args.grid, args.out or Path(f"/tmp/{args.grid}_grid.png"))
     else:
-        report(args.part)
+        report(args.part, args.set)
 
 
 if __name__ == "__main__":
