@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from clearcli.io.frames import object_ids
+from clearcli.evaluate.segmentation import overlaps
 
 RIGHT_IOU = 0.5
 HOLDS = 0.5  # a segment holds an object when it has at least this share of its points
@@ -50,18 +50,8 @@ class ExactReport:
 
 def exact_report(pred_labels: np.ndarray, true_labels: np.ndarray) -> ExactReport:
     """The verdict on every labelled object, and the spurious segments (module doc)."""
-    pred = object_ids(pred_labels)
-    true = object_ids(true_labels)
-    if pred.shape != true.shape:
-        raise ValueError(f"label arrays differ in length: {pred.size} predicted, {true.size} true")
-    p_ids, p_inv = np.unique(pred, return_inverse=True)
-    t_ids, t_inv = np.unique(true, return_inverse=True)
-    counts = np.zeros((p_ids.size, t_ids.size), dtype=np.int64)
-    np.add.at(counts, (p_inv, t_inv), 1)
-    p_keep, t_keep = p_ids != 0, t_ids != 0
-    inter = counts[np.ix_(p_keep, t_keep)].astype(np.float64)  # [segments, objects]
-    seg_size = counts[p_keep].sum(axis=1).astype(np.float64)
-    obj_size = counts[:, t_keep].sum(axis=0).astype(np.float64)
+    ov = overlaps(pred_labels, true_labels)
+    inter, seg_size, obj_size = ov.shared, ov.pred_size, ov.true_size  # [segments, objects]
     n_seg, n_obj = inter.shape
     if n_obj == 0:
         return ExactReport(0, 0, 0, 0, 0, n_seg, ())

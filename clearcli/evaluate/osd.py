@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from clearcli.io.frames import object_ids
+from clearcli.evaluate.segmentation import overlaps
 
 BOUNDARY_TOLERANCE = 0.003  # of the image diagonal (DAVIS, and the OSD/OCID evaluations)
 DETECTED_F = 0.75
@@ -84,20 +84,11 @@ def osd_metrics(
     mOSD's too); ``shape`` (height, width) when the frame is organized, for Boundary."""
     from scipy.optimize import linear_sum_assignment
 
-    pred = object_ids(pred_labels)
-    true = object_ids(true_labels)
-    if pred.shape != true.shape:
-        raise ValueError(f"label arrays differ in length: {pred.size} predicted, {true.size} true")
+    ov = overlaps(pred_labels, true_labels)
+    pred, true = ov.pred, ov.true
     organized = shape is not None and shape[0] > 1 and shape[0] * shape[1] == pred.size
-    p_ids, p_inv = np.unique(pred, return_inverse=True)
-    t_ids, t_inv = np.unique(true, return_inverse=True)
-    counts = np.zeros((p_ids.size, t_ids.size), dtype=np.int64)
-    np.add.at(counts, (p_inv, t_inv), 1)
-    p_keep, t_keep = p_ids != 0, t_ids != 0
-    inter = counts[np.ix_(p_keep, t_keep)].astype(np.float64)  # [P, T]
-    p_size = counts[p_keep].sum(axis=1).astype(np.float64)
-    t_size = counts[:, t_keep].sum(axis=0).astype(np.float64)
-    n_pred, n_true = int(p_keep.sum()), int(t_keep.sum())
+    inter, p_size, t_size = ov.shared, ov.pred_size, ov.true_size  # [P, T], (P,), (T,)
+    n_pred, n_true = inter.shape
     if n_pred == 0 or n_true == 0:
         v = 1.0 if n_pred == n_true else 0.0
         b = v if organized else None
@@ -118,7 +109,7 @@ def osd_metrics(
         h, w = shape
         radius = max(1, math.ceil(BOUNDARY_TOLERANCE * math.hypot(h, w)))
         pred_grid, true_grid = pred.reshape(h, w), true.reshape(h, w)
-        p_obj, t_obj = p_ids[p_keep], t_ids[t_keep]
+        p_obj, t_obj = ov.pred_ids, ov.true_ids
         p_edges = {int(j): _boundary(pred_grid == p_obj[j]) for j in range(n_pred)}
         t_edges = {int(i): _boundary(true_grid == t_obj[i]) for i in range(n_true)}
         p_total = sum(int(e.sum()) for e in p_edges.values())

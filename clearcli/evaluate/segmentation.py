@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from clearcli.io.frames import object_ids  # noqa: F401  (the label convention, one home)
+from clearcli.io.frames import object_ids
 
 MAJORITY = 0.5
 MIN_COVER = 0.1
@@ -63,6 +63,37 @@ class SegmentationScore:
             "true_ids": list(self.true_ids),
             "pred_ids": list(self.pred_ids),
         }
+
+
+@dataclass(frozen=True)
+class Overlaps:
+    """Two labellings of one frame's points, object against object (the label convention
+    of clearcli/io/frames.py; the table and unlabelled points are background)."""
+
+    pred: np.ndarray  # (N,) predicted object id per point, 0 background
+    true: np.ndarray  # (N,) true object id per point
+    pred_ids: np.ndarray  # (P,) the predicted objects
+    true_ids: np.ndarray  # (T,) the true objects
+    shared: np.ndarray  # (P, T) float: points in both
+    pred_size: np.ndarray  # (P,) float: points of each predicted object
+    true_size: np.ndarray  # (T,) float: points of each true object
+
+
+def overlaps(pred_labels: np.ndarray, true_labels: np.ndarray) -> Overlaps:
+    """Every predicted object against every true object, in one pass over the points;
+    ValueError when the two do not label the same number of points."""
+    pred, true = object_ids(pred_labels), object_ids(true_labels)
+    if pred.shape != true.shape:
+        raise ValueError(f"label arrays differ in length: {pred.size} predicted, {true.size} true")
+    p_ids, p_inv = np.unique(pred, return_inverse=True)
+    t_ids, t_inv = np.unique(true, return_inverse=True)
+    counts = np.zeros((p_ids.size, t_ids.size), dtype=np.int64)
+    np.add.at(counts, (p_inv, t_inv), 1)
+    p_keep, t_keep = p_ids != 0, t_ids != 0
+    return Overlaps(
+        pred, true, p_ids[p_keep], t_ids[t_keep], counts[np.ix_(p_keep, t_keep)].astype(np.float64),
+        counts[p_keep].sum(axis=1).astype(np.float64), counts[:, t_keep].sum(axis=0).astype(np.float64),
+    )
 
 
 def overlap_matrix(pred_obj: np.ndarray, true_obj: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
