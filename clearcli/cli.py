@@ -66,7 +66,7 @@ def make_app(only: str | None = None) -> typer.Typer:
     app = typer.Typer(
         name="clear",
         help=(
-            "Plan how a robot arm clears a cluttered table, from recorded point clouds.\n\n"
+            "Plan how a robot arm clears a cluttered table, from recorded point clouds and RGB-D images.\n\n"
             "Results go to stdout (--json: one stable, versioned schema); logs and progress "
             "to stderr.\n\nExit codes:\n\n" + _EXIT_HELP
         ),

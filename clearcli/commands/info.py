@@ -154,7 +154,7 @@ def info_cmd(
     inputs: Annotated[
         list[Path],
         typer.Argument(
-            help="A .pcd, .mcap or ROS 1 .bag file (told apart by content), or a rosbag2 folder; "
+            help="A .pcd, .mcap or ROS 1 .bag file, or a depth image (told apart by content), or a rosbag2 folder; "
             "several, or folders to search, make a batch.",
         ),
     ],

@@ -37,8 +37,8 @@ Inputs = Annotated[
     list[Path],
     typer.Argument(
         metavar="FRAME",
-        help="Frames: .pcd, .mcap or .bag files, rosbag2 folders, and folders to search for them. "
-        "More than one frame makes a batch.",
+        help="Frames: .pcd, .mcap or .bag files, rosbag2 folders, depth images (.png, .tif, .npy; see "
+        "--intrinsics, --color), and folders to search for them. More than one frame makes a batch.",
     ),
 ]
 Every = Annotated[
