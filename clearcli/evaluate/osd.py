@@ -33,6 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from clearcli.evaluate.segmentation import overlaps
+from clearcli.render.camera import mask_edge
 
 BOUNDARY_TOLERANCE = 0.003  # of the image diagonal (DAVIS, and the OSD/OCID evaluations)
 DETECTED_F = 0.75
@@ -60,13 +61,6 @@ class OsdScore:
 
 def _f(p: float, r: float) -> float:
     return 0.0 if p + r <= 0 else 2 * p * r / (p + r)
-
-
-def _boundary(mask: np.ndarray) -> np.ndarray:
-    """Pixels of ``mask`` with a 4-neighbour outside it (the image border counts as outside)."""
-    padded = np.pad(mask, 1, constant_values=False)
-    inner = padded[:-2, 1:-1] & padded[2:, 1:-1] & padded[1:-1, :-2] & padded[1:-1, 2:]
-    return mask & ~inner
 
 
 def _near(boundary: np.ndarray, radius: int) -> np.ndarray:
@@ -110,8 +104,8 @@ def osd_metrics(
         radius = max(1, math.ceil(BOUNDARY_TOLERANCE * math.hypot(h, w)))
         pred_grid, true_grid = pred.reshape(h, w), true.reshape(h, w)
         p_obj, t_obj = ov.pred_ids, ov.true_ids
-        p_edges = {int(j): _boundary(pred_grid == p_obj[j]) for j in range(n_pred)}
-        t_edges = {int(i): _boundary(true_grid == t_obj[i]) for i in range(n_true)}
+        p_edges = {int(j): mask_edge(pred_grid == p_obj[j]) for j in range(n_pred)}
+        t_edges = {int(i): mask_edge(true_grid == t_obj[i]) for i in range(n_true)}
         p_total = sum(int(e.sum()) for e in p_edges.values())
         t_total = sum(int(e.sum()) for e in t_edges.values())
         hit_p = hit_t = 0

@@ -44,21 +44,20 @@ def describe_frame(frame: "Frame", index: int = 0) -> dict[str, Any]:
     }
 
 
-def describe_image(path: Path, images: Any = None, color: Path | None = None) -> dict[str, Any]:
-    """The info payload of a depth image: its size, depth range, the intrinsics found and
-    the colour image paired with it, and the frame they make."""
-    import numpy as np
+def describe_image(frame: "Frame", path: Path, images: Any = None, color: Path | None = None) -> dict[str, Any]:
+    """The info payload of a depth image, from the frame it made: its size, depth range,
+    the intrinsics found and the colour image paired with it."""
+    from clearcli.io.images import color_pair, find_intrinsics, or_defaults
 
-    from clearcli.io.images import _settings, color_pair, find_intrinsics, read_depth_m, read_image_frame
-
-    images = _settings(images)
-    depth = read_depth_m(path, images.depth_scale_m)
-    valid = depth[np.isfinite(depth) & (depth > 0)]
-    model = find_intrinsics(path, images)
+    images = or_defaults(images)
+    z = frame.points[:, 2]
+    valid = z[frame.finite_mask]  # a pixel's depth is its point's z
+    model = find_intrinsics(path, images)  # read once already: the reader keeps it
     paired = Path(color) if color is not None else color_pair(path, images)
+    assert frame.shape is not None  # depth images make organized frames
     image_part = {
-        "width": int(depth.shape[1]),
-        "height": int(depth.shape[0]),
+        "width": int(frame.shape[1]),
+        "height": int(frame.shape[0]),
         "depth_scale_m": images.depth_scale_m,
         "valid_pixels": int(valid.size),
         "depth_min_m": round(float(valid.min()), 6) if valid.size else None,
@@ -72,7 +71,6 @@ def describe_image(path: Path, images: Any = None, color: Path | None = None) ->
         },
         "color": str(paired) if paired is not None else None,
     }
-    frame = read_image_frame(path, images, color)
     return {"file": str(path), "format": "depth-image", "image": image_part, "frame": describe_frame(frame, 0)}
 
 
@@ -83,17 +81,12 @@ def describe_file(path: Path, topic: str | None = None, index: int = 0, images: 
     A damaged MCAP log or bag is described (mcap/bag.complete false) without raising; the
     caller decides what exit code that deserves.
     """
-    from clearcli.errors import InputError
     from clearcli.io.read import read_frame, sniff
 
     path = Path(path)
     kind = sniff(path)
-    if kind == "image":
-        if index != 0:
-            raise InputError(f"{path}: --frame {index} does not exist: a depth image holds 1 frame (0)")
-        return describe_image(path, images, color)
-    if color is not None:
-        raise InputError(f"--color {color}: only a depth image takes a colour image; {path} is a {kind} file")
+    if kind == "image" or color is not None:  # the reader checks --frame and --color
+        return describe_image(read_frame(path, topic, index, images, color), path, images, color)
     if kind == "pcd":
         from clearcli.io.pcd import pcd_header_fields
 

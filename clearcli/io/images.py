@@ -39,7 +39,8 @@ INTRINSICS_NAMES = (
 )
 
 
-def _settings(images: "ImageSettings | None") -> "ImageSettings":
+def or_defaults(images: "ImageSettings | None") -> "ImageSettings":
+    """``images``, or the [images] defaults when a caller has none (a library call)."""
     if images is None:
         from clearcli.settings.images import ImageSettings
 
@@ -134,7 +135,7 @@ def color_pair(depth_path: Path, images: "ImageSettings") -> Path | None:
 
 def frame_name(path: Path, images: "ImageSettings | None" = None) -> str:
     """The name a depth image's outputs take: its stem without the depth suffix."""
-    suffix = _settings(images).depth_suffix
+    suffix = or_defaults(images).depth_suffix
     stem = path.stem
     return stem[: len(stem) - len(suffix)] if stem.endswith(suffix) and len(stem) > len(suffix) else stem
 
@@ -185,7 +186,7 @@ def read_image_frame(path: Path, images: "ImageSettings | None" = None, color: P
     from clearcli.io.intrinsics import back_project
 
     path = Path(path)
-    images = _settings(images)
+    images = or_defaults(images)
     color_path = Path(color) if color is not None else color_pair(path, images)
     # The colour PNG decodes in a second thread while the depth is read and projected:
     # zlib lets go of the GIL, and the two decodes are most of a pair's reading time.

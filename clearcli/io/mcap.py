@@ -213,17 +213,17 @@ def _topic_list(summary: Any) -> str:
 def choose_topic(summary: Any, topic: str | None) -> str:
     """The point-cloud topic to read: `topic` if given (checked), else the only one there is.
     ``summary``: an `McapSummary`, or a bag's summary (`clearcli.io.rosbag.BagSummary`):
-    anything with ``path``, ``topics()``, ``pointcloud_topics()`` and ``damage``.
+    anything with ``path``, ``topics()``, ``pointcloud_topics()``, ``image_topics()``,
+    ``depth_topics()`` and ``damage``.
 
     An MCAP log with no point-cloud topic may hold depth images instead: its one depth
     image topic is read (`--topic` names it when there are several)."""
     path = summary.path
-    images = hasattr(summary, "depth_topics")
     if topic is not None:
         types = dict(summary.topics())
         if topic not in types:
             raise InputError(f"{path}: no topic {topic!r}; topics: {_topic_list(summary)}")
-        if images and types[topic] in IMAGE_SCHEMAS:
+        if types[topic] in IMAGE_SCHEMAS:
             return topic  # a depth image topic (its encoding is checked when read)
         if types[topic] in COMPRESSED_SCHEMAS:
             raise InputError(
@@ -243,7 +243,7 @@ def choose_topic(summary: Any, topic: str | None) -> str:
             f"{path}: truncated or corrupt {what}: it breaks {summary.damage} before any "
             f"point-cloud topic; topics seen: {_topic_list(summary)}"
         )
-    if not candidates and images and summary.depth_topics():
+    if not candidates and summary.depth_topics():
         candidates = summary.depth_topics()
         if len(candidates) > 1:
             raise InputError(f"{path}: several depth image topics ({', '.join(candidates)}); choose one with --topic")
@@ -255,7 +255,7 @@ def choose_topic(summary: Any, topic: str | None) -> str:
                 f"{path}: depth is recorded only compressed ({', '.join(compressed)}); clear reads raw depth images "
                 "(sensor_msgs/Image 16UC1 or 32FC1): record the raw topic, or decompress the log first"
             )
-        hint = "; for an image topic holding depth, name it with --topic" if images and summary.image_topics() else ""
+        hint = "; for an image topic holding depth, name it with --topic" if summary.image_topics() else ""
         raise InputError(f"no point-cloud topic in {path}; topics: {_topic_list(summary)}{hint}")
     if len(candidates) > 1:
         raise InputError(

@@ -34,6 +34,8 @@ _COLOR_WINDOW_NS = 1_000_000_000
 _noted: set[tuple[str, str]] = set()
 # (log path, camera info topic, mtime, size) -> [(log time ns, CameraModel)], read once per log
 _infos: dict[tuple[str, str, int, int], list[tuple[int, Any]]] = {}
+# (log path, option topic, mtime, size) -> the recorded depth unit (m), read once per log
+_units: dict[tuple[str, str, int, int], float | None] = {}
 
 
 def _note(path: Path, text: str) -> None:
@@ -70,13 +72,18 @@ def camera_info_topic(summary: "McapSummary", depth_topic: str) -> str:
     )
 
 
-def _camera_at(log: "LogAccess", topic: str, log_time_ns: int) -> Any:
-    path = log.path
+def _log_key(path: Path, topic: str) -> tuple[str, str, int, int]:
+    """What a per-log cache is keyed by: a rewritten log (other mtime or size) is read again."""
     try:
         st = path.stat()
-        key = (str(path.resolve()), topic, st.st_mtime_ns, st.st_size)  # a rewritten log is read again
+        return (str(path.resolve()), topic, st.st_mtime_ns, st.st_size)
     except OSError:
-        key = (str(path), topic, 0, 0)
+        return (str(path), topic, 0, 0)
+
+
+def _camera_at(log: "LogAccess", topic: str, log_time_ns: int) -> Any:
+    path = log.path
+    key = _log_key(path, topic)
     if key not in _infos:
         models: list[tuple[int, Any]] = []
         for _, msg, log_time in log.decoded(topic):
@@ -151,15 +158,19 @@ def _recorded_depth_units(log: "LogAccess", depth_topic: str) -> float | None:
     option = f"{sensor}/option/Depth Units/value"
     if option not in dict(log.summary.topics()):
         return None
-    from clearcli.io.messages import message_field
+    key = _log_key(log.path, option)
+    if key not in _units:
+        from clearcli.io.messages import message_field
 
-    for _, msg, _ in log.decoded(option):
-        # a float32 in the bag: 0.001 arrives as 0.0010000000475; seven digits are what it holds
-        value = float(f"{float(message_field(msg, 'data', default=0.0) or 0.0):.7g}")
-        if not (value > 0 and value < 1):
-            raise InputError(f"{log.path}: {option} is {value}, not a depth unit in metres; give --depth-scale")
-        return value
-    return None
+        value = None
+        for _, msg, _ in log.decoded(option):
+            # a float32 in the bag: 0.001 arrives as 0.0010000000475; seven digits are what it holds
+            value = float(f"{float(message_field(msg, 'data', default=0.0) or 0.0):.7g}")
+            if not (value > 0 and value < 1):
+                raise InputError(f"{log.path}: {option} is {value}, not a depth unit in metres; give --depth-scale")
+            break
+        _units[key] = value
+    return _units[key]
 
 
 def depth_frame(
@@ -167,10 +178,10 @@ def depth_frame(
     source: str, images: Any = None,
 ) -> Frame:
     """The organized frame of one depth image message (see the module)."""
-    from clearcli.io.images import _settings
+    from clearcli.io.images import or_defaults
     from clearcli.io.intrinsics import back_project
 
-    images = _settings(images)
+    images = or_defaults(images)
     depth = depth_m(msg, source, _recorded_depth_units(log, topic) or images.depth_scale_m)
     h, w = depth.shape
     model = _camera_at(log, camera_info_topic(log.summary, topic), log_time_ns)

@@ -9,15 +9,12 @@ from typing import Any, Sequence
 import numpy as np
 
 
-def _edge(mask: np.ndarray) -> np.ndarray:
-    """Pixels of ``mask`` with a 4-neighbour outside it (the image border counts as outside)."""
-    inner = mask.copy()
-    inner[1:, :] &= mask[:-1, :]
-    inner[:-1, :] &= mask[1:, :]
-    inner[:, 1:] &= mask[:, :-1]
-    inner[:, :-1] &= mask[:, 1:]
-    inner[0, :] = inner[-1, :] = False
-    inner[:, 0] = inner[:, -1] = False
+def mask_edge(mask: np.ndarray) -> np.ndarray:
+    """Pixels of ``mask`` (H, W) with a 4-neighbour outside it (the image border counts as
+    outside): the outline drawn here, and the boundary the Boundary metric scores
+    (clearcli/evaluate/osd.py)."""
+    padded = np.pad(mask, 1, constant_values=False)
+    inner = padded[:-2, 1:-1] & padded[2:, 1:-1] & padded[1:-1, :-2] & padded[1:-1, 2:]
     return mask & ~inner
 
 
@@ -48,7 +45,7 @@ def outlined(
         mask = np.zeros(h * w, dtype=bool)
         mask[np.asarray(indices, dtype=np.int64)] = True
         mask = mask.reshape(h, w)
-        line = _thicken(_edge(mask), mask, width_px)
+        line = _thicken(mask_edge(mask), mask, width_px)
         image[line] = np.round(np.clip(np.asarray(color[:3], dtype=float), 0, 1) * 255).astype(np.uint8)
     return image
 

@@ -173,9 +173,9 @@ def expand(
     """The frames of ``inputs`` in order (folders expanded), and the inputs that fail.
     ``images``: the naming rule of depth images ([images]; defaults when None)."""
     from clearcli.errors import EXIT_INPUT, ClearError
-    from clearcli.io.images import _settings, frame_name
+    from clearcli.io.images import or_defaults, frame_name
 
-    images = _settings(images)
+    images = or_defaults(images)
 
     items: list[Item] = []
     for raw in inputs:
