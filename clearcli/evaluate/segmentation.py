@@ -79,16 +79,32 @@ class Overlaps:
     true_size: np.ndarray  # (T,) float: points of each true object
 
 
+def _joint_counts(pred_obj: np.ndarray, true_obj: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(the predicted ids present, the true ids present, counts[P, T] of points with each
+    pair), 0 (background) included. Object ids are small non-negative integers, so one
+    bincount over pred * (T + 1) + true does it (a 640 x 480 frame: ~3 ms, where
+    np.unique and np.add.at took ~90)."""
+    pred_obj, true_obj = np.asarray(pred_obj, dtype=np.int64), np.asarray(true_obj, dtype=np.int64)
+    n_p = int(pred_obj.max(initial=0)) + 1
+    n_t = int(true_obj.max(initial=0)) + 1
+    if n_p * n_t <= 10_000_000:
+        full = np.bincount(pred_obj * n_t + true_obj, minlength=n_p * n_t).reshape(n_p, n_t)
+        p_ids, t_ids = np.nonzero(full.sum(axis=1))[0], np.nonzero(full.sum(axis=0))[0]
+        return p_ids, t_ids, full[np.ix_(p_ids, t_ids)]
+    p_ids, p_inv = np.unique(pred_obj, return_inverse=True)  # ids too large for a dense table
+    t_ids, t_inv = np.unique(true_obj, return_inverse=True)
+    counts = np.zeros((p_ids.size, t_ids.size), dtype=np.int64)
+    np.add.at(counts, (p_inv, t_inv), 1)
+    return p_ids, t_ids, counts
+
+
 def overlaps(pred_labels: np.ndarray, true_labels: np.ndarray) -> Overlaps:
     """Every predicted object against every true object, in one pass over the points;
     ValueError when the two do not label the same number of points."""
     pred, true = object_ids(pred_labels), object_ids(true_labels)
     if pred.shape != true.shape:
         raise ValueError(f"label arrays differ in length: {pred.size} predicted, {true.size} true")
-    p_ids, p_inv = np.unique(pred, return_inverse=True)
-    t_ids, t_inv = np.unique(true, return_inverse=True)
-    counts = np.zeros((p_ids.size, t_ids.size), dtype=np.int64)
-    np.add.at(counts, (p_inv, t_inv), 1)
+    p_ids, t_ids, counts = _joint_counts(pred, true)
     p_keep, t_keep = p_ids != 0, t_ids != 0
     return Overlaps(
         pred, true, p_ids[p_keep], t_ids[t_keep], counts[np.ix_(p_keep, t_keep)].astype(np.float64),
@@ -98,10 +114,7 @@ def overlaps(pred_labels: np.ndarray, true_labels: np.ndarray) -> Overlaps:
 
 def overlap_matrix(pred_obj: np.ndarray, true_obj: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(pred ids, true ids, counts[P, T] of shared points) for nonzero ids."""
-    p_ids, p_inv = np.unique(pred_obj, return_inverse=True)
-    t_ids, t_inv = np.unique(true_obj, return_inverse=True)
-    counts = np.zeros((p_ids.size, t_ids.size), dtype=np.int64)
-    np.add.at(counts, (p_inv, t_inv), 1)
+    p_ids, t_ids, counts = _joint_counts(pred_obj, true_obj)
     p_keep = p_ids != 0
     t_keep = t_ids != 0
     return p_ids[p_keep], t_ids[t_keep], counts[np.ix_(p_keep, t_keep)]
