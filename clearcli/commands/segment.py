@@ -9,7 +9,14 @@ JSON (`--json`), envelope {"schema": "clear.segmentation", "version": 1, ...}:
     table         {normal: [3] unit, pointing up (towards the camera side),
                    offset: float d of n . p + d = 0 (m),
                    polygon: [[x, y, z], ...] convex hull on the plane, in order,
-                   n_points: int table inlier points}
+                   n_points: int table inlier points,
+                   planes: [{normal: [3], offset: float, area_m2: float (its largest
+                             connected piece), standing_points: int (points standing
+                             on it inside its hull, minus those below it), chosen: bool,
+                             why: str}] every plane RANSAC found, the chosen one first
+                             (README "Which plane is the table"),
+                   beyond_edge_m2: float area (m^2) the hull lost when pieces of the
+                             plane seen beyond the table's edge were dropped (0: none)}
     objects       [{id: int (k, from 0), label: int (10 (k + 1), as in -o),
                     n_points: int, centroid: [3],
                     obb: {center: [3], axes: [[3] x 3] rows, the third the table normal,

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
+
 from clearcli.io.frames import object_label
 from clearcli.rounding import rounded, timings
 
@@ -26,6 +28,19 @@ def segmentation_payload(seg: "Segmentation") -> dict[str, Any]:
             "offset": rounded(seg.table.offset),
             "polygon": rounded(seg.table_polygon),
             "n_points": int(seg.table_indices.shape[0]),
+            # how the support was chosen (README "Which plane is the table")
+            "planes": [
+                {
+                    "normal": rounded(np.asarray(v.normal)),
+                    "offset": rounded(v.offset_m),
+                    "area_m2": rounded(v.area_m2),
+                    "standing_points": int(v.standing_points),
+                    "chosen": bool(v.chosen),
+                    "why": v.why,
+                }
+                for v in seg.support
+            ],
+            "beyond_edge_m2": rounded(seg.beyond_edge_m2),
         },
         "objects": [
             {

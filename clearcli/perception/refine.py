@@ -143,7 +143,7 @@ def _rings(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
     return merge_rings(
         seg_of_voxel, ctx.vox.centroids @ basis.T, ctx.voxel_height, ctx.sv.voxel_label,
         ctx.sv.normals @ basis.T, ctx.sv.centroids @ basis.T, wall, s.rim_tolerance_m,
-        s.ring_max_radius_m, s.ring_max_residual, s.ring_min_cover_deg, min_vox,
+        s.ring_max_radius_m, s.ring_max_residual, s.ring_min_cover_deg, min_vox, s.ring_max_off_share,
     )
 
 

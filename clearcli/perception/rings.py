@@ -34,9 +34,8 @@ _MIN_RADIUS_M = 0.015
 _MIN_FACING = 0.3
 _ANGLE_BINS = 36
 # rim points farther than this many times the allowed RMS from the circle are not rim
-# (a handle, a knob); at least this share of a band must be rim
+# (a handle, a knob)
 _TRIM = 2.0
-_MIN_INLIERS = 0.8
 
 
 def fit_circle(xy: np.ndarray) -> tuple[np.ndarray, float]:
@@ -50,14 +49,16 @@ def fit_circle(xy: np.ndarray) -> tuple[np.ndarray, float]:
     return centre, float(np.sqrt(max(r2, 0.0)))
 
 
-def fit_rim(xy: np.ndarray, max_radius_m: float, max_residual: float) -> tuple[np.ndarray, float, np.ndarray] | None:
+def fit_rim(
+    xy: np.ndarray, max_radius_m: float, max_residual: float, max_off_share: float = 0.2
+) -> tuple[np.ndarray, float, np.ndarray] | None:
     """(centre, radius, inlier mask) of the rim circle through ``xy`` (N, 2), or None.
 
     A mug's handle and a lid's knob reach into a rim band (their tops are within the
     band's tolerance of the rim's) and pull a plain least-squares circle off the rim:
     the PCL tutorial's mug fits at 0.13 of its radius with its handle, 0.07 without.
     So the circle is fitted again to the points within ``_TRIM`` x ``max_residual`` of
-    the radius (twice), and kept when at least ``_MIN_INLIERS`` of the band lie there and
+    the radius (twice), and kept when at most ``max_off_share`` of the band lie off it and
     those fit within ``max_residual`` (RMS, as a share of the radius). A filled top (a
     can's, a box's) has most of its points far inside any circle through its edge: it
     fails the share, as it failed the plain residual before.
@@ -74,7 +75,7 @@ def fit_rim(xy: np.ndarray, max_radius_m: float, max_residual: float) -> tuple[n
         centre, radius = fit_circle(xy[inlier])
     resid = np.linalg.norm(xy - centre, axis=1) - radius
     inlier = np.abs(resid) <= _TRIM * max_residual * radius
-    if not (_MIN_RADIUS_M <= radius <= max_radius_m) or inlier.mean() < _MIN_INLIERS:
+    if not (_MIN_RADIUS_M <= radius <= max_radius_m) or inlier.mean() < 1.0 - max_off_share:
         return None
     if np.sqrt(np.mean(resid[inlier] ** 2)) > max_residual * radius:
         return None
@@ -91,6 +92,7 @@ def ring_pair(
     max_radius_m: float,
     max_residual: float,
     min_cover_deg: float,
+    max_off_share: float = 0.2,
 ) -> bool:
     """Are two segments the inner and outer walls of one container? ``band_*`` (N, 2):
     their rim bands in the table plane; ``normals_*`` / ``points_*`` (K, 2): their
@@ -98,7 +100,7 @@ def ring_pair(
     if band_a.shape[0] < 3 or band_b.shape[0] < 3:
         return False
     both = np.vstack([band_a, band_b])
-    fitted = fit_rim(both, max_radius_m, max_residual)
+    fitted = fit_rim(both, max_radius_m, max_residual, max_off_share)
     if fitted is None:
         return False
     centre, radius, inlier = fitted
@@ -131,6 +133,7 @@ def merge_rings(
     max_residual: float,
     min_cover_deg: float,
     min_voxels: int,
+    max_off_share: float = 0.2,
 ) -> np.ndarray:
     """(V,) segment per voxel after joining inner and outer walls of containers.
 
@@ -169,7 +172,7 @@ def merge_rings(
                 continue
             if ring_pair(
                 band[a], band[b], sv_normals_xy[wa], sv_xy[wa], sv_normals_xy[wb], sv_xy[wb],
-                max_radius_m, max_residual, min_cover_deg,
+                max_radius_m, max_residual, min_cover_deg, max_off_share,
             ):
                 joined.append((a, b))
     return join_pairs(seg_of_voxel, joined, n_seg)

@@ -134,6 +134,30 @@ def _fit_to_density(points: np.ndarray, settings: SegmentSettings) -> SegmentSet
     )
 
 
+def _without_what_lies_beyond(frame: Frame, idx: np.ndarray, pts: np.ndarray, fit, table_mask, prism_mask, settings):
+    """The table without the pieces of its plane seen beyond its own edge (table.py,
+    `beyond_the_edge`): its hull drawn again round the rest, and the prism with it, so
+    that a chair's back standing over a seat in the table's plane is no object.
+    Returns (fit, table mask, prism mask, area of the plane dropped in m^2)."""
+    import dataclasses
+
+    from clearcli.perception.table import beyond_the_edge, convex_hull_2d, polygon_area, table_and_prism
+
+    on_table = np.flatnonzero(table_mask)
+    drop, solid = beyond_the_edge(frame.points, frame.shape, idx[on_table], fit.plane, settings)
+    if not drop.any():
+        return fit, table_mask, prism_mask, 0.0
+    kept = pts[on_table[solid]]
+    kept = kept[fit.inside(kept)]  # the new hull lies within the old one
+    if kept.shape[0] < 3:
+        return fit, table_mask, prism_mask, 0.0
+    before = polygon_area(fit.polygon_2d)
+    fit = dataclasses.replace(fit, polygon_2d=convex_hull_2d(fit.to_2d(kept)))
+    table_mask, prism_mask, _ = table_and_prism(pts, fit, settings)
+    table_mask[on_table[drop]] = False
+    return fit, table_mask, prism_mask, max(0.0, before - polygon_area(fit.polygon_2d))
+
+
 def segment(frame: Frame, settings: SegmentSettings) -> Segmentation:
     """Segment the objects on the table of ``frame``.
 
@@ -168,6 +192,9 @@ def segment(frame: Frame, settings: SegmentSettings) -> Segmentation:
     # 2. table, hull, prism
     fit = find_table(pts, settings, organized, frame.source)
     table_mask, prism_mask, _ = table_and_prism(pts, fit, settings)
+    beyond_m2 = 0.0
+    if organized and settings.beyond_edge_check:
+        fit, table_mask, prism_mask, beyond_m2 = _without_what_lies_beyond(frame, idx, pts, fit, table_mask, prism_mask, settings)
     t2 = time.perf_counter()
     timings["table"] = t2 - t1
 
@@ -243,6 +270,8 @@ def segment(frame: Frame, settings: SegmentSettings) -> Segmentation:
         table_indices=idx[table_mask],
         objects=tuple(objects),
         timings_s=timings,
+        support=fit.planes,
+        beyond_edge_m2=beyond_m2,
         source=frame.source,
         frame_id=frame.frame_id,
         stamp_s=frame.stamp_s,

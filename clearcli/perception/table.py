@@ -10,13 +10,13 @@ itself a plane, and a book's hull holds little.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from clearcli.errors import SceneError
 from clearcli.settings.segment import SegmentSettings
-from clearcli.perception.types import TablePlane
+from clearcli.perception.types import PlaneVerdict, TablePlane
 
 # Height band (m) in which points count as "standing on" a candidate plane when scoring
 # candidates: tabletop objects, not furniture standing on a floor.
@@ -37,6 +37,12 @@ _RANSAC_CHUNK = 50
 # of a wall (or of a big box's front face) lies there off the wall's bottom edge; both
 # within a few mm. What stands on a table, or under one seen from below, is inside.
 _EDGE_BAND_M = 0.02
+# beyond_the_edge(): pieces of the plane smaller than this many pixels are not judged; a
+# piece is beyond a gap when at least this many looks at the gap see through it, and
+# this many times as many as see something nearer
+_EDGE_MIN_PIECE_PX = 200
+_EDGE_MIN_CELLS = 5
+_EDGE_RATIO = 2.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -46,6 +52,8 @@ class TableFit:
     origin: np.ndarray  # (3,) a point on the plane, the 2D origin
     basis: np.ndarray  # (2, 3) rows u, v: in-plane unit axes; u x v = normal
     camera_is_origin: bool  # the cloud is in a camera frame (sensor at the origin, above the table)
+    # every plane RANSAC found and what became of it (the chosen one first), for --json
+    planes: tuple[PlaneVerdict, ...] = ()
 
     @property
     def polygon(self) -> np.ndarray:
@@ -57,6 +65,10 @@ class TableFit:
 
     def inside(self, points: np.ndarray, margin_m: float = 0.0) -> np.ndarray:
         return inside_convex_raster(self.to_2d(points), self.polygon_2d, margin_m)
+
+
+def _tuple(v: np.ndarray) -> tuple[float, float, float]:
+    return (float(v[0]), float(v[1]), float(v[2]))
 
 
 def project(points: np.ndarray, axes: np.ndarray) -> np.ndarray:
@@ -131,6 +143,12 @@ def convex_hull_2d(points_2d: np.ndarray) -> np.ndarray:
     except QhullError as exc:
         raise SceneError(f"no table: the table points are degenerate ({str(exc).splitlines()[0]})") from None
     return points_2d[hull.vertices]
+
+
+def polygon_area(polygon_2d: np.ndarray) -> float:
+    """Area (m^2) of a simple polygon (K, 2) (the shoelace formula)."""
+    x, y = polygon_2d[:, 0], polygon_2d[:, 1]
+    return float(abs(x @ np.roll(y, -1) - y @ np.roll(x, -1)) / 2.0)
 
 
 def inside_convex(points_2d: np.ndarray, polygon_2d: np.ndarray, margin_m: float = 0.0) -> np.ndarray:
@@ -272,6 +290,7 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
     dist = settings.plane_distance_m
 
     candidates: list[_Candidate] = []
+    small: list[PlaneVerdict] = []
     remaining = np.ones(sample.shape[0], dtype=bool)
     for _ in range(settings.plane_candidates):
         idx = np.flatnonzero(remaining)
@@ -286,6 +305,8 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
         basis = plane_basis(n)
         comp, area = largest_component(project(sample[inl], basis), settings.table_cell_m, settings.table_join_gap_m)
         if area < settings.table_min_area_m2:
+            small.append(PlaneVerdict(_tuple(n), float(d), area, 0, False,
+                                      f"smaller than table_min_area_m2 ({area:.3f} < {settings.table_min_area_m2:g} m^2)"))
             continue
         candidates.append(_Candidate(n, d, inl[comp], area, on_plane))
     if not candidates:
@@ -301,10 +322,14 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
     loose_range2 = np.einsum("ij,ij->i", loose, loose)
 
     best: tuple[tuple[int, float], TableFit, int, int] | None = None
+    far: list[PlaneVerdict] = []
+    scored: list[tuple[TableFit, int, float]] = []
     for c in candidates:
         n, d = fit_plane_lsq(sample[c.members])
         camera_is_origin = abs(d) >= _MIN_CAMERA_HEIGHT_M
         if camera_is_origin and abs(d) > settings.table_max_distance_m:
+            far.append(PlaneVerdict(_tuple(n), float(d), c.area_m2, 0, False,
+                                    f"farther than table_max_distance_m ({abs(d):.2f} > {settings.table_max_distance_m:g} m)"))
             continue
         basis = plane_basis(n)
         origin = -d * n
@@ -330,6 +355,7 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
         fit = TableFit(TablePlane(normal=n, offset=float(d)), poly, origin, basis, camera_is_origin)
         # noise lies on both sides of a plane, objects on one: score the difference
         key = (abs(above - below), c.area_m2)
+        scored.append((fit, abs(above - below), c.area_m2))
         if best is None or key > best[0]:
             best = (key, fit, above, below)
     if best is None:
@@ -338,6 +364,15 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
             f"{settings.table_max_distance_m} m from the camera; is a table in reach?"
         )
     _, fit, above, below = best
+    chosen_standing = abs(above - below)
+    verdicts = [
+        PlaneVerdict(_tuple(f.plane.normal), f.plane.offset, area, standing, f is fit,
+                     "the most points standing on it" if f is fit else
+                     f"fewer points standing on it ({standing} against {chosen_standing})")
+        for f, standing, area in scored
+    ]
+    verdicts.sort(key=lambda v: not v.chosen)
+    fit = replace(fit, planes=tuple(verdicts + far + small))
 
     # Seen from below: what stands on the table is on the far side from the camera (the
     # camera side of a table's underside holds nothing inside its hull), or, for a camera
@@ -382,3 +417,137 @@ def table_and_prism(
     table[cand[ins & near[cand]]] = True
     prism[cand[ins & band[cand]]] = True
     return table, prism, h
+
+
+def beyond_the_edge(
+    points: np.ndarray,
+    shape: tuple[int, int],
+    table_pixels: np.ndarray,
+    plane: TablePlane,
+    settings: SegmentSettings,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Two (T,) bool masks over ``table_pixels`` (flat pixel indices of the table's points
+    in the organized ``points`` of ``shape``, a camera frame): the pieces of the plane
+    that lie beyond a gap the camera sees through, which are not the table; and the
+    pieces that are (the largest and those judged to stay), whose hull is the table's
+    when something was dropped (stray pixels between pieces do not stretch it).
+
+    A chair's seat, a second table or a shelf behind the table can lie within a
+    centimetre of the table's plane and within ``table_join_gap_m`` of it: the plane
+    alone takes it for table, the hull grows over it, and the chair's back becomes an
+    object. On the pixel grid the table's points fall into pieces where the range jumps
+    (as in edges.py). Between the largest piece and another one lies the area their
+    joint hull adds to the largest piece's hull. Where that area is table hidden by
+    objects, the pixel looking at a point of it shows something nearer (a mug in front
+    of the table behind it); where it is no table, the pixel looks through it to
+    something farther (the floor under a gap). A piece is beyond the
+    edge when, of those looks (one per ``table_cell_m`` cell of the added area), at least
+    ``_EDGE_MIN_CELLS`` see through and at least ``_EDGE_RATIO`` times as many see
+    through as see something nearer. Pieces smaller than ``_EDGE_MIN_PIECE_PX`` are left
+    alone (noise)."""
+    from scipy import ndimage
+
+    height, width = shape
+    drop = np.zeros(table_pixels.shape[0], dtype=bool)
+    if table_pixels.size == 0:
+        return drop, ~drop
+    pts = points.reshape(height, width, 3)
+    # depth along the optical axis (NaN where none): a jump in it is a jump in range
+    # to within the pixel's angle off the axis, and it costs no square roots
+    rng = pts[..., 2]
+    is_table = np.zeros(height * width, dtype=bool)
+    is_table[table_pixels] = True
+    is_table = is_table.reshape(height, width)
+    rel = settings.depth_edge_rel
+    # a table pixel with a jump to its right or lower neighbour belongs to no piece: both
+    # sides of a jump are left out, so no 8-neighbour path crosses it
+    cut = np.zeros_like(is_table)
+    with np.errstate(invalid="ignore"):
+        for dv, du in ((0, 1), (1, 0)):
+            a = rng[: height - dv, : width - du]
+            b = rng[dv:, du:]
+            jump = ~(np.abs(a - b) <= rel * np.minimum(a, b))
+            cut[: height - dv, : width - du] |= jump
+            cut[dv:, du:] |= jump
+    pieces, n = ndimage.label(is_table & ~cut, structure=np.ones((3, 3), dtype=bool))
+    if n < 2:
+        return drop, ~drop
+    sizes = np.bincount(pieces.ravel(), minlength=n + 1)
+    sizes[0] = 0
+    main = int(sizes.argmax())
+    others = [k for k in range(1, n + 1) if k != main and sizes[k] >= _EDGE_MIN_PIECE_PX]
+    if not others:
+        return drop, ~drop
+    camera = _pinhole_of(pts, np.isfinite(rng))
+    if camera is None:
+        return drop, ~drop
+    basis = plane_basis(plane.normal)
+    origin = -plane.offset * plane.normal
+    cell = settings.table_cell_m
+    flat_pieces = pieces.ravel()
+    flat_pts = points.reshape(-1, 3).astype(np.float64)
+
+    def cells(k: int) -> np.ndarray:
+        xy = project(flat_pts[flat_pieces == k], basis) - origin @ basis.T
+        return np.unique(np.floor(xy / cell).astype(np.int64), axis=0)
+
+    main_cells = cells(main)
+    main_hull = convex_hull_2d((main_cells + 0.5) * cell)
+    gone = np.zeros(height * width, dtype=bool)
+    for k in others:
+        own = cells(k)
+        both = convex_hull_2d((np.vstack([main_cells, own]) + 0.5) * cell)
+        lo = np.floor(both.min(axis=0) / cell).astype(np.int64)
+        hi = np.ceil(both.max(axis=0) / cell).astype(np.int64)
+        gx, gy = np.meshgrid(np.arange(lo[0], hi[0] + 1), np.arange(lo[1], hi[1] + 1), indexing="ij")
+        grid = np.column_stack([gx.ravel(), gy.ravel()])
+        centres = (grid + 0.5) * cell
+        added = inside_convex(centres, both) & ~inside_convex(centres, main_hull, cell)
+        if added.any():  # not the piece's own cells
+            mine = {tuple(c) for c in own.tolist()}
+            added &= np.array([tuple(c) not in mine for c in grid.tolist()])
+        looks = origin + centres[added] @ basis  # points of the plane in the added area
+        through = nearer = 0
+        if looks.shape[0]:
+            u, v = camera(looks)
+            ok = (u >= 0) & (u < width) & (v >= 0) & (v < height)
+            seen = rng[v[ok], u[ok]]
+            want = looks[ok, 2]
+            nearer = int((seen < want * (1.0 - rel)).sum())
+            # farther than the plane: nothing stands there. A pixel with no depth tells
+            # nothing (a shadow behind an object is one too)
+            through = int((seen > want * (1.0 + rel)).sum())
+        if through >= _EDGE_MIN_CELLS and through >= _EDGE_RATIO * nearer:
+            gone |= flat_pieces == k
+    solid = (flat_pieces == main) | np.isin(flat_pieces, [k for k in others]) & ~gone
+    return gone[table_pixels], solid[table_pixels]
+
+
+def _pinhole_of(pts: np.ndarray, finite: np.ndarray):
+    """The pixel of a point, as a function of (N, 3) points -> (columns, rows), fitted to
+    an organized cloud's own points (column = fx X/Z + cx, row = fy Y/Z + cy, least
+    squares on a sample); None when the cloud is not a pinhole image (a fit off by more
+    than a pixel)."""
+    rows, cols = np.nonzero(finite & (pts[..., 2] > 0))
+    if rows.size < 100:
+        return None
+    pick = np.linspace(0, rows.size - 1, 2000).astype(np.int64)
+    rows, cols = rows[pick], cols[pick]
+    p = pts[rows, cols].astype(np.float64)
+    x, y = p[:, 0] / p[:, 2], p[:, 1] / p[:, 2]
+    fu, *_ = np.linalg.lstsq(np.column_stack([x, np.ones_like(x)]), cols.astype(np.float64), rcond=None)
+    fv, *_ = np.linalg.lstsq(np.column_stack([y, np.ones_like(y)]), rows.astype(np.float64), rcond=None)
+    err = max(np.abs(fu[0] * x + fu[1] - cols).max(), np.abs(fv[0] * y + fv[1] - rows).max())
+    if not np.isfinite(err) or err > 1.0:
+        return None
+
+    def pixel(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        z = np.where(q[:, 2] > 1e-6, q[:, 2], np.nan)
+        with np.errstate(invalid="ignore"):
+            u = np.floor(fu[0] * q[:, 0] / z + fu[1] + 0.5)
+            v = np.floor(fv[0] * q[:, 1] / z + fv[1] + 0.5)
+        bad = ~(np.isfinite(u) & np.isfinite(v))
+        u[bad], v[bad] = -1, -1
+        return u.astype(np.int64), v.astype(np.int64)
+
+    return pixel

@@ -27,6 +27,20 @@ class TablePlane:
         return points - np.outer(self.height_of(points), self.normal)
 
 
+@dataclass(frozen=True)
+class PlaneVerdict:
+    """One candidate plane: in the sensor frame (unit normal towards the camera side for
+    a camera frame), its largest connected piece's area, the points standing on it inside
+    its hull, and why it was taken or not."""
+
+    normal: tuple[float, float, float]
+    offset_m: float
+    area_m2: float
+    standing_points: int  # above minus below: objects stand on one side, noise on both
+    chosen: bool
+    why: str
+
+
 @dataclass(frozen=True, eq=False)
 class SegmentedObject:
     """One object: its points are ``frame.points[indices]``.
@@ -64,6 +78,10 @@ class Segmentation:
     table_indices: np.ndarray
     objects: tuple[SegmentedObject, ...]
     timings_s: Mapping[str, float] = field(default_factory=dict)
+    # how the support was chosen: every candidate plane and its verdict, the area of the
+    # plane dropped as lying beyond the table's edge (m^2); and whether colour was used
+    support: tuple[PlaneVerdict, ...] = ()
+    beyond_edge_m2: float = 0.0
     source: str = ""
     frame_id: str = ""
     stamp_s: float = 0.0

@@ -49,6 +49,11 @@ class SegmentSettings(Section):
     # the support surface is at most this far (m) from the camera (camera frames only):
     # a table to clear is within reach of a robot beside the sensor, not a far wall
     table_max_distance_m: float = param(3.0, gt=0, le=20)
+    # organized frames: pieces of the table's plane that the table's own edge hides from
+    # its largest piece (a chair's seat, a shelf, a second table behind it: nearer
+    # neighbours on or below the plane, not objects above it) are not table, and the
+    # hull is drawn without them (table.beyond_the_edge)
+    beyond_edge_check: bool = param(True)
     # polygonal prism: heights above the table kept as object points. The lower bound
     # grows with the squared range (depth noise does: ~3 sigma of a Kinect's), so a
     # rough or far table surface does not turn into a carpet of small "objects".
@@ -181,6 +186,12 @@ class SegmentSettings(Section):
     # the two bands together go at least this far round the centre (degrees): one
     # container's walls 290-360, other pairs fitting the circle within 0.15 at most 260
     ring_min_cover_deg: float = param(270.0, ge=0, le=360)
+    # share of the bands that may lie off the circle (more than twice ring_max_residual
+    # of the radius): a mug's handle or a lid's knob, whose tops reach into the band.
+    # The circle is fitted again without them. On the choose part of the foreign frames
+    # the bands of a mug with its handle are 7-20 % off, a cup's 5-15 %; 0 asks every
+    # band point to lie on the rim
+    ring_max_off_share: float = param(0.2, ge=0, lt=1)
     # join a fragment (a small segment with no top face, touching nothing: a strip of
     # a face seen edge-on that the outlier filter thinned) to the nearest segment
     # within this distance (m; 0 = off): three voxels

@@ -78,3 +78,50 @@ def test_table_seen_from_below_is_a_scene_error(box_frame: Frame) -> None:
     flipped = box_frame.points.reshape(480, 640, 3)[::-1].reshape(-1, 3) * np.array([1, -1, 1], np.float32)
     with pytest.raises(SceneError, match="seen from below"):
         segment(replace(box_frame, points=np.ascontiguousarray(flipped)), S)
+
+
+# ------------------------------------------------------------------ beyond the edge
+def _table_gap_seat(gap_shows: str) -> tuple[np.ndarray, np.ndarray]:
+    """An organized pinhole frame (640 x 480, f = 400 px) looking down at a plane 0.4 m
+    below the camera (optical y down): the table where the plane is 0.67-1.2 m ahead,
+    a gap 1.2-1.4 m, a seat on the same plane 1.4-1.7 m, a wall 2.5 m away above. Through
+    the gap the camera sees the floor (1.1 m down: farther) or a box's front face at
+    1.15 m (nearer). Returns (points (N, 3), flat pixels of the plane's points)."""
+    h, w, f = 480, 640, 400.0
+    v, u = np.mgrid[0:h, 0:w].astype(np.float64)
+    rays = np.stack([(u - w / 2) / f, (v - h / 2) / f, np.ones_like(u)], axis=-1)
+    below = v > h / 2
+    z_plane = np.where(below, 0.4 * f / np.maximum(v - h / 2, 1e-9), np.inf)
+    z = np.full((h, w), 2.5)  # the wall
+    table = below & (z_plane <= 1.2)
+    gap = below & (z_plane > 1.2) & (z_plane < 1.4)
+    seat = below & (z_plane >= 1.4) & (z_plane <= 1.7)
+    z[table | seat] = z_plane[table | seat]
+    z[gap] = 1.1 * f / (v[gap] - h / 2) if gap_shows == "floor" else 1.15
+    points = (rays * z[..., None]).reshape(-1, 3).astype(np.float32)
+    return points, np.flatnonzero((table | seat).ravel())
+
+
+def test_a_piece_of_the_plane_seen_beyond_a_gap_is_not_table() -> None:
+    from clearcli.perception.table import beyond_the_edge
+    from clearcli.perception.types import TablePlane
+
+    plane = TablePlane(normal=np.array([0.0, -1.0, 0.0]), offset=0.4)  # up = towards the camera
+    points, on_plane = _table_gap_seat("floor")
+    z = points[on_plane, 2]
+    drop, solid = beyond_the_edge(points, (480, 640), on_plane, plane, S)
+    # the seat (1.4-1.7 m) goes, the table stays: the camera sees the floor in between.
+    # (The pixel rows at a jump belong to no piece: the seat's first and last rows.)
+    assert drop[z >= 1.4].mean() > 0.85 and not drop[z <= 1.2].any()
+    assert solid[z <= 1.2].mean() > 0.95 and not solid[z >= 1.4].any()
+    # the same seat behind a box (nearer than the gap): table hidden by an object, kept
+    points, on_plane = _table_gap_seat("box")
+    drop, _ = beyond_the_edge(points, (480, 640), on_plane, plane, S)
+    assert not drop.any()
+
+
+def test_polygon_area_by_hand() -> None:
+    from clearcli.perception.table import polygon_area
+
+    assert polygon_area(np.array([[0.0, 0.0], [2.0, 0.0], [2.0, 1.0], [0.0, 1.0]])) == pytest.approx(2.0)
+    assert polygon_area(np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])) == pytest.approx(0.5)
