@@ -56,6 +56,8 @@ class Frame:
     stamp_s: time stamp in seconds (log time for MCAP, 0.0 when unknown).
     frame_id: the sensor frame's name ("" when unknown).
     source:  where it came from, for messages ("scene.pcd", "log.mcap#3 /topic").
+    color_note: why a colour offered with the frame was left out ("" when none was, or
+             when it is in ``colors``): a colour image of another size than the depth.
     """
 
     points: np.ndarray
@@ -65,6 +67,7 @@ class Frame:
     stamp_s: float = 0.0
     frame_id: str = ""
     source: str = ""
+    color_note: str = ""
 
     @property
     def n_points(self) -> int:

@@ -18,6 +18,8 @@ resolution, an all-zero depth image.
 
 from __future__ import annotations
 
+import logging
+
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -204,12 +206,17 @@ def read_image_frame(path: Path, images: "ImageSettings | None" = None, color: P
             pending.cancel()
         raise
     colors = None
+    note = ""
     if pending is not None:
         rgb = pending.result()
         if rgb.shape[:2] != (h, w):
-            raise InputError(
+            # the depth alone still makes a frame: segmentation runs on geometry and its
+            # --json says why there was no colour (a warning on stderr says it too)
+            note = (
                 f"{color_path}: the colour image is {rgb.shape[1]} x {rgb.shape[0]} but its depth image {path} is "
-                f"{w} x {h}; give the colour image registered to the depth (aligned_depth_to_color)"
+                f"{w} x {h}; colour left out (give the colour image registered to the depth: aligned_depth_to_color)"
             )
-        colors = np.ascontiguousarray(rgb.reshape(-1, 3))
-    return Frame(points=points, colors=colors, shape=(h, w), source=str(path))
+            logging.getLogger(__name__).warning(note)
+        else:
+            colors = np.ascontiguousarray(rgb.reshape(-1, 3))
+    return Frame(points=points, colors=colors, shape=(h, w), source=str(path), color_note=note)

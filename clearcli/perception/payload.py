@@ -57,5 +57,6 @@ def segmentation_payload(seg: "Segmentation") -> dict[str, Any]:
             }
             for k, obj in enumerate(seg.objects)
         ],
+        "color": {"used": bool(seg.color_used), "note": seg.color_note},
         "timings_s": timings(seg.timings_s),
     }

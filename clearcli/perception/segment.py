@@ -28,6 +28,14 @@ from clearcli.io.frames import Frame
 from clearcli.settings.segment import SegmentSettings
 from clearcli.perception.types import Segmentation, SegmentedObject, TablePlane
 
+# colour_state(): a frame is "all black" or "all saturated" when this share of its points
+# are (every channel at most _BLACK, or at least _SATURATED); "one flat value" when no
+# channel varies by more than _FLAT_COLOR
+_BAD_SHARE = 0.98
+_BLACK = 8
+_SATURATED = 250
+_FLAT_COLOR = 2
+
 
 def principal_axes(points: np.ndarray) -> np.ndarray:
     """(3, 3) rows: unit PCA axes, largest variance first, right-handed."""
@@ -158,6 +166,61 @@ def _without_what_lies_beyond(frame: Frame, idx: np.ndarray, pts: np.ndarray, fi
     return fit, table_mask, prism_mask, max(0.0, before - polygon_area(fit.polygon_2d))
 
 
+def color_state(frame: Frame, organized: bool, settings: SegmentSettings) -> tuple[bool, str]:
+    """(colour used, why or what for): segmentation runs on geometry alone, and says so,
+    when the frame has no colour, when it is all black or all saturated (a camera whose
+    exposure failed, a colour topic that never came), or when no stage would read it."""
+    readers = [name for name, on in (("supervoxels", settings.color_importance > 0),
+                                      ("flat objects", settings.flat_objects and organized)) if on]
+    if frame.colors is None:
+        return False, frame.color_note or "the frame has no colour: geometry alone"
+    if frame.colors.shape != (frame.n_points, 3):
+        return False, f"the colour has {frame.colors.shape[0]} rows for {frame.n_points} points: geometry alone"
+    step = max(1, frame.n_points // 20000)  # a sample judges the whole image
+    finite = np.isfinite(frame.points[::step]).all(axis=1)
+    rgb = frame.colors[::step][finite]
+    if rgb.size == 0:
+        return False, "no finite points"
+    brightest = rgb.max(axis=1)
+    if np.mean(brightest <= _BLACK) >= _BAD_SHARE:
+        return False, "the colour is all black: geometry alone"
+    if np.mean(rgb.min(axis=1) >= _SATURATED) >= _BAD_SHARE:
+        return False, "the colour is all saturated (white): geometry alone"
+    if float(np.ptp(rgb.astype(np.int16), axis=0).max()) <= _FLAT_COLOR:
+        return False, "the colour is one flat value: geometry alone"
+    if not readers:
+        return False, "no stage reads colour with these settings (color_importance 0, flat_objects off or an unorganized cloud)"
+    return True, "read by: " + ", ".join(readers)
+
+
+def _flat_objects(frame: Frame, table_idx: np.ndarray, obj_idx: np.ndarray, objects: list, fit, settings):
+    """(table indices without the flat objects' points, the flat objects): flat.py."""
+    from clearcli.perception.flat import flat_objects
+    from clearcli.perception.table import project
+
+    taken = np.concatenate([o.indices for o in objects]) if objects else np.zeros(0, dtype=np.int64)
+    loose = np.setdiff1d(obj_idx, taken, assume_unique=True)
+    cell = settings.voxel_m
+
+    def area(pixels: np.ndarray) -> float:
+        xy = project(frame.points[pixels].astype(np.float64), fit.basis)
+        return float(np.unique(np.floor(xy / cell).astype(np.int64), axis=0).shape[0]) * cell * cell
+
+    found = flat_objects(
+        frame.points, frame.colors, frame.shape, table_idx, loose, taken,
+        lambda p: fit.plane.height_of(p.astype(np.float64)), area,
+        settings.flat_min_color_delta, settings.flat_min_relief_m, settings.min_object_area_m2,
+        settings.flat_max_area_m2,
+    )
+    if not found:
+        return table_idx, []
+    pixels = np.concatenate(found)
+    table_idx = np.setdiff1d(table_idx, pixels, assume_unique=True)
+    # lying on the table: the box reaches down to it
+    made = [make_object(f, frame.points[f].astype(np.float64), fit.plane, np.inf) for f in found]
+    return table_idx, made
+
+
 def segment(frame: Frame, settings: SegmentSettings) -> Segmentation:
     """Segment the objects on the table of ``frame``.
 
@@ -259,19 +322,31 @@ def segment(frame: Frame, settings: SegmentSettings) -> Segmentation:
             # the prism's lower bound grew with range: so does "resting on the table"
             noise = settings.prism_noise_per_m2 * float(np.min(np.einsum("ij,ij->i", p, p))) if fit.camera_is_origin else 0.0
             objects.append(make_object(obj_idx[members], p, fit.plane, rests + noise))
+    table_idx = idx[table_mask]
+
+    # 4'. objects lying flat, by colour (flat.py)
+    t_flat = time.perf_counter()
+    color_used, color_note = color_state(frame, organized, settings)
+    if color_used and settings.flat_objects:
+        table_idx, found = _flat_objects(frame, table_idx, obj_idx, objects, fit, settings)
+        objects.extend(found)
+    timings["flat"] = time.perf_counter() - t_flat
     timings["objects"] = time.perf_counter() - t0 - sum(
         v for k, v in timings.items() if k not in merged_stages  # (in "merge")
     )
+    timings.setdefault("flat", 0.0)
     timings["total"] = time.perf_counter() - t0
     return Segmentation(
         n_points=frame.n_points,
         table=fit.plane,
         table_polygon=fit.polygon,
-        table_indices=idx[table_mask],
+        table_indices=table_idx if obj_pts.shape[0] >= 4 else idx[table_mask],
         objects=tuple(objects),
         timings_s=timings,
         support=fit.planes,
         beyond_edge_m2=beyond_m2,
+        color_used=color_used if obj_pts.shape[0] >= 4 else False,
+        color_note=color_note if obj_pts.shape[0] >= 4 else "nothing stands on the table",
         source=frame.source,
         frame_id=frame.frame_id,
         stamp_s=frame.stamp_s,

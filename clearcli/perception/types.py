@@ -82,6 +82,8 @@ class Segmentation:
     # plane dropped as lying beyond the table's edge (m^2); and whether colour was used
     support: tuple[PlaneVerdict, ...] = ()
     beyond_edge_m2: float = 0.0
+    color_used: bool = False
+    color_note: str = ""  # what read the colour, or why none did
     source: str = ""
     frame_id: str = ""
     stamp_s: float = 0.0

@@ -196,6 +196,19 @@ class SegmentSettings(Section):
     # a face seen edge-on that the outlier filter thinned) to the nearest segment
     # within this distance (m; 0 = off): three voxels
     fragment_join_m: float = param(0.015, ge=0, le=0.1)
+    # --- 3e. objects lying flat (ours; flat.py) -----------------------------------------
+    # markers, pens, cutlery: 1-2 cm high, inside the table's depth noise; found by
+    # colour on organized frames with colour. A candidate differs from the table's median
+    # colour by at least flat_min_color_delta (CIE76 dE; a just-noticeable difference is
+    # ~2.3, a wood grain 5-10 from its median, a marker 30-60) ...
+    flat_objects: bool = param(True)
+    flat_min_color_delta: float = param(20.0, gt=0, le=200)
+    # ... and stands at least this high (m) above the table around it (median against
+    # median): prints, stains and shadows on the choose frames -5 to +0.9 mm, a black
+    # marker a metre away 2.2 mm
+    flat_min_relief_m: float = param(0.0015, ge=0, le=0.05)
+    # ... and shows at most this much surface (m^2): a flat object, not a cloth's border
+    flat_max_area_m2: float = param(0.02, gt=0, le=1)
     # --- 4. final filter ----------------------------------------------------------------
     # smallest object kept, as visible surface area (m^2, counted in occupied voxels) so
     # that a far object is not dropped for being sampled sparsely. 10 cm^2 ~ 40 voxels:

@@ -78,3 +78,44 @@ def test_plan_and_replay_read_the_rgbd_recording() -> None:
     res = clear("info", log, "--json")
     streams = json.loads(res.stdout)["mcap"]["image_streams"]
     assert {(s["encoding"], s["depth"]) for s in streams} == {("16UC1", True), ("rgb8", False)}
+
+
+def test_bad_colour_is_geometry_alone_and_said_so(tmp_path: Path) -> None:
+    # colour of another size, all black, all saturated, none: segmentation runs on the
+    # depth alone (no flat objects found by colour), exit 0, no traceback, and --json
+    # says why colour was not used
+    import numpy as np
+    from PIL import Image
+
+    src = shared_path("rgbd/uois")
+    shutil.copy(src / "uois_0006_depth.png", tmp_path / "f_depth.png")
+    shutil.copy(src / "camera_params.json", tmp_path / "camera_params.json")
+    good = Image.open(src / "uois_0006_color.png")
+    cases = {
+        "none": None,
+        "size": good.resize((320, 240)),
+        "black": Image.fromarray(np.zeros((480, 640, 3), np.uint8)),
+        "saturated": Image.fromarray(np.full((480, 640, 3), 255, np.uint8)),
+    }
+    docs, errs = {}, {}
+    for case, image in cases.items():
+        colour = tmp_path / "f_color.png"
+        colour.unlink(missing_ok=True)
+        if image is not None:
+            image.save(colour)
+        res = clear("segment", tmp_path / "f_depth.png", "--json")
+        assert res.returncode == 0 and "Traceback" not in res.stderr, (case, res.stderr)
+        docs[case], errs[case] = json.loads(res.stdout), res.stderr
+        assert docs[case]["color"]["used"] is False, case
+    assert "no colour" in docs["none"]["color"]["note"]
+    # the size mismatch is also a warning on stderr, one line
+    assert "320 x 240" in docs["size"]["color"]["note"] and "320 x 240" in errs["size"]
+    assert "all black" in docs["black"]["color"]["note"]
+    assert "saturated" in docs["saturated"]["color"]["note"]
+    # geometry alone: the same objects whatever the bad colour was
+    assert len({len(d["objects"]) for d in docs.values()}) == 1
+    # and with the good colour, colour is read (the flat marker of this frame is one more object)
+    good.save(tmp_path / "f_color.png")
+    res = clear("segment", tmp_path / "f_depth.png", "--json")
+    doc = json.loads(res.stdout)
+    assert doc["color"]["used"] is True and len(doc["objects"]) == len(docs["none"]["objects"]) + 1

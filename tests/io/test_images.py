@@ -84,7 +84,6 @@ def test_a_colour_image_is_never_taken_for_depth(tmp_path: Path) -> None:
         ("truncated", "damaged or truncated"),
         ("not_png", "not a PNG file"),
         ("all_zero", "every pixel of the depth image is 0"),
-        ("colour_size", "colour image is 320 x 240 but its depth image"),
         ("intrinsics_size", "the intrinsics .* are for 1280 x 720"),
         ("no_intrinsics", "needs the camera's intrinsics"),
         ("fx_zero", "fx"),
@@ -105,14 +104,25 @@ def test_bad_image_inputs_are_one_input_error(tmp_path: Path, damage: str, words
         png.write_bytes(b"this is not an image at all\n" * 10)
     elif damage == "all_zero":
         Image.fromarray(np.zeros((480, 640), np.uint16)).save(png)
-    elif damage == "colour_size":
-        Image.open(color).resize((320, 240)).save(color)
     elif damage in ("intrinsics_size", "fx_zero"):
         p = json.loads(params.read_text())
         p.update({"img_width": 1280, "img_height": 720} if damage == "intrinsics_size" else {"fx": 0})
         params.write_text(json.dumps(p))
     with pytest.raises(InputError, match=words):
         read_frame(png)
+
+
+def test_a_colour_image_of_another_size_is_left_out_and_said_so(tmp_path: Path) -> None:
+    # the depth alone makes the frame (segmentation runs on geometry); the frame says why
+    # it has no colour, for --json
+    from PIL import Image
+
+    png = _copy_uois(tmp_path)
+    color = png.with_name("uois_0003_color.png")
+    Image.open(color).resize((320, 240)).save(color)
+    got = read_frame(png)
+    assert got.colors is None and got.n_points == 640 * 480
+    assert "colour image is 320 x 240 but its depth image" in got.color_note and "left out" in got.color_note
 
 
 def test_intrinsics_files_beside_it_that_disagree_ask_which(tmp_path: Path) -> None:
