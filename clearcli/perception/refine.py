@@ -11,6 +11,7 @@ The stages, in order:
   cuts       planar cuts through rising seams (cuts.py; after CPC)      supervoxel level
   occlusion  pieces of one object cut apart by a nearer one (occlusion.py) supervoxel level,
                                                                          pixel grid
+  colors     colour splits a segment along a concave seam (colors.py)    supervoxel level
   steps      two tops at two heights on either side of a line (steps.py)  voxel level
   rims       a container's inner and outer walls (rims.py)                voxel level
   rings      ... and those that do not touch: two arcs of one rim (rings.py) voxel level
@@ -46,6 +47,8 @@ class RefineContext:
     plane: TablePlane
     settings: SegmentSettings  # as given
     scaled: SegmentSettings  # as the supervoxels used them (fitted to an unorganized cloud's density)
+    point_index: np.ndarray | None = None  # (M,) frame index of each point above the table
+    color_used: bool = False  # the frame's colour is usable (segment.color_state)
 
     @cached_property
     def voxel_height(self) -> np.ndarray:
@@ -114,6 +117,17 @@ def _occlusion(seg_of_sv: np.ndarray, ctx: RefineContext) -> np.ndarray:
     )
 
 
+def _colors(seg_of_sv: np.ndarray, ctx: RefineContext) -> np.ndarray:
+    from clearcli.perception.colors import color_splits, supervoxel_lab
+
+    if not ctx.color_used or ctx.point_index is None or ctx.frame.colors is None:
+        return seg_of_sv
+    s = ctx.settings
+    lab = supervoxel_lab(ctx.sv, ctx.vox.point_voxel, ctx.frame.colors[ctx.point_index])
+    min_vox = max(1, int(s.min_object_area_m2 / ctx.scaled.voxel_m**2))
+    return color_splits(seg_of_sv, ctx.sv, lab, s.color_split_delta, min_vox)
+
+
 def _steps(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
     from clearcli.perception.steps import step_splits
 
@@ -164,6 +178,7 @@ STAGES: tuple[Stage, ...] = (
     Stage("stacks", lambda s: s.stack_split, _per_supervoxel(_stacks)),
     Stage("cuts", lambda s: s.planar_cuts, _per_supervoxel(_cuts)),
     Stage("occlusion", lambda s: s.occlusion_merge, _per_supervoxel(_occlusion), needs_grid=True),
+    Stage("colors", lambda s: s.color_split, _per_supervoxel(_colors)),
     Stage("steps", lambda s: s.step_split, _steps),
     Stage("rims", lambda s: s.rim_merge, _rims),
     Stage("rings", lambda s: s.ring_merge, _rings),

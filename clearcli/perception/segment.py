@@ -171,6 +171,7 @@ def color_state(frame: Frame, organized: bool, settings: SegmentSettings) -> tup
     when the frame has no colour, when it is all black or all saturated (a camera whose
     exposure failed, a colour topic that never came), or when no stage would read it."""
     readers = [name for name, on in (("supervoxels", settings.color_importance > 0),
+                                      ("colour splits", settings.color_split),
                                       ("flat objects", settings.flat_objects and organized)) if on]
     if frame.colors is None:
         return False, frame.color_note or "the frame has no colour: geometry alone"
@@ -189,7 +190,7 @@ def color_state(frame: Frame, organized: bool, settings: SegmentSettings) -> tup
     if float(np.ptp(rgb.astype(np.int16), axis=0).max()) <= _FLAT_COLOR:
         return False, "the colour is one flat value: geometry alone"
     if not readers:
-        return False, "no stage reads colour with these settings (color_importance 0, flat_objects off or an unorganized cloud)"
+        return False, "no stage reads colour with these settings (color_importance 0, color_split and flat_objects off)"
     return True, "read by: " + ", ".join(readers)
 
 
@@ -262,6 +263,7 @@ def segment(frame: Frame, settings: SegmentSettings) -> Segmentation:
     timings["table"] = t2 - t1
 
     obj_idx = idx[prism_mask]
+    color_used, color_note = color_state(frame, organized, settings)
     obj_pts = pts[prism_mask]
     objects: list[SegmentedObject] = []
     # "merge": every refinement but the planar cuts, together (each is also timed apart)
@@ -299,7 +301,7 @@ def segment(frame: Frame, settings: SegmentSettings) -> Segmentation:
         timings["lccp"] = t4 - t3
 
         # refinements after LCCP, each a stage of refine.STAGES
-        ctx = RefineContext(frame, organized, vox, sv, fit.plane, settings, seg_settings)
+        ctx = RefineContext(frame, organized, vox, sv, fit.plane, settings, seg_settings, obj_idx, color_used)
         seg_of_voxel = refine(seg_of_sv[sv.voxel_label], ctx, timings)
         timings["merge"] = sum(timings[k] for k in merged_stages)
 
@@ -326,7 +328,6 @@ def segment(frame: Frame, settings: SegmentSettings) -> Segmentation:
 
     # 4'. objects lying flat, by colour (flat.py)
     t_flat = time.perf_counter()
-    color_used, color_note = color_state(frame, organized, settings)
     if color_used and settings.flat_objects:
         table_idx, found = _flat_objects(frame, table_idx, obj_idx, objects, fit, settings)
         objects.extend(found)
