@@ -60,7 +60,7 @@ def _categories() -> list[tuple[str, list[str]]]:
 
 
 CATEGORIES: list[tuple[str, list[str]]] = _categories()
-STAGES = ("filter", "table", "edges", "supervoxels", "lccp", "cuts", "merge", "objects", "total")
+STAGES = ("filter", "table", "edges", "supervoxels", "lccp", "cuts", "merge", "flat", "objects", "total")
 
 
 def _settings(overrides: list[str]) -> SegmentSettings:

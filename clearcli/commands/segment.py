@@ -22,8 +22,12 @@ JSON (`--json`), envelope {"schema": "clear.segmentation", "version": 1, ...}:
                     obb: {center: [3], axes: [[3] x 3] rows, the third the table normal,
                           extents: [3] full side lengths (m) along the axes},
                     principal_axes: [[3] x 3] rows, largest variance first}]
+    color         {used: bool, note: str} whether colour was read (by the flat-object
+                   search, by the supervoxels when color_importance > 0), and else why
+                   not: no colour, a colour image of another size, all black, all
+                   saturated (segmentation then runs on geometry alone)
     timings_s     {stage: seconds} (filter, table, supervoxels, lccp, merge,
-                   objects, total)
+                   flat, objects, total, and each refinement by name)
 
 All coordinates in metres in the sensor frame of the input.
 """
