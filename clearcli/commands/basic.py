@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Annotated
+from typing import Annotated, Optional
 
 import typer
 
@@ -20,3 +20,34 @@ def settings_cmd(
     from clearcli.settings import settings_to_toml
 
     typer.echo(settings_to_toml(bo.resolve_settings(settings, sets), ranges=ranges), nl=False)
+
+
+def robots_cmd(
+    name: Annotated[Optional[str], typer.Argument(help="A profile: print its facts.", metavar="[NAME]")] = None,
+    json_out: Annotated[bool, typer.Option("--json", help="Machine-readable output (schema clear.robots, version 1).")] = False,
+) -> None:
+    """List the robot profiles (--robot NAME, [robot] name), or print one's facts: its
+    description, frames, reach, gripper, joints and the [robot]/[gripper] defaults it
+    supplies."""
+    from clearcli.commands.common import print_json
+    from clearcli.tasks import robots as task
+
+    payload = task.robots_payload(name)
+    if json_out:
+        print_json(task.SCHEMA, task.VERSION, payload, bo.resolve_settings(None, None), "robots")
+        return
+    if name is None:
+        for p in payload["profiles"]:
+            typer.echo(f"{p['name']:8s} {p['summary']}" + ("  (default)" if p["default"] else ""))
+        return
+    facts = payload["profile"]
+    for key in ("name", "summary", "urdf", "base_frame", "flange_frame", "tcp_frame", "reach_m", "shoulder_base_m",
+                "base_above_footprint_m", "gripper"):
+        typer.echo(f"{key:24s} {facts[key]}")
+    typer.echo("joints (rad)")
+    for j in facts["joints"]:
+        typer.echo(f"  {j['name']:24s} {j['lower_rad']:+.4f} .. {j['upper_rad']:+.4f}")
+    for section, values in facts["defaults"].items():
+        typer.echo(f"[{section}] defaults")
+        for k, v in values.items():
+            typer.echo(f"  {k} = {v}")

@@ -32,6 +32,15 @@ Topic = Annotated[
 ]
 FrameIndex = Annotated[int, typer.Option("--frame", help="Logs: which frame of the topic (from 0).", min=0)]
 Force = Annotated[bool, typer.Option("--force", help="Overwrite existing output files.")]
+Robot = Annotated[
+    Optional[str],
+    typer.Option(
+        "--robot",
+        help="Robot profile: wam (default), panda, ur5e (`clear robots`). An alias of --set robot.name=NAME: "
+        "the profile's [robot] and [gripper] values, under the file's and --set's.",
+        metavar="NAME",
+    ),
+]
 
 Inputs = Annotated[
     list[Path],
@@ -88,12 +97,17 @@ Wait = Annotated[
 ]
 
 
-def resolve_settings(path: Path | None, sets: list[str] | None, section: str | None = None, **flags: Any) -> Any:
+def resolve_settings(
+    path: Path | None, sets: list[str] | None, section: str | None = None, robot: str | None = None, **flags: Any
+) -> Any:
     """The resolved settings tree, checked before any frame is read: defaults, the file,
-    each --set, then the command's own flags (aliases of --set in ``section``)."""
+    each --set, then the command's own flags (aliases of --set in ``section``). ``robot``
+    (--robot) is --set robot.name=ROBOT given first: the profile's defaults, then the
+    file's and the other --set values over them."""
     from clearcli.settings import load_settings, override
 
-    settings = load_settings(path, sets or ())
+    sets = ([f"robot.name={robot}"] if robot is not None else []) + list(sets or ())
+    settings = load_settings(path, sets)
     if section is not None:
         settings = override(settings, section, **flags)
     return settings

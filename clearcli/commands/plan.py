@@ -5,8 +5,9 @@ some and leaves others, each with its reason; 5 nothing can be done. With ``--js
 document is printed in all three cases (and for a deadline that ends with a checked
 plan); errors (3, 4, 6, 8) are one line on stderr.
 
---json prints one document, schema ``clear.plan`` version 2 (version 1 had no
-``status``/``left``, and its ``optimal`` and ``steps`` meant less):
+--json prints one document, schema ``clear.plan`` version 3 (version 1 had no
+``status``/``left``, and its ``optimal`` and ``steps`` meant less; version 2 had no
+``robot`` and no ``T_base_gripper`` per step):
 
     source, frame_id          where the frame came from
     status                    "complete" | "partial" | "no_plan"
@@ -14,9 +15,12 @@ plan); errors (3, 4, 6, 8) are one line on stderr.
     steps                     per action: {"kind": "grasp"|"push", "object": "o1",
                               "direction": null|"dir1", "checked": bool,
                               "candidate": int|null (gripper candidate used: half-turn /
-                              quarter-turn alternative), "joints_rad": [[7 floats] per
-                              gripper pose]|null}; with --first-only only the first
-                              action is checked, the others have nulls
+                              quarter-turn alternative), "joints_rad": [[one float per
+                              joint of robot.joint_names] per gripper pose]|null,
+                              "T_base_gripper": [[4x4] per pose]|null (the pose each joint
+                              vector was solved for: check it by forward kinematics)};
+                              with --first-only only the first action is checked, the
+                              others have nulls
     check                     "whole" (every action checked, each in the scene as the
                               earlier actions leave it) | "first" (--first-only)
     cost                      plan cost (number of actions with unit costs)
@@ -47,7 +51,12 @@ plan); errors (3, 4, 6, 8) are one line on stderr.
                               "learnt", "prefix"}] per call
     first_action              null, or {"action", "candidate", "T_base_gripper": [[4x4]...],
                               "joints_rad": [[7 floats] per pose]}
-    T_base_camera             4x4 used (robot base = WAM shoulder, DH frame 0)
+    T_base_camera             4x4 used, in the robot's base frame (robot.base_frame: the
+                              WAM's shoulder, DH frame 0; panda_link0; the UR5e's base_link)
+    robot                     {"name": the profile (--robot), "urdf_sha256": digest of its
+                              description, "base_frame", "tcp_frame", "joint_names": the
+                              order of every joint vector, "gripper": {"name",
+                              "opening_width_m", "closing_width_m"}}
     camera_pose_source        "given" | "thesis" | "default from table"
     timings_s                 seconds per stage
 """
@@ -117,7 +126,7 @@ def plan_cmd(
         Optional[Path],
         typer.Option("--domain", help="Write the PDDL domain the plan is for (the push-cost variant when costs were used)."),
     ] = None,
-    json_out: Annotated[bool, typer.Option("--json", help="Machine-readable output (schema clear.plan, version 2).")] = False,
+    json_out: Annotated[bool, typer.Option("--json", help="Machine-readable output (schema clear.plan, version 3).")] = False,
     png: Annotated[Optional[Path], typer.Option("--png", help="Draw the scene and the plan to this PNG.")] = None,
     force: bo.Force = False,
     first_only: Annotated[
@@ -129,14 +138,15 @@ def plan_cmd(
     ] = False,
     settings: bo.SettingsFile = None,
     sets: bo.Set = None,
+    robot: bo.Robot = None,
     camera_pose: Annotated[
         Optional[str],
         typer.Option(
             "--camera-pose",
-            help="Pose of the points' (optical) frame in the WAM base: 'x y z qx qy qz qw' "
-            "(one quoted argument), or 'thesis' for the thesis's Kinect extrinsic. "
-            "Default: [robot] camera_pose, else the WAM just outside the table edge "
-            "nearest the camera, facing the objects.",
+            help="Pose of the points' (optical) frame in the robot's base frame: 'x y z qx qy qz qw' "
+            "(one quoted argument), or 'thesis' for the thesis's Kinect extrinsic (the WAM only). "
+            "Default: [robot] camera_pose, else the robot just outside the table edge "
+            "nearest the camera, facing the objects."
         ),
     ] = None,
     time_limit: Annotated[
@@ -167,7 +177,7 @@ def plan_cmd(
     from clearcli.tasks import plan as task
     from clearcli.tasks.base import Outputs, Source
 
-    cfg = bo.with_images(bo.resolve_settings(settings, sets, "plan", time_limit_s=time_limit), intrinsics, depth_scale)
+    cfg = bo.with_images(bo.resolve_settings(settings, sets, "plan", robot=robot, time_limit_s=time_limit), intrinsics, depth_scale)
     request = task.Request(cfg, camera_pose=camera_pose, first_only=first_only)
     if batch.wanted(inputs):
         bo.no_color_in_batch(color)

@@ -75,6 +75,7 @@ def predicates_cmd(
     png: Annotated[Optional[Path], typer.Option("--png", help="Draw the top view with hulls, pushes, grasps, blocks.")] = None,
     settings: bo.SettingsFile = None,
     sets: bo.Set = None,
+    robot: bo.Robot = None,
     force: bo.Force = False,
     topic: bo.Topic = None,
     frame_index: bo.FrameIndex = 0,
@@ -98,7 +99,7 @@ def predicates_cmd(
     from clearcli.tasks import predicates as task
     from clearcli.tasks.base import Outputs, Source
 
-    cfg = bo.with_images(bo.resolve_settings(settings, sets), intrinsics, depth_scale)
+    cfg = bo.with_images(bo.resolve_settings(settings, sets, robot=robot), intrinsics, depth_scale)
     if batch.wanted(inputs):
         bo.no_color_in_batch(color)
         bo.single_only(**{"-o": output, "--png": png})

@@ -23,6 +23,7 @@ COMMANDS: list[tuple[str, str, dict[str, Any]]] = [
     ("replay", "clearcli.commands.replay:replay_cmd", {}),
     ("simulate", "clearcli.commands.simulate:simulate_cmd", {}),
     ("settings", "clearcli.commands.basic:settings_cmd", {}),
+    ("robots", "clearcli.commands.basic:robots_cmd", {}),
 ]
 
 GROUPS: list[tuple[str, str]] = [

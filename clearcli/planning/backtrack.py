@@ -375,7 +375,7 @@ def make_plan(
     ``[robot] camera_pose`` or derived from the table, see clearcli/robot/placement.py).
     ``check``: "whole" or "first" (default ``[plan] check``)."""
     from clearcli.robot.collision import make_obstacles
-    from clearcli.robot.kinematics import kinematics_from_settings
+    from clearcli.robot.profiles import kinematics_from_settings
     from clearcli.robot.placement import placement_from_settings
 
     robot = settings.robot  # type: ignore[attr-defined]

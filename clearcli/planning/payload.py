@@ -14,8 +14,9 @@ if TYPE_CHECKING:
     from clearcli.predicates.state import SymbolicState
 
 PREDICATES_SCHEMA, PREDICATES_VERSION = "predicates", 1
-# version 1 had no status/left, and its optimal and steps meant less
-PLAN_SCHEMA, PLAN_VERSION = "plan", 2
+# version 1 had no status/left, and its optimal and steps meant less; version 2 had no
+# robot block and no gripper poses per step
+PLAN_SCHEMA, PLAN_VERSION = "plan", 3
 
 
 def predicates_payload(state: "SymbolicState") -> dict[str, Any]:
@@ -76,6 +77,8 @@ def plan_payload(plan: "Plan", source: str, frame_id: str, pose_source: str, uni
                 "checked": c is not None,
                 "candidate": None if c is None else int(c.candidate),
                 "joints_rad": None if c is None else [rounded(q) for q in c.joint_solutions],
+                # the gripper pose each joint vector was solved for (robot base frame)
+                "T_base_gripper": None if c is None else [rounded(T) for T in c.T_base_gripper],
             }
         )
     left = [

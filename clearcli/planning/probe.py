@@ -126,7 +126,7 @@ def probe_push(
     one along the seam slides it past."""
     from clearcli.planning.feasibility import IKActionChecker
     from clearcli.robot.collision import make_obstacles
-    from clearcli.robot.kinematics import kinematics_from_settings
+    from clearcli.robot.profiles import kinematics_from_settings
 
     tried = tried or {}
     names = [

@@ -170,6 +170,7 @@ class WamKinematics:
         self.model = pin.buildModelFromUrdf(str(URDF_PATH))
         self.data = self.model.createData()
         self.tcp_id = self.model.getFrameId(TCP_FRAME)
+        self.joint_names = tuple(self.model.names[1:])
         self.plate_id = self.model.getFrameId(TOOL_PLATE_FRAME)
         self.lower = np.array(self.model.lowerPositionLimit, dtype=float)
         self.upper = np.array(self.model.upperPositionLimit, dtype=float)
@@ -544,7 +545,7 @@ class WamKinematics:
         return float(np.linalg.norm(plate)) <= REACH_TOOL_PLATE_M + slack_m
 
 
-def kinematics_from_settings(robot: Any) -> WamKinematics:
+def kinematics_of_wam(robot: Any) -> WamKinematics:
     """The WAM model with the IK search of ``[robot]`` (`RobotSettings`)."""
     return WamKinematics(
         damping=robot.ik_damping,

@@ -71,11 +71,14 @@ def default_T_base_camera(
     min_object_distance_m: float,
     preferred_object_distance_m: float,
     max_object_distance_m: float,
+    base_above_footprint_m: float = SHOULDER_ABOVE_FOOTPRINT_M,
 ) -> np.ndarray:
     """Footprint just outside the table edge nearest the camera, facing the objects, and
     at least ``min_object_distance_m`` from every object's centroid (on the plane); then
     farther back, up to ``preferred_object_distance_m`` from the nearest object, as long
-    as the farthest stays within ``max_object_distance_m``."""
+    as the farthest stays within ``max_object_distance_m``. The base frame is
+    ``base_above_footprint_m`` above the footprint (the WAM's is its shoulder, 0.346 m
+    up; a Panda's or a UR's is its mounting flange, on the table's plane)."""
     n = np.asarray(table_normal, dtype=float)
     n = n / np.linalg.norm(n)
     d = float(table_offset)
@@ -133,7 +136,7 @@ def default_T_base_camera(
     y = np.cross(n, x)
     T_camera_base = np.eye(4)
     T_camera_base[:3, :3] = np.column_stack([x, y, n])
-    T_camera_base[:3, 3] = footprint + SHOULDER_ABOVE_FOOTPRINT_M * n
+    T_camera_base[:3, 3] = footprint + base_above_footprint_m * n
     return np.linalg.inv(T_camera_base)
 
 
@@ -151,6 +154,12 @@ def resolve_T_base_camera(
         robot = RobotSettings()
     if isinstance(camera_pose, str):
         if camera_pose.strip().lower() == "thesis":
+            name = getattr(robot, "name", "wam")
+            if name != "wam":
+                raise SettingsError(
+                    f"camera pose 'thesis' is where the thesis's camera stood relative to its WAM; with robot "
+                    f"{name!r} give the camera's pose as 7 numbers x y z qx qy qz qw, or none (placed from the table)"
+                )
             return thesis_T_base_camera(), "thesis"
         try:
             values = [float(v) for v in camera_pose.replace(",", " ").split()]
@@ -163,6 +172,8 @@ def resolve_T_base_camera(
         return pose_to_matrix(list(camera_pose)), "given"
     if state is None:
         raise SettingsError("camera pose: none given and no table to derive it from")
+    from clearcli.robot.profiles import profile
+
     centroids = np.array([o.centroid for o in state.objects]) if state.objects else None  # type: ignore[attr-defined]
     T = default_T_base_camera(
         state.table.normal,  # type: ignore[attr-defined]
@@ -173,6 +184,7 @@ def resolve_T_base_camera(
         robot.base_min_object_distance_m,  # type: ignore[attr-defined]
         robot.base_preferred_object_distance_m,  # type: ignore[attr-defined]
         robot.base_max_object_distance_m,  # type: ignore[attr-defined]
+        profile(getattr(robot, "name", "wam")).base_above_footprint_m,
     )
     return T, "default from table"
 

@@ -1,16 +1,21 @@
-"""Robot settings (section [robot]): where the WAM stands and how IK is searched."""
+"""Robot settings (section [robot]): which arm, where it stands and how IK is searched.
+The defaults are the WAM's; another profile (``name``) supplies its own for [robot] and
+[gripper] (clearcli/settings/profiles.py), which a user's values override."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 from clearcli.settings.fields import Section, param
+from clearcli.settings.profiles import PROFILE_NAMES
 
 
 @dataclass(frozen=True)
 class RobotSettings(Section):
     NAME = "robot"
 
+    # the robot profile: arm, gripper, IK (`clear robots` lists them)
+    name: str = param("wam", choices=PROFILE_NAMES)
     # T_base_camera as x y z qx qy qz qw of the points' frame in the WAM base frame;
     # empty = derive from the table (see clearcli/robot/placement.py).
     camera_pose: tuple[float, ...] = param((), ge=-100, le=100, lengths=(0, 7))

@@ -71,11 +71,19 @@ def _section(name: str, base: Any, values: Mapping[str, Any]) -> Any:
 
 
 def settings_from_dict(data: Mapping[str, Any], base: Settings | None = None) -> Settings:
-    """``base`` (defaults when None) with the sections and keys of ``data`` replaced."""
+    """``base`` (defaults when None) with the sections and keys of ``data`` replaced.
+
+    A ``[robot] name`` that changes the profile first resets [robot] and [gripper] to
+    that profile's defaults (clearcli/settings/profiles.py); the other keys of ``data``
+    then override them. Within one call, then, a user's values always win; across calls
+    (a file, then --set robot.name=...), give the profile no later than its overrides."""
     base = base or Settings()
     unknown = sorted(set(data) - set(SECTIONS))
     if unknown:
         raise SettingsError(f"settings: unknown section(s) {', '.join(unknown)}; known: {', '.join(SECTIONS)}")
+    robot_values = data.get("robot")
+    if isinstance(robot_values, Mapping) and "name" in robot_values and robot_values["name"] != base.robot.name:
+        base = with_profile(base, robot_values["name"])
     changes: dict[str, Any] = {}
     for name, values in data.items():
         if not isinstance(values, Mapping):
@@ -83,6 +91,23 @@ def settings_from_dict(data: Mapping[str, Any], base: Settings | None = None) ->
         if values:
             changes[name] = _section(name, getattr(base, name), values)
     return dataclasses.replace(base, **changes) if changes else base
+
+
+def with_profile(settings: Settings, name: Any) -> Settings:
+    """``settings`` with [robot] and [gripper] at the defaults of profile ``name``."""
+    from clearcli.settings.profiles import PROFILE_DEFAULTS
+
+    if not isinstance(name, str) or name not in PROFILE_DEFAULTS:
+        raise SettingsError(
+            f"settings: [robot] name = {name!r} is not a robot profile; known: {', '.join(PROFILE_DEFAULTS)} "
+            "(`clear robots` lists them)"
+        )
+    defaults = PROFILE_DEFAULTS[name]
+    return dataclasses.replace(
+        settings,
+        robot=_section("robot", RobotSettings(), {**defaults.get("robot", {}), "name": name}),
+        gripper=_section("gripper", GripperSettings(), dict(defaults.get("gripper", {}))),
+    )
 
 
 def parse_set(text: str) -> tuple[str, str, Any]:
@@ -130,13 +155,23 @@ def read_settings_file(path: Path) -> dict[str, Any]:
 def load_settings(path: Path | None = None, sets: Iterable[str] = ()) -> Settings:
     """Defaults, updated by the TOML file at ``path`` when given, then by each ``--set``."""
     settings = Settings()
+    data: dict[str, Any] = {}
     if path is not None:
+        data = read_settings_file(path)
         try:
-            settings = settings_from_dict(read_settings_file(path))
+            settings = settings_from_dict(data)
         except SettingsError as exc:
             if str(path) in str(exc):
                 raise
             raise SettingsError(f"{path}: {exc}") from None
+    sets = list(sets)
+    changed = {parse_set(text)[0:2] for text in sets}
+    if ("robot", "name") in changed:
+        # a profile given by --set: the file's [robot] and [gripper] values still win
+        # over the profile's defaults, as a file's values win over the tree's
+        name = [parse_set(t)[2] for t in sets if parse_set(t)[0:2] == ("robot", "name")][-1]
+        own = {"robot": {k: v for k, v in dict(data.get("robot", {})).items() if k != "name"}, "gripper": data.get("gripper", {})}
+        settings = settings_from_dict(own, base=with_profile(settings, name))
     return apply_sets(settings, sets)
 
 

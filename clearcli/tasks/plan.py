@@ -33,6 +33,9 @@ def run(request: Request, source: Source) -> Outcome:
     done = pipeline.planned(state, request.settings, request.camera_pose, "first" if request.first_only else None)
     plan = done.plan
     payload = plan_payload(plan, str(source.path), getattr(frame, "frame_id", ""), done.pose_source, not state.push_costs)
+    from clearcli.robot.profiles import robot_block
+
+    payload["robot"] = robot_block(request.settings)
     out = request.outputs
     write_plan_files(state, plan, problem=out.get("problem"), domain=out.get("domain"), output=out.get("plan"))
     png = out.get("png")

@@ -1,0 +1,299 @@
+"""Kinematics of any serial arm from its URDF (Pinocchio): forward kinematics, a damped
+least squares IK with restarts, and the arm's collision capsules from the URDF's
+collision geometry. The WAM keeps its analytic solver (kinematics.py); this serves the
+other profiles and a user's own URDF, and runs as the WAM's fallback in a test that
+compares the two.
+
+Why by hand: the maintained IK packages on PyPI (TRAC-IK bindings, pin-pink) solve one
+pose from one start; what the planner needs around them (a warm start from the previous
+pose of a motion, deterministic restarts, a cache, joint-limit clipping, a fast "beyond
+reach" answer, capsules for the collision check) is this module either way, and
+Pinocchio's Jacobians are what they would call. benchmarks/ik.py measures it.
+
+Frames: poses are ``T_base_tcp`` in the profile's base frame; the TCP is the gripper's
+closing point (z = approach, x = closing direction), as for the WAM.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+
+from clearcli.errors import SettingsError
+from clearcli.robot.kinematics import IKStats, _se3
+
+# a step of damped least squares moves no joint more than this (rad): the linearisation
+# stays honest far from the target
+_MAX_STEP_RAD = 0.4
+# a start is given up when its error (m^2, plus rad^2 weighted as 0.1 m a radian) has not
+# fallen by 5 % in this many iterations
+_STALL_ITERATIONS = 12
+_PROGRESS = 0.95
+_RAD_AS_M2 = 0.01
+# the generic solver tries at least this many starts (the WAM's analytic solver needs none)
+_MIN_STARTS = 48
+
+
+def _capsule_of(geometry: Any) -> tuple[np.ndarray, np.ndarray, float] | None:
+    """(a, b, radius) of a collision shape in its own frame: a cylinder along its axis,
+    a sphere as a point, a box or a mesh as the capsule round its longest axis."""
+    g = geometry
+    kind = type(g).__name__  # hppfcl's or coal's classes, whichever Pinocchio uses
+    if kind in ("Cylinder", "Capsule"):
+        h = float(g.halfLength)
+        return np.array([0.0, 0.0, -h]), np.array([0.0, 0.0, h]), float(g.radius)
+    if kind == "Sphere":
+        return np.zeros(3), np.zeros(3), float(g.radius)
+    if kind == "Box":
+        half = np.asarray(g.halfSide, dtype=float)
+        k = int(np.argmax(half))
+        others = np.delete(half, k)
+        a, b = np.zeros(3), np.zeros(3)
+        a[k], b[k] = -half[k], half[k]
+        return a, b, float(np.hypot(*others))
+    vertices = getattr(g, "vertices", None)
+    if callable(vertices):
+        v = np.asarray(vertices(), dtype=float)
+        if v.shape[0] >= 2:
+            c = v.mean(axis=0)
+            axis = np.linalg.svd(v - c, full_matrices=False)[2][0]
+            t = (v - c) @ axis
+            radial = np.linalg.norm((v - c) - np.outer(t, axis), axis=1)
+            return c + t.min() * axis, c + t.max() * axis, float(radial.max())
+    return None
+
+
+class UrdfKinematics:
+    """A serial arm of six or more revolute joints read from a URDF."""
+
+    def __init__(
+        self,
+        urdf: Path,
+        base_frame: str,
+        tcp_frame: str,
+        *,
+        flange_frame: str,
+        shoulder_base: Sequence[float],
+        reach_m: float,
+        rest: Sequence[float] | None = None,
+        arm_from_joint: int = 2,
+        gripper_frames: Sequence[str] = (),
+        damping: float = 0.05,
+        max_iterations: int = 150,
+        tolerance_m: float = 0.001,
+        tolerance_rad: float = 0.01,
+        n_seeds: int = 8,
+    ) -> None:
+        import pinocchio as pin
+
+        self.pin = pin
+        self.urdf = Path(urdf)
+        try:
+            self.model = pin.buildModelFromUrdf(str(self.urdf))
+        except Exception as exc:  # Pinocchio raises ValueError/RuntimeError on bad files
+            raise SettingsError(f"{urdf}: not a URDF Pinocchio can read ({str(exc).splitlines()[0]})") from None
+        model = self.model
+        frames = [f.name for f in model.frames]
+        for what, name in (("base_frame", base_frame), ("tcp_frame", tcp_frame), ("flange_frame", flange_frame)):
+            if not model.existFrame(name):
+                raise SettingsError(f"{urdf}: no frame {name!r} ({what}); its frames: {', '.join(frames)}")
+        revolute = [j for j in model.joints[1:] if j.shortname() in ("JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRevoluteUnaligned")]
+        if len(revolute) < 6 or model.nq != len(revolute):
+            raise SettingsError(
+                f"{urdf}: a chain of {len(revolute)} revolute joints (nq {model.nq}); the generic IK needs a "
+                "serial chain of 6 or more revolute joints and nothing else movable"
+            )
+        self.data = model.createData()
+        self.joint_names = tuple(model.names[1:])
+        self.tcp_id = model.getFrameId(tcp_frame)
+        self.flange_id = model.getFrameId(flange_frame)
+        self.lower = np.array(model.lowerPositionLimit, dtype=float)
+        self.upper = np.array(model.upperPositionLimit, dtype=float)
+        pin.framesForwardKinematics(model, self.data, np.zeros(model.nq))
+        self.M_root_base = self.data.oMf[model.getFrameId(base_frame)].copy()
+        self.M_base_root = self.M_root_base.inverse()
+        self.M_flange_tcp = self.data.oMf[self.flange_id].actInv(self.data.oMf[self.tcp_id])
+        self.shoulder = np.asarray(shoulder_base, dtype=float)
+        self.reach_m = float(reach_m)  # the maker's figure (documents, pictures)
+        # What `reachable` tests: an upper bound on the flange's distance from the
+        # shoulder joint's origin, the sum of the chain's link lengths from there (the
+        # triangle inequality). The makers' reach figures are not bounds: a UR5e's flange
+        # reaches 0.97 m from its shoulder against the quoted 0.85 m.
+        j0 = int(arm_from_joint)
+        pin.forwardKinematics(model, self.data, np.zeros(model.nq))
+        self.shoulder_bound = np.asarray((self.M_base_root * self.data.oMi[j0]).translation, dtype=float)
+        links = [float(np.linalg.norm(model.jointPlacements[k].translation)) for k in range(j0 + 1, model.njoints)]
+        flange = model.frames[self.flange_id]
+        self.stretch_m = sum(links) + float(np.linalg.norm(flange.placement.translation))
+        self.rest = np.clip(np.asarray(rest if rest is not None else np.zeros(model.nq), dtype=float), self.lower, self.upper)
+        self.damping = float(damping)
+        self.max_iterations = int(max_iterations)
+        self.tolerance_m = float(tolerance_m)
+        self.tolerance_rad = float(tolerance_rad)
+        self.n_seeds = max(_MIN_STARTS, int(n_seeds))
+        self.stats = IKStats()
+        self._cache: dict[bytes, np.ndarray | None] = {}
+        self._capsule_parts = self._read_capsules(arm_from_joint, set(gripper_frames))
+
+    # -- collision model ------------------------------------------------------------
+    def _read_capsules(self, arm_from_joint: int, gripper_frames: set[str]) -> list[tuple[int, np.ndarray, np.ndarray, float]]:
+        """(joint, a, b, radius) in the joint's frame for every collision shape of the arm
+        moved by joint ``arm_from_joint`` or later, the gripper's left out: what hangs
+        from the flange and ``gripper_frames`` (what the gripper touches is what
+        block_grasp/block_dir say; the base and the shoulder column stand still). A mesh whose file is
+        missing is left out with one warning."""
+        import logging
+        import warnings
+
+        pin = self.pin
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            try:
+                geom = pin.buildGeomFromUrdf(self.model, str(self.urdf), pin.GeometryType.COLLISION)
+            except Exception as exc:  # missing package:// meshes: kinematics without them
+                logging.getLogger(__name__).warning(
+                    "%s: collision geometry not loaded (%s); the arm's collision check is off",
+                    self.urdf, str(exc).splitlines()[0],
+                )
+                return []
+        out = []
+        for go in geom.geometryObjects:
+            if go.parentJoint < arm_from_joint:
+                continue
+            if self._beyond_flange(go.parentFrame) or self.model.frames[go.parentFrame].name in gripper_frames:
+                continue
+            cap = _capsule_of(go.geometry)
+            if cap is None:
+                continue
+            a, b, r = cap
+            M = go.placement
+            R, t = np.asarray(M.rotation), np.asarray(M.translation)
+            out.append((int(go.parentJoint), R @ a + t, R @ b + t, r))
+        return out
+
+    def _beyond_flange(self, frame_id: int) -> bool:
+        """The frame is the flange or hangs from it (the gripper's bodies)."""
+        frames = self.model.frames
+        while True:
+            if frame_id == self.flange_id:
+                return True
+            parent = int(frames[frame_id].parentFrame)
+            if parent == frame_id or frames[frame_id].parentJoint == 0 and parent == 0:
+                return False
+            frame_id = parent
+
+    def capsules(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Arm capsules at q: (C,3) start points, (C,3) end points, (C,) radii (base frame)."""
+        pin = self.pin
+        pin.forwardKinematics(self.model, self.data, np.asarray(q, dtype=float))
+        if not self._capsule_parts:
+            return np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0)
+        M = self.M_base_root
+        Rb, tb = np.asarray(M.rotation), np.asarray(M.translation)
+        a, b = [], []
+        for j, pa, pb, _ in self._capsule_parts:
+            oMi = self.data.oMi[j]
+            R, t = np.asarray(oMi.rotation), np.asarray(oMi.translation)
+            a.append(Rb @ (R @ pa + t) + tb)
+            b.append(Rb @ (R @ pb + t) + tb)
+        return np.array(a), np.array(b), np.array([r for *_, r in self._capsule_parts])
+
+    # -- forward kinematics ---------------------------------------------------------
+    def fk(self, q: np.ndarray, frame: str | None = None) -> np.ndarray:
+        """T_base_<frame> (4x4) at joint angles q; the TCP by default."""
+        pin = self.pin
+        pin.framesForwardKinematics(self.model, self.data, np.asarray(q, dtype=float))
+        fid = self.tcp_id if frame is None else self.model.getFrameId(frame)
+        return np.array((self.M_base_root * self.data.oMf[fid]).homogeneous)
+
+    # -- inverse kinematics ---------------------------------------------------------
+    def reachable(self, T_base_tcp: np.ndarray, slack_m: float = 0.005) -> bool:
+        """Cheap necessary condition: the flange within the chain's stretch of the
+        shoulder joint (a bound: no pose it rejects has a solution)."""
+        T = np.asarray(T_base_tcp, dtype=float)
+        M = np.asarray(self.M_flange_tcp.homogeneous)
+        flange = T[:3, 3] - T[:3, :3] @ (M[:3, :3].T @ M[:3, 3])
+        return float(np.linalg.norm(flange - self.shoulder_bound)) <= self.stretch_m + slack_m
+
+    def seeds(self, T_target: np.ndarray) -> list[np.ndarray]:
+        """The rest shape turned towards the target, then fixed pseudo-random ones."""
+        q = self.rest.copy()
+        q[0] = float(np.clip(math.atan2(T_target[1, 3], T_target[0, 3]) + q[0], self.lower[0], self.upper[0]))
+        out = [q]
+        rng = np.random.default_rng(12345)
+        while len(out) < self.n_seeds:
+            out.append(rng.uniform(self.lower, self.upper))
+        return out
+
+    def _solve_from(self, target: Any, q0: np.ndarray, iterations: int | None = None) -> np.ndarray | None:
+        """Damped least squares from q0 (clipped to the limits at every step)."""
+        pin = self.pin
+        model, data, fid, local = self.model, self.data, self.tcp_id, pin.LOCAL
+        lo, hi = self.lower, self.upper
+        tol_m2, tol_rad2 = self.tolerance_m**2, self.tolerance_rad**2
+        q = np.clip(np.asarray(q0, dtype=float), lo, hi)
+        damp = self.damping**2 * np.eye(6)
+        self.stats.starts += 1
+        n_it = self.max_iterations if iterations is None else int(iterations)
+        best, since = math.inf, 0
+        for it in range(n_it):
+            pin.computeJointJacobians(model, data, q)
+            pin.updateFramePlacement(model, data, fid)
+            err = pin.log6(data.oMf[fid].actInv(target)).vector
+            vx, vy, vz, wx, wy, wz = err.tolist()
+            e_m2, e_rad2 = vx * vx + vy * vy + vz * vz, wx * wx + wy * wy + wz * wz
+            if e_m2 < tol_m2 and e_rad2 < tol_rad2:
+                self.stats.iterations += it
+                return q
+            # stuck (a joint against its limit, a local minimum): another start does
+            # better than more steps here
+            size = e_m2 + _RAD_AS_M2 * e_rad2
+            if size < _PROGRESS * best:
+                best, since = size, 0
+            else:
+                since += 1
+                if since >= _STALL_ITERATIONS:
+                    self.stats.iterations += it
+                    return None
+            J = pin.getFrameJacobian(model, data, fid, local)
+            dq = J.T @ np.linalg.solve(J @ J.T + damp, err)
+            step = float(np.abs(dq).max())
+            if step > _MAX_STEP_RAD:
+                dq *= _MAX_STEP_RAD / step
+            q = np.minimum(np.maximum(q + dq, lo), hi)
+        self.stats.iterations += n_it
+        return None
+
+    def _within_tolerance(self, target: Any, q: np.ndarray) -> bool:
+        pin = self.pin
+        if np.any(q < self.lower) or np.any(q > self.upper):
+            return False
+        pin.forwardKinematics(self.model, self.data, q)
+        pin.updateFramePlacement(self.model, self.data, self.tcp_id)
+        vx, vy, vz, wx, wy, wz = pin.log6(self.data.oMf[self.tcp_id].actInv(target)).vector.tolist()
+        return math.sqrt(vx * vx + vy * vy + vz * vz) < self.tolerance_m and math.sqrt(wx * wx + wy * wy + wz * wz) < self.tolerance_rad
+
+    def ik(self, T_base_tcp: np.ndarray, warm: np.ndarray | None = None) -> np.ndarray | None:
+        """Joint angles putting the TCP at ``T_base_tcp`` within the tolerances and the
+        joint limits, or None: beyond the stretch at once; else damped least squares
+        from ``warm`` (the previous pose's solution), then from the seeds."""
+        T_base_tcp = np.asarray(T_base_tcp, dtype=float)
+        key = np.round(T_base_tcp[:3], 6).tobytes()
+        if key in self._cache:
+            self.stats.cache_hits += 1
+            hit = self._cache[key]
+            return None if hit is None else hit.copy()
+        self.stats.solves += 1
+        q: np.ndarray | None = None
+        if self.reachable(T_base_tcp):
+            target = self.M_root_base * _se3(T_base_tcp)
+            starts = ([np.asarray(warm, dtype=float)] if warm is not None else []) + self.seeds(T_base_tcp)
+            for q0 in starts:
+                q = self._solve_from(target, q0)
+                if q is not None:
+                    break
+        self._cache[key] = None if q is None else q.copy()
+        return q

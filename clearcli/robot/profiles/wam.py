@@ -1,0 +1,35 @@
+"""The thesis's Barrett WAM with the IRI gripper (7 cm): the default, its analytic IK."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from clearcli.robot.kinematics import (
+    BASE_FRAME,
+    REACH_TOOL_PLATE_M,
+    SHOULDER_ABOVE_FOOTPRINT_M,
+    TCP_FRAME,
+    TOOL_PLATE_FRAME,
+    URDF_PATH,
+    kinematics_of_wam,
+)
+from clearcli.robot.profiles.base import RobotProfile
+
+
+def _make(robot: Any):
+    return kinematics_of_wam(robot)
+
+
+PROFILE = RobotProfile(
+    name="wam",
+    summary="Barrett WAM, 7 joints, with the IRI parallel gripper (7 cm opening): the thesis's arm",
+    urdf=URDF_PATH,
+    base_frame=BASE_FRAME,
+    flange_frame=TOOL_PLATE_FRAME,
+    tcp_frame=TCP_FRAME,
+    shoulder_base=(0.0, 0.0, 0.0),  # the WAM's base frame is at its shoulder
+    reach_m=REACH_TOOL_PLATE_M,
+    base_above_footprint_m=SHOULDER_ABOVE_FOOTPRINT_M,
+    gripper="IRI parallel gripper (0.07 m open)",
+    make=_make,
+)

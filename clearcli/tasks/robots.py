@@ -1,0 +1,26 @@
+"""`robots`: the robot profiles, or one profile's facts (schema ``clear.robots``)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+SCHEMA, VERSION = "robots", 1
+
+
+def robots_payload(name: str | None = None) -> dict[str, Any]:
+    """{profiles: [{name, summary, default}]} or, for ``name``, {profile: facts} with the
+    joints and their limits read from the shipped description."""
+    from clearcli.robot.profiles import PROFILES, profile
+
+    if name is None:
+        return {"profiles": [{"name": p.name, "summary": p.summary, "default": p.name == "wam"} for p in PROFILES.values()]}
+    p = profile(name)
+    facts = p.facts()
+    import pinocchio as pin
+
+    model = pin.buildModelFromUrdf(str(p.urdf))
+    facts["joints"] = [
+        {"name": n, "lower_rad": float(lo), "upper_rad": float(hi)}
+        for n, lo, hi in zip(list(model.names)[1:], model.lowerPositionLimit, model.upperPositionLimit)
+    ]
+    return {"profile": facts}

@@ -1,0 +1,139 @@
+"""Robot profiles (clearcli/robot/profiles): the registry, the defaults a profile
+supplies, IK judged by forward kinematics on each profile, and the generic solver run
+on the WAM beside its analytic one."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from helpers import run_clear as clear
+
+from clearcli.errors import SettingsError
+from clearcli.settings import load_settings
+
+
+def _tool_down_poses(kin, n: int, seed: int) -> list[np.ndarray]:
+    """Forward kinematics of random in-limit configurations whose gripper points down
+    (approach within 30 degrees of straight down) and whose closing point is above the
+    base's plane: the poses a table-clearing plan asks for."""
+    rng = np.random.default_rng(seed)
+    out = []
+    while len(out) < n:
+        T = kin.fk(rng.uniform(kin.lower, kin.upper))
+        if T[2, 2] < -np.cos(np.radians(30)) and T[2, 3] > -0.3:
+            out.append(T)
+    return out
+
+
+def test_the_registry_and_the_settings_name_the_same_profiles() -> None:
+    from clearcli.robot.profiles import PROFILES, profile
+    from clearcli.settings.profiles import PROFILE_DEFAULTS
+
+    assert tuple(PROFILES) == tuple(PROFILE_DEFAULTS) == ("wam", "panda", "ur5e")
+    with pytest.raises(SettingsError, match="known: wam, panda, ur5e"):
+        profile("kuka")
+    for p in PROFILES.values():
+        assert p.urdf.exists() and p.reach_m > 0.5
+
+
+def test_a_profile_supplies_defaults_that_a_user_overrides(tmp_path) -> None:
+    assert load_settings().robot.name == "wam" and load_settings().gripper.opening_width_m == 0.07
+    panda = load_settings(sets=["robot.name=panda"])
+    assert panda.gripper.opening_width_m == 0.08 and panda.robot.base_max_object_distance_m == 0.75
+    # --set after the profile wins over it
+    assert load_settings(sets=["robot.name=ur5e", "gripper.opening_width_m=0.1"]).gripper.opening_width_m == 0.1
+    # a file's [gripper] wins over a profile given by --set, as over the tree's defaults
+    f = tmp_path / "lab.toml"
+    f.write_text("[gripper]\nopening_width_m = 0.09\n")
+    s = load_settings(f, ["robot.name=panda"])
+    assert s.robot.name == "panda" and s.gripper.opening_width_m == 0.09 and s.gripper.finger_width_m == 0.02
+    # and a file that names the profile itself
+    f.write_text('[robot]\nname = "ur5e"\n[gripper]\nopening_width_m = 0.07\n')
+    s = load_settings(f)
+    assert s.robot.name == "ur5e" and s.gripper.opening_width_m == 0.07 and s.gripper.base_width_m == 0.15
+    with pytest.raises(SettingsError, match="robot"):
+        load_settings(sets=["robot.name=kuka"])
+
+
+@pytest.mark.parametrize("name", ["wam", "panda", "ur5e"])
+def test_ik_of_each_profile_lands_on_the_pose_by_forward_kinematics(name: str) -> None:
+    from clearcli.robot.profiles import kinematics_from_settings
+
+    kin = kinematics_from_settings(load_settings(sets=[f"robot.name={name}"]).robot)
+    poses = _tool_down_poses(kin, 150, seed=7)
+    solved = 0
+    for T in poses:
+        q = kin.ik(T)
+        if q is None:
+            continue
+        solved += 1
+        assert np.all(q >= kin.lower - 1e-9) and np.all(q <= kin.upper + 1e-9)
+        got = kin.fk(q)
+        assert np.linalg.norm(got[:3, 3] - T[:3, 3]) < 0.001 + 1e-9
+        angle = np.degrees(np.arccos(np.clip((np.trace(got[:3, :3].T @ T[:3, :3]) - 1) / 2, -1, 1)))
+        assert angle < np.degrees(0.01) + 1e-6
+    assert solved >= 0.99 * len(poses), f"{name}: {solved} of {len(poses)}"
+    # far beyond the stretch: no solution, at once
+    far = np.eye(4)
+    far[:3, 3] = [2.0, 0.0, 0.2]
+    assert not kin.reachable(far) and kin.ik(far) is None
+
+
+def test_the_generic_solver_on_the_wam_agrees_with_the_analytic_one() -> None:
+    from clearcli.robot.generic import UrdfKinematics
+    from clearcli.robot.kinematics import BASE_FRAME, REACH_TOOL_PLATE_M, TCP_FRAME, TOOL_PLATE_FRAME, URDF_PATH, WamKinematics
+
+    analytic = WamKinematics()
+    generic = UrdfKinematics(URDF_PATH, BASE_FRAME, TCP_FRAME, flange_frame=TOOL_PLATE_FRAME, shoulder_base=(0, 0, 0),
+                             reach_m=REACH_TOOL_PLATE_M, rest=(0.0, 0.9, 0.0, 1.6, 0.0, 0.6, 0.0), n_seeds=16)
+    poses = _tool_down_poses(analytic, 100, seed=3)
+    both = 0
+    for T in poses:
+        qa, qg = analytic.ik(T), generic.ik(T)
+        assert qa is not None  # FK of an in-limit configuration: the analytic solver finds it
+        if qg is not None:
+            both += 1
+            for kin, q in ((analytic, qa), (generic, qg)):
+                assert np.linalg.norm(kin.fk(q)[:3, 3] - T[:3, 3]) < 0.001 + 1e-9
+    assert both >= 97, both
+    # one model: the two agree on forward kinematics and on the capsules' count
+    q = np.array([0.3, 0.8, -0.2, 1.5, 0.1, 0.5, 0.2])
+    np.testing.assert_allclose(generic.fk(q), analytic.fk(q), atol=1e-9)
+
+
+def test_robots_lists_the_profiles_and_prints_one() -> None:
+    res = clear("robots")
+    assert res.returncode == 0 and [line.split()[0] for line in res.stdout.splitlines()] == ["wam", "panda", "ur5e"]
+    res = clear("robots", "panda", "--json")
+    doc = json.loads(res.stdout)
+    assert doc["schema"] == "clear.robots"
+    facts = doc["profile"]
+    assert facts["base_frame"] == "panda_link0" and len(facts["joints"]) == 7
+    assert facts["defaults"]["gripper"]["opening_width_m"] == 0.08
+    res = clear("robots", "kuka")
+    assert res.returncode == 3 and "known: wam, panda, ur5e" in res.stderr and len(res.stderr.strip().splitlines()) == 1
+    res = clear("plan", "fixtures/clutter10.pcd", "--robot", "kuka")
+    assert res.returncode == 3 and "known" in res.stderr
+    res = clear("plan", "fixtures/clutter10.pcd", "--robot", "panda", "--camera-pose", "thesis")
+    assert res.returncode == 3 and "WAM" in res.stderr
+
+
+@pytest.mark.parametrize("name, base", [("panda", "panda_link0"), ("ur5e", "base_link")])
+def test_plan_with_another_robot_lands_every_step_on_its_recorded_pose(name: str, base: str) -> None:
+    from clearcli.robot.profiles import kinematics_from_settings
+
+    res = clear("plan", "fixtures/clutter10.pcd", "--robot", name, "--json")
+    assert res.returncode in (0, 10), res.stderr
+    doc = json.loads(res.stdout)
+    assert doc["version"] == 3 and doc["robot"]["name"] == name and doc["robot"]["base_frame"] == base
+    kin = kinematics_from_settings(load_settings(sets=[f"robot.name={name}"]).robot)
+    assert doc["robot"]["joint_names"] == list(kin.joint_names)
+    checked = [s for s in doc["steps"] if s["checked"]]
+    assert len(checked) >= 5, doc["steps"]
+    for step in checked:
+        for q, T in zip(step["joints_rad"], step["T_base_gripper"]):
+            assert len(q) == len(kin.joint_names)
+            got = kin.fk(np.array(q))
+            assert np.linalg.norm(got[:3, 3] - np.array(T)[:3, 3]) < 0.001 + 2e-6  # the JSON rounds to 1e-6
