@@ -10,6 +10,20 @@ squares from the warm start, then 8 seeds, 150 iterations each).
     .venv/bin/python benchmarks/ik.py            # 2000 / 300 / 200 / 500 poses drawn (a few min)
     .venv/bin/python benchmarks/ik.py --quick    # 400 / 60 / 40 / 200 poses drawn (about 1 min)
     .venv/bin/python benchmarks/ik.py --no-old   # without the replaced solver
+    .venv/bin/python benchmarks/ik.py --robot panda [--quick]   # another profile (generic IK)
+    .venv/bin/python benchmarks/ik.py --robot all [--quick]     # every profile
+
+With --robot NAME (a profile of `clear robots`, the WAM included through the same
+groups) the groups are the profile's, in its base frame with the table's plane where
+the default placement puts it (the WAM's 0.346 m below its shoulder; a Panda's or a
+UR5e's base stands on it):
+ (1)  reachable tool-down: FK of random in-limit configurations whose TCP z axis is within
+      5 degrees of straight down, 0.01-0.30 m above the table, 0.25-0.80 m from the base's
+      vertical axis. No warm start.
+ (2)  in reach, no solution: random orientation, TCP 0-0.90 m from the axis, 0.01-0.30 m
+      above the table, passing reachable(), and no solution from a thorough search
+      (48 random starts, 200 iterations of damped least squares each).
+ (3)  beyond reach: the TCP 1.2-1.6 m from the shoulder: rejected by reachable().
 
 All poses are T_base_tcp in the WAM's DH frame 0 (the shoulder). The table top is
 0.346 m below the shoulder (the default placement stands the WAM's footprint on the table
@@ -330,11 +344,83 @@ def timed(f: Callable[[], Any], repeat: int) -> float:
     return (time.perf_counter() - t0) / repeat
 
 
+def profile_bench(name: str, quick: bool) -> None:
+    """The three groups of the module doc for one profile (--robot)."""
+    from clearcli.robot.profiles import kinematics_from_settings
+    from clearcli.robot.profiles import profile as get_profile
+    from clearcli.settings import load_settings
+
+    kin = kinematics_from_settings(load_settings(sets=[f"robot.name={name}"]).robot)
+    prof = get_profile(name)
+    table_z = -prof.base_above_footprint_m  # the table's plane in the base frame
+    n1, n2, n3 = (200, 40, 100) if quick else (1000, 120, 300)
+    rng = np.random.default_rng(1)
+    reach: list[np.ndarray] = []
+    while len(reach) < n1:
+        T = kin.fk(rng.uniform(kin.lower, kin.upper))
+        r = math.hypot(T[0, 3], T[1, 3])
+        if T[2, 2] < -math.cos(math.radians(5)) and 0.01 <= T[2, 3] - table_z <= 0.30 and 0.25 <= r <= 0.80:
+            reach.append(T)
+    thorough = kinematics_from_settings(load_settings(sets=[f"robot.name={name}"]).robot)
+    no_sol: list[np.ndarray] = []
+    rng2 = np.random.default_rng(2)
+    tries = 0
+    while len(no_sol) < n2 and tries < 50 * n2:
+        tries += 1
+        az, r = rng2.uniform(-math.pi, math.pi), rng2.uniform(0.0, 0.9)
+        T = np.eye(4)
+        T[:3, :3] = random_rotation(rng2)
+        T[:3, 3] = [r * math.cos(az), r * math.sin(az), table_z + rng2.uniform(0.01, 0.30)]
+        if not kin.reachable(T) or thorough_solution(thorough, T):
+            continue
+        no_sol.append(T)
+    far: list[np.ndarray] = []
+    rng3 = np.random.default_rng(3)
+    shoulder = np.asarray(getattr(kin, "shoulder_bound", np.zeros(3)), dtype=float)
+    while len(far) < n3:
+        d = rng3.normal(size=3)
+        d /= np.linalg.norm(d)
+        T = np.eye(4)
+        T[:3, :3] = random_rotation(rng3)
+        T[:3, 3] = shoulder + rng3.uniform(1.2, 1.6) * d
+        far.append(T)
+
+    def timed_group(poses: list[np.ndarray]) -> tuple[list[float], int, int]:
+        times, ok, wrong = [], 0, 0
+        for T in poses:
+            kin._cache.clear()
+            t = time.perf_counter()
+            q = kin.ik(T)
+            times.append(time.perf_counter() - t)
+            if q is not None:
+                ok += 1
+                wrong += not verified(kin, q, T)
+        return times, ok, wrong
+
+    print(f"robot {name}: {prof.summary}")
+    print(f"{'group':<34} {'poses':>5} {'median ms':>9} {'p95 ms':>9} {'solved':>8}")
+    for label, poses in (("(1) reachable tool-down", reach), ("(2) in reach, no solution", no_sol), ("(3) beyond reach: ik()", far)):
+        times, ok, wrong = timed_group(poses)
+        ms = np.array(times) * 1000
+        print(f"{label:<34} {len(poses):>5} {np.median(ms):>9.3f} {np.percentile(ms, 95):>9.3f} {100 * ok / max(len(poses), 1):>7.1f}%"
+              + (f"  WRONG {wrong}" if wrong else ""))
+    per_call = timed(lambda: [kin.reachable(T) for T in far], 5) / len(far)
+    print(f"{'(3) beyond reach: reachable()':<34} {len(far):>5} {1000 * per_call:>9.4f} (mean)")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--no-old", action="store_true", help="skip the replaced solver (OLD_REV)")
+    ap.add_argument("--robot", help="a profile (clear robots), or all: the profile groups of the module doc")
     args = ap.parse_args()
+    if args.robot:
+        from clearcli.robot.profiles import PROFILES
+
+        for name in (list(PROFILES) if args.robot == "all" else [args.robot]):
+            profile_bench(name, args.quick)
+            print()
+        return
     n1, n2, n2b, n3 = (400, 60, 40, 200) if args.quick else (2000, 300, 200, 500)
 
     new = Counted(kin_mod)

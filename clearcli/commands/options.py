@@ -108,6 +108,10 @@ def resolve_settings(
 
     sets = ([f"robot.name={robot}"] if robot is not None else []) + list(sets or ())
     settings = load_settings(path, sets)
+    if settings.robot.urdf:
+        from clearcli.tasks.robots import check_robot
+
+        check_robot(settings.robot)
     if section is not None:
         settings = override(settings, section, **flags)
     return settings

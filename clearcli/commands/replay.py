@@ -64,7 +64,12 @@ def replay_cmd(
     ] = False,
     base_frame: Annotated[
         Optional[str],
-        typer.Option("--base-frame", help="Robot base frame to look up in the log's /tf_static or /tf."),
+        typer.Option(
+            "--base-frame",
+            help="The log's name for the robot's base frame, looked up in its /tf_static or /tf "
+            "(default: the profile's base frame, e.g. panda_link0, then the names WAM setups use). "
+            "It names a frame of the log; which arm it is, is --robot.",
+        ),
     ] = None,
     settings: bo.SettingsFile = None,
     sets: bo.Set = None,

@@ -11,7 +11,8 @@ import numpy as np
 from clearcli.errors import ClearError
 
 # Names the robot base frame goes by in WAM setups (IRI's and the ROS WAM packages), and
-# the generic ROS one last; `--base-frame` picks another.
+# the generic ROS one last; replay puts the robot profile's own base frame first
+# (panda_link0 for a Panda), and `--base-frame` picks another.
 BASE_FRAMES = ("wam_base", "wam_link_base", "iri_wam_link_base", "estirabot_link_base", "link_base", "base_link")
 TF_TOPICS = ("/tf_static", "/tf")
 

@@ -38,6 +38,8 @@ def capsule_spheres(a: np.ndarray, b: np.ndarray, r: np.ndarray) -> tuple[np.nda
         t = np.linspace(0.0, 1.0, n)[:, None]
         centres.append(p + t * (q - p))
         radii.append(np.full(n, rad))
+    if not centres:  # an arm without collision geometry (its meshes missing)
+        return np.zeros((0, 3)), np.zeros(0)
     return np.concatenate(centres), np.concatenate(radii)
 
 

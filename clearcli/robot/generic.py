@@ -16,6 +16,7 @@ closing point (z = approach, x = closing direction), as for the WAM.
 
 from __future__ import annotations
 
+import contextlib
 import math
 from pathlib import Path
 from typing import Any, Sequence
@@ -35,6 +36,8 @@ _PROGRESS = 0.95
 _RAD_AS_M2 = 0.01
 # the generic solver tries at least this many starts (the WAM's analytic solver needs none)
 _MIN_STARTS = 48
+# URDFs whose missing meshes were warned about
+_WARNED: set[Path] = set()
 
 
 def _capsule_of(geometry: Any) -> tuple[np.ndarray, np.ndarray, float] | None:
@@ -66,6 +69,35 @@ def _capsule_of(geometry: Any) -> tuple[np.ndarray, np.ndarray, float] | None:
     return None
 
 
+@contextlib.contextmanager
+def _quiet_stderr():
+    """File descriptor 2 to /dev/null while a C++ library (urdfdom) talks on it: the user
+    gets our one line, not its dump."""
+    import os
+    import sys
+
+    sys.stderr.flush()
+    saved = os.dup(2)
+    try:
+        with open(os.devnull, "w") as null:
+            os.dup2(null.fileno(), 2)
+            yield
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+
+
+def _chain_end(model: Any) -> str:
+    """The last body frame of the longest chain of movable joints (the flange when the
+    URDF has no gripper joints)."""
+    depth = [0] * model.njoints
+    for j in range(1, model.njoints):
+        depth[j] = depth[model.parents[j]] + 1
+    deepest = int(np.argmax(depth))
+    bodies = [f for f in model.frames if f.parentJoint == deepest and f.type == model.frames[0].type.BODY]
+    return bodies[-1].name if bodies else model.frames[-1].name
+
+
 class UrdfKinematics:
     """A serial arm of six or more revolute joints read from a URDF."""
 
@@ -76,8 +108,10 @@ class UrdfKinematics:
         tcp_frame: str,
         *,
         flange_frame: str,
-        shoulder_base: Sequence[float],
-        reach_m: float,
+        shoulder_base: Sequence[float] | None = None,
+        reach_m: float | None = None,
+        tcp_xyz_m: Sequence[float] = (),
+        tcp_yaw_deg: float = 0.0,
         rest: Sequence[float] | None = None,
         arm_from_joint: int = 2,
         gripper_frames: Sequence[str] = (),
@@ -91,15 +125,44 @@ class UrdfKinematics:
 
         self.pin = pin
         self.urdf = Path(urdf)
+        if not self.urdf.is_file():
+            raise SettingsError(f"{urdf}: URDF file not found ([robot] urdf)")
+        import xml.etree.ElementTree as ET
+
+        try:  # urdfdom prints its own parse errors on stderr: say it in one line first
+            ET.parse(self.urdf)
+        except (ET.ParseError, OSError) as exc:
+            raise SettingsError(f"{urdf}: not a URDF (not well-formed XML: {exc})") from None
         try:
-            self.model = pin.buildModelFromUrdf(str(self.urdf))
+            with _quiet_stderr():
+                full = pin.buildModelFromUrdf(str(self.urdf))
         except Exception as exc:  # Pinocchio raises ValueError/RuntimeError on bad files
             raise SettingsError(f"{urdf}: not a URDF Pinocchio can read ({str(exc).splitlines()[0]})") from None
-        model = self.model
-        frames = [f.name for f in model.frames]
-        for what, name in (("base_frame", base_frame), ("tcp_frame", tcp_frame), ("flange_frame", flange_frame)):
-            if not model.existFrame(name):
+        frames = [f.name for f in full.frames if f.name != "universe"]
+        base_frame = base_frame or frames[0]  # the root link
+        flange_frame = flange_frame or _chain_end(full)
+        for what, name in (("base_frame", base_frame), ("flange_frame", flange_frame)) + (
+            (("tcp_frame", tcp_frame),) if tcp_frame else ()
+        ):
+            if not full.existFrame(name):
                 raise SettingsError(f"{urdf}: no frame {name!r} ({what}); its frames: {', '.join(frames)}")
+        # the joints that move the flange; any other (a gripper's fingers) is held at 0
+        chain = set()
+        j = full.frames[full.getFrameId(flange_frame)].parentJoint
+        while j > 0:
+            chain.add(j)
+            j = full.parents[j]
+        locked = [k for k in range(1, full.njoints) if k not in chain]
+        self.model = pin.buildReducedModel(full, locked, pin.neutral(full)) if locked else full
+        self._locked = locked
+        model = self.model
+        if not tcp_frame:  # the closing point as an offset from the flange
+            yaw = math.radians(tcp_yaw_deg)
+            R = np.array([[math.cos(yaw), -math.sin(yaw), 0.0], [math.sin(yaw), math.cos(yaw), 0.0], [0.0, 0.0, 1.0]])
+            fl = model.frames[model.getFrameId(flange_frame)]
+            offset = pin.SE3(R, np.asarray(tcp_xyz_m if len(tcp_xyz_m) else (0.0, 0.0, 0.0), dtype=float))
+            tcp_frame = "clear_tcp"
+            model.addFrame(pin.Frame(tcp_frame, fl.parentJoint, model.getFrameId(flange_frame), fl.placement * offset, pin.FrameType.OP_FRAME))
         revolute = [j for j in model.joints[1:] if j.shortname() in ("JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRevoluteUnaligned")]
         if len(revolute) < 6 or model.nq != len(revolute):
             raise SettingsError(
@@ -116,8 +179,7 @@ class UrdfKinematics:
         self.M_root_base = self.data.oMf[model.getFrameId(base_frame)].copy()
         self.M_base_root = self.M_root_base.inverse()
         self.M_flange_tcp = self.data.oMf[self.flange_id].actInv(self.data.oMf[self.tcp_id])
-        self.shoulder = np.asarray(shoulder_base, dtype=float)
-        self.reach_m = float(reach_m)  # the maker's figure (documents, pictures)
+        self.flange_frame = flange_frame
         # What `reachable` tests: an upper bound on the flange's distance from the
         # shoulder joint's origin, the sum of the chain's link lengths from there (the
         # triangle inequality). The makers' reach figures are not bounds: a UR5e's flange
@@ -128,6 +190,9 @@ class UrdfKinematics:
         links = [float(np.linalg.norm(model.jointPlacements[k].translation)) for k in range(j0 + 1, model.njoints)]
         flange = model.frames[self.flange_id]
         self.stretch_m = sum(links) + float(np.linalg.norm(flange.placement.translation))
+        # the maker's figures where a profile gives them (documents, pictures), else the bound
+        self.shoulder = np.asarray(shoulder_base if shoulder_base is not None else self.shoulder_bound, dtype=float)
+        self.reach_m = float(reach_m) if reach_m is not None else self.stretch_m
         self.rest = np.clip(np.asarray(rest if rest is not None else np.zeros(model.nq), dtype=float), self.lower, self.upper)
         self.damping = float(damping)
         self.max_iterations = int(max_iterations)
@@ -152,12 +217,15 @@ class UrdfKinematics:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             try:
-                geom = pin.buildGeomFromUrdf(self.model, str(self.urdf), pin.GeometryType.COLLISION)
+                with _quiet_stderr():
+                    geom = pin.buildGeomFromUrdf(self.model, str(self.urdf), pin.GeometryType.COLLISION, package_dirs=[str(self.urdf.parent)])
             except Exception as exc:  # missing package:// meshes: kinematics without them
-                logging.getLogger(__name__).warning(
-                    "%s: collision geometry not loaded (%s); the arm's collision check is off",
-                    self.urdf, str(exc).splitlines()[0],
-                )
+                if self.urdf not in _WARNED:  # once per file and process
+                    _WARNED.add(self.urdf)
+                    logging.getLogger(__name__).warning(
+                        "%s: collision geometry not loaded (%s); the arm's collision check is off",
+                        self.urdf, str(exc).splitlines()[0],
+                    )
                 return []
         out = []
         for go in geom.geometryObjects:

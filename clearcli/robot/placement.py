@@ -172,7 +172,7 @@ def resolve_T_base_camera(
         return pose_to_matrix(list(camera_pose)), "given"
     if state is None:
         raise SettingsError("camera pose: none given and no table to derive it from")
-    from clearcli.robot.profiles import profile
+    from clearcli.robot.profiles import profile_of
 
     centroids = np.array([o.centroid for o in state.objects]) if state.objects else None  # type: ignore[attr-defined]
     T = default_T_base_camera(
@@ -184,7 +184,7 @@ def resolve_T_base_camera(
         robot.base_min_object_distance_m,  # type: ignore[attr-defined]
         robot.base_preferred_object_distance_m,  # type: ignore[attr-defined]
         robot.base_max_object_distance_m,  # type: ignore[attr-defined]
-        profile(getattr(robot, "name", "wam")).base_above_footprint_m,
+        profile_of(robot).base_above_footprint_m,
     )
     return T, "default from table"
 

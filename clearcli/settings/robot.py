@@ -16,6 +16,17 @@ class RobotSettings(Section):
 
     # the robot profile: arm, gripper, IK (`clear robots` lists them)
     name: str = param("wam", choices=PROFILE_NAMES)
+    # Your own arm: its URDF ("" = the profile's description). Any serial chain of 6 or
+    # more revolute joints up to flange_frame (other joints, a gripper's fingers, are held
+    # at 0); the profile named above still supplies the [robot] and [gripper] defaults.
+    urdf: str = param("", text='"" or a URDF file')
+    # its base frame ("" = the URDF's root link) and flange ("" = the end of its longest chain)
+    base_frame: str = param("", text='"" or a frame of the URDF')
+    flange_frame: str = param("", text='"" or a frame of the URDF')
+    # the gripper's closing point in the flange frame (m; () = on the flange), and the turn
+    # about the flange's z that makes x the fingers' closing direction (degrees)
+    tcp_xyz_m: tuple[float, ...] = param((), ge=-0.5, le=0.5, lengths=(0, 3))
+    tcp_yaw_deg: float = param(0.0, ge=-180, le=180)
     # T_base_camera as x y z qx qy qz qw of the points' frame in the WAM base frame;
     # empty = derive from the table (see clearcli/robot/placement.py).
     camera_pose: tuple[float, ...] = param((), ge=-100, le=100, lengths=(0, 7))
@@ -46,6 +57,10 @@ class RobotSettings(Section):
     collision_margin_m: float = param(0.01, ge=0, le=0.2)
 
     def cross_checks(self) -> None:
+        if self.tcp_xyz_m and sum(v * v for v in self.tcp_xyz_m) > 0.25:
+            self.fail("tcp_xyz_m", "the tool-centre offset must be within 0.5 m of the flange")
+        if not self.urdf and (self.base_frame or self.flange_frame or self.tcp_xyz_m or self.tcp_yaw_deg):
+            self.fail("urdf", "base_frame, flange_frame and the tcp offset describe your own URDF: give urdf too")
         if self.camera_pose and sum(v * v for v in self.camera_pose[3:]) < 1e-6:
             self.fail("camera_pose", "its quaternion (the last four numbers) must not be zero")
         if self.base_max_object_distance_m < self.base_min_object_distance_m:

@@ -44,7 +44,7 @@ def run(request: Request, source: Source) -> Outcome:
         from clearcli.render.plan_png import render_plan
 
         with atomic_path(png) as tmp:
-            render_plan(tmp, frame, state, plan, seg)
+            render_plan(tmp, frame, state, plan, seg, request.settings.robot.name)
     if done.no_plan is not None:
         payload["no_plan_reason"] = str(done.no_plan)
         code = EXIT_NO_PLAN

@@ -24,3 +24,13 @@ def robots_payload(name: str | None = None) -> dict[str, Any]:
         for n, lo, hi in zip(list(model.names)[1:], model.lowerPositionLimit, model.upperPositionLimit)
     ]
     return {"profile": facts}
+
+
+def check_robot(robot: Any) -> None:
+    """Read a user's URDF (``[robot] urdf``) now: a file that does not parse, a frame not
+    in it, a chain of fewer than six revolute joints is one line, exit 3, before any
+    frame is read."""
+    if getattr(robot, "urdf", ""):
+        from clearcli.robot.profiles import profile_of
+
+        profile_of(robot)

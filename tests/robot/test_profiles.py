@@ -137,3 +137,67 @@ def test_plan_with_another_robot_lands_every_step_on_its_recorded_pose(name: str
             assert len(q) == len(kin.joint_names)
             got = kin.fk(np.array(q))
             assert np.linalg.norm(got[:3, 3] - np.array(T)[:3, 3]) < 0.001 + 2e-6  # the JSON rounds to 1e-6
+
+
+def test_a_users_urdf_plans_as_the_profile_of_that_arm() -> None:
+    # the third-party Panda (with finger joints, held at 0) read as a user's own file,
+    # the closing point given as an offset from its flange: the plan of the panda profile
+    from helpers import shared_path
+
+    urdf = shared_path("robots/panda/panda_collision.urdf")
+    user = clear("plan", "fixtures/clutter10.pcd", "--robot", "panda", "--json", "--set", f"robot.urdf={urdf}",
+                 "--set", "robot.flange_frame=panda_link8", "--set", "robot.tcp_xyz_m=[0, 0, 0.1034]",
+                 "--set", "robot.tcp_yaw_deg=45")
+    ours = clear("plan", "fixtures/clutter10.pcd", "--robot", "panda", "--json")
+    assert user.returncode == ours.returncode == 0, user.stderr
+    a, b = json.loads(user.stdout), json.loads(ours.stdout)
+    assert a["actions"] == b["actions"] and a["status"] == b["status"]
+    assert a["robot"]["name"] == "urdf" and a["robot"]["joint_names"] == b["robot"]["joint_names"]
+    for x, y in zip(a["steps"], b["steps"]):
+        if x["T_base_gripper"] is not None and y["T_base_gripper"] is not None and x["candidate"] == y["candidate"]:
+            np.testing.assert_allclose(x["T_base_gripper"], y["T_base_gripper"], atol=2e-6)
+
+
+def test_bad_robot_settings_are_one_line_exit_3(tmp_path) -> None:
+    from helpers import shared_path
+
+    panda = shared_path("robots/panda/panda_collision.urdf")
+    bad = tmp_path / "bad.urdf"
+    bad.write_text("<robot name='x'><link name='a'/><joint name='j' type='revolute'>")
+    short = tmp_path / "short.urdf"  # three revolute joints
+    links = "".join(f"<link name='l{k}'/>" for k in range(4))
+    joints = "".join(
+        f"<joint name='j{k}' type='revolute'><parent link='l{k}'/><child link='l{k + 1}'/><axis xyz='0 0 1'/>"
+        f"<origin xyz='0 0 0.1'/><limit lower='-1' upper='1' effort='1' velocity='1'/></joint>" for k in range(3)
+    )
+    short.write_text(f"<robot name='s'>{links}{joints}</robot>")
+    cases = [
+        (["--robot", "kuka"], "known: wam, panda, ur5e"),
+        (["--set", f"robot.urdf={bad}"], "not a URDF"),
+        (["--set", f"robot.urdf={tmp_path / 'none.urdf'}"], "not found"),
+        (["--set", f"robot.urdf={panda}", "--set", "robot.flange_frame=tool0"], "no frame 'tool0'"),
+        (["--set", f"robot.urdf={short}"], "6 or more revolute"),
+        (["--set", "gripper.closing_width_m=0.09"], "closing_width_m"),
+        (["--set", f"robot.urdf={panda}", "--set", "robot.tcp_xyz_m=[0.4, 0, 0.4]"], "0.5 m"),
+        (["--set", "robot.flange_frame=x"], "give urdf too"),
+    ]
+    for args, words in cases:
+        res = clear("plan", "fixtures/clutter10.pcd", *args)
+        assert res.returncode == 3, (args, res.stderr)
+        lines = res.stderr.strip().splitlines()
+        assert len(lines) == 1 and words in lines[0], (args, res.stderr)
+    # the frame error lists the file's frames
+    res = clear("plan", "fixtures/clutter10.pcd", "--set", f"robot.urdf={panda}", "--set", "robot.flange_frame=tool0")
+    assert "panda_link8" in res.stderr
+
+
+def test_a_urdf_whose_meshes_are_missing_loads_with_one_warning() -> None:
+    from helpers import shared_path
+
+    urdf = shared_path("robots/panda/panda.urdf")  # mesh references, meshes not shipped
+    res = clear("plan", "fixtures/clutter10.pcd", "--robot", "panda", "--set", f"robot.urdf={urdf}",
+                "--set", "robot.flange_frame=panda_link8", "--set", "robot.tcp_xyz_m=[0, 0, 0.1034]",
+                "--set", "robot.tcp_yaw_deg=45")
+    assert res.returncode in (0, 10), res.stderr
+    warnings = [line for line in res.stderr.splitlines() if "collision geometry not loaded" in line]
+    assert len(warnings) == 1 and "Traceback" not in res.stderr

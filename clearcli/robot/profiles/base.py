@@ -40,7 +40,8 @@ class RobotProfile:
     flange_frame: str
     tcp_frame: str  # the gripper's closing point: z approach, x closing direction
     shoulder_base: tuple[float, float, float]  # the shoulder's centre in the base frame (m)
-    reach_m: float  # the flange's farthest distance from the shoulder (m)
+    reach_m: float  # the flange's farthest distance from the shoulder (m; the maker's figure)
+    tcp_past_flange_m: float  # the gripper's closing point past the flange (m)
     base_above_footprint_m: float  # the base frame's origin above the floor of the arm's mount
     gripper: str  # its name
     make: Callable[[Any], Kinematics]  # [robot] settings -> kinematics
@@ -60,6 +61,7 @@ class RobotProfile:
             "flange_frame": self.flange_frame,
             "tcp_frame": self.tcp_frame,
             "reach_m": self.reach_m,
+            "tcp_past_flange_m": self.tcp_past_flange_m,
             "shoulder_base_m": list(self.shoulder_base),
             "base_above_footprint_m": self.base_above_footprint_m,
             "gripper": self.gripper,

@@ -36,6 +36,7 @@ PROFILE = RobotProfile(
     tcp_frame="panda_tcp",
     shoulder_base=SHOULDER,
     reach_m=REACH_M,
+    tcp_past_flange_m=0.1034,  # Franka's figure
     base_above_footprint_m=0.0,
     gripper="Franka Hand (0.08 m open)",
     make=_make,

@@ -36,6 +36,7 @@ PROFILE = RobotProfile(
     tcp_frame="robotiq_tcp",
     shoulder_base=SHOULDER,
     reach_m=REACH_M,
+    tcp_past_flange_m=0.1443,  # the 2F-85's pads closed, on tool0's axis (ur5e.urdf)
     base_above_footprint_m=0.0,
     gripper="Robotiq 2F-85 (0.085 m open)",
     make=_make,

@@ -9,6 +9,7 @@ from clearcli.robot.kinematics import (
     REACH_TOOL_PLATE_M,
     SHOULDER_ABOVE_FOOTPRINT_M,
     TCP_FRAME,
+    TCP_PAST_TOOL_PLATE_M,
     TOOL_PLATE_FRAME,
     URDF_PATH,
     kinematics_of_wam,
@@ -29,6 +30,7 @@ PROFILE = RobotProfile(
     tcp_frame=TCP_FRAME,
     shoulder_base=(0.0, 0.0, 0.0),  # the WAM's base frame is at its shoulder
     reach_m=REACH_TOOL_PLATE_M,
+    tcp_past_flange_m=TCP_PAST_TOOL_PLATE_M,
     base_above_footprint_m=SHOULDER_ABOVE_FOOTPRINT_M,
     gripper="IRI parallel gripper (0.07 m open)",
     make=_make,
