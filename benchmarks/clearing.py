@@ -4,6 +4,7 @@
     .venv/bin/python benchmarks/clearing.py --set choose --mode truth --n 40
     .venv/bin/python benchmarks/clearing.py --seeds 1017,1033 -v  # a few sessions, each step
     .venv/bin/python benchmarks/clearing.py --set choose --settings thesis.toml  # ablation
+    .venv/bin/python benchmarks/clearing.py --set report --mode truth --robot panda  # another arm
 
 ``--scenes clutter`` runs `scene.clutter(3 + s % 10, s)` instead (3-12 objects) and counts
 the sessions that end with an object merged with another by the segmenter (or missed).
@@ -92,15 +93,15 @@ def left_reasons(r: Any) -> Counter:
     return out
 
 
-def run_session(seed: int, mode: str, settings_path: str = "", kind: str = "mixed") -> dict[str, Any]:
+def run_session(seed: int, mode: str, settings_path: str = "", kind: str = "mixed", robot: str = "") -> dict[str, Any]:
     from clearcli.pipeline import Pipeline
     from clearcli.replay.session import ReplayOptions, Session
-    from clearcli.settings import Settings, load_settings
+    from clearcli.settings import load_settings
     from clearcli.sim.episode import Episode
     from clearcli.sim.truth import truth_segment
 
     world = session_scene(seed, kind)
-    settings = load_settings(Path(settings_path)) if settings_path else Settings()
+    settings = load_settings(Path(settings_path) if settings_path else None, [f"robot.name={robot}"] if robot else [])
     pipeline = Pipeline(settings, segment_fn=truth_segment if mode == "truth" else None)
     episode = Episode(world, Session(pipeline, ReplayOptions(push_memory=True)), seed=seed, max_actions=MAX_ACTIONS)
     t0 = time.perf_counter()
@@ -198,6 +199,7 @@ def main() -> None:
     ap.add_argument("--json", default="", help="write every session's record to this file")
     ap.add_argument("-v", "--verbose", action="store_true", help="print the steps of sessions not cleared")
     ap.add_argument("--settings", default="", help="a settings TOML (as `clear --settings`), for ablations")
+    ap.add_argument("--robot", default="", help="a robot profile (`clear robots`); default the WAM")
     ap.add_argument(
         "--scenes", choices=("mixed", "clutter"), default="mixed",
         help="mixed: dense and clutter of 3-15 objects (above); clutter: `scene.clutter(3 + s %% 10, s)`, "
@@ -223,7 +225,7 @@ def main() -> None:
         if skipped:
             print(f"seeds left out (no room in the clutter for every object): {skipped}")
         groups = {k: [s for s in g if s not in skipped] for k, g in groups.items()}
-    work = [(seed, mode, args.settings, args.scenes) for group in groups.values() for mode in modes for seed in group]
+    work = [(seed, mode, args.settings, args.scenes, args.robot) for group in groups.values() for mode in modes for seed in group]
     t0 = time.perf_counter()
     with ProcessPoolExecutor(max_workers=max(1, args.jobs)) as pool:
         rows = list(pool.map(_run, work, chunksize=1))

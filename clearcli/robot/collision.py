@@ -32,15 +32,19 @@ def hull_planes(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
 
 def capsule_spheres(a: np.ndarray, b: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Spheres covering capsules, spaced at half a radius: (S,3) centres, (S,) radii."""
-    centres, radii = [], []
-    for p, q, rad in zip(a, b, r):
-        n = max(2, int(math.ceil(np.linalg.norm(q - p) / (0.5 * rad))) + 1)
-        t = np.linspace(0.0, 1.0, n)[:, None]
-        centres.append(p + t * (q - p))
-        radii.append(np.full(n, rad))
-    if not centres:  # an arm without collision geometry (its meshes missing)
+    a, b, r = np.asarray(a, dtype=float).reshape(-1, 3), np.asarray(b, dtype=float).reshape(-1, 3), np.asarray(r, dtype=float)
+    if r.size == 0:  # an arm without collision geometry (its meshes missing)
         return np.zeros((0, 3)), np.zeros(0)
-    return np.concatenate(centres), np.concatenate(radii)
+    # n spheres a capsule, evenly from a to b (t = k / (n - 1)): one array operation for
+    # all capsules, the same spheres as one linspace each
+    n = np.maximum(2, np.ceil(np.linalg.norm(b - a, axis=1) / (0.5 * r)).astype(np.int64) + 1)
+    which = np.repeat(np.arange(r.size), n)
+    k = np.arange(which.size) - np.repeat(np.cumsum(n) - n, n)
+    m = n[which] - 1
+    t = k * (1.0 / m)  # as numpy's linspace computes it, its last value exactly 1
+    t[k == m] = 1.0
+    t = t[:, None]
+    return a[which] + t * (b[which] - a[which]), r[which]
 
 
 @dataclass

@@ -69,6 +69,32 @@ def _capsule_of(geometry: Any) -> tuple[np.ndarray, np.ndarray, float] | None:
     return None
 
 
+def _without_covered(parts: list[tuple[int, np.ndarray, np.ndarray, float]]) -> list[tuple[int, np.ndarray, np.ndarray, float]]:
+    """The capsules without those inside another of the same joint: a description's
+    cylinder capped by two spheres is one capsule (the Panda's links), not three."""
+    keep = []
+    for i, (j, a, b, r) in enumerate(parts):
+        covered = False
+        for k, (j2, a2, b2, r2) in enumerate(parts):
+            if k == i or j2 != j or r2 < r or (r2 == r and k > i and np.allclose(a, a2) and np.allclose(b, b2)):
+                continue
+            # both ends of capsule i within capsule k, grown by the difference of the radii
+            d = b2 - a2
+            L2 = float(d @ d)
+            ends_in = True
+            for p in (a, b):
+                t = 0.0 if L2 == 0 else min(1.0, max(0.0, float((p - a2) @ d) / L2))
+                if float(np.linalg.norm(p - (a2 + t * d))) > r2 - r + 1e-9:
+                    ends_in = False
+                    break
+            if ends_in:
+                covered = True
+                break
+        if not covered:
+            keep.append(parts[i])
+    return keep
+
+
 @contextlib.contextmanager
 def _quiet_stderr():
     """File descriptor 2 to /dev/null while a C++ library (urdfdom) talks on it: the user
@@ -201,6 +227,7 @@ class UrdfKinematics:
         self.n_seeds = max(_MIN_STARTS, int(n_seeds))
         self.stats = IKStats()
         self._cache: dict[bytes, np.ndarray | None] = {}
+        self._random_seeds: list[np.ndarray] | None = None
         self._capsule_parts = self._read_capsules(arm_from_joint, set(gripper_frames))
 
     # -- collision model ------------------------------------------------------------
@@ -240,7 +267,7 @@ class UrdfKinematics:
             M = go.placement
             R, t = np.asarray(M.rotation), np.asarray(M.translation)
             out.append((int(go.parentJoint), R @ a + t, R @ b + t, r))
-        return out
+        return _without_covered(out)
 
     def _beyond_flange(self, frame_id: int) -> bool:
         """The frame is the flange or hangs from it (the gripper's bodies)."""
@@ -287,14 +314,14 @@ class UrdfKinematics:
         return float(np.linalg.norm(flange - self.shoulder_bound)) <= self.stretch_m + slack_m
 
     def seeds(self, T_target: np.ndarray) -> list[np.ndarray]:
-        """The rest shape turned towards the target, then fixed pseudo-random ones."""
+        """The rest shape turned towards the target, then fixed pseudo-random ones (drawn
+        once: the same for every pose)."""
         q = self.rest.copy()
         q[0] = float(np.clip(math.atan2(T_target[1, 3], T_target[0, 3]) + q[0], self.lower[0], self.upper[0]))
-        out = [q]
-        rng = np.random.default_rng(12345)
-        while len(out) < self.n_seeds:
-            out.append(rng.uniform(self.lower, self.upper))
-        return out
+        if self._random_seeds is None:
+            rng = np.random.default_rng(12345)
+            self._random_seeds = list(rng.uniform(self.lower, self.upper, size=(self.n_seeds - 1, self.lower.size)))
+        return [q, *self._random_seeds]
 
     def _solve_from(self, target: Any, q0: np.ndarray, iterations: int | None = None) -> np.ndarray | None:
         """Damped least squares from q0 (clipped to the limits at every step)."""

@@ -275,7 +275,7 @@ class Episode:
         settings = self.session.pipeline.settings
         reach = WorldReach(
             T_base_table_of(T_base_camera, self.scene), settings.gripper, settings.push,
-            params=settings.world_reach, table=self.scene.table,
+            params=settings.world_reach, table=self.scene.table, robot=settings.robot,
         )
         return tuple(sorted(o.object_id for o in left if reach.why_not(o)))
 

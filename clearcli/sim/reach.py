@@ -14,9 +14,11 @@ object's true pose and size (`clearcli.sim.scene`), with a different IK:
   cylinder, at ``n_yaws`` yaws), each at both half-turns; for each, the pre-grasp pose
   ``approach_m`` above and the grasp pose must have joint angles within the limits that
   Pinocchio's forward kinematics confirms, with no arm capsule under the table top.
-  Joint angles come from damped least squares started from ``n_seeds`` seeds (random
-  within the joint limits, from a fixed generator), not from the planner's analytic
-  solver: an error in that solver cannot excuse itself.
+  Joint angles come from ``n_seeds`` seeds (random within the joint limits, from a fixed
+  generator) by a solver the planner does not use: damped least squares for the WAM
+  (whose planner solves in closed form), SciPy's bounded least squares for another arm
+  (whose planner runs damped least squares). An error in the planner's solver cannot
+  excuse itself.
 """
 
 from __future__ import annotations
@@ -78,13 +80,21 @@ class WorldReach:
         push: "PushSettings",
         params: WorldReachParams = WorldReachParams(),
         table: Table = Table(),
+        robot: Any = None,
     ) -> None:
+        """``robot``: the [robot] settings whose arm the world has (the WAM when None)."""
         from clearcli.robot.kinematics import WamKinematics
 
         self.T_base_table = np.asarray(T_base_table, dtype=float)
         self.T_table_base = np.linalg.inv(self.T_base_table)
         self.gripper, self.push, self.params, self.table = gripper, push, params, table
-        self.kin = WamKinematics(max_iterations=params.max_iterations)
+        self.wam = robot is None or (getattr(robot, "name", "wam") == "wam" and not getattr(robot, "urdf", ""))
+        if self.wam:
+            self.kin = WamKinematics(max_iterations=params.max_iterations)
+        else:  # its model (FK, limits, capsules); the solving below is the world's own
+            from clearcli.robot.profiles import kinematics_from_settings
+
+            self.kin = kinematics_from_settings(robot)
         rng = np.random.default_rng(20261122)
         self.seeds = rng.uniform(self.kin.lower, self.kin.upper, size=(params.n_seeds, self.kin.model.nq))
 
@@ -94,10 +104,32 @@ class WorldReach:
         target = self.kin.M_root_base * _se3(T_base_tcp)
         starts = ([warm] if warm is not None else []) + list(self.seeds)
         for q0 in starts:
-            q = self.kin._solve_from(target, np.asarray(q0, dtype=float))
+            q0 = np.asarray(q0, dtype=float)
+            # the WAM: damped least squares (its planner solves in closed form); another
+            # arm: SciPy's bounded least squares (its planner runs damped least squares)
+            q = self.kin._solve_from(target, q0) if self.wam else self._least_squares(target, q0)
             if q is not None and self.kin._within_tolerance(target, q) and self._clear_of_table(q):
                 return q
         return None
+
+    def _least_squares(self, target: Any, q0: np.ndarray) -> np.ndarray | None:
+        """SciPy's trust-region reflective least squares on the pose error (Pinocchio's
+        log6), within the joint limits: a solver the planner does not use."""
+        import pinocchio as pin
+        from scipy.optimize import least_squares
+
+        kin = self.kin
+        model, data, fid = kin.model, kin.data, kin.tcp_id
+
+        def error(q: np.ndarray) -> np.ndarray:
+            pin.framesForwardKinematics(model, data, q)
+            return np.asarray(pin.log6(data.oMf[fid].actInv(target)).vector)
+
+        lo, hi = kin.lower, kin.upper
+        eps = 1e-9
+        start = np.clip(q0, lo + eps, hi - eps)
+        res = least_squares(error, start, bounds=(lo, hi), max_nfev=self.params.max_iterations, xtol=1e-10, ftol=1e-12)
+        return np.asarray(res.x, dtype=float)
 
     def _clear_of_table(self, q: np.ndarray) -> bool:
         a, b, r = self.kin.capsules(q)

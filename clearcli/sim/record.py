@@ -11,13 +11,14 @@ from clearcli.sim.episode import Episode, EpisodeResult
 from clearcli.sim.scene import Scene
 from clearcli.sim.truth import truth_segment
 
+# the WAM's base as the thesis's logs name it; another arm's is its profile's base frame
 BASE_FRAME = "wam_base"
 
 
-def static_transforms(T_base_camera: np.ndarray, frame_id: str) -> list[Any]:
+def static_transforms(T_base_camera: np.ndarray, frame_id: str, base_frame: str = BASE_FRAME) -> list[Any]:
     from clearcli.io.mcap_write import StaticTransform
 
-    return [StaticTransform(parent_frame=BASE_FRAME, child_frame=frame_id, T_parent_child=np.asarray(T_base_camera))]
+    return [StaticTransform(parent_frame=base_frame, child_frame=frame_id, T_parent_child=np.asarray(T_base_camera))]
 
 
 def record_session(
@@ -44,6 +45,10 @@ def record_session(
     episode = Episode(world, session, seed=seed, max_actions=max_actions, params=settings.world)
     first = episode.render(0)
     T_base_camera = episode.robot_placement(first)
-    count = write_pointcloud2_mcap(path, episode, tf_static=static_transforms(T_base_camera, first.frame_id))
+    from clearcli.robot.profiles import profile_of
+
+    arm = profile_of(settings.robot)
+    base = BASE_FRAME if arm.name == "wam" else arm.base_frame
+    count = write_pointcloud2_mcap(path, episode, tf_static=static_transforms(T_base_camera, first.frame_id, base))
     assert episode.result is not None
     return count, episode.result

@@ -201,3 +201,34 @@ def test_a_urdf_whose_meshes_are_missing_loads_with_one_warning() -> None:
     assert res.returncode in (0, 10), res.stderr
     warnings = [line for line in res.stderr.splitlines() if "collision geometry not loaded" in line]
     assert len(warnings) == 1 and "Traceback" not in res.stderr
+
+
+@pytest.mark.parametrize("name, base", [("panda", "panda_link0"), ("ur5e", "base_link")])
+def test_a_simulated_session_per_profile(tmp_path, name: str, base: str) -> None:
+    # the world judges reach with its own solver (SciPy's least squares) for the arm,
+    # records the profile's base frame on /tf_static, and replay finds it there
+    log = tmp_path / f"{name}.mcap"
+    res = clear("simulate", log, "--seed", "1000", "--robot", name, "--json")
+    assert res.returncode == 0, res.stderr
+    doc = json.loads(res.stdout)
+    assert doc["end"] == "cleared" and doc["cleared_truly"]
+    res = clear("replay", log, "--robot", name)
+    assert res.returncode == 0 and f"robot base: {base}" in res.stderr, res.stderr
+
+
+def test_the_worlds_solver_for_another_arm_lands_on_the_pose() -> None:
+    from clearcli.settings.geometry import GripperSettings, PushSettings
+    from clearcli.sim.reach import WorldReach
+
+    robot = load_settings(sets=["robot.name=panda"]).robot
+    world = WorldReach(np.eye(4), GripperSettings(), PushSettings(), robot=robot)
+    assert not world.wam
+    solved = 0
+    for T in _tool_down_poses(world.kin, 20, seed=5):
+        T = T.copy()
+        T[2, 3] = max(T[2, 3], 0.15)  # above the world's table top (z = 0 here)
+        q = world._solve(T, None)
+        if q is not None:
+            solved += 1
+            assert np.linalg.norm(world.kin.fk(q)[:3, 3] - T[:3, 3]) < 0.001
+    assert solved >= 10, solved
