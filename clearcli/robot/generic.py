@@ -36,6 +36,10 @@ _PROGRESS = 0.95
 _RAD_AS_M2 = 0.01
 # the generic solver tries at least this many starts (the WAM's analytic solver needs none)
 _MIN_STARTS = 48
+# a solved pose within this (m, see _nearest_solved) gives the first start of a new one;
+# the last _NEAR_KEEP solved poses are searched
+_NEAR_M = 0.3
+_NEAR_KEEP = 256
 # URDFs whose missing meshes were warned about
 _WARNED: set[Path] = set()
 
@@ -228,6 +232,7 @@ class UrdfKinematics:
         self.stats = IKStats()
         self._cache: dict[bytes, np.ndarray | None] = {}
         self._random_seeds: list[np.ndarray] | None = None
+        self._solved: list[tuple[np.ndarray, np.ndarray]] = []
         self._capsule_parts = self._read_capsules(arm_from_joint, set(gripper_frames))
 
     # -- collision model ------------------------------------------------------------
@@ -385,10 +390,26 @@ class UrdfKinematics:
         q: np.ndarray | None = None
         if self.reachable(T_base_tcp):
             target = self.M_root_base * _se3(T_base_tcp)
-            starts = ([np.asarray(warm, dtype=float)] if warm is not None else []) + self.seeds(T_base_tcp)
+            near = self._nearest_solved(T_base_tcp) if warm is None else None
+            starts = [np.asarray(x, dtype=float) for x in (warm, near) if x is not None] + self.seeds(T_base_tcp)
             for q0 in starts:
                 q = self._solve_from(target, q0)
                 if q is not None:
                     break
         self._cache[key] = None if q is None else q.copy()
+        if q is not None:
+            self._solved.append((T_base_tcp.copy(), q.copy()))
         return q
+
+    def _nearest_solved(self, T: np.ndarray) -> np.ndarray | None:
+        """The solution of the solved pose nearest ``T`` (position, plus a tenth of a metre
+        per unit of rotation difference), when within _NEAR_M: the poses of one plan
+        cluster round its objects, and a neighbour's solution is a few iterations away."""
+        if not self._solved:
+            return None
+        recent = self._solved[-_NEAR_KEEP:]
+        P = np.array([t[:3, 3] for t, _ in recent])
+        R = np.array([t[:3, :3] for t, _ in recent])
+        d = np.linalg.norm(P - T[:3, 3], axis=1) + 0.1 * np.linalg.norm(R - T[:3, :3], axis=(1, 2))
+        k = int(np.argmin(d))
+        return recent[k][1] if d[k] <= _NEAR_M else None

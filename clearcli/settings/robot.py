@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from clearcli.settings.fields import Section, param
+from clearcli.settings.fields import Section, param, range_of
 from clearcli.settings.profiles import PROFILE_NAMES
 
 
@@ -59,8 +59,11 @@ class RobotSettings(Section):
     def cross_checks(self) -> None:
         if self.tcp_xyz_m and sum(v * v for v in self.tcp_xyz_m) > 0.25:
             self.fail("tcp_xyz_m", "the tool-centre offset must be within 0.5 m of the flange")
-        if not self.urdf and (self.base_frame or self.flange_frame or self.tcp_xyz_m or self.tcp_yaw_deg):
-            self.fail("urdf", "base_frame, flange_frame and the tcp offset describe your own URDF: give urdf too")
+        if not self.urdf:
+            for key in ("base_frame", "flange_frame", "tcp_xyz_m", "tcp_yaw_deg"):
+                if getattr(self, key):
+                    self.fail(key, f"accepted: {range_of(type(self), key).describe()}, with [robot] urdf: it describes "
+                              "your own URDF; give urdf too")
         if self.camera_pose and sum(v * v for v in self.camera_pose[3:]) < 1e-6:
             self.fail("camera_pose", "its quaternion (the last four numbers) must not be zero")
         if self.base_max_object_distance_m < self.base_min_object_distance_m:
