@@ -24,7 +24,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from clearcli.errors import SettingsError
-from clearcli.robot.kinematics import IKStats, _se3
+from clearcli.robot.kinematics import IKStats, _se3, cache_lookup, within_tolerance
 
 # a step of damped least squares moves no joint more than this (rad): the linearisation
 # stays honest far from the target
@@ -368,25 +368,16 @@ class UrdfKinematics:
         return None
 
     def _within_tolerance(self, target: Any, q: np.ndarray) -> bool:
-        pin = self.pin
-        if np.any(q < self.lower) or np.any(q > self.upper):
-            return False
-        pin.forwardKinematics(self.model, self.data, q)
-        pin.updateFramePlacement(self.model, self.data, self.tcp_id)
-        vx, vy, vz, wx, wy, wz = pin.log6(self.data.oMf[self.tcp_id].actInv(target)).vector.tolist()
-        return math.sqrt(vx * vx + vy * vy + vz * vz) < self.tolerance_m and math.sqrt(wx * wx + wy * wy + wz * wz) < self.tolerance_rad
+        return within_tolerance(self, target, q)
 
     def ik(self, T_base_tcp: np.ndarray, warm: np.ndarray | None = None) -> np.ndarray | None:
         """Joint angles putting the TCP at ``T_base_tcp`` within the tolerances and the
         joint limits, or None: beyond the stretch at once; else damped least squares
         from ``warm`` (the previous pose's solution), then from the seeds."""
         T_base_tcp = np.asarray(T_base_tcp, dtype=float)
-        key = np.round(T_base_tcp[:3], 6).tobytes()
-        if key in self._cache:
-            self.stats.cache_hits += 1
-            hit = self._cache[key]
-            return None if hit is None else hit.copy()
-        self.stats.solves += 1
+        key, found, hit = cache_lookup(self, T_base_tcp)
+        if found:
+            return hit
         q: np.ndarray | None = None
         if self.reachable(T_base_tcp):
             target = self.M_root_base * _se3(T_base_tcp)

@@ -133,6 +133,31 @@ def half_turn(T: np.ndarray) -> np.ndarray:
     return out
 
 
+def cache_lookup(kin: Any, T_base_tcp: np.ndarray) -> tuple[bytes, bool, np.ndarray | None]:
+    """(key, found, answer) of a pose in ``kin``'s IK cache, counted in its stats (a hit,
+    or a solve to come). Keyed by the pose alone, to a micrometre."""
+    key = np.round(T_base_tcp[:3], 6).tobytes()
+    if key in kin._cache:
+        kin.stats.cache_hits += 1
+        hit = kin._cache[key]
+        return key, True, None if hit is None else hit.copy()
+    kin.stats.solves += 1
+    return key, False, None
+
+
+def within_tolerance(kin: Any, target: Any, q: np.ndarray) -> bool:
+    """Pinocchio's FK of q (within ``kin``'s limits) meets the target within its tolerances."""
+    pin = kin.pin
+    if np.any(q < kin.lower) or np.any(q > kin.upper):
+        return False
+    pin.forwardKinematics(kin.model, kin.data, q)
+    pin.updateFramePlacement(kin.model, kin.data, kin.tcp_id)
+    vx, vy, vz, wx, wy, wz = pin.log6(kin.data.oMf[kin.tcp_id].actInv(target)).vector.tolist()
+    return math.sqrt(vx * vx + vy * vy + vz * vz) < kin.tolerance_m and math.sqrt(
+        wx * wx + wy * wy + wz * wz
+    ) < kin.tolerance_rad
+
+
 @dataclass
 class IKStats:
     solves: int = 0
@@ -290,16 +315,7 @@ class WamKinematics:
         return None
 
     def _within_tolerance(self, target: Any, q: np.ndarray) -> bool:
-        """Pinocchio's FK of q (within the limits) meets the target within the tolerances."""
-        pin = self.pin
-        if np.any(q < self.lower) or np.any(q > self.upper):
-            return False
-        pin.forwardKinematics(self.model, self.data, q)
-        pin.updateFramePlacement(self.model, self.data, self.tcp_id)
-        vx, vy, vz, wx, wy, wz = pin.log6(self.data.oMf[self.tcp_id].actInv(target)).vector.tolist()
-        return math.sqrt(vx * vx + vy * vy + vz * vz) < self.tolerance_m and math.sqrt(
-            wx * wx + wy * wy + wz * wz
-        ) < self.tolerance_rad
+        return within_tolerance(self, target, q)
 
     def elbow_angles(self, T_base_tcp: np.ndarray) -> list[float]:
         """The elbow angles q4 (0, 1 or 2) within the limits that put the wrist centre of
@@ -519,12 +535,9 @@ class WamKinematics:
         # Keyed by the pose alone: a pose met again (the lift pose is the pre-grasp pose;
         # backtracking re-checks candidates) gets the same answer, whatever the warm start.
         T_base_tcp = np.asarray(T_base_tcp, dtype=float)
-        key = np.round(T_base_tcp[:3], 6).tobytes()
-        if key in self._cache:
-            self.stats.cache_hits += 1
-            hit = self._cache[key]
-            return None if hit is None else hit.copy()
-        self.stats.solves += 1
+        key, found, hit = cache_lookup(self, T_base_tcp)
+        if found:
+            return hit
         q: np.ndarray | None = None
         if self.analytic:
             q = self._ik_analytic(T_base_tcp, warm)

@@ -67,3 +67,27 @@ class RobotProfile:
             "gripper": self.gripper,
             "defaults": {k: dict(v) for k, v in PROFILE_DEFAULTS[self.name].items()},
         }
+
+
+def generic_profile(
+    *, name: str, summary: str, urdf: Path, base_frame: str, flange_frame: str, tcp_frame: str,
+    shoulder_base: tuple[float, float, float], reach_m: float, tcp_past_flange_m: float, gripper: str,
+    rest: tuple[float, ...],
+) -> RobotProfile:
+    """A profile whose kinematics are the generic solver's on its shipped URDF, its base
+    frame on the table's plane."""
+
+    def make(robot: Any) -> Kinematics:
+        from clearcli.robot.generic import UrdfKinematics
+
+        return UrdfKinematics(
+            urdf, base_frame, tcp_frame, flange_frame=flange_frame, shoulder_base=shoulder_base, reach_m=reach_m,
+            rest=rest, damping=robot.ik_damping, max_iterations=robot.ik_max_iterations,
+            tolerance_m=robot.ik_tolerance_m, tolerance_rad=robot.ik_tolerance_rad, n_seeds=robot.ik_seeds,
+        )
+
+    return RobotProfile(
+        name=name, summary=summary, urdf=urdf, base_frame=base_frame, flange_frame=flange_frame,
+        tcp_frame=tcp_frame, shoulder_base=shoulder_base, reach_m=reach_m, tcp_past_flange_m=tcp_past_flange_m,
+        base_above_footprint_m=0.0, gripper=gripper, make=make,
+    )
