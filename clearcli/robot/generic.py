@@ -35,7 +35,7 @@ _STALL_ITERATIONS = 12
 _PROGRESS = 0.95
 _RAD_AS_M2 = 0.01
 # the generic solver tries at least this many starts (the WAM's analytic solver needs none)
-_MIN_STARTS = 48
+_MIN_STARTS = 40
 # a solved pose within this (m, see _nearest_solved) gives the first start of a new one;
 # the last _NEAR_KEEP solved poses are searched
 _NEAR_M = 0.3

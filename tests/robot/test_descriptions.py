@@ -175,3 +175,17 @@ def test_ur5e_cylinders_bound_reference_meshes() -> None:
         assert inside.all(), (joint, int((~inside).sum()))
         checked.add(joint)
     assert checked == set(ours.names[1:])
+
+
+def test_gripper_widths_are_the_makers_figures() -> None:
+    # the openings the profiles give [gripper] against the figures quoted beside the
+    # third-party descriptions (../shared/data/robots/README.md)
+    import re
+
+    from clearcli.settings import load_settings
+
+    text = shared_path("robots/README.md").read_text(encoding="utf-8")
+    hand = float(re.search(r"Franka Hand opens to ([0-9.]+) m", text).group(1))
+    robotiq = float(re.search(r"Robotiq 2F-85: opens to ([0-9.]+) m", text).group(1))
+    assert load_settings(sets=["robot.name=panda"]).gripper.opening_width_m == pytest.approx(hand)
+    assert load_settings(sets=["robot.name=ur5e"]).gripper.opening_width_m == pytest.approx(robotiq)
