@@ -73,6 +73,31 @@ def _capsule_of(geometry: Any) -> tuple[np.ndarray, np.ndarray, float] | None:
     return None
 
 
+def _without_missing_meshes(urdf: Path) -> tuple[str | None, int]:
+    """(the URDF's text without the <collision> elements whose mesh file is not found,
+    how many were dropped); (None, 0) when it cannot be read. A ``package://PKG/path``
+    mesh is looked for as ``path`` beside the URDF and in its parent folders."""
+    import xml.etree.ElementTree as ET
+
+    try:
+        root = ET.parse(urdf).getroot()
+    except (ET.ParseError, OSError):
+        return None, 0
+
+    def found(name: str) -> bool:
+        rel = name.split("://", 1)[1].split("/", 1)[-1] if "://" in name else name
+        return any((folder / rel).is_file() for folder in (urdf.parent, *urdf.parent.parents))
+
+    dropped = 0
+    for link in root.iter("link"):
+        for col in list(link.findall("collision")):
+            mesh = col.find("geometry/mesh")
+            if mesh is not None and not found(mesh.get("filename", "")):
+                link.remove(col)
+                dropped += 1
+    return ET.tostring(root, encoding="unicode"), dropped
+
+
 def _without_covered(parts: list[tuple[int, np.ndarray, np.ndarray, float]]) -> list[tuple[int, np.ndarray, np.ndarray, float]]:
     """The capsules without those inside another of the same joint: a description's
     cylinder capped by two spheres is one capsule (the Panda's links), not three."""
@@ -240,8 +265,8 @@ class UrdfKinematics:
         """(joint, a, b, radius) in the joint's frame for every collision shape of the arm
         moved by joint ``arm_from_joint`` or later, the gripper's left out: what hangs
         from the flange and ``gripper_frames`` (what the gripper touches is what
-        block_grasp/block_dir say; the base and the shoulder column stand still). A mesh whose file is
-        missing is left out with one warning."""
+        block_grasp/block_dir say; the base and the shoulder column stand still). A mesh
+        whose file is missing is left out, the rest kept, with one warning."""
         import logging
         import warnings
 
@@ -251,14 +276,26 @@ class UrdfKinematics:
             try:
                 with _quiet_stderr():
                     geom = pin.buildGeomFromUrdf(self.model, str(self.urdf), pin.GeometryType.COLLISION, package_dirs=[str(self.urdf.parent)])
-            except Exception as exc:  # missing package:// meshes: kinematics without them
+            except Exception as exc:  # missing package:// meshes: the rest without them
+                kept, dropped = _without_missing_meshes(self.urdf)
+                geom = None
+                if kept is not None:
+                    try:
+                        with _quiet_stderr():
+                            geom = pin.buildGeomFromUrdfString(self.model, kept, pin.GeometryType.COLLISION)
+                    except Exception:
+                        geom = None
                 if self.urdf not in _WARNED:  # once per file and process
                     _WARNED.add(self.urdf)
                     logging.getLogger(__name__).warning(
-                        "%s: collision geometry not loaded (%s); the arm's collision check is off",
-                        self.urdf, str(exc).splitlines()[0],
+                        "%s: %s (%s); %s", self.urdf,
+                        f"{dropped} collision mesh(es) not found, left out" if geom is not None else "collision geometry not loaded",
+                        str(exc).splitlines()[0],
+                        f"the arm's collision check uses the {len(geom.geometryObjects)} shape(s) left" if geom is not None
+                        else "the arm's collision check is off",
                     )
-                return []
+                if geom is None:
+                    return []
         out = []
         for go in geom.geometryObjects:
             if go.parentJoint < arm_from_joint:

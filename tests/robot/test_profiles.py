@@ -199,8 +199,30 @@ def test_a_urdf_whose_meshes_are_missing_loads_with_one_warning() -> None:
                 "--set", "robot.flange_frame=panda_link8", "--set", "robot.tcp_xyz_m=[0, 0, 0.1034]",
                 "--set", "robot.tcp_yaw_deg=45")
     assert res.returncode in (0, 10), res.stderr
-    warnings = [line for line in res.stderr.splitlines() if "collision geometry not loaded" in line]
+    warnings = [line for line in res.stderr.splitlines() if "collision mesh(es) not found, left out" in line]
     assert len(warnings) == 1 and "Traceback" not in res.stderr
+
+
+def test_a_missing_mesh_leaves_the_other_collision_shapes(tmp_path) -> None:
+    # the shipped Panda with link 3's collision shapes replaced by a mesh that is not
+    # there: link 3 loses its capsules, every other link keeps its own
+    from clearcli.robot.generic import UrdfKinematics
+    from clearcli.robot.profiles import PROFILES
+
+    text = PROFILES["panda"].urdf.read_text()
+    start = text.index("<link name=\"panda_link3\"")
+    end = text.index("</link>", start)
+    body = text[start:end]
+    first, last = body.index("<collision>"), body.rindex("</collision>") + len("</collision>")
+    body = body[:first] + '<collision><geometry><mesh filename="package://nowhere/link3.stl"/></geometry></collision>' + body[last:]
+    urdf = tmp_path / "panda_mixed.urdf"
+    urdf.write_text(text[:start] + body + text[end:])
+    args = dict(flange_frame="panda_link8", tcp_xyz_m=(0, 0, 0.1034))
+    full = UrdfKinematics(PROFILES["panda"].urdf, "panda_link0", "", **args)
+    mixed = UrdfKinematics(urdf, "panda_link0", "", **args)
+    joints = lambda kin: sorted(j for j, *_ in kin._capsule_parts)  # noqa: E731
+    assert 3 in joints(full) and 3 not in joints(mixed)
+    assert [j for j in joints(full) if j != 3] == joints(mixed)
 
 
 @pytest.mark.parametrize("name, base", [("panda", "panda_link0"), ("ur5e", "base_link")])
