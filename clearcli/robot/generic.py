@@ -427,6 +427,8 @@ class UrdfKinematics:
         self._cache[key] = None if q is None else q.copy()
         if q is not None:
             self._solved.append((T_base_tcp.copy(), q.copy()))
+            if len(self._solved) > 2 * _NEAR_KEEP:  # a long replay: keep the recent ones
+                del self._solved[:-_NEAR_KEEP]
         return q
 
     def _nearest_solved(self, T: np.ndarray) -> np.ndarray | None:
