@@ -167,6 +167,7 @@ class UrdfKinematics:
         reach_m: float | None = None,
         tcp_xyz_m: Sequence[float] = (),
         tcp_yaw_deg: float = 0.0,
+        closed_form: tuple[Any, str, str] | None = None,
         rest: Sequence[float] | None = None,
         arm_from_joint: int = 2,
         gripper_frames: Sequence[str] = (),
@@ -257,8 +258,20 @@ class UrdfKinematics:
         self.stats = IKStats()
         self._cache: dict[bytes, np.ndarray | None] = {}
         self._random_seeds: list[np.ndarray] | None = None
-        self._solved: list[tuple[np.ndarray, np.ndarray]] = []
+        # recent solved poses (position, a tenth of the rotation's entries) and solutions
+        self._near_pose = np.zeros((_NEAR_KEEP, 12))
+        self._near_q = np.zeros((_NEAR_KEEP, model.nq))
+        self._n_solved = 0
         self._capsule_parts = self._read_capsules(arm_from_joint, set(gripper_frames))
+        # (solver, its base frame, its end frame): a closed form for this arm (the UR
+        # family's, ur_ik.py); its end frame's pose is the TCP's less a fixed offset
+        self._closed = None
+        if closed_form is not None:
+            solver, dh_base, dh_end = closed_form
+            pin.framesForwardKinematics(model, self.data, np.zeros(model.nq))
+            M_root_dh = self.data.oMf[model.getFrameId(dh_base)]
+            M_end_tcp = self.data.oMf[model.getFrameId(dh_end)].actInv(self.data.oMf[self.tcp_id])
+            self._closed = (solver, M_root_dh.inverse(), M_end_tcp.inverse())
 
     # -- collision model ------------------------------------------------------------
     def _read_capsules(self, arm_from_joint: int, gripper_frames: set[str]) -> list[tuple[int, np.ndarray, np.ndarray, float]]:
@@ -416,7 +429,9 @@ class UrdfKinematics:
         if found:
             return hit
         q: np.ndarray | None = None
-        if self.reachable(T_base_tcp):
+        if self._closed is not None:
+            q = self._closed_form(T_base_tcp, warm) if self.reachable(T_base_tcp) else None
+        elif self.reachable(T_base_tcp):
             target = self.M_root_base * _se3(T_base_tcp)
             near = self._nearest_solved(T_base_tcp) if warm is None else None
             starts = [np.asarray(x, dtype=float) for x in (warm, near) if x is not None] + self.seeds(T_base_tcp)
@@ -425,21 +440,49 @@ class UrdfKinematics:
                 if q is not None:
                     break
         self._cache[key] = None if q is None else q.copy()
-        if q is not None:
-            self._solved.append((T_base_tcp.copy(), q.copy()))
-            if len(self._solved) > 2 * _NEAR_KEEP:  # a long replay: keep the recent ones
-                del self._solved[:-_NEAR_KEEP]
+        if q is not None:  # into the ring of recent solutions (a long replay does not grow it)
+            k = self._n_solved % _NEAR_KEEP
+            self._near_pose[k, :3] = T_base_tcp[:3, 3]
+            self._near_pose[k, 3:] = 0.1 * T_base_tcp[:3, :3].ravel()
+            self._near_q[k] = q
+            self._n_solved += 1
         return q
+
+    def _closed_form(self, T_base_tcp: np.ndarray, warm: np.ndarray | None) -> np.ndarray | None:
+        """The exact solution within the joint limits nearest the warm start (else the
+        nearest solved pose's solution, else the rest shape), each joint taken at the turn
+        (plus or minus 2 pi) nearest that start; None when no exact solution is within the
+        limits. Every one is confirmed by Pinocchio's forward kinematics."""
+        solver, M_dh_root, M_tcp_end = self._closed
+        target = self.M_root_base * _se3(T_base_tcp)
+        T_dh_end = np.asarray((M_dh_root * target * M_tcp_end).homogeneous)
+        ref = warm if warm is not None else self._nearest_solved(T_base_tcp)
+        ref = self.rest if ref is None else np.asarray(ref, dtype=float)
+        cands = solver(T_dh_end)
+        if not cands:
+            return None
+        Q = np.array(cands)
+        Q = Q + 2.0 * math.pi * np.round((ref - Q) / (2.0 * math.pi))  # the turn nearest ref
+        for _ in range(2):  # then into the limits, when a turn away fits
+            Q = np.where(Q > self.upper, Q - 2.0 * math.pi, Q)
+            Q = np.where(Q < self.lower, Q + 2.0 * math.pi, Q)
+        inside = np.all((Q >= self.lower) & (Q <= self.upper), axis=1)
+        order = np.argsort(np.sum((Q - ref) ** 2, axis=1))
+        for k in order:  # nearest first; the first confirmed is the answer
+            if inside[k] and within_tolerance(self, target, Q[k]):
+                return Q[k].copy()
+        return None
 
     def _nearest_solved(self, T: np.ndarray) -> np.ndarray | None:
         """The solution of the solved pose nearest ``T`` (position, plus a tenth of a metre
-        per unit of rotation difference), when within _NEAR_M: the poses of one plan
-        cluster round its objects, and a neighbour's solution is a few iterations away."""
-        if not self._solved:
+        per unit of rotation difference, Frobenius), when within _NEAR_M: the poses of one
+        plan cluster round its objects, and a neighbour's solution is a few iterations
+        away. The last _NEAR_KEEP solved poses are searched."""
+        n = min(self._n_solved, _NEAR_KEEP)
+        if n == 0:
             return None
-        recent = self._solved[-_NEAR_KEEP:]
-        P = np.array([t[:3, 3] for t, _ in recent])
-        R = np.array([t[:3, :3] for t, _ in recent])
-        d = np.linalg.norm(P - T[:3, 3], axis=1) + 0.1 * np.linalg.norm(R - T[:3, :3], axis=(1, 2))
+        key = np.concatenate([T[:3, 3], 0.1 * T[:3, :3].ravel()])
+        diff = self._near_pose[:n] - key
+        d = np.sqrt(np.einsum("ij,ij->i", diff[:, :3], diff[:, :3])) + np.sqrt(np.einsum("ij,ij->i", diff[:, 3:], diff[:, 3:]))
         k = int(np.argmin(d))
-        return recent[k][1] if d[k] <= _NEAR_M else None
+        return self._near_q[k].copy() if d[k] <= _NEAR_M else None

@@ -254,3 +254,30 @@ def test_the_worlds_solver_for_another_arm_lands_on_the_pose() -> None:
             solved += 1
             assert np.linalg.norm(world.kin.fk(q)[:3, 3] - T[:3, 3]) < 0.001
     assert solved >= 10, solved
+
+
+def test_the_ur_closed_form_matches_the_description_and_its_solutions_land() -> None:
+    # ur_ik's DH table is the shipped UR5e: its frame 6 in its base frame is Pinocchio's
+    # wrist_3_link in base_link_inertia; every solution it gives lands on the pose
+    import pinocchio as pin
+
+    from clearcli.robot.profiles import PROFILES
+    from clearcli.robot.ur_ik import UR5E, fk, solutions
+
+    model = pin.buildModelFromUrdf(str(PROFILES["ur5e"].urdf))
+    data = model.createData()
+    rng = np.random.default_rng(4)
+    for _ in range(200):
+        q = rng.uniform(-np.pi, np.pi, 6)
+        pin.framesForwardKinematics(model, data, q)
+        M = data.oMf[model.getFrameId("base_link_inertia")].actInv(data.oMf[model.getFrameId("wrist_3_link")])
+        T = fk(UR5E, q)
+        np.testing.assert_allclose(T, M.homogeneous, atol=1e-8)
+        sols = solutions(UR5E, T)
+        assert 1 <= len(sols) <= 8
+        assert any(np.allclose(np.angle(np.exp(1j * (s - q))), 0, atol=1e-6) for s in sols)  # q itself among them
+        for s in sols:
+            np.testing.assert_allclose(fk(UR5E, s), T, atol=1e-8)
+    far = np.eye(4)
+    far[:3, 3] = [0.0, 0.0, 2.0]
+    assert solutions(UR5E, far) == []

@@ -73,8 +73,10 @@ def generic_profile(
     *, name: str, summary: str, urdf: Path, base_frame: str, flange_frame: str, tcp_frame: str,
     shoulder_base: tuple[float, float, float], reach_m: float, tcp_past_flange_m: float, gripper: str,
     rest: tuple[float, ...],
+    closed_form: Callable[[], tuple[Any, str, str]] | None = None,
 ) -> RobotProfile:
-    """A profile whose kinematics are the generic solver's on its shipped URDF, its base
+    """A profile whose kinematics are the generic solver's on its shipped URDF (or a
+    closed form, ``closed_form()`` -> (solver, its base frame, its end frame)), its base
     frame on the table's plane."""
 
     def make(robot: Any) -> Kinematics:
@@ -82,6 +84,7 @@ def generic_profile(
 
         return UrdfKinematics(
             urdf, base_frame, tcp_frame, flange_frame=flange_frame, shoulder_base=shoulder_base, reach_m=reach_m,
+            closed_form=closed_form() if closed_form is not None else None,
             rest=rest, damping=robot.ik_damping, max_iterations=robot.ik_max_iterations,
             tolerance_m=robot.ik_tolerance_m, tolerance_rad=robot.ik_tolerance_rad, n_seeds=robot.ik_seeds,
         )

@@ -1,10 +1,21 @@
-"""Universal Robots UR5e with a Robotiq 2F-85; the generic IK."""
+"""Universal Robots UR5e with a Robotiq 2F-85; IK in closed form (ur_ik.py)."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
 from clearcli.robot.profiles.base import generic_profile
+
+
+def _closed_form():
+    """The UR family's closed form (ur_ik.py) with the UR5e's DH table; the description's
+    base_link_inertia is its base frame, wrist_3_link its frame 6."""
+    from functools import partial
+
+    from clearcli.robot.ur_ik import UR5E, solutions
+
+    return partial(solutions, UR5E), "base_link_inertia", "wrist_3_link"
+
 
 PROFILE = generic_profile(
     name="ur5e",
@@ -18,4 +29,5 @@ PROFILE = generic_profile(
     tcp_past_flange_m=0.1443,  # the 2F-85's pads closed, on tool0's axis (ur5e.urdf)
     gripper="Robotiq 2F-85 (0.085 m open)",
     rest=(0.0, -1.571, 1.571, -1.571, -1.571, 0.0),  # shoulder up, elbow bent, wrist down
+    closed_form=_closed_form,
 )
