@@ -86,5 +86,28 @@ def dumps(doc: Mapping[str, Any]) -> str:
 
 def print_document(doc: Mapping[str, Any]) -> None:
     """One document as one line on stdout."""
-    sys.stdout.write(dumps(doc) + "\n")
-    sys.stdout.flush()
+    print_line(dumps(doc))
+
+
+def print_line(text: str) -> None:
+    """One line on stdout, whole: Ctrl-C or SIGTERM while it is written (a plan document
+    is tens of kilobytes, written in several pieces into a pipe) is raised after its
+    newline, so a script reading the lines never gets half of one."""
+    from clearcli import interrupts
+
+    with interrupts.deferred():
+        out = sys.stdout
+        buf = getattr(out, "buffer", None)
+        if buf is None:  # a replaced stdout (a test's capture): text as is
+            out.write(text + "\n")
+            out.flush()
+            return
+        out.flush()
+        # A signal that interrupts the write of a large line into a full pipe makes the
+        # binary buffer return short, and the text layer above it drops the rest without
+        # a word (seen: a 2 MB line cut at 64 KiB). Write the bytes until all are out.
+        view = memoryview((text + "\n").encode("utf-8"))
+        while view:
+            n = buf.write(view)
+            view = view[n if n is not None else 0 :]
+        buf.flush()

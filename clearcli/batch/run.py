@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import json
 import os
-import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -294,6 +293,7 @@ def run_batch(
     ``extra_summary`` adds keys to the summary from every frame's line; ``render``
     replaces the summary table for people."""
     from clearcli.console import stderr, stdout
+    from clearcli.provenance import print_line
 
     t0 = time.perf_counter()
     lock = None  # the --out-dir lock, held until the batch ends
@@ -327,8 +327,7 @@ def run_batch(
             if on_line is not None:
                 on_line(line)
             if req.json_out:
-                sys.stdout.write(json.dumps(_public(line, req.made_by), separators=(",", ":"), allow_nan=False) + "\n")
-                sys.stdout.flush()
+                print_line(json.dumps(_public(line, req.made_by), separators=(",", ":"), allow_nan=False))
             else:
                 rows.append(line)
 
@@ -451,8 +450,7 @@ def run_batch(
     if extra_summary is not None:
         summary.update(extra_summary([ln for ln in lines if ln is not None]))
     if req.json_out:
-        sys.stdout.write(json.dumps(_public(summary, req.made_by), separators=(",", ":")) + "\n")
-        sys.stdout.flush()
+        print_line(json.dumps(_public(summary, req.made_by), separators=(",", ":")))
     elif render is not None:
         render(rows, summary)
     else:
