@@ -163,8 +163,6 @@ class UrdfKinematics:
         tcp_frame: str,
         *,
         flange_frame: str,
-        shoulder_base: Sequence[float] | None = None,
-        reach_m: float | None = None,
         tcp_xyz_m: Sequence[float] = (),
         tcp_yaw_deg: float = 0.0,
         closed_form: tuple[Any, str, str] | None = None,
@@ -246,9 +244,6 @@ class UrdfKinematics:
         links = [float(np.linalg.norm(model.jointPlacements[k].translation)) for k in range(j0 + 1, model.njoints)]
         flange = model.frames[self.flange_id]
         self.stretch_m = sum(links) + float(np.linalg.norm(flange.placement.translation))
-        # the maker's figures where a profile gives them (documents, pictures), else the bound
-        self.shoulder = np.asarray(shoulder_base if shoulder_base is not None else self.shoulder_bound, dtype=float)
-        self.reach_m = float(reach_m) if reach_m is not None else self.stretch_m
         self.rest = np.clip(np.asarray(rest if rest is not None else np.zeros(model.nq), dtype=float), self.lower, self.upper)
         self.damping = float(damping)
         self.max_iterations = int(max_iterations)

@@ -165,11 +165,11 @@ def load_settings(path: Path | None = None, sets: Iterable[str] = ()) -> Setting
                 raise
             raise SettingsError(f"{path}: {exc}") from None
     sets = list(sets)
-    changed = {parse_set(text)[0:2] for text in sets}
-    if ("robot", "name") in changed:
+    names = [value for section, key, value in map(parse_set, sets) if (section, key) == ("robot", "name")]
+    if names:
         # a profile given by --set: the file's [robot] and [gripper] values still win
         # over the profile's defaults, as a file's values win over the tree's
-        name = [parse_set(t)[2] for t in sets if parse_set(t)[0:2] == ("robot", "name")][-1]
+        name = names[-1]
         own = {"robot": {k: v for k, v in dict(data.get("robot", {})).items() if k != "name"}, "gripper": data.get("gripper", {})}
         settings = settings_from_dict(own, base=with_profile(settings, name))
     return apply_sets(settings, sets)

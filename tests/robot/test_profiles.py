@@ -83,11 +83,11 @@ def test_ik_of_each_profile_lands_on_the_pose_by_forward_kinematics(name: str) -
 
 def test_the_generic_solver_on_the_wam_agrees_with_the_analytic_one() -> None:
     from clearcli.robot.generic import UrdfKinematics
-    from clearcli.robot.kinematics import BASE_FRAME, REACH_TOOL_PLATE_M, TCP_FRAME, TOOL_PLATE_FRAME, URDF_PATH, WamKinematics
+    from clearcli.robot.kinematics import BASE_FRAME, TCP_FRAME, TOOL_PLATE_FRAME, URDF_PATH, WamKinematics
 
     analytic = WamKinematics()
-    generic = UrdfKinematics(URDF_PATH, BASE_FRAME, TCP_FRAME, flange_frame=TOOL_PLATE_FRAME, shoulder_base=(0, 0, 0),
-                             reach_m=REACH_TOOL_PLATE_M, rest=(0.0, 0.9, 0.0, 1.6, 0.0, 0.6, 0.0), n_seeds=16)
+    generic = UrdfKinematics(URDF_PATH, BASE_FRAME, TCP_FRAME, flange_frame=TOOL_PLATE_FRAME,
+                             rest=(0.0, 0.9, 0.0, 1.6, 0.0, 0.6, 0.0), n_seeds=16)
     poses = _tool_down_poses(analytic, 100, seed=3)
     both = 0
     for T in poses:

@@ -83,7 +83,7 @@ def generic_profile(
         from clearcli.robot.generic import UrdfKinematics
 
         return UrdfKinematics(
-            urdf, base_frame, tcp_frame, flange_frame=flange_frame, shoulder_base=shoulder_base, reach_m=reach_m,
+            urdf, base_frame, tcp_frame, flange_frame=flange_frame,
             closed_form=closed_form() if closed_form is not None else None,
             rest=rest, damping=robot.ik_damping, max_iterations=robot.ik_max_iterations,
             tolerance_m=robot.ik_tolerance_m, tolerance_rad=robot.ik_tolerance_rad, n_seeds=robot.ik_seeds,
