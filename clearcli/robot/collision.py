@@ -64,19 +64,35 @@ class Obstacles:
         heights = centres @ self.table_normal + self.table_offset
         if np.any(heights < radii + self.margin_m):
             hit.append("table")
+        if not self.names:
+            return hit
         reach = radii + self.margin_m
-        for name, planes, (lo, hi) in zip(self.names, self.planes, self.boxes):
+        lo, hi = self._stacked_boxes()
+        # every sphere against every object's box in one array operation (the IK check
+        # calls this for each pose of each candidate: a loop per object cost more than
+        # the test itself); the face planes only for the objects some sphere is near
+        c = centres[:, None, :]
+        r = reach[:, None, None]
+        near_all = np.all((c + r > lo) & (c - r < hi), axis=2)  # (spheres, objects)
+        for j in np.flatnonzero(near_all.any(axis=0)):
+            name, planes = self.names[j], self.planes[j]
             if name in ignore or len(planes) == 0:
                 continue
-            near = np.all((centres + reach[:, None] > lo) & (centres - reach[:, None] < hi), axis=1)
-            if not np.any(near):
-                continue
+            near = near_all[:, j]
             # Largest face-plane distance: a lower bound of the true distance, so this
             # errs towards "collides" near the hull's edges and corners.
             dist = np.max(centres[near] @ planes[:, :3].T + planes[:, 3], axis=1)
             if np.any(dist < reach[near]):
                 hit.append(name)
         return hit
+
+    def _stacked_boxes(self) -> tuple[np.ndarray, np.ndarray]:
+        got = self.__dict__.get("_boxes_stacked")
+        if got is None:
+            lo = np.array([b[0] for b in self.boxes], dtype=float).reshape(-1, 3)
+            hi = np.array([b[1] for b in self.boxes], dtype=float).reshape(-1, 3)
+            got = self.__dict__["_boxes_stacked"] = (lo, hi)
+        return got
 
 
 def make_obstacles(state: Any, T_base_camera: np.ndarray, margin_m: float | None = None) -> Obstacles:
