@@ -41,6 +41,16 @@ Robot = Annotated[
         metavar="NAME",
     ),
 ]
+Grasps = Annotated[
+    Optional[str],
+    typer.Option(
+        "--grasps",
+        help="Grasp kinds the planner may use, cheapest first: pinch (the thesis's, from above), rim (an open "
+        "container's wall), slide (a flat object slid to a seen table edge). 'pinch' alone is the thesis's "
+        "behaviour exactly. An alias of --set plan.grasps=KINDS (default pinch,rim,slide).",
+        metavar="KINDS",
+    ),
+]
 
 Inputs = Annotated[
     list[Path],
@@ -98,7 +108,12 @@ Wait = Annotated[
 
 
 def resolve_settings(
-    path: Path | None, sets: list[str] | None, section: str | None = None, robot: str | None = None, **flags: Any
+    path: Path | None,
+    sets: list[str] | None,
+    section: str | None = None,
+    robot: str | None = None,
+    grasps: str | None = None,
+    **flags: Any,
 ) -> Any:
     """The resolved settings tree, checked before any frame is read: defaults, the file,
     each --set, then the command's own flags (aliases of --set in ``section``). ``robot``
@@ -107,6 +122,8 @@ def resolve_settings(
     from clearcli.settings import load_settings, override
 
     sets = ([f"robot.name={robot}"] if robot is not None else []) + list(sets or ())
+    if grasps is not None:  # a flag: over the file and --set
+        sets.append(f'plan.grasps="{grasps.replace(" ", "")}"')
     settings = load_settings(path, sets)
     if settings.robot.urdf:
         from clearcli.tasks.robots import check_robot

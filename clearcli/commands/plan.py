@@ -139,6 +139,7 @@ def plan_cmd(
     settings: bo.SettingsFile = None,
     sets: bo.Set = None,
     robot: bo.Robot = None,
+    grasps: bo.Grasps = None,
     camera_pose: Annotated[
         Optional[str],
         typer.Option(
@@ -177,7 +178,7 @@ def plan_cmd(
     from clearcli.tasks import plan as task
     from clearcli.tasks.base import Outputs, Source
 
-    cfg = bo.with_images(bo.resolve_settings(settings, sets, "plan", robot=robot, time_limit_s=time_limit), intrinsics, depth_scale)
+    cfg = bo.with_images(bo.resolve_settings(settings, sets, "plan", robot=robot, grasps=grasps, time_limit_s=time_limit), intrinsics, depth_scale)
     request = task.Request(cfg, camera_pose=camera_pose, first_only=first_only)
     if batch.wanted(inputs):
         bo.no_color_in_batch(color)

@@ -74,6 +74,7 @@ def replay_cmd(
     settings: bo.SettingsFile = None,
     sets: bo.Set = None,
     robot: bo.Robot = None,
+    grasps: bo.Grasps = None,
 ) -> None:
     """Replay a recorded clearing session: segment, predicates and plan on every frame,
     with object ids stable across frames, a check of whether each planned action
@@ -82,7 +83,7 @@ def replay_cmd(
     from clearcli.errors import SettingsError
     from clearcli.tasks import replay as task
 
-    config = bo.resolve_settings(settings, sets, "replay", robot=robot, push_memory=False if no_push_memory else None)
+    config = bo.resolve_settings(settings, sets, "replay", robot=robot, grasps=grasps, push_memory=False if no_push_memory else None)
     if from_s is not None and to_s is not None and to_s < from_s:
         raise SettingsError(f"--to {to_s} is before --from {from_s}")
     if out is not None:

@@ -32,6 +32,7 @@ def simulate_cmd(
     settings: bo.SettingsFile = None,
     sets: bo.Set = None,
     robot: bo.Robot = None,
+    grasps: bo.Grasps = None,
 ) -> None:
     """Simulate a clearing session: plan on a rendered frame, carry out the first action
     in a world that slides, turns and slips, render again, until the table is clear, no
@@ -39,7 +40,7 @@ def simulate_cmd(
     from clearcli.commands.common import check_output_path, print_json, stderr, stdout
     from clearcli.tasks import simulate as task
 
-    config = bo.resolve_settings(settings, sets, "replay", robot=robot, push_memory=False if no_push_memory else None)
+    config = bo.resolve_settings(settings, sets, "replay", robot=robot, grasps=grasps, push_memory=False if no_push_memory else None)
     request = task.Request(
         config, scene=scene, objects=objects, seed=seed, max_actions=max_actions,
         push_memory=config.replay.push_memory, truth_segmentation=truth_segmentation,

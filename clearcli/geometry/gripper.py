@@ -134,6 +134,10 @@ def check_gripper_settings(s: GripperSettings, where: str = "[gripper]") -> None
     """Reject dimensions that cannot describe a gripper (one-line SettingsError)."""
     for f in dataclasses.fields(s):
         value = getattr(s, f.name)
+        if f.name == "closed_gap_m":  # a gripper that closes fully has none
+            if not value >= 0.0:
+                raise SettingsError(f"settings: {where} {f.name} must be zero or positive, got {value!r}")
+            continue
         if not value > 0.0:
             raise SettingsError(f"settings: {where} {f.name} must be positive, got {value!r}")
     if s.closing_width_m > s.opening_width_m:

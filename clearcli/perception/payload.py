@@ -14,7 +14,22 @@ if TYPE_CHECKING:
     from clearcli.perception.types import Segmentation
 
 SCHEMA = "segmentation"
-VERSION = 1
+# version 1 had no rims of open containers and no table edges
+VERSION = 2
+
+
+def _rim(opening: Any) -> dict[str, Any] | None:
+    rim = opening.rim
+    if rim is None:
+        return None
+    return {
+        "center": rounded(rim.center),
+        "radius_m": rounded(rim.radius_m),
+        "height_m": rounded(rim.height_m),
+        "wall_m": rounded(rim.wall_m),
+        "inside_depth_m": rounded(rim.inside_depth_m),
+        "arc_deg": rounded(rim.arc_deg),
+    }
 
 
 def segmentation_payload(seg: "Segmentation") -> dict[str, Any]:
@@ -41,6 +56,12 @@ def segmentation_payload(seg: "Segmentation") -> dict[str, Any]:
                 for v in seg.support
             ],
             "beyond_edge_m2": rounded(seg.beyond_edge_m2),
+            # the polygon's sides and whether the camera sees the table end there (a
+            # flat object is slid only to such a side): clearcli/perception/openings.py
+            "edges": [
+                {"start": rounded(e.start), "end": rounded(e.end), "seen": bool(e.seen), "why": e.why}
+                for e in seg.table_edges
+            ],
         },
         "objects": [
             {
@@ -54,6 +75,9 @@ def segmentation_payload(seg: "Segmentation") -> dict[str, Any]:
                     "extents": rounded(obj.obb_extents),
                 },
                 "principal_axes": rounded(obj.principal_axes),
+                # an open container's rim (sensor frame; height above the table), else why not
+                "rim": _rim(seg.openings[k]) if k < len(seg.openings) else None,
+                "rim_why": seg.openings[k].why if k < len(seg.openings) else "",
             }
             for k, obj in enumerate(seg.objects)
         ],

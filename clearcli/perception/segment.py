@@ -336,6 +336,13 @@ def segment(frame: Frame, settings: SegmentSettings) -> Segmentation:
         v for k, v in timings.items() if k not in merged_stages  # (in "merge")
     )
     timings.setdefault("flat", 0.0)
+    # what the grasps beyond the pinch need: rims of open containers, seen table edges
+    t_open = time.perf_counter()
+    from clearcli.perception.openings import rim_of, seen_edges
+
+    openings = tuple(rim_of(frame.points[o.indices], fit.plane) for o in objects)
+    edges = seen_edges(frame.points, frame.shape, fit.plane, fit.polygon)
+    timings["openings"] = time.perf_counter() - t_open
     timings["total"] = time.perf_counter() - t0
     return Segmentation(
         n_points=frame.n_points,
@@ -348,6 +355,8 @@ def segment(frame: Frame, settings: SegmentSettings) -> Segmentation:
         beyond_edge_m2=beyond_m2,
         color_used=color_used,
         color_note=color_note,
+        openings=openings,
+        table_edges=edges,
         source=frame.source,
         frame_id=frame.frame_id,
         stamp_s=frame.stamp_s,

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Mapping
+from typing import Any, Mapping
 
 import numpy as np
 
@@ -84,6 +84,11 @@ class Segmentation:
     beyond_edge_m2: float = 0.0
     color_used: bool = False
     color_note: str = ""  # what read the colour, or why none did
+    # per object (as ``objects``): its rim when it is an open container, or why not; the
+    # table polygon's sides and whether each is seen to end (openings.py). Empty when
+    # the segmentation came from elsewhere (labels): the predicates stage works them out.
+    openings: tuple[Any, ...] = ()
+    table_edges: tuple[Any, ...] = ()
     source: str = ""
     frame_id: str = ""
     stamp_s: float = 0.0

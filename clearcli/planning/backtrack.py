@@ -65,8 +65,24 @@ Checker = Callable[[Action, SceneContext], "CheckedAction | Infeasible"]
 CHECK_MODES = ("whole", "first")
 
 
+GRASP_LABELS = {"pinch": "grasp", "rim": "rim grasp", "slide": "slide grasp"}
+
+
 def _label(action: Action) -> str:
-    return "grasp" if action.kind == "grasp" else f"push {action.direction}"
+    return GRASP_LABELS[action.grasp_kind] if action.kind == "grasp" else f"push {action.direction}"
+
+
+def with_grasp_kinds(state: SymbolicState, kinds: Sequence[str]) -> SymbolicState:
+    """``state`` with the facts of the grasp kinds not in ``kinds`` left out (``[plan]
+    grasps``): with "pinch" alone, exactly the thesis's facts, so exactly its plans."""
+    import dataclasses
+
+    from clearcli.predicates.grasps import EXTRA_KINDS, KIND_FACTS
+
+    drop = {n for k in EXTRA_KINDS if k not in kinds for n in (KIND_FACTS[k].offered, KIND_FACTS[k].block)}
+    if not drop or not any(f[0] in drop for f in state.facts):
+        return state
+    return dataclasses.replace(state, facts=frozenset(f for f in state.facts if f[0] not in drop))
 
 
 def backtrack(
@@ -104,7 +120,9 @@ def backtrack(
     deadline_at = t_start + time_limit_s
     names = state.names()
     facts0 = frozenset(state.facts)
-    ungraspable = tuple(o for o in names if ("ungraspable", o) in facts0)
+    # too wide or narrow for the pinch, and no other grasp kind offered
+    offered_other = {f[1] for f in facts0 if f[0] in ("rim_graspable", "slidable")}
+    ungraspable = tuple(o for o in names if ("ungraspable", o) in facts0 and o not in offered_other)
     wanted = [o for o in (goal_objects if goal_objects is not None else names) if o not in ungraspable]
     learnt0: set[Fact] = set()  # learnt, true in the recorded scene
     why: dict[str, dict[str, str]] = {}  # object -> action label -> why it has no arm motion
@@ -378,9 +396,12 @@ def make_plan(
     from clearcli.robot.profiles import kinematics_from_settings
     from clearcli.robot.placement import placement_from_settings
 
+    from clearcli.predicates.grasps import parse_kinds
+
     robot = settings.robot  # type: ignore[attr-defined]
     plan_s = settings.plan  # type: ignore[attr-defined]
     gripper = settings.gripper  # type: ignore[attr-defined]
+    state = with_grasp_kinds(state, parse_kinds(plan_s.grasps))
     if T_base_camera is None:
         T_base_camera, _ = placement_from_settings(robot, state)
     T_base_camera = np.asarray(T_base_camera, dtype=float)
@@ -388,11 +409,17 @@ def make_plan(
     obstacles = make_obstacles(state, T_base_camera, robot.collision_margin_m)
     checker = IKActionChecker(state, T_base_camera, kin, obstacles, push_lookahead=plan_s.push_lookahead)
 
+    kinds_on = parse_kinds(plan_s.grasps)
+
     def describe_width(name: str) -> tuple[str, float | None]:
-        width = float(state.by_name(name).grasp_width_m)
-        if width <= 0:
-            return "too wide or narrow for the gripper", None
-        return gripper_opening_text(width, gripper.opening_width_m, gripper.closing_width_m), width
+        obj = state.by_name(name)
+        width = float(obj.grasp_width_m)
+        text = "too wide or narrow for the gripper" if width <= 0 else gripper_opening_text(width, gripper.opening_width_m, gripper.closing_width_m)
+        # the other kinds tried, and why each is not offered
+        tried = [f"{GRASP_LABELS[k]}: {obj.kind_refusals[k]}" for k in kinds_on if k in obj.kind_refusals]
+        if tried:
+            text = f"{text}; " + "; ".join(tried)
+        return text, (width if width > 0 else None)
 
     try:
         plan = backtrack(

@@ -16,7 +16,8 @@ or ``ik_unfeasible_*`` fact; they are only deleted. So
   "delete X" becomes "add free-X". The task is then delete-free, which makes plan
   existence a simple fixpoint (`removable_objects`) and LM-cut very well informed.
 
-Static facts (``ungraspable``, ``push_off_table``) remove the action instead.
+Static facts (``ungraspable``, ``push_off_table``) remove the action instead, and the
+other grasp kinds' "offered" facts (``rim_graspable``, ``slidable``) add it.
 """
 
 from __future__ import annotations
@@ -26,12 +27,16 @@ from dataclasses import dataclass
 from typing import Iterable, Mapping, Sequence
 
 from clearcli.planning.types import Action
+from clearcli.predicates.grasps import EXTRA_KINDS, KIND_FACTS
 from clearcli.predicates.state import DIRECTIONS, Fact
 
 _NAME_OK = re.compile(r"^[a-z][a-z0-9_]*$")
 
 # Fact kinds the planner can make false (the rest are static or added only between plans).
-DYNAMIC = ("on", "block_grasp", "block_dir", "ik_unfeasible_grasp", "ik_unfeasible_dir")
+DYNAMIC = (
+    "on", "block_grasp", "block_dir", "ik_unfeasible_grasp", "ik_unfeasible_dir",
+    "block_rim", "block_slide", "ik_unfeasible_rim", "ik_unfeasible_slide",
+)
 
 
 @dataclass(frozen=True)
@@ -77,6 +82,7 @@ def ground_actions(
         _check_name(d)
     ungraspable = {f[1] for f in true if f[0] == "ungraspable"}
     off_table = {(f[1], f[2]) for f in true if f[0] == "push_off_table"}
+    offered = {k: {f[1] for f in true if f[0] == KIND_FACTS[k].offered} for k in EXTRA_KINDS}
     # Index the initially true dynamic facts by the objects they mention.
     on_over: dict[str, list[Fact]] = {o: [] for o in objects}  # on(x, o)
     on_under: dict[str, list[Fact]] = {o: [] for o in objects}  # on(o, x)
@@ -85,6 +91,10 @@ def ground_actions(
     bd_of: dict[tuple[str, str], list[Fact]] = {}  # block_dir(x, o, d)
     bd_any: dict[str, list[Fact]] = {o: [] for o in objects}  # block_dir with o either side
     bd_by: dict[str, list[Fact]] = {o: [] for o in objects}  # block_dir(o, x, d)
+    # the other grasp kinds' blocking facts (block_rim, block_slide): of o, by o
+    kb_of: dict[str, dict[str, list[Fact]]] = {k: {o: [] for o in objects} for k in EXTRA_KINDS}
+    kb_by: dict[str, dict[str, list[Fact]]] = {k: {o: [] for o in objects} for k in EXTRA_KINDS}
+    block_kind = {KIND_FACTS[k].block: k for k in EXTRA_KINDS}
     known = set(objects)
     for f in sorted(true):
         kind = f[0]
@@ -100,15 +110,34 @@ def ground_actions(
             bd_any[f[1]].append(f)
             if f[2] != f[1]:
                 bd_any[f[2]].append(f)
+        elif kind in block_kind and f[1] in known and f[2] in known:
+            kb_of[block_kind[kind]][f[2]].append(f)
+            kb_by[block_kind[kind]][f[1]].append(f)
     out: list[GroundAction] = []
     for o in objects:
+        # o gone: it stands on nothing and blocks nothing any more (any kind of grasp)
+        gone = list(on_under[o]) + list(bg_by[o]) + list(bd_by[o])
+        for k in EXTRA_KINDS:
+            gone += kb_by[k][o]
         if o not in ungraspable:
             pre = list(on_over[o]) + list(bg_of[o])
             ikg = ("ik_unfeasible_grasp", o)
             if ikg in true:
                 pre.append(ikg)
-            deletes = list(on_under[o]) + list(bg_by[o]) + list(bd_by[o])
-            out.append(GroundAction(f"grasp_{o}", Action("grasp", o), tuple(pre), tuple(deletes), 1))
+            out.append(GroundAction(f"grasp_{o}", Action("grasp", o), tuple(pre), tuple(gone), 1))
+        for k in EXTRA_KINDS:
+            if o not in offered[k]:
+                continue
+            facts_k = KIND_FACTS[k]
+            pre = list(on_over[o]) + list(kb_of[k][o])
+            if k == "slide":  # slid along the table: nothing under it either
+                pre += on_under[o]
+            ikk = (facts_k.ik, o)
+            if ikk in true:
+                pre.append(ikk)
+            out.append(
+                GroundAction(f"{facts_k.action}_{o}", Action("grasp", o, None, k), tuple(pre), tuple(gone), facts_k.cost)
+            )
         for d in directions:
             if (o, d) in off_table:
                 continue
@@ -117,9 +146,11 @@ def ground_actions(
             if ikd in true:
                 pre.append(ikd)
             deletes = list(bd_any[o]) + list(bg_of[o]) + list(bg_by[o])
-            ikg = ("ik_unfeasible_grasp", o)
-            if ikg in true:
-                deletes.append(ikg)
+            for k in EXTRA_KINDS:
+                deletes += kb_of[k][o] + kb_by[k][o]
+            for ik in ("ik_unfeasible_grasp",) + tuple(KIND_FACTS[k].ik for k in EXTRA_KINDS):
+                if (ik, o) in true:
+                    deletes.append((ik, o))
             cost = int(push_costs.get((o, d), 1))
             if cost < 1:
                 raise ValueError(f"push cost of {o} {d} must be a positive integer, got {cost}")

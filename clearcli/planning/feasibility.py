@@ -31,6 +31,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from clearcli.planning.types import Action, CheckedAction
+from clearcli.predicates.grasps import KIND_FACTS
 from clearcli.predicates.state import Fact, SymbolicState
 
 # Failure kinds whose fact is an ik_unfeasible_* fact (the action itself is impossible
@@ -51,7 +52,8 @@ class Infeasible:
         action's ik_unfeasible_* fact."""
         if self.kind == "collision" and self.colliders:
             if action.kind == "grasp":
-                return tuple(("block_grasp", x, action.obj) for x in self.colliders)
+                block = KIND_FACTS[action.grasp_kind].block
+                return tuple((block, x, action.obj) for x in self.colliders)
             return tuple(("block_dir", x, action.obj, str(action.direction)) for x in self.colliders)
         return (action.ik_fact(),)
 
@@ -183,7 +185,9 @@ class IKActionChecker:
         from clearcli.robot.kinematics import half_turn
 
         obj = self.state.by_name(action.obj)
-        if action.kind == "grasp":
+        if action.kind == "grasp" and action.grasp_kind != "pinch":
+            cands = tuple(obj.kind_candidates.get(action.grasp_kind, ()))
+        elif action.kind == "grasp":
             cands = tuple(obj.grasp_candidates)
         else:
             push = obj.pushes.get(str(action.direction))

@@ -13,10 +13,11 @@ if TYPE_CHECKING:
     from clearcli.planning.types import Plan
     from clearcli.predicates.state import SymbolicState
 
-PREDICATES_SCHEMA, PREDICATES_VERSION = "predicates", 1
+# version 1 had no grasp kinds beyond the pinch (objects' "grasp_kinds", "not_offered")
+PREDICATES_SCHEMA, PREDICATES_VERSION = "predicates", 2
 # version 1 had no status/left, and its optimal and steps meant less; version 2 had no
-# robot block and no gripper poses per step
-PLAN_SCHEMA, PLAN_VERSION = "plan", 3
+# robot block and no gripper poses per step; version 3 no grasp kind per step
+PLAN_SCHEMA, PLAN_VERSION = "plan", 4
 
 
 def predicates_payload(state: "SymbolicState") -> dict[str, Any]:
@@ -38,6 +39,14 @@ def predicates_payload(state: "SymbolicState") -> dict[str, Any]:
                     d: {"length_m": rounded(p.push_length_m), "start_poses": [rounded(c[1]) for c in p.candidates]}
                     for d, p in o.pushes.items()
                 },
+                # the grasp kinds beyond the pinch offered for it (a rim's circle and wall,
+                # a slide's direction and length; the poses each candidate grasps at), and
+                # why the others are not
+                "grasp_kinds": {
+                    k: {**{kk: rounded(v) for kk, v in o.kind_details.get(k, {}).items()}, "grasp_poses": [rounded(_grasp_pose(c)) for c in cands]}
+                    for k, cands in o.kind_candidates.items()
+                },
+                "not_offered": dict(o.kind_refusals),
             }
         )
     return {
@@ -56,6 +65,12 @@ def predicates_payload(state: "SymbolicState") -> dict[str, Any]:
     }
 
 
+def _grasp_pose(seq: Any) -> Any:
+    # the pose that closes the fingers: the pinch's middle of three; a slide's is its
+    # second last (after the push along the table and the approach from the edge)
+    return seq[-2]
+
+
 def plan_payload(plan: "Plan", source: str, frame_id: str, pose_source: str, unit_cost: bool) -> dict[str, Any]:
     """The payload of schema ``clear.plan`` (documented in `clearcli/commands/plan.py`)."""
     first = None
@@ -72,6 +87,8 @@ def plan_payload(plan: "Plan", source: str, frame_id: str, pose_source: str, uni
         steps.append(
             {
                 "kind": a.kind,
+                # which grasp: "pinch" (the thesis's), "rim", "slide"; null for a push
+                "grasp_kind": a.grasp_kind if a.kind == "grasp" else None,
                 "object": a.obj,
                 "direction": a.direction,
                 "checked": c is not None,

@@ -34,6 +34,13 @@ FACT_ARITY: dict[str, int] = {
     "ik_unfeasible_dir": 2,
     "ungraspable": 1,
     "push_off_table": 2,
+    # the grasp kinds beyond the pinch (clearcli/predicates/grasps)
+    "rim_graspable": 1,
+    "block_rim": 2,
+    "ik_unfeasible_rim": 1,
+    "slidable": 1,
+    "block_slide": 2,
+    "ik_unfeasible_slide": 1,
 }
 
 
@@ -53,12 +60,17 @@ def _domain_file() -> str:
         raise InputError(f"the PDDL domain (clearcli/{DOMAIN_RESOURCE}) is missing: reinstall clear ({exc})") from None
 
 
-def domain_text(clearance_costs: bool = False) -> str:
-    """The domain: the file as shipped (unit costs), or with ``clearance_costs`` the
-    variant whose push costs (push-cost ?o ?d) come from the problem. The unit-cost file
-    uses only standard :action-costs (every PDDL parser takes it); the variant's static
-    cost function is accepted by Fast Downward and unified-planning."""
+def domain_text(clearance_costs: bool = False, kinds: Sequence[str] = ("pinch",)) -> str:
+    """The domain: the file as shipped (unit costs, the thesis's pinch grasp alone), or
+    with ``clearance_costs`` the variant whose push costs (push-cost ?o ?d) come from the
+    problem, and with ``kinds`` beyond "pinch" the actions of those grasp kinds
+    (`with_grasp_kinds`). The unit-cost file uses only standard :action-costs (every
+    PDDL parser takes it); the variant's static cost function is accepted by Fast
+    Downward and unified-planning."""
     text = _domain_file()
+    extra = [k for k in kinds if k != "pinch"]
+    if extra:
+        text = with_grasp_kinds(text, extra)
     if not clearance_costs:
         return text
     if _FUNCTIONS_UNIT not in text or _PUSH_COST_UNIT not in text:
@@ -66,10 +78,76 @@ def domain_text(clearance_costs: bool = False) -> str:
     return text.replace(_FUNCTIONS_UNIT, _FUNCTIONS_COST).replace(_PUSH_COST_UNIT, _PUSH_COST_VAR)
 
 
+_PREDICATES_END = "    (push_off_table ?o - obj ?d - direction))"
+_GRASP_EFFECT_END = "             (not (block_dir ?o ?x ?e))))\n      (increase (total-cost) 1)))"
+_PUSH_EFFECT_END = "             (not (block_grasp ?x ?o))))\n      (not (ik_unfeasible_grasp ?o))"
+
+
+def with_grasp_kinds(text: str, kinds: Sequence[str]) -> str:
+    """The domain with one action per grasp kind in ``kinds`` ("rim", "slide"), as the
+    pinch's ``grasp`` is written: offered by a static fact, blocked by its own blocking
+    predicate, ruled out by its own IK fact; its effect the grasp's (the object removed,
+    every fact in which it blocks or stands on another deleted), its cost its own (the
+    planner prefers the cheapest, the surest: pinch 1, rim 2, slide 3). The grasp and the
+    push delete the new blocking facts as they delete the thesis's, and the push the new
+    IK facts as it deletes the grasp's (the object may be reachable where it ends up)."""
+    from clearcli.predicates.grasps import KIND_FACTS
+
+    for piece in (_PREDICATES_END, _GRASP_EFFECT_END, _PUSH_EFFECT_END):
+        if piece not in text:
+            raise InputError(f"clearcli/{DOMAIN_RESOURCE}: edited so that the grasp kinds cannot be added")
+    preds, grasp_dels, push_dels, push_ik, actions = [], [], [], [], []
+    for k in kinds:
+        f = KIND_FACTS[k]
+        preds += [f"    ({f.offered} ?o - obj)", f"    ({f.block} ?a - obj ?b - obj)", f"    ({f.ik} ?o - obj)"]
+        grasp_dels.append(f"\n             (not ({f.block} ?o ?x))")
+        push_dels.append(f"\n             (not ({f.block} ?o ?x))\n             (not ({f.block} ?x ?o))")
+        push_ik.append(f"\n      (not ({f.ik} ?o))")
+        under = "\n      (not (exists (?x - obj) (on ?o ?x)))" if k == "slide" else ""
+        effect_dels = "".join(
+            f"\n             (not ({g.block} ?o ?x))" for kk, g in KIND_FACTS.items() if kk in kinds
+        )
+        actions.append(
+            f"""
+  (:action {f.action}
+    :parameters (?o - obj)
+    :precondition (and
+      (not (removed ?o))
+      ({f.offered} ?o)
+      (not ({f.ik} ?o))
+      (not (exists (?x - obj) (on ?x ?o))){under}
+      (not (exists (?x - obj) ({f.block} ?x ?o))))
+    :effect (and
+      (removed ?o)
+      (forall (?x - obj ?e - direction)
+        (and (not (on ?o ?x))
+             (not (block_grasp ?o ?x))
+             (not (block_dir ?o ?x ?e)){effect_dels}))
+      (increase (total-cost) {f.cost})))
+"""
+        )
+    text = text.replace(_PREDICATES_END, _PREDICATES_END[:-1] + "\n" + "\n".join(preds) + ")")
+    text = text.replace(
+        _GRASP_EFFECT_END,
+        "             (not (block_dir ?o ?x ?e))" + "".join(grasp_dels) + "))\n      (increase (total-cost) 1)))",
+    )
+    text = text.replace(
+        _PUSH_EFFECT_END,
+        "             (not (block_grasp ?x ?o))" + "".join(push_dels) + "))\n      (not (ik_unfeasible_grasp ?o))" + "".join(push_ik),
+    )
+    body = text.rstrip()
+    assert body.endswith(")")
+    return body[:-1].rstrip() + "\n" + "".join(actions) + ")\n"
+
+
 def domain_for(state: SymbolicState) -> str:
     """The domain that goes with `write_problem(state)`: with clearance costs when the
-    state carries push costs."""
-    return domain_text(clearance_costs=bool(state.push_costs))
+    state carries push costs, with the actions of the grasp kinds its facts offer."""
+    from clearcli.predicates.grasps import EXTRA_KINDS, KIND_FACTS
+
+    offered = {f[0] for f in state.facts}
+    kinds = ["pinch"] + [k for k in EXTRA_KINDS if KIND_FACTS[k].offered in offered]
+    return domain_text(clearance_costs=bool(state.push_costs), kinds=kinds)
 
 
 def fact_to_pddl(fact: Fact) -> str:

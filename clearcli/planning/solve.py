@@ -11,6 +11,7 @@ from typing import Iterable, Mapping, Sequence
 
 from clearcli.errors import PlannerError, SettingsError
 from clearcli.planning import downward
+from clearcli.predicates.grasps import EXTRA_KINDS, KIND_FACTS
 from clearcli.planning.types import Action
 from clearcli.predicates.state import DIRECTIONS, Fact
 
@@ -124,7 +125,9 @@ def _task(objects: Sequence[str], facts: Iterable[Fact], goal: Sequence[str], pu
 
 
 def action_cost(action: Action, push_costs: Mapping[tuple[str, str], int]) -> int:
-    return 1 if action.kind == "grasp" else int(push_costs.get((action.obj, str(action.direction)), 1))
+    if action.kind == "grasp":
+        return KIND_FACTS[action.grasp_kind].cost
+    return int(push_costs.get((action.obj, str(action.direction)), 1))
 
 
 def action_space(state_facts: frozenset[Fact], obj: str, directions: Sequence[str] = DIRECTIONS) -> list[Action]:
@@ -132,6 +135,9 @@ def action_space(state_facts: frozenset[Fact], obj: str, directions: Sequence[st
     out = []
     if ("ungraspable", obj) not in state_facts:
         out.append(Action("grasp", obj))
+    for k in EXTRA_KINDS:
+        if (KIND_FACTS[k].offered, obj) in state_facts:
+            out.append(Action("grasp", obj, None, k))
     for d in directions:
         if ("push_off_table", obj, d) not in state_facts:
             out.append(Action("push", obj, d))
@@ -148,5 +154,9 @@ def progress(facts: frozenset[Fact], action: Action) -> frozenset[Fact]:
     return frozenset(
         f
         for f in facts
-        if not (f[0] in ("block_dir", "block_grasp") and o in f[1:3]) and f != ("ik_unfeasible_grasp", o)
+        if not (f[0] in _BLOCKS and o in f[1:3]) and not (f[0] in _IK_GRASPS and f[1:] == (o,))
     )
+
+
+_BLOCKS = ("block_dir", "block_grasp") + tuple(KIND_FACTS[k].block for k in EXTRA_KINDS)
+_IK_GRASPS = tuple(f.ik for f in KIND_FACTS.values())

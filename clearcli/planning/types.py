@@ -7,27 +7,36 @@ from typing import Mapping
 
 import numpy as np
 
+from clearcli.predicates.grasps import KIND_FACTS
 from clearcli.predicates.state import Fact
 from clearcli.status import PlanStatus
 
 
 @dataclass(frozen=True)
 class Action:
-    """A grounded action: ("grasp", "o2") or ("push", "o0", "dir1")."""
+    """A grounded action: ("grasp", "o2") or ("push", "o0", "dir1"); a grasp of another
+    kind than the thesis's pinch carries it: ("grasp", "o3", None, "rim")."""
 
-    kind: str  # "grasp" | "push"
+    kind: str  # "grasp" | "push": a grasp of any kind removes the object
     obj: str
     direction: str | None = None
+    grasp_kind: str = "pinch"  # grasps only: a name of clearcli.predicates.grasps.KIND_FACTS
+
+    @property
+    def pddl_name(self) -> str:
+        if self.kind == "grasp":
+            return KIND_FACTS[self.grasp_kind].action
+        return "push"
 
     def pddl(self) -> str:
         if self.kind == "grasp":
-            return f"(grasp {self.obj})"
+            return f"({self.pddl_name} {self.obj})"
         return f"(push {self.obj} {self.direction})"
 
     def ik_fact(self) -> Fact:
         """The fact backtracking adds when this action has no IK solution."""
         if self.kind == "grasp":
-            return ("ik_unfeasible_grasp", self.obj)
+            return (KIND_FACTS[self.grasp_kind].ik, self.obj)
         return ("ik_unfeasible_dir", self.obj, str(self.direction))
 
 

@@ -7,7 +7,7 @@ named o0..oN-1 in a stable order by position, not by segmentation order.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Mapping
+from typing import Any, Mapping
 
 import numpy as np
 
@@ -23,6 +23,9 @@ DIRECTIONS: tuple[str, ...] = ("dir1", "dir2", "dir3", "dir4")
 #                                the gripper's [closing, opening] range
 #   ("push_off_table", o, d)     static: pushing o along d would leave the table polygon
 #   ("ik_unfeasible_grasp", o), ("ik_unfeasible_dir", o, d)   added by the planner only
+#   ("rim_graspable", o), ("slidable", o)   static: that grasp kind is offered for o
+#   ("block_rim", a, b), ("block_slide", a, b)   a blocks that kind's grasp of b
+#   ("ik_unfeasible_rim", o), ("ik_unfeasible_slide", o)   added by the planner only
 Fact = tuple[str, ...]
 
 
@@ -58,6 +61,13 @@ class ObjectModel:
     # added by the predicates stage (defaults keep older constructors valid)
     grasp_width_m: float = 0.0  # size across the grasp's closing direction
     height_m: float = 0.0  # top above the table
+    # the grasp kinds beyond the pinch (clearcli/predicates/grasps), by kind name: their
+    # candidate pose sequences T_camera_gripper, what the JSON tells of them (a rim, a
+    # slide's path), why a kind is not offered; a slide's translation (sensor frame)
+    kind_candidates: Mapping[str, tuple[tuple[np.ndarray, ...], ...]] = field(default_factory=dict)
+    kind_details: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
+    kind_refusals: Mapping[str, str] = field(default_factory=dict)
+    slide_translation: np.ndarray | None = None
 
 
 @dataclass(frozen=True, eq=False)

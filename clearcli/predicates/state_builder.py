@@ -8,9 +8,10 @@ with a warning (logger ``clearcli.predicates``) and listed in ``SymbolicState.sk
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import time
-from typing import TYPE_CHECKING, Sequence
+from typing import TYPE_CHECKING, Any, Sequence
 
 import numpy as np
 
@@ -21,6 +22,7 @@ from clearcli.predicates.state import DIRECTIONS, Fact, ObjectModel, PushModel, 
 if TYPE_CHECKING:
     from clearcli.geometry.models import ObjectGeometry, TableFrame
     from clearcli.geometry.poses import GraspGeometry, PushGeometry
+    from clearcli.predicates.grasps import Offer
     from clearcli.settings import Settings
 
 log = logging.getLogger("clearcli.predicates")
@@ -102,6 +104,19 @@ def compute_state(frame: Frame, seg: Segmentation, settings: "Settings | None" =
     facts.update(("push_off_table", names[i], d) for i, d in rel.push_off_table(geoms, pushes, table_xy))
     timings["static"] = time.perf_counter() - t0
 
+    # the grasp kinds beyond the pinch: rims of open containers, slides to a seen edge
+    t0 = time.perf_counter()
+    kinds = _other_grasps(frame, seg, geoms, tf, gripper, s, exclude, touching, rel.ungraspable(grasps, gripper, ps.grasp_width_margin_m))
+    for kind, offers in kinds.items():
+        from clearcli.predicates.grasps import KIND_FACTS
+
+        for i, offer in enumerate(offers):
+            if offer.why_not:
+                continue
+            facts.add((KIND_FACTS[kind].offered, names[i]))
+            facts.update((KIND_FACTS[kind].block, names[a], names[i]) for a in offer.blockers)
+    timings["grasp_kinds"] = time.perf_counter() - t0
+
     costs: dict[tuple[str, str], int] = {}
     if ps.clearance_cost:
         t0 = time.perf_counter()
@@ -113,7 +128,10 @@ def compute_state(frame: Frame, seg: Segmentation, settings: "Settings | None" =
         timings["costs"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    objects = tuple(_object_model(names[i], g, grasps[i], pushes[i], tf) for i, g in enumerate(geoms))
+    objects = tuple(
+        _object_model(names[i], g, grasps[i], pushes[i], tf, {k: v[i] for k, v in kinds.items()})
+        for i, g in enumerate(geoms)
+    )
     timings["export"] = time.perf_counter() - t0
     timings["total"] = time.perf_counter() - t_all
     return SymbolicState(
@@ -128,8 +146,39 @@ def compute_state(frame: Frame, seg: Segmentation, settings: "Settings | None" =
     )
 
 
+def _other_grasps(frame, seg, geoms, tf, gripper, settings, exclude, touching, ungraspable):  # type: ignore[no-untyped-def]
+    """kind -> one `Offer` per object (table frame), for the kinds beyond the pinch."""
+    from clearcli.perception.openings import rim_of, seen_edges
+    from clearcli.predicates.grasps import Scene as GraspScene, kind_module
+
+    # what segmentation saw, or (a segmentation from labels) worked out here
+    openings = seg.openings if len(seg.openings) == len(seg.objects) else tuple(
+        rim_of(frame.points[o.indices], seg.table) for o in seg.objects
+    )
+    edges = seg.table_edges or seen_edges(frame.points, frame.shape, seg.table, seg.table_polygon)
+    edges_table = [(*tf.to_table(np.stack([e.start, e.end])), e.seen, e.why) for e in edges]
+    scene = GraspScene(
+        objects=geoms,
+        points_table=(),
+        openings=[openings[g.segment_index] for g in geoms],
+        edges_table=edges_table,
+        exclude=exclude,
+        touching=touching,
+        ungraspable=set(ungraspable),
+        tf=tf,
+    )
+    rim = kind_module("rim").offers(scene, gripper, settings)
+    scene = dataclasses.replace(scene, rim_offered=frozenset(i for i, o in enumerate(rim) if not o.why_not))
+    return {"rim": rim, "slide": kind_module("slide").offers(scene, gripper, settings)}
+
+
 def _object_model(
-    name: str, g: "ObjectGeometry", grasp: "GraspGeometry", pushes: "dict[str, PushGeometry]", tf: "TableFrame"
+    name: str,
+    g: "ObjectGeometry",
+    grasp: "GraspGeometry",
+    pushes: "dict[str, PushGeometry]",
+    tf: "TableFrame",
+    offers: "dict[str, Offer] | None" = None,
 ) -> ObjectModel:
     def poses(seq: Sequence[np.ndarray]) -> tuple[np.ndarray, ...]:
         out = np.einsum("ij,njk->nik", tf.T_camera_table, np.asarray(seq))
@@ -166,4 +215,23 @@ def _object_model(
         pushes=push_models,
         grasp_width_m=float(grasp.width_m),
         height_m=float(g.top_height_m),
+        kind_candidates={k: tuple(poses(c) for c in o.candidates) for k, o in (offers or {}).items() if not o.why_not},
+        kind_details={k: _detail_to_camera(o.detail or {}, tf) for k, o in (offers or {}).items() if not o.why_not},
+        kind_refusals={k: o.why_not for k, o in (offers or {}).items() if o.why_not},
+        slide_translation=(
+            tf.vector_to_camera(np.asarray(offers["slide"].slide_translation))
+            if offers and "slide" in offers and offers["slide"].slide_translation is not None and not offers["slide"].why_not
+            else None
+        ),
     )
+
+
+def _detail_to_camera(detail: Any, tf: "TableFrame") -> dict[str, Any]:
+    # the JSON's points and directions in the sensor frame, as every other pose there
+    out = dict(detail)
+    if "center" in out:
+        out["center"] = tf.to_camera(np.asarray(out["center"], dtype=float)[None])[0].tolist()
+    if "direction" in out:
+        out["direction"] = tf.vector_to_camera(np.asarray(out["direction"], dtype=float)[None])[0].tolist()
+    out.pop("edge", None)  # a distance along the table frame's direction: not for readers
+    return out

@@ -23,6 +23,12 @@ class GripperSettings(Section):
 
     opening_width_m: float = param(0.07, gt=0, le=0.5)
     closing_width_m: float = param(0.03, ge=0, le=0.5)
+    # The gap between the fingers fully closed (m): what a rim grasp can close on (a
+    # container's wall thinner than this slips). The IRI gripper's is its closing width
+    # (parameters.md: 0.03 m, fingers apart when closed); the Franka Hand and the
+    # Robotiq 2F-85 close fully (0), though their pinch from above keeps 1 cm. Taken as
+    # at most closing_width_m.
+    closed_gap_m: float = param(0.03, ge=0, le=0.5)
     finger_width_m: float = param(0.03, gt=0, le=0.2)
     finger_thickness_m: float = param(0.01, gt=0, le=0.1)
     gripper_height_m: float = param(0.10, gt=0, le=1)

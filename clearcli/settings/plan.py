@@ -56,3 +56,8 @@ class PlanSettings(Section):
     # the other): a grasp at the middle of a segment that is two objects merged end to
     # end closes on both at their seam.
     regrasp_off_centre: bool = param(True)
+    # Which grasp kinds the planner may use (clearcli/predicates/grasps), cheapest first
+    # by action cost: the thesis's pinch from above (1), the rim of an open container
+    # (2), a flat object slid to a seen table edge and pinched there (3). "pinch" alone
+    # is the thesis's behaviour exactly (--grasps pinch).
+    grasps: str = param("pinch,rim,slide", choices=("pinch", "pinch,rim", "pinch,slide", "pinch,rim,slide"))

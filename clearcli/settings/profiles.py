@@ -25,6 +25,7 @@ PROFILE_DEFAULTS: Mapping[str, Mapping[str, Mapping[str, Any]]] = {
             # lying on the table is not picked from above by the fingertips
             "opening_width_m": 0.08,
             "closing_width_m": 0.01,
+            "closed_gap_m": 0.0,
             "finger_width_m": 0.02,
             "finger_thickness_m": 0.015,
             "gripper_height_m": 0.1034,  # flange to the closing point
@@ -48,6 +49,7 @@ PROFILE_DEFAULTS: Mapping[str, Mapping[str, Mapping[str, Any]]] = {
             # Robotiq 2F-85: 85 mm open, closes fully (1 cm kept, as for the Franka Hand)
             "opening_width_m": 0.085,
             "closing_width_m": 0.01,
+            "closed_gap_m": 0.0,
             "finger_width_m": 0.022,
             "finger_thickness_m": 0.015,
             "gripper_height_m": 0.15,

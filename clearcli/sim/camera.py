@@ -100,13 +100,17 @@ def render(
         commit(idx, t[hit], lab, colour, _shade(rays_table[idx], np.array([0.0, 0.0, 1.0])))
 
     for obj in scene.objects:
-        idx = _pixels_covering(obj, scene.T_camera_table, camera)
-        if idx.size == 0:
-            continue
-        t, normal_table = _intersect(obj, origin, rays_table[idx])
-        hit = np.isfinite(t)
-        colour = OBJECT_RGB[obj.object_id % len(OBJECT_RGB)]
-        commit(idx[hit], t[hit], object_label(obj.object_id), colour, _shade(rays_table[idx[hit]], normal_table[hit]))
+        # A mug's handle is a box of its own with the mug's id (so label and colour); a
+        # cylinder without one renders exactly as before handles existed.
+        handle = obj.handle_box() if isinstance(obj, Cylinder) else None
+        for part in (obj,) if handle is None else (obj, handle):
+            idx = _pixels_covering(part, scene.T_camera_table, camera)
+            if idx.size == 0:
+                continue
+            t, normal_table = _intersect(part, origin, rays_table[idx])
+            hit = np.isfinite(t)
+            colour = OBJECT_RGB[part.object_id % len(OBJECT_RGB)]
+            commit(idx[hit], t[hit], object_label(part.object_id), colour, _shade(rays_table[idx[hit]], normal_table[hit]))
 
     seen = np.isfinite(depth)
     depth_clean = np.where(seen, depth, np.nan)

@@ -1,6 +1,7 @@
 """Families of self-made scenes that test segmentation where it is hardest for clearing:
 small objects (the 3-7 cm a gripper takes) on and against larger ones, equal-height
-objects across narrow gaps, dense mixes, and open containers.
+objects across narrow gaps, dense mixes, open containers, and objects too wide for the
+gripper (bowls, mugs with handles, plates, flat boxes) among small ones.
 
 Every family is a pure function ``family(seed) -> Scene``: sizes and poses drawn from
 ``seed``, the same seed giving the same scene. `FAMILIES` names them for the benchmark
@@ -27,6 +28,7 @@ from clearcli.sim.scene import (
     Cylinder,
     Scene,
     SceneObject,
+    Table,
     _in_region,
     _place_touching,
     make_scene,
@@ -207,6 +209,90 @@ def open_container(seed: int) -> Scene:
     return make_scene(f"open_container({seed})", [cup])
 
 
+# wide_objects: footprints keep this far in from the table's border, at least one wide
+# object comes this close to it (near enough to be slid over the edge and pinched), and
+# objects keep this gap between them (beyond the sensor's noise: segmentable).
+WIDE_TABLE_MARGIN_M = 0.03
+WIDE_NEAR_EDGE_M = 0.12
+WIDE_MIN_GAP_M = 0.01
+
+
+def _wide(rng: np.random.Generator, object_id: int) -> SceneObject:
+    """An object no parallel gripper closes across: an open bowl, a mug with a handle, a
+    plate, or a flat box wider than every profile's opening (the widest is 8.5 cm)."""
+    kind = int(rng.integers(4))
+    yaw = round(float(rng.uniform(-math.pi, math.pi)), 4)  # the mug's handle direction
+    if kind == 0:  # bowl
+        return Cylinder(
+            object_id, round(float(rng.uniform(0.06, 0.09)), 4), round(float(rng.uniform(0.05, 0.08)), 4),
+            0.0, 0.0, yaw, wall_m=round(float(rng.uniform(0.003, 0.006)), 4),
+        )
+    if kind == 1:  # mug
+        return Cylinder(
+            object_id, round(float(rng.uniform(0.04, 0.045)), 4), round(float(rng.uniform(0.09, 0.10)), 4),
+            0.0, 0.0, yaw, wall_m=round(float(rng.uniform(0.003, 0.005)), 4),
+            handle_m=round(float(rng.uniform(0.02, 0.025)), 4),
+        )
+    if kind == 2:  # plate: closed and low
+        return Cylinder(
+            object_id, round(float(rng.uniform(0.09, 0.12)), 4), round(float(rng.uniform(0.015, 0.025)), 4),
+            0.0, 0.0, yaw,
+        )
+    return Box(  # flat box
+        object_id, round(float(rng.uniform(0.15, 0.22)), 4), round(float(rng.uniform(0.10, 0.16)), 4),
+        round(float(rng.uniform(0.02, 0.04)), 4), 0.0, 0.0, yaw,
+    )
+
+
+def _edge_gap(poly: np.ndarray, table: Table) -> float:
+    """Shortest distance from a footprint (on the table) to the table's border."""
+    hx, hy = table.size_x_m / 2, table.size_y_m / 2
+    return float(min(hx - poly[:, 0].max(), hx + poly[:, 0].min(), hy - poly[:, 1].max(), hy + poly[:, 1].min()))
+
+
+def wide_objects(seed: int) -> Scene:
+    """1-3 wide objects (`_wide`: bowls, mugs with handles, plates, flat boxes) and 3-6
+    small graspable ones (`_small`) anywhere on the table, ``WIDE_TABLE_MARGIN_M`` in from
+    its border and ``WIDE_MIN_GAP_M`` apart; the first wide object within
+    ``WIDE_NEAR_EDGE_M`` of a table edge. Wide objects get ids 0.., small ones follow."""
+    rng = np.random.default_rng(seed)
+    table = Table()
+    n_wide = int(rng.integers(1, 4))
+    n_small = int(rng.integers(3, 7))
+    objs: list[SceneObject] = [_wide(rng, i) for i in range(n_wide)]
+    objs += [_small(rng, n_wide + i) for i in range(n_small)]
+    lim_x = table.size_x_m / 2 - WIDE_TABLE_MARGIN_M
+    lim_y = table.size_y_m / 2 - WIDE_TABLE_MARGIN_M
+    placed: list[SceneObject] = []
+    for obj in objs:
+        for _attempt in range(500):
+            cand = replace(obj, x_m=round(float(rng.uniform(-lim_x, lim_x)), 4),
+                           y_m=round(float(rng.uniform(-lim_y, lim_y)), 4))
+            if not placed:
+                # the first (wide) object: moved towards a random side until its footprint
+                # is 3-10 cm (a drawn gap) from that edge, keeping its place along it
+                side = int(rng.integers(4))
+                axis, sign = side // 2, 1.0 if side % 2 else -1.0
+                gap = float(rng.uniform(WIDE_TABLE_MARGIN_M, 0.10))
+                poly = cand.footprint()
+                half = (table.size_x_m, table.size_y_m)[axis] / 2
+                reach = float((sign * poly[:, axis]).max())  # how far out it reaches now
+                shift = sign * (half - gap - reach)
+                centre = [cand.x_m, cand.y_m]
+                centre[axis] = round(centre[axis] + shift, 4)
+                cand = replace(cand, x_m=centre[0], y_m=centre[1])
+            poly = cand.footprint()
+            if (np.abs(poly[:, 0]) > lim_x).any() or (np.abs(poly[:, 1]) > lim_y).any():
+                continue
+            if any(objects_overlap(cand, p, WIDE_MIN_GAP_M) for p in placed):
+                continue
+            placed.append(cand)
+            break
+        else:
+            raise ValueError(f"wide_objects({seed}): no room for object {obj.object_id}")  # pragma: no cover
+    return make_scene(f"wide_objects({seed})", placed)
+
+
 FAMILIES: dict[str, Callable[[int], Scene]] = {
     "small_on_large": small_on_large,
     "small_against_tall": small_against_tall,
@@ -217,4 +303,5 @@ FAMILIES: dict[str, Callable[[int], Scene]] = {
     },
     "dense_mix": dense_mix,
     "open_container": open_container,
+    "wide_objects": wide_objects,
 }

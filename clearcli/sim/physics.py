@@ -12,7 +12,16 @@ import numpy as np
 from clearcli.transforms import rot2
 
 from clearcli.settings.sim import WorldParams
-from clearcli.sim.scene import Cylinder, Scene, SceneObject, with_object_pose, without_object
+from clearcli.sim.scene import (
+    Cylinder,
+    Scene,
+    SceneObject,
+    convex_hull,
+    objects_overlap,
+    polygons_overlap,
+    with_object_pose,
+    without_object,
+)
 
 # A neighbour that reaches less than this (m) into the space the open fingers take is
 # nudged aside as they come down and close; more, and the grasp takes nothing.
@@ -232,6 +241,257 @@ def world_push(
     if displaced:
         outcome += f", shoved {', '.join(str(i) for i in displaced)}"
     return scene, outcome
+
+
+# --- grasp kinds for wide objects: a rim grasp on an open container, a slide to the
+# table's edge and a pinch of the overhang. Written from the scene alone (no import from
+# clearcli.planning/predicates/geometry): these rules judge the planner's plans.
+
+# Rim grasp: the approach within this of straight down, the closing direction within this
+# of the container's radial direction, the fingertips at least this far below the rim.
+RIM_MAX_TILT_DEG = 15.0
+RIM_MAX_CLOSING_OFF_RADIAL_DEG = 20.0
+RIM_MIN_TIP_DEPTH_M = 0.01
+# Edge pinch: the overhang must exceed the fingers' grip depth by this (the pads' margin).
+EDGE_PINCH_MARGIN_M = 0.005
+# world_slide advances in steps this long, then bisects the last one to this precision.
+SLIDE_STEP_M = 0.002
+SLIDE_PRECISION_M = 1e-6
+
+# The 8 corner signs of a box and its 12 edges (pairs of corners differing in one sign).
+_SIGNS = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], dtype=float)
+_EDGES = [(i, j) for i in range(8) for j in range(i + 1, 8) if np.count_nonzero(_SIGNS[i] != _SIGNS[j]) == 1]
+
+
+def _finger_corners(
+    T_table_gripper: np.ndarray,
+    opening_m: float,
+    finger_thickness_m: float,
+    finger_width_m: float,
+    finger_depth_m: float,
+    fingertip_z_m: float,
+) -> list[np.ndarray]:
+    """(8, 3) table-frame corners of each open finger (+x finger, then -x finger).
+
+    Gripper frame as in the project's gripper model: closing point at the origin,
+    approach +z, closing along x; a finger's inner face at x = +/- opening/2, its tip at
+    z = fingertip_z_m, ``finger_depth_m`` long back along -z."""
+    half = np.array([finger_thickness_m / 2, finger_width_m / 2, finger_depth_m / 2])
+    R, t = T_table_gripper[:3, :3], T_table_gripper[:3, 3]
+    out = []
+    for side in (1.0, -1.0):
+        centre = np.array([side * (opening_m / 2 + finger_thickness_m / 2), 0.0, fingertip_z_m - finger_depth_m / 2])
+        local = centre + _SIGNS * half
+        out.append(local @ R.T + t)
+    return out
+
+
+def _below(corners: np.ndarray, z_max: float) -> np.ndarray:
+    """Vertices of the part of a box (its 8 corners) at z <= z_max: the corners below and
+    where the edges cross the plane (the clipped solid is their convex hull)."""
+    pts = [c for c in corners if c[2] <= z_max]
+    for i, j in _EDGES:
+        a, b = corners[i], corners[j]
+        if (a[2] - z_max) * (b[2] - z_max) < 0:
+            pts.append(a + (z_max - a[2]) / (b[2] - a[2]) * (b - a))
+    return np.array(pts, dtype=float).reshape(-1, 3)
+
+
+def _distance_to_polygon(point: np.ndarray, poly: np.ndarray) -> float:
+    """Distance from a 2D point to a counter-clockwise convex polygon (0 inside it)."""
+    n = len(poly)
+    if n == 0:
+        return math.inf
+    if n == 1:
+        return float(np.linalg.norm(point - poly[0]))
+    inside = n >= 3
+    best = math.inf
+    for i in range(n):
+        a, b = poly[i], poly[(i + 1) % n]
+        e = b - a
+        if n >= 3 and e[0] * (point[1] - a[1]) - e[1] * (point[0] - a[0]) < 0:
+            inside = False  # right of a counter-clockwise edge: outside
+        u = float(np.clip((point - a) @ e / max(float(e @ e), 1e-24), 0.0, 1.0))
+        best = min(best, float(np.linalg.norm(point - (a + u * e))))
+    return 0.0 if inside else best
+
+
+def world_rim_grasp(
+    scene: Scene,
+    k: int,
+    T_table_gripper: np.ndarray,
+    opening_m: float,
+    finger_thickness_m: float,
+    finger_width_m: float,
+    finger_depth_m: float,
+    *,
+    fingertip_z_m: float | None = None,
+) -> tuple[bool, str]:
+    """Does the open gripper at ``T_table_gripper`` (table frame; gripper frame: closing
+    point at the origin, approach +z, closing along x) hold object ``k`` by its wall
+    when it closes? (True, "held ...") or (False, a one-line reason).
+
+    The fingers are the project's gripper model: inner faces at x = +/- opening_m / 2,
+    ``finger_thickness_m`` along x, ``finger_width_m`` along y, ``finger_depth_m`` along z
+    ending at the fingertips, z = ``fingertip_z_m`` (default ``finger_depth_m / 2``; the
+    gripper model puts them at closing_region_height_m / 2, pass that to match it).
+
+    Held when: ``k`` is an open cylinder; the approach is within 15 deg of straight down;
+    the closing direction within 20 deg of radial; the wall between the fingers' inner
+    faces (so the opening at least the wall's thickness), the inner finger wholly inside
+    the inner wall and the outer one wholly outside the outer wall (the parts of them
+    below the rim: above it they meet nothing of the wall); both fingertips at least
+    1 cm below the rim, the inner one above the container's floor and the outer one above
+    the container's base; no finger meeting the mug's handle or another object (their
+    footprints overlapping at overlapping heights)."""
+    obj = scene.objects[k]
+    if not (isinstance(obj, Cylinder) and obj.is_open):
+        return False, "not an open container: no rim to grasp"
+    T = np.asarray(T_table_gripper, dtype=float)
+    R, tcp = T[:3, :3], T[:3, 3]
+    approach, closing = R[:, 2], R[:, 0]
+    tilt = math.degrees(math.acos(float(np.clip(-approach[2] / np.linalg.norm(approach), -1.0, 1.0))))
+    if tilt > RIM_MAX_TILT_DEG:
+        return False, f"approach {tilt:.1f} deg from straight down (at most {RIM_MAX_TILT_DEG:g})"
+    axis = np.array([obj.x_m, obj.y_m])
+    rel = tcp[:2] - axis
+    rho = float(np.linalg.norm(rel))
+    if rho < 1e-6:
+        return False, "closing point on the container's axis: no radial direction to close along"
+    radial = np.array([rel[0] / rho, rel[1] / rho, 0.0])
+    off = math.degrees(math.acos(float(np.clip(abs(closing @ radial) / np.linalg.norm(closing), 0.0, 1.0))))
+    if off > RIM_MAX_CLOSING_OFF_RADIAL_DEG:
+        return False, f"closing direction {off:.1f} deg off radial (at most {RIM_MAX_CLOSING_OFF_RADIAL_DEG:g})"
+    r_out, r_in = obj.radius_m, obj.radius_m - obj.wall_m
+    if opening_m < obj.wall_m:
+        return False, f"opening {opening_m * 1000:.1f} mm narrower than the wall ({obj.wall_m * 1000:.1f} mm)"
+    # the inner faces' places along the radial line: the wall must lie between them
+    unit_closing = closing / np.linalg.norm(closing)
+    faces = [float((tcp[:2] + side * opening_m / 2 * unit_closing[:2] - axis) @ radial[:2]) for side in (1.0, -1.0)]
+    face_in, face_out = min(faces), max(faces)
+    if not (face_in <= r_in and face_out >= r_out):
+        return False, (f"wall ({r_in * 1000:.1f}-{r_out * 1000:.1f} mm from the axis) not between the fingers' "
+                       f"inner faces ({face_in * 1000:.1f} and {face_out * 1000:.1f} mm)")
+    tip_z = finger_depth_m / 2 if fingertip_z_m is None else float(fingertip_z_m)
+    fingers = _finger_corners(T, opening_m, finger_thickness_m, finger_width_m, finger_depth_m, tip_z)
+    # the inner finger is the one nearer the axis (the other has the outer wall to clear)
+    centres = [float(np.linalg.norm(f.mean(axis=0)[:2] - axis)) for f in fingers]
+    inner, outer = (fingers[0], fingers[1]) if centres[0] <= centres[1] else (fingers[1], fingers[0])
+    rim_z = obj.top_z_m
+    unit_approach = approach / np.linalg.norm(approach)
+    for name, finger in (("inner", inner), ("outer", outer)):
+        tip_centre = finger.mean(axis=0) + unit_approach * finger_depth_m / 2  # centre of its tip face
+        if tip_centre[2] > rim_z - RIM_MIN_TIP_DEPTH_M:
+            return False, (f"{name} fingertip {(rim_z - tip_centre[2]) * 1000:.1f} mm below the rim "
+                           f"(at least {RIM_MIN_TIP_DEPTH_M * 1000:.0f} mm)")
+    floor_z = obj.base_z_m + obj.floor_m
+    if inner[:, 2].min() <= floor_z:
+        return False, f"inner fingertip at the container's floor ({(floor_z - inner[:, 2].min()) * 1000:.1f} mm into it)"
+    if outer[:, 2].min() <= obj.base_z_m:
+        return False, "outer fingertip below the container's base"
+    # what of each finger is below the rim meets the wall if it crosses r_in or r_out
+    inner_low = _below(inner, rim_z)
+    reach = float(np.linalg.norm(inner_low[:, :2] - axis, axis=1).max())
+    if reach >= r_in:
+        return False, f"inner finger meets the wall (reaches {reach * 1000:.1f} mm from the axis, inner wall at {r_in * 1000:.1f})"
+    outer_low = convex_hull(_below(outer, rim_z)[:, :2])
+    gap = _distance_to_polygon(axis, outer_low)
+    if gap <= r_out:
+        return False, f"outer finger meets the wall ({gap * 1000:.1f} mm from the axis, outer wall at {r_out * 1000:.1f})"
+    # the mug's own handle, then every other object: footprints at overlapping heights
+    handle = obj.handle_box()
+    blockers: list[tuple[str, SceneObject]] = [("the handle", handle)] if handle is not None else []
+    blockers += [(f"object {o.object_id}", o) for j, o in enumerate(scene.objects) if j != k]
+    for name, finger in (("inner", inner), ("outer", outer)):
+        lo, hi = float(finger[:, 2].min()), float(finger[:, 2].max())
+        finger_print = convex_hull(finger[:, :2])
+        for what, other in blockers:
+            if other.base_z_m >= hi or lo >= other.top_z_m:
+                continue
+            if polygons_overlap(finger_print, other.footprint()):
+                return False, f"{name} finger meets {what}"
+    return True, f"held by the rim ({(rim_z - inner[:, 2].min()) * 1000:.0f} mm below it)"
+
+
+def world_slide(scene: Scene, k: int, direction_xy: np.ndarray, distance_m: float) -> tuple[Scene, float]:
+    """Slide object ``k`` along ``direction_xy`` (table frame, normalised here) by up to
+    ``distance_m``, stopping where its footprint would meet another object's (at
+    overlapping heights); returns the new scene and the distance travelled.
+
+    It advances in `SLIDE_STEP_M` steps and bisects the step that meets something, so it
+    stops at the contact to within `SLIDE_PRECISION_M`. Objects it already overlaps at the
+    start (a contact within the builders' tolerance) do not stop it. It does not leave
+    the table on its own account: whether it tips is `world_edge_pinch`'s concern."""
+    d = np.asarray(direction_xy, dtype=float)[:2]
+    norm = float(np.linalg.norm(d))
+    if norm < 1e-12:
+        raise ValueError("world_slide: direction_xy has no length")
+    d = d / norm
+    obj = scene.objects[k]
+    others = [o for j, o in enumerate(scene.objects) if j != k and not objects_overlap(obj, o)]
+
+    def blocked(t: float) -> bool:
+        trial = with_object_pose(scene, k, obj.x_m + t * d[0], obj.y_m + t * d[1], obj.yaw_rad).objects[k]
+        return any(objects_overlap(trial, o) for o in others)
+
+    travelled = 0.0
+    total = max(float(distance_m), 0.0)
+    while travelled < total:
+        nxt = min(travelled + SLIDE_STEP_M, total)
+        if blocked(nxt):
+            lo, hi = travelled, nxt  # free at lo, meeting something at hi
+            while hi - lo > SLIDE_PRECISION_M:
+                mid = (lo + hi) / 2
+                lo, hi = (lo, mid) if blocked(mid) else (mid, hi)
+            travelled = lo
+            break
+        travelled = nxt
+    return with_object_pose(scene, k, obj.x_m + travelled * d[0], obj.y_m + travelled * d[1], obj.yaw_rad), travelled
+
+
+def world_edge_pinch(
+    scene: Scene,
+    k: int,
+    direction_xy: np.ndarray,
+    grip_depth_m: float,
+    opening_m: float,
+    closing_m: float,
+) -> tuple[bool, str]:
+    """After object ``k`` was slid along ``direction_xy`` towards a table edge, can the
+    gripper pinch the part hanging over the edge (fingers above and below it)?
+
+    The edge is the table side the direction leaves through from the object's centre;
+    the overhang is how far the footprint reaches past that side, measured along the
+    direction (the way the fingers come back in). Held when the centre is still over
+    the table (else the object tips off), the overhang is at least ``grip_depth_m`` +
+    `EDGE_PINCH_MARGIN_M` (else the pinch slips off the rim), and the object's height is
+    within [closing_m, opening_m] (the jaws close on it)."""
+    d = np.asarray(direction_xy, dtype=float)[:2]
+    norm = float(np.linalg.norm(d))
+    if norm < 1e-12:
+        raise ValueError("world_edge_pinch: direction_xy has no length")
+    d = d / norm
+    obj = scene.objects[k]
+    if not on_table(scene, obj):
+        return False, "tipped off the table: its centre is past the edge"
+    half = np.array([scene.table.size_x_m / 2, scene.table.size_y_m / 2])
+    centre = np.array([obj.x_m, obj.y_m])
+    # the side the direction leaves through: the axis whose border the ray meets first
+    exits = [(half[a] - math.copysign(1.0, d[a]) * centre[a]) / abs(d[a]) if abs(d[a]) > 1e-12 else math.inf
+             for a in (0, 1)]
+    a = int(np.argmin(exits))
+    sign = math.copysign(1.0, d[a])
+    poly = obj.footprint()
+    overhang = (float((sign * poly[:, a]).max()) - half[a]) / abs(d[a])
+    need = grip_depth_m + EDGE_PINCH_MARGIN_M
+    if overhang < need:
+        return False, f"slips: overhang {overhang * 1000:.1f} mm, needs {need * 1000:.1f} mm"
+    height = obj.height_m
+    if height > opening_m:
+        return False, f"too thick to pinch: {height * 1000:.1f} mm, opening {opening_m * 1000:.1f} mm"
+    if height < closing_m:
+        return False, f"too thin to pinch: {height * 1000:.1f} mm, the jaws close to {closing_m * 1000:.1f} mm"
+    return True, f"pinched: overhang {overhang * 1000:.1f} mm, {height * 1000:.1f} mm thick"
 
 
 # --- perception of the simulated world ------------------------------------------------------

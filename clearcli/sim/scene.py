@@ -40,6 +40,11 @@ TABLE_SIZE_Y_M = 0.60
 MIN_WIDTH_M = 0.03
 MAX_WIDTH_M = 0.07
 
+# A mug's handle (`Cylinder.handle_m`): a loop modelled as a solid box this thick across,
+# over this share of the mug's height, centred on its middle.
+HANDLE_THICKNESS_M = 0.012
+HANDLE_SPAN = 0.6
+
 
 def camera_pose_T_camera_table(
     height_m: float = CAMERA_HEIGHT_M, pitch_deg: float = CAMERA_PITCH_DEG
@@ -58,6 +63,29 @@ def camera_pose_T_camera_table(
     T_table_camera[:3, :3] = np.stack([x_c, y_c, z_c], axis=1)
     T_table_camera[:3, 3] = position
     return invert_transform(T_table_camera)
+
+
+def convex_hull(points: np.ndarray) -> np.ndarray:
+    """(m, 2) counter-clockwise convex hull of (n, 2) points (Andrew's monotone chain);
+    collinear points are dropped."""
+    pts = sorted(set(map(tuple, np.asarray(points, dtype=float).tolist())))
+    if len(pts) <= 2:
+        return np.array(pts, dtype=float).reshape(-1, 2)
+
+    def cross(o: tuple[float, ...], a: tuple[float, ...], b: tuple[float, ...]) -> float:
+        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+
+    lower: list[tuple[float, ...]] = []
+    for p in pts:
+        while len(lower) >= 2 and cross(lower[-2], lower[-1], p) <= 0:
+            lower.pop()
+        lower.append(p)
+    upper: list[tuple[float, ...]] = []
+    for p in reversed(pts):
+        while len(upper) >= 2 and cross(upper[-2], upper[-1], p) <= 0:
+            upper.pop()
+        upper.append(p)
+    return np.array(lower[:-1] + upper[:-1], dtype=float)
 
 
 def invert_transform(T: np.ndarray) -> np.ndarray:
@@ -121,7 +149,12 @@ class Cylinder:
 
     ``wall_m`` > 0 makes it an open container (a cup, a bowl with straight sides): no
     top cap, a wall that thick, and a floor inside ``floor_m`` above its base. 0 is a
-    solid, closed cylinder (a can)."""
+    solid, closed cylinder (a can).
+
+    ``handle_m`` > 0 gives it a mug's handle: the loop is modelled as a solid box
+    (`handle_box`) sticking out radially from the wall along the yaw direction,
+    ``handle_m`` beyond the outer wall, `HANDLE_THICKNESS_M` across, over the middle
+    `HANDLE_SPAN` of the height. It is part of the object (same id and label)."""
 
     object_id: int
     radius_m: float
@@ -132,10 +165,41 @@ class Cylinder:
     base_z_m: float = 0.0
     wall_m: float = 0.0
     floor_m: float = 0.005
+    handle_m: float = 0.0  # last, so positional construction elsewhere stays valid
 
     @property
     def is_open(self) -> bool:
         return self.wall_m > 0.0
+
+    @property
+    def has_handle(self) -> bool:
+        return self.handle_m > 0.0
+
+    def handle_box(self) -> Box | None:
+        """The handle as a `Box` in the table frame (same id, so same label), or None.
+
+        Its inner face sits inside the wall where the outer surface is at least as far
+        out as the box's corners (so no gap shows between box and wall) but never inside
+        the inner wall (so an open mug shows no handle stub on its inside)."""
+        if not self.has_handle:
+            return None
+        half = HANDLE_THICKNESS_M / 2
+        r_in = self.radius_m - self.wall_m if self.is_open else 0.0
+        inner = max(math.sqrt(max(self.radius_m**2 - half**2, 0.0)), r_in)
+        outer = self.radius_m + self.handle_m
+        mid = (inner + outer) / 2
+        c, s = math.cos(self.yaw_rad), math.sin(self.yaw_rad)
+        low = (1.0 - HANDLE_SPAN) / 2 * self.height_m
+        return Box(
+            self.object_id,
+            outer - inner,
+            HANDLE_THICKNESS_M,
+            HANDLE_SPAN * self.height_m,
+            x_m=self.x_m + mid * c,
+            y_m=self.y_m + mid * s,
+            yaw_rad=self.yaw_rad,
+            base_z_m=self.base_z_m + low,
+        )
 
     @property
     def top_z_m(self) -> float:
@@ -145,7 +209,12 @@ class Cylinder:
         """(n_sides, 2) polygon circumscribing its footprint circle, counter-clockwise."""
         angles = np.arange(n_sides) * (2 * math.pi / n_sides)
         r = self.radius_m / math.cos(math.pi / n_sides)  # circumscribed: never under-covers
-        return np.stack([self.x_m + r * np.cos(angles), self.y_m + r * np.sin(angles)], axis=1)
+        circle = np.stack([self.x_m + r * np.cos(angles), self.y_m + r * np.sin(angles)], axis=1)
+        handle = self.handle_box()
+        if handle is None:
+            return circle  # the exact polygon of before handles existed
+        # still convex (every caller's separating-axis tests need that): the hull of both
+        return convex_hull(np.vstack([circle, handle.footprint()]))
 
 
 SceneObject = Union[Box, Cylinder]

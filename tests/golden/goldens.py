@@ -3,7 +3,8 @@
     python tests/golden/goldens.py record [SET ...]   # writes tests/golden/data/<set>.json
     python tests/golden/goldens.py compare [SET ...]  # exit 1 and a diff summary on change
 
-Sets: the JSON documents of `segment`, `predicates` and `plan` on the 50 mOSD frames, the
+Sets: the JSON documents of `segment`, `predicates` and `plan` (and `plan --grasps pinch`, the
+thesis's grasp alone: `plan_pinch_*`) on the 50 mOSD frames, the
 fixtures' PCDs and the nine uois RealSense frames; `replay --json` of
 fixtures/simulated_session.mcap; `simulate --json` for seeds 0-9. Frames run as one batch
 per command (`--jobs 2`), the path a batch evaluation takes, and each frame's document
@@ -77,8 +78,8 @@ def _run(args: list[str]) -> list[dict[str, Any]]:
     return [json.loads(line) for line in proc.stdout.splitlines() if line.strip()]
 
 
-def _batch(command: str, frames: list[Path]) -> dict[str, Any]:
-    lines = _run([command, *map(str, frames), "--json", "--jobs", "2"])
+def _batch(command: str, frames: list[Path], extra: tuple[str, ...] = ()) -> dict[str, Any]:
+    lines = _run([command, *map(str, frames), "--json", "--jobs", "2", *extra])
     out: dict[str, Any] = {}
     for line in lines:
         if line.get("type") != "frame":
@@ -107,6 +108,8 @@ def recorders() -> dict[str, Callable[[], dict[str, Any]]]:
     for name, frames in sets.items():
         for command in ("segment", "predicates", "plan"):
             rec[f"{command}_{name}"] = lambda c=command, f=frames: _batch(c, f)
+        # the thesis's pinch alone: the plans as before the other grasp kinds came
+        rec[f"plan_pinch_{name}"] = lambda f=frames: _batch("plan", f, ("--grasps", "pinch"))
     rec["replay_session"] = _replay
     rec["simulate_seeds"] = _simulate
     return rec
