@@ -35,7 +35,10 @@ import numpy as np
 
 from clearcli.settings.sim import WorldParams
 from clearcli.sim.physics import aligned_width, grasp_contacts, push_contacts, truly_ungraspable, world_grasp, world_push
-from clearcli.sim.scene import Scene
+from clearcli.sim.scene import Scene, without_object
+
+# how much of a slid object's overhang the world's fingers need to hold it (m)
+EDGE_GRIP_M = 0.025
 from clearcli.sim.truth import world_object_of
 
 if TYPE_CHECKING:
@@ -318,6 +321,44 @@ class Episode:
         reach = float(push.push_length_m) + 0.1
         return push_contacts(self.scene, start, d, half_width, reach)
 
+    def _other_grasp(self, report: "FrameReport", model: Any, kind: str, k: int) -> str:
+        """A rim grasp or a slide to the edge, judged by the world's own rules
+        (`physics.world_rim_grasp`, `world_slide`, `world_edge_pinch`), not the planner's."""
+        from clearcli.sim.physics import world_edge_pinch, world_rim_grasp, world_slide
+
+        gripper = self.session.pipeline.settings.gripper
+        T_table_camera = np.linalg.inv(self.scene.T_camera_table)
+        detail = model.kind_details.get(kind, {})
+        if kind == "rim":
+            T_camera_grasp = _chosen_pose_camera(report, model.kind_candidates.get("rim", ()))
+            if T_camera_grasp is None:
+                return "missed: no rim pose"
+            ok, why = world_rim_grasp(
+                self.scene,
+                k,
+                T_table_camera @ T_camera_grasp,
+                float(detail.get("opening_m", gripper.opening_width_m)),
+                gripper.finger_thickness_m,
+                gripper.finger_width_m,
+                gripper.finger_depth_m,
+                fingertip_z_m=gripper.closing_region_height_m / 2.0,
+            )
+            if not ok:
+                return f"rim grasp failed: {why}"
+            self.scene = without_object(self.scene, k)
+            return "removed"
+        direction = T_table_camera[:3, :3] @ np.asarray(detail.get("direction", (1.0, 0.0, 0.0)), dtype=float)
+        self.scene, travelled = world_slide(self.scene, k, direction[:2], float(detail.get("slide_m", 0.0)))
+        # the world's own figure: fingers need 2.5 cm of the overhang to hold it
+        ok, why = world_edge_pinch(self.scene, k, direction[:2], EDGE_GRIP_M, gripper.opening_width_m, gripper.closing_width_m)
+        if not ok:
+            if "tipped" in why:
+                self.scene = without_object(self.scene, k)
+                return f"slid {travelled:.3f} m, fell off the table"
+            return f"slid {travelled:.3f} m, then the pinch failed: {why}"
+        self.scene = without_object(self.scene, k)
+        return "removed"
+
     def _act(self, frame: "Frame", report: "FrameReport", index: int) -> tuple[StepRecord, tuple[int, ...]]:
         result = report.result
         n = len(self.scene.objects)
@@ -358,6 +399,9 @@ class Episode:
         label = f"({first.kind} {wid}{' ' + first.direction if first.direction else ''})"
         if k is None:
             outcome = "missed: no object there"
+        elif first.kind == "grasp" and first.grasp_kind != "pinch":
+            label = f"({first.pddl_name} {wid})"
+            outcome = self._other_grasp(report, model, first.grasp_kind, k)
         elif first.kind == "grasp":
             gripper = self.session.pipeline.settings.gripper
             # The world closes the fingers on what lies between them, not on what the

@@ -37,6 +37,9 @@ SLIDE_EDGE_CLEARANCE_M = 0.005
 SLIDE_CLEARANCE_M = 0.005
 SLIDE_KEEP_ON_M = 0.01
 SLIDE_MAX_M = 0.6
+# how far below the horizontal the edge pinch approaches (deg): level, none of the wam,
+# panda and ur5e reached a pose 1.5 cm above the table beyond its edge; 45: all three
+SLIDE_TILT_DEG = 45.0
 UP = np.array([0.0, 0.0, 1.0])
 
 
@@ -120,13 +123,22 @@ class SlideGrasp:
             start = lateral + (rear - push.gripper_behind_m - half_along) * d3
             start[2] = push.fingertips_above_table_m + g.closing_region_height_m / 2.0
             push_seq = _push_sequence(d3, start, push.approach_m * UP, translations, steps_n)[0]
-            # the pinch at the edge: approach towards the table, closing vertical
+            # the pinch at the edge: from beyond it and above, the approach tilted
+            # SLIDE_TILT_DEG below the horizontal (level, no arm here reached it: the
+            # wrist would be at the table's height), closing in the vertical plane of the
+            # slide; the fingertips SLIDE_EDGE_CLEARANCE_M short of the edge, at the
+            # object's mid-height, the lower finger out beyond the edge
             half = g.closing_region_height_m / 2.0
-            point = lateral + (edge_at + SLIDE_EDGE_CLEARANCE_M + half) * d3
-            point[2] = thick / 2.0
-            T = _pose(UP, -d3, point)
+            tilt = math.radians(SLIDE_TILT_DEG)
+            approach = -math.cos(tilt) * d3 - math.sin(tilt) * UP
+            tip = lateral + (edge_at + SLIDE_EDGE_CLEARANCE_M) * d3
+            tip[2] = thick / 2.0
+            point = tip - half * approach
+            x = np.cross(np.cross(UP, d3), approach)  # in the vertical plane through d3
+            x /= np.linalg.norm(x)
+            T = _pose(x, approach, point)
             pre, lift = T.copy(), T.copy()
-            pre[:3, 3] += push.approach_m * d3
+            pre[:3, 3] -= push.approach_m * approach
             lift[:3, 3] += push.approach_m * UP
             seq = tuple(push_seq) + (pre, T, lift)
             geometry = PushGeometry("slide", d3, dist, translations, (tuple(push_seq),))

@@ -1,0 +1,198 @@
+"""Grasp kinds beyond the thesis's pinch (clearcli/predicates/grasps): rims of open
+containers and slides to a seen table edge, on rendered scenes whose sizes are known."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from clearcli.sim import scene as S
+
+# the sim's table is 0.80 x 0.60 m centred on the origin: its right edge at x = +0.40
+BOWL = S.Cylinder(0, 0.07, 0.06, -0.10, 0.05, wall_m=0.005)
+MUG = S.Cylinder(1, 0.04, 0.095, 0.12, 0.0, wall_m=0.004, handle_m=0.02)
+CAN = S.Cylinder(2, 0.04, 0.10, 0.0, -0.15)
+FLAT = S.Box(3, 0.20, 0.14, 0.03, 0.25, 0.15)  # right face at x = 0.35
+
+
+def _settings(robot: str = "panda", grasps: str | None = None):  # type: ignore[no-untyped-def]
+    from clearcli.settings.tree import load_settings
+
+    sets = [f"robot.name={robot}"] + ([f'plan.grasps="{grasps}"'] if grasps else [])
+    return load_settings(None, sets)
+
+
+def _state(scene: S.Scene, settings, seed: int = 0):  # type: ignore[no-untyped-def]
+    from clearcli.perception.segment import segment
+    from clearcli.predicates.state_builder import compute_state
+    from clearcli.sim.camera import render
+
+    frame = render(scene, seed=seed)
+    seg = segment(frame, settings.segment)
+    return frame, seg, compute_state(frame, seg, settings)
+
+
+def _by_position(state, scene: S.Scene, obj: S.SceneObject):  # type: ignore[no-untyped-def]
+    """The state's object nearest to a world object (table frame x, y)."""
+    T = scene.T_camera_table
+    want = T[:3, :3] @ np.array([obj.x_m, obj.y_m, 0.0]) + T[:3, 3]
+    return min(state.objects, key=lambda o: float(np.linalg.norm((o.centroid - want)[[0]])) + 0.3 * float(np.linalg.norm(o.centroid - want)))
+
+
+def test_rim_offered_on_a_bowl_and_a_mug_with_their_walls_not_on_a_can() -> None:
+    scene = S.make_scene("rims", [BOWL, MUG, CAN])
+    _, _, state = _state(scene, _settings())
+    for world, wall in ((BOWL, 0.005), (MUG, 0.004)):
+        obj = _by_position(state, scene, world)
+        assert ("rim_graspable", obj.name) in state.facts, obj.kind_refusals
+        detail = obj.kind_details["rim"]
+        assert abs(detail["wall_m"] - wall) <= 0.002  # the render's wall, within 2 mm
+        assert abs(detail["radius_m"] - (world.radius_m - wall / 2)) <= 0.004
+        assert len(obj.kind_candidates["rim"]) >= 1
+    can = _by_position(state, scene, CAN)
+    assert ("rim_graspable", can.name) not in state.facts
+    assert "closed" in can.kind_refusals["rim"]
+
+
+def test_the_wams_gripper_cannot_close_on_a_wall() -> None:
+    # the IRI gripper's fingers stop 3 cm apart (parameters.md): a 5 mm wall slips
+    scene = S.make_scene("bowl", [BOWL])
+    _, _, state = _state(scene, _settings("wam"))
+    (obj,) = state.objects
+    assert ("rim_graspable", obj.name) not in state.facts
+    assert "thinner than the gripper closes (0.030 m)" in obj.kind_refusals["rim"]
+
+
+def test_a_rim_grasp_is_planned_ik_checked_and_lands_on_its_pose() -> None:
+    from clearcli.planning.backtrack import make_plan
+    from clearcli.robot.profiles import kinematics_from_settings
+
+    scene = S.make_scene("bowl", [BOWL])
+    settings = _settings("panda")
+    _, _, state = _state(scene, settings)
+    plan = make_plan(state, settings)
+    assert [a.pddl() for a in plan.actions] == ["(grasp_rim o0)"]
+    checked = plan.checked[0]
+    assert checked is not None and checked.action.grasp_kind == "rim"
+    kin = kinematics_from_settings(settings.robot)
+    for q, T in zip(checked.joint_solutions, checked.T_base_gripper):
+        assert np.linalg.norm(kin.fk(q)[:3, 3] - T[:3, 3]) < 1e-3
+    # the grasp pose: approach straight down, closing across the wall (radial)
+    T_grasp = np.linalg.inv(plan.T_base_camera) @ checked.T_base_gripper[1]
+    T_table = np.linalg.inv(scene.T_camera_table) @ T_grasp
+    assert T_table[2, 2] < -0.99
+    radial = T_table[:2, 3] - np.array([BOWL.x_m, BOWL.y_m])
+    assert abs(np.linalg.norm(radial) - (BOWL.radius_m - 0.0025)) < 0.004
+    assert abs(abs(T_table[:2, 0] @ (radial / np.linalg.norm(radial))) - 1.0) < 0.02
+
+
+def test_pinch_alone_leaves_the_bowl_as_the_thesis_would() -> None:
+    from clearcli.errors import NoPlanError
+    from clearcli.planning.backtrack import make_plan
+
+    scene = S.make_scene("bowl", [BOWL])
+    settings = _settings("panda", "pinch")
+    _, _, state = _state(scene, settings)
+    with pytest.raises(NoPlanError) as err:
+        make_plan(state, settings)
+    (left,) = err.value.plan.left  # type: ignore[attr-defined]
+    assert left.reason == "ungraspable" and "rim" not in left.detail
+
+
+def test_slide_to_the_nearest_seen_edge_by_hand() -> None:
+    scene = S.make_scene("flat", [FLAT])
+    _, seg, state = _state(scene, _settings())
+    (obj,) = state.objects
+    assert ("ungraspable", obj.name) in state.facts and ("slidable", obj.name) in state.facts
+    detail = obj.kind_details["slide"]
+    # towards +x of the table (its right edge, 5 cm from the box's face): 0.05 m to the
+    # edge plus the 0.035 m overhang
+    d_table = np.linalg.inv(scene.T_camera_table)[:3, :3] @ np.asarray(detail["direction"])
+    assert d_table[0] > 0.99
+    assert abs(detail["slide_m"] - (0.40 - 0.35 + 0.035)) < 0.006
+    assert abs(detail["thickness_m"] - 0.03) < 0.004
+    # the edges segmentation saw: the table's sides end in the sim (nothing beyond)
+    assert any(e.seen for e in seg.table_edges)
+
+
+def test_slide_blocked_by_what_stands_in_its_path_by_hand() -> None:
+    # The flat box spans x 0.12-0.32 and slides right (+x). A small box between it and
+    # the right edge (x 0.355-0.395) is in its swept path; one 2 cm behind its left face
+    # (x 0.06-0.10) is where the closed fingers push from (they stand 3 cm behind the
+    # face, 2.5 cm deep): both block. One beside it (y 0.005-0.045, the box's side at
+    # y 0.08) is in neither.
+    in_path = S.Box(4, 0.04, 0.04, 0.06, 0.375, 0.15)
+    behind = S.Box(5, 0.04, 0.04, 0.06, 0.08, 0.15)
+    beside = S.Box(6, 0.04, 0.04, 0.06, 0.25, 0.025)
+    flat = dataclasses.replace(FLAT, x_m=0.22)
+    scene = S.make_scene("two", [flat, in_path, behind, beside])
+    _, _, state = _state(scene, _settings())
+    f, p, b, c = (_by_position(state, scene, o) for o in (flat, in_path, behind, beside))
+    assert len({f.name, p.name, b.name, c.name}) == 4
+    assert ("slidable", f.name) in state.facts
+    assert ("block_slide", p.name, f.name) in state.facts
+    assert ("block_slide", b.name, f.name) in state.facts
+    assert ("block_slide", c.name, f.name) not in state.facts
+
+
+def test_no_slide_when_the_edge_is_only_the_image_border() -> None:
+    # a table far larger than the view: every side of what is seen is the image's border
+    scene = S.make_scene("big", [dataclasses.replace(FLAT, x_m=0.0, y_m=0.05)], table=S.Table(4.0, 4.0))
+    _, seg, state = _state(scene, _settings())
+    (obj,) = state.objects
+    assert not any(e.seen for e in seg.table_edges)
+    assert ("slidable", obj.name) not in state.facts
+    assert "no side of the table is seen to end" in obj.kind_refusals["slide"]
+
+
+def test_no_slide_when_the_edge_is_beyond_the_arms_reach() -> None:
+    from clearcli.errors import NoPlanError
+    from clearcli.planning.backtrack import make_plan
+
+    scene = S.make_scene("flat", [FLAT])
+    settings = _settings()
+    _, _, state = _state(scene, settings)
+    # the arm's base 1.5 m to the left of the table's centre: the right edge is beyond reach
+    T_base_table = np.eye(4)
+    T_base_table[:3, 3] = [1.5, 0.0, 0.0]
+    T_base_camera = T_base_table @ np.linalg.inv(scene.T_camera_table)
+    with pytest.raises(NoPlanError) as err:
+        make_plan(state, settings, T_base_camera)
+    (left,) = err.value.plan.left  # type: ignore[attr-defined]
+    assert "slide grasp: beyond the arm's reach" in left.detail or left.actions.get("slide grasp") == "beyond the arm's reach"
+
+
+# near the robot's side of the table (its base 0.25 m before the near edge, y = -0.3):
+# the right edge, 8.5 cm of slide away, is within the Panda's reach
+NEAR_FLAT = dataclasses.replace(FLAT, y_m=-0.15)
+
+
+@pytest.mark.parametrize("world", [BOWL, NEAR_FLAT], ids=["grasp_rim", "slide_grasp"])
+def test_plans_with_each_new_action_pass_two_independent_validators(world, tmp_path) -> None:  # type: ignore[no-untyped-def]
+    from helpers.validate import second_verdict, validate_files, validate_files_second
+
+    from clearcli.planning.backtrack import make_plan
+    from clearcli.planning.pddl import domain_for, write_plan, write_problem
+    from clearcli.predicates.grasps import KIND_FACTS
+
+    scene = S.make_scene("one", [world, S.Box(9, 0.04, 0.04, 0.06, -0.25, -0.15)])
+    settings = _settings()
+    _, _, state = _state(scene, settings)
+    plan = make_plan(state, settings)
+    kinds = {a.grasp_kind for a in plan.actions if a.kind == "grasp"}
+    assert len(plan.goal) == 2 and kinds - {"pinch"}, [a.pddl() for a in plan.actions]
+    domain, problem, plan_file = tmp_path / "domain.pddl", tmp_path / "problem.pddl", tmp_path / "plan.txt"
+    domain.write_text(domain_for(state))
+    problem.write_text(write_problem(state, plan.goal, plan.ik_facts))
+    plan_file.write_text(write_plan(plan.actions, plan.cost, unit_cost=False))
+    assert KIND_FACTS[next(iter(kinds - {"pinch"}))].action in domain.read_text()
+    assert validate_files(domain, problem, plan_file)
+    assert validate_files_second(domain, problem, plan_file), second_verdict(domain, problem, plan_file).reason
+    # the same plan without the fact that offers the new kind: both refuse it
+    offered = {KIND_FACTS[k].offered for k in kinds}
+    stripped = dataclasses.replace(state, facts=frozenset(f for f in state.facts if f[0] not in offered))
+    problem.write_text(write_problem(stripped, plan.goal, plan.ik_facts))
+    assert not validate_files(domain, problem, plan_file)
+    assert not validate_files_second(domain, problem, plan_file)
