@@ -57,6 +57,10 @@ MAX_ACTIONS = 40
 def session_scene(seed: int, kind: str = "mixed") -> Any:
     from clearcli.sim import scene as scenes
 
+    if kind == "wide":  # issue 25: containers, plates and flat boxes among small objects
+        from clearcli.sim.families import wide_objects
+
+        return wide_objects(seed)
     n_objects = 3 + seed % (10 if kind == "clutter" else 13)
     if kind == "clutter":  # issue 12's population: clutter of 3-12 objects
         return scenes.clutter(n_objects, seed)
@@ -93,7 +97,9 @@ def left_reasons(r: Any) -> Counter:
     return out
 
 
-def run_session(seed: int, mode: str, settings_path: str = "", kind: str = "mixed", robot: str = "") -> dict[str, Any]:
+def run_session(
+    seed: int, mode: str, settings_path: str = "", kind: str = "mixed", robot: str = "", grasps: str = ""
+) -> dict[str, Any]:
     from clearcli.pipeline import Pipeline
     from clearcli.replay.session import ReplayOptions, Session
     from clearcli.settings import load_settings
@@ -101,7 +107,8 @@ def run_session(seed: int, mode: str, settings_path: str = "", kind: str = "mixe
     from clearcli.sim.truth import truth_segment
 
     world = session_scene(seed, kind)
-    settings = load_settings(Path(settings_path) if settings_path else None, [f"robot.name={robot}"] if robot else [])
+    sets = ([f"robot.name={robot}"] if robot else []) + ([f'plan.grasps="{grasps}"'] if grasps else [])
+    settings = load_settings(Path(settings_path) if settings_path else None, sets)
     pipeline = Pipeline(settings, segment_fn=truth_segment if mode == "truth" else None)
     episode = Episode(world, Session(pipeline, ReplayOptions(push_memory=True)), seed=seed, max_actions=MAX_ACTIONS)
     t0 = time.perf_counter()
@@ -122,6 +129,9 @@ def run_session(seed: int, mode: str, settings_path: str = "", kind: str = "mixe
         "actions": r.actions,
         "pushes": sum(1 for s in r.steps if s.action.startswith("(push")),
         "slipped": sum(1 for s in r.steps if s.outcome == "slipped"),
+        "rim": sum(1 for s in r.steps if s.action.startswith("(grasp_rim") and s.outcome == "removed"),
+        "slide": sum(1 for s in r.steps if s.action.startswith("(slide_grasp") and s.outcome == "removed"),
+        "kinds_failed": [f"{s.action} -> {s.outcome}" for s in r.steps if s.action.startswith(("(grasp_rim", "(slide_grasp")) and s.outcome != "removed"],
         "back_and_forth": r.back_and_forth,
         "left": dict(left_reasons(r)),
         "reason": r.reason,
@@ -131,7 +141,7 @@ def run_session(seed: int, mode: str, settings_path: str = "", kind: str = "mixe
     }
 
 
-def _run(args: tuple[int, str, str, str]) -> dict[str, Any]:
+def _run(args: tuple[int, str, str, str, str, str]) -> dict[str, Any]:
     return run_session(*args)
 
 
@@ -164,6 +174,11 @@ def report(label: str, rows: list[dict[str, Any]], verbose: bool) -> dict[str, A
         f"95th percentile {p95:.3f} s, max {max(plan_s) if plan_s else 0:.3f} s over {len(plan_s)} frames"
     )
     print("    objects left: " + ("; ".join(f"{k}: {v}" for k, v in sorted(left.items())) or "none"))
+    failed = [x for r in rows for x in r["kinds_failed"]]
+    print(
+        f"    removed by a rim grasp {sum(r['rim'] for r in rows)}, by a slide to the edge {sum(r['slide'] for r in rows)}; "
+        f"those the world refused: {len(failed)} {failed[:6]}"
+    )
     merged = [r["seed"] for r in rows if r["left"].get("merged with another or missed by the segmenter")]
     print(f"    sessions ending with objects merged with another or missed by the segmenter: {len(merged)}/{n} {merged}")
     for r in rows:
@@ -201,10 +216,12 @@ def main() -> None:
     ap.add_argument("--settings", default="", help="a settings TOML (as `clear --settings`), for ablations")
     ap.add_argument("--robot", default="", help="a robot profile (`clear robots`); default the WAM")
     ap.add_argument(
-        "--scenes", choices=("mixed", "clutter"), default="mixed",
+        "--scenes", choices=("mixed", "clutter", "wide"), default="mixed",
         help="mixed: dense and clutter of 3-15 objects (above); clutter: `scene.clutter(3 + s %% 10, s)`, "
-        "3-12 objects (issue 12's sessions: do touching objects merged by the segmenter end them?)",
+        "3-12 objects (issue 12's sessions: do touching objects merged by the segmenter end them?); wide: "
+        "`families.wide_objects(s)`, 3-6 small objects with 1-3 bowls, mugs, plates, flat boxes (issue 25)",
     )
+    ap.add_argument("--grasps", default="", help="[plan] grasps (default: the settings' pinch,rim,slide)")
     args = ap.parse_args()
 
     if args.seeds:
@@ -225,7 +242,7 @@ def main() -> None:
         if skipped:
             print(f"seeds left out (no room in the clutter for every object): {skipped}")
         groups = {k: [s for s in g if s not in skipped] for k, g in groups.items()}
-    work = [(seed, mode, args.settings, args.scenes, args.robot) for group in groups.values() for mode in modes for seed in group]
+    work = [(seed, mode, args.settings, args.scenes, args.robot, args.grasps) for group in groups.values() for mode in modes for seed in group]
     t0 = time.perf_counter()
     with ProcessPoolExecutor(max_workers=max(1, args.jobs)) as pool:
         rows = list(pool.map(_run, work, chunksize=1))

@@ -5,14 +5,16 @@ some and leaves others, each with its reason; 5 nothing can be done. With ``--js
 document is printed in all three cases (and for a deadline that ends with a checked
 plan); errors (3, 4, 6, 8) are one line on stderr.
 
---json prints one document, schema ``clear.plan`` version 3 (version 1 had no
+--json prints one document, schema ``clear.plan`` version 4 (version 1 had no
 ``status``/``left``, and its ``optimal`` and ``steps`` meant less; version 2 had no
-``robot`` and no ``T_base_gripper`` per step):
+``robot`` and no ``T_base_gripper`` per step; version 3 no ``grasp_kind`` per step):
 
     source, frame_id          where the frame came from
     status                    "complete" | "partial" | "no_plan"
-    actions                   ["(grasp o1)", "(push o0 dir1)", ...] in order
-    steps                     per action: {"kind": "grasp"|"push", "object": "o1",
+    actions                   ["(grasp o1)", "(push o0 dir1)", "(grasp_rim o2)",
+                              "(slide_grasp o3)", ...] in order
+    steps                     per action: {"kind": "grasp"|"push", "grasp_kind":
+                              "pinch"|"rim"|"slide" (grasps; null for a push), "object": "o1",
                               "direction": null|"dir1", "checked": bool,
                               "candidate": int|null (gripper candidate used: half-turn /
                               quarter-turn alternative), "joints_rad": [[one float per
@@ -34,8 +36,10 @@ plan); errors (3, 4, 6, 8) are one line on stderr.
     goal                      objects the plan removes
     left                      [{"object", "reason": "unreachable"|"ungraspable"|"stuck",
                               "detail" (which pose failed and how; the measured width
-                              against the opening; what holds it), "actions": {"grasp"|
-                              "push dirN": why it has no arm motion}, "blockers": [..],
+                              against the opening, and why each other grasp kind is not
+                              offered; what holds it), "actions": {"grasp"|"rim grasp"|
+                              "slide grasp"|"push dirN": why it has no arm motion},
+                              "blockers": [..],
                               "width_m": float|null}] for every object not removed
     no_plan_reason            null, or (status no_plan) the one-line reason also printed on stderr
     unreachable, stuck, ungraspable   the names in ``left``, by reason

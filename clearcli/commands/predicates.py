@@ -2,7 +2,7 @@
 
 --json prints one document, schema ``clear.predicates`` (version in the envelope):
 
-    {"schema": "clear.predicates", "version": 1,
+    {"schema": "clear.predicates", "version": 2,   # 1: no grasp_kinds / not_offered
      "source": str,                      # the frame's file (and topic/frame for MCAP)
      "frame": "sensor (optical)",        # every vector/pose below is in the sensor frame, m
      "table": {"normal": [3], "offset": float, "polygon": [[3], ...]},
@@ -14,8 +14,16 @@
         "height_m": float, "grasp_width_m": float,
         "directions": {"dir1": [3], ...},  # unit push directions (compare by vector)
         "grasp_poses": [[4x4], ...],     # T_camera_gripper: the grasp's two half-turns, then the IK fallbacks (other yaw, off-centre)
-        "push": {"dir1": {"length_m": float, "start_poses": [[4x4], [4x4]]}, ...}}, ...],
-     "facts": ["(on o1 o0)", ...],       # PDDL atoms, sorted
+        "push": {"dir1": {"length_m": float, "start_poses": [[4x4], [4x4]]}, ...},
+        "grasp_kinds": {                 # the grasp kinds beyond the pinch offered for it
+          "rim": {"center": [3], "radius_m", "height_m", "wall_m", "inside_depth_m",
+                  "opening_m", "grasp_poses": [[4x4], ...]},
+          "slide": {"direction": [3] (unit), "slide_m", "overhang_m", "thickness_m",
+                    "grasp_poses": [[4x4]] (the pinch at the edge, after the slide)}},
+        "not_offered": {"rim": why, "slide": why}}, ...],
+     "facts": ["(on o1 o0)", ...],       # PDDL atoms, sorted; with the kinds' facts
+                                         # (rim_graspable o), (block_rim x o), (slidable o),
+                                         # (block_slide x o)
      "skipped": [{"segment_index": int, "reason": str}, ...],
      "push_costs": {"o0 dir1": int, ...}, # only with [predicates] clearance_cost
      "timings_s": {"models": float, ...}}
@@ -50,7 +58,7 @@ def print_state(doc: dict[str, Any]) -> None:
             f"{o['grasp_width_m']:.3f}",
         )
     stdout.print(t)
-    kinds = ("on", "block_grasp", "block_dir", "ungraspable", "push_off_table")
+    kinds = ("on", "block_grasp", "block_dir", "ungraspable", "push_off_table", "rim_graspable", "block_rim", "slidable", "block_slide")
     f = Table(title=f"facts ({len(doc['facts'])})")
     f.add_column("predicate")
     f.add_column("n", justify="right")
@@ -124,8 +132,18 @@ def domain_cmd(
         bool,
         typer.Option("--clearance-cost", help="The variant with per-push costs (push-cost ?o ?d)."),
     ] = False,
+    grasps: Annotated[
+        str,
+        typer.Option(
+            "--grasps",
+            help="Grasp kinds whose actions it has: pinch (the thesis's grasp; pddl/domain.pddl), rim "
+            "(grasp_rim), slide (slide_grasp).",
+            metavar="KINDS",
+        ),
+    ] = "pinch,rim,slide",
 ) -> None:
-    """Print the PDDL domain (types obj/direction; actions grasp and push)."""
+    """Print the PDDL domain (types obj/direction; actions grasp, push, and grasp_rim and
+    slide_grasp unless --grasps leaves them out)."""
     from clearcli.tasks.domain import domain_text
 
-    typer.echo(domain_text(clearance_costs=clearance_cost), nl=False)
+    typer.echo(domain_text(clearance_costs=clearance_cost, grasps=grasps), nl=False)

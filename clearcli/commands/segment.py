@@ -1,6 +1,7 @@
 """`clear segment`: the table and the objects on it.
 
-JSON (`--json`), envelope {"schema": "clear.segmentation", "version": 1, ...}:
+JSON (`--json`), envelope {"schema": "clear.segmentation", "version": 2, ...} (version 1
+had no ``rim``/``rim_why`` per object and no ``table.edges``):
 
     source        str     the file (and frame/topic) read
     frame_id      str     sensor frame name ("" when unknown)
@@ -16,12 +17,24 @@ JSON (`--json`), envelope {"schema": "clear.segmentation", "version": 1, ...}:
                              why: str}] every plane RANSAC found, the chosen one first
                              (README "Which plane is the table"),
                    beyond_edge_m2: float area (m^2) the hull lost when pieces of the
-                             plane seen beyond the table's edge were dropped (0: none)}
+                             plane seen beyond the table's edge were dropped (0: none),
+                   edges: [{start: [3], end: [3], seen: bool, why: str}] the polygon's
+                             sides (nearly straight runs joined) and whether the camera
+                             sees the table end there ("a drop beyond it"), or why not
+                             ("the view ends there", "the table goes on beyond it",
+                             "something stands beyond it", ...): a flat object is slid
+                             only to a seen side (clearcli/perception/openings.py)}
     objects       [{id: int (k, from 0), label: int (10 (k + 1), as in -o),
                     n_points: int, centroid: [3],
                     obb: {center: [3], axes: [[3] x 3] rows, the third the table normal,
                           extents: [3] full side lengths (m) along the axes},
-                    principal_axes: [[3] x 3] rows, largest variance first}]
+                    principal_axes: [[3] x 3] rows, largest variance first,
+                    rim: null | {center: [3] the rim circle's centre, radius_m: to the
+                          middle of the wall, height_m: above the table, wall_m: its
+                          thickness where seen, inside_depth_m: how deep the inside is
+                          seen below the rim, arc_deg: how much of the circle is seen}
+                          (an open container: a bowl, a mug, a cup),
+                    rim_why: str why it has no rim ("" when it has one)}]
     color         {used: bool, note: str} whether colour was read (by the flat-object
                    search, by the supervoxels when color_importance > 0), and else why
                    not: no colour, a colour image of another size, all black, all

@@ -154,7 +154,12 @@ def backtrack(
         stuck.clear()
         facts = known()
         for o in list(goal):  # every allowed action IK-infeasible
-            if all(a.ik_fact() in facts for a in action_space(facts, o)):
+            space = action_space(facts, o)
+            grasps = [a for a in space if a.kind == "grasp"]
+            # or its only grasps are slides without an arm motion: a push of it does not
+            # make a slide known (pddl.with_grasp_kinds), so no sequence frees them
+            slides_only = bool(grasps) and all(a.grasp_kind == "slide" for a in grasps)
+            if all(a.ik_fact() in facts for a in (grasps if slides_only else space)):
                 goal.remove(o)
                 unreachable.append(o)
         removable = removable_objects(base_names(), facts, state.push_costs)

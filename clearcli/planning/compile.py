@@ -147,8 +147,10 @@ def ground_actions(
                 pre.append(ikd)
             deletes = list(bd_any[o]) + list(bg_of[o]) + list(bg_by[o])
             for k in EXTRA_KINDS:
-                deletes += kb_of[k][o] + kb_by[k][o]
-            for ik in ("ik_unfeasible_grasp",) + tuple(KIND_FACTS[k].ik for k in EXTRA_KINDS):
+                # a slide is made for where o stands: a push moves o out of others' slide
+                # paths but tells nothing of its own slide (its blocks and IK facts stay)
+                deletes += (kb_of[k][o] if k != "slide" else []) + kb_by[k][o]
+            for ik in ("ik_unfeasible_grasp", KIND_FACTS["rim"].ik):
                 if (ik, o) in true:
                     deletes.append((ik, o))
             cost = int(push_costs.get((o, d), 1))

@@ -233,6 +233,11 @@ class IKActionChecker:
         return result
 
     def _check(self, action: Action, ctx: SceneContext) -> "CheckedAction | Infeasible":
+        if action.kind == "grasp" and action.grasp_kind == "slide" and np.any(ctx.shift_of(action.obj)):
+            # a slide's path and pinch are made for where the object stands, to one side
+            # of the table: pushed first, it is somewhere else, and its slide is not known
+            # (backtracking then learns that the push before it is of no use)
+            return Infeasible("a slide is planned from where the object stands, not after a push", "poses")
         cands = self.poses(action, ctx)
         if not cands:
             return Infeasible("no gripper poses for this action", "poses")

@@ -89,8 +89,10 @@ def with_grasp_kinds(text: str, kinds: Sequence[str]) -> str:
     predicate, ruled out by its own IK fact; its effect the grasp's (the object removed,
     every fact in which it blocks or stands on another deleted), its cost its own (the
     planner prefers the cheapest, the surest: pinch 1, rim 2, slide 3). The grasp and the
-    push delete the new blocking facts as they delete the thesis's, and the push the new
-    IK facts as it deletes the grasp's (the object may be reachable where it ends up)."""
+    push delete the new blocking facts as they delete the thesis's, and the push the rim's
+    IK fact as it deletes the grasp's (the object may be reachable where it ends up); a
+    slide is made for where the object stands, so a push of it deletes neither what
+    blocks its slide nor its slide's IK fact."""
     from clearcli.predicates.grasps import KIND_FACTS
 
     for piece in (_PREDICATES_END, _GRASP_EFFECT_END, _PUSH_EFFECT_END):
@@ -101,8 +103,11 @@ def with_grasp_kinds(text: str, kinds: Sequence[str]) -> str:
         f = KIND_FACTS[k]
         preds += [f"    ({f.offered} ?o - obj)", f"    ({f.block} ?a - obj ?b - obj)", f"    ({f.ik} ?o - obj)"]
         grasp_dels.append(f"\n             (not ({f.block} ?o ?x))")
-        push_dels.append(f"\n             (not ({f.block} ?o ?x))\n             (not ({f.block} ?x ?o))")
-        push_ik.append(f"\n      (not ({f.ik} ?o))")
+        # a slide is made for where the object stands: a push moves it out of the others'
+        # slide paths, but tells nothing of its own slide (its blocks and IK fact stay)
+        push_dels.append(f"\n             (not ({f.block} ?o ?x))" + ("" if k == "slide" else f"\n             (not ({f.block} ?x ?o))"))
+        if k != "slide":
+            push_ik.append(f"\n      (not ({f.ik} ?o))")
         under = "\n      (not (exists (?x - obj) (on ?o ?x)))" if k == "slide" else ""
         effect_dels = "".join(
             f"\n             (not ({g.block} ?o ?x))" for kk, g in KIND_FACTS.items() if kk in kinds

@@ -154,9 +154,12 @@ def progress(facts: frozenset[Fact], action: Action) -> frozenset[Fact]:
     return frozenset(
         f
         for f in facts
-        if not (f[0] in _BLOCKS and o in f[1:3]) and not (f[0] in _IK_GRASPS and f[1:] == (o,))
+        if not (f[0] in _BLOCKS and o in f[1:3] and not (f[0] == _SLIDE_BLOCK and f[2] == o))
+        and not (f[0] in _IK_PUSHED and f[1:] == (o,))
     )
 
 
 _BLOCKS = ("block_dir", "block_grasp") + tuple(KIND_FACTS[k].block for k in EXTRA_KINDS)
-_IK_GRASPS = tuple(f.ik for f in KIND_FACTS.values())
+# what a push of o deletes of its own (not the slide's: pddl.with_grasp_kinds)
+_SLIDE_BLOCK = KIND_FACTS["slide"].block
+_IK_PUSHED = ("ik_unfeasible_grasp", KIND_FACTS["rim"].ik)

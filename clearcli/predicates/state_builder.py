@@ -233,5 +233,10 @@ def _detail_to_camera(detail: Any, tf: "TableFrame") -> dict[str, Any]:
         out["center"] = tf.to_camera(np.asarray(out["center"], dtype=float)[None])[0].tolist()
     if "direction" in out:
         out["direction"] = tf.vector_to_camera(np.asarray(out["direction"], dtype=float)[None])[0].tolist()
+    if "slides" in out:
+        out["slides"] = [
+            {**c, "direction": tf.vector_to_camera(np.asarray(c["direction"], dtype=float)[None])[0].tolist()}
+            for c in out["slides"]
+        ]
     out.pop("edge", None)  # a distance along the table frame's direction: not for readers
     return out

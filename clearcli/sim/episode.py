@@ -34,7 +34,14 @@ from typing import TYPE_CHECKING, Any, Iterator
 import numpy as np
 
 from clearcli.settings.sim import WorldParams
-from clearcli.sim.physics import aligned_width, grasp_contacts, push_contacts, truly_ungraspable, world_grasp, world_push
+from clearcli.sim.physics import (
+    aligned_width,
+    grasp_contacts,
+    push_contacts,
+    truly_ungraspable_by,
+    world_grasp,
+    world_push,
+)
 from clearcli.sim.scene import Scene, without_object
 
 # how much of a slid object's overhang the world's fingers need to hold it (m)
@@ -235,12 +242,11 @@ class Episode:
             index += 1
         remaining = tuple(o.object_id for o in self.scene.objects)
         gripper = self.session.pipeline.settings.gripper
+        # the world's verdict, with the grasp kinds the planner was given: a bowl is no
+        # excuse when the rim grasp was allowed and the world's fingers close on its wall
+        kinds = tuple(k.strip() for k in str(self.session.pipeline.settings.plan.grasps).split(","))
         too_wide_or_narrow = tuple(
-            sorted(
-                o.object_id
-                for o in self.scene.objects
-                if truly_ungraspable(o, gripper.opening_width_m, gripper.closing_width_m)
-            )
+            sorted(o.object_id for o in self.scene.objects if truly_ungraspable_by(o, gripper, kinds))
         )
         self.result = EpisodeResult(
             scene=self.scene.name.split(".")[0],
@@ -347,8 +353,14 @@ class Episode:
                 return f"rim grasp failed: {why}"
             self.scene = without_object(self.scene, k)
             return "removed"
-        direction = T_table_camera[:3, :3] @ np.asarray(detail.get("direction", (1.0, 0.0, 0.0)), dtype=float)
-        self.scene, travelled = world_slide(self.scene, k, direction[:2], float(detail.get("slide_m", 0.0)))
+        # the slide of the candidate the IK check chose (one per seen side; a single one
+        # comes with its half-turn, the same slide)
+        slides = list(detail.get("slides") or [detail])
+        plan = report.result.plan
+        chosen = plan.first.candidate if plan is not None and plan.first is not None and len(slides) > 1 else 0
+        slide = slides[min(int(chosen), len(slides) - 1)]
+        direction = T_table_camera[:3, :3] @ np.asarray(slide.get("direction", (1.0, 0.0, 0.0)), dtype=float)
+        self.scene, travelled = world_slide(self.scene, k, direction[:2], float(slide.get("slide_m", 0.0)))
         # the world's own figure: fingers need 2.5 cm of the overhang to hold it
         ok, why = world_edge_pinch(self.scene, k, direction[:2], EDGE_GRIP_M, gripper.opening_width_m, gripper.closing_width_m)
         if not ok:

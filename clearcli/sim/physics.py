@@ -5,7 +5,7 @@ model of it (see `clearcli.sim.episode`)."""
 from __future__ import annotations
 
 import math
-from typing import Sequence
+from typing import Any, Sequence
 
 import numpy as np
 
@@ -46,6 +46,26 @@ def truly_ungraspable(obj: SceneObject, opening_width_m: float, closing_width_m:
     width is beyond the opening, or under the closing width (the fingers meet first)."""
     width = grasp_width_m(obj)
     return width > opening_width_m or width < closing_width_m
+
+
+def truly_ungraspable_by(obj: SceneObject, gripper: Any, kinds: tuple[str, ...] = ("pinch",)) -> bool:
+    """`truly_ungraspable` by the pinch, and by every other grasp kind in ``kinds`` the
+    world's own rules allow: "rim" an open cylinder whose wall the fingers close on (thicker
+    than the gripper's fully closed gap, at most its opening less 2 mm on either side) with
+    room inside for a finger; "slide" a box or a closed cylinder whose height the gripper
+    spans at an edge (from its closing width to its opening less 1 cm) and whose narrowest
+    side can overhang the fingers' grip without tipping."""
+    if not truly_ungraspable(obj, gripper.opening_width_m, gripper.closing_width_m):
+        return False
+    if "rim" in kinds and isinstance(obj, Cylinder) and obj.is_open:
+        gap = min(float(getattr(gripper, "closed_gap_m", gripper.closing_width_m)), gripper.closing_width_m)
+        room = obj.radius_m - obj.wall_m - gripper.finger_thickness_m
+        if gap < obj.wall_m <= gripper.opening_width_m - 0.004 and room >= 0.01:
+            return False
+    if "slide" in kinds and not (isinstance(obj, Cylinder) and obj.is_open):
+        if gripper.closing_width_m <= obj.height_m <= gripper.opening_width_m - 0.01 and grasp_width_m(obj) >= 0.08:
+            return False
+    return True
 
 
 def world_grasp(

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from clearcli.perception.payload import SCHEMA, VERSION  # the schema's one home
 from clearcli.settings import Settings
 from clearcli.tasks.base import NO_OUTPUTS, Outcome, Outputs, Source
 
-SCHEMA, VERSION = "segmentation", 1
 OUTPUTS = ("labels", "png")
 
 

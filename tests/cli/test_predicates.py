@@ -22,7 +22,7 @@ def test_cli_predicates_json_problem_png_and_domain(tmp_path) -> None:
     res = runner.invoke(app, ["predicates", str(pcd), "--ground-truth", "--json", "-o", str(out), "--png", str(png)])
     assert res.exit_code == 0, res.output
     doc = json.loads(res.stdout.strip().splitlines()[-1])
-    assert doc["schema"] == "clear.predicates" and doc["version"] == 1
+    assert doc["schema"] == "clear.predicates" and doc["version"] == 2
     assert "(on o1 o0)" in doc["facts"]
     obj = doc["objects"][0]
     assert set(obj["directions"]) == {"dir1", "dir2", "dir3", "dir4"}
@@ -38,4 +38,8 @@ def test_cli_predicates_json_problem_png_and_domain(tmp_path) -> None:
 
     assert isinstance(res2.exception, OutputError)  # main() maps it to exit code 8
     res3 = runner.invoke(app, ["domain"])
-    assert res3.exit_code == 0 and res3.stdout == domain_text()
+    assert res3.exit_code == 0 and res3.stdout == domain_text(kinds=("pinch", "rim", "slide"))
+    assert "(:action grasp_rim" in res3.stdout and "(:action slide_grasp" in res3.stdout
+    # the thesis's domain alone: the shipped file, pddl/domain.pddl
+    res4 = runner.invoke(app, ["domain", "--grasps", "pinch"])
+    assert res4.exit_code == 0 and res4.stdout == domain_text() and "grasp_rim" not in res4.stdout

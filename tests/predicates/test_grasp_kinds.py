@@ -117,24 +117,51 @@ def test_slide_to_the_nearest_seen_edge_by_hand() -> None:
     assert any(e.seen for e in seg.table_edges)
 
 
+def _only_right_edge_seen(scene: S.Scene, seg):  # type: ignore[no-untyped-def]
+    """The segmentation with only the table's right side (x = +0.40) seen to end."""
+    T_table_camera = np.linalg.inv(scene.T_camera_table)
+
+    def x_of(p: np.ndarray) -> float:
+        return float((T_table_camera[:3, :3] @ p + T_table_camera[:3, 3])[0])
+
+    edges = tuple(dataclasses.replace(e, seen=e.seen and min(x_of(e.start), x_of(e.end)) > 0.38) for e in seg.table_edges)
+    assert sum(e.seen for e in edges) == 1
+    return dataclasses.replace(seg, table_edges=edges)
+
+
 def test_slide_blocked_by_what_stands_in_its_path_by_hand() -> None:
-    # The flat box spans x 0.12-0.32 and slides right (+x). A small box between it and
-    # the right edge (x 0.355-0.395) is in its swept path; one 2 cm behind its left face
-    # (x 0.06-0.10) is where the closed fingers push from (they stand 3 cm behind the
-    # face, 2.5 cm deep): both block. One beside it (y 0.005-0.045, the box's side at
-    # y 0.08) is in neither.
+    from clearcli.predicates.state_builder import compute_state
+
+    # The flat box spans x 0.12-0.32 and slides right (+x), the only side seen to end. A
+    # small box between it and the right edge (x 0.355-0.395) is in its swept path; one
+    # 2 cm behind its left face (x 0.06-0.10) is where the closed fingers push from (they
+    # stand 3 cm behind the face, 2.5 cm deep): both block. One beside it (y 0.005-0.045,
+    # the box's side at y 0.08) is in neither.
     in_path = S.Box(4, 0.04, 0.04, 0.06, 0.375, 0.15)
     behind = S.Box(5, 0.04, 0.04, 0.06, 0.08, 0.15)
     beside = S.Box(6, 0.04, 0.04, 0.06, 0.25, 0.025)
     flat = dataclasses.replace(FLAT, x_m=0.22)
     scene = S.make_scene("two", [flat, in_path, behind, beside])
-    _, _, state = _state(scene, _settings())
+    settings = _settings()
+    frame, seg, _ = _state(scene, settings)
+    state = compute_state(frame, _only_right_edge_seen(scene, seg), settings)
     f, p, b, c = (_by_position(state, scene, o) for o in (flat, in_path, behind, beside))
     assert len({f.name, p.name, b.name, c.name}) == 4
     assert ("slidable", f.name) in state.facts
     assert ("block_slide", p.name, f.name) in state.facts
     assert ("block_slide", b.name, f.name) in state.facts
     assert ("block_slide", c.name, f.name) not in state.facts
+    # with the small box in the path alone and every side seen: the slide to the far
+    # side (+y: from y 0.22 to the edge at 0.30 and 3.5 cm over it) is free, so it is
+    # the one offered, and nothing blocks it
+    scene = S.make_scene("one", [flat, in_path])
+    _, _, state = _state(scene, settings)
+    f = _by_position(state, scene, flat)
+    assert ("slidable", f.name) in state.facts
+    assert not any(x[0] == "block_slide" and x[2] == f.name for x in state.facts)
+    detail = f.kind_details["slide"]
+    d_table = np.linalg.inv(scene.T_camera_table)[:3, :3] @ np.asarray(detail["direction"])
+    assert d_table[1] > 0.99 and abs(detail["slide_m"] - (0.30 - 0.22 + 0.035)) < 0.008
 
 
 def test_no_slide_when_the_edge_is_only_the_image_border() -> None:

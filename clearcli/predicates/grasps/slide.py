@@ -3,11 +3,12 @@ from above (a book, a flat box, a plate).
 
 The object is pushed, as a push of the thesis is (closed fingers behind it, the
 fingertips ``[push] fingertips_above_table_m`` above the table), straight towards the
-nearest side of the table the camera sees end (`clearcli.perception.openings.seen_edges`)
+side of the table the camera sees end (`clearcli.perception.openings.seen_edges`)
 until it overhangs that side by ``SLIDE_OVERHANG_M``; then the gripper comes from beyond
 the edge, level with the table, its fingers above and below the overhang (the lower one
 below the table's top, ``SLIDE_EDGE_CLEARANCE_M`` short of the edge), closes across the
-object's thickness and lifts. One candidate: the side that needs the shortest slide.
+object's thickness and lifts. One candidate per seen side, the shortest slide first;
+the planner gets those blocked least (the IK check takes the first the arm reaches).
 
 Offered when the object is too wide for the pinch, has no rim grasp, is thin enough for
 the opening (its height and ``SLIDE_CLEARANCE_M`` on either side) and no thinner than the
@@ -53,19 +54,16 @@ class SlideGrasp:
         return KIND_FACTS["slide"]
 
     def offers(self, scene: Scene, gripper: "GripperModel", settings: "Settings") -> list[Offer]:
-        from clearcli.geometry.poses import PushGeometry, _pose, _push_sequence
         from clearcli.predicates import relations as rel
 
         g = gripper.settings
-        push = settings.push
         n = len(scene.objects)
         seen = [(a[:2], b[:2]) for a, b, ok, _ in scene.edges_table if ok]
         why_unseen = sorted({why for *_, ok, why in scene.edges_table if not ok})
-        table_mid = (
-            np.mean([a[:2] for a, *_ in scene.edges_table], axis=0) if scene.edges_table else np.zeros(2)
-        )
-        offers: list[Offer | None] = [None] * n
-        plans: dict[int, tuple[np.ndarray, float, tuple[np.ndarray, ...], float]] = {}
+        table_mid = np.mean([a[:2] for a, *_ in scene.edges_table], axis=0) if scene.edges_table else np.zeros(2)
+        offers: list[Offer] = [Offer(why_not="not modelled")] * n
+        # (object, its candidates: one per seen side it can be slid to, nearest first)
+        cands: dict[int, list[dict]] = {}
         for i, obj in enumerate(scene.objects):
             if i not in scene.ungraspable:
                 offers[i] = Offer(why_not="the pinch from above fits it")
@@ -74,8 +72,11 @@ class SlideGrasp:
                 offers[i] = Offer(why_not="its rim is grasped instead")
                 continue
             thick = float(obj.top_height_m)
-            if thick + 2.0 * SLIDE_CLEARANCE_M > g.opening_width_m:
-                offers[i] = Offer(why_not=f"{thick:.3f} m thick: too thick to pinch at the edge (the gripper opens to {g.opening_width_m:.3f} m)")
+            if _pinch_opening(thick) > g.opening_width_m:
+                offers[i] = Offer(
+                    why_not=f"{thick:.3f} m thick: too thick to pinch at the edge from {SLIDE_TILT_DEG:.0f} deg "
+                    f"(needs {_pinch_opening(thick):.3f} m, the gripper opens to {g.opening_width_m:.3f} m)"
+                )
                 continue
             if thick < g.closing_width_m:
                 offers[i] = Offer(why_not=f"{thick:.3f} m thick: thinner than the gripper closes")
@@ -83,104 +84,133 @@ class SlideGrasp:
             if not seen:
                 offers[i] = Offer(why_not="no side of the table is seen to end (" + "; ".join(why_unseen) + ")")
                 continue
-            fp = np.asarray(obj.footprint, dtype=float)
-            best: tuple[float, np.ndarray, float, np.ndarray] | None = None
-            why = "no seen side of the table is long enough to take it"
+            found, why = [], "no seen side of the table is long enough to take it"
             for a, b in seen:
-                length = float(np.linalg.norm(b - a))
-                along = (b - a) / length
-                out_dir = np.array([along[1], -along[0]])
-                if out_dir @ (a - table_mid) < 0:
-                    out_dir = -out_dir
-                lat = fp @ along - a @ along
-                if lat.min() < 0.01 or lat.max() > length - 0.01:
+                plan, why_side = _slide_to(obj, a, b, table_mid)
+                if plan is None:
+                    why = why_side or why
                     continue
-                proj = fp @ out_dir
-                extent = float(proj.max() - proj.min())
-                if SLIDE_OVERHANG_M > extent / 2.0 - SLIDE_KEEP_ON_M:
-                    why = f"{extent:.3f} m long towards the edge: too short to overhang {SLIDE_OVERHANG_M:.3f} m without tipping"
-                    continue
-                dist = float(a @ out_dir - proj.max() + SLIDE_OVERHANG_M)
-                if dist > SLIDE_MAX_M:
-                    why = f"the nearest seen edge is {dist:.2f} m away"
-                    continue
-                dist = max(dist, 0.0)
-                if best is None or dist < best[0]:
-                    best = (dist, out_dir, float(a @ out_dir), along)
-            if best is None:
+                found.append(_candidate(obj, plan, gripper, settings))
+            if not found:
                 offers[i] = Offer(why_not=why)
                 continue
-            dist, out_dir, edge_at, along = best
-            d3 = np.array([out_dir[0], out_dir[1], 0.0])
-            c = np.asarray(obj.center, dtype=float).copy()
-            c[2] = 0.0
-            rear = float((fp @ out_dir).min())
-            lateral = c - (c @ d3) * d3
-            # the push part: closed fingers behind the object, closing along the slide
-            steps_n = max(1, math.ceil(max(dist, 1e-3) / push.path_resolution_m - 1e-9))
-            translations = (max(dist, 1e-3) * np.arange(1, steps_n + 1) / steps_n)[:, None] * d3[None, :]
-            half_along = gripper.finger_half_extent_along_x(closed=True)
-            start = lateral + (rear - push.gripper_behind_m - half_along) * d3
-            start[2] = push.fingertips_above_table_m + g.closing_region_height_m / 2.0
-            push_seq = _push_sequence(d3, start, push.approach_m * UP, translations, steps_n)[0]
-            # the pinch at the edge: from beyond it and above, the approach tilted
-            # SLIDE_TILT_DEG below the horizontal (level, no arm here reached it: the
-            # wrist would be at the table's height), closing in the vertical plane of the
-            # slide; the fingertips SLIDE_EDGE_CLEARANCE_M short of the edge, at the
-            # object's mid-height, the lower finger out beyond the edge
-            half = g.closing_region_height_m / 2.0
-            tilt = math.radians(SLIDE_TILT_DEG)
-            approach = -math.cos(tilt) * d3 - math.sin(tilt) * UP
-            tip = lateral + (edge_at + SLIDE_EDGE_CLEARANCE_M) * d3
-            tip[2] = thick / 2.0
-            point = tip - half * approach
-            x = np.cross(np.cross(UP, d3), approach)  # in the vertical plane through d3
-            x /= np.linalg.norm(x)
-            T = _pose(x, approach, point)
-            pre, lift = T.copy(), T.copy()
-            pre[:3, 3] -= push.approach_m * approach
-            lift[:3, 3] += push.approach_m * UP
-            seq = tuple(push_seq) + (pre, T, lift)
-            geometry = PushGeometry("slide", d3, dist, translations, (tuple(push_seq),))
-            plans[i] = (d3 * dist, dist, seq, thick)
+            cands[i] = sorted(found, key=lambda c: c["slide_m"])
+        if not cands:
+            return offers
+        # blockers of every candidate: its swept volume and the pusher behind it (as
+        # block_dir: relations.block_dir_triples), and the open gripper at the edge
+        keys = [(i, j) for i in sorted(cands) for j in range(len(cands[i]))]
+        pushes: list[dict] = [{} for _ in range(n)]
+        for i, j in keys:
+            pushes[i][f"slide{j}"] = cands[i][j]["geometry"]
+        blockers: dict[tuple[int, int], set[int]] = {k: set() for k in keys}
+        triples = rel.block_dir_triples(
+            list(scene.objects), pushes, gripper, scene.exclude, scene.touching, settings.predicates.touching_block_angle_deg
+        )
+        for a, b, name in triples:
+            blockers[(b, int(name[5:]))].add(a)
+        allowed = rel._allowed(n, scene.exclude)
+        poses = np.stack([cands[i][j]["T_edge"] for i, j in keys])
+        openings = [min(g.opening_width_m, _pinch_opening(cands[i][j]["thickness_m"])) for i, j in keys]
+        rows = allowed[[i for i, _ in keys]]
+        for p, a in rel._grasp_hits(gripper, poses, openings, list(scene.objects), rows):
+            blockers[keys[p]].add(a)
+        for i, found in cands.items():
+            # the candidates blocked least, nearest first: the IK check takes the first
+            # the arm reaches; their blockers are the object's block_slide facts
+            sets = [blockers[(i, j)] for j in range(len(found))]
+            best = min(sets, key=len)
+            keep = [c for c, b in zip(found, sets) if b == best]
+            first = keep[0]
             offers[i] = Offer(
-                candidates=(seq,),
+                candidates=tuple(c["sequence"] for c in keep),
+                blockers=frozenset(best),
                 detail={
-                    "direction": d3.tolist(),
-                    "slide_m": float(dist),
+                    "direction": first["direction"].tolist(),
+                    "slide_m": float(first["slide_m"]),
                     "overhang_m": SLIDE_OVERHANG_M,
-                    "edge": [float(edge_at)],
-                    "thickness_m": thick,
+                    "thickness_m": float(first["thickness_m"]),
+                    # every candidate's slide, in the order of the pose sequences
+                    "slides": [{"direction": c["direction"].tolist(), "slide_m": float(c["slide_m"])} for c in keep],
                 },
-                slide_translation=d3 * dist,
+                slide_translation=first["direction"] * first["slide_m"],
             )
-            offers[i] = _with_geometry(offers[i], geometry, T, thick)  # type: ignore[arg-type]
-        # blockers: the swept volume and the pusher (as block_dir), the open gripper at the edge
-        if plans:
-            keys = sorted(plans)
-            pushes = [{"slide": offers[i].detail["_geometry"]} if i in plans else {} for i in range(n)]  # type: ignore[union-attr,index]
-            triples = rel.block_dir_triples(list(scene.objects), pushes, gripper, scene.exclude, scene.touching, settings.predicates.touching_block_angle_deg)
-            blockers: dict[int, set[int]] = {i: set() for i in keys}
-            for a, b, _ in triples:
-                blockers[b].add(a)
-            allowed = rel._allowed(n, scene.exclude)
-            poses = np.stack([offers[i].detail["_edge_pose"] for i in keys])  # type: ignore[union-attr,index]
-            openings = [min(g.opening_width_m, plans[i][3] + 2.0 * SLIDE_CLEARANCE_M) for i in keys]
-            for p, a in rel._grasp_hits(gripper, poses, openings, list(scene.objects), allowed[keys]):
-                blockers[keys[p]].add(a)
-            for i in keys:
-                o = offers[i]
-                assert o is not None and o.detail is not None
-                detail = {k: v for k, v in o.detail.items() if not k.startswith("_")}
-                offers[i] = Offer(o.candidates, frozenset(blockers[i]), "", detail, o.slide_translation)
-        return [o if o is not None else Offer(why_not="not modelled") for o in offers]
+        return offers
 
 
-def _with_geometry(offer: Offer, geometry: object, T_edge: np.ndarray, thick: float) -> Offer:
-    detail = dict(offer.detail or {})
-    detail["_geometry"] = geometry
-    detail["_edge_pose"] = T_edge
-    return Offer(offer.candidates, offer.blockers, offer.why_not, detail, offer.slide_translation)
+def _pinch_opening(thick_m: float) -> float:
+    """How far the fingers open to pinch a slab ``thick_m`` thick from SLIDE_TILT_DEG
+    below the horizontal: across the fingers the slab is thick / cos(tilt) (m)."""
+    return thick_m / math.cos(math.radians(SLIDE_TILT_DEG)) + 2.0 * SLIDE_CLEARANCE_M
+
+
+def _slide_to(obj, a: np.ndarray, b: np.ndarray, table_mid: np.ndarray):  # type: ignore[no-untyped-def]
+    """(slide length, outward unit (2,), the side's offset along it) to side a-b, or
+    (None, why not)."""
+    fp = np.asarray(obj.footprint, dtype=float)
+    length = float(np.linalg.norm(b - a))
+    along = (b - a) / length
+    out_dir = np.array([along[1], -along[0]])
+    if out_dir @ (a - table_mid) < 0:
+        out_dir = -out_dir
+    lat = fp @ along - a @ along
+    if lat.min() < 0.01 or lat.max() > length - 0.01:
+        return None, ""
+    proj = fp @ out_dir
+    extent = float(proj.max() - proj.min())
+    if SLIDE_OVERHANG_M > extent / 2.0 - SLIDE_KEEP_ON_M:
+        return None, f"{extent:.3f} m long towards the edge: too short to overhang {SLIDE_OVERHANG_M:.3f} m without tipping"
+    dist = float(a @ out_dir - proj.max() + SLIDE_OVERHANG_M)
+    if dist > SLIDE_MAX_M:
+        return None, f"the nearest seen edge is {dist:.2f} m away"
+    return (max(dist, 0.0), out_dir, float(a @ out_dir)), ""
+
+
+def _candidate(obj, plan, gripper: "GripperModel", settings: "Settings") -> dict:  # type: ignore[no-untyped-def]
+    """The pose sequence of one slide: the push along the table, then the pinch at the edge."""
+    from clearcli.geometry.poses import PushGeometry, _pose, _push_sequence
+
+    g, push = gripper.settings, settings.push
+    dist, out_dir, edge_at = plan
+    thick = float(obj.top_height_m)
+    fp = np.asarray(obj.footprint, dtype=float)
+    d3 = np.array([out_dir[0], out_dir[1], 0.0])
+    c = np.asarray(obj.center, dtype=float).copy()
+    c[2] = 0.0
+    rear = float((fp @ out_dir).min())
+    lateral = c - (c @ d3) * d3
+    # the push part: closed fingers behind the object, closing along the slide
+    travel = max(dist, 1e-3)
+    steps_n = max(1, math.ceil(travel / push.path_resolution_m - 1e-9))
+    translations = (travel * np.arange(1, steps_n + 1) / steps_n)[:, None] * d3[None, :]
+    start = lateral + (rear - push.gripper_behind_m - gripper.finger_half_extent_along_x(closed=True)) * d3
+    start[2] = push.fingertips_above_table_m + g.closing_region_height_m / 2.0
+    push_seq = _push_sequence(d3, start, push.approach_m * UP, translations, steps_n)[0]
+    # the pinch at the edge: from beyond it and above, the approach tilted
+    # SLIDE_TILT_DEG below the horizontal (level, no arm here reached it: the wrist would
+    # be at the table's height), closing in the vertical plane of the slide; the
+    # fingertips SLIDE_EDGE_CLEARANCE_M short of the edge, at the object's mid-height,
+    # the lower finger out beyond the edge
+    half = g.closing_region_height_m / 2.0
+    tilt = math.radians(SLIDE_TILT_DEG)
+    approach = -math.cos(tilt) * d3 - math.sin(tilt) * UP
+    tip = lateral + (edge_at + SLIDE_EDGE_CLEARANCE_M) * d3
+    tip[2] = thick / 2.0
+    point = tip - half * approach
+    x = np.cross(np.cross(UP, d3), approach)  # in the vertical plane through d3
+    x /= np.linalg.norm(x)
+    T = _pose(x, approach, point)
+    pre, lift = T.copy(), T.copy()
+    pre[:3, 3] -= push.approach_m * approach
+    lift[:3, 3] += push.approach_m * UP
+    return {
+        "sequence": tuple(push_seq) + (pre, T, lift),
+        "geometry": PushGeometry("slide", d3, dist, translations, (tuple(push_seq),)),
+        "T_edge": T,
+        "direction": d3,
+        "slide_m": float(dist),
+        "thickness_m": thick,
+    }
 
 
 SLIDE = SlideGrasp()
