@@ -51,7 +51,8 @@ def render_plan(path: Path, frame: Any, state: Any, plan: Any, seg: Any = None, 
         colours[o] = "#c0392b"
     steps: dict[str, list[str]] = {}
     for i, a in enumerate(plan.actions, 1):
-        steps.setdefault(a.obj, []).append(str(i))
+        # each step named: "2 push", "3 pinch", "4 rim", "5 slide" (the grasp kind)
+        steps.setdefault(a.obj, []).append(f"{i} {a.grasp_kind if a.kind == 'grasp' else 'push'}")
     for obj in state.objects:
         v = np.asarray(obj.hull_vertices, dtype=float)
         if len(v) < 3:
@@ -80,6 +81,15 @@ def render_plan(path: Path, frame: Any, state: Any, plan: Any, seg: Any = None, 
         )
         ax_cam.set_title("camera view (colour; objects outlined, [plan steps])", fontsize=9)
     for i, a in enumerate(plan.actions, 1):
+        if a.kind == "grasp" and a.grasp_kind == "slide":
+            # the slide to the table's edge: a dashed arrow to where it is pinched
+            obj = state.by_name(a.obj)
+            if obj.slide_translation is not None:
+                c = R @ np.asarray(obj.centroid, dtype=float) + t
+                u = R @ np.asarray(obj.slide_translation, dtype=float)
+                ax.annotate("", xy=(c[0] + u[0], c[1] + u[1]), xytext=(c[0], c[1]),
+                            arrowprops=dict(arrowstyle="->", color="k", lw=1.5, ls="--"), zorder=5)
+            continue
         if a.kind != "push":
             continue
         obj = state.by_name(a.obj)
