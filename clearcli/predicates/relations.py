@@ -161,6 +161,28 @@ def on_pairs(
     return out
 
 
+def inside_rims(
+    objects: Sequence[ObjectGeometry], rims: Sequence[tuple[float, float, float] | None], margin_m: float = 0.005
+) -> set[tuple[int, int]]:
+    """(a, b): most of a's footprint points lie within the rim of b, an open container
+    (``rims[b]``: its centre x, y and inner radius, table frame): a stands in b, and is
+    ``on`` it whatever its height (a can in a bowl stays below the rim, and the thesis's
+    test wants a higher than b). A rim grasp's inner finger goes down where a stands:
+    a goes first."""
+    out: set[tuple[int, int]] = set()
+    for b, rim in enumerate(rims):
+        if rim is None:
+            continue
+        cx, cy, r_in = rim
+        for a, obj in enumerate(objects):
+            if a == b:
+                continue
+            d = np.hypot(obj.projected_xy[:, 0] - cx, obj.projected_xy[:, 1] - cy)
+            if float(np.mean(d <= r_in + margin_m)) > 0.5:
+                out.add((a, b))
+    return out
+
+
 def related(pairs: Iterable[tuple[int, int]]) -> set[tuple[int, int]]:
     """Both orders of every pair."""
     out: set[tuple[int, int]] = set()

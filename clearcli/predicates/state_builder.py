@@ -81,6 +81,14 @@ def compute_state(frame: Frame, seg: Segmentation, settings: "Settings | None" =
         height_gap_m=ps.on_height_gap_m,
         support_band_m=ps.on_support_band_m,
     )
+    # what stands in an open container is on it (relations.inside_rims)
+    openings, edges = _openings_and_edges(frame, seg)
+    rims = []
+    for g in geoms:
+        rim = getattr(openings[g.segment_index], "rim", None)
+        c = tf.to_table(np.asarray(rim.center, dtype=float)[None])[0] if rim is not None else None
+        rims.append(None if rim is None else (float(c[0]), float(c[1]), float(rim.radius_m - rim.wall_m / 2.0)))
+    on = set(on) | rel.inside_rims(geoms, rims)
     facts.update(("on", names[a], names[b]) for a, b in on)
     timings["on"] = time.perf_counter() - t0
     exclude = rel.related(on)
@@ -106,7 +114,9 @@ def compute_state(frame: Frame, seg: Segmentation, settings: "Settings | None" =
 
     # the grasp kinds beyond the pinch: rims of open containers, slides to a seen edge
     t0 = time.perf_counter()
-    kinds = _other_grasps(frame, seg, geoms, tf, gripper, s, exclude, touching, rel.ungraspable(grasps, gripper, ps.grasp_width_margin_m))
+    kinds = _other_grasps(
+        geoms, openings, edges, tf, gripper, s, exclude, touching, rel.ungraspable(grasps, gripper, ps.grasp_width_margin_m)
+    )
     for kind, offers in kinds.items():
         from clearcli.predicates.grasps import KIND_FACTS
 
@@ -146,16 +156,22 @@ def compute_state(frame: Frame, seg: Segmentation, settings: "Settings | None" =
     )
 
 
-def _other_grasps(frame, seg, geoms, tf, gripper, settings, exclude, touching, ungraspable):  # type: ignore[no-untyped-def]
-    """kind -> one `Offer` per object (table frame), for the kinds beyond the pinch."""
+def _openings_and_edges(frame: Frame, seg: Segmentation) -> tuple[tuple[Any, ...], tuple[Any, ...]]:
+    """Per segment its rim or why not, and the table's sides seen to end: what
+    segmentation saw, or (a segmentation from labels) worked out here."""
     from clearcli.perception.openings import rim_of, seen_edges
-    from clearcli.predicates.grasps import Scene as GraspScene, kind_module
 
-    # what segmentation saw, or (a segmentation from labels) worked out here
     openings = seg.openings if len(seg.openings) == len(seg.objects) else tuple(
         rim_of(frame.points[o.indices], seg.table) for o in seg.objects
     )
     edges = seg.table_edges or seen_edges(frame.points, frame.shape, seg.table, seg.table_polygon)
+    return tuple(openings), tuple(edges)
+
+
+def _other_grasps(geoms, openings, edges, tf, gripper, settings, exclude, touching, ungraspable):  # type: ignore[no-untyped-def]
+    """kind -> one `Offer` per object (table frame), for the kinds beyond the pinch."""
+    from clearcli.predicates.grasps import Scene as GraspScene, kind_module
+
     edges_table = [(*tf.to_table(np.stack([e.start, e.end])), e.seen, e.why) for e in edges]
     scene = GraspScene(
         objects=geoms,

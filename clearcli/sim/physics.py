@@ -48,12 +48,24 @@ def truly_ungraspable(obj: SceneObject, opening_width_m: float, closing_width_m:
     return width > opening_width_m or width < closing_width_m
 
 
+# An arm reaching over a table's edge to pinch what overhangs it comes down at about this
+# angle below the horizontal (the world's figure: a level approach puts the wrist at the
+# table's height, beyond the arms' reach): across the fingers a slab h thick then spans
+# h / cos(angle), and the fingers keep 5 mm on either side.
+EDGE_PINCH_TILT_DEG = 45.0
+
+
+def edge_pinch_span_m(opening_m: float) -> float:
+    """The thickest slab the gripper pinches at an edge (m)."""
+    return (opening_m - 0.01) * math.cos(math.radians(EDGE_PINCH_TILT_DEG))
+
+
 def truly_ungraspable_by(obj: SceneObject, gripper: Any, kinds: tuple[str, ...] = ("pinch",)) -> bool:
     """`truly_ungraspable` by the pinch, and by every other grasp kind in ``kinds`` the
     world's own rules allow: "rim" an open cylinder whose wall the fingers close on (thicker
     than the gripper's fully closed gap, at most its opening less 2 mm on either side) with
     room inside for a finger; "slide" a box or a closed cylinder whose height the gripper
-    spans at an edge (from its closing width to its opening less 1 cm) and whose narrowest
+    spans at an edge (from its closing width to `edge_pinch_span_m`) and whose narrowest
     side can overhang the fingers' grip without tipping."""
     if not truly_ungraspable(obj, gripper.opening_width_m, gripper.closing_width_m):
         return False
@@ -63,7 +75,10 @@ def truly_ungraspable_by(obj: SceneObject, gripper: Any, kinds: tuple[str, ...] 
         if gap < obj.wall_m <= gripper.opening_width_m - 0.004 and room >= 0.01:
             return False
     if "slide" in kinds and not (isinstance(obj, Cylinder) and obj.is_open):
-        if gripper.closing_width_m <= obj.height_m <= gripper.opening_width_m - 0.01 and grasp_width_m(obj) >= 0.08:
+        if (
+            gripper.closing_width_m <= obj.height_m <= edge_pinch_span_m(gripper.opening_width_m)
+            and grasp_width_m(obj) >= 0.08
+        ):
             return False
     return True
 
@@ -485,7 +500,7 @@ def world_edge_pinch(
     direction (the way the fingers come back in). Held when the centre is still over
     the table (else the object tips off), the overhang is at least ``grip_depth_m`` +
     `EDGE_PINCH_MARGIN_M` (else the pinch slips off the rim), and the object's height is
-    within [closing_m, opening_m] (the jaws close on it)."""
+    within [closing_m, `edge_pinch_span_m`(opening_m)] (the jaws close on it)."""
     d = np.asarray(direction_xy, dtype=float)[:2]
     norm = float(np.linalg.norm(d))
     if norm < 1e-12:
@@ -507,8 +522,11 @@ def world_edge_pinch(
     if overhang < need:
         return False, f"slips: overhang {overhang * 1000:.1f} mm, needs {need * 1000:.1f} mm"
     height = obj.height_m
-    if height > opening_m:
-        return False, f"too thick to pinch: {height * 1000:.1f} mm, opening {opening_m * 1000:.1f} mm"
+    if height > edge_pinch_span_m(opening_m):
+        return False, (
+            f"too thick to pinch: {height * 1000:.1f} mm, at most {edge_pinch_span_m(opening_m) * 1000:.1f} mm "
+            f"with the opening {opening_m * 1000:.1f} mm from {EDGE_PINCH_TILT_DEG:.0f} deg"
+        )
     if height < closing_m:
         return False, f"too thin to pinch: {height * 1000:.1f} mm, the jaws close to {closing_m * 1000:.1f} mm"
     return True, f"pinched: overhang {overhang * 1000:.1f} mm, {height * 1000:.1f} mm thick"

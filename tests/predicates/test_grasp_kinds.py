@@ -223,3 +223,37 @@ def test_plans_with_each_new_action_pass_two_independent_validators(world, tmp_p
     problem.write_text(write_problem(stripped, plan.goal, plan.ik_facts))
     assert not validate_files(domain, problem, plan_file)
     assert not validate_files_second(domain, problem, plan_file)
+
+
+def test_the_pinch_is_preferred_where_it_fits_and_the_left_say_what_was_tried() -> None:
+    from clearcli.errors import NoPlanError
+    from clearcli.planning.backtrack import make_plan
+
+    # an open cup 6 cm across: the pinch (cost 1) fits the Panda's 8 cm, the rim (2) too
+    cup = S.Cylinder(0, 0.03, 0.09, -0.10, -0.05, wall_m=0.004)
+    settings = _settings("panda")
+    _, _, state = _state(S.make_scene("cup", [cup]), settings)
+    assert ("rim_graspable", "o0") in state.facts and ("ungraspable", "o0") not in state.facts
+    assert [a.pddl() for a in make_plan(state, settings).actions] == ["(grasp o0)"]
+    # a can 12 cm across (closed): no kind takes it, and its reason says why each failed
+    can = S.Cylinder(0, 0.06, 0.12, -0.10, -0.05)
+    _, _, state = _state(S.make_scene("can", [can]), settings)
+    with pytest.raises(NoPlanError) as err:
+        make_plan(state, settings)
+    (left,) = err.value.plan.left  # type: ignore[attr-defined]
+    assert left.reason == "ungraspable"
+    assert "opens to 0.080 m" in left.detail and "rim grasp: no rim: closed" in left.detail
+    assert "slide grasp: 0.12" in left.detail and "too thick" in left.detail
+
+
+def test_what_stands_in_a_bowl_goes_first() -> None:
+    from clearcli.planning.backtrack import make_plan
+
+    bowl = S.Cylinder(0, 0.08, 0.06, -0.10, -0.08, wall_m=0.005)
+    inside = S.Box(1, 0.03, 0.03, 0.05, -0.10, -0.08, base_z_m=0.005)
+    settings = _settings("panda")
+    _, _, state = _state(S.make_scene("bowl with a box", [bowl, inside]), settings)
+    b = _by_position(state, S.make_scene("x", [bowl]), bowl)
+    names = [a.obj for a in make_plan(state, settings).actions if a.kind == "grasp"]
+    kinds = {a.obj: a.grasp_kind for a in make_plan(state, settings).actions if a.kind == "grasp"}
+    assert len(names) == 2 and names[-1] == b.name and kinds[b.name] == "rim", (names, kinds)
