@@ -155,6 +155,15 @@ def domain_for(state: SymbolicState) -> str:
     return domain_text(clearance_costs=bool(state.push_costs), kinds=kinds)
 
 
+def unit_cost(state: SymbolicState) -> bool:
+    """Every action of `domain_for(state)` costs 1: no push costs, no grasp kind beyond
+    the pinch offered (a rim grasp costs 2, a slide 3)."""
+    from clearcli.predicates.grasps import EXTRA_KINDS, KIND_FACTS
+
+    offered = {KIND_FACTS[k].offered for k in EXTRA_KINDS}
+    return not state.push_costs and not any(f[0] in offered for f in state.facts)
+
+
 def fact_to_pddl(fact: Fact) -> str:
     """("block_dir", "o1", "o0", "dir3") -> "(block_dir o1 o0 dir3)"."""
     return "(" + " ".join(fact) + ")"

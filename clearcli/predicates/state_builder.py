@@ -88,7 +88,8 @@ def compute_state(frame: Frame, seg: Segmentation, settings: "Settings | None" =
         rim = getattr(openings[g.segment_index], "rim", None)
         c = tf.to_table(np.asarray(rim.center, dtype=float)[None])[0] if rim is not None else None
         rims.append(None if rim is None else (float(c[0]), float(c[1]), float(rim.radius_m - rim.wall_m / 2.0)))
-    on = set(on) | rel.inside_rims(geoms, rims)
+    # (not where the container stands on the other: then the other is under it)
+    on = set(on) | {(a, b) for a, b in rel.inside_rims(geoms, rims) if (b, a) not in on}
     facts.update(("on", names[a], names[b]) for a, b in on)
     timings["on"] = time.perf_counter() - t0
     exclude = rel.related(on)

@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any, Iterable, Iterator, Mapping
 
 from clearcli.errors import ClearError, PartialLogError
 from clearcli.pipeline import CLEARED, FAILED, NO_PLAN, NO_TABLE, OK, FrameResult, Pipeline
+from clearcli.predicates.grasps import KIND_FACTS
 from clearcli.predicates.state import DIRECTIONS
 from clearcli.replay import memory as push_memory
 from clearcli.replay.memory import MemoryParams, PushMemory, PushRecord
@@ -85,7 +86,12 @@ def expected_effect(
             push_length_m=float(push.push_length_m),
             extents_m=extents,
         )
-    return ExpectedEffect(kind="grasp", track_id=track_id, start_centroid=start, action=label, extents_m=extents)
+    if action.grasp_kind != "pinch":
+        label = f"({action.pddl_name} #{track_id})"
+    return ExpectedEffect(
+        kind="grasp", track_id=track_id, start_centroid=start, action=label, extents_m=extents,
+        grasp_kind=action.grasp_kind,
+    )
 
 
 class Session:
@@ -106,6 +112,7 @@ class Session:
         self.summary = Summary()
         # track id -> grasps in a row that did not take it
         self.failed_grasps: dict[int, int] = {}
+        self.failed_kinds: dict[int, set[str]] = {}  # per track: the grasp kinds that failed
         # track id -> push axes tried on it to see whether it comes apart (probe.py)
         self.probed: dict[int, frozenset[str]] = {}
 
@@ -131,8 +138,10 @@ class Session:
                     self.memory = push_memory.forget(self.memory, {self.effect.track_id})
                 if self.effect.kind == "grasp" and execution.outcome != "done":
                     self.failed_grasps[self.effect.track_id] = self.failed_grasps.get(self.effect.track_id, 0) + 1
+                    self.failed_kinds.setdefault(self.effect.track_id, set()).add(self.effect.grasp_kind)
                 elif self.effect.kind == "push" and execution.outcome == "done":
                     self.failed_grasps.pop(self.effect.track_id, None)  # it stands elsewhere now
+                    self.failed_kinds.pop(self.effect.track_id, None)
                 elif execution.outcome != "done" and self.effect.kind == "push":
                     self.memory = push_memory.mark_failed(self.memory, self.effect.track_id)
 
@@ -141,7 +150,14 @@ class Session:
             ids = {o.name: assignment.ids[o.segment_index] for o in state.objects}
             found["ids_by_name"] = ids
             limit = self.pipeline.settings.plan.max_failed_grasps
-            failed = {("ik_unfeasible_grasp", n) for n, tid in ids.items() if limit > 0 and self.failed_grasps.get(tid, 0) >= limit}
+            # the kinds of grasp that kept failing on it (the pinch's fact as before; a rim
+            # grasp's or a slide's their own)
+            failed = {
+                (KIND_FACTS[k].ik, n)
+                for n, tid in ids.items()
+                if limit > 0 and self.failed_grasps.get(tid, 0) >= limit
+                for k in sorted(self.failed_kinds.get(tid, {"pinch"}))
+            }
             if failed - state.facts:
                 from clearcli.planning.probe import off_seam
 
@@ -149,7 +165,7 @@ class Session:
                 # a grasp that keeps taking nothing may be closing on two objects the
                 # segmentation merged: push such an object with the fingers off the
                 # middle of its face, where they meet one of the two
-                for _, name in sorted(failed):
+                for _, name in sorted(f for f in failed if f[0] == "ik_unfeasible_grasp"):
                     for d in DIRECTIONS:
                         state = off_seam(state, name, d, self.pipeline.settings.gripper)
             if self.pipeline.settings.plan.regrasp_off_centre:

@@ -68,6 +68,7 @@ class ExpectedEffect:
     unit_vector: Vec3 | None = None  # push direction on the table, sensor frame
     push_length_m: float = 0.0
     extents_m: Vec3 = (0.0, 0.0, 0.0)  # the pushed object's box, for its swept path
+    grasp_kind: str = "pinch"  # a grasp's kind (clearcli/predicates/grasps)
 
 
 @dataclass(frozen=True)

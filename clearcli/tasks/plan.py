@@ -29,10 +29,16 @@ def run(request: Request, source: Source) -> Outcome:
 
     frame = pipeline.read(source.path, source.topic, source.index, request.settings, source.color)
     seg = pipeline.segmented(frame, request.settings)
+    from clearcli.planning.backtrack import with_grasp_kinds
+    from clearcli.planning.pddl import unit_cost
+    from clearcli.predicates.grasps import parse_kinds
+
     state = pipeline.stated(frame, seg, request.settings)
     done = pipeline.planned(state, request.settings, request.camera_pose, "first" if request.first_only else None)
     plan = done.plan
-    payload = plan_payload(plan, str(source.path), getattr(frame, "frame_id", ""), done.pose_source, not state.push_costs)
+    # the model the plan was made in: the facts of the grasp kinds [plan] grasps allows
+    state = with_grasp_kinds(state, parse_kinds(request.settings.plan.grasps))
+    payload = plan_payload(plan, str(source.path), getattr(frame, "frame_id", ""), done.pose_source, unit_cost(state))
     from clearcli.robot.profiles import robot_block
 
     payload["robot"] = robot_block(request.settings)
@@ -57,7 +63,7 @@ def write_plan_files(state: Any, plan: Any, *, problem: Path | None, domain: Pat
     """The problem (and domain) first, the plan file last, each written whole or not at
     all: a plan file on disk means its problem is complete."""
     from clearcli.files import atomic_output
-    from clearcli.planning.pddl import domain_for, write_plan, write_problem
+    from clearcli.planning.pddl import domain_for, unit_cost, write_plan, write_problem
 
     if problem is not None:
         text = write_problem(state, goal_objects=plan.goal, extra_facts=plan.ik_facts)
@@ -68,4 +74,4 @@ def write_plan_files(state: Any, plan: Any, *, problem: Path | None, domain: Pat
             handle.write(domain_for(state))
     if output is not None:
         with atomic_output(output, "w") as handle:
-            handle.write(write_plan(plan.actions, plan.cost, unit_cost=not state.push_costs))
+            handle.write(write_plan(plan.actions, plan.cost, unit_cost=unit_cost(state)))

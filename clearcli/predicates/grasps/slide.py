@@ -78,8 +78,10 @@ class SlideGrasp:
                     f"(needs {_pinch_opening(thick):.3f} m, the gripper opens to {g.opening_width_m:.3f} m)"
                 )
                 continue
-            if thick < g.closing_width_m:
-                offers[i] = Offer(why_not=f"{thick:.3f} m thick: thinner than the gripper closes")
+            if thick < g.closing_width_m + SLIDE_CLEARANCE_M:
+                # (the modelled height is the top's, noise included: 5 mm to be sure the
+                # fingers close on it, as a failed slide leaves it at the edge)
+                offers[i] = Offer(why_not=f"{thick:.3f} m thick: too thin for the gripper to close on (it closes to {g.closing_width_m:.3f} m)")
                 continue
             if not seen:
                 offers[i] = Offer(why_not="no side of the table is seen to end (" + "; ".join(why_unseen) + ")")

@@ -1,0 +1,56 @@
+"""`--grasps` on the command line: the kinds the planner may use, checked before any
+frame is read."""
+
+from __future__ import annotations
+
+import json
+
+from helpers import run_clear as clear
+
+
+def test_a_bad_grasps_list_is_one_line_and_exit_3() -> None:
+    for bad in ("bowl", "rim", "pinch,,lid", ""):
+        res = clear("plan", "fixtures/clutter10.pcd", "--grasps", bad)
+        assert res.returncode == 3, (bad, res.stderr)
+        assert len(res.stderr.strip().splitlines()) == 1 and "Traceback" not in res.stderr
+        assert "grasps" in res.stderr
+
+
+def test_pinch_only_names_every_grasp_a_pinch() -> None:
+    res = clear("plan", "fixtures/clutter10.pcd", "--grasps", "pinch", "--json")
+    assert res.returncode == 0, res.stderr
+    doc = json.loads(res.stdout)
+    grasps = [s for s in doc["steps"] if s["kind"] == "grasp"]
+    assert grasps and all(s["grasp_kind"] == "pinch" for s in grasps)
+    assert all(s["grasp_kind"] is None for s in doc["steps"] if s["kind"] == "push")
+
+
+def test_plan_files_with_a_rim_grasp_validate_and_pinch_only_files_are_the_thesis_model(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    from helpers.validate import validate_files, validate_files_second
+
+    from clearcli.io.pcd import write_pcd
+    from clearcli.sim import scene as S
+    from clearcli.sim.camera import render
+
+    bowl = S.Cylinder(0, 0.07, 0.06, -0.10, 0.05, wall_m=0.005)
+    box = S.Box(1, 0.04, 0.04, 0.06, 0.15, -0.10)
+    pcd = tmp_path / "bowl.pcd"
+    write_pcd(pcd, render(S.make_scene("bowl", [bowl, box]), seed=0))
+    for grasps, rim in (("pinch,rim,slide", True), ("pinch", False)):
+        out = tmp_path / grasps.replace(",", "_")
+        out.mkdir()
+        files = [out / "domain.pddl", out / "problem.pddl", out / "plan.txt"]
+        res = clear(
+            "plan", str(pcd), "--robot", "panda", "--grasps", grasps, "--json",
+            "--domain", str(files[0]), "--problem", str(files[1]), "-o", str(files[2]),
+        )
+        doc = json.loads(res.stdout)
+        assert ("(grasp_rim o0)" in doc["actions"] or "(grasp_rim o1)" in doc["actions"]) == rim, doc["actions"]
+        assert ("grasp_rim" in files[0].read_text()) == rim
+        assert ("rim_graspable" in files[1].read_text()) == rim
+        assert doc["unit_cost"] == (not rim)
+        if rim:
+            assert "(general cost)" in files[2].read_text()
+            assert validate_files(*files) and validate_files_second(*files)
+        else:
+            assert res.returncode == 10 and "(unit cost)" in files[2].read_text()  # the bowl left
