@@ -448,6 +448,15 @@ def world_rim_grasp(
     return True, f"held by the rim ({(rim_z - inner[:, 2].min()) * 1000:.0f} mm below it)"
 
 
+def _unit_xy(direction_xy: np.ndarray, who: str) -> np.ndarray:
+    """The table-plane direction, unit length; a ValueError naming ``who`` for none."""
+    d = np.asarray(direction_xy, dtype=float)[:2]
+    norm = float(np.linalg.norm(d))
+    if norm < 1e-12:
+        raise ValueError(f"{who}: direction_xy has no length")
+    return d / norm
+
+
 def world_slide(scene: Scene, k: int, direction_xy: np.ndarray, distance_m: float) -> tuple[Scene, float]:
     """Slide object ``k`` along ``direction_xy`` (table frame, normalised here) by up to
     ``distance_m``, stopping where its footprint would meet another object's (at
@@ -457,11 +466,7 @@ def world_slide(scene: Scene, k: int, direction_xy: np.ndarray, distance_m: floa
     stops at the contact to within `SLIDE_PRECISION_M`. Objects it already overlaps at the
     start (a contact within the builders' tolerance) do not stop it. It does not leave
     the table on its own account: whether it tips is `world_edge_pinch`'s concern."""
-    d = np.asarray(direction_xy, dtype=float)[:2]
-    norm = float(np.linalg.norm(d))
-    if norm < 1e-12:
-        raise ValueError("world_slide: direction_xy has no length")
-    d = d / norm
+    d = _unit_xy(direction_xy, "world_slide")
     obj = scene.objects[k]
     others = [o for j, o in enumerate(scene.objects) if j != k and not objects_overlap(obj, o)]
 
@@ -501,11 +506,7 @@ def world_edge_pinch(
     the table (else the object tips off), the overhang is at least ``grip_depth_m`` +
     `EDGE_PINCH_MARGIN_M` (else the pinch slips off the rim), and the object's height is
     within [closing_m, `edge_pinch_span_m`(opening_m)] (the jaws close on it)."""
-    d = np.asarray(direction_xy, dtype=float)[:2]
-    norm = float(np.linalg.norm(d))
-    if norm < 1e-12:
-        raise ValueError("world_edge_pinch: direction_xy has no length")
-    d = d / norm
+    d = _unit_xy(direction_xy, "world_edge_pinch")
     obj = scene.objects[k]
     if not on_table(scene, obj):
         return False, "tipped off the table: its centre is past the edge"

@@ -60,6 +60,18 @@ class Scene:
     rim_offered: frozenset[int] = frozenset()  # objects a rim grasp is offered for
 
 
+class KindModule:
+    """What every kind's module shares: its name, and its facts from the registry."""
+
+    name = ""
+
+    @property
+    def facts(self) -> KindFacts:
+        from clearcli.predicates.grasps import KIND_FACTS
+
+        return KIND_FACTS[self.name]
+
+
 class GraspKind(Protocol):
     name: str
     facts: KindFacts

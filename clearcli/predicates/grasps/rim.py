@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from clearcli.predicates.grasps.base import KindFacts, Offer, Scene
+from clearcli.predicates.grasps.base import KindModule, Offer, Scene
 
 if TYPE_CHECKING:
     from clearcli.geometry.gripper import GripperModel
@@ -35,14 +35,8 @@ RIM_N_POINTS = 8
 UP = np.array([0.0, 0.0, 1.0])
 
 
-class RimGrasp:
+class RimGrasp(KindModule):
     name = "rim"
-
-    @property
-    def facts(self) -> KindFacts:
-        from clearcli.predicates.grasps import KIND_FACTS
-
-        return KIND_FACTS["rim"]
 
     def offers(self, scene: Scene, gripper: "GripperModel", settings: "Settings") -> list[Offer]:
         from clearcli.geometry.poses import _pose

@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from clearcli.predicates.grasps.base import KindFacts, Offer, Scene
+from clearcli.predicates.grasps.base import KindModule, Offer, Scene
 
 if TYPE_CHECKING:
     from clearcli.geometry.gripper import GripperModel
@@ -44,14 +44,8 @@ SLIDE_TILT_DEG = 45.0
 UP = np.array([0.0, 0.0, 1.0])
 
 
-class SlideGrasp:
+class SlideGrasp(KindModule):
     name = "slide"
-
-    @property
-    def facts(self) -> KindFacts:
-        from clearcli.predicates.grasps import KIND_FACTS
-
-        return KIND_FACTS["slide"]
 
     def offers(self, scene: Scene, gripper: "GripperModel", settings: "Settings") -> list[Offer]:
         from clearcli.predicates import relations as rel
