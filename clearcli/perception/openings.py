@@ -49,6 +49,7 @@ from clearcli.perception.types import TablePlane
 RIM_BAND_M = 0.008
 RIM_MIN_ARC_DEG = 200.0
 RIM_MIN_INSIDE = 12
+RIM_MAX_POINTS = 4000
 RIM_MIN_RADIUS_M = 0.02
 RIM_MAX_RADIUS_M = 0.20
 # the inside must lie this much below the rim for most of its points to call it open
@@ -113,7 +114,10 @@ def _fit_circle(xy: np.ndarray) -> tuple[np.ndarray, float]:
 
 def rim_of(points_camera: np.ndarray, plane: TablePlane) -> Opening:
     """Whether the points (one object's, sensor frame) are an open container, and its rim."""
-    p = np.asarray(points_camera, dtype=float)
+    p = np.asarray(points_camera)
+    if len(p) > RIM_MAX_POINTS:  # an even sample: a rim is a shape, not a count
+        p = p[:: -(-len(p) // RIM_MAX_POINTS)]
+    p = np.asarray(p, dtype=float)
     p = p[np.all(np.isfinite(p), axis=1)]
     if len(p) < 30:
         return Opening(None, "too few points to see a rim")
@@ -157,16 +161,20 @@ def rim_of(points_camera: np.ndarray, plane: TablePlane) -> Opening:
 def _pinhole(points: np.ndarray, shape: tuple[int, int]) -> tuple[float, float, float, float] | None:
     """fx, fy, cx, cy of an organized cloud, from its own pixels."""
     hgt, wid = shape
-    v, u = np.divmod(np.arange(hgt * wid), wid)
-    ok = np.all(np.isfinite(points), axis=1) & (points[:, 2] > 1e-3)
-    idx = np.flatnonzero(ok)
+    # a regular sample of the pixels is plenty for four numbers (and costs no pass over
+    # the whole frame)
+    idx = np.arange(0, hgt * wid, max(1, (hgt * wid) // 20000))
+    p = np.asarray(points[idx], dtype=float)
+    ok = np.all(np.isfinite(p), axis=1)
+    ok[ok] = p[ok, 2] > 1e-3
+    idx, p = idx[ok], p[ok]
     if len(idx) < 100:
         return None
-    idx = idx[:: max(1, len(idx) // 5000)]
-    x = points[idx, 0] / points[idx, 2]
-    y = points[idx, 1] / points[idx, 2]
-    fu = np.linalg.lstsq(np.column_stack([x, np.ones_like(x)]), u[idx].astype(float), rcond=None)[0]
-    fv = np.linalg.lstsq(np.column_stack([y, np.ones_like(y)]), v[idx].astype(float), rcond=None)[0]
+    v, u = np.divmod(idx, wid)
+    x = p[:, 0] / p[:, 2]
+    y = p[:, 1] / p[:, 2]
+    fu = np.linalg.lstsq(np.column_stack([x, np.ones_like(x)]), u.astype(float), rcond=None)[0]
+    fv = np.linalg.lstsq(np.column_stack([y, np.ones_like(y)]), v.astype(float), rcond=None)[0]
     if fu[0] <= 0 or fv[0] <= 0:
         return None
     return float(fu[0]), float(fv[0]), float(fu[1]), float(fv[1])
@@ -207,7 +215,7 @@ def seen_edges(
     sides = _straight_sides(poly)
     if shape is None:
         return tuple(TableEdge(a, b, False, "an unorganized cloud: no image to see the edge in") for a, b in sides)
-    pts = np.asarray(points, dtype=float)
+    pts = points
     cam = _pinhole(pts, shape)
     if cam is None:
         return tuple(TableEdge(a, b, False, "too few pixels to place the camera") for a, b in sides)
@@ -233,20 +241,16 @@ def seen_edges(
             u = np.round(fx * probes[:, 0] / z + cx).astype(np.int64)
             v = np.round(fy * probes[:, 1] / z + cy).astype(np.int64)
         inside = (z > 1e-3) & (u >= 2) & (u < wid - 2) & (v >= 2) & (v < hgt - 2)
-        drops = table = nearer = 0
-        for j in np.flatnonzero(inside):
-            q = pts[v[j] * wid + u[j]]
-            if not np.all(np.isfinite(q)):
-                drops += 1  # no return: nothing at the table's height there
-                continue
-            # along the pixel's ray: farther than the probe on the plane = a drop
-            rng_q, rng_p = float(np.linalg.norm(q)), float(np.linalg.norm(probes[j]))
-            if rng_q > rng_p + EDGE_DROP_M:
-                drops += 1
-            elif rng_q < rng_p - EDGE_DROP_M:
-                nearer += 1
-            else:
-                table += 1
+        # every probe's pixel at once: no return, farther than the plane (a drop),
+        # nearer (something stands there), or on it (the table goes on)
+        j = np.flatnonzero(inside)
+        q = np.asarray(pts[v[j] * wid + u[j]], dtype=float)
+        finite = np.all(np.isfinite(q), axis=1)
+        rng_q = np.linalg.norm(np.where(finite[:, None], q, 0.0), axis=1)
+        rng_p = np.linalg.norm(probes[j], axis=1)
+        drops = int(np.count_nonzero(~finite | (rng_q > rng_p + EDGE_DROP_M)))
+        nearer = int(np.count_nonzero(finite & (rng_q < rng_p - EDGE_DROP_M)))
+        table = int(j.size) - drops - nearer
         if int(inside.sum()) < 0.5 * m:
             out.append(TableEdge(a, b, False, "the view ends there"))
         elif drops >= EDGE_MIN_SHARE * m:
