@@ -43,7 +43,7 @@ def predicates_payload(state: "SymbolicState") -> dict[str, Any]:
                 # a slide's direction and length; the poses each candidate grasps at), and
                 # why the others are not
                 "grasp_kinds": {
-                    k: {**{kk: rounded(v) for kk, v in o.kind_details.get(k, {}).items()}, "grasp_poses": [rounded(_grasp_pose(c)) for c in cands]}
+                    k: {**_rounded_detail(o.kind_details.get(k, {})), "grasp_poses": [rounded(_grasp_pose(c)) for c in cands]}
                     for k, cands in o.kind_candidates.items()
                 },
                 "not_offered": dict(o.kind_refusals),
@@ -63,6 +63,18 @@ def predicates_payload(state: "SymbolicState") -> dict[str, Any]:
         "push_costs": {f"{o} {d}": int(c) for (o, d), c in sorted(state.push_costs.items())},
         "timings_s": timings(state.timings_s),
     }
+
+
+def _rounded_detail(detail: Any) -> Any:
+    """A kind's detail for the JSON: numbers and vectors rounded, in lists and dicts too
+    (a slide's per-candidate ``slides``)."""
+    if isinstance(detail, dict):
+        return {k: _rounded_detail(v) for k, v in detail.items()}
+    if isinstance(detail, (list, tuple)) and detail and isinstance(detail[0], dict):
+        return [_rounded_detail(v) for v in detail]
+    if isinstance(detail, str):
+        return detail
+    return rounded(detail)
 
 
 def _grasp_pose(seq: Any) -> Any:

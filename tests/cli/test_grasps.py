@@ -54,3 +54,30 @@ def test_plan_files_with_a_rim_grasp_validate_and_pinch_only_files_are_the_thesi
             assert validate_files(*files) and validate_files_second(*files)
         else:
             assert res.returncode == 10 and "(unit cost)" in files[2].read_text()  # the bowl left
+
+
+def test_predicates_json_tells_every_kind_offered_and_why_not(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    from clearcli.io.pcd import write_pcd
+    from clearcli.sim import scene as S
+    from clearcli.sim.camera import render
+
+    flat = S.Box(0, 0.20, 0.14, 0.03, 0.25, -0.15)
+    bowl = S.Cylinder(1, 0.07, 0.06, -0.10, 0.05, wall_m=0.005)
+    pcd = tmp_path / "wide.pcd"
+    write_pcd(pcd, render(S.make_scene("wide", [flat, bowl]), seed=0))
+    res = clear("predicates", str(pcd), "--robot", "panda", "--json")
+    assert res.returncode == 0, res.stderr
+    doc = json.loads(res.stdout)
+    assert doc["version"] == 2
+    by_kind = {k: o for o in doc["objects"] for k in o["grasp_kinds"]}
+    slide, rim = by_kind["slide"]["grasp_kinds"]["slide"], by_kind["rim"]["grasp_kinds"]["rim"]
+    # the flat box: slid 5 cm to the right edge and 3.5 cm over it; every seen side a candidate
+    assert abs(slide["slide_m"] - 0.085) < 0.006 and len(slide["slides"]) >= 2 and slide["grasp_poses"]
+    assert abs(rim["wall_m"] - 0.005) < 0.002 and len(rim["grasp_poses"]) >= 1
+    assert "closed" in by_kind["slide"]["not_offered"]["rim"]
+    assert "(slidable" in " ".join(doc["facts"]) and "(rim_graspable" in " ".join(doc["facts"])
+    png = tmp_path / "plan.png"
+    res = clear("plan", str(pcd), "--robot", "panda", "--json", "--png", str(png))
+    assert res.returncode in (0, 10) and png.stat().st_size > 10000
+    kinds = {s["grasp_kind"] for s in json.loads(res.stdout)["steps"] if s["kind"] == "grasp"}
+    assert kinds == {"rim", "slide"}, kinds
