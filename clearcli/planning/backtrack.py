@@ -57,6 +57,7 @@ from clearcli.planning.compile import removable_objects
 from clearcli.planning.feasibility import EMPTY, IKActionChecker, Infeasible, SceneContext, gripper_opening_text
 from clearcli.planning.solve import Solved, action_cost, action_space, deadline_error, progress, solve
 from clearcli.planning.types import Action, BacktrackStep, CheckedAction, LeftObject, Plan
+from clearcli.predicates.grasps import EXTRA_KINDS, KIND_FACTS
 from clearcli.predicates.state import Fact, SymbolicState
 
 # check(action, context) -> CheckedAction, or Infeasible with the reason
@@ -76,8 +77,6 @@ def with_grasp_kinds(state: SymbolicState, kinds: Sequence[str]) -> SymbolicStat
     """``state`` with the facts of the grasp kinds not in ``kinds`` left out (``[plan]
     grasps``): with "pinch" alone, exactly the thesis's facts, so exactly its plans."""
     import dataclasses
-
-    from clearcli.predicates.grasps import EXTRA_KINDS, KIND_FACTS
 
     drop = {n for k in EXTRA_KINDS if k not in kinds for n in (KIND_FACTS[k].offered, KIND_FACTS[k].block)}
     if not drop or not any(f[0] in drop for f in state.facts):
@@ -121,7 +120,8 @@ def backtrack(
     names = state.names()
     facts0 = frozenset(state.facts)
     # too wide or narrow for the pinch, and no other grasp kind offered
-    offered_other = {f[1] for f in facts0 if f[0] in ("rim_graspable", "slidable")}
+    offered_kinds = {KIND_FACTS[k].offered for k in EXTRA_KINDS}
+    offered_other = {f[1] for f in facts0 if f[0] in offered_kinds}
     ungraspable = tuple(o for o in names if ("ungraspable", o) in facts0 and o not in offered_other)
     wanted = [o for o in (goal_objects if goal_objects is not None else names) if o not in ungraspable]
     learnt0: set[Fact] = set()  # learnt, true in the recorded scene
@@ -399,22 +399,20 @@ def make_plan(
     ``check``: "whole" or "first" (default ``[plan] check``)."""
     from clearcli.robot.collision import make_obstacles
     from clearcli.robot.profiles import kinematics_from_settings
-    from clearcli.robot.placement import placement_from_settings
-
     from clearcli.predicates.grasps import parse_kinds
+    from clearcli.robot.placement import placement_from_settings
 
     robot = settings.robot  # type: ignore[attr-defined]
     plan_s = settings.plan  # type: ignore[attr-defined]
     gripper = settings.gripper  # type: ignore[attr-defined]
-    state = with_grasp_kinds(state, parse_kinds(plan_s.grasps))
+    kinds_on = parse_kinds(plan_s.grasps)
+    state = with_grasp_kinds(state, kinds_on)
     if T_base_camera is None:
         T_base_camera, _ = placement_from_settings(robot, state)
     T_base_camera = np.asarray(T_base_camera, dtype=float)
     kin = kinematics_from_settings(robot)
     obstacles = make_obstacles(state, T_base_camera, robot.collision_margin_m)
     checker = IKActionChecker(state, T_base_camera, kin, obstacles, push_lookahead=plan_s.push_lookahead)
-
-    kinds_on = parse_kinds(plan_s.grasps)
 
     def describe_width(name: str) -> tuple[str, float | None]:
         obj = state.by_name(name)

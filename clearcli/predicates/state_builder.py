@@ -118,9 +118,9 @@ def compute_state(frame: Frame, seg: Segmentation, settings: "Settings | None" =
     kinds = _other_grasps(
         geoms, openings, edges, tf, gripper, s, exclude, touching, rel.ungraspable(grasps, gripper, ps.grasp_width_margin_m)
     )
-    for kind, offers in kinds.items():
-        from clearcli.predicates.grasps import KIND_FACTS
+    from clearcli.predicates.grasps import KIND_FACTS
 
+    for kind, offers in kinds.items():
         for i, offer in enumerate(offers):
             if offer.why_not:
                 continue
