@@ -257,3 +257,24 @@ def test_what_stands_in_a_bowl_goes_first() -> None:
     names = [a.obj for a in make_plan(state, settings).actions if a.kind == "grasp"]
     kinds = {a.obj: a.grasp_kind for a in make_plan(state, settings).actions if a.kind == "grasp"}
     assert len(names) == 2 and names[-1] == b.name and kinds[b.name] == "rim", (names, kinds)
+
+
+def test_a_wall_beyond_the_edge_is_no_edge_to_slide_to() -> None:
+    # a wall 1 cm beyond the table's right side (x = +0.40), as tall as the camera: the
+    # camera sees no drop there, so that side is not an edge, and the flat box beside it
+    # is slid elsewhere (or not at all)
+    wall = S.Box(9, 0.02, 0.70, 0.30, 0.42, 0.0)
+    scene = S.make_scene("wall", [FLAT, wall])
+    _, seg, state = _state(scene, _settings())
+    T_table_camera = np.linalg.inv(scene.T_camera_table)
+
+    def x_of(p: np.ndarray) -> float:
+        return float((T_table_camera[:3, :3] @ p + T_table_camera[:3, 3])[0])
+
+    right = [e for e in seg.table_edges if min(x_of(e.start), x_of(e.end)) > 0.3]
+    assert right and not any(e.seen for e in right)
+    assert any(e.why == "something stands beyond it" for e in right), [e.why for e in right]
+    flat = _by_position(state, scene, FLAT)
+    slides = flat.kind_details.get("slide", {}).get("slides", [])
+    for c in slides:  # none of them to the right
+        assert (T_table_camera[:3, :3] @ np.asarray(c["direction"]))[0] < 0.9
