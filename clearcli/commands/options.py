@@ -122,7 +122,10 @@ def resolve_settings(
     from clearcli.settings import load_settings, override
 
     sets = ([f"robot.name={robot}"] if robot is not None else []) + list(sets or ())
-    if grasps is not None:  # a flag: over the file and --set
+    if grasps is not None:  # a flag: over the file and --set; any order ("rim,pinch")
+        from clearcli.tasks.domain import canonical_grasps
+
+        grasps = canonical_grasps(grasps)
         sets.append(f'plan.grasps="{grasps.replace(" ", "")}"')
     settings = load_settings(path, sets)
     if settings.robot.urdf:

@@ -16,6 +16,11 @@ def test_a_bad_grasps_list_is_one_line_and_exit_3() -> None:
         assert "grasps" in res.stderr
 
 
+def test_kinds_in_any_order() -> None:
+    res = clear("plan", "fixtures/clutter10.pcd", "--grasps", "slide, pinch", "--json")
+    assert res.returncode == 0, res.stderr
+
+
 def test_pinch_only_names_every_grasp_a_pinch() -> None:
     res = clear("plan", "fixtures/clutter10.pcd", "--grasps", "pinch", "--json")
     assert res.returncode == 0, res.stderr
