@@ -5,7 +5,8 @@ envelope ({"schema": "clear.replay", "version": 1, ...}) with a "type":
   frame:   index (position on the topic), stamp_s, time_s (from the start of the log),
            status (ok | cleared | no_table | no_plan | failed), objects [{id, name,
            centroid_m, extents_m, new}], gone [ids], first_action {kind, id, name,
-           direction, unit_vector, push_length_m} or null, plan_length, plan (actions
+           grasp_kind (grasps: pinch | rim | slide), direction, unit_vector,
+           push_length_m} or null, plan_length, plan (actions
            with ids, cost, optimal, replans, unreachable/ungraspable/stuck ids, probe:
            the id of an object pushed to see whether it is two merged ones, else null)
            or null,

@@ -122,6 +122,8 @@ def _finite(value: float) -> float | None:
 
 def action_json(action: "Action", ids_by_name: Mapping[str, int]) -> dict[str, Any]:
     out: dict[str, Any] = {"kind": action.kind, "id": ids_by_name.get(action.obj), "name": action.obj}
+    if action.kind == "grasp":  # which grasp: "pinch", "rim", "slide"
+        out["grasp_kind"] = action.grasp_kind
     if action.direction is not None:
         out["direction"] = action.direction
     return out
