@@ -68,14 +68,12 @@ def domain_text(clearance_costs: bool = False, kinds: Sequence[str] = ("pinch",)
     PDDL parser takes it); the variant's static cost function is accepted by Fast
     Downward and unified-planning."""
     text = _domain_file()
+    if clearance_costs:  # first: the grasp kinds add effects between the anchors
+        if _FUNCTIONS_UNIT not in text or _PUSH_COST_UNIT not in text:
+            raise InputError(f"clearcli/{DOMAIN_RESOURCE}: edited so that the push cost cannot be swapped in")
+        text = text.replace(_FUNCTIONS_UNIT, _FUNCTIONS_COST).replace(_PUSH_COST_UNIT, _PUSH_COST_VAR)
     extra = [k for k in kinds if k != "pinch"]
-    if extra:
-        text = with_grasp_kinds(text, extra)
-    if not clearance_costs:
-        return text
-    if _FUNCTIONS_UNIT not in text or _PUSH_COST_UNIT not in text:
-        raise InputError(f"clearcli/{DOMAIN_RESOURCE}: edited so that the push cost cannot be swapped in")
-    return text.replace(_FUNCTIONS_UNIT, _FUNCTIONS_COST).replace(_PUSH_COST_UNIT, _PUSH_COST_VAR)
+    return with_grasp_kinds(text, extra) if extra else text
 
 
 _PREDICATES_END = "    (push_off_table ?o - obj ?d - direction))"

@@ -278,3 +278,24 @@ def test_a_wall_beyond_the_edge_is_no_edge_to_slide_to() -> None:
     slides = flat.kind_details.get("slide", {}).get("slides", [])
     for c in slides:  # none of them to the right
         assert (T_table_camera[:3, :3] @ np.asarray(c["direction"]))[0] < 0.9
+
+
+def test_the_clearance_cost_domain_with_the_kinds_validates(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    from helpers.validate import validate_files, validate_files_second
+
+    from clearcli.planning.backtrack import make_plan
+    from clearcli.planning.pddl import domain_for, unit_cost, write_plan, write_problem
+
+    settings = _settings()
+    settings = dataclasses.replace(settings, predicates=dataclasses.replace(settings.predicates, clearance_cost=True))
+    scene = S.make_scene("costs", [BOWL, NEAR_FLAT, S.Box(9, 0.04, 0.04, 0.06, -0.25, -0.15)])
+    _, _, state = _state(scene, settings)
+    assert state.push_costs and not unit_cost(state)
+    plan = make_plan(state, settings)
+    assert {a.grasp_kind for a in plan.actions if a.kind == "grasp"} >= {"rim"}
+    files = [tmp_path / "domain.pddl", tmp_path / "problem.pddl", tmp_path / "plan.txt"]
+    files[0].write_text(domain_for(state))
+    files[1].write_text(write_problem(state, plan.goal, plan.ik_facts))
+    files[2].write_text(write_plan(plan.actions, plan.cost, unit_cost=False))
+    assert "push-cost" in files[0].read_text() and "grasp_rim" in files[0].read_text()
+    assert validate_files(*files) and validate_files_second(*files)
