@@ -108,7 +108,8 @@ def compute_state(frame: Frame, seg: Segmentation, settings: "Settings | None" =
     timings["block_dir"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    facts.update(("ungraspable", names[i]) for i in rel.ungraspable(grasps, gripper, ps.grasp_width_margin_m))
+    too_wide_or_narrow = rel.ungraspable(grasps, gripper, ps.grasp_width_margin_m)
+    facts.update(("ungraspable", names[i]) for i in too_wide_or_narrow)
     table_xy = tf.to_table(np.asarray(seg.table_polygon, dtype=float).reshape(-1, 3))[:, :2]
     facts.update(("push_off_table", names[i], d) for i, d in rel.push_off_table(geoms, pushes, table_xy))
     timings["static"] = time.perf_counter() - t0
@@ -116,7 +117,7 @@ def compute_state(frame: Frame, seg: Segmentation, settings: "Settings | None" =
     # the grasp kinds beyond the pinch: rims of open containers, slides to a seen edge
     t0 = time.perf_counter()
     kinds = _other_grasps(
-        geoms, openings, edges, tf, gripper, s, exclude, touching, rel.ungraspable(grasps, gripper, ps.grasp_width_margin_m)
+        geoms, openings, edges, tf, gripper, s, exclude, touching, too_wide_or_narrow
     )
     from clearcli.predicates.grasps import KIND_FACTS
 

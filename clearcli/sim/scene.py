@@ -66,26 +66,18 @@ def camera_pose_T_camera_table(
 
 
 def convex_hull(points: np.ndarray) -> np.ndarray:
-    """(m, 2) counter-clockwise convex hull of (n, 2) points (Andrew's monotone chain);
-    collinear points are dropped."""
-    pts = sorted(set(map(tuple, np.asarray(points, dtype=float).tolist())))
-    if len(pts) <= 2:
-        return np.array(pts, dtype=float).reshape(-1, 2)
+    """(m, 2) counter-clockwise convex hull of (n, 2) points (SciPy's Qhull, as every other
+    hull in the project); fewer than three distinct or collinear points: their extremes."""
+    from scipy.spatial import ConvexHull, QhullError
 
-    def cross(o: tuple[float, ...], a: tuple[float, ...], b: tuple[float, ...]) -> float:
-        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
-
-    lower: list[tuple[float, ...]] = []
-    for p in pts:
-        while len(lower) >= 2 and cross(lower[-2], lower[-1], p) <= 0:
-            lower.pop()
-        lower.append(p)
-    upper: list[tuple[float, ...]] = []
-    for p in reversed(pts):
-        while len(upper) >= 2 and cross(upper[-2], upper[-1], p) <= 0:
-            upper.pop()
-        upper.append(p)
-    return np.array(lower[:-1] + upper[:-1], dtype=float)
+    pts = np.unique(np.asarray(points, dtype=float).reshape(-1, 2), axis=0)
+    if len(pts) < 3:
+        return pts
+    try:
+        return pts[ConvexHull(pts).vertices]
+    except QhullError:  # all on one line
+        along = (pts - pts[0]) @ (pts[-1] - pts[0])
+        return pts[[int(np.argmin(along)), int(np.argmax(along))]]
 
 
 def invert_transform(T: np.ndarray) -> np.ndarray:
