@@ -31,9 +31,13 @@ from clearcli.predicates.state import DIRECTIONS, SymbolicState
 
 
 def probe_candidates(state: SymbolicState, plan: Plan, opening_width_m: float, max_width_m: float) -> list[str]:
-    """Objects the plan left as too wide that may be two objects merged, widest last."""
+    """Objects the plan left as too wide that may be two objects merged, widest last:
+    too wide for the pinch and no other grasp kind offered, or those offered (a rim, a
+    slide) found without an arm motion or failing when tried (replay's
+    ``max_failed_grasps``) - a slide of two merged objects moves neither far."""
     out = []
-    for name in plan.ungraspable:
+    too_wide = [n for n in plan.unreachable if ("ungraspable", n) in state.facts]
+    for name in (*plan.ungraspable, *too_wide):
         width = float(state.by_name(name).grasp_width_m)
         if opening_width_m < width <= max_width_m:
             out.append((width, name))

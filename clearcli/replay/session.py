@@ -194,7 +194,7 @@ class Session:
         settings = self.pipeline.settings
         state, plan = result.state, result.plan
         ids: dict[str, int] = found.get("ids_by_name", {})
-        if settings.plan.probe_max_width_m <= 0 or state is None or plan is None or not plan.ungraspable:
+        if settings.plan.probe_max_width_m <= 0 or state is None or plan is None or not (plan.ungraspable or plan.unreachable):
             return result
         T_base_camera = plan.T_base_camera if plan.T_base_camera is not None else self.pipeline.T_base_camera
         if T_base_camera is None:

@@ -330,7 +330,13 @@ class Episode:
     def _other_grasp(self, report: "FrameReport", model: Any, kind: str, k: int) -> str:
         """A rim grasp or a slide to the edge, judged by the world's own rules
         (`physics.world_rim_grasp`, `world_slide`, `world_edge_pinch`), not the planner's."""
-        from clearcli.sim.physics import world_edge_pinch, world_rim_grasp, world_slide
+        from clearcli.sim.physics import (
+            EDGE_PINCH_TILT_DEG,
+            approach_tilt_deg,
+            world_edge_pinch,
+            world_rim_grasp,
+            world_slide,
+        )
 
         gripper = self.session.pipeline.settings.gripper
         T_table_camera = np.linalg.inv(self.scene.T_camera_table)
@@ -361,8 +367,13 @@ class Episode:
         slide = slides[min(int(chosen), len(slides) - 1)]
         direction = T_table_camera[:3, :3] @ np.asarray(slide.get("direction", (1.0, 0.0, 0.0)), dtype=float)
         self.scene, travelled = world_slide(self.scene, k, direction[:2], float(slide.get("slide_m", 0.0)))
+        # the pinch's pose as the arm went there (its tilt sets the span the jaws take);
         # the world's own figure: fingers need 2.5 cm of the overhang to hold it
-        ok, why = world_edge_pinch(self.scene, k, direction[:2], EDGE_GRIP_M, gripper.opening_width_m, gripper.closing_width_m)
+        T_camera_edge = _slide_edge_pose_camera(report, model.kind_candidates.get("slide", ()), int(chosen))
+        tilt_deg = EDGE_PINCH_TILT_DEG if T_camera_edge is None else approach_tilt_deg(T_table_camera @ T_camera_edge)
+        ok, why = world_edge_pinch(
+            self.scene, k, direction[:2], EDGE_GRIP_M, gripper.opening_width_m, gripper.closing_width_m, tilt_deg
+        )
         if not ok:
             if "tipped" in why:
                 self.scene = without_object(self.scene, k)
@@ -473,6 +484,18 @@ class Episode:
             seen=seen,
         )
         return record, unreachable
+
+
+def _slide_edge_pose_camera(report: "FrameReport", candidates: Any, chosen: int) -> np.ndarray | None:
+    """The slide's pinch at the edge (camera frame): the second-last pose of the
+    candidate the IK check chose, else of the model's candidate ``chosen``."""
+    plan = report.result.plan
+    checked = plan.first if plan is not None else None
+    if checked is not None and plan is not None and plan.T_base_camera is not None and len(checked.T_base_gripper) > 2:
+        return np.linalg.inv(np.asarray(plan.T_base_camera, dtype=float)) @ np.asarray(checked.T_base_gripper[-2])
+    if not candidates:
+        return None
+    return np.asarray(candidates[min(chosen, len(candidates) - 1)][-2], dtype=float)
 
 
 def _chosen_pose_camera(report: "FrameReport", candidates: Any) -> np.ndarray | None:

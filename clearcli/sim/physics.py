@@ -48,16 +48,25 @@ def truly_ungraspable(obj: SceneObject, opening_width_m: float, closing_width_m:
     return width > opening_width_m or width < closing_width_m
 
 
-# An arm reaching over a table's edge to pinch what overhangs it comes down at about this
-# angle below the horizontal (the world's figure: a level approach puts the wrist at the
+# An arm reaching over a table's edge to pinch what overhangs it comes down at some angle
+# below the horizontal, about 45 deg by default and no lower than
+# EDGE_PINCH_MIN_TILT_DEG (the world's figures: a level approach puts the wrist at the
 # table's height, beyond the arms' reach): across the fingers a slab h thick then spans
 # h / cos(angle), and the fingers keep 5 mm on either side.
 EDGE_PINCH_TILT_DEG = 45.0
+EDGE_PINCH_MIN_TILT_DEG = 20.0
 
 
-def edge_pinch_span_m(opening_m: float) -> float:
-    """The thickest slab the gripper pinches at an edge (m)."""
-    return (opening_m - 0.01) * math.cos(math.radians(EDGE_PINCH_TILT_DEG))
+def edge_pinch_span_m(opening_m: float, tilt_deg: float = EDGE_PINCH_TILT_DEG) -> float:
+    """The thickest slab the gripper pinches at an edge coming down ``tilt_deg`` below
+    the horizontal (m)."""
+    return (opening_m - 0.01) * math.cos(math.radians(tilt_deg))
+
+
+def approach_tilt_deg(T_table_gripper: np.ndarray) -> float:
+    """How far below the horizontal a gripper pose's approach (its z axis) points (deg)."""
+    z = np.asarray(T_table_gripper, dtype=float)[:3, 2]
+    return math.degrees(math.asin(float(np.clip(-z[2] / max(float(np.linalg.norm(z)), 1e-12), -1.0, 1.0))))
 
 
 def truly_ungraspable_by(obj: SceneObject, gripper: Any, kinds: tuple[str, ...] = ("pinch",)) -> bool:
@@ -76,7 +85,7 @@ def truly_ungraspable_by(obj: SceneObject, gripper: Any, kinds: tuple[str, ...] 
             return False
     if "slide" in kinds and not (isinstance(obj, Cylinder) and obj.is_open):
         if (
-            gripper.closing_width_m <= obj.height_m <= edge_pinch_span_m(gripper.opening_width_m)
+            gripper.closing_width_m <= obj.height_m <= edge_pinch_span_m(gripper.opening_width_m, EDGE_PINCH_MIN_TILT_DEG)
             and grasp_width_m(obj) >= 0.08
         ):
             return False
@@ -496,17 +505,22 @@ def world_edge_pinch(
     grip_depth_m: float,
     opening_m: float,
     closing_m: float,
+    tilt_deg: float = EDGE_PINCH_TILT_DEG,
 ) -> tuple[bool, str]:
     """After object ``k`` was slid along ``direction_xy`` towards a table edge, can the
-    gripper pinch the part hanging over the edge (fingers above and below it)?
+    gripper, coming down ``tilt_deg`` below the horizontal, pinch the part hanging over
+    the edge (fingers above and below it)?
 
     The edge is the table side the direction leaves through from the object's centre;
     the overhang is how far the footprint reaches past that side, measured along the
     direction (the way the fingers come back in). Held when the centre is still over
     the table (else the object tips off), the overhang is at least ``grip_depth_m`` +
     `EDGE_PINCH_MARGIN_M` (else the pinch slips off the rim), and the object's height is
-    within [closing_m, `edge_pinch_span_m`(opening_m)] (the jaws close on it)."""
+    within [closing_m, `edge_pinch_span_m`(opening_m, tilt_deg)] (the jaws close on it);
+    a tilt below `EDGE_PINCH_MIN_TILT_DEG` does not get there at all."""
     d = _unit_xy(direction_xy, "world_edge_pinch")
+    if not tilt_deg >= EDGE_PINCH_MIN_TILT_DEG - 1e-6:
+        return False, f"the gripper cannot come that low: {tilt_deg:.1f} deg below the horizontal, at least {EDGE_PINCH_MIN_TILT_DEG:g}"
     obj = scene.objects[k]
     if not on_table(scene, obj):
         return False, "tipped off the table: its centre is past the edge"
@@ -523,10 +537,11 @@ def world_edge_pinch(
     if overhang < need:
         return False, f"slips: overhang {overhang * 1000:.1f} mm, needs {need * 1000:.1f} mm"
     height = obj.height_m
-    if height > edge_pinch_span_m(opening_m):
+    span = edge_pinch_span_m(opening_m, tilt_deg)
+    if height > span:
         return False, (
-            f"too thick to pinch: {height * 1000:.1f} mm, at most {edge_pinch_span_m(opening_m) * 1000:.1f} mm "
-            f"with the opening {opening_m * 1000:.1f} mm from {EDGE_PINCH_TILT_DEG:.0f} deg"
+            f"too thick to pinch: {height * 1000:.1f} mm, at most {span * 1000:.1f} mm "
+            f"with the opening {opening_m * 1000:.1f} mm from {tilt_deg:.0f} deg"
         )
     if height < closing_m:
         return False, f"too thin to pinch: {height * 1000:.1f} mm, the jaws close to {closing_m * 1000:.1f} mm"

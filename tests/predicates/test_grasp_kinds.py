@@ -117,6 +117,38 @@ def test_slide_to_the_nearest_seen_edge_by_hand() -> None:
     assert any(e.seen for e in seg.table_edges)
 
 
+def test_a_thicker_slab_is_pinched_from_a_lower_tilt_as_far_as_20_deg() -> None:
+    from clearcli.planning.backtrack import make_plan
+    from clearcli.predicates.grasps.slide import pinch_tilt_deg
+
+    # by hand, the Panda's 8 cm less 5 mm either side leaves 7 cm: a 3 cm slab from 45 deg
+    # (4.2 cm across the fingers), a 6 cm one from acos(6 / 7) = 31.0 deg, a 6.6 cm one
+    # from no tilt of 20 deg or more (6.6 > 7 cos 20 = 6.58)
+    assert pinch_tilt_deg(0.03, 0.08) == 45.0
+    assert pinch_tilt_deg(0.06, 0.08) == pytest.approx(31.0, abs=0.11)
+    assert pinch_tilt_deg(0.066, 0.08) is None
+    settings = _settings("panda")
+    slab = dataclasses.replace(FLAT, size_z_m=0.055)
+    _, _, state = _state(S.make_scene("slab", [slab]), settings)
+    (obj,) = state.objects
+    detail = obj.kind_details["slide"]
+    assert ("slidable", obj.name) in state.facts
+    # the modelled thickness is the top's height, the sensor's noise on top of 5.5 cm
+    assert 0.054 < detail["thickness_m"] < 0.062
+    assert detail["tilt_deg"] == pytest.approx(np.degrees(np.arccos(detail["thickness_m"] / 0.07)), abs=0.11)
+    assert detail["tilt_deg"] < 45.0
+    plan = make_plan(state, settings)
+    assert [a.pddl() for a in plan.actions] == [f"(slide_grasp {obj.name})"]
+    # the edge pose the arm was checked at comes down at that tilt (robot base frame: z up)
+    z = np.asarray(plan.first.T_base_gripper[-2])[:3, 2]
+    assert np.degrees(np.arcsin(-z[2])) == pytest.approx(detail["tilt_deg"], abs=1.5)
+    # 7 cm thick: not offered, and the reason gives the least tilt and the opening
+    _, _, state = _state(S.make_scene("slab", [dataclasses.replace(FLAT, size_z_m=0.07)]), settings)
+    (obj,) = state.objects
+    assert ("slidable", obj.name) not in state.facts
+    assert "even from 20 deg" in obj.kind_refusals["slide"] and "opens to 0.080 m" in obj.kind_refusals["slide"]
+
+
 def _only_right_edge_seen(scene: S.Scene, seg):  # type: ignore[no-untyped-def]
     """The segmentation with only the table's right side (x = +0.40) seen to end."""
     T_table_camera = np.linalg.inv(scene.T_camera_table)

@@ -64,3 +64,14 @@ def test_a_slide_into_a_neighbour_stops_short_and_the_pinch_fails() -> None:
     assert abs(travelled - 0.01) < 1e-3  # 0.35 -> 0.36, where the block's face is
     ok, why = world_edge_pinch(moved, 0, [1.0, 0.0], EDGE_GRIP_M, 0.08, 0.01)
     assert not ok and "slip" in why
+
+
+def test_a_thick_flat_box_is_pinched_from_the_lower_tilt_the_planner_chose() -> None:
+    # 5.5 cm thick: from 45 deg the Panda's jaws span at most 7 cm x cos 45 = 4.9 cm, so
+    # the world holds it only because the arm came down at the planner's lower tilt
+    # (about 35 deg, read off the checked pose), where they span 5.7 cm
+    flat = S.Box(1, 0.20, 0.14, 0.055, 0.25, -0.15)
+    result = _session(S.make_scene("thick", [flat]))
+    done = [(s.action, s.outcome) for s in result.steps if s.action]
+    assert done == [("(slide_grasp 1)", "removed")], done
+    assert result.cleared_truly

@@ -13,7 +13,7 @@ import pytest
 
 from clearcli.sim.camera import DepthNoise, render
 from clearcli.sim.families import FAMILIES, _edge_gap, wide_objects
-from clearcli.sim.physics import world_edge_pinch, world_rim_grasp, world_slide
+from clearcli.sim.physics import approach_tilt_deg, world_edge_pinch, world_rim_grasp, world_slide
 from clearcli.sim.scene import Box, Cylinder, Scene, make_scene, objects_overlap
 
 EXACT = DepthNoise(enabled=False)
@@ -153,6 +153,23 @@ def test_edge_pinch_holds_with_enough_overhang() -> None:
     # mirrored on the left edge (x = -0.40), sliding along -x
     left = make_scene("left", [replace(FLAT, x_m=-0.35)])
     assert world_edge_pinch(left, 0, np.array([-1.0, 0.0]), **PINCH)[0]
+
+
+def test_edge_pinch_span_follows_the_approach_tilt() -> None:
+    # a 6 cm slab with the 8 cm jaws: from 45 deg it spans 6 / cos 45 = 8.49 cm across the
+    # fingers (> 8 - 1 cm), from 20 deg 6 / cos 20 = 6.39 cm (< 7 cm); below 20 deg the
+    # world's arms do not come
+    scene = make_scene("slab", [replace(FLAT, x_m=0.35, size_z_m=0.06)])
+    ok, why = world_edge_pinch(scene, 0, np.array([1.0, 0.0]), **PINCH, tilt_deg=45.0)
+    assert not ok and "at most 49.5 mm" in why  # 0.07 * cos 45
+    ok, why = world_edge_pinch(scene, 0, np.array([1.0, 0.0]), **PINCH, tilt_deg=20.0)
+    assert ok, why
+    ok, why = world_edge_pinch(scene, 0, np.array([1.0, 0.0]), **PINCH, tilt_deg=10.0)
+    assert not ok and "cannot come that low" in why
+    # the tilt read off a pose: approach 30 deg below the horizontal along +x
+    T = np.eye(4)
+    T[:3, 2] = [np.cos(np.radians(30.0)), 0.0, -np.sin(np.radians(30.0))]
+    assert approach_tilt_deg(T) == pytest.approx(30.0, abs=1e-9)
 
 
 def test_edge_pinch_slips_with_too_little_overhang() -> None:

@@ -38,9 +38,13 @@ SLIDE_EDGE_CLEARANCE_M = 0.005
 SLIDE_CLEARANCE_M = 0.005
 SLIDE_KEEP_ON_M = 0.01
 SLIDE_MAX_M = 0.6
-# how far below the horizontal the edge pinch approaches (deg): level, none of the wam,
-# panda and ur5e reached a pose 1.5 cm above the table beyond its edge; 45: all three
+# how far below the horizontal the edge pinch approaches (deg): 45 where the slab fits the
+# opening so (level, none of the wam, panda and ur5e reached a pose 1.5 cm above the table
+# beyond its edge; from 45 all three did); a thicker slab spans thick / cos(tilt) across
+# the fingers, so it is pinched from as steep a tilt as the opening allows, down to
+# SLIDE_MIN_TILT_DEG (below it the wrist comes near the table's height)
 SLIDE_TILT_DEG = 45.0
+SLIDE_MIN_TILT_DEG = 20.0
 UP = np.array([0.0, 0.0, 1.0])
 
 
@@ -66,10 +70,12 @@ class SlideGrasp(KindModule):
                 offers[i] = Offer(why_not="its rim is grasped instead")
                 continue
             thick = float(obj.top_height_m)
-            if _pinch_opening(thick) > g.opening_width_m:
+            tilt_deg = pinch_tilt_deg(thick, g.opening_width_m)
+            if tilt_deg is None:
+                least = _pinch_opening(thick, SLIDE_MIN_TILT_DEG)
                 offers[i] = Offer(
-                    why_not=f"{thick:.3f} m thick: too thick to pinch at the edge from {SLIDE_TILT_DEG:.0f} deg "
-                    f"(needs {_pinch_opening(thick):.3f} m, the gripper opens to {g.opening_width_m:.3f} m)"
+                    why_not=f"{thick:.3f} m thick: too thick to pinch at the edge even from {SLIDE_MIN_TILT_DEG:.0f} deg "
+                    f"below the horizontal (needs {least:.3f} m, the gripper opens to {g.opening_width_m:.3f} m)"
                 )
                 continue
             if thick < g.closing_width_m + SLIDE_CLEARANCE_M:
@@ -86,7 +92,7 @@ class SlideGrasp(KindModule):
                 if plan is None:
                     why = why_side or why
                     continue
-                found.append(_candidate(obj, plan, gripper, settings))
+                found.append(_candidate(obj, plan, gripper, settings, tilt_deg))
             if not found:
                 offers[i] = Offer(why_not=why)
                 continue
@@ -107,7 +113,7 @@ class SlideGrasp(KindModule):
             blockers[(b, int(name[5:]))].add(a)
         allowed = rel._allowed(n, scene.exclude)
         poses = np.stack([cands[i][j]["T_edge"] for i, j in keys])
-        openings = [min(g.opening_width_m, _pinch_opening(cands[i][j]["thickness_m"])) for i, j in keys]
+        openings = [min(g.opening_width_m, _pinch_opening(cands[i][j]["thickness_m"], cands[i][j]["tilt_deg"])) for i, j in keys]
         rows = allowed[[i for i, _ in keys]]
         for p, a in rel._grasp_hits(gripper, poses, openings, list(scene.objects), rows):
             blockers[keys[p]].add(a)
@@ -126,6 +132,7 @@ class SlideGrasp(KindModule):
                     "slide_m": float(first["slide_m"]),
                     "overhang_m": SLIDE_OVERHANG_M,
                     "thickness_m": float(first["thickness_m"]),
+                    "tilt_deg": float(first["tilt_deg"]),
                     # every candidate's slide, in the order of the pose sequences
                     "slides": [{"direction": c["direction"].tolist(), "slide_m": float(c["slide_m"])} for c in keep],
                 },
@@ -134,10 +141,21 @@ class SlideGrasp(KindModule):
         return offers
 
 
-def _pinch_opening(thick_m: float) -> float:
-    """How far the fingers open to pinch a slab ``thick_m`` thick from SLIDE_TILT_DEG
+def _pinch_opening(thick_m: float, tilt_deg: float) -> float:
+    """How far the fingers open to pinch a slab ``thick_m`` thick from ``tilt_deg``
     below the horizontal: across the fingers the slab is thick / cos(tilt) (m)."""
-    return thick_m / math.cos(math.radians(SLIDE_TILT_DEG)) + 2.0 * SLIDE_CLEARANCE_M
+    return thick_m / math.cos(math.radians(tilt_deg)) + 2.0 * SLIDE_CLEARANCE_M
+
+
+def pinch_tilt_deg(thick_m: float, opening_m: float) -> float | None:
+    """The steepest tilt below the horizontal, SLIDE_TILT_DEG at most, from which a slab
+    ``thick_m`` thick fits an ``opening_m`` opening; None when not even from
+    SLIDE_MIN_TILT_DEG. (Steeper keeps the wrist higher above the table's edge.)"""
+    room = opening_m - 2.0 * SLIDE_CLEARANCE_M
+    if thick_m <= 0.0 or room <= 0.0 or thick_m > room * math.cos(math.radians(SLIDE_MIN_TILT_DEG)):
+        return None if thick_m > 0.0 else SLIDE_TILT_DEG
+    # 0.1 deg below the bound, so that the opening needed stays within the opening
+    return min(SLIDE_TILT_DEG, math.floor(10.0 * math.degrees(math.acos(thick_m / room))) / 10.0)
 
 
 def _slide_to(obj, a: np.ndarray, b: np.ndarray, table_mid: np.ndarray):  # type: ignore[no-untyped-def]
@@ -162,7 +180,7 @@ def _slide_to(obj, a: np.ndarray, b: np.ndarray, table_mid: np.ndarray):  # type
     return (max(dist, 0.0), out_dir, float(a @ out_dir)), ""
 
 
-def _candidate(obj, plan, gripper: "GripperModel", settings: "Settings") -> dict:  # type: ignore[no-untyped-def]
+def _candidate(obj, plan, gripper: "GripperModel", settings: "Settings", tilt_deg: float) -> dict:  # type: ignore[no-untyped-def]
     """The pose sequence of one slide: the push along the table, then the pinch at the edge."""
     from clearcli.geometry.poses import PushGeometry, _pose, _push_sequence
 
@@ -182,13 +200,13 @@ def _candidate(obj, plan, gripper: "GripperModel", settings: "Settings") -> dict
     start = lateral + (rear - push.gripper_behind_m - gripper.finger_half_extent_along_x(closed=True)) * d3
     start[2] = push.fingertips_above_table_m + g.closing_region_height_m / 2.0
     push_seq = _push_sequence(d3, start, push.approach_m * UP, translations, steps_n)[0]
-    # the pinch at the edge: from beyond it and above, the approach tilted
-    # SLIDE_TILT_DEG below the horizontal (level, no arm here reached it: the wrist would
-    # be at the table's height), closing in the vertical plane of the slide; the
+    # the pinch at the edge: from beyond it and above, the approach tilted ``tilt_deg``
+    # below the horizontal (level, no arm here reached it: the wrist would be at the
+    # table's height), closing in the vertical plane of the slide; the
     # fingertips SLIDE_EDGE_CLEARANCE_M short of the edge, at the object's mid-height,
     # the lower finger out beyond the edge
     half = g.closing_region_height_m / 2.0
-    tilt = math.radians(SLIDE_TILT_DEG)
+    tilt = math.radians(tilt_deg)
     approach = -math.cos(tilt) * d3 - math.sin(tilt) * UP
     tip = lateral + (edge_at + SLIDE_EDGE_CLEARANCE_M) * d3
     tip[2] = thick / 2.0
@@ -206,6 +224,7 @@ def _candidate(obj, plan, gripper: "GripperModel", settings: "Settings") -> dict
         "direction": d3,
         "slide_m": float(dist),
         "thickness_m": thick,
+        "tilt_deg": float(tilt_deg),
     }
 
 
