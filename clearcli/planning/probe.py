@@ -21,7 +21,7 @@ the loop after two pushes at most.
 from __future__ import annotations
 
 import dataclasses
-from typing import Any, Mapping
+from typing import Any, Collection, Mapping
 
 import numpy as np
 
@@ -30,14 +30,21 @@ from clearcli.planning.types import Action, CheckedAction, Plan
 from clearcli.predicates.state import DIRECTIONS, SymbolicState
 
 
-def probe_candidates(state: SymbolicState, plan: Plan, opening_width_m: float, max_width_m: float) -> list[str]:
+def probe_candidates(
+    state: SymbolicState,
+    plan: Plan,
+    opening_width_m: float,
+    max_width_m: float,
+    failed: Collection[str] = (),
+) -> list[str]:
     """Objects the plan left as too wide that may be two objects merged, widest last:
-    too wide for the pinch and no other grasp kind offered, or those offered (a rim, a
-    slide) found without an arm motion or failing when tried (replay's
-    ``max_failed_grasps``) - a slide of two merged objects moves neither far."""
+    too wide for the pinch and no other grasp kind offered, or (``failed``: named by the
+    caller, replay's ``max_failed_grasps``) those whose other kinds, a rim or a slide,
+    kept failing when carried out - a slide of two merged objects moves neither far. One
+    whose other kinds merely have no arm motion is not probed: a push would not help."""
     out = []
-    too_wide = [n for n in plan.unreachable if ("ungraspable", n) in state.facts]
-    for name in (*plan.ungraspable, *too_wide):
+    tried_and_failed = [n for n in plan.unreachable if n in failed and ("ungraspable", n) in state.facts]
+    for name in (*plan.ungraspable, *tried_and_failed):
         width = float(state.by_name(name).grasp_width_m)
         if opening_width_m < width <= max_width_m:
             out.append((width, name))
@@ -122,9 +129,11 @@ def probe_push(
     settings: Any,
     T_base_camera: np.ndarray,
     tried: Mapping[str, frozenset[str]] | None = None,
+    failed: Collection[str] = (),
 ) -> Plan | None:
     """A one-action plan pushing the first candidate that has a free, IK-feasible push
-    along an axis not tried on it yet, or None. ``tried``: per name, the axes ("first":
+    along an axis not tried on it yet, or None. ``failed``: as `probe_candidates`.
+    ``tried``: per name, the axes ("first":
     dir1/dir2, "second": dir3/dir4) of earlier probes. Both axes get a probe: a push across
     the seam of two merged objects drives the nearer into the other (they stay together),
     one along the seam slides it past."""
@@ -135,7 +144,7 @@ def probe_push(
     tried = tried or {}
     names = [
         n
-        for n in probe_candidates(state, plan, settings.gripper.opening_width_m, settings.plan.probe_max_width_m)
+        for n in probe_candidates(state, plan, settings.gripper.opening_width_m, settings.plan.probe_max_width_m, failed)
         if len(tried.get(n, ())) < 2
     ]
     if not names:

@@ -64,8 +64,9 @@ def test_a_wide_object_whose_slide_failed_is_probed_too() -> None:
     from clearcli.planning.types import Plan
 
     # the 10 cm box is too wide for the pinch; left "unreachable" because its other
-    # grasps (a slide) failed, it may still be two merged objects: a probe candidate. An
-    # unreachable object the pinch fits is not one.
+    # grasps (a slide) kept failing when carried out, it may still be two merged objects:
+    # a probe candidate. Unreachable with no failure (its slide has no arm motion), it is
+    # not one: a push would not make it graspable. Nor is an object the pinch fits.
     _, state = _state(S.make_scene("two", [
         S.Box(0, 0.05, 0.05, 0.08, x_m=-0.15, y_m=0.05),
         S.Box(1, 0.10, 0.10, 0.08, x_m=0.0, y_m=0.05),
@@ -74,7 +75,8 @@ def test_a_wide_object_whose_slide_failed_is_probed_too() -> None:
     assert ("ungraspable", wide.name) in state.facts and ("ungraspable", narrow.name) not in state.facts
     plan = Plan(actions=(), cost=0, optimal=True, first=None, ik_facts=frozenset(),
                 unreachable=(narrow.name, wide.name), replans=0, ungraspable=())
-    assert probe_candidates(state, plan, 0.07, 0.14) == [wide.name]
+    assert probe_candidates(state, plan, 0.07, 0.14) == []
+    assert probe_candidates(state, plan, 0.07, 0.14, failed={wide.name, narrow.name}) == [wide.name]
 
 
 def test_off_seam_moves_the_push_contact_towards_either_end_of_the_face() -> None:
