@@ -34,8 +34,12 @@ _MAX_STEP_RAD = 0.4
 _STALL_ITERATIONS = 12
 _PROGRESS = 0.95
 _RAD_AS_M2 = 0.01
-# the generic solver tries at least this many starts (the WAM's analytic solver needs none)
-_MIN_STARTS = 40
+# the generic solver tries at least this many starts (the WAM's analytic solver needs
+# none). Every start is paid in full by a pose with no solution (the arm's in-reach
+# refusals, most of a plan stage's IK time); of 2,000 reachable tool-down Panda poses
+# (FK of random in-limit configurations) 24 starts solved 100 % and 99.85 % on a second
+# draw, against 100 % / 99.95 % with 40, for 0.6 times the refusal time
+_MIN_STARTS = 24
 # a solved pose within this (m, see _nearest_solved) gives the first start of a new one;
 # the last _NEAR_KEEP solved poses are searched
 _NEAR_M = 0.3
