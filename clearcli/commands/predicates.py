@@ -19,6 +19,8 @@
           "rim": {"center": [3], "radius_m", "height_m", "wall_m", "inside_depth_m",
                   "opening_m", "grasp_poses": [[4x4], ...]},
           "slide": {"direction": [3] (unit), "slide_m", "overhang_m", "thickness_m",
+                    "tilt_deg" (the pinch's approach below the horizontal: 45, or as
+                    steep as the opening allows a thicker slab, at least 20),
                     "grasp_poses": [[4x4]] (the pinch at the edge, after the slide)}},
         "not_offered": {"rim": why, "slide": why}}, ...],
      "facts": ["(on o1 o0)", ...],       # PDDL atoms, sorted; with the kinds' facts
