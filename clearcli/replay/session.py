@@ -13,7 +13,7 @@ from __future__ import annotations
 import dataclasses
 import time
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Iterable, Iterator, Mapping
+from typing import TYPE_CHECKING, Any, Iterable, Iterator, Mapping, Sequence
 
 
 from clearcli.errors import ClearError, PartialLogError
@@ -137,8 +137,14 @@ class Session:
                 if execution.outcome == "done" and self.effect.kind == "grasp":
                     self.memory = push_memory.forget(self.memory, {self.effect.track_id})
                 if self.effect.kind == "grasp" and execution.outcome != "done":
-                    self.failed_grasps[self.effect.track_id] = self.failed_grasps.get(self.effect.track_id, 0) + 1
-                    self.failed_kinds.setdefault(self.effect.track_id, set()).add(self.effect.grasp_kind)
+                    tid = self.effect.track_id
+                    self.failed_grasps[tid] = self.failed_grasps.get(tid, 0) + 1
+                    self.failed_kinds.setdefault(tid, set()).add(self.effect.grasp_kind)
+                    if self.effect.grasp_kind == "slide" and _stayed(self.effect, observations, assignment):
+                        # a slide that did not move the object met something the model
+                        # did not: the same slide would meet it again, so it is given
+                        # up at once (a pinch that slips may hold the next time)
+                        self.failed_grasps[tid] = max(self.failed_grasps[tid], self.pipeline.settings.plan.max_failed_grasps)
                 elif self.effect.kind == "push" and execution.outcome == "done":
                     self.failed_grasps.pop(self.effect.track_id, None)  # it stands elsewhere now
                     self.failed_kinds.pop(self.effect.track_id, None)
@@ -380,3 +386,16 @@ def replay(
         if close is not None:
             close()
 
+
+# an object whose centroid moved less than this (m) stayed where it was
+_STAYED_M = 0.01
+
+
+def _stayed(effect: Any, observations: Sequence[Any], assignment: Any) -> bool:
+    """The object of ``effect`` is still seen within `_STAYED_M` of where it was."""
+    import numpy as np
+
+    index = next((i for i, tid in enumerate(assignment.ids) if tid == effect.track_id), None)
+    if index is None:
+        return False
+    return float(np.linalg.norm(np.subtract(observations[index].centroid, effect.start_centroid))) < _STAYED_M

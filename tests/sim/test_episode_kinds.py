@@ -75,3 +75,31 @@ def test_a_thick_flat_box_is_pinched_from_the_lower_tilt_the_planner_chose() -> 
     done = [(s.action, s.outcome) for s in result.steps if s.action]
     assert done == [("(slide_grasp 1)", "removed")], done
     assert result.cleared_truly
+
+
+def test_a_slide_that_moved_nothing_is_given_up_at_once(monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    from clearcli.pipeline import Pipeline
+    from clearcli.replay import session as session_mod
+    from clearcli.replay.session import ReplayOptions, Session
+    from clearcli.settings.tree import load_settings
+    from clearcli.sim.episode import Episode
+
+    # `clear simulate --seed 1000 --robot ur5e`: the segmenter sees boxes 2 and 4, which
+    # touch, as one segment too wide for the 2F-85; its slide pushes box 2 into box 4 and
+    # moves nothing. Given up after that one try, the segment is probed apart and cleared
+    # (three tries, the pinch's rule, without the "moved nothing" check).
+    def run():  # type: ignore[no-untyped-def]
+        settings = load_settings(None, ["robot.name=ur5e"])
+        episode = Episode(S.clutter(6, 1000), Session(Pipeline(settings), ReplayOptions()), seed=1000, max_actions=12)
+        for _ in episode:
+            pass
+        assert episode.result is not None
+        return episode.result
+
+    result = run()
+    slides = [s.outcome for s in result.steps if s.action.startswith("(slide_grasp")]
+    assert len(slides) == 1 and "slid 0.000 m" in slides[0], slides
+    assert result.end == "cleared" and result.cleared_truly
+    monkeypatch.setattr(session_mod, "_STAYED_M", 0.0)
+    slides = [s.outcome for s in run().steps if s.action.startswith("(slide_grasp")]
+    assert len(slides) == 3, slides
