@@ -13,7 +13,7 @@ from __future__ import annotations
 import dataclasses
 import time
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Iterable, Iterator, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Iterable, Iterator, Mapping
 
 
 from clearcli.errors import ClearError, PartialLogError
@@ -140,7 +140,8 @@ class Session:
                     tid = self.effect.track_id
                     self.failed_grasps[tid] = self.failed_grasps.get(tid, 0) + 1
                     self.failed_kinds.setdefault(tid, set()).add(self.effect.grasp_kind)
-                    if self.effect.grasp_kind == "slide" and _stayed(self.effect, observations, assignment):
+                    stayed = execution.moved_m is not None and execution.moved_m < _STAYED_M
+                    if self.effect.grasp_kind == "slide" and stayed:
                         # a slide that did not move the object met something the model
                         # did not: the same slide would meet it again, so it is given
                         # up at once (a pinch that slips may hold the next time)
@@ -389,13 +390,3 @@ def replay(
 
 # an object whose centroid moved less than this (m) stayed where it was
 _STAYED_M = 0.01
-
-
-def _stayed(effect: Any, observations: Sequence[Any], assignment: Any) -> bool:
-    """The object of ``effect`` is still seen within `_STAYED_M` of where it was."""
-    import numpy as np
-
-    index = next((i for i, tid in enumerate(assignment.ids) if tid == effect.track_id), None)
-    if index is None:
-        return False
-    return float(np.linalg.norm(np.subtract(observations[index].centroid, effect.start_centroid))) < _STAYED_M

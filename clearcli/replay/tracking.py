@@ -100,6 +100,8 @@ class ExecutionReport:
     detail: str
     moved_along_m: float | None = None
     moved_across_m: float | None = None
+    # a failed grasp: how far its object is from where it was (m); not in the JSON
+    moved_m: float | None = None
 
 
 def _point_segment_distance(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -283,6 +285,7 @@ def check_execution(
             effect.track_id,
             "failed",
             f"object still on the table ({moved:.3f} m from where it was)",
+            moved_m=moved,
         )
     if index is None:
         return ExecutionReport(

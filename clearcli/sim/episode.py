@@ -369,7 +369,7 @@ class Episode:
         self.scene, travelled = world_slide(self.scene, k, direction[:2], float(slide.get("slide_m", 0.0)))
         # the pinch's pose as the arm went there (its tilt sets the span the jaws take);
         # the world's own figure: fingers need 2.5 cm of the overhang to hold it
-        T_camera_edge = _slide_edge_pose_camera(report, model.kind_candidates.get("slide", ()), int(chosen))
+        T_camera_edge = _chosen_pose_camera(report, model.kind_candidates.get("slide", ()), pose=-2, candidate=int(chosen))
         tilt_deg = EDGE_PINCH_TILT_DEG if T_camera_edge is None else approach_tilt_deg(T_table_camera @ T_camera_edge)
         ok, why = world_edge_pinch(
             self.scene, k, direction[:2], EDGE_GRIP_M, gripper.opening_width_m, gripper.closing_width_m, tilt_deg
@@ -486,25 +486,15 @@ class Episode:
         return record, unreachable
 
 
-def _slide_edge_pose_camera(report: "FrameReport", candidates: Any, chosen: int) -> np.ndarray | None:
-    """The slide's pinch at the edge (camera frame): the second-last pose of the
-    candidate the IK check chose, else of the model's candidate ``chosen``."""
+def _chosen_pose_camera(report: "FrameReport", candidates: Any, pose: int = 1, candidate: int = 0) -> np.ndarray | None:
+    """A pose (camera frame) of the first action's sequence, the ``pose``-th (the grasp
+    or push start by default; -2 a slide's pinch at the edge): of the candidate the IK
+    check chose, else of the model's ``candidate``-th of ``candidates``; None without
+    either."""
     plan = report.result.plan
     checked = plan.first if plan is not None else None
-    if checked is not None and plan is not None and plan.T_base_camera is not None and len(checked.T_base_gripper) > 2:
-        return np.linalg.inv(np.asarray(plan.T_base_camera, dtype=float)) @ np.asarray(checked.T_base_gripper[-2])
+    if checked is not None and plan is not None and plan.T_base_camera is not None and -len(checked.T_base_gripper) <= pose < len(checked.T_base_gripper):
+        return np.linalg.inv(np.asarray(plan.T_base_camera, dtype=float)) @ np.asarray(checked.T_base_gripper[pose])
     if not candidates:
         return None
-    return np.asarray(candidates[min(chosen, len(candidates) - 1)][-2], dtype=float)
-
-
-def _chosen_pose_camera(report: "FrameReport", candidates: Any) -> np.ndarray | None:
-    """The first action's grasp or push-start pose (camera frame): of the candidate the
-    IK check chose, else the model's first of ``candidates``; None without either."""
-    plan = report.result.plan
-    checked = plan.first if plan is not None else None
-    if checked is not None and plan is not None and plan.T_base_camera is not None and len(checked.T_base_gripper) > 1:
-        return np.linalg.inv(np.asarray(plan.T_base_camera, dtype=float)) @ np.asarray(checked.T_base_gripper[1])
-    if not candidates:
-        return None
-    return np.asarray(candidates[0][1], dtype=float)
+    return np.asarray(candidates[min(candidate, len(candidates) - 1)][pose], dtype=float)
