@@ -123,11 +123,19 @@ class SequenceResult:
     failure: Infeasible | None = None
 
 
-def check_sequence(kin: Any, obstacles: Any, poses_base: Sequence[np.ndarray], target: str) -> SequenceResult:
+def check_sequence(
+    kin: Any,
+    obstacles: Any,
+    poses_base: Sequence[np.ndarray],
+    target: str,
+    spheres: dict[bytes, tuple[np.ndarray, np.ndarray]] | None = None,
+) -> SequenceResult:
     """IK and arm collisions along one candidate's poses (pre-pose ... retreat), each
     solved from the previous one's solution. A collision with objects does not stop the
     check: every object the motion hits is collected (what backtracking learns), unless
-    a later pose has no solution at all."""
+    a later pose has no solution at all. ``spheres`` keeps the arm's covering spheres per
+    joint vector: backtracking re-checks the same poses (the IK is cached, so the same
+    joint vectors) against each context's obstacles."""
     from clearcli.robot.collision import capsule_spheres
 
     n = len(poses_base)
@@ -142,8 +150,13 @@ def check_sequence(kin: Any, obstacles: Any, poses_base: Sequence[np.ndarray], t
         q = kin.ik(T, warm)
         if q is None:
             return SequenceResult(None, Infeasible(f"no IK solution for pose {i + 1}/{n}", "ik"))
-        a, b, r = kin.capsules(q)
-        centres, radii = capsule_spheres(a, b, r)
+        key = q.tobytes()
+        got = spheres.get(key) if spheres is not None else None
+        if got is None:
+            got = capsule_spheres(*kin.capsules(q))
+            if spheres is not None:
+                spheres[key] = got
+        centres, radii = got
         hit = obstacles.collisions(centres, radii, ignore=(target,))
         if "table" in hit:
             return SequenceResult(None, Infeasible(f"arm collides with {', '.join(hit)} at pose {i + 1}/{n}", "ik"))
@@ -179,11 +192,19 @@ class IKActionChecker:
     per_action_s: list[float] = field(default_factory=list)
     _cache: dict[tuple[Action, SceneContext], "CheckedAction | Infeasible"] = field(default_factory=dict)
     _obstacles: dict[SceneContext, Any] = field(default_factory=dict)
+    _spheres: dict[bytes, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
+    _poses: dict[tuple[Action, bytes], tuple[tuple[np.ndarray, ...], ...]] = field(default_factory=dict)
 
     def poses(self, action: Action, ctx: SceneContext = EMPTY) -> tuple[tuple[np.ndarray, ...], ...]:
-        """Candidate pose sequences (robot base frame), the object moved as in ``ctx``."""
+        """Candidate pose sequences (robot base frame), the object moved as in ``ctx``
+        (kept per action and shift: backtracking asks for them round after round)."""
         from clearcli.robot.kinematics import half_turn
 
+        shift = ctx.shift_of(action.obj)
+        key = (action, np.asarray(shift, dtype=float).tobytes())
+        got = self._poses.get(key)
+        if got is not None:
+            return got
         obj = self.state.by_name(action.obj)
         if action.kind == "grasp" and action.grasp_kind != "pinch":
             cands = tuple(obj.kind_candidates.get(action.grasp_kind, ()))
@@ -194,7 +215,8 @@ class IKActionChecker:
             cands = tuple(push.candidates) if push is not None else ()
         if len(cands) == 1:  # the gripper is symmetric: its half-turn is as good
             cands = (cands[0], tuple(half_turn(np.asarray(T, dtype=float)) for T in cands[0]))
-        return tuple(self._to_base(c, ctx.shift_of(action.obj)) for c in cands)
+        got = self._poses[key] = tuple(self._to_base(c, shift) for c in cands)
+        return got
 
     def _to_base(self, poses: Sequence[np.ndarray], shift_camera: np.ndarray) -> tuple[np.ndarray, ...]:
         out = []
@@ -244,7 +266,7 @@ class IKActionChecker:
         obstacles = self.obstacles_in(ctx)
         failures: list[Infeasible] = []
         for i, poses in enumerate(cands):
-            res = check_sequence(self.kin, obstacles, poses, action.obj)
+            res = check_sequence(self.kin, obstacles, poses, action.obj, self._spheres)
             if res.joints is None:
                 assert res.failure is not None
                 failures.append(res.failure)
@@ -268,7 +290,7 @@ class IKActionChecker:
         shift = ctx.shift_of(action.obj) + np.asarray(push.object_path[-1], dtype=float)
         failures = []
         for cand in obj.grasp_candidates:
-            res = check_sequence(self.kin, obstacles, self._to_base(cand, shift), action.obj)
+            res = check_sequence(self.kin, obstacles, self._to_base(cand, shift), action.obj, self._spheres)
             if res.joints is not None:
                 return ""
             assert res.failure is not None

@@ -262,6 +262,12 @@ class UrdfKinematics:
         self._near_q = np.zeros((_NEAR_KEEP, model.nq))
         self._n_solved = 0
         self._capsule_parts = self._read_capsules(arm_from_joint, set(gripper_frames))
+        # the parts as arrays: `capsules` places them all in one stacked product
+        parts = self._capsule_parts
+        self._capsule_joints = [j for j, *_ in parts]
+        self._capsule_a = np.array([pa for _, pa, _, _ in parts], dtype=float).reshape(-1, 3)
+        self._capsule_b = np.array([pb for _, _, pb, _ in parts], dtype=float).reshape(-1, 3)
+        self._capsule_r = np.array([r for *_, r in parts], dtype=float)
         # (solver, its base frame, its end frame): a closed form for this arm (the UR
         # family's, ur_ik.py); its end frame's pose is the TCP's less a fixed offset
         self._closed = None
@@ -340,15 +346,16 @@ class UrdfKinematics:
         pin.forwardKinematics(self.model, self.data, np.asarray(q, dtype=float))
         if not self._capsule_parts:
             return np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0)
+        # one stacked product for all parts (the IK check asks this for every pose)
+        oMi = self.data.oMi
+        joints, pa, pb = self._capsule_joints, self._capsule_a, self._capsule_b
+        R = np.array([oMi[j].rotation for j in joints])  # (C,3,3) joint frames in the root
+        t = np.array([oMi[j].translation for j in joints])
         M = self.M_base_root
         Rb, tb = np.asarray(M.rotation), np.asarray(M.translation)
-        a, b = [], []
-        for j, pa, pb, _ in self._capsule_parts:
-            oMi = self.data.oMi[j]
-            R, t = np.asarray(oMi.rotation), np.asarray(oMi.translation)
-            a.append(Rb @ (R @ pa + t) + tb)
-            b.append(Rb @ (R @ pb + t) + tb)
-        return np.array(a), np.array(b), np.array([r for *_, r in self._capsule_parts])
+        a = (np.einsum("cij,cj->ci", R, pa) + t) @ Rb.T + tb
+        b = (np.einsum("cij,cj->ci", R, pb) + t) @ Rb.T + tb
+        return a, b, self._capsule_r.copy()
 
     # -- forward kinematics ---------------------------------------------------------
     def fk(self, q: np.ndarray, frame: str | None = None) -> np.ndarray:
