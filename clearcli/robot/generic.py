@@ -17,6 +17,7 @@ closing point (z = approach, x = closing direction), as for the WAM.
 from __future__ import annotations
 
 import contextlib
+from dataclasses import dataclass
 import math
 from pathlib import Path
 from typing import Any, Sequence
@@ -157,6 +158,110 @@ def _chain_end(model: Any) -> str:
     return bodies[-1].name if bodies else model.frames[-1].name
 
 
+@dataclass(frozen=True)
+class _ReachBounds:
+    """What `UrdfKinematics.reachable` tests beyond the summed link lengths."""
+
+    flange_m: float  # the flange's greatest distance from the shoulder (m)
+    previous_m: float  # the origin of the joint before the last: its greatest distance
+    axis: np.ndarray  # (3,) the last joint's axis in its own frame
+    along_m: float  # where the joint before the last lies, seen from the last joint's
+    radius_m: float  # frame: this far along its axis, this far from it
+    flange_to_last: np.ndarray  # (4,4) the last joint's frame in the flange's
+
+
+# measured bounds are a search's best, short of the true greatest distance by a little:
+# this much is added (m), and a test checks them against forward kinematics
+_BOUND_SLACK_M = 0.002
+_bounds_cache: dict[tuple[Any, ...], "_ReachBounds | None"] = {}
+
+
+def _reach_bounds(model: Any, shoulder: int, flange_id: int, lower: np.ndarray, upper: np.ndarray) -> "_ReachBounds | None":
+    """The greatest distances from the shoulder joint's origin (joint ``shoulder``) of
+    the flange and of the origin of the joint before the last, over the joint limits:
+    random configurations, the best few then climbed to a local maximum within the
+    limits (projected gradient ascent; scipy.optimize would cost its import, ~80 ms, on
+    every run). None when the flange does not hang from the last joint, or the
+    chain is too short for the second bound to mean anything. Kept per model (a batch
+    builds the same arm for every frame)."""
+    import pinocchio as pin
+
+    last = model.njoints - 1
+    previous = int(model.parents[last])
+    placements = np.array([np.asarray(M.homogeneous) for M in model.jointPlacements]).round(9)
+    key = (tuple(model.names), placements.tobytes(), shoulder, flange_id, lower.tobytes(), upper.tobytes())
+    if key in _bounds_cache:
+        return _bounds_cache[key]
+    out = None
+    flange = model.frames[flange_id]
+    if flange.parentJoint == last and previous - shoulder >= 2:
+        data = model.createData()
+        world = pin.LOCAL_WORLD_ALIGNED
+
+        def climbed(q: np.ndarray, k: int) -> tuple[float, np.ndarray]:
+            """Distance k (0 the flange's, 1 the joint before the last's) at q, and its
+            gradient in q."""
+            pin.computeJointJacobians(model, data, q)
+            pin.updateFramePlacements(model, data)
+            o = data.oMi[shoulder].translation
+            Jo = pin.getJointJacobian(model, data, shoulder, world)[:3]
+            if k == 0:
+                p, Jp = data.oMf[flange_id].translation, pin.getFrameJacobian(model, data, flange_id, world)[:3]
+            else:
+                p, Jp = data.oMi[previous].translation, pin.getJointJacobian(model, data, previous, world)[:3]
+            d = np.asarray(p - o, dtype=float)
+            n = float(np.linalg.norm(d))
+            return n, (d / max(n, 1e-12)) @ np.asarray(Jp - Jo)
+
+        def distances(q: np.ndarray) -> tuple[float, float]:
+            pin.framesForwardKinematics(model, data, q)
+            o = data.oMi[shoulder].translation
+            return (
+                float(np.linalg.norm(data.oMf[flange_id].translation - o)),
+                float(np.linalg.norm(data.oMi[previous].translation - o)),
+            )
+
+        rng = np.random.default_rng(7)
+        samples = rng.uniform(lower, upper, size=(256, model.nq))
+        sampled = np.array([distances(q) for q in samples])
+        best = []
+        for k in range(2):
+            found = sampled[:, k]
+            top = float(found.max())
+            for q in samples[np.argsort(-found)[:4]]:
+                # projected gradient ascent within the limits, the step grown on success
+                # and halved on failure
+                val, grad = climbed(q, k)
+                step = 0.2
+                for _ in range(100):
+                    if step < 1e-3:  # rad: at a maximum the distance is then within ~0.1 mm of it
+                        break
+                    norm = float(np.linalg.norm(grad))
+                    if norm < 1e-12:
+                        break
+                    q_new = np.clip(q + step * grad / norm, lower, upper)
+                    v_new, g_new = climbed(q_new, k)
+                    if v_new > val:
+                        q, val, grad, step = q_new, v_new, g_new, step * 1.5
+                    else:
+                        step *= 0.5
+                top = max(top, val)
+            best.append(top + _BOUND_SLACK_M)
+        # the last joint's axis in its frame (its Jacobian column), and where the joint
+        # before it lies seen from it
+        q = np.clip(np.zeros(model.nq), lower, upper)
+        pin.computeJointJacobians(model, data, q)
+        J = pin.getJointJacobian(model, data, last, pin.LOCAL)
+        axis = np.asarray(J[3:, model.joints[last].idx_v], dtype=float)
+        axis = axis / np.linalg.norm(axis)
+        before = np.asarray(model.jointPlacements[last].inverse().translation, dtype=float)
+        along = float(before @ axis)
+        radius = float(np.linalg.norm(before - along * axis))
+        out = _ReachBounds(best[0], best[1], axis, along, radius, np.asarray(flange.placement.inverse().homogeneous))
+    _bounds_cache[key] = out
+    return out
+
+
 class UrdfKinematics:
     """A serial arm of six or more revolute joints read from a URDF."""
 
@@ -243,11 +348,25 @@ class UrdfKinematics:
         # triangle inequality). The makers' reach figures are not bounds: a UR5e's flange
         # reaches 0.97 m from its shoulder against the quoted 0.85 m.
         j0 = int(arm_from_joint)
+        self._arm_from_joint = j0
         pin.forwardKinematics(model, self.data, np.zeros(model.nq))
         self.shoulder_bound = np.asarray((self.M_base_root * self.data.oMi[j0]).translation, dtype=float)
         links = [float(np.linalg.norm(model.jointPlacements[k].translation)) for k in range(j0 + 1, model.njoints)]
         flange = model.frames[self.flange_id]
         self.stretch_m = sum(links) + float(np.linalg.norm(flange.placement.translation))
+        # Tighter, measured over the joint limits (`_reach_bounds`): the flange's and the
+        # last joint's neighbour's greatest distance from the shoulder. A Panda's flange
+        # comes 0.858 m from it at most, against 0.986 m summed; the tool-down poses
+        # between the two are most of its refusals, each paid with every IK start.
+        self._wrist = _reach_bounds(model, j0, self.flange_id, self.lower, self.upper)
+        if self._wrist is not None:
+            self.stretch_m = min(self.stretch_m, self._wrist.flange_m)
+            self._tcp_to_last = np.linalg.inv(np.asarray(self.M_flange_tcp.homogeneous)) @ self._wrist.flange_to_last
+            # a solution is accepted within the IK's tolerances: its wrist may stand this
+            # much beyond where the exact pose puts it (the tilt times the lever from the
+            # TCP, plus the position)
+            lever_m = float(np.linalg.norm(self._tcp_to_last[:3, 3])) + self._wrist.radius_m + abs(self._wrist.along_m)
+            self._wrist_slack_m = float(tolerance_m) + float(tolerance_rad) * lever_m
         self.rest = np.clip(np.asarray(rest if rest is not None else np.zeros(model.nq), dtype=float), self.lower, self.upper)
         self.damping = float(damping)
         self.max_iterations = int(max_iterations)
@@ -372,7 +491,22 @@ class UrdfKinematics:
         T = np.asarray(T_base_tcp, dtype=float)
         M = np.asarray(self.M_flange_tcp.homogeneous)
         flange = T[:3, 3] - T[:3, :3] @ (M[:3, :3].T @ M[:3, 3])
-        return float(np.linalg.norm(flange - self.shoulder_bound)) <= self.stretch_m + slack_m
+        if float(np.linalg.norm(flange - self.shoulder_bound)) > self.stretch_m + slack_m:
+            return False
+        w = self._wrist
+        if w is None:
+            return True
+        # The last joint's frame is fixed by the pose; the joint before it turns about
+        # the last one's axis on a circle around it: its nearest point to the shoulder
+        # must lie within that joint's greatest distance from it.
+        T_last = T @ self._tcp_to_last  # the last joint's frame in the base frame
+        R, t = T_last[:3, :3], T_last[:3, 3]
+        u = R @ w.axis
+        centre = t + R @ (w.along_m * w.axis)
+        v = self.shoulder_bound - centre
+        along = float(v @ u)
+        across = float(np.linalg.norm(v - along * u))
+        return math.hypot(along, across - w.radius_m) <= w.previous_m + self._wrist_slack_m
 
     def seeds(self, T_target: np.ndarray) -> list[np.ndarray]:
         """The rest shape turned towards the target, then fixed pseudo-random ones (drawn

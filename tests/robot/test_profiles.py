@@ -81,6 +81,48 @@ def test_ik_of_each_profile_lands_on_the_pose_by_forward_kinematics(name: str) -
     assert not kin.reachable(far) and kin.ik(far) is None
 
 
+@pytest.mark.parametrize("name", ["panda", "ur5e"])
+def test_the_measured_reach_bounds_hold_and_refuse_what_the_summed_links_let_through(name: str) -> None:
+    import pinocchio as pin
+
+    from clearcli.robot.profiles import kinematics_from_settings
+
+    kin = kinematics_from_settings(load_settings(sets=[f"robot.name={name}"]).robot)
+    w = kin._wrist
+    model = kin.model
+    data = model.createData()
+    last = model.njoints - 1
+    previous = int(model.parents[last])
+    shoulder = int(kin._arm_from_joint)
+    # the bounds against a denser random search than the one that made them: none of
+    # 20,000 configurations puts the flange or the wrist joint beyond them
+    rng = np.random.default_rng(11)
+    far_flange = far_wrist = 0.0
+    for q in rng.uniform(kin.lower, kin.upper, size=(20000, model.nq)):
+        pin.framesForwardKinematics(model, data, q)
+        o = data.oMi[shoulder].translation
+        far_flange = max(far_flange, float(np.linalg.norm(data.oMf[kin.flange_id].translation - o)))
+        far_wrist = max(far_wrist, float(np.linalg.norm(data.oMi[previous].translation - o)))
+    assert far_flange <= w.flange_m and far_wrist <= w.previous_m
+    # and not loose: the search comes within 2 cm of them (a Panda's flange 0.858 m,
+    # the links summed 0.986 m)
+    assert w.flange_m - far_flange < 0.02 and w.previous_m - far_wrist < 0.02
+    links = sum(float(np.linalg.norm(model.jointPlacements[k].translation)) for k in range(shoulder + 1, model.njoints))
+    links += float(np.linalg.norm(model.frames[kin.flange_id].placement.translation))
+    assert w.flange_m < links
+    # every pose of an in-limit configuration passes reachable(), with no slack at all
+    for q in rng.uniform(kin.lower, kin.upper, size=(3000, model.nq)):
+        assert kin.reachable(kin.fk(q), slack_m=0.0)
+    # a tool-down pose within the summed links but past the measured flange bound: the
+    # old test let it through to every IK start, the measured one refuses it at once
+    down = np.diag([1.0, -1.0, -1.0, 1.0])
+    shoulder_xyz = kin.shoulder_bound
+    tcp_past_flange = float(np.linalg.norm(np.asarray(kin.M_flange_tcp.translation)))
+    down[:3, 3] = shoulder_xyz + [w.flange_m + 0.03, 0.0, -tcp_past_flange]
+    assert np.linalg.norm(down[:3, 3] + [0, 0, tcp_past_flange] - shoulder_xyz) < links
+    assert not kin.reachable(down) and kin.ik(down) is None
+
+
 def test_the_generic_solver_on_the_wam_agrees_with_the_analytic_one() -> None:
     from clearcli.robot.generic import UrdfKinematics
     from clearcli.robot.kinematics import BASE_FRAME, TCP_FRAME, TOOL_PLATE_FRAME, URDF_PATH, WamKinematics
