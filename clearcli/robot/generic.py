@@ -354,6 +354,7 @@ class UrdfKinematics:
         links = [float(np.linalg.norm(model.jointPlacements[k].translation)) for k in range(j0 + 1, model.njoints)]
         flange = model.frames[self.flange_id]
         self.stretch_m = sum(links) + float(np.linalg.norm(flange.placement.translation))
+        self.links_stretch_m = self.stretch_m  # (benchmarks/ik.py draws "in reach" within it)
         # Tighter, measured over the joint limits (`_reach_bounds`): the flange's and the
         # last joint's neighbour's greatest distance from the shoulder. A Panda's flange
         # comes 0.858 m from it at most, against 0.986 m summed; the tool-down poses
