@@ -17,8 +17,8 @@ closing point (z = approach, x = closing direction), as for the WAM.
 from __future__ import annotations
 
 import contextlib
-from dataclasses import dataclass
 import math
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Sequence
 
@@ -194,6 +194,11 @@ def _reach_bounds(model: Any, shoulder: int, flange_id: int, lower: np.ndarray, 
         return _bounds_cache[key]
     out = None
     flange = model.frames[flange_id]
+    # a joint turning a whole turn or more (or without finite limits) is searched over
+    # one turn: the distances repeat with it
+    lower, upper = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
+    whole = ~np.isfinite(upper - lower) | (upper - lower >= 2 * math.pi)
+    lower, upper = np.where(whole, -math.pi, lower), np.where(whole, math.pi, upper)
     if flange.parentJoint == last and previous - shoulder >= 2:
         data = model.createData()
         world = pin.LOCAL_WORLD_ALIGNED
@@ -257,7 +262,8 @@ def _reach_bounds(model: Any, shoulder: int, flange_id: int, lower: np.ndarray, 
         before = np.asarray(model.jointPlacements[last].inverse().translation, dtype=float)
         along = float(before @ axis)
         radius = float(np.linalg.norm(before - along * axis))
-        out = _ReachBounds(best[0], best[1], axis, along, radius, np.asarray(flange.placement.inverse().homogeneous))
+        if all(np.isfinite([*best, along, radius])):
+            out = _ReachBounds(best[0], best[1], axis, along, radius, np.asarray(flange.placement.inverse().homogeneous))
     _bounds_cache[key] = out
     return out
 
