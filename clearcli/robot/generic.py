@@ -350,9 +350,10 @@ class UrdfKinematics:
         self.M_flange_tcp = self.data.oMf[self.flange_id].actInv(self.data.oMf[self.tcp_id])
         self.flange_frame = flange_frame
         # What `reachable` tests: an upper bound on the flange's distance from the
-        # shoulder joint's origin, the sum of the chain's link lengths from there (the
-        # triangle inequality). The makers' reach figures are not bounds: a UR5e's flange
-        # reaches 0.97 m from its shoulder against the quoted 0.85 m.
+        # shoulder joint's origin; at first the sum of the chain's link lengths from
+        # there (the triangle inequality), then, where measured, tighter. The makers'
+        # reach figures are not bounds: a UR5e's flange reaches 0.97 m from its
+        # shoulder against the quoted 0.85 m.
         j0 = int(arm_from_joint)
         self._arm_from_joint = j0
         pin.forwardKinematics(model, self.data, np.zeros(model.nq))
@@ -493,8 +494,10 @@ class UrdfKinematics:
 
     # -- inverse kinematics ---------------------------------------------------------
     def reachable(self, T_base_tcp: np.ndarray, slack_m: float = 0.005) -> bool:
-        """Cheap necessary condition: the flange within the chain's stretch of the
-        shoulder joint (a bound: no pose it rejects has a solution)."""
+        """Cheap necessary condition (no pose it rejects has a solution): the flange
+        within its greatest distance from the shoulder joint (``stretch_m``: measured
+        over the joint limits, else the links' summed lengths; plus ``slack_m``), and
+        the joint before the last within its own (`_reach_bounds`)."""
         T = np.asarray(T_base_tcp, dtype=float)
         M = np.asarray(self.M_flange_tcp.homogeneous)
         flange = T[:3, 3] - T[:3, :3] @ (M[:3, :3].T @ M[:3, 3])
