@@ -41,6 +41,8 @@ if TYPE_CHECKING:
     from clearcli.planning.types import Action
     from clearcli.predicates.state import SymbolicState
 
+# a failed grasp whose object's centroid moved less than this (m): it stayed where it was
+_STAYED_M = 0.01
 
 
 @dataclass(frozen=True)
@@ -387,6 +389,3 @@ def replay(
         if close is not None:
             close()
 
-
-# an object whose centroid moved less than this (m) stayed where it was
-_STAYED_M = 0.01
