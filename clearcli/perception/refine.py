@@ -15,6 +15,8 @@ The stages, in order:
   steps      two tops at two heights on either side of a line (steps.py)  voxel level
   rims       a container's inner and outer walls (rims.py)                voxel level
   rings      ... and those that do not touch: two arcs of one rim (rings.py) voxel level
+  vessels    a container rebuilt from its rim, its wall taken back from what
+             stands in it or leans on it (vessels.py)                    voxel level
   fragments  strips of a face seen edge-on, apart from their object (fragments.py) voxel level
 Before the supervoxels, `edges.py` cuts the voxel adjacency at depth discontinuities
 of the pixel grid (stage "edges", organized frames only): it changes the graph every
@@ -54,6 +56,20 @@ class RefineContext:
     def voxel_height(self) -> np.ndarray:
         """(V,) height of each voxel centroid above the table."""
         return self.plane.height_of(self.vox.centroids)
+
+    @cached_property
+    def voxel_lab(self) -> np.ndarray | None:
+        """(V, 3) CIELAB of each voxel's mean colour, or None without usable colour."""
+        from clearcli.perception.flat import cielab
+
+        if not self.color_used or self.point_index is None or self.frame.colors is None:
+            return None
+        n_vox = self.vox.centroids.shape[0]
+        pv = self.vox.point_voxel
+        rgb = self.frame.colors[self.point_index].astype(np.float64)
+        counts = np.maximum(np.bincount(pv, minlength=n_vox), 1)
+        mean = np.stack([np.bincount(pv, weights=rgb[:, c], minlength=n_vox) for c in range(3)], axis=1)
+        return cielab(np.clip(mean / counts[:, None], 0, 255).round().astype(np.uint8))
 
     @cached_property
     def first_voxel(self) -> np.ndarray:
@@ -161,6 +177,22 @@ def _rings(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
     )
 
 
+def _vessels(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
+    from clearcli.perception.table import plane_basis
+    from clearcli.perception.vessels import rebuild_vessels
+
+    s = ctx.settings
+    up = ctx.plane.normal / np.linalg.norm(ctx.plane.normal)
+    basis = plane_basis(up)
+    wall = np.abs(ctx.sv.normals @ up) < np.cos(np.radians(s.step_max_tilt_deg))
+    min_vox = max(1, int(s.min_object_area_m2 / ctx.scaled.voxel_m**2))
+    return rebuild_vessels(
+        seg_of_voxel, ctx.vox.centroids @ basis.T, ctx.voxel_height, ctx.vox.edges, ctx.sv.voxel_label,
+        ctx.sv.normals @ basis.T, ctx.sv.centroids @ basis.T, wall, s.rim_tolerance_m, s.ring_max_radius_m,
+        min_vox, s.standing_max_m, ctx.voxel_lab,
+    )
+
+
 def _fragments(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
     from clearcli.perception.fragments import join_fragments
 
@@ -182,6 +214,7 @@ STAGES: tuple[Stage, ...] = (
     Stage("steps", lambda s: s.step_split, _steps),
     Stage("rims", lambda s: s.rim_merge, _rims),
     Stage("rings", lambda s: s.ring_merge, _rings),
+    Stage("vessels", lambda s: s.vessel_rebuild, _vessels),
     Stage("fragments", lambda s: s.fragment_join_m > 0, _fragments),
 )
 

@@ -203,6 +203,10 @@ class SegmentSettings(Section):
     # the bands of a mug with its handle are 7-20 % off, a cup's 5-15 %; 0 asks every
     # band point to lie on the rim
     ring_max_off_share: float = param(0.2, ge=0, lt=1)
+    # rebuild an open container from its rim: the circle its walls' tops lie on, and
+    # every voxel on its wall below it, taken back from what stands in it or leans on
+    # it (vessels.py)
+    vessel_rebuild: bool = param(True)
     # join a fragment (a small segment with no top face, touching nothing: a strip of
     # a face seen edge-on that the outlier filter thinned) to the nearest segment
     # within this distance (m; 0 = off): three voxels

@@ -68,3 +68,31 @@ def test_a_flat_marker_is_found() -> None:
     _, _, seg = judged("uois_image_0006", flat_objects=False)
     inside, covered = best(seg)
     assert covered < 0.1
+
+
+def test_a_bowl_with_a_can_in_it_is_two_objects() -> None:
+    # uois_image_0002: a teal bowl with a can standing in it, a drill lying against its
+    # rim. vessels.py rebuilds the bowl from its rim circle: its wall left and right of
+    # the can, behind the can and against the drill is one segment again, the can and
+    # the drill each another. (The can is "split" by the exact measure only because its
+    # polygon, drawn a little wide, takes ~500 pixels of the bowl's wall beside it.)
+    from helpers.foreign import labelled
+
+    frame, truth, spec = labelled("uois_image_0002")
+    names = [o["name"] for o in spec["object"]]
+
+    def best(seg, name: str) -> tuple[int, float]:
+        obj = truth == 10 * (names.index(name) + 1)
+        labels = seg.labels()
+        ids, counts = np.unique(labels[obj & (labels >= 10)], return_counts=True)
+        k = int(ids[np.argmax(counts)])
+        return k, float((obj & (labels == k)).sum() / (obj | (labels == k)).sum())
+
+    verdicts, _, seg = judged("uois_image_0002")
+    assert verdicts["teal bowl"] == "right" and verdicts["drill"] == "right"
+    (bowl, bowl_iou), (can, can_iou), (drill, _) = (best(seg, n) for n in ("teal bowl", "small can", "drill"))
+    assert bowl_iou >= 0.8 and can_iou >= 0.7 and len({bowl, can, drill}) == 3
+    # needed: without it the bowl is in pieces, one of them with the drill
+    verdicts, _, seg = judged("uois_image_0002", vessel_rebuild=False)
+    assert verdicts["teal bowl"] == "split"
+    assert best(seg, "teal bowl")[1] < 0.5

@@ -18,7 +18,7 @@ def test_refinement_stages_run_from_one_list() -> None:
     from clearcli.perception.refine import STAGES
     from clearcli.perception.segment import segment
 
-    assert [s.name for s in STAGES] == ["stacks", "cuts", "occlusion", "colors", "steps", "rims", "rings", "fragments"]
+    assert [s.name for s in STAGES] == ["stacks", "cuts", "occlusion", "colors", "steps", "rims", "rings", "vessels", "fragments"]
     assert [s.name for s in STAGES if s.needs_grid] == ["occlusion"]
     frame = read_frame(FIXTURES / "clutter10.pcd")
     seg = segment(frame, SegmentSettings())

@@ -160,13 +160,15 @@ def test_mosd_frames_score(name: str, floor: float) -> None:
 def test_mosd_cylindrical_category_keeps_containers_whole() -> None:
     """mOSD's cylindrical frames (bowls, mugs, pots; learn33-44): mean F1 >= 0.93 (the
     issue's target; 0.857 before the rings stage). The six where a container's inner
-    and outer walls came apart are here; without the rings stage they fall below."""
+    and outer walls came apart are here; without the rings stage and the vessels stage
+    they fall below (either alone mends them: the vessels stage rebuilds a container
+    whose wall is in two segments, whatever the two are)."""
     from clearcli.io.read import read_frame
     from clearcli.perception.segment import segment
 
     frames = [read_frame(shared_path(f"mosd/learn/learn{i}.pcd")) for i in range(33, 39)]
     on = [score(segment(f, S).labels(), f.fields["label"]).f1 for f in frames]
-    off = [score(segment(f, replace(S, ring_merge=False)).labels(), f.fields["label"]).f1 for f in frames]
+    off = [score(segment(f, replace(S, ring_merge=False, vessel_rebuild=False)).labels(), f.fields["label"]).f1 for f in frames]
     assert np.mean(on) >= 0.93, on
     assert np.mean(off) < 0.8, off
 

@@ -1,0 +1,273 @@
+"""Stage 3d'' (ours, not in the thesis): an open container rebuilt from its rim, taking
+back its wall from what stands in it and what leans on it.
+
+A bowl with a can standing in it is cut by the can into the walls left and right of it,
+the wall behind it goes to the can (they continue each other in depth), and an object
+lying against the rim (a drill) joins the wall it touches there (`rims.py` sees two
+segments touching only at their tops). No pairwise join undoes that: the pieces are
+mixed. What stays plain is the container's shape: a surface of revolution about the
+table's normal, whose rim is one circle at one height, and whose wall at each height
+lies at one distance from the axis. What stands inside lies nearer the axis than the
+wall at its height; what leans on it from outside lies beyond the rim's circle.
+
+For every group of segments whose tops lie within ``rim_tolerance_m`` of each other:
+1. their rim bands (voxels within ``rim_tolerance_m`` of their segment's top, on wall
+   supervoxels) and the circle most of them lie on (RANSAC on the bands, then least
+   squares on its inliers; radius between ``_MIN_RADIUS_M`` and ``ring_max_radius_m``);
+   kept when its inliers go at least ``_MIN_COVER_DEG`` round the centre and some of the
+   walls inside it face its centre (an opening: a can's or a box's walls all face away
+   from any centre; a filled top has no arc);
+2. the wall's distance from the axis per 1 cm of height (the largest distances within
+   the rim's circle at that height: the wall is the outermost thing inside it), made
+   to widen upwards (bowls, cups and mugs do; a vase that narrows is not a container
+   anything is put in);
+3. the container is every voxel at most the rim's height, within ``_OUT_M`` outside
+   the rim's circle and within ``_WALL_IN`` of the radius (or ``_WALL_IN_M``) inside
+   the wall at its height;
+4. what is left of each segment: its connected pieces; a piece that is at least an
+   object's area, rises above ``standing_max_m`` (not the container's floor) and is
+   either most of its segment or standing on the table is an object of its own (the
+   can, the drill), any other (a mug's handle, a strip of wall the circle did not
+   cover, the floor) goes with the container.
+Applied only when the container takes an object's area of voxels from two or more
+segments: one segment already holding its whole wall is left as it is.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from clearcli.perception.rings import fit_circle
+
+_MIN_RADIUS_M = 0.02
+_RANSAC_ROUNDS = 200
+_SCORE_SAMPLES = 500
+_ANGLE_BINS = 36
+# a rim point within this share of the radius (or _INLIER_M) of the circle is on it
+_INLIER = 0.06
+_INLIER_M = 0.004
+_MIN_COVER_DEG = 200.0
+# the share of the walls within the rim that must face the centre (cos >= 0.5), and
+# their least number: the inner wall seen over the near rim
+_MIN_FACING_SHARE = 0.2
+_MIN_FACING_SV = 3
+# the container's wall: up to _OUT_M beyond the rim's circle (a rim is a few mm thick
+# and the depth noise a few more), and inside the wall's distance at its height by
+# _WALL_IN of the radius, at least _WALL_IN_M (the wall's thickness and the noise)
+_OUT_M = 0.006
+_WALL_IN = 0.15
+_WALL_IN_M = 0.01
+_BIN_M = 0.01
+# with colour: within _SURE_WALL of the radius inside the wall a voxel is the wall for
+# certain, beyond _SURE_INSIDE it is what stands inside; between, where a can's side
+# and the bowl's lower wall both lie, each voxel goes to the one whose colour it is
+# nearer (its _K nearest of the sure ones, CIELAB)
+_SURE_WALL = 0.15
+_SURE_INSIDE = 0.3
+_K = 7
+_MAX_SAMPLES = 2000
+
+
+def _by_colour(lab: np.ndarray, wall: np.ndarray, inside: np.ndarray, unsure: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """(len(unsure),) is each unsure voxel's colour nearer the wall's than the inside's
+    (majority of its ``_K`` nearest among samples of both, CIELAB)?"""
+    from scipy.spatial import cKDTree
+
+    w = wall if wall.size <= _MAX_SAMPLES else rng.choice(wall, _MAX_SAMPLES, replace=False)
+    i = inside if inside.size <= _MAX_SAMPLES else rng.choice(inside, _MAX_SAMPLES, replace=False)
+    ref = np.vstack([lab[w], lab[i]])
+    is_wall = np.concatenate([np.ones(w.size, bool), np.zeros(i.size, bool)])
+    k = min(_K, ref.shape[0])
+    _, nn = cKDTree(ref).query(lab[unsure], k=k)
+    return is_wall[nn.reshape(unsure.size, k)].mean(axis=1) > 0.5
+
+
+def _cover_deg(xy: np.ndarray, centre: np.ndarray) -> float:
+    ang = np.arctan2(xy[:, 1] - centre[1], xy[:, 0] - centre[0])
+    bins = np.unique(np.floor((ang + np.pi) / (2 * np.pi) * _ANGLE_BINS).astype(np.int64) % _ANGLE_BINS)
+    return bins.size * 360.0 / _ANGLE_BINS
+
+
+def _circles3(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Centres (R, 2) and radii (R,) of the circles through each three points of ``p``
+    (R, 3, 2); a radius of inf where the three are collinear."""
+    a, b, c = p[:, 0], p[:, 1], p[:, 2]
+    d = 2.0 * (a[:, 0] * (b[:, 1] - c[:, 1]) + b[:, 0] * (c[:, 1] - a[:, 1]) + c[:, 0] * (a[:, 1] - b[:, 1]))
+    ok = np.abs(d) > 1e-12
+    d = np.where(ok, d, 1.0)
+    a2, b2, c2 = (a**2).sum(1), (b**2).sum(1), (c**2).sum(1)
+    ux = (a2 * (b[:, 1] - c[:, 1]) + b2 * (c[:, 1] - a[:, 1]) + c2 * (a[:, 1] - b[:, 1])) / d
+    uy = (a2 * (c[:, 0] - b[:, 0]) + b2 * (a[:, 0] - c[:, 0]) + c2 * (b[:, 0] - a[:, 0])) / d
+    centres = np.stack([ux, uy], axis=1)
+    radii = np.where(ok, np.linalg.norm(a - centres, axis=1), np.inf)
+    return centres, radii
+
+
+def find_rim(band_xy: np.ndarray, max_radius_m: float, rng: np.random.Generator) -> tuple[np.ndarray, float, np.ndarray] | None:
+    """(centre, radius, inlier mask) of the circle most of ``band_xy`` (N, 2) lie on,
+    going at least ``_MIN_COVER_DEG`` round it, or None. RANSAC over circles through
+    three band points, all rounds at once, then least squares on the inliers."""
+    n = band_xy.shape[0]
+    if n < 10:
+        return None
+    # a point picked twice makes no circle (radius inf); the rounds are scored on at
+    # most _SCORE_SAMPLES of the band
+    centres, radii = _circles3(band_xy[rng.integers(0, n, (_RANSAC_ROUNDS, 3))])
+    ok = (radii >= _MIN_RADIUS_M) & (radii <= max_radius_m)
+    if not ok.any():
+        return None
+    centres, radii = centres[ok], radii[ok]
+    sample = band_xy if n <= _SCORE_SAMPLES else band_xy[rng.choice(n, _SCORE_SAMPLES, replace=False)]
+    dist = np.linalg.norm(sample[None, :, :] - centres[:, None, :], axis=2)  # (R, n)
+    score = (np.abs(dist - radii[:, None]) <= np.maximum(_INLIER * radii, _INLIER_M)[:, None]).sum(axis=1)
+    best = int(np.argmax(score))
+    centre, radius = centres[best], float(radii[best])
+    inl = np.abs(np.linalg.norm(band_xy - centre, axis=1) - radius) <= max(_INLIER * radius, _INLIER_M)
+    if inl.sum() < 10:
+        return None
+    for _ in range(2):
+        centre, radius = fit_circle(band_xy[inl])
+        if not (_MIN_RADIUS_M <= radius <= max_radius_m):
+            return None
+        inl = np.abs(np.linalg.norm(band_xy - centre, axis=1) - radius) <= max(_INLIER * radius, _INLIER_M)
+        if inl.sum() < 10:
+            return None
+    if _cover_deg(band_xy[inl], centre) < _MIN_COVER_DEG:
+        return None
+    return centre, radius, inl
+
+
+def _wall_profile(d: np.ndarray, h: np.ndarray, rim_h: float, radius: float) -> np.ndarray:
+    """(B,) the wall's distance from the axis per ``_BIN_M`` of height, 0..rim_h: the
+    largest distance within the rim (its 95th percentile) at that height, widening
+    upwards, the rim's radius at the top."""
+    n_bins = int(np.ceil(max(rim_h, _BIN_M) / _BIN_M)) + 1
+    b = np.clip((h / _BIN_M).astype(np.int64), 0, n_bins - 1)
+    prof = np.full(n_bins, np.nan)
+    for k in range(n_bins):
+        dk = d[b == k]
+        if dk.size >= 3:
+            prof[k] = np.percentile(dk, 95)
+    prof[-1] = radius if np.isnan(prof[-1]) else max(prof[-1], radius)
+    # bins with nothing seen take the next one up; then widening upwards: each bin at
+    # most the one above it
+    for k in range(n_bins - 2, -1, -1):
+        if np.isnan(prof[k]) or prof[k] > prof[k + 1]:
+            prof[k] = prof[k + 1] if np.isnan(prof[k]) else min(prof[k], prof[k + 1])
+    return prof
+
+
+def rebuild_vessels(
+    seg_of_voxel: np.ndarray,
+    voxel_xy: np.ndarray,
+    voxel_height: np.ndarray,
+    voxel_edges: np.ndarray,
+    voxel_label: np.ndarray,
+    sv_normals_xy: np.ndarray,
+    sv_xy: np.ndarray,
+    sv_is_wall: np.ndarray,
+    tolerance_m: float,
+    max_radius_m: float,
+    min_voxels: int,
+    standing_max_m: float,
+    voxel_lab: np.ndarray | None = None,
+) -> np.ndarray:
+    """(V,) segment per voxel, 0..G-1, with each open container rebuilt from its rim
+    (module docstring). ``voxel_xy`` (V, 2) and ``voxel_height`` (V,): the voxels in the
+    table plane and above it; ``voxel_edges``: their adjacency; ``voxel_label`` (V,):
+    their supervoxels, whose in-plane normals and centroids are ``sv_normals_xy`` /
+    ``sv_xy`` (S, 2), ``sv_is_wall`` flagging those that are not top faces;
+    ``voxel_lab`` (V, 3): their colour (CIELAB) when the frame's is usable."""
+    from clearcli.perception.supervoxels import _components
+
+    seg = np.asarray(seg_of_voxel, dtype=np.int64).copy()
+    if seg.size == 0:
+        return seg
+    rng = np.random.default_rng(0)  # the same frame, the same segments
+    n_seg = int(seg.max()) + 1
+    sizes = np.bincount(seg, minlength=n_seg)
+    top = np.full(n_seg, -np.inf)
+    np.maximum.at(top, seg, voxel_height)
+    wall_vox = sv_is_wall[voxel_label]
+    in_band = wall_vox & (voxel_height >= top[seg] - tolerance_m)
+    cand = [s for s in range(n_seg) if sizes[s] >= min_voxels]
+    # segments by their tops, highest first: a group is every candidate whose top lies
+    # within the tolerance of the first one's, near it in the plane
+    done: set[int] = set()
+    next_label = n_seg
+    mid = np.stack([np.bincount(seg, weights=voxel_xy[:, k], minlength=n_seg) for k in range(2)], axis=1)
+    mid /= np.maximum(sizes, 1)[:, None]
+    band_of = {s: np.flatnonzero((seg == s) & in_band) for s in cand}
+    for s in sorted(cand, key=lambda k: -top[k]):
+        if s in done:
+            continue
+        group = [
+            k for k in cand
+            if k not in done and abs(top[k] - top[s]) <= tolerance_m
+            and np.linalg.norm(mid[k] - mid[s]) <= 2 * max_radius_m
+        ]
+        band = np.concatenate([band_of[k] for k in group])
+        found = find_rim(voxel_xy[band], max_radius_m, rng)
+        if found is None:
+            continue
+        centre, radius, on_rim = found
+        rim_h = float(np.median(voxel_height[band][on_rim]))
+        d = np.linalg.norm(voxel_xy - centre, axis=1)
+        inside_rim = d <= radius + _OUT_M
+        # the container reaches down as far as the segments holding its rim do within
+        # the circle: what it stands on (a box under a bowl) lies lower
+        holders = np.unique(seg[band[on_rim]])
+        base = float(voxel_height[inside_rim & np.isin(seg, holders)].min())
+        near = inside_rim & (voxel_height <= rim_h + tolerance_m) & (voxel_height >= base)
+        # an opening: walls inside the rim facing its centre
+        svs = np.unique(voxel_label[near & wall_vox])
+        if svs.size == 0:
+            continue
+        to_c = centre - sv_xy[svs]
+        to_c /= np.maximum(np.linalg.norm(to_c, axis=1, keepdims=True), 1e-9)
+        nrm = sv_normals_xy[svs] / np.maximum(np.linalg.norm(sv_normals_xy[svs], axis=1, keepdims=True), 1e-9)
+        facing = np.einsum("ij,ij->i", nrm, to_c) >= 0.5
+        if facing.sum() < _MIN_FACING_SV or facing.mean() < _MIN_FACING_SHARE:
+            continue
+        prof = _wall_profile(d[near], voxel_height[near], rim_h, radius)
+        b = np.clip((voxel_height / _BIN_M).astype(np.int64), 0, prof.size - 1)
+        depth_in = prof[b] - d  # how far inside the wall at its height
+        shell = near & (depth_in <= max(_WALL_IN * radius, _WALL_IN_M))
+        if voxel_lab is not None:
+            # the floor lies inside the wall too: below standing_max_m nothing is
+            # inside for certain, colour decides there
+            wall_like = near & (depth_in <= _SURE_WALL * radius)
+            inside = near & (depth_in >= _SURE_INSIDE * radius) & (voxel_height > standing_max_m)
+            sure_wall, sure_in = np.flatnonzero(wall_like), np.flatnonzero(inside)
+            unsure = np.flatnonzero(near & ~wall_like & ~inside)
+            if sure_wall.size >= _K and sure_in.size >= _K and unsure.size:
+                shell[sure_wall] = True
+                shell[sure_in] = False
+                shell[unsure] = _by_colour(voxel_lab, sure_wall, sure_in, unsure, rng)
+        share = np.bincount(seg[shell], minlength=n_seg)
+        touched = np.flatnonzero(share >= 3)
+        done.update(group)
+        if int((share >= min_voxels).sum()) < 2:
+            continue  # one segment holds the whole wall already
+        vessel = next_label
+        next_label += 1
+        for k in touched.tolist():
+            rest = (seg == k) & ~shell
+            seg[shell & (seg == k)] = vessel
+            idx = np.flatnonzero(rest)
+            if idx.size == 0:
+                continue
+            keep = rest[voxel_edges[:, 0]] & rest[voxel_edges[:, 1]]
+            comp = _components(seg.size, voxel_edges[keep])[idx]
+            for c in np.unique(comp):
+                piece = idx[comp == c]
+                standing = voxel_height[piece].min() <= standing_max_m
+                rises = voxel_height[piece].max() > standing_max_m  # not the container's floor
+                if piece.size >= min_voxels and rises and (standing or piece.size >= 0.5 * sizes[k]):
+                    seg[piece] = next_label
+                    next_label += 1
+                else:
+                    seg[piece] = vessel
+            done.add(k)
+    _, out = np.unique(seg, return_inverse=True)
+    return out.astype(np.int64)

@@ -1,0 +1,126 @@
+"""Tests of clearcli/perception/vessels.py: a container rebuilt from its rim, on voxels laid
+out by hand (each voxel its own supervoxel, its normal known), and on a labelled frame."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+STEP_M = 0.004  # the voxel spacing the surfaces are sampled at
+CENTRE = np.array([0.3, -0.1])
+
+
+def _wall(r_of_z, z0: float, z1: float, deg0: float, deg1: float, outward: bool, centre=CENTRE):
+    """Points (N, 3) and in-plane normals (N, 2) of a surface of revolution r(z) over an
+    arc, every STEP_M."""
+    pts, nrm = [], []
+    for z in np.arange(z0, z1 + 1e-9, STEP_M):
+        r = r_of_z(z)
+        n_a = max(3, int(np.radians(deg1 - deg0) * r / STEP_M))
+        a = np.radians(np.linspace(deg0, deg1, n_a))
+        u = np.column_stack([np.cos(a), np.sin(a)])
+        pts.append(np.column_stack([centre + r * u, np.full(n_a, z)]))
+        nrm.append(u if outward else -u)
+    return np.vstack(pts), np.vstack(nrm)
+
+
+def _rebuild(parts, min_voxels: int = 20):
+    """parts: (points, normals xy, is_wall, segment) per surface -> (segment in, out)."""
+    from scipy.spatial import cKDTree
+
+    from clearcli.perception.vessels import rebuild_vessels
+
+    pts = np.vstack([p[0] for p in parts])
+    nrm = np.vstack([p[1] for p in parts])
+    wall = np.concatenate([np.full(p[0].shape[0], p[2]) for p in parts])
+    seg = np.concatenate([np.full(p[0].shape[0], p[3]) for p in parts])
+    edges = cKDTree(pts).query_pairs(1.8 * STEP_M, output_type="ndarray")
+    n = pts.shape[0]
+    out = rebuild_vessels(
+        seg, pts[:, :2], pts[:, 2], edges, np.arange(n), nrm, pts[:, :2], wall,
+        tolerance_m=0.015, max_radius_m=0.15, min_voxels=min_voxels, standing_max_m=0.02,
+    )
+    return seg, out
+
+
+def _bowl(z_top: float = 0.07, z_base: float = 0.0):
+    """A bowl 14 cm across at its rim, 9 cm at its foot, 7 cm high: its outer wall seen
+    on the near half, its inner wall (4 mm in) on the far half."""
+    r_out = lambda z: 0.045 + 0.025 * (z - z_base) / (z_top - z_base)  # noqa: E731
+    outer = _wall(r_out, z_base, z_top, 180, 360, outward=True)
+    inner_l = _wall(lambda z: r_out(z) - 0.004, z_base + 0.01, z_top, 0, 80, outward=False)
+    inner_m = _wall(lambda z: r_out(z) - 0.004, z_base + 0.01, z_top, 80, 100, outward=False)
+    inner_r = _wall(lambda z: r_out(z) - 0.004, z_base + 0.01, z_top, 100, 180, outward=False)
+    return outer, inner_l, inner_m, inner_r
+
+
+def test_a_bowl_cut_by_a_can_in_it_and_joined_to_what_leans_on_it_is_rebuilt() -> None:
+    outer, inner_l, inner_m, inner_r = _bowl()
+    # a can 6 cm across, 10 cm high, standing in the bowl: its near half
+    can = _wall(lambda z: 0.03, 0.008, 0.10, 180, 360, outward=True)
+    # a box lying against the rim from outside (a drill), its front face and its top
+    x = np.arange(CENTRE[0] + 0.078, CENTRE[0] + 0.15, STEP_M)
+    zf = np.arange(0.0, 0.065, STEP_M)
+    front = np.array([[xi, CENTRE[1] - 0.03, z] for xi in x for z in zf])
+    top = np.array([[xi, y, 0.065] for xi in x for y in np.arange(CENTRE[1] - 0.03, CENTRE[1] + 0.03, STEP_M)])
+    parts = [
+        (inner_l[0], inner_l[1], True, 0),  # the wall right of the can ...
+        (front, np.tile([0.0, -1.0], (front.shape[0], 1)), True, 0),  # ... joined to the box
+        (top, np.zeros((top.shape[0], 2)), False, 0),
+        (inner_r[0], inner_r[1], True, 1),  # the wall left of the can
+        (outer[0], outer[1], True, 2),  # the near outer wall
+        (can[0], can[1], True, 3),  # the can ...
+        (inner_m[0], inner_m[1], True, 3),  # ... with the wall behind it
+    ]
+    seg, out = _rebuild(parts)
+    sizes = np.cumsum([0] + [p[0].shape[0] for p in parts])
+    part_of = np.repeat(np.arange(len(parts)), np.diff(sizes))
+    bowl = np.isin(part_of, [0, 3, 4, 6])
+    box = np.isin(part_of, [1, 2])
+    can_ = part_of == 5
+    # three objects, each exactly its own voxels
+    assert np.unique(out).size == 3
+    for obj in (bowl, box, can_):
+        assert np.unique(out[obj]).size == 1
+        assert (out == out[obj][0]).sum() == obj.sum()
+
+
+def test_a_bowl_on_a_box_keeps_the_box_and_whole_cans_are_left_alone() -> None:
+    outer, inner_l, inner_m, inner_r = _bowl(z_top=0.17, z_base=0.10)
+    # a cylinder under the bowl (a tin it stands on), within the rim's circle from above
+    tin = _wall(lambda z: 0.05, 0.0, 0.098, 180, 360, outward=True)
+    parts = [
+        (np.vstack([inner_l[0], inner_m[0]]), np.vstack([inner_l[1], inner_m[1]]), True, 0),
+        (inner_r[0], inner_r[1], True, 1),
+        (outer[0], outer[1], True, 2),
+        (tin[0], tin[1], True, 3),
+    ]
+    seg, out = _rebuild(parts)
+    # the bowl's three pieces are one, the tin under it stays apart
+    assert out[seg == 0][0] == out[seg == 1][0] == out[seg == 2][0]
+    assert np.unique(out[seg == 3]).size == 1 and out[seg == 3][0] != out[seg == 0][0]
+    assert (out == out[seg == 3][0]).sum() == (seg == 3).sum()
+    # two closed cans side by side: their near halves face away from every centre
+    a = _wall(lambda z: 0.033, 0.0, 0.11, 180, 360, outward=True, centre=CENTRE)
+    b = _wall(lambda z: 0.033, 0.0, 0.11, 180, 360, outward=True, centre=CENTRE + [0.068, 0.0])
+    seg, out = _rebuild([(a[0], a[1], True, 0), (b[0], b[1], True, 1)])
+    assert np.array_equal(seg, out)
+
+
+def test_a_rim_is_found_by_ransac_among_other_points() -> None:
+    from clearcli.perception.vessels import _circles3, find_rim
+
+    centres, radii = _circles3(np.array([[[0.0, 0.0], [2.0, 0.0], [0.0, 2.0]], [[0.0, 0.0], [1.0, 1.0], [2.0, 2.0]]]))
+    assert centres[0] == pytest.approx([1.0, 1.0]) and radii[0] == pytest.approx(np.sqrt(2.0))
+    assert np.isinf(radii[1])  # collinear
+    rng = np.random.default_rng(1)
+    a = np.radians(np.linspace(0, 250, 120))
+    rim = np.column_stack([0.3 + 0.06 * np.cos(a), -0.1 + 0.06 * np.sin(a)])
+    line = np.column_stack([np.linspace(0.4, 0.5, 60), np.full(60, -0.13)])  # a box's edge in the band
+    found = find_rim(np.vstack([rim, line]), 0.15, rng)
+    assert found is not None
+    centre, radius, inlier = found
+    assert radius == pytest.approx(0.06, abs=1e-3) and centre == pytest.approx([0.3, -0.1], abs=1e-3)
+    assert inlier[:120].all() and inlier[120:].mean() < 0.1
+    # an arc of 150 degrees is no rim: it goes less than 200 degrees round
+    assert find_rim(rim[:72], 0.15, rng) is None
