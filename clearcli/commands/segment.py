@@ -36,7 +36,8 @@ had no ``rim``/``rim_why`` per object and no ``table.edges``):
                           (an open container: a bowl, a mug, a cup),
                     rim_why: str why it has no rim ("" when it has one)}]
     color         {used: bool, note: str} whether colour was read (by the flat-object
-                   search, by the supervoxels when color_importance > 0), and else why
+                   search, by the containers' walls, by the supervoxels when
+                   color_importance > 0), and else why
                    not: no colour, a colour image of another size, all black, all
                    saturated (segmentation then runs on geometry alone)
     timings_s     {stage: seconds} (filter, table, supervoxels, lccp, merge,

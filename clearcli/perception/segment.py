@@ -172,7 +172,8 @@ def color_state(frame: Frame, organized: bool, settings: SegmentSettings) -> tup
     exposure failed, a colour topic that never came), or when no stage would read it."""
     readers = [name for name, on in (("supervoxels", settings.color_importance > 0),
                                       ("colour splits", settings.color_split),
-                                      ("flat objects", settings.flat_objects and organized)) if on]
+                                      ("flat objects", settings.flat_objects and organized),
+                                      ("containers' walls", settings.vessel_rebuild)) if on]
     if frame.colors is None:
         return False, frame.color_note or "the frame has no colour: geometry alone"
     if frame.colors.shape != (frame.n_points, 3):
@@ -190,7 +191,7 @@ def color_state(frame: Frame, organized: bool, settings: SegmentSettings) -> tup
     if float(np.ptp(rgb.astype(np.int16), axis=0).max()) <= _FLAT_COLOR:
         return False, "the colour is one flat value: geometry alone"
     if not readers:
-        return False, "no stage reads colour with these settings (color_importance 0, color_split and flat_objects off)"
+        return False, "no stage reads colour with these settings (color_importance 0, color_split, flat_objects and vessel_rebuild off)"
     return True, "read by: " + ", ".join(readers)
 
 
