@@ -189,7 +189,7 @@ def _vessels(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
     return rebuild_vessels(
         seg_of_voxel, ctx.vox.centroids @ basis.T, ctx.voxel_height, ctx.vox.edges, ctx.sv.voxel_label,
         ctx.sv.normals @ basis.T, ctx.sv.centroids @ basis.T, wall, s.rim_tolerance_m, s.ring_max_radius_m,
-        min_vox, s.standing_max_m, ctx.voxel_lab,
+        min_vox, s.standing_max_m, ctx.scaled.voxel_m, ctx.voxel_lab,
     )
 
 

@@ -14,9 +14,10 @@ For every group of segments whose tops lie within ``rim_tolerance_m`` of each ot
 1. their rim bands (voxels within ``rim_tolerance_m`` of their segment's top, on wall
    supervoxels) and the circle most of them lie on (RANSAC on the bands, then least
    squares on its inliers; radius between ``_MIN_RADIUS_M`` and ``ring_max_radius_m``);
-   kept when its inliers go at least ``_MIN_COVER_DEG`` round the centre and some of the
-   walls inside it face its centre (an opening: a can's or a box's walls all face away
-   from any centre; a filled top has no arc);
+   kept when its inliers go at least ``_MIN_COVER_DEG`` round the centre, no top face
+   fills the circle at the rim's height, and some of the walls inside it face its centre
+   (an opening: a can's or a box's walls all face away from any centre; two boxes whose
+   edges lie on one circle fill it with their tops);
 2. the wall's distance from the axis per 1 cm of height (the largest distances within
    the rim's circle at that height: the wall is the outermost thing inside it), made
    to widen upwards (bowls, cups and mugs do; a vase that narrows is not a container
@@ -55,6 +56,10 @@ _MIN_FACING_SV = 3
 # and the depth noise a few more), and inside the wall's distance at its height by
 # _WALL_IN of the radius, at least _WALL_IN_M (the wall's thickness and the noise)
 _OUT_M = 0.006
+# the opening: within _OPEN of the radius, top faces at the rim's height may cover at
+# most _MAX_FILLED of it (a container's inside is empty there; a box's top is not)
+_OPEN = 0.8
+_MAX_FILLED = 0.25
 _WALL_IN = 0.15
 _WALL_IN_M = 0.01
 _BIN_M = 0.01
@@ -170,6 +175,7 @@ def rebuild_vessels(
     max_radius_m: float,
     min_voxels: int,
     standing_max_m: float,
+    voxel_m: float,
     voxel_lab: np.ndarray | None = None,
 ) -> np.ndarray:
     """(V,) segment per voxel, 0..G-1, with each open container rebuilt from its rim
@@ -219,7 +225,12 @@ def rebuild_vessels(
         holders = np.unique(seg[band[on_rim]])
         base = float(voxel_height[inside_rim & np.isin(seg, holders)].min())
         near = inside_rim & (voxel_height <= rim_h + tolerance_m) & (voxel_height >= base)
-        # an opening: walls inside the rim facing its centre
+        # an opening: no top face filling the circle at the rim's height (two boxes'
+        # edges can lie on a circle; their tops then fill it) ...
+        filled = ~wall_vox & (d <= _OPEN * radius) & (voxel_height >= rim_h - tolerance_m)
+        if filled.sum() * voxel_m**2 >= _MAX_FILLED * np.pi * (_OPEN * radius) ** 2:
+            continue
+        # ... and walls inside the rim facing its centre
         svs = np.unique(voxel_label[near & wall_vox])
         if svs.size == 0:
             continue

@@ -38,7 +38,7 @@ def _rebuild(parts, min_voxels: int = 20):
     n = pts.shape[0]
     out = rebuild_vessels(
         seg, pts[:, :2], pts[:, 2], edges, np.arange(n), nrm, pts[:, :2], wall,
-        tolerance_m=0.015, max_radius_m=0.15, min_voxels=min_voxels, standing_max_m=0.02,
+        tolerance_m=0.015, max_radius_m=0.15, min_voxels=min_voxels, standing_max_m=0.02, voxel_m=STEP_M,
     )
     return seg, out
 
