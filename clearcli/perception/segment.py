@@ -329,7 +329,7 @@ def segment(frame: Frame, settings: SegmentSettings) -> Segmentation:
 
     # 4'. objects lying flat, by colour (flat.py)
     t_flat = time.perf_counter()
-    if color_used and settings.flat_objects:
+    if color_used and settings.flat_objects and organized:
         table_idx, found = _flat_objects(frame, table_idx, obj_idx, objects, fit, settings)
         objects.extend(found)
     timings["flat"] = time.perf_counter() - t_flat

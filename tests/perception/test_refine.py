@@ -26,7 +26,10 @@ def test_refinement_stages_run_from_one_list() -> None:
     finite = np.isfinite(frame.points).all(axis=1)
     flat = Frame(points=frame.points[finite], colors=None if frame.colors is None else frame.colors[finite],
                  shape=None, fields={}, source="unorganized")
-    on = segment(flat, SegmentSettings(occlusion_merge=True)).labels()
+    unorganized = segment(flat, SegmentSettings(occlusion_merge=True))
+    # colour is read there by the containers' walls only: the flat objects need the grid
+    assert unorganized.color_used and unorganized.color_note == "read by: containers' walls"
+    on = unorganized.labels()
     off = segment(flat, SegmentSettings(occlusion_merge=False)).labels()
     assert np.array_equal(on, off) and len(np.unique(on[on >= 10])) >= 5
     # every stage off: LCCP's segments as they come
