@@ -58,6 +58,24 @@ class RefineContext:
         return self.plane.height_of(self.vox.centroids)
 
     @cached_property
+    def plane_basis(self) -> np.ndarray:
+        """(2, 3) two unit axes of the table plane: voxels and normals in it are ``@ .T``."""
+        from clearcli.perception.table import plane_basis
+
+        return plane_basis(self.plane.normal / np.linalg.norm(self.plane.normal))
+
+    @cached_property
+    def sv_is_wall(self) -> np.ndarray:
+        """(S,) supervoxels that are not a top face (tilted more than step_max_tilt_deg)."""
+        up = self.plane.normal / np.linalg.norm(self.plane.normal)
+        return np.abs(self.sv.normals @ up) < np.cos(np.radians(self.settings.step_max_tilt_deg))
+
+    @property
+    def min_object_voxels(self) -> int:
+        """The smallest object's visible area in voxels."""
+        return max(1, int(self.settings.min_object_area_m2 / self.scaled.voxel_m**2))
+
+    @cached_property
     def voxel_lab(self) -> np.ndarray | None:
         """(V, 3) CIELAB of each voxel's mean colour, or None without usable colour."""
         from clearcli.perception.flat import cielab
@@ -163,33 +181,23 @@ def _rims(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
 
 def _rings(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
     from clearcli.perception.rings import merge_rings
-    from clearcli.perception.table import plane_basis
 
-    s = ctx.settings
-    up = ctx.plane.normal / np.linalg.norm(ctx.plane.normal)
-    basis = plane_basis(up)
-    wall = np.abs(ctx.sv.normals @ up) < np.cos(np.radians(s.step_max_tilt_deg))
-    min_vox = max(1, int(s.min_object_area_m2 / ctx.scaled.voxel_m**2))
+    s, basis = ctx.settings, ctx.plane_basis
     return merge_rings(
         seg_of_voxel, ctx.vox.centroids @ basis.T, ctx.voxel_height, ctx.sv.voxel_label,
-        ctx.sv.normals @ basis.T, ctx.sv.centroids @ basis.T, wall, s.rim_tolerance_m,
-        s.ring_max_radius_m, s.ring_max_residual, s.ring_min_cover_deg, min_vox, s.ring_max_off_share,
+        ctx.sv.normals @ basis.T, ctx.sv.centroids @ basis.T, ctx.sv_is_wall, s.rim_tolerance_m,
+        s.ring_max_radius_m, s.ring_max_residual, s.ring_min_cover_deg, ctx.min_object_voxels, s.ring_max_off_share,
     )
 
 
 def _vessels(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
-    from clearcli.perception.table import plane_basis
     from clearcli.perception.vessels import rebuild_vessels
 
-    s = ctx.settings
-    up = ctx.plane.normal / np.linalg.norm(ctx.plane.normal)
-    basis = plane_basis(up)
-    wall = np.abs(ctx.sv.normals @ up) < np.cos(np.radians(s.step_max_tilt_deg))
-    min_vox = max(1, int(s.min_object_area_m2 / ctx.scaled.voxel_m**2))
+    s, basis = ctx.settings, ctx.plane_basis
     return rebuild_vessels(
         seg_of_voxel, ctx.vox.centroids @ basis.T, ctx.voxel_height, ctx.vox.edges, ctx.sv.voxel_label,
-        ctx.sv.normals @ basis.T, ctx.sv.centroids @ basis.T, wall, s.rim_tolerance_m, s.ring_max_radius_m,
-        min_vox, s.standing_max_m, ctx.scaled.voxel_m, ctx.voxel_lab,
+        ctx.sv.normals @ basis.T, ctx.sv.centroids @ basis.T, ctx.sv_is_wall, s.rim_tolerance_m, s.ring_max_radius_m,
+        ctx.min_object_voxels, s.standing_max_m, ctx.scaled.voxel_m, ctx.voxel_lab,
     )
 
 
