@@ -22,16 +22,22 @@ For every group of segments whose tops lie within ``rim_tolerance_m`` of each ot
    the rim's circle at that height: the wall is the outermost thing inside it), made
    to widen upwards (bowls, cups and mugs do; a vase that narrows is not a container
    anything is put in);
-3. the container is every voxel at most the rim's height, within ``_OUT_M`` outside
-   the rim's circle and within ``_WALL_IN`` of the radius (or ``_WALL_IN_M``) inside
-   the wall at its height;
-4. what is left of each segment: its connected pieces; a piece that is at least an
-   object's area, rises above ``standing_max_m`` (not the container's floor) and is
-   either most of its segment or standing on the table is an object of its own (the
-   can, the drill), any other (a mug's handle, a strip of wall the circle did not
-   cover, the floor) goes with the container.
+3. the container is every voxel from the rim's height down to the lowest voxel of the
+   segments holding the rim (not what the container stands on), within ``_OUT_M``
+   outside the rim's circle and within ``_WALL_IN`` of the radius (or ``_WALL_IN_M``)
+   inside the wall at its height; with the frame's colour, the voxels between
+   ``_SURE_WALL`` and ``_SURE_INSIDE`` of the radius inside it (and the floor's) go to
+   the wall or to what stands inside by their colour;
+4. what is left of each segment: its connected pieces; a piece of at least an object's
+   area is an object of its own when, inside the rim's circle, it rises above the rim
+   (the can standing in the bowl), or, outside it, it stands on the table (the drill
+   leaning on the rim); any other (a mug's handle, a strip of wall the circle did not
+   cover, the floor, the surface a stereo camera spans across a mug's opening) goes
+   with the container.
 Applied only when the container takes an object's area of voxels from two or more
-segments: one segment already holding its whole wall is left as it is.
+segments: one segment already holding its whole wall is left as it is. A container's
+rim segments are not looked at again; the others of its group may hold another rim (two
+bowls side by side).
 """
 
 from __future__ import annotations
@@ -56,13 +62,13 @@ _MIN_FACING_SV = 3
 # and the depth noise a few more), and inside the wall's distance at its height by
 # _WALL_IN of the radius, at least _WALL_IN_M (the wall's thickness and the noise)
 _OUT_M = 0.006
+_WALL_IN = 0.15
+_WALL_IN_M = 0.01
+_BIN_M = 0.01  # the wall's distance from the axis is read per this much height
 # the opening: within _OPEN of the radius, top faces at the rim's height may cover at
 # most _MAX_FILLED of it (a container's inside is empty there; a box's top is not)
 _OPEN = 0.8
 _MAX_FILLED = 0.25
-_WALL_IN = 0.15
-_WALL_IN_M = 0.01
-_BIN_M = 0.01
 # with colour: within _SURE_WALL of the radius inside the wall a voxel is the wall for
 # certain, beyond _SURE_INSIDE it is what stands inside; between, where a can's side
 # and the bowl's lower wall both lie, each voxel goes to the one whose colour it is
@@ -255,16 +261,20 @@ def rebuild_vessels(
                 shell[sure_wall] = True
                 shell[sure_in] = False
                 shell[unsure] = _by_colour(voxel_lab, sure_wall, sure_in, unsure, rng)
-        share = np.bincount(seg[shell], minlength=n_seg)
+        share = np.bincount(seg[shell])
         touched = np.flatnonzero(share >= 3)
-        done.update(group)
+        # the rim's own segments are this container's whatever follows (a second
+        # container near it is found from its own segments); the others of the group
+        # may hold another container's rim
+        done.update(holders.tolist())
         if int((share >= min_voxels).sum()) < 2:
             continue  # one segment holds the whole wall already
         vessel = next_label
         next_label += 1
         for k in touched.tolist():
-            rest = (seg == k) & ~shell
-            seg[shell & (seg == k)] = vessel
+            members = seg == k
+            rest = members & ~shell
+            seg[shell & members] = vessel
             idx = np.flatnonzero(rest)
             if idx.size == 0:
                 continue
@@ -272,9 +282,15 @@ def rebuild_vessels(
             comp = _components(seg.size, voxel_edges[keep])[idx]
             for c in np.unique(comp):
                 piece = idx[comp == c]
-                standing = voxel_height[piece].min() <= standing_max_m
-                rises = voxel_height[piece].max() > standing_max_m  # not the container's floor
-                if piece.size >= min_voxels and rises and (standing or piece.size >= 0.5 * sizes[k]):
+                if np.median(d[piece]) <= radius:
+                    # inside the rim: what stands in it rises above the rim; a surface
+                    # below it is the container's (its floor, or the surface a stereo
+                    # camera spans across a narrow opening it cannot see into)
+                    own = voxel_height[piece].max() > rim_h + tolerance_m
+                else:
+                    # outside: what leans on it stands on the table; a handle does not
+                    own = voxel_height[piece].min() <= standing_max_m
+                if piece.size >= min_voxels and own:
                     seg[piece] = next_label
                     next_label += 1
                 else:

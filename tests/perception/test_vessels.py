@@ -124,3 +124,22 @@ def test_a_rim_is_found_by_ransac_among_other_points() -> None:
     assert inlier[:120].all() and inlier[120:].mean() < 0.1
     # an arc of 150 degrees is no rim: it goes less than 200 degrees round
     assert find_rim(rim[:72], 0.15, rng) is None
+
+
+def test_two_bowls_side_by_side_are_each_rebuilt() -> None:
+    # the second bowl's rim lies 4 mm from the first's: its wall region reaches the
+    # first bowl, already rebuilt under a new label
+    parts = []
+    for i, dx in enumerate((0.0, 0.144)):
+        centre = CENTRE + [dx, 0.0]
+        r_out = lambda z: 0.045 + 0.025 * z / 0.07  # noqa: E731
+        outer = _wall(r_out, 0.0, 0.07, 180, 360, outward=True, centre=centre)
+        inner_l = _wall(lambda z: r_out(z) - 0.004, 0.01, 0.07, 0, 90, outward=False, centre=centre)
+        inner_r = _wall(lambda z: r_out(z) - 0.004, 0.01, 0.07, 90, 180, outward=False, centre=centre)
+        parts += [(inner_l[0], inner_l[1], True, 3 * i), (inner_r[0], inner_r[1], True, 3 * i + 1),
+                  (outer[0], outer[1], True, 3 * i + 2)]
+    seg, out = _rebuild(parts)
+    first, second = np.isin(seg, [0, 1, 2]), np.isin(seg, [3, 4, 5])
+    assert np.unique(out).size == 2
+    assert np.unique(out[first]).size == 1 and np.unique(out[second]).size == 1
+    assert out[first][0] != out[second][0]
