@@ -229,7 +229,10 @@ def rebuild_vessels(
         # the container reaches down as far as the segments holding its rim do within
         # the circle: what it stands on (a box under a bowl) lies lower
         holders = np.unique(seg[band[on_rim]])
-        base = float(voxel_height[inside_rim & np.isin(seg, holders)].min())
+        holders_inside = inside_rim & np.isin(seg, holders)
+        if not holders_inside.any():  # a wide rim's inliers may all lie just beyond _OUT_M
+            continue
+        base = float(voxel_height[holders_inside].min())
         near = inside_rim & (voxel_height <= rim_h + tolerance_m) & (voxel_height >= base)
         # an opening: no top face filling the circle at the rim's height (two boxes'
         # edges can lie on a circle; their tops then fill it) ...
