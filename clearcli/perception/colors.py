@@ -37,16 +37,23 @@ _CONCAVE_DEG = 20.0
 _CREASE_DEG = 30.0
 
 
+def group_lab(group_of_point: np.ndarray, colors: np.ndarray, n_groups: int) -> np.ndarray:
+    """(n_groups, 3) CIELAB of each group's mean colour (``colors`` (M, 3) uint8 of the
+    points, ``group_of_point`` (M,) their group: a voxel, a supervoxel)."""
+    from clearcli.perception.flat import cielab
+
+    counts = np.maximum(np.bincount(group_of_point, minlength=n_groups), 1)
+    mean = np.stack(
+        [np.bincount(group_of_point, weights=colors[:, c].astype(np.float64), minlength=n_groups) for c in range(3)],
+        axis=1,
+    )
+    return cielab(np.clip(mean / counts[:, None], 0, 255).round().astype(np.uint8))
+
+
 def supervoxel_lab(sv: Supervoxels, point_voxel: np.ndarray, colors: np.ndarray) -> np.ndarray:
     """(S, 3) CIELAB of each supervoxel's mean colour (``colors`` (M, 3) uint8 of the
     points whose voxel is ``point_voxel``)."""
-    from clearcli.perception.flat import cielab
-
-    n_sv = sv.centroids.shape[0]
-    point_sv = sv.voxel_label[point_voxel]
-    counts = np.maximum(np.bincount(point_sv, minlength=n_sv), 1)
-    mean = np.stack([np.bincount(point_sv, weights=colors[:, c].astype(np.float64), minlength=n_sv) for c in range(3)], axis=1)
-    return cielab(np.clip(mean / counts[:, None], 0, 255).round().astype(np.uint8))
+    return group_lab(sv.voxel_label[point_voxel], colors, sv.centroids.shape[0])
 
 
 def color_splits(seg_of_sv: np.ndarray, sv: Supervoxels, lab: np.ndarray, min_delta: float, min_voxels: int) -> np.ndarray:

@@ -78,16 +78,11 @@ class RefineContext:
     @cached_property
     def voxel_lab(self) -> np.ndarray | None:
         """(V, 3) CIELAB of each voxel's mean colour, or None without usable colour."""
-        from clearcli.perception.flat import cielab
+        from clearcli.perception.colors import group_lab
 
         if not self.color_used or self.point_index is None or self.frame.colors is None:
             return None
-        n_vox = self.vox.centroids.shape[0]
-        pv = self.vox.point_voxel
-        rgb = self.frame.colors[self.point_index].astype(np.float64)
-        counts = np.maximum(np.bincount(pv, minlength=n_vox), 1)
-        mean = np.stack([np.bincount(pv, weights=rgb[:, c], minlength=n_vox) for c in range(3)], axis=1)
-        return cielab(np.clip(mean / counts[:, None], 0, 255).round().astype(np.uint8))
+        return group_lab(self.vox.point_voxel, self.frame.colors[self.point_index], self.vox.centroids.shape[0])
 
     @cached_property
     def first_voxel(self) -> np.ndarray:

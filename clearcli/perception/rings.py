@@ -82,6 +82,22 @@ def fit_rim(
     return centre, radius, inlier
 
 
+def cover_deg(xy: np.ndarray, centre: np.ndarray) -> float:
+    """How far round ``centre`` the points ``xy`` (N, 2) go, in degrees (10° bins)."""
+    ang = np.arctan2(xy[:, 1] - centre[1], xy[:, 0] - centre[0])
+    bins = np.unique(np.floor((ang + np.pi) / (2 * np.pi) * _ANGLE_BINS).astype(np.int64) % _ANGLE_BINS)
+    return bins.size * 360.0 / _ANGLE_BINS
+
+
+def facing_cos(normals: np.ndarray, points: np.ndarray, centre: np.ndarray) -> np.ndarray:
+    """(K,) cosine between each in-plane normal (K, 2) and the direction from its point
+    (K, 2) to ``centre``: near 1 for an inner wall, near -1 for an outer one."""
+    to_centre = centre - points
+    to_centre = to_centre / np.maximum(np.linalg.norm(to_centre, axis=1, keepdims=True), 1e-9)
+    n = normals / np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-9)
+    return np.einsum("ij,ij->i", n, to_centre)
+
+
 def ring_pair(
     band_a: np.ndarray,
     band_b: np.ndarray,
@@ -104,19 +120,10 @@ def ring_pair(
     if fitted is None:
         return False
     centre, radius, inlier = fitted
-    rim = both[inlier]
-    ang = np.arctan2(rim[:, 1] - centre[1], rim[:, 0] - centre[0])
-    bins = np.unique(np.floor((ang + np.pi) / (2 * np.pi) * _ANGLE_BINS).astype(np.int64) % _ANGLE_BINS)
-    if bins.size * 360.0 / _ANGLE_BINS < min_cover_deg:
+    if cover_deg(both[inlier], centre) < min_cover_deg:
         return False
-
-    def facing(normals: np.ndarray, points: np.ndarray) -> float:
-        to_centre = centre - points
-        to_centre /= np.maximum(np.linalg.norm(to_centre, axis=1, keepdims=True), 1e-9)
-        n = normals / np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-9)
-        return float(np.mean(np.einsum("ij,ij->i", n, to_centre)))
-
-    fa, fb = facing(normals_a, points_a), facing(normals_b, points_b)
+    fa = float(np.mean(facing_cos(normals_a, points_a, centre)))
+    fb = float(np.mean(facing_cos(normals_b, points_b, centre)))
     return (fa >= _MIN_FACING and fb <= -_MIN_FACING) or (fb >= _MIN_FACING and fa <= -_MIN_FACING)
 
 

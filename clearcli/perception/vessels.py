@@ -44,12 +44,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from clearcli.perception.rings import fit_circle
+from clearcli.perception.rings import cover_deg, facing_cos, fit_circle
 
 _MIN_RADIUS_M = 0.02
 _RANSAC_ROUNDS = 200
 _SCORE_SAMPLES = 500
-_ANGLE_BINS = 36
 # a rim point within this share of the radius (or _INLIER_M) of the circle is on it
 _INLIER = 0.06
 _INLIER_M = 0.004
@@ -91,12 +90,6 @@ def _by_colour(lab: np.ndarray, wall: np.ndarray, inside: np.ndarray, unsure: np
     k = min(_K, ref.shape[0])
     _, nn = cKDTree(ref).query(lab[unsure], k=k)
     return is_wall[nn.reshape(unsure.size, k)].mean(axis=1) > 0.5
-
-
-def _cover_deg(xy: np.ndarray, centre: np.ndarray) -> float:
-    ang = np.arctan2(xy[:, 1] - centre[1], xy[:, 0] - centre[0])
-    bins = np.unique(np.floor((ang + np.pi) / (2 * np.pi) * _ANGLE_BINS).astype(np.int64) % _ANGLE_BINS)
-    return bins.size * 360.0 / _ANGLE_BINS
 
 
 def _circles3(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -143,7 +136,7 @@ def find_rim(band_xy: np.ndarray, max_radius_m: float, rng: np.random.Generator)
         inl = np.abs(np.linalg.norm(band_xy - centre, axis=1) - radius) <= max(_INLIER * radius, _INLIER_M)
         if inl.sum() < 10:
             return None
-    if _cover_deg(band_xy[inl], centre) < _MIN_COVER_DEG:
+    if cover_deg(band_xy[inl], centre) < _MIN_COVER_DEG:
         return None
     return centre, radius, inl
 
@@ -243,10 +236,7 @@ def rebuild_vessels(
         svs = np.unique(voxel_label[near & wall_vox])
         if svs.size == 0:
             continue
-        to_c = centre - sv_xy[svs]
-        to_c /= np.maximum(np.linalg.norm(to_c, axis=1, keepdims=True), 1e-9)
-        nrm = sv_normals_xy[svs] / np.maximum(np.linalg.norm(sv_normals_xy[svs], axis=1, keepdims=True), 1e-9)
-        facing = np.einsum("ij,ij->i", nrm, to_c) >= 0.5
+        facing = facing_cos(sv_normals_xy[svs], sv_xy[svs], centre) >= 0.5
         if facing.sum() < _MIN_FACING_SV or facing.mean() < _MIN_FACING_SHARE:
             continue
         prof = _wall_profile(d[near], voxel_height[near], rim_h, radius)
