@@ -166,6 +166,13 @@ def main() -> None:
         return
     interrupts.hold()  # until the command can answer a signal properly (clearcli/interrupts.py)
     try:
+        _main()
+    finally:
+        interrupts.finish()  # a signal during the interpreter's exit: 130/143 at once, no traceback
+
+
+def _main() -> None:
+    try:
         try:
             if "--ray" in sys.argv:
                 from clearcli.commands.options import ray_argv

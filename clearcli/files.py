@@ -11,6 +11,7 @@ import contextlib
 import errno
 import os
 import re
+import stat
 import tempfile
 from pathlib import Path
 from typing import Any, Iterator
@@ -44,15 +45,69 @@ def _default_mode() -> int:
     return 0o666 & ~umask
 
 
-def check_output_path(path: Path, force: bool, inputs: tuple[Path, ...] = ()) -> None:
-    """Refuse to clobber: an input, or an existing file without --force."""
+# A link through one of these is an open file of a process (`/dev/stdout` ->
+# `/proc/self/fd/1` -> wherever the shell sent it): written into, never replaced, or the
+# shell's redirection would point at a file removed from under it.
+_FD_LINK = re.compile(r"\A/(?:dev|proc/[^/]+)/fd/\d+\Z|\A/dev/std(?:out|err)\Z")
+
+
+def _through_fd(path: Path) -> bool:
+    """Whether ``path`` or a link on the way to its target names a process's open file."""
+    hop = os.path.abspath(path)
+    for _ in range(40):  # the kernel's own limit of links followed
+        if _FD_LINK.match(hop):
+            return True
+        try:
+            nxt = os.readlink(hop)
+        except OSError:
+            return False
+        hop = os.path.abspath(os.path.join(os.path.dirname(hop), nxt))
+    return False
+
+
+def stream_kind(path: Path) -> str | None:
+    """What kind of non-regular file ``path`` (links followed) is, when output to it is
+    written into rather than replaced: "a character device" (/dev/null, a terminal),
+    "a FIFO", or "an open file of a process" (/dev/stdout, /dev/fd/N). None for a
+    regular file, a missing one or a folder; a block device or a socket is refused by
+    `check_output_path`."""
+    if _through_fd(Path(path)):
+        return "an open file of a process"
+    try:
+        mode = os.stat(path).st_mode
+    except OSError:
+        return None
+    if stat.S_ISCHR(mode):
+        return "a character device"
+    if stat.S_ISFIFO(mode):
+        return "a FIFO"
+    return None
+
+
+def check_output_path(path: Path, force: bool, inputs: tuple[Path, ...] = (), streams: bool = True) -> None:
+    """Refuse to clobber: an input (by its real path), an existing file without
+    --force, a folder, a block device or socket. An existing character device, FIFO or
+    open file (/dev/null, /dev/stdout, a pipe) is written into, never replaced: no
+    --force needed, nothing the user had is lost (``streams`` False: refused instead,
+    as in a batch's --out-dir, whose outputs are files)."""
     path = Path(path)
     for inp in inputs:
         with contextlib.suppress(OSError):
-            if path.resolve() == Path(inp).resolve():
-                raise OutputError(f"{path}: refusing to overwrite the input file; choose another path")
+            if path.resolve() == Path(inp).resolve() or os.path.samefile(path, inp):
+                also = "" if str(inp) == str(path) else f" (as {inp})"
+                raise OutputError(
+                    f"{path}: is a file this run reads{also}; refusing to overwrite it (even with --force); "
+                    "choose another path"
+                )
     if path.is_dir():
         raise OutputError(f"{path}: is a folder; name a file to write")
+    kind = stream_kind(path)
+    if kind is not None:
+        if not streams:
+            raise OutputError(f"{path}: is {kind}, not a file; remove it or choose another --out-dir")
+        return
+    if path.exists() and not path.is_file():
+        raise OutputError(f"{path}: is not a regular file (a block device or socket); name a file to write")
     if path.exists() and not force:
         raise OutputError(f"{path}: exists; pass --force to overwrite it")
     parent = path.parent if str(path.parent) else Path(".")
@@ -60,19 +115,50 @@ def check_output_path(path: Path, force: bool, inputs: tuple[Path, ...] = ()) ->
         raise OutputError(f"{path}: directory {parent} does not exist")
 
 
+def _write_into(path: Path, tmp: str) -> None:
+    """Copy the finished temporary ``tmp`` into the stream ``path`` (a device, a FIFO,
+    an open file), opened for appending, never created, truncated or replaced. A FIFO
+    nobody reads is refused at once rather than waited on for ever."""
+    flags = os.O_WRONLY | os.O_APPEND | getattr(os, "O_NOCTTY", 0)
+    try:
+        fd = os.open(path, flags | os.O_NONBLOCK)
+    except OSError as exc:
+        if exc.errno == errno.ENXIO:
+            raise OutputError(f"{path}: a FIFO that nobody reads; start its reader first", errno_=exc.errno) from None
+        raise
+    try:
+        os.set_blocking(fd, True)
+        with open(tmp, "rb") as src:
+            while chunk := src.read(1 << 20):
+                view = memoryview(chunk)
+                while view:
+                    view = view[os.write(fd, view):]
+    finally:
+        os.close(fd)
+
+
 @contextlib.contextmanager
 def _temporary_beside(path: Path, prefix: str, suffix: str) -> Iterator[tuple[int, str]]:
     """(fd, name) of a new temporary beside ``path``, moved onto it when the block ends
-    normally and removed when it does not (an error, Ctrl-C, SIGTERM's SystemExit)."""
-    parent = path.parent if str(path.parent) else Path(".")
+    normally and removed when it does not (an error, Ctrl-C, SIGTERM's SystemExit). A
+    stream (`stream_kind`) is written into once its output is whole, never replaced."""
+    stream = stream_kind(path) is not None
+    if not stream and path.is_symlink():
+        path = path.resolve()  # a link to a file: the file is written, the link kept
+    # a stream's output is made whole in the temporary folder first, then copied in
+    parent = Path(tempfile.gettempdir()) if stream else (path.parent if str(path.parent) else Path("."))
     try:
         fd, tmp = tempfile.mkstemp(prefix=prefix, suffix=suffix, dir=parent)
     except OSError as exc:
         raise OutputError(f"{path}: cannot write ({exc.strerror or exc})", errno_=exc.errno) from None
     try:
         yield fd, tmp
-        os.chmod(tmp, _default_mode())
-        os.replace(tmp, path)
+        if stream:
+            _write_into(path, tmp)
+            os.unlink(tmp)
+        else:
+            os.chmod(tmp, _default_mode())
+            os.replace(tmp, path)
     except BaseException as exc:
         with contextlib.suppress(OSError):
             os.unlink(tmp)

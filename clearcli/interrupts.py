@@ -71,6 +71,28 @@ def release() -> None:
         _raise_for(signum)
 
 
+def _exit_now(signum: int, frame: Any) -> None:
+    import os
+    import sys
+
+    # the command's output is out; flush what is left of it, then go without unwinding
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except BaseException:  # a closed or full pipe: the code below still tells
+            pass
+    os._exit(128 + signum)
+
+
+def finish() -> None:
+    """The command is over: a SIGINT/SIGTERM from now on ends the process at once with
+    130/143, raising nothing. Without this, a signal during the interpreter's own exit
+    (atexit callbacks, thread joins, module teardown) raised `Terminated` where nothing
+    can catch it: "Exception ignored in ..." and a traceback on stderr."""
+    signal.signal(signal.SIGINT, _exit_now)
+    signal.signal(signal.SIGTERM, _exit_now)
+
+
 def terminated() -> bool:
     """Whether SIGTERM (not Ctrl-C) stopped the program."""
     return _terminated

@@ -71,3 +71,42 @@ def test_deferred_holds_a_block_together_and_raises_after_it() -> None:
             done.append("the rest of the block")
     assert done == ["the rest of the block"]
     assert signal.getsignal(signal.SIGINT) is not interrupts._on_signal_held  # handlers restored
+
+
+_EXIT_SIGNAL = """
+import atexit, os, signal, sys
+# the signal lands while the interpreter exits, after the command is over
+atexit.register(lambda: os.kill(os.getpid(), signal.{sig}))
+sys.argv = ["clear", "info", {frame!r}, {frame!r}, "--json", "--jobs", "1"]
+from clearcli.cli import main
+main()
+"""
+
+
+@pytest.mark.parametrize("sig, code", [("SIGTERM", 143), ("SIGINT", 130)])
+def test_a_signal_while_the_interpreter_exits_is_its_code_without_a_traceback(sig: str, code: int) -> None:
+    """Issue 34, fault 9: a SIGTERM at the end of a batch raised `Terminated` in the
+    interpreter's teardown, where nothing catches it ("Exception ignored in atexit
+    callback" and a traceback). After the command, a signal ends the process at once."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    frame = str(Path(__file__).resolve().parents[1] / "fixtures" / "box_on_box.pcd")
+    res = subprocess.run([sys.executable, "-c", _EXIT_SIGNAL.format(sig=sig, frame=frame)],
+                         capture_output=True, text=True, timeout=120)
+    assert res.returncode == code, res.stderr
+    assert res.stderr == "", res.stderr  # not a word: the batch's lines were out already
+    lines = res.stdout.splitlines()
+    assert len(lines) == 3 and '"type":"summary"' in lines[-1]  # the output whole, flushed before the exit
+
+
+def test_a_worker_ignores_a_second_sigterm_while_it_cleans_up() -> None:
+    """A busy worker gets SIGTERM twice (the pool's terminate() and its parent-death
+    signal): the first exits through the writers' clean-up, the second must not raise
+    again inside that clean-up."""
+    from clearcli.batch import pool
+
+    with pytest.raises(SystemExit) as exc:
+        pool._stop_worker(signal.SIGTERM, None)
+    assert exc.value.code == 143 and signal.getsignal(signal.SIGTERM) == signal.SIG_IGN

@@ -58,12 +58,29 @@ def _worker(conn: Connection, parent_pid: int) -> None:
     for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ.setdefault(var, "1")
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
+    signal.signal(signal.SIGTERM, _stop_worker)
     _die_with(parent_pid)
+    try:
+        _serve(conn)
+    finally:
+        # done: a SIGTERM while the interpreter exits ends it at once, raising nothing
+        # (a SystemExit raised in its teardown prints "Exception ignored" and a traceback)
+        signal.signal(signal.SIGTERM, lambda *_: os._exit(143))
+
+
+def _stop_worker(signum: int, frame: Any) -> None:
+    """The first SIGTERM: exit through the writers' clean-up. A second one (the parent's
+    terminate() and its death signal both) is ignored, so it cannot cut that clean-up
+    short; the parent kills a worker that does not end in 5 s."""
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    sys.exit(143)
+
+
+def _serve(conn: Connection) -> None:
     while True:
         try:
             msg = conn.recv()
-        except (EOFError, OSError):
+        except Exception:  # the pipe closed, or a message cut by its sender's stop: no more work
             return
         if msg is None:
             return

@@ -31,6 +31,7 @@ from clearcli import interrupts
 from clearcli.tasks.sources import BadInput, FrameRef, Skipped, check_unique_names, expand
 from clearcli.batch.work import MARK, RESULT_CODES, Job, run_job
 from clearcli.tasks.base import OUTPUT_FILES
+from clearcli.files import stream_kind
 from clearcli.errors import EXIT_BATCH_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_TERMINATED, InputError, Terminated
 
 BATCH_SCHEMA_VERSION = 1
@@ -57,6 +58,7 @@ class BatchRequest:
     fail_fast: bool = False
     json_out: bool = False
     wait: bool = False  # --wait: wait for another batch writing in --out-dir instead of refusing
+    reads: tuple[str, ...] = ()  # files the run reads besides its frames (--settings): never an output
 
 
 def parse_outputs(command: str, text: str | None) -> tuple[str, ...]:
@@ -127,7 +129,8 @@ def _clean_stale(
         if mark.is_file() and not (force and _made_otherwise(mark, made_by)):
             return True
         for f in frame_files(name):
-            (out_dir / f).unlink(missing_ok=True)
+            if stream_kind(out_dir / f) is None:  # a device or FIFO of that name is the user's
+                (out_dir / f).unlink(missing_ok=True)
     elif force:
         mark.unlink(missing_ok=True)
     return False
@@ -142,6 +145,21 @@ def _resolved(paths: Any) -> set[Path]:
         except (OSError, RuntimeError):
             pass
     return out
+
+
+def _inputs_of_run(req: BatchRequest, items: Sequence[Any]) -> set[Path]:
+    """The real paths of every file the batch reads: its frames, and what each frame's
+    run reads beside it (paired colour, intrinsics, a URDF, --settings)."""
+    from clearcli.tasks.sources import files_read, run_files
+
+    settings = getattr(req.request, "settings", None)
+    found: set[str | Path] = set(run_files(settings, req.reads))
+    for it in items:
+        if isinstance(it, FrameRef):
+            found.update(files_read(it.source, settings))
+        elif isinstance(it, (BadInput, Skipped)):
+            found.add(it.source)
+    return _resolved(found)
 
 
 def _input_among_outputs(job: Job, inputs: set[Path]) -> Path | None:
@@ -361,7 +379,7 @@ def run_batch(
 
         lines = [None] * len(items)
         temps = _temporaries(req.out_dir) if req.out_dir is not None else {}
-        inputs_of_run = _resolved({it.source for it in items}) if req.out_dir is not None else set()
+        inputs_of_run = _inputs_of_run(req, items) if req.out_dir is not None else set()
         jobs: list[Job] = []
         for k, it in enumerate(items):
             if isinstance(it, BadInput):
@@ -372,17 +390,10 @@ def run_batch(
                             "skipped": it.reason}
                 continue
             assert isinstance(it, FrameRef)
-            if req.out_dir is not None:
-                mark = req.out_dir / MARK.format(name=it.name)
-                if _clean_stale(req.out_dir, it.name, req.resume, req.force, req.made_by, temps):
-                    try:
-                        lines[k] = {**json.loads(mark.read_text(encoding="utf-8")), "_resumed": True}
-                        skipped += 1
-                        continue
-                    except (OSError, ValueError):
-                        mark.unlink(missing_ok=True)  # unreadable: do the frame again
             job = Job(req.command, req.request, it.source, it.index, it.name, dict(req.made_by), req.topic,
-                      None if req.out_dir is None else str(req.out_dir), req.outputs, req.force)
+                      None if req.out_dir is None else str(req.out_dir), req.outputs, req.force, req.reads)
+            # before anything in --out-dir is removed (--force, --resume): a file this
+            # batch reads that one of the frame's outputs would name is never touched
             clash = _input_among_outputs(job, inputs_of_run)
             if clash is not None:
                 from clearcli.errors import EXIT_OUTPUT
@@ -392,6 +403,15 @@ def run_batch(
                     EXIT_OUTPUT, it.index, it.name,
                 ))
                 continue
+            if req.out_dir is not None:
+                mark = req.out_dir / MARK.format(name=it.name)
+                if _clean_stale(req.out_dir, it.name, req.resume, req.force, req.made_by, temps):
+                    try:
+                        lines[k] = {**json.loads(mark.read_text(encoding="utf-8")), "_resumed": True}
+                        skipped += 1
+                        continue
+                    except (OSError, ValueError):
+                        mark.unlink(missing_ok=True)  # unreadable: do the frame again
             job_at.append(k)
             jobs.append(job)
         with progress:

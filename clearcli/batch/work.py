@@ -38,6 +38,7 @@ class Job:
     out_dir: str | None = None
     outputs: tuple[str, ...] = ()
     force: bool = False
+    reads: tuple[str, ...] = ()  # files the run reads besides its frames (--settings)
 
     def output_path(self, kind: str) -> Path | None:
         if self.out_dir is None or kind not in self.outputs:
@@ -48,6 +49,14 @@ class Job:
         return None if self.out_dir is None else Path(self.out_dir) / MARK.format(name=self.name)
 
 
+def job_inputs(job: Job) -> tuple[Path, ...]:
+    """Every file ``job``'s run reads (clearcli/tasks/sources.files_read): no output of
+    it may be one of them, even with --force."""
+    from clearcli.tasks.sources import files_read
+
+    return files_read(job.source, getattr(job.request, "settings", None), also=job.reads)
+
+
 def _check_outputs(job: Job) -> None:
     """Refuse to overwrite a frame's outputs or its mark (without --force): exit 8."""
     from clearcli.files import check_output_path
@@ -55,7 +64,7 @@ def _check_outputs(job: Job) -> None:
     paths = [job.output_path(kind) for kind in job.outputs] + [job.mark_path()]
     for p in paths:
         if p is not None:
-            check_output_path(p, job.force, (Path(job.source),))
+            check_output_path(p, job.force, job_inputs(job), streams=False)
 
 
 def _run(job: Job) -> Outcome:

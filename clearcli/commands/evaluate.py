@@ -104,7 +104,7 @@ def dataset_cmd(
 
     for out in (csv_out, png):
         if out is not None:
-            check_output_path(out, force, tuple(inputs))
+            check_output_path(out, force, (*inputs, *(p for p in (settings, groups) if p and Path(str(p)).is_file())))
     group_map = load_groups(groups)
     if pred is not None and not pred.is_dir():
         from clearcli.errors import InputError
@@ -160,6 +160,7 @@ def dataset_cmd(
     code = batch.run(
         "evaluate", inputs, task.Request(cfg, pred=pred, groups=group_map), frame=frame_index, topic=topic,
         force=force, json_out=json_out, on_line=collected.append, extra_summary=extra, render=render,
+        reads=(settings, groups if groups and Path(groups).is_file() else None),
     )
     docs = docs_of(collected)
     if csv_out is not None:

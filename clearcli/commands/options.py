@@ -47,7 +47,8 @@ Grasps = Annotated[
         "--grasps",
         help="Grasp kinds the planner may use, cheapest first: pinch (the thesis's, from above), rim (an open "
         "container's wall), slide (a flat object slid to a seen table edge). 'pinch' alone is the thesis's "
-        "behaviour exactly. An alias of --set plan.grasps=KINDS (default pinch,rim,slide).",
+        "behaviour exactly. Any order, each kind at most once, pinch included: the rule of --set "
+        "plan.grasps=KINDS, whose alias this is (default pinch,rim,slide).",
         metavar="KINDS",
     ),
 ]
@@ -122,12 +123,9 @@ def resolve_settings(
     from clearcli.settings import load_settings, override
 
     sets = ([f"robot.name={robot}"] if robot is not None else []) + list(sets or ())
-    if grasps is not None:  # a flag: over the file and --set; any order ("rim,pinch")
-        from clearcli.tasks.domain import canonical_grasps
-
-        grasps = canonical_grasps(grasps)
-        sets.append(f'plan.grasps="{grasps.replace(" ", "")}"')
     settings = load_settings(path, sets)
+    if grasps is not None:  # a flag over the file and --set, checked by [plan] grasps's own rule
+        settings = override(settings, "plan", grasps=grasps)
     if settings.robot.urdf:
         from clearcli.tasks.robots import check_robot
 
@@ -223,15 +221,17 @@ class Batch:
         return is_batch(inputs, self.every, self.out_dir, self.ray)
 
     def run(self, command: str, inputs: Any, request: Any, *, frame: int, topic: str | None, force: bool,
-            json_out: bool, **more: Any) -> int:
-        """The batch's exit code (clearcli/batch/run.py); ``more``: its on_line,
-        extra_summary and render hooks."""
+            json_out: bool, reads: tuple[Path | None, ...] = (), **more: Any) -> int:
+        """The batch's exit code (clearcli/batch/run.py); ``reads``: files the run reads
+        besides its frames (--settings), which no output may name; ``more``: its
+        on_line, extra_summary and render hooks."""
         from clearcli.batch.run import run_command_batch
 
         return run_command_batch(
             command, inputs, request, outputs=self.outputs, jobs=self.jobs, frame=frame, every=self.every,
             topic=topic, out_dir=self.out_dir, force=force, resume=self.resume, ray=self.ray,
-            fail_fast=self.fail_fast, wait=self.wait, json_out=json_out, **more,
+            fail_fast=self.fail_fast, wait=self.wait, json_out=json_out,
+            reads=tuple(str(p) for p in reads if p is not None), **more,
         )
 
 

@@ -181,17 +181,19 @@ def plan_cmd(
     from clearcli.errors import EXIT_NO_PLAN, InputError
     from clearcli.tasks import plan as task
     from clearcli.tasks.base import Outputs, Source
+    from clearcli.tasks.sources import files_read
 
     cfg = bo.with_images(bo.resolve_settings(settings, sets, "plan", robot=robot, grasps=grasps, time_limit_s=time_limit), intrinsics, depth_scale)
     request = task.Request(cfg, camera_pose=camera_pose, first_only=first_only)
     if batch.wanted(inputs):
         bo.no_color_in_batch(color)
         bo.single_only(**{"-o": output, "--problem": problem, "--domain": domain, "--png": png})
-        raise typer.Exit(batch.run("plan", inputs, request, frame=frame_index, topic=topic, force=force, json_out=json_out))
+        raise typer.Exit(batch.run("plan", inputs, request, frame=frame_index, topic=topic, force=force, json_out=json_out, reads=(settings,)))
     frame = inputs[0]
     outputs = [p for p in (problem, domain, output, png) if p is not None]
+    read = files_read(frame, cfg, color, also=(settings,))
     for p in outputs:
-        check_output_path(p, force, (frame, *([color] if color else [])))
+        check_output_path(p, force, read)
     resolved = [Path(p).resolve() for p in outputs]
     if len(set(resolved)) != len(resolved):
         raise InputError("-o, --problem, --domain and --png must name different files")

@@ -108,17 +108,18 @@ def predicates_cmd(
     from clearcli.errors import InputError
     from clearcli.tasks import predicates as task
     from clearcli.tasks.base import Outputs, Source
+    from clearcli.tasks.sources import files_read
 
     cfg = bo.with_images(bo.resolve_settings(settings, sets, robot=robot), intrinsics, depth_scale)
     if batch.wanted(inputs):
         bo.no_color_in_batch(color)
         bo.single_only(**{"-o": output, "--png": png})
         request = task.Request(cfg, ground_truth=ground_truth)
-        raise typer.Exit(batch.run("predicates", inputs, request, frame=frame_index, topic=topic, force=force, json_out=json_out))
+        raise typer.Exit(batch.run("predicates", inputs, request, frame=frame_index, topic=topic, force=force, json_out=json_out, reads=(settings,)))
     frame = inputs[0]
     for out in (output, png):
         if out is not None:
-            check_output_path(out, force, (frame, *([color] if color else [])))
+            check_output_path(out, force, files_read(frame, cfg, color, also=(settings,)))
     if output is not None and png is not None and Path(output).resolve() == Path(png).resolve():
         raise InputError(f"{output}: -o and --png name the same file")
     request = task.Request(cfg, ground_truth=ground_truth, outputs=Outputs.of(problem=output, png=png))

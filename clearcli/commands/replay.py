@@ -88,7 +88,9 @@ def replay_cmd(
     if from_s is not None and to_s is not None and to_s < from_s:
         raise SettingsError(f"--to {to_s} is before --from {from_s}")
     if out is not None:
-        check_output_path(out, force, inputs=(log,))
+        from clearcli.tasks.sources import files_read
+
+        check_output_path(out, force, files_read(log, config, also=(settings,)))
     request = task.Request(config, every=every, from_s=from_s, to_s=to_s, fail_fast=fail_fast, base_frame=base_frame, out=out)
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 

@@ -97,6 +97,7 @@ def segment_cmd(
     from clearcli.commands.common import check_output_path, print_json, stderr, stdout
     from clearcli.tasks import segment as task
     from clearcli.tasks.base import Outputs, Source
+    from clearcli.tasks.sources import files_read
 
     flags = dict(
         voxel_m=voxel_m,
@@ -112,11 +113,11 @@ def segment_cmd(
         bo.no_color_in_batch(color)
         bo.single_only(**{"-o": labels_out, "--png": png})
         request = task.Request(settings)
-        raise typer.Exit(batch.run("segment", inputs, request, frame=frame_index, topic=topic, force=force, json_out=json_out))
+        raise typer.Exit(batch.run("segment", inputs, request, frame=frame_index, topic=topic, force=force, json_out=json_out, reads=(settings_file,)))
     frame_path = inputs[0]
     for out in (labels_out, png):
         if out is not None:
-            check_output_path(out, force, (frame_path, *([color] if color else [])))
+            check_output_path(out, force, files_read(frame_path, settings, color, also=(settings_file,)))
     outcome = task.run(
         task.Request(settings, Outputs.of(labels=labels_out, png=png)), Source(str(frame_path), frame_index, topic, color=str(color) if color else None)
     )

@@ -46,7 +46,9 @@ def simulate_cmd(
         push_memory=config.replay.push_memory, truth_segmentation=truth_segmentation,
     )
     task.check(request)
-    check_output_path(out, force)
+    from clearcli.tasks.sources import run_files
+
+    check_output_path(out, force, run_files(config, also=(settings,)))
     with stderr.status("simulating", spinner="dots") if not json_out else _nothing():
         payload = task.run(request, out)
     if json_out:

@@ -50,18 +50,43 @@ def or_defaults(images: "ImageSettings | None") -> "ImageSettings":
     return images
 
 
+# The largest image `clear` decodes, checked on the header before a byte is decoded (a
+# PNG may claim 100000 x 100000 in 60 bytes; decoded, that is 20 GB). The largest frames
+# depth and structured-light cameras write are 4096 x 3072 (Azure Kinect colour, 12.6 MP),
+# 2448 x 2048 (Zivid 2+), 2208 x 1242 (ZED 2) and 1920 x 1080 (RealSense colour): 2^25
+# pixels (33.5 MP, 2.7 times the largest) and 16384 a side leave room for any of them
+# and for stitched or upsampled frames, and bound one frame's points to 400 MB.
+MAX_IMAGE_PIXELS = 1 << 25
+MAX_IMAGE_SIDE_PX = 16384
+
+
+def check_image_size(width: int, height: int, where: str) -> None:
+    """Refuse an image larger than any camera writes before decoding it (see above)."""
+    if width > MAX_IMAGE_SIDE_PX or height > MAX_IMAGE_SIDE_PX or width * height > MAX_IMAGE_PIXELS:
+        raise InputError(
+            f"{where}: a {width} x {height} image, larger than any camera frame clear reads (at most "
+            f"{MAX_IMAGE_PIXELS:,} pixels and {MAX_IMAGE_SIDE_PX} a side); is its header damaged? Scale it down if real"
+        )
+
+
 def _open_image(path: Path, what: str):  # -> PIL.Image.Image
     from PIL import Image, UnidentifiedImageError
 
+    # PIL's own bomb check (warn past 89 MP, raise past twice that) is replaced by ours,
+    # which runs first and refuses with the reason: ours is the stricter of the two.
+    Image.MAX_IMAGE_PIXELS = None
     try:
-        image = Image.open(path)
+        image = Image.open(path)  # reads the header only
+        check_image_size(image.width, image.height, str(path))
         image.load()  # decode now: a truncated file fails here, not half-way into a stage
     except FileNotFoundError:
         raise InputError(f"{path}: file not found") from None
     except UnidentifiedImageError:
         raise InputError(f"{path}: not an image file (PNG or TIFF) although it was given as {what}") from None
-    except (OSError, SyntaxError, ValueError) as exc:
+    except (OSError, SyntaxError, ValueError, Image.DecompressionBombError) as exc:
         raise InputError(f"{path}: a damaged or truncated image ({exc}); record or copy it again") from None
+    except MemoryError:
+        raise InputError(f"{path}: too large to decode in this machine's memory") from None
     return image
 
 
@@ -87,6 +112,14 @@ def read_depth_m(path: Path, scale_m: float) -> np.ndarray:
         raise InputError(f"{path}: cannot read ({exc.strerror})") from None
     if is_npy:
         try:
+            with open(path, "rb") as fp:
+                # the header's shape is checked before the array is read, as an image's is
+                fmt = np.lib.format
+                version = fmt.read_magic(fp)
+                header = fmt.read_array_header_1_0 if version == (1, 0) else fmt.read_array_header_2_0
+                shape = header(fp, max_header_size=10000)[0] if version[0] <= 2 else ()
+            if len(shape) in (2, 3):
+                check_image_size(int(shape[1]), int(shape[0]), str(path))
             raw = np.load(path, allow_pickle=False)
         except (ValueError, OSError, EOFError) as exc:
             raise InputError(f"{path}: not a readable NPY array ({exc})") from None

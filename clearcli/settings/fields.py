@@ -31,10 +31,17 @@ class Range:
     max_items: int | None = None
     lengths: tuple[int, ...] = ()  # allowed tuple lengths (empty: any up to max_items)
     text: str = ""  # free text (a path, a name): what it may be, checked where it is used
+    # a set of names written "a,b" (strings only): each of ``members`` at most once, in
+    # any order, ``required`` among them; kept in ``members``' order
+    members: tuple[str, ...] = ()
+    required: tuple[str, ...] = ()
 
     def describe(self) -> str:
         if self.text:
             return self.text
+        if self.members:
+            need = f" that includes {', '.join(self.required)}" if self.required else ""
+            return (f"a comma-separated list of {', '.join(self.members)} (any order, each at most once){need}")
         if self.choices:
             return "one of " + ", ".join(repr(c) for c in self.choices)
         parts = []
@@ -63,8 +70,9 @@ def param(default: Any, **bounds: Any) -> Any:
     ``max_items``, ``lengths``; ``text`` for free text, saying what it may be)."""
     if "choices" in bounds:
         bounds["choices"] = tuple(bounds["choices"])
-    if "lengths" in bounds:
-        bounds["lengths"] = tuple(bounds["lengths"])
+    for key in ("lengths", "members", "required"):
+        if key in bounds:
+            bounds[key] = tuple(bounds[key])
     return dataclasses.field(default=default, metadata={"range": Range(**bounds)})
 
 
@@ -79,6 +87,21 @@ def _type_name(typ: Any) -> str:
     return {bool: "true or false", int: "an integer", float: "a number", str: "a string"}.get(typ, "a list of numbers")
 
 
+def set_of_names(where: str, text: Any, rng: Range) -> str:
+    """"rim, pinch" -> "pinch,rim": a set of ``rng.members`` in their order; SettingsError
+    (naming ``where``) for an unknown name, a repeat, an empty item or a required one
+    missing. One rule for a file, --set and a flag that is its alias (--grasps)."""
+    items = [x.strip() for x in text] if isinstance(text, (list, tuple)) else str(text).split(",")
+    items = [x.strip() if isinstance(x, str) else x for x in items]
+    if (
+        not all(isinstance(x, str) and x in rng.members for x in items)
+        or len(set(items)) != len(items)
+        or not set(rng.required) <= set(items)
+    ):
+        raise SettingsError(f"{where}: must be {rng.describe()}")
+    return ",".join(m for m in rng.members if m in items)
+
+
 def check_value(section: str, key: str, typ: Any, rng: Range, value: Any) -> Any:
     """``value`` as ``typ`` when it is of that type and within ``rng``; else SettingsError."""
     where = f"settings: [{section}] {key} = {value!r}"
@@ -87,6 +110,10 @@ def check_value(section: str, key: str, typ: Any, rng: Range, value: Any) -> Any
         if not isinstance(value, bool):
             raise SettingsError(f"{where}: {wanted}")
         return value
+    if typ is str and rng.members:
+        if not isinstance(value, (str, list, tuple)):
+            raise SettingsError(f"{where}: must be {rng.describe()}")
+        return set_of_names(where, value, rng)
     if typ is str:
         if not isinstance(value, str):
             raise SettingsError(f"{where}: {wanted}")

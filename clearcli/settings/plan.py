@@ -59,5 +59,6 @@ class PlanSettings(Section):
     # Which grasp kinds the planner may use (clearcli/predicates/grasps), cheapest first
     # by action cost: the thesis's pinch from above (1), the rim of an open container
     # (2), a flat object slid to a seen table edge and pinched there (3). "pinch" alone
-    # is the thesis's behaviour exactly (--grasps pinch).
-    grasps: str = param("pinch,rim,slide", choices=("pinch", "pinch,rim", "pinch,slide", "pinch,rim,slide"))
+    # is the thesis's behaviour exactly (--grasps pinch). Any order, each kind at most once
+    # ("rim, pinch" is "pinch,rim"); a file, --set and --grasps follow the one rule.
+    grasps: str = param("pinch,rim,slide", members=("pinch", "rim", "slide"), required=("pinch",))

@@ -112,7 +112,8 @@ def with_profile(settings: Settings, name: Any) -> Settings:
 
 def parse_set(text: str) -> tuple[str, str, Any]:
     """``section.key=value`` -> (section, key, value). The value is read as TOML (numbers,
-    true/false, [lists], "strings", nan, inf); a bare word is a string."""
+    true/false, [lists], "strings", nan, inf); bare words (with commas too: pinch,rim)
+    are a string."""
     name, sep, raw = text.partition("=")
     section, dot, key = name.strip().partition(".")
     if not sep or not dot or not section or not key:
@@ -123,7 +124,8 @@ def parse_set(text: str) -> tuple[str, str, Any]:
     try:
         value = tomllib.loads(f"v = {raw}")["v"]
     except tomllib.TOMLDecodeError:
-        if not raw or any(c in raw for c in "[]{}\"'=,"):
+        # a bare word, or bare words with commas ("pinch,rim": a set of names), is text
+        if not raw or any(c in raw for c in "[]{}\"'="):
             raise SettingsError(f"--set {text!r}: {raw!r} is not a value (a number, true/false, a [list] or a word)") from None
         value = raw
     return section.strip(), key.strip(), value

@@ -11,14 +11,3 @@ def domain_text(clearance_costs: bool = False, grasps: str = "pinch") -> str:
 
     return text(clearance_costs=clearance_costs, kinds=parse_kinds(grasps))
 
-
-def canonical_grasps(text: str) -> str:
-    """"rim,pinch" -> "pinch,rim" (the order [plan] grasps accepts); anything not a list
-    of kinds unchanged, for the settings check to say what is wrong."""
-    from clearcli.errors import SettingsError
-    from clearcli.predicates.grasps import parse_kinds
-
-    try:
-        return ",".join(parse_kinds(text))
-    except SettingsError:
-        return text

@@ -178,9 +178,14 @@ def expand(
     images = or_defaults(images)
 
     items: list[Item] = []
+    # Real folders searched and real files taken, over all the inputs: a folder reached
+    # again (a link back to itself, or named twice through links) is searched once, and
+    # a file a folder search reaches again is one frame, not two lines whose outputs
+    # would clash. A file named twice on the command line is done twice: asked for.
+    seen: set[tuple[int, int]] = set()
+    taken: dict[tuple[int, int], str] = {}
     for raw in inputs:
         path = Path(raw)
-        seen: set[tuple[int, int]] = set()  # folders searched for this input
         why = _special(path)
         if why is not None:
             items.append(Skipped(str(path), why))
@@ -200,7 +205,12 @@ def expand(
             continue
         else:
             paths = [path]
+        searched = path.is_dir() and not _is_rosbag2(path)
         for p in paths:
+            again = _taken_before(p, taken)
+            if again is not None and searched:
+                items.append(Skipped(str(p), f"the same file as {again}, reached again"))
+                continue
             stem = p.name if p.is_dir() else p.stem
             if not _is_log(p):
                 name = frame_name(p, images) if _is_depth_image(p, images.depth_suffix) else stem
@@ -230,6 +240,20 @@ def expand(
     return items
 
 
+def _taken_before(path: Path, taken: dict[tuple[int, int], str]) -> str | None:
+    """The name under which the real file (or rosbag2 folder) ``path`` was taken
+    before, else None, and ``path`` is taken now."""
+    try:
+        st = path.stat()
+    except OSError:
+        return None
+    key = (st.st_dev, st.st_ino)
+    if key in taken:
+        return taken[key]
+    taken[key] = str(path)
+    return None
+
+
 def check_intrinsics(spec: str) -> None:
     """Read the intrinsics ``spec`` (a file or "fx fy cx cy") once, before any frame: a bad
     one is one InputError (exit 3), not one per frame."""
@@ -252,3 +276,64 @@ def check_unique_names(items: Sequence[Item]) -> None:
                     "run them in separate batches or rename one"
                 )
             seen[it.name] = it.source
+
+
+def files_read(
+    source: str | Path,
+    settings: Any = None,
+    color: str | Path | None = None,
+    also: Sequence[str | Path | None] = (),
+) -> tuple[Path, ...]:
+    """Every file a run on ``source`` reads, so that no output may name one (even with
+    --force): the frame's file (a rosbag2 folder's files), the colour image --color or
+    the naming rule pairs with a depth image, the intrinsics file ([images] intrinsics,
+    or the ones found beside the image), the robot's URDF ([robot] urdf) and the meshes
+    it names, and ``also`` (the --settings file, a groups file). Files that do not
+    exist are left out: they cannot be overwritten, and their absence is another error."""
+    from clearcli.io.images import INTRINSICS_NAMES, color_pair, or_defaults
+
+    path = Path(source)
+    images = or_defaults(getattr(settings, "images", None))
+    found: list[Path] = [path]
+    if _is_rosbag2(path):
+        found.extend(p for p in path.iterdir() if p.is_file())
+    elif _is_depth_image(path, images.depth_suffix) or path.suffix.lower() in (".png", ".tif", ".tiff", ".npy"):
+        paired = Path(color) if color else color_pair(path, images)
+        if paired is not None:
+            found.append(paired)
+        if images.intrinsics and Path(images.intrinsics).is_file():
+            found.append(Path(images.intrinsics))
+        elif not images.intrinsics:
+            found.extend(path.parent / n for n in INTRINSICS_NAMES)
+    elif color:
+        found.append(Path(color))
+    return tuple(p for p in dict.fromkeys(found) if p.exists()) + run_files(settings, also)
+
+
+def run_files(settings: Any = None, also: Sequence[str | Path | None] = ()) -> tuple[Path, ...]:
+    """The files a run reads whatever its frames: the robot's URDF ([robot] urdf) and
+    the meshes it names, and ``also`` (the --settings file, a groups file)."""
+    found: list[Path] = []
+    urdf = getattr(getattr(settings, "robot", None), "urdf", "")
+    if urdf:
+        found.extend(_urdf_files(Path(urdf)))
+    found.extend(Path(p) for p in also if p)
+    return tuple(p for p in dict.fromkeys(found) if p.exists())
+
+
+def _urdf_files(urdf: Path) -> list[Path]:
+    """A URDF and the mesh files it names by a path (relative to it, absolute or
+    file://; package:// needs a ROS workspace and is not followed)."""
+    import re
+
+    try:
+        text = urdf.read_text(encoding="utf-8", errors="replace")
+    except OSError:
+        return [urdf]
+    meshes = []
+    for name in re.findall(r'filename\s*=\s*["\']([^"\']+)["\']', text):
+        if name.startswith("package://"):
+            continue
+        name = name[len("file://"):] if name.startswith("file://") else name
+        meshes.append(urdf.parent / name)
+    return [urdf, *meshes]

@@ -34,15 +34,13 @@ def kind_module(name: str) -> GraspKind:
 
 
 def parse_kinds(text: str) -> tuple[str, ...]:
-    """"pinch,rim" -> ("pinch", "rim"); one line SettingsError for anything else."""
-    kinds = tuple(k.strip() for k in str(text).split(",") if k.strip())
-    bad = [k for k in kinds if k not in KIND_FACTS]
-    if bad or not kinds or "pinch" not in kinds:
-        raise SettingsError(
-            f"settings: [plan] grasps = {text!r}: a comma-separated list of {', '.join(KIND_NAMES)} "
-            "that includes pinch"
-        )
-    return tuple(k for k in KIND_NAMES if k in kinds)
+    """"rim,pinch" -> ("pinch", "rim"); one line SettingsError for anything else: the
+    rule of [plan] grasps itself (`clear domain --grasps` and the settings agree)."""
+    from clearcli.settings.fields import range_of, set_of_names
+    from clearcli.settings.plan import PlanSettings
+
+    canonical = set_of_names(f"settings: [plan] grasps = {text!r}", text, range_of(PlanSettings, "grasps"))
+    return tuple(canonical.split(","))
 
 
 def kind_of_action(action_name: str) -> str:
