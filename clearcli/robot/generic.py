@@ -26,6 +26,7 @@ import numpy as np
 
 from clearcli.errors import SettingsError
 from clearcli.robot.kinematics import IKStats, _se3, cache_lookup, within_tolerance
+from clearcli.robot.urdf_joints import checked_urdf
 
 # a step of damped least squares moves no joint more than this (rad): the linearisation
 # stays honest far from the target
@@ -131,20 +132,35 @@ def _without_covered(parts: list[tuple[int, np.ndarray, np.ndarray, float]]) -> 
 
 @contextlib.contextmanager
 def _quiet_stderr():
-    """File descriptor 2 to /dev/null while a C++ library (urdfdom) talks on it: the user
-    gets our one line, not its dump."""
+    """File descriptor 2 to a temporary file while a C++ library (urdfdom) talks on it:
+    the user gets our one line, not its dump. Yields a list that holds, once the block
+    ends, what was said (the reason a file was refused is only there)."""
     import os
     import sys
+    import tempfile
 
     sys.stderr.flush()
+    said: list[str] = []
     saved = os.dup(2)
     try:
-        with open(os.devnull, "w") as null:
-            os.dup2(null.fileno(), 2)
-            yield
+        with tempfile.TemporaryFile() as sink:
+            os.dup2(sink.fileno(), 2)
+            try:
+                yield said
+            finally:
+                os.dup2(saved, 2)
+                sink.seek(0)
+                said.append(sink.read().decode(errors="replace"))
     finally:
-        os.dup2(saved, 2)
         os.close(saved)
+
+
+def _first_error(said: list[str]) -> str:
+    """urdfdom's first ``Error:`` line in what it said, without the prefix ("" if none)."""
+    for line in "".join(said).splitlines():
+        if line.strip().startswith("Error:"):
+            return " ".join(line.strip()[len("Error:"):].split())
+    return ""
 
 
 def _chain_end(model: Any) -> str:
@@ -294,33 +310,50 @@ class UrdfKinematics:
 
         self.pin = pin
         self.urdf = Path(urdf)
-        if not self.urdf.is_file():
-            raise SettingsError(f"{urdf}: URDF file not found ([robot] urdf)")
-        import xml.etree.ElementTree as ET
-
-        try:  # urdfdom prints its own parse errors on stderr: say it in one line first
-            ET.parse(self.urdf)
-        except (ET.ParseError, OSError) as exc:
-            raise SettingsError(f"{urdf}: not a URDF (not well-formed XML: {exc})") from None
+        # what urdfdom would refuse with its reason on stderr only, or take silently (lower
+        # limit above upper, a zero axis), is one line naming the joint; continuous joints
+        # come back as revolute ones over a stated range (urdf_joints.CONTINUOUS_RANGE_RAD)
+        text = checked_urdf(self.urdf)
         try:
-            with _quiet_stderr():
-                full = pin.buildModelFromUrdf(str(self.urdf))
+            with _quiet_stderr() as said:
+                full = pin.buildModelFromXML(text)
         except Exception as exc:  # Pinocchio raises ValueError/RuntimeError on bad files
-            raise SettingsError(f"{urdf}: not a URDF Pinocchio can read ({str(exc).splitlines()[0]})") from None
-        frames = [f.name for f in full.frames if f.name != "universe"]
-        base_frame = base_frame or frames[0]  # the root link
+            reason = _first_error(said) or str(exc).splitlines()[0]
+            raise SettingsError(f"{urdf}: not a URDF Pinocchio can read ({reason})") from None
+        # frames are the URDF's links (Pinocchio's joint frames are not offered: a URDF
+        # names its frames by its links)
+        links = [f.name for f in full.frames if f.type == pin.FrameType.BODY]
+        base_frame = base_frame or links[0]  # the root link
         flange_frame = flange_frame or _chain_end(full)
-        for what, name in (("base_frame", base_frame), ("flange_frame", flange_frame)) + (
-            (("tcp_frame", tcp_frame),) if tcp_frame else ()
-        ):
-            if not full.existFrame(name):
-                raise SettingsError(f"{urdf}: no frame {name!r} ({what}); its frames: {', '.join(frames)}")
-        # the joints that move the flange; any other (a gripper's fingers) is held at 0
+        for what, name in (("base_frame", base_frame), ("flange_frame", flange_frame)):
+            if name not in links:
+                raise SettingsError(f"{urdf}: no frame {name!r} ({what}); its frames (links): {', '.join(links)}")
+        if tcp_frame and not full.existFrame(tcp_frame):
+            raise SettingsError(f"{urdf}: no frame {tcp_frame!r} (tcp_frame); its frames (links): {', '.join(links)}")
+        if base_frame == flange_frame:
+            raise SettingsError(
+                f"{urdf}: base_frame and flange_frame are both {base_frame!r}; the base is the link the arm stands "
+                "on, the flange the one the gripper is mounted on"
+            )
+        # The joints between the base and the flange move the flange; any other (a
+        # gripper's fingers, a torso or a mobile base above the base frame) is held at 0:
+        # poses are in the base frame, which must not move with the arm's joints.
+        base_joint = full.frames[full.getFrameId(base_frame, pin.FrameType.BODY)].parentJoint
         chain = set()
-        j = full.frames[full.getFrameId(flange_frame)].parentJoint
-        while j > 0:
+        j = full.frames[full.getFrameId(flange_frame, pin.FrameType.BODY)].parentJoint
+        while j > 0 and j != base_joint:
             chain.add(j)
             j = full.parents[j]
+        if j != base_joint:
+            raise SettingsError(
+                f"{urdf}: flange_frame {flange_frame!r} does not hang from base_frame {base_frame!r}; give a base "
+                "the flange is reached from through the arm's joints"
+            )
+        if not chain:
+            raise SettingsError(
+                f"{urdf}: no movable joint between base_frame {base_frame!r} and flange_frame {flange_frame!r} "
+                "(fixed to each other); give the arm's base and its flange"
+            )
         locked = [k for k in range(1, full.njoints) if k not in chain]
         self.model = pin.buildReducedModel(full, locked, pin.neutral(full)) if locked else full
         self._locked = locked

@@ -27,9 +27,11 @@ def robots_payload(name: str | None = None) -> dict[str, Any]:
 
 
 def check_robot(robot: Any) -> None:
-    """Read a user's URDF (``[robot] urdf``) now: a file that does not parse, a frame not
-    in it, a chain of fewer than six revolute joints is one line, exit 3, before any
-    frame is read."""
+    """Read a user's URDF (``[robot] urdf``) now: a file that does not parse, a joint's
+    non-finite numbers, zero axis or lower limit above its upper, a base or flange frame
+    that is not a link or makes no arm (the same, not above the flange, fixed to it), a
+    chain of fewer than six revolute joints is one line, exit 3, before any frame is read
+    (clearcli/robot/urdf_joints.py `checked_urdf`, clearcli/robot/generic.py)."""
     if getattr(robot, "urdf", ""):
         from clearcli.robot.profiles import profile_of
 

@@ -95,7 +95,7 @@ def test_every_field_declares_a_range_or_is_a_flag() -> None:
             if isinstance(value, bool):
                 continue
             rng = range_of(cls, f.name)
-            assert rng.choices or rng.text and isinstance(value, str) or (rng.ge is not None or rng.gt is not None) and (rng.le is not None or rng.lt is not None), (
+            assert rng.choices or rng.members and isinstance(value, str) or rng.text and isinstance(value, str) or (rng.ge is not None or rng.gt is not None) and (rng.le is not None or rng.lt is not None), (
                 f"[{name}] {f.name} has no range"
             )
 
