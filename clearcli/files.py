@@ -96,8 +96,8 @@ def check_output_path(path: Path, force: bool, inputs: tuple[Path, ...] = (), st
             if path.resolve() == Path(inp).resolve() or os.path.samefile(path, inp):
                 also = "" if str(inp) == str(path) else f" (as {inp})"
                 raise OutputError(
-                    f"{path}: is a file this run reads{also}; refusing to overwrite it (even with --force); "
-                    "choose another path"
+                    f"{path}: is an input of this run, a file it reads{also}; refusing to overwrite it (even "
+                    "with --force); choose another path"
                 )
     if path.is_dir():
         raise OutputError(f"{path}: is a folder; name a file to write")

@@ -62,10 +62,46 @@ class BagDecoders:
             return store.deserialize_ros1(data, msgtype)
         return store.deserialize_cdr(data, msgtype)
 
+    def md5_problem(self, msgtype: str, md5sum: str) -> str | None:
+        """Why a ROS 1 connection's md5sum is not that of the type it names, else None.
 
-def bag_frame(decoders: BagDecoders, msgtype: str, msgdef: str, fmt: str, data: bytes | memoryview,
-           time_ns: int, source: str) -> Frame:
-    msg = decoders.decode(msgtype, msgdef, fmt, data)
+        ROS 1 names a connection's type twice: by name, and by the md5sum of its
+        definition. A header whose name was changed (or whose bytes were damaged) keeps
+        the md5sum of what the messages are. Compared for the standard types only (a
+        custom type has no reference to compare with), and not when the bag gives none."""
+        if not self.ros1 or md5sum in ("", "*"):
+            return None
+        store = self._standard_store()
+        want = _standard_md5(store, msgtype)
+        if want is None or md5sum == want:
+            return None
+        other = next((t for t in _FRAME_TYPES if _standard_md5(store, t) == md5sum), None)
+        return (f"the connection's md5sum {md5sum} is not that of {_ros1_spelling(msgtype)} ({want})"
+                + (f" but that of {_ros1_spelling(other)}" if other else ""))
+
+
+# The ROS 1 types clear reads frames from, for naming what a mislabelled connection holds.
+_FRAME_TYPES = ("sensor_msgs/msg/PointCloud2", "sensor_msgs/msg/Image", "sensor_msgs/msg/CameraInfo")
+# md5sums of the standard ROS 1 types by type (None: not a standard type), computed once.
+_MD5: dict[str, str | None] = {}
+
+
+def _standard_md5(store: Any, msgtype: str) -> str | None:
+    if msgtype not in _MD5:
+        try:
+            _MD5[msgtype] = store.generate_msgdef(msgtype)[1] if msgtype in store.fielddefs else None
+        except Exception:  # a type the store cannot define: nothing to compare with
+            _MD5[msgtype] = None
+    return _MD5[msgtype]
+
+
+def _ros1_spelling(msgtype: str) -> str:
+    """rosbags' normalised `pkg/msg/Type` -> ROS 1's `pkg/Type`."""
+    return msgtype.replace("/msg/", "/", 1)
+
+
+def bag_frame(msgtype: str, msg: Any, time_ns: int, source: str) -> Frame:
+    """The frame of a decoded PointCloud2 or foxglove cloud of type ``msgtype``."""
     if msgtype in POINTCLOUD2_SCHEMAS:
         return pointcloud2_frame(_ZeroCopy(msg), time_ns, source)
     return foxglove_frame(_ZeroCopy(msg), time_ns, source)

@@ -109,9 +109,7 @@ def describe_file(path: Path, topic: str | None = None, index: int = 0, images: 
         summary = read_bag_summary(path)
         read_one = read_bag_frame
         access = BagAccess(summary, BagDecoders(ros1=summary.format == "rosbag1"))
-    candidates = summary.pointcloud_topics()
-    if not candidates:
-        candidates = summary.depth_topics()  # no point cloud: depth images are the frames
+    candidates = summary.frame_topics()  # no point cloud: depth images are the frames
     chosen: str | None = None
     if topic is not None or len(candidates) == 1:
         chosen = choose_topic(summary, topic)

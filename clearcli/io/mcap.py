@@ -7,7 +7,8 @@ structured dtype (offsets, point_step, row_step, byte order from the message), n
 walked point by point. With an intact summary the reader seeks chunk by chunk (only the
 chunks holding the chosen topic); without one (a truncated log) it streams the records in
 file order and, when the data stops making sense, raises PartialLogError after yielding
-every complete frame.
+every complete frame. Each frame message is checked to be the type its schema declares
+(`decode_declared`): one that is not is damage, never read as something else.
 
 foxglove.PointCloud carries a `pose` of the points in `frame_id`; it is APPLIED, so every
 Frame's points are in its `frame_id` like PointCloud2's.
@@ -20,12 +21,19 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, BinaryIO, Iterator
+from typing import Any, BinaryIO, Callable, Iterator, TypeVar
 
 from clearcli.errors import InputError, PartialLogError
 from clearcli.io.frames import Frame
 from clearcli.io.image_messages import CAMERA_INFO_SCHEMAS, COMPRESSED_SCHEMAS, IMAGE_SCHEMAS
-from clearcli.io.messages import MessageDecoders, foxglove_frame, pointcloud2_frame, schema_name
+from clearcli.io.messages import (
+    MessageDecoders,
+    _as_bytes,
+    foxglove_frame,
+    message_field,
+    pointcloud2_frame,
+    schema_name,
+)
 from clearcli.io.sniff import MCAP_MAGIC, open_input
 
 DEFAULT_TOPIC = "/camera/depth_registered/points"
@@ -85,6 +93,12 @@ class McapSummary:
         `.../aligned_depth_to_color/image_raw`, Azure Kinect `/depth/image_raw`)."""
         return [t for t in self.image_topics() if "depth" in t.lower()]
 
+    def frame_topics(self) -> list[str]:
+        """The topics whose messages are frames: the point-cloud topics, or in a log with
+        none, its depth image topics. The one rule for an intact log, a damaged one's scan
+        (which knows the topics seen before the damage) and a bag."""
+        return self.pointcloud_topics() or self.depth_topics()
+
     def count(self, topic: str) -> int:
         return sum(ch.message_count for ch in self.channels if ch.topic == topic)
 
@@ -113,6 +127,73 @@ def error_reason(exc: BaseException) -> str:
     text = str(exc).splitlines()[0] if str(exc) else ""
     name = type(exc).__name__
     return f"{name}: {text[:120]}" if text else name
+
+
+# --- declared types -------------------------------------------------------------------
+
+# The fields a frame message of each type has, and which of them times the height must
+# be the bytes of its data: a message that really is its declared type has them, and
+# they agree with the data it carries.
+_FRAME_LAYOUTS = (
+    (POINTCLOUD2_SCHEMAS, "PointCloud2", ("height", "width", "fields", "point_step", "row_step", "data"), "row_step"),
+    (IMAGE_SCHEMAS, "image", ("height", "width", "encoding", "step", "data"), "step"),
+)
+# What to do about an MCAP message that is not its declared type.
+_TYPE_REMEDY = (
+    "the log is damaged, or its schema for the topic names another type than its messages are: "
+    "re-record it, or rewrite the topic with the schema of what it holds"
+)
+
+
+class DeclaredTypeError(ValueError):
+    """A message that does not decode as the type its log declares for its topic, or
+    decodes to fields that do not add up to the bytes it carries (the CDR of a
+    PointCloud2 read as an Image): the log is damaged, or names another type than its
+    messages are (an MCAP schema, a rosbag2's metadata.yaml, a ROS 1 connection header).
+    Readers report it as damage: exit 3 before any complete frame, 9 after, in one line
+    naming the topic, the type and what to do."""
+
+    def __init__(self, declared: str, reason: str) -> None:
+        super().__init__(f"does not decode as its declared type {declared or 'unknown'} ({reason})")
+        self.declared, self.reason = declared, reason
+
+
+def _byte_length(data: Any) -> int:
+    if isinstance(data, memoryview):
+        return data.nbytes
+    if hasattr(data, "nbytes"):  # a NumPy array (rosbags)
+        return int(data.nbytes)
+    if isinstance(data, (bytes, bytearray)):
+        return len(data)
+    return len(_as_bytes(data))  # json: base64 text
+
+
+def decode_declared(declared: str, decode: Callable[[], Any]) -> Any:
+    """The message ``decode()`` gives, checked to be the ``declared`` type: it decodes, and
+    a frame type's fields are there and add up to its data; DeclaredTypeError if not.
+    (A decoder that reads past the end of a message quietly returns less: the sizes,
+    not the decoder, tell a PointCloud2's bytes read as an Image.)"""
+    try:
+        msg = decode()
+    except Exception as exc:  # SerdeError (size mismatch), struct.error, UnicodeDecodeError...
+        raise DeclaredTypeError(declared, error_reason(exc)) from None
+    for names, kind, fields, step_name in _FRAME_LAYOUTS:
+        if declared not in names:
+            continue
+        missing = [name for name in fields if message_field(msg, name) is None]
+        if missing:
+            raise DeclaredTypeError(declared, f"it has no {', '.join(missing)}")
+        try:
+            height, step = int(message_field(msg, "height")), int(message_field(msg, step_name))
+            n_bytes = _byte_length(message_field(msg, "data"))
+        except (TypeError, ValueError) as exc:
+            raise DeclaredTypeError(declared, error_reason(exc)) from None
+        if height * step != n_bytes:
+            raise DeclaredTypeError(
+                declared, f"damaged {kind}: height {height} x {step_name} {step} = {height * step} bytes, "
+                f"but it carries {n_bytes}",
+            )
+    return msg
 
 
 def _scan(path: Path, fp: BinaryIO) -> McapSummary:
@@ -236,15 +317,16 @@ def choose_topic(summary: Any, topic: str | None) -> str:
                 f"({', '.join(sorted(POINTCLOUD_SCHEMAS))})"
             )
         return topic
-    candidates = summary.pointcloud_topics()
+    # Depth image topics are frame topics as point-cloud topics are, in a damaged log as
+    # in an intact one: a cut RGB-D log keeps its whole frames like a cut point-cloud log.
+    candidates = summary.frame_topics()
     if not candidates and summary.damage is not None:
         what = getattr(summary, "what", "MCAP log")
         raise InputError(
             f"{path}: truncated or corrupt {what}: it breaks {summary.damage} before any "
-            f"point-cloud topic; topics seen: {_topic_list(summary)}"
+            f"frame topic (point cloud or depth image); topics seen: {_topic_list(summary)}"
         )
-    if not candidates and summary.depth_topics():
-        candidates = summary.depth_topics()
+    if candidates and not summary.pointcloud_topics():
         if len(candidates) > 1:
             raise InputError(f"{path}: several depth image topics ({', '.join(candidates)}); choose one with --topic")
         return candidates[0]
@@ -270,7 +352,8 @@ def choose_topic(summary: Any, topic: str | None) -> str:
 def _message_frame(decoders: MessageDecoders, schema: Any, channel: Any, message: Any, index: int, path: Path,
                    images: Any = None, summary: "McapSummary | None" = None) -> Frame:
     source = f"{path.name}#{index} {channel.topic}"
-    msg = decoders.decode(schema, channel, message.data)
+    decode = decoders.decoder(schema, channel)
+    msg = decode_declared(schema_name(schema), lambda: decode(message.data))
     if schema_name(schema) in IMAGE_SCHEMAS:
         from clearcli.io.mcap_images import depth_frame
 
@@ -299,6 +382,30 @@ def raw_messages(path: Path, summary: McapSummary, topic: str) -> Iterator[tuple
             yield from reader.iter_messages(topics=[topic], log_time_order=False)
 
 
+_T = TypeVar("_T")
+
+
+def until_damage(messages: Iterator[_T]) -> Iterator[_T]:
+    """``messages`` up to where the log breaks, ending there quietly. For what a frame is
+    paired with (its camera info, its colour): a damaged log's frames before the damage
+    keep it, and the frames' own reader reports the damage (exit 9 after them)."""
+    try:
+        while True:
+            try:
+                item = next(messages)
+            except StopIteration:
+                return
+            except InputError:  # the log cannot be opened at all: not damage past frames
+                raise
+            except Exception:  # EndOfFile, CRC and decompression errors, ROS 1 Damage...
+                return
+            yield item
+    finally:
+        close = getattr(messages, "close", None)
+        if close is not None:
+            close()
+
+
 class LogAccess:
     """A log's decoded messages by topic, for readers that pair messages of several
     topics (a depth image with its camera info and colour: clearcli/io/mcap_images.py).
@@ -310,29 +417,36 @@ class LogAccess:
         self.can_seek = summary.indexed
 
     def decoded(self, topic: str) -> Iterator[tuple[str, Any, int]]:
-        """(schema name, message, log time ns) of ``topic``."""
-        for schema, channel, message in raw_messages(self.path, self.summary, topic):
+        """(schema name, message, log time ns) of ``topic``, up to any damage."""
+        for schema, channel, message in until_damage(raw_messages(self.path, self.summary, topic)):
             yield schema_name(schema), self.decoders.decode(schema, channel, message.data), int(message.log_time)
 
     def window(self, topic: str, start_ns: int, end_ns: int) -> Iterator[tuple[str, Any, int]]:
-        """The same for messages logged in [start_ns, end_ns] (seeks: the log is indexed)."""
+        """The same for messages logged in [start_ns, end_ns] (seeks: the log is indexed),
+        up to any damage (a corrupt chunk near a whole frame costs it its colour, not the frame)."""
         from mcap.reader import SeekingReader
 
         with _open(self.path) as fp:
-            for schema, channel, message in SeekingReader(fp).iter_messages(
+            for schema, channel, message in until_damage(SeekingReader(fp).iter_messages(
                 topics=[topic], starting_at=start_ns, ending_at=end_ns
-            ):
+            )):
                 yield schema_name(schema), self.decoders.decode(schema, channel, message.data), int(message.log_time)
 
 
 def _guarded(path: Path, summary: McapSummary, topic: str) -> Iterator[tuple[int, Any, Any, Any]]:
-    """Raw messages numbered from 0; damage after k messages -> PartialLogError (k > 0)."""
+    """Raw messages numbered from 0; damage after k messages -> PartialLogError (k > 0).
+    Fewer messages than an intact summary counts is damage too, never a quiet end."""
     it = raw_messages(path, summary, topic)
     index = 0
     while True:
         try:
             schema, channel, message = next(it)
         except StopIteration:
+            total = summary.count(topic)
+            if summary.damage is None and index < total:
+                # the summary promises more: never a quiet end short of it
+                _raise_damage(path, topic, index,
+                              f"its summary counts {total} messages on {topic}, the log holds {index}")
             return
         except InputError:
             raise
@@ -360,6 +474,8 @@ def iter_mcap_frames(path: Path, topic: str | None = None, images: Any = None) -
     for index, schema, channel, message in _guarded(path, summary, topic):
         try:
             frame = _message_frame(decoders, schema, channel, message, index, path, images, summary)
+        except DeclaredTypeError as exc:  # all of it: it names the type and what to do
+            _raise_damage(path, topic, index, f"message {index} {exc}; {_TYPE_REMEDY}")
         except Exception as exc:  # bad input included: exit 3 at the first frame, 9 after complete ones
             _raise_damage(path, topic, index, f"message {index} cannot be decoded: {error_reason(exc)}")
         yield frame
@@ -391,6 +507,8 @@ def read_mcap_frame(path: Path, topic: str | None = None, index: int = 0, images
                 return _message_frame(decoders, schema, channel, message, index, path, images, summary)
             except InputError:
                 raise
+            except DeclaredTypeError as exc:
+                raise InputError(f"{path}: frame {index} of {topic} {exc}; {_TYPE_REMEDY}") from None
             except Exception as exc:
                 raise InputError(f"{path}: frame {index} of {topic} cannot be decoded ({error_reason(exc)})") from None
     if summary.damage is not None:

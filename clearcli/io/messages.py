@@ -42,15 +42,20 @@ class MessageDecoders:
         self._cache: dict[tuple[int, str], Callable[[bytes], Any]] = {}
 
     def decode(self, schema: Any, channel: Any, data: bytes) -> Any:
+        return self.decoder(schema, channel)(data)
+
+    def decoder(self, schema: Any, channel: Any) -> Callable[[bytes], Any]:
+        """The function that decodes ``channel``'s messages; raises when clear has no
+        decoder for its encoding or schema (apart from a message that fails to decode)."""
         encoding = channel.message_encoding
         if encoding == "json":
-            return json.loads(data)
+            return json.loads
         key = (schema.id if schema is not None else 0, encoding)
         decoder = self._cache.get(key)
         if decoder is None:
             decoder = self._make(schema, encoding)
             self._cache[key] = decoder
-        return decoder(data)
+        return decoder
 
     @staticmethod
     def _make(schema: Any, encoding: str) -> Callable[[bytes], Any]:

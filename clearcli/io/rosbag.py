@@ -9,12 +9,17 @@ counts, time span), `choose_bag_topic` (the same topic rules and messages),
   the chunk holding message N. A bag whose index is missing or unreadable (a recording cut
   short, a truncated copy, an unindexed bag) is streamed record by record in file order
   by this module instead; when the records stop making sense it raises PartialLogError
-  after yielding every complete frame (InputError when there is none).
+  after yielding every complete frame (InputError when there is none). A connection whose
+  md5sum is not that of the standard type it names is damage too (the header names
+  another type than its messages are).
 - rosbag2 (a folder holding `metadata.yaml`, or its `.db3` sqlite storage file alone):
   `rosbags.rosbag2.Reader`, sqlite3 and mcap storage; messages come from a database
   cursor or one MCAP chunk at a time (a bag compressed per file is first unpacked by
   rosbags into a temporary folder). A `.mcap` storage file alone is an MCAP log, read by
-  `clearcli.io.mcap`, which also reads a damaged one up to its damage.
+  `clearcli.io.mcap`, which also reads a damaged one up to its damage. Every message of a
+  topic is read even where metadata.yaml declares another type for it than its storage
+  file records (rosbags would pass them over), and decoded as declared: a disagreement
+  is damage (exit 3, or 9 after complete frames), never frames silently lost.
 
 Messages are deserialised with a `rosbags.typesys` type store built from the bag's own
 message definitions when it carries them (else the standard ROS 1 Noetic / ROS 2 types);
@@ -35,7 +40,15 @@ import numpy as np
 
 from clearcli.errors import InputError, PartialLogError
 from clearcli.io.frames import Frame
-from clearcli.io.mcap import ChannelInfo, McapSummary, error_reason, require_frame_index
+from clearcli.io.mcap import (
+    ChannelInfo,
+    DeclaredTypeError,
+    McapSummary,
+    decode_declared,
+    error_reason,
+    require_frame_index,
+    until_damage,
+)
 from clearcli.io.bag_messages import BagDecoders, _ZeroCopy, bag_frame
 from clearcli.io.image_messages import IMAGE_SCHEMAS
 from clearcli.io.messages import quat_matrix
@@ -265,8 +278,9 @@ def choose_bag_topic(summary: BagSummary, topic: str | None) -> str:
 
 # --- iteration --------------------------------------------------------------------------
 
-# One raw message: (normalised type, definition, definition format, data, log time ns).
-_Raw = tuple[str, str, str, "bytes | memoryview", int]
+# One raw message: (normalised type, definition, definition format, data, log time ns,
+# the connection's md5sum: ROS 1 only, else "").
+_Raw = tuple[str, str, str, "bytes | memoryview", int, str]
 
 
 def _ros1_indexed(reader: Any, topic: str, skip_to: int = 0) -> Iterator[_Raw]:
@@ -290,7 +304,7 @@ def _ros1_indexed(reader: Any, topic: str, skip_to: int = 0) -> Iterator[_Raw]:
     for i, (conn, time_ns, data) in enumerate(reader.messages(connections=conns, start=start)):
         if i < skip:
             continue
-        yield conn.msgtype, conn.msgdef.data, "MSG", data, int(time_ns)
+        yield conn.msgtype, conn.msgdef.data, "MSG", data, int(time_ns), conn.digest
 
 
 def _ros1_streamed(path: Path, topic: str) -> Iterator[_Raw]:
@@ -300,17 +314,59 @@ def _ros1_streamed(path: Path, topic: str) -> Iterator[_Raw]:
         for item in stream.records():
             if isinstance(item, Ros1Msg) and item.data is not None:
                 conn = stream.conns[item.conn]
-                yield _normalize(conn.msgtype), conn.msgdef, "MSG", item.data, item.time_ns
+                yield _normalize(conn.msgtype), conn.msgdef, "MSG", item.data, item.time_ns, conn.md5sum
+
+
+def _stored(reader: Any, topic: str) -> list[Any]:
+    """The connections the storage files of a rosbag2 folder record for ``topic`` (with
+    their own types); [] for a storage file read alone (its connections are its own)."""
+    storages = getattr(reader.storage, "storages", None) or []
+    return [s for storage in storages for s in storage.connections if s.topic == topic]
+
+
+def _asked(reader: Any, conns: list[Any]) -> list[Any]:
+    """What to ask rosbags for, to get every message of ``conns`` (metadata.yaml's). It
+    passes over, without a word, the messages whose storage file records another type for
+    their topic than metadata.yaml declares: asked with the stored type (and its hash and
+    QoS, which it compares too), it gives them all, under the declared connection's id,
+    to be decoded as the declared type, where a disagreement shows (DeclaredTypeError)."""
+    asked: list[Any] = []
+    for conn in conns:
+        for stored in _stored(reader, conn.topic) or [conn]:
+            mine = conn._replace(msgtype=stored.msgtype, digest=stored.digest, ext=stored.ext)
+            if mine not in asked:
+                asked.append(mine)
+    return asked
 
 
 def _rosbag2_messages(path: Path, topic: str) -> Iterator[_Raw]:
     reader = _rosbag2_reader(path)
     try:
-        conns = [c for c in reader.connections if c.topic == topic]
-        for conn, time_ns, data in reader.messages(connections=conns):
-            yield conn.msgtype, conn.msgdef.data, conn.msgdef.format.name, data, int(time_ns)
+        declared = {c.id: c for c in reader.connections if c.topic == topic}
+        for asked, time_ns, data in reader.messages(connections=_asked(reader, list(declared.values()))):
+            conn = declared[asked.id]
+            yield conn.msgtype, conn.msgdef.data, conn.msgdef.format.name, data, int(time_ns), ""
     finally:
         reader.close()
+
+
+def _type_remedy(summary: BagSummary, topic: str) -> str:
+    """What to do about messages on ``topic`` that are not their declared type."""
+    if summary.format == "rosbag1":
+        return ("the bag is damaged, or its connection header names another type than its messages are: "
+                "re-record it, or rewrite the connection with the type (and md5sum) of what it holds")
+    declared = {ch.schema_name for ch in summary.channels if ch.topic == topic}
+    try:
+        reader = _rosbag2_reader(summary.path)
+        try:
+            stored = sorted({s.msgtype for s in _stored(reader, topic)} - declared)
+        finally:
+            reader.close()
+    except Exception:  # a hint only
+        stored = []
+    records = f" (its storage file records {', '.join(stored)})" if stored else ""
+    return (f"the bag is damaged, or its {ROSBAG2_METADATA} declares another type for the topic than its "
+            f"messages are{records}: correct the type in {ROSBAG2_METADATA}, or re-record the bag")
 
 
 def _seeks(summary: BagSummary) -> bool:
@@ -355,6 +411,11 @@ def _guarded(summary: BagSummary, topic: str, skip_to: int = 0) -> Iterator[tupl
             try:
                 index, raw = next(it)
             except StopIteration:
+                total = summary.count(topic)
+                if summary.damage is None and complete < total:
+                    # the index promises more: never a quiet end short of it
+                    _raise_damage(summary, topic, complete,
+                                  f"its index counts {total} messages on {topic}, the bag holds {complete}")
                 return
             except InputError:
                 raise
@@ -381,7 +442,8 @@ class BagAccess:
         return msgtype, _ZeroCopy(self.decoders.decode(msgtype, msgdef, fmt, data)), int(time_ns)
 
     def decoded(self, topic: str) -> Iterator[tuple[str, Any, int]]:
-        for _, (msgtype, msgdef, fmt, data, time_ns) in _raw_messages(self.summary, topic):
+        """(type, message, log time ns) of ``topic``, up to any damage."""
+        for _, (msgtype, msgdef, fmt, data, time_ns, _md5) in until_damage(_raw_messages(self.summary, topic)):
             yield self._decoded(msgtype, msgdef, fmt, data, time_ns)
 
     def window(self, topic: str, start_ns: int, end_ns: int) -> Iterator[tuple[str, Any, int]]:
@@ -390,8 +452,13 @@ class BagAccess:
         if reader is None:
             return
         try:
-            conns = [c for c in reader.connections if c.topic == topic]
-            for conn, time_ns, data in reader.messages(connections=conns, start=start_ns, stop=end_ns + 1):
+            declared = {c.id: c for c in reader.connections if c.topic == topic}
+            conns = list(declared.values())
+            if self.summary.format == "rosbag2":
+                conns = _asked(reader, conns)
+            messages = reader.messages(connections=conns, start=start_ns, stop=end_ns + 1)
+            for asked, time_ns, data in until_damage(messages):
+                conn = declared[asked.id]
                 fmt = "MSG" if self.summary.format == "rosbag1" else conn.msgdef.format.name
                 yield self._decoded(conn.msgtype, conn.msgdef.data, fmt, data, time_ns)
         finally:
@@ -399,14 +466,20 @@ class BagAccess:
 
 
 def _decode(decoders: BagDecoders, summary: BagSummary, topic: str, index: int, raw: _Raw, images: Any = None) -> Frame:
-    msgtype, msgdef, fmt, data, time_ns = raw
+    """The frame of one raw message; DeclaredTypeError when it is not its declared type
+    (its ROS 1 md5sum is another type's, it does not decode as the type, or to the wrong size)."""
+    msgtype, msgdef, fmt, data, time_ns, md5sum = raw
     source = f"{summary.path.name}#{index} {topic}"
+    declared = _ros1_name(msgtype) if decoders.ros1 else msgtype  # as the bag spells it
+    problem = decoders.md5_problem(msgtype, md5sum)
+    if problem is not None:
+        raise DeclaredTypeError(declared, problem)
+    msg = decode_declared(declared, lambda: decoders.decode(msgtype, msgdef, fmt, data))
     if msgtype in IMAGE_SCHEMAS:
         from clearcli.io.mcap_images import depth_frame
 
-        msg = _ZeroCopy(decoders.decode(msgtype, msgdef, fmt, data))
-        return depth_frame(BagAccess(summary, decoders), topic, msg, int(time_ns), source, images)
-    return bag_frame(decoders, msgtype, msgdef, fmt, data, time_ns, source)
+        return depth_frame(BagAccess(summary, decoders), topic, _ZeroCopy(msg), int(time_ns), source, images)
+    return bag_frame(msgtype, msg, time_ns, source)
 
 
 def iter_bag_frames(path: Path, topic: str | None = None, images: Any = None) -> Iterator[Frame]:
@@ -418,6 +491,8 @@ def iter_bag_frames(path: Path, topic: str | None = None, images: Any = None) ->
     for index, raw in _guarded(summary, topic):
         try:
             frame = _decode(decoders, summary, topic, index, raw, images)
+        except DeclaredTypeError as exc:  # all of it: it names the type and what to do
+            _raise_damage(summary, topic, index, f"message {index} {exc}; {_type_remedy(summary, topic)}")
         except Exception as exc:
             _raise_damage(summary, topic, index, f"message {index} cannot be decoded: {error_reason(exc)}")
         yield frame
@@ -436,6 +511,8 @@ def read_bag_frame(path: Path, topic: str | None = None, index: int = 0, images:
                 return _decode(decoders, summary, topic, index, raw, images)
             except InputError:
                 raise
+            except DeclaredTypeError as exc:
+                raise InputError(f"{path}: frame {index} of {topic} {exc}; {_type_remedy(summary, topic)}") from None
             except Exception as exc:
                 raise InputError(f"{path}: frame {index} of {topic} cannot be decoded ({error_reason(exc)})") from None
     total = summary.count(topic)
@@ -465,7 +542,7 @@ def read_bag_transforms(path: Path, max_messages: int = 1000) -> dict[tuple[str,
     for topic in (t for t in TF_TOPICS if t in present):
         with contextlib.closing(_raw_messages(summary, topic)) as messages:
             try:
-                for _, (msgtype, msgdef, fmt, data, _t) in messages:
+                for _, (msgtype, msgdef, fmt, data, _t, _md5) in messages:
                     if budget <= 0:
                         return found
                     budget -= 1

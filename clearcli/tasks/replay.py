@@ -57,6 +57,11 @@ def run(
         if summary.start_ns is not None:
             log_start_s = summary.start_ns / 1e9
         total = summary.count(topic) or None
+    elif kind in ("rosbag1", "rosbag2"):
+        from clearcli.io.rosbag import choose_bag_topic, read_bag_summary
+
+        bag = read_bag_summary(log)
+        total = bag.count(choose_bag_topic(bag, topic)) or None
     else:
         total = 1
 
@@ -101,6 +106,16 @@ def run(
                     sink.write(report, report.frame)
         except PartialLogError as exc:
             partial = exc
+        if session.summary.frames_read == 0 and partial is None and total:
+            from clearcli.errors import InputError
+
+            # A log whose index counts frames gave none, without a word from its reader:
+            # never a replay of nothing that exits 0 (raised here, inside the annotated
+            # log's block, which then leaves no output).
+            raise InputError(
+                f"{log}: none of the {total} frame(s) its index counts on {topic or 'its frame topic'} could be read; "
+                "the log is damaged or declares another type than its messages are"
+            )
 
     if request.out is not None:
         from clearcli.replay.annotate import AnnotatedLog

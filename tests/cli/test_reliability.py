@@ -100,7 +100,7 @@ def pair(tmp_path: Path) -> Path:
 def test_an_output_naming_a_paired_input_is_refused_even_with_force(pair: Path, flag: str, name: str) -> None:
     before = _digest(pair)
     line = _one_line(clear("plan", pair / "uois_0003_depth.png", flag, pair / name, "--force"), 8)
-    assert "is a file this run reads" in line and name in line
+    assert "is an input of this run" in line and name in line
     assert _digest(pair) == before
 
 
@@ -108,7 +108,7 @@ def test_an_output_naming_the_settings_file_or_the_urdf_is_refused(tmp_path: Pat
     settings = tmp_path / "s.toml"
     settings.write_text("[plan]\ntime_limit_s = 20\n")
     line = _one_line(clear("plan", BOX, "--settings", settings, "-o", settings, "--force"), 8)
-    assert "is a file this run reads" in line and settings.read_text() == "[plan]\ntime_limit_s = 20\n"
+    assert "is an input of this run" in line and settings.read_text() == "[plan]\ntime_limit_s = 20\n"
     urdf = tmp_path / "arm.urdf"
     shutil.copy(Path(__file__).resolve().parents[2] / "clearcli" / "robot" / "panda.urdf", urdf)
     before = urdf.read_bytes()

@@ -91,7 +91,8 @@ def bag_image(store: Any, ros1: bool, pixels: np.ndarray, encoding: str, t_ns: i
 
 
 def bag_info(store: Any, ros1: bool, w: int, h: int, t_ns: int, frame_id: str,
-             k: tuple[float, float, float, float] = K_UOIS, d: tuple[float, ...] = (0.0,) * 5) -> Any:
+             k: tuple[float, float, float, float] = K_UOIS, d: tuple[float, ...] = (0.0,) * 5,
+             model: str = "plumb_bob") -> Any:
     fx, fy, cx, cy = k
     roi = store.types["sensor_msgs/msg/RegionOfInterest"](x_offset=0, y_offset=0, height=0, width=0, do_rectify=False)
     mats = {
@@ -101,7 +102,7 @@ def bag_info(store: Any, ros1: bool, w: int, h: int, t_ns: int, frame_id: str,
     if ros1:
         mats = {key.upper(): v for key, v in mats.items()}
     return store.types["sensor_msgs/msg/CameraInfo"](
-        header=_bag_header(store, ros1, t_ns, frame_id), height=h, width=w, distortion_model="plumb_bob",
+        header=_bag_header(store, ros1, t_ns, frame_id), height=h, width=w, distortion_model=model,
         binning_x=0, binning_y=0, roi=roi, **mats)
 
 
@@ -136,39 +137,63 @@ def write_rgbd_bag(path: Path, depth: list[np.ndarray], color: list[np.ndarray] 
     return path
 
 
+# (translation x, y, z in metres), (quaternion x, y, z, w) of a geometry_msgs/Transform
+Extrinsic = tuple[tuple[float, float, float], tuple[float, float, float, float]]
+
+
 def write_realsense_sdk_bag(path: Path, depth: list[np.ndarray], color: list[np.ndarray], *,
-                            depth_units: float = 0.001, depth_frame_id: str = "0", color_frame_id: str = "0") -> Path:
+                            depth_units: float = 0.001, depth_frame_id: str = "0", color_frame_id: str = "0",
+                            depth_k: tuple[float, float, float, float] = K_UOIS, color_k: tuple[float, float, float, float] = K_UOIS,
+                            color_model: str = "plumb_bob", color_d: tuple[float, ...] = (0.0,) * 5,
+                            color_encoding: str = "rgb8", color_info: bool = True,
+                            color_at_ns: list[int] | None = None,
+                            extrinsics: dict[str, Extrinsic] | None = None) -> Path:
     """A ROS 1 bag laid out as librealsense's recorder writes one (realsense-viewer,
     rs2::recorder; its record-and-playback documentation): each stream under
     /device_0/sensor_<i>/<Stream>_<index>/ with `image/data` and `info/camera_info`, the
     sensor's options as std_msgs/Float32 under `option/<name>/value`, the streams'
-    extrinsics as geometry_msgs/Transform under `tf/<index>`. Colour is not registered
-    to depth (another sensor, its own intrinsics)."""
+    extrinsics as geometry_msgs/Transform under `tf/<group>` (group 0: from the reference
+    stream to that stream, as ros_writer::write_extrinsics records them).
+
+    Depth k is logged at 1_700_000_000 s + k * 33 ms; colour j at the same time as depth j,
+    or at 1_700_000_000 s + ``color_at_ns[j]``. ``extrinsics``: {"Depth": ..., "Color": ...}
+    (a stream left out has no tf topic); by default only Color's, 15 mm along x, so that
+    colour is not registered (no Depth extrinsics). ``color_info`` False leaves out the
+    colour's camera info."""
     from rosbags.rosbag1 import Writer
 
     store = _store(True)
     ser = store.serialize_ros1
-    d_ns, c_ns = "/device_0/sensor_0/Depth_0", "/device_0/sensor_1/Color_0"
+    t0 = 1_700_000_000_000_000_000
+    streams = {"Depth": "/device_0/sensor_0/Depth_0", "Color": "/device_0/sensor_1/Color_0"}
+    if extrinsics is None:
+        extrinsics = {"Color": ((0.015, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0))}
     with Writer(path) as writer:
         units = writer.add_connection("/device_0/sensor_0/option/Depth Units/value", "std_msgs/msg/Float32", typestore=store)
-        writer.write(units, 1_700_000_000_000_000_000 - 1, ser(store.types["std_msgs/msg/Float32"](data=depth_units),
-                                                             "std_msgs/msg/Float32"))
-        tf_c = writer.add_connection(f"{c_ns}/tf/0", "geometry_msgs/msg/Transform", typestore=store)
-        tf = store.types["geometry_msgs/msg/Transform"](
-            translation=store.types["geometry_msgs/msg/Vector3"](x=0.015, y=0.0, z=0.0),
-            rotation=store.types["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0, w=1.0))
-        writer.write(tf_c, 1_700_000_000_000_000_000 - 1, ser(tf, "geometry_msgs/msg/Transform"))
+        writer.write(units, t0 - 1, ser(store.types["std_msgs/msg/Float32"](data=depth_units), "std_msgs/msg/Float32"))
+        for name, (xyz, q) in extrinsics.items():
+            tf_c = writer.add_connection(f"{streams[name]}/tf/0", "geometry_msgs/msg/Transform", typestore=store)
+            tf = store.types["geometry_msgs/msg/Transform"](
+                translation=store.types["geometry_msgs/msg/Vector3"](x=xyz[0], y=xyz[1], z=xyz[2]),
+                rotation=store.types["geometry_msgs/msg/Quaternion"](x=q[0], y=q[1], z=q[2], w=q[3]))
+            writer.write(tf_c, t0 - 1, ser(tf, "geometry_msgs/msg/Transform"))
         conns = {}
-        for ns in (d_ns, c_ns):
-            conns[ns] = (writer.add_connection(f"{ns}/info/camera_info", "sensor_msgs/msg/CameraInfo", typestore=store),
-                         writer.add_connection(f"{ns}/image/data", "sensor_msgs/msg/Image", typestore=store))
-        for k, (d, c) in enumerate(zip(depth, color)):
-            t = 1_700_000_000_000_000_000 + k * 33_000_000
-            for ns, pixels, enc, fid in ((d_ns, d, "16UC1", depth_frame_id), (c_ns, c, "rgb8", color_frame_id)):
-                h, w = pixels.shape[:2]
-                info_c, image_c = conns[ns]
-                writer.write(info_c, t, ser(bag_info(store, True, w, h, t, fid), "sensor_msgs/msg/CameraInfo"))
-                writer.write(image_c, t + 1, ser(bag_image(store, True, pixels, enc, t, fid), "sensor_msgs/msg/Image"))
+        for name, ns in streams.items():
+            info = name == "Depth" or color_info
+            conns[name] = (writer.add_connection(f"{ns}/info/camera_info", "sensor_msgs/msg/CameraInfo", typestore=store)
+                           if info else None,
+                           writer.add_connection(f"{ns}/image/data", "sensor_msgs/msg/Image", typestore=store))
+        messages = [("Depth", t0 + k * 33_000_000, d, "16UC1", depth_frame_id, {"k": depth_k})
+                    for k, d in enumerate(depth)]
+        messages += [("Color", t0 + (color_at_ns[j] if color_at_ns is not None else j * 33_000_000), c,
+                      color_encoding, color_frame_id, {"k": color_k, "d": color_d, "model": color_model})
+                     for j, c in enumerate(color)]
+        for name, t, pixels, enc, fid, intrinsics in sorted(messages, key=lambda m: m[1]):
+            h, w = pixels.shape[:2]
+            info_c, image_c = conns[name]
+            if info_c is not None:
+                writer.write(info_c, t, ser(bag_info(store, True, w, h, t, fid, **intrinsics), "sensor_msgs/msg/CameraInfo"))
+            writer.write(image_c, t + 1, ser(bag_image(store, True, pixels, enc, t, fid), "sensor_msgs/msg/Image"))
     return path
 
 
