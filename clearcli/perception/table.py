@@ -239,13 +239,17 @@ def largest_component(points_2d: np.ndarray, cell_m: float, join_gap_m: float = 
     """Mask of the points in the largest 8-connected piece of the occupied grid cells,
     together with every other piece within ``join_gap_m`` of it (objects standing on a
     table and their shadows cut its visible surface into pieces), and their area (m^2)."""
-    cells = np.floor((points_2d - points_2d.min(axis=0)) / cell_m).astype(np.int64)
-    dims = cells.max(axis=0) + 1
-    if dims[0] * dims[1] > 4_000_000:  # a plane reaching far away: coarser cells
-        scale = int(np.ceil(np.sqrt(dims[0] * dims[1] / 4_000_000)))
-        cells //= scale
+    offsets = np.floor((points_2d - points_2d.min(axis=0)) / cell_m)
+    # counted in floats: points from absurd intrinsics (a principal point 1e18 px away)
+    # span more cells than an int64 holds, and the product of the sides wrapped round
+    sides = offsets.max(axis=0) + 1
+    n_cells = float(np.prod(sides))
+    if n_cells > 4_000_000:  # a plane reaching far away: coarser cells (a long thin one: by its long side)
+        scale = float(np.ceil(max(np.sqrt(n_cells / 4_000_000), float(sides.max()) / 4_000_000)))
+        offsets = np.floor(offsets / scale)
         cell_m *= scale
-        dims = cells.max(axis=0) + 1
+    cells = offsets.astype(np.int64)
+    dims = cells.max(axis=0) + 1
     grid = np.zeros(dims, dtype=bool)
     grid[cells[:, 0], cells[:, 1]] = True
     labels, n = _label_grid(grid)

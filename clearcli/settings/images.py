@@ -6,6 +6,9 @@ from dataclasses import dataclass
 
 from clearcli.settings.fields import Section, param
 
+# [images] depth_suffix / color_suffix: a name ending, far below the 255 bytes of a file name
+MAX_SUFFIX_BYTES = 64
+
 
 @dataclass(frozen=True)
 class ImageSettings(Section):
@@ -25,6 +28,14 @@ class ImageSettings(Section):
     color_suffix: str = param("_color", text="a name ending other than depth_suffix")
 
     def cross_checks(self) -> None:
+        for key in ("depth_suffix", "color_suffix"):
+            # the ending of a file name beside the depth image: a "/" would name another
+            # folder (pathlib refuses it), and a long one a name past the file system's 255 bytes
+            value = getattr(self, key)
+            if "/" in value or "\x00" in value:
+                self.fail(key, "a name ending holds no '/' (nor NUL): it names a file beside the depth image")
+            if len(value.encode("utf-8", "surrogatepass")) > MAX_SUFFIX_BYTES:
+                self.fail(key, f"a name ending of at most {MAX_SUFFIX_BYTES} bytes")
         if not self.depth_suffix:
             self.fail("depth_suffix", "must not be empty (a folder's colour images would be taken for depth)")
         if self.color_suffix == self.depth_suffix:
