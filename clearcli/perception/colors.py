@@ -24,10 +24,15 @@ it is off by default: measured on mOSD, prints mislead it (settings/segment.py).
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from clearcli.perception.lccp import _angle_deg, join_pairs
 from clearcli.perception.supervoxels import Supervoxels
+
+if TYPE_CHECKING:
+    from clearcli.perception.refine import RefineContext
 
 # a seam between two pieces: this share of the adjacencies between them are concave by
 # this many degrees between their normals
@@ -54,6 +59,15 @@ def supervoxel_lab(sv: Supervoxels, point_voxel: np.ndarray, colors: np.ndarray)
     """(S, 3) CIELAB of each supervoxel's mean colour (``colors`` (M, 3) uint8 of the
     points whose voxel is ``point_voxel``)."""
     return group_lab(sv.voxel_label[point_voxel], colors, sv.centroids.shape[0])
+
+
+def split_by_colour(seg_of_sv: np.ndarray, ctx: RefineContext) -> np.ndarray:
+    """The stage (supervoxel level): `color_splits` with the frame's colour, or the
+    segments as they are without usable colour."""
+    if ctx.point_colors is None:
+        return seg_of_sv
+    lab = supervoxel_lab(ctx.sv, ctx.vox.point_voxel, ctx.point_colors)
+    return color_splits(seg_of_sv, ctx.sv, lab, ctx.settings.color_split_delta, ctx.size.min_object_voxels)
 
 
 def color_splits(seg_of_sv: np.ndarray, sv: Supervoxels, lab: np.ndarray, min_delta: float, min_voxels: int) -> np.ndarray:

@@ -40,10 +40,16 @@ Here (per round, every segment at once):
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from clearcli.settings.segment import SegmentSettings
+from clearcli.perception.size import SegmentSize
 from clearcli.perception.supervoxels import Supervoxels
+
+if TYPE_CHECKING:
+    from clearcli.perception.refine import RefineContext
 
 
 def _unit(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -51,17 +57,17 @@ def _unit(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return v / np.maximum(n, 1e-12)[..., None], n
 
 
-def concave_adjacencies(sv: Supervoxels, settings: SegmentSettings) -> np.ndarray:
+def concave_adjacencies(sv: Supervoxels, settings: SegmentSettings, size: SegmentSize | None = None) -> np.ndarray:
     """(A,) bool: seams, adjacencies LCCP does not merge (concave, or failing its sanity
     or smoothness check) whose normals are at least ``cut_concave_deg`` apart; a small
-    angle is a noisy flat patch, not a seam."""
+    angle is a noisy flat patch, not a seam. ``size``: as for `lccp.convex_edges`."""
     e = sv.edges
     if e.shape[0] == 0:
         return np.zeros(0, dtype=bool)
     from clearcli.perception.lccp import _angle_deg, convex_edges
 
     n1, n2 = sv.normals[e[:, 0]], sv.normals[e[:, 1]]
-    return ~convex_edges(sv, settings) & (_angle_deg(n1, n2) >= settings.cut_concave_deg)
+    return ~convex_edges(sv, settings, size) & (_angle_deg(n1, n2) >= settings.cut_concave_deg)
 
 
 def seam_rise(sv: Supervoxels, voxel_centroids: np.ndarray, edges: np.ndarray) -> np.ndarray:
@@ -110,25 +116,20 @@ def candidate_planes(
 
 def planar_cuts(
     seg: np.ndarray,
-    sv: Supervoxels,
-    voxel_centroids: np.ndarray,
-    up: np.ndarray,
-    settings: SegmentSettings,
+    ctx: RefineContext,
     trace: list[dict[str, np.ndarray]] | None = None,
 ) -> np.ndarray:
-    """(S,) segment of every supervoxel after the cuts, 0..G-1 (``seg`` from LCCP).
-
-    ``voxel_centroids`` (V, 3) are the voxels ``sv.voxel_label`` labels; ``up`` is the
-    table's normal. ``trace``, when given, receives a dict per round with every
-    candidate's figures (for choosing the thresholds)."""
+    """The stage (supervoxel level): (S,) segment of every supervoxel after the cuts,
+    0..G-1 (``seg`` from LCCP). ``trace``, when given, receives a dict per round with
+    every candidate's figures (for choosing the thresholds)."""
     from clearcli.perception.lccp import rejoin_pieces
 
+    settings, size, sv, up = ctx.settings, ctx.size, ctx.sv, ctx.up
     seg = np.asarray(seg, dtype=np.int64).copy()
     e = sv.edges
     if e.shape[0] == 0 or seg.size == 0:
         return seg
-    up = up / np.linalg.norm(up)
-    concave = concave_adjacencies(sv, settings)
+    concave = concave_adjacencies(sv, settings, size)
     if not concave.any():
         return seg
     d_unit, _ = _unit(sv.centroids[e[:, 0]] - sv.centroids[e[:, 1]])
@@ -138,11 +139,10 @@ def planar_cuts(
     # cut: a plane along a box's edge crosses the odd patch straddling the edge, whose
     # adjacencies fail LCCP's checks like a seam's
     angle = _angle_deg(sv.normals[e[:, 0]], sv.normals[e[:, 1]])
-    crease = convex_edges(sv, settings) & (angle >= settings.cut_concave_deg)
+    crease = convex_edges(sv, settings, size) & (angle >= settings.cut_concave_deg)
     penalty = 1.0 + settings.cut_crease_weight * crease
     # a side smaller than LCCP's small segments would only rejoin its neighbour
-    min_segment_voxels = int(settings.min_segment_supervoxels * (settings.seed_m / settings.voxel_m) ** 2)
-    min_side_vox = max(settings.cut_min_side_m2 / settings.voxel_m**2, min_segment_voxels)
+    min_side_vox = size.min_side_voxels
     # seams of a top face (normal near the table's) against a side face (normal near the
     # table plane): where a lower object's top meets a taller one's side
     up_cos = np.abs(sv.normals @ up)
@@ -153,9 +153,9 @@ def planar_cuts(
     # both patches of a seam at least a quarter of a seed cell (a 1.5 cm square at the
     # defaults): the few voxels of a side at a small object's foot, left in the segment
     # of the top it stands on, are not a wall to cut along
-    min_patch = 0.25 * (settings.seed_m / settings.voxel_m) ** 2
+    min_patch = 0.25 * size.seed_voxels
     pick = concave & top_side & (np.minimum(sv.n_voxels[e[:, 0]], sv.n_voxels[e[:, 1]]) >= min_patch)
-    rising[pick] = seam_rise(sv, voxel_centroids, e[pick]) >= settings.cut_min_rise_m
+    rising[pick] = seam_rise(sv, ctx.vox.centroids, e[pick]) >= settings.cut_min_rise_m
     cut_any = False
     for _ in range(settings.cut_max_rounds):
         inside = seg[e[:, 0]] == seg[e[:, 1]]
@@ -224,4 +224,4 @@ def planar_cuts(
         return seg
     # a side may fall apart into pieces; pieces are connected components, small ones
     # rejoin their largest neighbour as after LCCP
-    return rejoin_pieces(seg, e, settings.min_segment_supervoxels, sv.n_voxels, min_segment_voxels)
+    return rejoin_pieces(seg, e, size.min_segment_supervoxels, sv.n_voxels, size.min_segment_voxels)

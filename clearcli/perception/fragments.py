@@ -13,7 +13,21 @@ it is left alone (the size filter drops it if it is tiny).
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
+
+if TYPE_CHECKING:
+    from clearcli.perception.refine import RefineContext
+
+
+def rejoin_fragments(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
+    """The stage: `join_fragments` on the frame's voxels; a fragment is smaller than
+    LCCP's smallest segment in voxels."""
+    return join_fragments(
+        seg_of_voxel, ctx.vox.centroids, ctx.vox.edges, ctx.voxel_is_top, ctx.size.min_segment_voxels,
+        ctx.settings.fragment_join_m,
+    )
 
 
 def join_fragments(

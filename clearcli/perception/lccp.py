@@ -20,6 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from clearcli.settings.segment import SegmentSettings
+from clearcli.perception.size import SegmentSize
 from clearcli.perception.supervoxels import Supervoxels
 
 
@@ -31,11 +32,13 @@ def _angle_deg(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
 
 
-def convex_edges(sv: Supervoxels, settings: SegmentSettings) -> np.ndarray:
-    """(A,) bool: which supervoxel adjacencies are convex (may be merged)."""
+def convex_edges(sv: Supervoxels, settings: SegmentSettings, size: SegmentSize | None = None) -> np.ndarray:
+    """(A,) bool: which supervoxel adjacencies are convex (may be merged). ``size``: the
+    frame's seed and voxel (`SegmentSize.of(settings)` when None)."""
     e = sv.edges
     if e.shape[0] == 0:
         return np.zeros(0, dtype=bool)
+    size = size if size is not None else SegmentSize.of(settings)
     x1, x2 = sv.centroids[e[:, 0]], sv.centroids[e[:, 1]]
     n1, n2 = sv.normals[e[:, 0]], sv.normals[e[:, 1]]
     d = x1 - x2  # target -> source, the reference direction
@@ -43,10 +46,10 @@ def convex_edges(sv: Supervoxels, settings: SegmentSettings) -> np.ndarray:
     ncross = np.cross(n1, n2)
     ok = np.ones(e.shape[0], dtype=bool)
     if settings.smoothness_check:
-        expected = np.linalg.norm(ncross, axis=1) * settings.seed_m
+        expected = np.linalg.norm(ncross, axis=1) * size.seed_m
         p1 = np.abs(np.einsum("ij,ij->i", d, n1))
         p2 = np.abs(np.einsum("ij,ij->i", -d, n2))
-        ok &= np.minimum(p1, p2) <= expected + settings.smoothness_threshold * settings.voxel_m
+        ok &= np.minimum(p1, p2) <= expected + settings.smoothness_threshold * size.voxel_m
     convex = _angle_deg(d, n1) - _angle_deg(d, n2) <= 0
     is_convex = convex | (normal_angle < settings.concavity_tolerance_deg)
     if settings.sanity_criterion:
@@ -63,8 +66,10 @@ def lccp_segments(
     sv_low_m: np.ndarray | None = None,
     sv_high_m: np.ndarray | None = None,
     up: np.ndarray | None = None,
+    size: SegmentSize | None = None,
 ) -> np.ndarray:
-    """(S,) segment index of every supervoxel, 0..G-1.
+    """(S,) segment index of every supervoxel, 0..G-1; ``size``: the frame's sizes
+    (`SegmentSize.of(settings)` when None).
 
     With ``sv_low_m`` and ``sv_high_m`` (S,), the heights above the table of each
     supervoxel's lowest and highest voxel, and ``up``, the table's normal: a small
@@ -80,13 +85,13 @@ def lccp_segments(
     n_sv = sv.centroids.shape[0]
     if n_sv == 0:
         return np.zeros(0, dtype=np.int64)
-    keep = convex_edges(sv, settings)
+    size = size if size is not None else SegmentSize.of(settings)
+    keep = convex_edges(sv, settings, size)
     e = sv.edges[keep]
     graph = coo_matrix((np.ones(e.shape[0], dtype=np.int8), (e[:, 0], e[:, 1])), shape=(n_sv, n_sv))
     seg = connected_components(graph, directed=False)[1].astype(np.int64)
     # "small" also by area: the connectivity step of the supervoxels can leave a small
     # patch in several pieces, which would count as several supervoxels
-    min_voxels = int(settings.min_segment_supervoxels * (settings.seed_m / settings.voxel_m) ** 2)
     keep = None
     if sv_low_m is not None and sv_high_m is not None and up is not None and settings.keep_standing_small:
         n_seg = int(seg.max()) + 1
@@ -96,13 +101,13 @@ def lccp_segments(
         high = np.full(n_seg, -np.inf)
         np.maximum.at(high, seg, sv_high_m)
         has_top = np.bincount(seg, weights=top.astype(np.float64), minlength=n_seg) > 0
-        area = np.bincount(seg, weights=sv.n_voxels, minlength=n_seg) * settings.voxel_m**2
-        keep = (low <= settings.standing_max_m) & has_top & (area >= settings.min_object_area_m2)
+        big = size.holds_object_area(np.bincount(seg, weights=sv.n_voxels, minlength=n_seg))
+        keep = (low <= settings.standing_max_m) & has_top & big
         a, b = seg[sv.edges[:, 0]], seg[sv.edges[:, 1]]
         level = (a != b) & (np.abs(high[a] - high[b]) < settings.step_min_m)
         keep[a[level]] = False
         keep[b[level]] = False
-    return merge_small_segments(seg, sv.edges, settings.min_segment_supervoxels, sv.n_voxels, min_voxels, keep)
+    return merge_small_segments(seg, sv.edges, size.min_segment_supervoxels, sv.n_voxels, size.min_segment_voxels, keep)
 
 
 def join_pairs(seg: np.ndarray, pairs: list[tuple[int, int]] | np.ndarray, n_seg: int) -> np.ndarray:

@@ -15,7 +15,12 @@ the frame itself (pixel coordinates against x/z, y/z).
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
+
+if TYPE_CHECKING:
+    from clearcli.perception.refine import RefineContext
 
 # patch normals within this angle count as the same surface
 _MAX_ANGLE_DEG = 15.0
@@ -49,29 +54,22 @@ def estimate_intrinsics(points: np.ndarray, shape: tuple[int, int]) -> tuple[flo
     return float(out[0][0]), float(out[1][0]), float(out[0][1]), float(out[1][1])
 
 
-def merge_occluded(
-    seg_of_sv: np.ndarray,
-    sv_centroids: np.ndarray,
-    sv_normals: np.ndarray,
-    sv_edges: np.ndarray,
-    sv_voxels: np.ndarray,
-    frame_points: np.ndarray,
-    shape: tuple[int, int],
-    max_gap_m: float,
-    voxel_m: float,
-    min_voxels: int,
-    sv_height: np.ndarray | None = None,
-) -> np.ndarray:
-    """Segment index per supervoxel after joining occluded pieces (renumbered).
+def merge_occluded(seg_of_sv: np.ndarray, ctx: RefineContext) -> np.ndarray:
+    """The stage (supervoxel level, organized frames): segment index per supervoxel
+    after joining occluded pieces (renumbered).
 
-    ``sv_height``: height of each supervoxel above the table; when given, the two
-    pieces must also reach the same height (within ``_TOP_TOL_M``), as the two sides
-    of one object cut by a nearer one do.
+    Segments of at least the smallest object (`SegmentSize.min_object_voxels`) that do
+    not touch and reach the same height (within ``_TOP_TOL_M``), as the two sides of one
+    object cut by a nearer one do: the closest pair of their supervoxels that lie on one
+    plane (parallel normals, each centroid on the other's plane) gives the gap line; the
+    pair is joined when the camera cannot see that line.
 
-    For two segments that do not touch, the closest pair of their supervoxels that lie
-    on one plane (parallel normals, each centroid on the other's plane) gives the gap
-    line; the pair is joined when the camera cannot see that line.
+    It runs on the pixel grid only, where `SegmentSize` is never fitted to density: its
+    voxel and smallest object are the settings' own.
     """
+    sv, frame_points, shape = ctx.sv, ctx.frame.points, ctx.frame.shape
+    sv_centroids, sv_normals, sv_edges, sv_height = sv.centroids, sv.normals, sv.edges, ctx.sv_height
+    max_gap_m, voxel_m = ctx.settings.occlusion_max_gap_m, ctx.size.voxel_m
     intr = estimate_intrinsics(frame_points, shape)
     n_seg = int(seg_of_sv.max()) + 1 if seg_of_sv.size else 0
     if intr is None or n_seg < 2:
@@ -79,8 +77,8 @@ def merge_occluded(
     fx, fy, cx, cy = intr
     h, w = shape
     depth = frame_points[:, 2].reshape(h, w)
-    seg_voxels = np.bincount(seg_of_sv, weights=sv_voxels, minlength=n_seg)
-    cand = np.flatnonzero(seg_voxels >= min_voxels)
+    seg_voxels = np.bincount(seg_of_sv, weights=sv.n_voxels, minlength=n_seg)
+    cand = np.flatnonzero(seg_voxels >= ctx.size.min_object_voxels)
     if cand.size < 2:
         return seg_of_sv
     a_seg, b_seg = seg_of_sv[sv_edges[:, 0]], seg_of_sv[sv_edges[:, 1]]
@@ -107,7 +105,7 @@ def merge_occluded(
             gap_box = np.maximum(0.0, np.maximum(lo[a] - hi[b], lo[b] - hi[a]))
             if np.linalg.norm(gap_box) > max_gap_m:
                 continue
-            if sv_height is not None and abs(sv_height[members[a]].max() - sv_height[members[b]].max()) > _TOP_TOL_M:
+            if abs(sv_height[members[a]].max() - sv_height[members[b]].max()) > _TOP_TOL_M:
                 continue
             xa, na = sv_centroids[members[a]], sv_normals[members[a]]
             xb, nb = sv_centroids[members[b]], sv_normals[members[b]]

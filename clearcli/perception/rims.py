@@ -14,11 +14,25 @@ their contact lies within ``rim_tolerance_m`` of the top of each:
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
+
+if TYPE_CHECKING:
+    from clearcli.perception.refine import RefineContext
 
 # share of the contact (voxel adjacencies) that must be near both tops
 _MIN_SHARE_AT_TOP = 0.9
 _MIN_CONTACTS = 5
+
+
+def join_rims(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
+    """The stage: `merge_rims` on the frame's voxels, top faces from the supervoxels."""
+    s = ctx.settings
+    return merge_rims(
+        seg_of_voxel, ctx.vox.centroids, ctx.voxel_height, s.rim_tolerance_m, s.rim_contact_m,
+        voxel_is_top=ctx.voxel_is_top,
+    )
 
 
 def merge_rims(

@@ -26,7 +26,12 @@ For two segments whose tops lie within ``rim_tolerance_m`` of each other:
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
+
+if TYPE_CHECKING:
+    from clearcli.perception.refine import RefineContext
 
 _MIN_RADIUS_M = 0.015
 # average facing (cosine between a wall's in-plane normal and the direction to the
@@ -127,29 +132,21 @@ def ring_pair(
     return (fa >= _MIN_FACING and fb <= -_MIN_FACING) or (fb >= _MIN_FACING and fa <= -_MIN_FACING)
 
 
-def merge_rings(
-    seg_of_voxel: np.ndarray,
-    voxel_xy: np.ndarray,
-    voxel_height: np.ndarray,
-    voxel_label: np.ndarray,
-    sv_normals_xy: np.ndarray,
-    sv_xy: np.ndarray,
-    sv_is_wall: np.ndarray,
-    tolerance_m: float,
-    max_radius_m: float,
-    max_residual: float,
-    min_cover_deg: float,
-    min_voxels: int,
-    max_off_share: float = 0.2,
-) -> np.ndarray:
-    """(V,) segment per voxel after joining inner and outer walls of containers.
+def merge_rings(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
+    """The stage: (V,) segment per voxel after joining inner and outer walls of
+    containers.
 
-    ``voxel_xy`` (V, 2) and ``voxel_height`` (V,): the voxels in the table plane and
-    above it; ``voxel_label`` (V,): their supervoxels, whose in-plane normals and
-    centroids are ``sv_normals_xy`` / ``sv_xy`` (S, 2); only supervoxels flagged
-    ``sv_is_wall`` (not a top face) count for facing. Segments of fewer than
-    ``min_voxels`` voxels are left alone."""
+    The voxels and the supervoxels in the table plane and their heights above it come
+    from ``ctx``; only supervoxels that are not a top face (`RefineContext.sv_is_wall`)
+    count for facing. Segments of fewer than the smallest object's voxels
+    (`SegmentSize.min_object_voxels`) are left alone."""
     from clearcli.perception.lccp import join_pairs
+
+    settings = ctx.settings
+    voxel_xy, voxel_height, voxel_label = ctx.voxel_xy, ctx.voxel_height, ctx.sv.voxel_label
+    sv_normals_xy, sv_xy, sv_is_wall = ctx.sv_normals_xy, ctx.sv_xy, ctx.sv_is_wall
+    tolerance_m, max_radius_m = settings.rim_tolerance_m, settings.ring_max_radius_m
+    min_voxels = ctx.size.min_object_voxels
 
     n_seg = int(seg_of_voxel.max()) + 1 if seg_of_voxel.size else 0
     if n_seg < 2:
@@ -179,7 +176,7 @@ def merge_rings(
                 continue
             if ring_pair(
                 band[a], band[b], sv_normals_xy[wa], sv_xy[wa], sv_normals_xy[wb], sv_xy[wb],
-                max_radius_m, max_residual, min_cover_deg, max_off_share,
+                max_radius_m, settings.ring_max_residual, settings.ring_min_cover_deg, settings.ring_max_off_share,
             ):
                 joined.append((a, b))
     return join_pairs(seg_of_voxel, joined, n_seg)

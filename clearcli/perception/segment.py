@@ -12,20 +12,30 @@
    heights (steps.py), a container's inner and outer walls joined where they touch at
    the rim (rims.py) or form one rim from above (rings.py), and strips of a face seen
    edge-on joined to their object (fragments.py)
-4. minimum-size filter (visible area in voxels, and a point count)
+4. minimum-size filter (visible area in voxels, and a point count); objects lying flat,
+   by colour (flat.py); the rims of open containers and the seen table edges (openings.py)
 
-Every stage is its own function; `segment` chains them and times each one.
+`segment` runs `STEPS`, a list of named steps, each a function of the frame's `_Work`,
+timed by one `Clock` under its name; the sizes every step counts in are the frame's
+`SegmentSize` (size.py), worked out once.
 """
 
 from __future__ import annotations
 
-import time
+from dataclasses import dataclass, field
+from typing import Callable
 
 import numpy as np
 
 from clearcli.errors import SceneError
 from clearcli.io.frames import Frame
 from clearcli.settings.segment import SegmentSettings
+from clearcli.perception.clock import Clock
+from clearcli.perception.openings import Opening
+from clearcli.perception.refine import STAGES
+from clearcli.perception.size import SegmentSize
+from clearcli.perception.supervoxels import Supervoxels, VoxelCloud
+from clearcli.perception.table import TableFit
 from clearcli.perception.types import Segmentation, SegmentedObject, TablePlane
 
 # colour_state(): a frame is "all black" or "all saturated" when this share of its points
@@ -118,30 +128,6 @@ def make_object(
     )
 
 
-def _fit_to_density(points: np.ndarray, settings: SegmentSettings) -> SegmentSettings:
-    """Settings for a cloud sparser than the voxel grid (an unorganized cloud thinned on
-    a coarser grid): voxels of at least 1.5 point spacings, or no voxel has neighbours;
-    seeds and normal radius grow with them."""
-    import dataclasses
-
-    from scipy.spatial import cKDTree
-
-    if points.shape[0] < 10:
-        return settings
-    probe = points[:: max(1, points.shape[0] // 2000)]
-    spacing = float(np.median(cKDTree(points).query(probe, k=2)[0][:, 1]))
-    voxel = max(settings.voxel_m, 1.5 * spacing)
-    if voxel <= settings.voxel_m:
-        return settings
-    scale = voxel / settings.voxel_m
-    return dataclasses.replace(
-        settings,
-        voxel_m=voxel,
-        seed_m=settings.seed_m * scale,
-        normal_radius_m=settings.normal_radius_m * scale,
-    )
-
-
 def _without_what_lies_beyond(frame: Frame, idx: np.ndarray, pts: np.ndarray, fit, table_mask, prism_mask, settings):
     """The table without the pieces of its plane seen beyond its own edge (table.py,
     `beyond_the_edge`): its hull drawn again round the rest, and the prism with it, so
@@ -195,14 +181,14 @@ def color_state(frame: Frame, organized: bool, settings: SegmentSettings) -> tup
     return True, "read by: " + ", ".join(readers)
 
 
-def _flat_objects(frame: Frame, table_idx: np.ndarray, obj_idx: np.ndarray, objects: list, fit, settings):
+def _flat_objects(frame: Frame, table_idx: np.ndarray, obj_idx: np.ndarray, objects: list, fit, settings, size):
     """(table indices without the flat objects' points, the flat objects): flat.py."""
     from clearcli.perception.flat import flat_objects
     from clearcli.perception.table import project
 
     taken = np.concatenate([o.indices for o in objects]) if objects else np.zeros(0, dtype=np.int64)
     loose = np.setdiff1d(obj_idx, taken, assume_unique=True)
-    cell = settings.voxel_m
+    cell = size.voxel_m
 
     def area(pixels: np.ndarray) -> float:
         xy = project(frame.points[pixels].astype(np.float64), fit.basis)
@@ -223,141 +209,232 @@ def _flat_objects(frame: Frame, table_idx: np.ndarray, obj_idx: np.ndarray, obje
     return table_idx, made
 
 
+def _empty() -> np.ndarray:
+    return np.zeros(0, dtype=np.int64)
+
+
+@dataclass
+class _Work:
+    """One frame on its way through `STEPS`: what each step leaves for the next."""
+
+    frame: Frame
+    settings: SegmentSettings
+    organized: bool  # the frame's pixel grid is usable
+    clock: Clock
+    idx: np.ndarray = field(default_factory=_empty)  # (K,) frame index of the points kept (finite, not outliers)
+    pts: np.ndarray = field(default_factory=_empty)  # (K, 3) their coordinates
+    fit: TableFit | None = None
+    table_mask: np.ndarray = field(default_factory=_empty)  # (K,) on the table
+    prism_mask: np.ndarray = field(default_factory=_empty)  # (K,) above it, inside its hull
+    beyond_m2: float = 0.0
+    obj_idx: np.ndarray = field(default_factory=_empty)  # (M,) frame index of the points above the table
+    obj_pts: np.ndarray = field(default_factory=_empty)  # (M, 3)
+    color_used: bool = False
+    color_note: str = ""
+    size: SegmentSize | None = None
+    vox: VoxelCloud | None = None  # None: too few points above the table to segment
+    sv: Supervoxels | None = None
+    seg_of_voxel: np.ndarray = field(default_factory=_empty)
+    objects: list[SegmentedObject] = field(default_factory=list)
+    table_idx: np.ndarray = field(default_factory=_empty)
+    openings: tuple[Opening, ...] = ()
+    table_edges: tuple = ()
+
+
+def _filter(w: _Work) -> None:
+    """1. finite points, outliers (filters.py)."""
+    from clearcli.perception.filters import clean_mask
+
+    where = f"{w.frame.source}: " if w.frame.source else ""
+    points = w.frame.points
+    keep = clean_mask(points, w.frame.shape if w.organized else None, w.settings)
+    w.idx = np.flatnonzero(keep)
+    if w.idx.size == 0:
+        if not np.isfinite(points).all(axis=1).any():
+            raise SceneError(f"{where}the frame has no finite points (all NaN)")
+        raise SceneError(f"{where}no table: no points are left after outlier removal")
+    w.pts = points[w.idx].astype(np.float64)
+
+
+def _table(w: _Work) -> None:
+    """2. the table, its hull, the prism above it (table.py)."""
+    from clearcli.perception.table import find_table, table_and_prism
+
+    fit = find_table(w.pts, w.settings, w.organized, w.frame.source)
+    table_mask, prism_mask, _ = table_and_prism(w.pts, fit, w.settings)
+    if w.organized and w.settings.beyond_edge_check:
+        fit, table_mask, prism_mask, w.beyond_m2 = _without_what_lies_beyond(
+            w.frame, w.idx, w.pts, fit, table_mask, prism_mask, w.settings
+        )
+    w.fit, w.table_mask, w.prism_mask = fit, table_mask, prism_mask
+
+
+def _voxels(w: _Work) -> None:
+    """3. the points above the table, whether their colour is usable, the frame's sizes
+    (fitted to an unorganized cloud's density), the voxel grid."""
+    from clearcli.perception.supervoxels import voxelize
+
+    w.obj_idx = w.idx[w.prism_mask]
+    w.color_used, w.color_note = color_state(w.frame, w.organized, w.settings)
+    w.obj_pts = w.pts[w.prism_mask]
+    w.size = SegmentSize.of(w.settings, None if w.organized else w.obj_pts)
+    if w.obj_pts.shape[0] < 4:
+        return
+    colors = w.frame.colors[w.obj_idx] if (w.frame.colors is not None and w.settings.color_importance > 0) else None
+    w.vox = voxelize(w.obj_pts, w.size.voxel_m, colors)
+
+
+def _depth_edges(w: _Work) -> None:
+    """3a'. the voxel adjacency cut at depth discontinuities (edges.py, organized)."""
+    if w.organized and w.settings.depth_edges:
+        from clearcli.perception.edges import cut_depth_edges
+
+        w.vox = cut_depth_edges(
+            w.vox, w.frame.points, w.frame.shape, w.obj_idx, w.settings.depth_edge_rel, w.size.min_edge_piece_voxels
+        )
+
+
+def _supervoxels(w: _Work) -> None:
+    """3a. supervoxels (supervoxels.py), seen from the camera, or from above the table's
+    middle for a cloud in the table's frame."""
+    from clearcli.perception.supervoxels import compute_supervoxels
+
+    fit = w.fit
+    viewpoint = np.zeros(3) if fit.camera_is_origin else fit.polygon.mean(axis=0) + 1.0 * fit.plane.normal
+    w.sv = compute_supervoxels(w.vox, viewpoint, w.settings, w.size)
+
+
+def _lccp(w: _Work) -> None:
+    """3b. LCCP (lccp.py): a small segment standing on the table with a top of its own
+    is kept."""
+    from clearcli.perception.lccp import lccp_segments
+
+    plane, sv = w.fit.plane, w.sv
+    voxel_h = plane.height_of(w.vox.centroids)
+    sv_low = np.full(sv.centroids.shape[0], np.inf)
+    np.minimum.at(sv_low, sv.voxel_label, voxel_h)
+    sv_high = np.full(sv.centroids.shape[0], -np.inf)
+    np.maximum.at(sv_high, sv.voxel_label, voxel_h)
+    seg_of_sv = lccp_segments(sv, w.settings, sv_low, sv_high, plane.normal, w.size)
+    w.seg_of_voxel = seg_of_sv[sv.voxel_label]
+
+
+def _refine(w: _Work) -> None:
+    """3c. the refinements after LCCP, each a stage of refine.STAGES timed by its name."""
+    from clearcli.perception.refine import RefineContext, refine
+
+    ctx = RefineContext(w.frame, w.organized, w.vox, w.sv, w.fit.plane, w.settings, w.size, w.obj_idx, w.color_used)
+    w.seg_of_voxel = refine(w.seg_of_voxel, ctx, w.clock)
+
+
+def _objects(w: _Work) -> None:
+    """4. the size filter (visible area in voxels, and a point count), largest first,
+    and each object's box."""
+    settings, fit = w.settings, w.fit
+    seg_of_voxel = w.seg_of_voxel
+    seg_of_point = seg_of_voxel[w.vox.point_voxel]
+    n_seg = int(seg_of_voxel.max()) + 1 if seg_of_voxel.size else 0
+    seg_voxels = np.bincount(seg_of_voxel, minlength=n_seg)
+    seg_points = np.bincount(seg_of_point, minlength=n_seg)
+    ok = w.size.holds_object_area(seg_voxels) & (seg_points >= settings.min_object_points)
+    kept = np.flatnonzero(ok)
+    kept = kept[np.argsort(-seg_points[kept], kind="stable")]  # largest first
+    order = np.argsort(seg_of_point, kind="stable")
+    bounds = np.searchsorted(seg_of_point[order], np.arange(n_seg + 1))
+    rests = settings.prism_min_height_m + settings.plane_distance_m
+    for s in kept.tolist():
+        members = order[bounds[s] : bounds[s + 1]]
+        p = w.obj_pts[members]
+        # the prism's lower bound grew with range: so does "resting on the table"
+        noise = 0.0
+        if fit.camera_is_origin:
+            noise = settings.prism_noise_per_m2 * float(np.min(np.einsum("ij,ij->i", p, p)))
+        w.objects.append(make_object(w.obj_idx[members], p, fit.plane, rests + noise))
+
+
+def _flat(w: _Work) -> None:
+    """4'. objects lying flat, found by colour (flat.py; organized frames)."""
+    w.table_idx = w.idx[w.table_mask]
+    if w.color_used and w.settings.flat_objects and w.organized:
+        w.table_idx, found = _flat_objects(w.frame, w.table_idx, w.obj_idx, w.objects, w.fit, w.settings, w.size)
+        w.objects.extend(found)
+
+
+def _openings(w: _Work) -> None:
+    """What the grasps beyond the pinch need: rims of open containers, seen table edges
+    (openings.py)."""
+    from clearcli.perception.openings import rim_of, seen_edges
+
+    w.openings = tuple(rim_of(w.frame.points[o.indices], w.fit.plane) for o in w.objects)
+    w.table_edges = seen_edges(w.frame.points, w.frame.shape, w.fit.plane, w.fit.polygon)
+
+
+@dataclass(frozen=True)
+class Step:
+    name: str | None  # its key in the timings (steps of one name add up); None: it times its own parts
+    run: Callable[[_Work], None]
+    above_table: bool = False  # needs points above the table: skipped (0 s) without them
+
+
+STEPS: tuple[Step, ...] = (
+    Step("filter", _filter),
+    Step("table", _table),
+    Step("supervoxels", _voxels),
+    Step("edges", _depth_edges, above_table=True),
+    Step("supervoxels", _supervoxels, above_table=True),
+    Step("lccp", _lccp, above_table=True),
+    Step(None, _refine, above_table=True),  # each stage of refine.STAGES by its name
+    Step("objects", _objects, above_table=True),
+    Step("flat", _flat),
+    Step("openings", _openings),
+)
+STAGE_NAMES = tuple(st.name for st in STAGES)
+# "merge": every refinement but the planar cuts, together (each is also timed apart)
+MERGED = tuple(name for name in STAGE_NAMES if name != "cuts")
+# the timings' keys, in the order the JSON reports them
+TIMINGS = (
+    "filter", "table", "supervoxels", "lccp", "merge", "edges", *STAGE_NAMES, "flat", "objects", "openings", "total",
+)
+
+
 def segment(frame: Frame, settings: SegmentSettings) -> Segmentation:
-    """Segment the objects on the table of ``frame``.
+    """Segment the objects on the table of ``frame``: the steps of `STEPS` in order,
+    each timed by its name (`Segmentation.timings_s`, keys `TIMINGS`).
 
     Raises SceneError when there is no usable table (no finite points, no plane, a table
     seen from below). A table with nothing on it is a result with zero objects.
     """
-    from clearcli.perception.filters import clean_mask
-    from clearcli.perception.lccp import lccp_segments
-    from clearcli.perception.refine import STAGES, RefineContext, refine
-    from clearcli.perception.supervoxels import compute_supervoxels, voxelize
-    from clearcli.perception.table import find_table, table_and_prism
-
-    where = f"{frame.source}: " if frame.source else ""
-    timings: dict[str, float] = {}
-    t0 = time.perf_counter()
+    clock = Clock(TIMINGS[:-1])
     points = frame.points
     if points.ndim != 2 or points.shape[1] != 3 or points.shape[0] == 0:
+        where = f"{frame.source}: " if frame.source else ""
         raise SceneError(f"{where}the frame holds no points")
     organized = frame.is_organized and frame.shape is not None and frame.shape[0] * frame.shape[1] == points.shape[0]
-
-    # 1. finite points, outliers
-    keep = clean_mask(points, frame.shape if organized else None, settings)
-    idx = np.flatnonzero(keep)
-    if idx.size == 0:
-        if not np.isfinite(points).all(axis=1).any():
-            raise SceneError(f"{where}the frame has no finite points (all NaN)")
-        raise SceneError(f"{where}no table: no points are left after outlier removal")
-    pts = points[idx].astype(np.float64)
-    t1 = time.perf_counter()
-    timings["filter"] = t1 - t0
-
-    # 2. table, hull, prism
-    fit = find_table(pts, settings, organized, frame.source)
-    table_mask, prism_mask, _ = table_and_prism(pts, fit, settings)
-    beyond_m2 = 0.0
-    if organized and settings.beyond_edge_check:
-        fit, table_mask, prism_mask, beyond_m2 = _without_what_lies_beyond(frame, idx, pts, fit, table_mask, prism_mask, settings)
-    t2 = time.perf_counter()
-    timings["table"] = t2 - t1
-
-    obj_idx = idx[prism_mask]
-    color_used, color_note = color_state(frame, organized, settings)
-    obj_pts = pts[prism_mask]
-    objects: list[SegmentedObject] = []
-    # "merge": every refinement but the planar cuts, together (each is also timed apart)
-    merged_stages = tuple(st.name for st in STAGES if st.name != "cuts")
-    timings.update(dict.fromkeys(("supervoxels", "lccp", "merge", "edges", *(st.name for st in STAGES)), 0.0))
-    if obj_pts.shape[0] >= 4:
-        if fit.camera_is_origin:
-            viewpoint = np.zeros(3)
-        else:  # a cloud in the table's frame: look from above the table's middle
-            viewpoint = fit.polygon.mean(axis=0) + 1.0 * fit.plane.normal
-        colors = frame.colors[obj_idx] if (frame.colors is not None and settings.color_importance > 0) else None
-
-        # 3. supervoxels, LCCP
-        seg_settings = settings
-        if not organized:
-            seg_settings = _fit_to_density(obj_pts, settings)
-        vox = voxelize(obj_pts, seg_settings.voxel_m, colors)
-        t_edges = time.perf_counter()
-        if organized and settings.depth_edges:
-            from clearcli.perception.edges import cut_depth_edges
-
-            min_piece = max(1, int(settings.depth_edge_min_piece_m2 / seg_settings.voxel_m**2))
-            vox = cut_depth_edges(vox, points, frame.shape, obj_idx, settings.depth_edge_rel, min_piece)
-        timings["edges"] = time.perf_counter() - t_edges
-        sv = compute_supervoxels(vox, viewpoint, seg_settings)
-        t3 = time.perf_counter()
-        timings["supervoxels"] = t3 - t2 - timings["edges"]
-        voxel_h = fit.plane.height_of(vox.centroids)
-        sv_low = np.full(sv.centroids.shape[0], np.inf)
-        np.minimum.at(sv_low, sv.voxel_label, voxel_h)
-        sv_high = np.full(sv.centroids.shape[0], -np.inf)
-        np.maximum.at(sv_high, sv.voxel_label, voxel_h)
-        seg_of_sv = lccp_segments(sv, seg_settings, sv_low, sv_high, fit.plane.normal)
-        t4 = time.perf_counter()
-        timings["lccp"] = t4 - t3
-
-        # refinements after LCCP, each a stage of refine.STAGES
-        ctx = RefineContext(frame, organized, vox, sv, fit.plane, settings, seg_settings, obj_idx, color_used)
-        seg_of_voxel = refine(seg_of_sv[sv.voxel_label], ctx, timings)
-        timings["merge"] = sum(timings[k] for k in merged_stages)
-
-        # 4. size filter
-        seg_of_point = seg_of_voxel[vox.point_voxel]
-        n_seg = int(seg_of_voxel.max()) + 1 if seg_of_voxel.size else 0
-        seg_voxels = np.bincount(seg_of_voxel, minlength=n_seg)
-        seg_points = np.bincount(seg_of_point, minlength=n_seg)
-        ok = (seg_voxels * seg_settings.voxel_m**2 >= settings.min_object_area_m2) & (
-            seg_points >= settings.min_object_points
-        )
-        kept = np.flatnonzero(ok)
-        kept = kept[np.argsort(-seg_points[kept], kind="stable")]  # largest first
-        order = np.argsort(seg_of_point, kind="stable")
-        bounds = np.searchsorted(seg_of_point[order], np.arange(n_seg + 1))
-        rests = settings.prism_min_height_m + settings.plane_distance_m
-        for s in kept.tolist():
-            members = order[bounds[s] : bounds[s + 1]]
-            p = obj_pts[members]
-            # the prism's lower bound grew with range: so does "resting on the table"
-            noise = settings.prism_noise_per_m2 * float(np.min(np.einsum("ij,ij->i", p, p))) if fit.camera_is_origin else 0.0
-            objects.append(make_object(obj_idx[members], p, fit.plane, rests + noise))
-    table_idx = idx[table_mask]
-
-    # 4'. objects lying flat, by colour (flat.py)
-    t_flat = time.perf_counter()
-    if color_used and settings.flat_objects and organized:
-        table_idx, found = _flat_objects(frame, table_idx, obj_idx, objects, fit, settings)
-        objects.extend(found)
-    timings["flat"] = time.perf_counter() - t_flat
-    timings["objects"] = time.perf_counter() - t0 - sum(
-        v for k, v in timings.items() if k not in merged_stages  # (in "merge")
-    )
-    timings.setdefault("flat", 0.0)
-    # what the grasps beyond the pinch need: rims of open containers, seen table edges
-    t_open = time.perf_counter()
-    from clearcli.perception.openings import rim_of, seen_edges
-
-    openings = tuple(rim_of(frame.points[o.indices], fit.plane) for o in objects)
-    edges = seen_edges(frame.points, frame.shape, fit.plane, fit.polygon)
-    timings["openings"] = time.perf_counter() - t_open
-    timings["total"] = time.perf_counter() - t0
+    w = _Work(frame, settings, organized, clock)
+    for step in STEPS:
+        if step.above_table and w.vox is None:
+            continue
+        if step.name is None:
+            step.run(w)
+        else:
+            with clock(step.name):
+                step.run(w)
+    clock.total("merge", MERGED)
+    clock.timings["total"] = clock.elapsed()
+    fit = w.fit
     return Segmentation(
         n_points=frame.n_points,
         table=fit.plane,
         table_polygon=fit.polygon,
-        table_indices=table_idx,
-        objects=tuple(objects),
-        timings_s=timings,
+        table_indices=w.table_idx,
+        objects=tuple(w.objects),
+        timings_s=clock.timings,
         support=fit.planes,
-        beyond_edge_m2=beyond_m2,
-        color_used=color_used,
-        color_note=color_note,
-        openings=openings,
-        table_edges=edges,
+        beyond_edge_m2=w.beyond_m2,
+        color_used=w.color_used,
+        color_note=w.color_note,
+        openings=w.openings,
+        table_edges=w.table_edges,
         source=frame.source,
         frame_id=frame.frame_id,
         stamp_s=frame.stamp_s,

@@ -39,10 +39,12 @@ upper object's foot, mostly lower top, stays with the lower object.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
-from clearcli.settings.segment import SegmentSettings
-from clearcli.perception.supervoxels import Supervoxels
+if TYPE_CHECKING:
+    from clearcli.perception.refine import RefineContext
 
 # share of the candidate upper object that must stand within the lower top's hull
 _MIN_INSIDE = 0.9
@@ -81,28 +83,31 @@ def _component(seed_mask: np.ndarray, allowed: np.ndarray, edges: np.ndarray) ->
     return allowed & np.isin(comp, seeds)
 
 
-def stack_splits(
-    seg_of_voxel: np.ndarray,
-    sv: Supervoxels,
-    voxel_centroids: np.ndarray,
-    voxel_height: np.ndarray,
-    voxel_edges: np.ndarray,
-    up: np.ndarray,
-    settings: SegmentSettings,
-) -> np.ndarray:
-    """(V,) segment of every voxel after splitting off objects standing on a lower top
-    of their segment, 0..G-1. Arguments as for `steps.step_splits`."""
-    from clearcli.perception.table import plane_basis
+def separate_stacks(seg_of_sv: np.ndarray, ctx: RefineContext) -> np.ndarray:
+    """The stage (supervoxel level): (S,) segment of every supervoxel after the objects
+    standing on a lower top are split off (`stack_splits`) and the tops they stand on
+    joined (`join_supports`), 0..G-1."""
+    sv = ctx.sv
+    seg_of_voxel = join_supports(stack_splits(seg_of_sv[sv.voxel_label], ctx), ctx)
+    # back to supervoxels, each to the segment of most of its voxels: the patch at the
+    # upper object's foot, mostly lower top, stays with the lower object
+    n_seg = int(seg_of_voxel.max()) + 1
+    votes = np.zeros((sv.centroids.shape[0], n_seg), dtype=np.int64)
+    np.add.at(votes, (sv.voxel_label, seg_of_voxel), 1)
+    return np.unique(votes.argmax(axis=1), return_inverse=True)[1]
 
+
+def stack_splits(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
+    """(V,) segment of every voxel after splitting off objects standing on a lower top
+    of their segment, 0..G-1."""
+    settings, sv, voxel_height, voxel_edges = ctx.settings, ctx.sv, ctx.voxel_height, ctx.vox.edges
     seg = np.asarray(seg_of_voxel, dtype=np.int64).copy()
     if seg.size == 0 or voxel_edges.shape[0] == 0:
         return seg
-    up = up / np.linalg.norm(up)
-    xy = voxel_centroids @ plane_basis(up).T
-    top_sv = np.abs(sv.normals @ up) >= np.cos(np.radians(settings.step_max_tilt_deg))
-    top = top_sv[sv.voxel_label]
-    min_level_vox = settings.min_object_area_m2 / settings.voxel_m**2
-    min_side_vox = settings.cut_min_side_m2 / settings.voxel_m**2
+    xy = ctx.voxel_xy
+    top = ctx.voxel_is_top
+    min_level_vox = ctx.size.min_object_voxels_unrounded
+    min_side_vox = ctx.size.min_side_voxels_stacks
     # only segments with two top levels can split: edges within a segment, once
     same = seg[voxel_edges[:, 0]] == seg[voxel_edges[:, 1]]
     edges_in = voxel_edges[same]
@@ -137,7 +142,7 @@ def stack_splits(
                 n_cand = int(cand.sum())
                 if n_cand < min_side_vox or int(members.sum()) - n_cand < min_side_vox:
                     continue
-                inside = _inside_hull(xy[cand], lower_xy, settings.voxel_m)
+                inside = _inside_hull(xy[cand], lower_xy, ctx.size.voxel_m)
                 if inside.mean() >= _MIN_INSIDE:
                     split = cand
                     break
@@ -153,27 +158,18 @@ def stack_splits(
     return out.astype(np.int64)
 
 
-def join_supports(
-    seg_of_voxel: np.ndarray,
-    sv: Supervoxels,
-    voxel_centroids: np.ndarray,
-    voxel_height: np.ndarray,
-    voxel_edges: np.ndarray,
-    up: np.ndarray,
-    settings: SegmentSettings,
-) -> np.ndarray:
+def join_supports(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
     """(V,) segment of every voxel after joining touching segments that are pieces of
     the one top another object stands on (module docstring), 0..G-1."""
     from clearcli.perception.lccp import join_pairs
-    from clearcli.perception.table import plane_basis
 
+    settings, voxel_height, voxel_edges = ctx.settings, ctx.voxel_height, ctx.vox.edges
     seg = np.asarray(seg_of_voxel, dtype=np.int64)
     n_seg = int(seg.max()) + 1 if seg.size else 0
     if n_seg < 3 or voxel_edges.shape[0] == 0:
         return seg
-    up = up / np.linalg.norm(up)
-    xy = voxel_centroids @ plane_basis(up).T
-    top = (np.abs(sv.normals @ up) >= np.cos(np.radians(settings.step_max_tilt_deg)))[sv.voxel_label]
+    xy = ctx.voxel_xy
+    top = ctx.voxel_is_top
     a, b = seg[voxel_edges[:, 0]], seg[voxel_edges[:, 1]]
     cross = a != b
     pairs = np.unique(np.stack([np.minimum(a[cross], b[cross]), np.maximum(a[cross], b[cross])], 1), axis=0)
@@ -184,7 +180,7 @@ def join_supports(
         neighbours.setdefault(y, set()).add(x)
     foot = np.full(n_seg, np.inf)
     np.minimum.at(foot, seg, voxel_height)
-    min_level_vox = settings.min_object_area_m2 / settings.voxel_m**2
+    min_level_vox = ctx.size.min_object_voxels_unrounded
     joined: list[tuple[int, int]] = []
 
     for upper in range(n_seg):
@@ -200,7 +196,7 @@ def join_supports(
                 if (s1, s2) not in touching:
                     continue
                 level = top & np.isin(seg, (s1, s2)) & (np.abs(voxel_height - h) <= settings.step_min_m)
-                inside = _inside_hull(xy[seg == upper], xy[level], settings.voxel_m)
+                inside = _inside_hull(xy[seg == upper], xy[level], ctx.size.voxel_m)
                 if inside.mean() >= _MIN_INSIDE:
                     joined.append((s1, s2))
     return join_pairs(seg, joined, n_seg)

@@ -26,10 +26,12 @@ Per segment (every round, every segment):
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
-from clearcli.settings.segment import SegmentSettings
-from clearcli.perception.supervoxels import Supervoxels
+if TYPE_CHECKING:
+    from clearcli.perception.refine import RefineContext
 
 _N_DIRECTIONS = 90  # 2 degree steps over half a turn
 _SEAM_BAND_VOXELS = 1.5
@@ -81,35 +83,23 @@ def best_separating_line(xy: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray,
     return normal, offset, int(errs[kk, d])
 
 
-def step_splits(
-    seg_of_voxel: np.ndarray,
-    sv: Supervoxels,
-    voxel_centroids: np.ndarray,
-    voxel_height: np.ndarray,
-    voxel_edges: np.ndarray,
-    up: np.ndarray,
-    settings: SegmentSettings,
-) -> np.ndarray:
-    """(V,) segment of every voxel after splitting at steps between tops, 0..G-1.
+def step_splits(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
+    """The stage: (V,) segment of every voxel after splitting at steps between tops,
+    0..G-1.
 
     Works on voxels, not supervoxels: a supervoxel may straddle the seam (the two
-    objects' end faces nearly in one plane), and the plane must cut through it.
-    ``voxel_height`` (V,) are the voxels' heights above the table, ``up`` its normal,
-    ``voxel_edges`` (E, 2) the voxel adjacency; the supervoxels (``sv.voxel_label`` over
-    the same voxels) give the top patches and their normals."""
+    objects' end faces nearly in one plane), and the plane must cut through it. The
+    supervoxels give the top patches (`RefineContext.voxel_is_top`)."""
     from clearcli.perception.lccp import rejoin_pieces
-    from clearcli.perception.table import plane_basis
 
+    settings, size, sv, voxel_height = ctx.settings, ctx.size, ctx.sv, ctx.voxel_height
     seg = np.asarray(seg_of_voxel, dtype=np.int64).copy()
     if seg.size == 0:
         return seg
-    up = up / np.linalg.norm(up)
-    xy = voxel_centroids @ plane_basis(up).T  # in the table plane, for the 2-D separation
-    top_sv = np.abs(sv.normals @ up) >= np.cos(np.radians(settings.step_max_tilt_deg))
-    top = top_sv[sv.voxel_label]
-    min_top_vox = settings.min_object_area_m2 / settings.voxel_m**2
-    min_segment_voxels = int(settings.min_segment_supervoxels * (settings.seed_m / settings.voxel_m) ** 2)
-    min_side_vox = max(settings.cut_min_side_m2 / settings.voxel_m**2, min_segment_voxels)
+    xy = ctx.voxel_xy  # in the table plane, for the 2-D separation
+    top = ctx.voxel_is_top
+    min_top_vox = size.min_object_voxels_unrounded
+    min_side_vox = size.min_side_voxels
     cut_any = False
     for _ in range(settings.cut_max_rounds):
         next_label = int(seg.max()) + 1
@@ -139,7 +129,7 @@ def step_splits(
             # say nothing against a step. Those farther away do (a bowl's inside bottom,
             # ringed by its rim, leaves many far on the wrong side of any line).
             dist = xy[tops] @ normal2 - offset
-            errors = int((((dist > 0) != is_upper) & (np.abs(dist) > _SEAM_BAND_VOXELS * settings.voxel_m)).sum())
+            errors = int((((dist > 0) != is_upper) & (np.abs(dist) > _SEAM_BAND_VOXELS * size.voxel_m)).sum())
             if errors > settings.step_max_error * smaller:
                 continue
             side = xy[members] @ normal2 > offset
@@ -156,4 +146,4 @@ def step_splits(
         return out.astype(np.int64)
     # a side may fall apart into pieces: pieces are connected components, small ones
     # rejoin their largest neighbour (LCCP's rule, counted in voxels)
-    return rejoin_pieces(seg, voxel_edges, min_segment_voxels)
+    return rejoin_pieces(seg, ctx.vox.edges, size.min_segment_voxels)

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from clearcli.settings.segment import SegmentSettings
+from clearcli.perception.size import SegmentSize
 
 # 13 of the 26 neighbour offsets: each undirected adjacency found once
 _HALF_OFFSETS = np.array(
@@ -166,13 +167,17 @@ def _components(n: int, edges: np.ndarray) -> np.ndarray:
     return connected_components(graph, directed=False)[1]
 
 
-def supervoxel_labels(vox: VoxelCloud, normals: np.ndarray, settings: SegmentSettings) -> np.ndarray:
-    """(V,) supervoxel index of every voxel, 0..S-1."""
+def supervoxel_labels(
+    vox: VoxelCloud, normals: np.ndarray, settings: SegmentSettings, size: SegmentSize | None = None
+) -> np.ndarray:
+    """(V,) supervoxel index of every voxel, 0..S-1 (``size``: the frame's seed;
+    `SegmentSize.of(settings)` when None)."""
     from scipy.spatial import cKDTree
 
+    size = size if size is not None else SegmentSize.of(settings)
     cent = vox.centroids
     n_vox = vox.n_voxels
-    seed_m = settings.seed_m
+    seed_m = size.seed_m
     # seeds: in every occupied seed cell holding enough voxels (a speck is no seed), the
     # voxel nearest to the mean of that cell's voxels
     cell = np.floor(cent / seed_m).astype(np.int64)
@@ -189,8 +194,7 @@ def supervoxel_labels(vox: VoxelCloud, normals: np.ndarray, settings: SegmentSet
     first = np.ones(order.shape[0], dtype=bool)
     first[1:] = cinv[order[1:]] != cinv[order[:-1]]
     seed_vox = order[first]
-    min_seed_voxels = max(1, int(0.1 * (seed_m / settings.voxel_m) ** 2))
-    seed_vox = seed_vox[ccount[cinv[seed_vox]] >= min_seed_voxels]
+    seed_vox = seed_vox[ccount[cinv[seed_vox]] >= size.min_seed_voxels]
     if seed_vox.size == 0:
         seed_vox = np.array([0], dtype=np.int64)
 
@@ -309,8 +313,12 @@ def supervoxel_stats(
     return Supervoxels(labels, mean, normals, cnt.astype(np.int64), pairs)
 
 
-def compute_supervoxels(vox: VoxelCloud, viewpoint: np.ndarray, settings: SegmentSettings) -> Supervoxels:
-    """Stage 3a: voxel normals, VCCS clustering, supervoxel centroids/normals/adjacency."""
-    normals = voxel_normals(vox.centroids, settings.normal_radius_m, viewpoint)
-    labels = supervoxel_labels(vox, normals, settings)
+def compute_supervoxels(
+    vox: VoxelCloud, viewpoint: np.ndarray, settings: SegmentSettings, size: SegmentSize | None = None
+) -> Supervoxels:
+    """Stage 3a: voxel normals, VCCS clustering, supervoxel centroids/normals/adjacency.
+    ``size``: the frame's seed and normal radius (`SegmentSize.of(settings)` when None)."""
+    size = size if size is not None else SegmentSize.of(settings)
+    normals = voxel_normals(vox.centroids, size.normal_radius_m, viewpoint)
+    labels = supervoxel_labels(vox, normals, settings, size)
     return supervoxel_stats(vox, normals, labels, viewpoint)

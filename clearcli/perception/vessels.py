@@ -42,9 +42,14 @@ bowls side by side).
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from clearcli.perception.rings import cover_deg, facing_cos, fit_circle
+
+if TYPE_CHECKING:
+    from clearcli.perception.refine import RefineContext
 
 _MIN_RADIUS_M = 0.02
 _RANSAC_ROUNDS = 200
@@ -161,29 +166,20 @@ def _wall_profile(d: np.ndarray, h: np.ndarray, rim_h: float, radius: float) -> 
     return prof
 
 
-def rebuild_vessels(
-    seg_of_voxel: np.ndarray,
-    voxel_xy: np.ndarray,
-    voxel_height: np.ndarray,
-    voxel_edges: np.ndarray,
-    voxel_label: np.ndarray,
-    sv_normals_xy: np.ndarray,
-    sv_xy: np.ndarray,
-    sv_is_wall: np.ndarray,
-    tolerance_m: float,
-    max_radius_m: float,
-    min_voxels: int,
-    standing_max_m: float,
-    voxel_m: float,
-    voxel_lab: np.ndarray | None = None,
-) -> np.ndarray:
-    """(V,) segment per voxel, 0..G-1, with each open container rebuilt from its rim
-    (module docstring). ``voxel_xy`` (V, 2) and ``voxel_height`` (V,): the voxels in the
-    table plane and above it; ``voxel_edges``: their adjacency; ``voxel_label`` (V,):
-    their supervoxels, whose in-plane normals and centroids are ``sv_normals_xy`` /
-    ``sv_xy`` (S, 2), ``sv_is_wall`` flagging those that are not top faces;
-    ``voxel_lab`` (V, 3): their colour (CIELAB) when the frame's is usable."""
+def rebuild_vessels(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
+    """The stage: (V,) segment per voxel, 0..G-1, with each open container rebuilt from
+    its rim (module docstring). The voxels and supervoxels in the table plane and above
+    it, their adjacency, the walls (`RefineContext.sv_is_wall`) and the voxels' colour
+    (CIELAB, when the frame's is usable) come from ``ctx``; a piece is an object of its
+    own from the smallest object's voxels (`SegmentSize.min_object_voxels`)."""
     from clearcli.perception.supervoxels import _components
+
+    settings = ctx.settings
+    voxel_xy, voxel_height, voxel_edges, voxel_label = ctx.voxel_xy, ctx.voxel_height, ctx.vox.edges, ctx.sv.voxel_label
+    sv_normals_xy, sv_xy, sv_is_wall, voxel_lab = ctx.sv_normals_xy, ctx.sv_xy, ctx.sv_is_wall, ctx.voxel_lab
+    tolerance_m, max_radius_m = settings.rim_tolerance_m, settings.ring_max_radius_m
+    standing_max_m = settings.standing_max_m
+    min_voxels, voxel_m = ctx.size.min_object_voxels, ctx.size.voxel_m
 
     seg = np.asarray(seg_of_voxel, dtype=np.int64).copy()
     if seg.size == 0:

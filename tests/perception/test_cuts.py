@@ -49,6 +49,8 @@ def _two_box_patches(with_lower_box: bool):  # type: ignore[no-untyped-def]
 
 @pytest.mark.parametrize("with_lower_box", [True, False])
 def test_planar_cut_splits_coplanar_touching_boxes(with_lower_box: bool) -> None:
+    from helpers.refine import hand_context
+
     from clearcli.perception.cuts import concave_adjacencies, planar_cuts, seam_rise
     from clearcli.perception.lccp import lccp_segments
 
@@ -56,8 +58,7 @@ def test_planar_cut_splits_coplanar_touching_boxes(with_lower_box: bool) -> None
     seg = lccp_segments(sv, S)
     # LCCP alone: one segment, joined through the coplanar front faces
     assert int(seg.max()) == 0
-    up = np.array([0.0, 0.0, 1.0])
-    out = planar_cuts(seg, sv, voxels, up, S)
+    out = planar_cuts(seg, hand_context(voxels, sv, S))  # the table z = 0, z up
     if not with_lower_box:  # a lone box has only the odd edge adjacencies: no cut
         assert int(out.max()) == 0
         return
@@ -75,4 +76,4 @@ def test_planar_cut_splits_coplanar_touching_boxes(with_lower_box: bool) -> None
     assert len(set(out[box_b].tolist())) == 1 and len(set(out[~box_b].tolist())) == 1
     assert out[box_b][0] != out[~box_b][0]
     # off: untouched
-    assert np.array_equal(planar_cuts(seg, sv, voxels, up, replace(S, cut_min_score=0.9)), seg)
+    assert np.array_equal(planar_cuts(seg, hand_context(voxels, sv, replace(S, cut_min_score=0.9))), seg)

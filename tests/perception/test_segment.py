@@ -50,6 +50,23 @@ def test_isolated_box_one_object_true_size(box_frame: Frame) -> None:
     assert np.isfinite(box_frame.points[obj.indices]).all()
 
 
+def test_timings_keep_their_names_order_and_sums(box_frame: Frame) -> None:
+    """`segment` times its steps by name with one clock: the keys the JSON reports, in
+    their order; "merge" every refinement but the planar cuts; the named steps within
+    the total."""
+    from clearcli.perception.refine import STAGES
+    from clearcli.perception.segment import TIMINGS, segment
+
+    stages = [st.name for st in STAGES]
+    assert list(TIMINGS) == ["filter", "table", "supervoxels", "lccp", "merge", "edges", *stages, "flat", "objects",
+                             "openings", "total"]
+    t = segment(box_frame, S).timings_s
+    assert list(t) == list(TIMINGS)
+    assert t["merge"] == sum(t[k] for k in stages if k != "cuts")
+    steps = ("filter", "table", "supervoxels", "edges", "lccp", "cuts", "merge", "objects", "flat", "openings")
+    assert min(t.values()) >= 0.0 and sum(t[k] for k in steps) <= t["total"]
+
+
 def test_two_touching_boxes_are_two() -> None:
     from clearcli.perception.segment import segment
     from clearcli.sim.scene import Box, make_scene

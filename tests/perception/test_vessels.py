@@ -24,11 +24,16 @@ def _wall(r_of_z, z0: float, z1: float, deg0: float, deg1: float, outward: bool,
     return np.vstack(pts), np.vstack(nrm)
 
 
-def _rebuild(parts, min_voxels: int = 20):
-    """parts: (points, normals xy, is_wall, segment) per surface -> (segment in, out)."""
+def _rebuild(parts):
+    """parts: (points, normals xy, is_wall, segment) per surface -> (segment in, out).
+    Each voxel its own supervoxel, a wall's normal level, a top's straight up; the voxel
+    STEP_M and the smallest object 20.5 voxels' area: 20 voxels, rounded down."""
+    from helpers.refine import hand_context
     from scipy.spatial import cKDTree
 
+    from clearcli.perception.supervoxels import Supervoxels
     from clearcli.perception.vessels import rebuild_vessels
+    from clearcli.settings.segment import SegmentSettings
 
     pts = np.vstack([p[0] for p in parts])
     nrm = np.vstack([p[1] for p in parts])
@@ -36,11 +41,13 @@ def _rebuild(parts, min_voxels: int = 20):
     seg = np.concatenate([np.full(p[0].shape[0], p[3]) for p in parts])
     edges = cKDTree(pts).query_pairs(1.8 * STEP_M, output_type="ndarray")
     n = pts.shape[0]
-    out = rebuild_vessels(
-        seg, pts[:, :2], pts[:, 2], edges, np.arange(n), nrm, pts[:, :2], wall,
-        tolerance_m=0.015, max_radius_m=0.15, min_voxels=min_voxels, standing_max_m=0.02, voxel_m=STEP_M,
-    )
-    return seg, out
+    normals = np.column_stack([nrm, np.where(wall, 0.0, 1.0)])
+    sv = Supervoxels(np.arange(n), pts, normals, np.ones(n, dtype=np.int64), np.zeros((0, 2), dtype=np.int64))
+    # the defaults otherwise: rims within 15 mm, radius up to 15 cm, standing within 2 cm
+    settings = SegmentSettings(voxel_m=STEP_M, min_object_area_m2=20.5 * STEP_M**2)
+    ctx = hand_context(pts, sv, settings, edges)
+    assert ctx.size.min_object_voxels == 20 and np.array_equal(ctx.sv_is_wall, wall)
+    return seg, rebuild_vessels(seg, ctx)
 
 
 def _bowl(z_top: float = 0.07, z_base: float = 0.0):
