@@ -13,6 +13,7 @@ from typing import Annotated, Any, Callable, Optional
 import typer
 
 from clearcli import interrupts
+from clearcli.settings import kinds as grasp_kinds
 
 SettingsFile = Annotated[
     Optional[Path], typer.Option("--settings", help="TOML settings file (see `clear settings`).")
@@ -45,10 +46,10 @@ Grasps = Annotated[
     Optional[str],
     typer.Option(
         "--grasps",
-        help="Grasp kinds the planner may use, cheapest first: pinch (the thesis's, from above), rim (an open "
-        "container's wall), slide (a flat object slid to a seen table edge). 'pinch' alone is the thesis's "
-        "behaviour exactly. Any order, each kind at most once, pinch included: the rule of --set "
-        "plan.grasps=KINDS, whose alias this is (default pinch,rim,slide).",
+        help=f"Grasp kinds the planner may use, cheapest first: {grasp_kinds.help_text()}. "
+        f"'{grasp_kinds.REQUIRED_KINDS[0]}' alone is the thesis's behaviour exactly. Any order, each kind at most "
+        f"once, {', '.join(grasp_kinds.REQUIRED_KINDS)} included: the rule of --set plan.grasps=KINDS, whose alias "
+        f"this is (default {grasp_kinds.default_kinds()}).",
         metavar="KINDS",
     ),
 ]

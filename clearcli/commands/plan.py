@@ -13,8 +13,9 @@ plan); errors (3, 4, 6, 8) are one line on stderr.
     status                    "complete" | "partial" | "no_plan"
     actions                   ["(grasp o1)", "(push o0 dir1)", "(grasp_rim o2)",
                               "(slide_grasp o3)", ...] in order
-    steps                     per action: {"kind": "grasp"|"push", "grasp_kind":
-                              "pinch"|"rim"|"slide" (grasps; null for a push), "object": "o1",
+    steps                     per action: {"kind": "grasp"|"push", "grasp_kind": a
+                              registered kind's name (clearcli/settings/kinds.py: "pinch",
+                              "rim", "slide", ...; null for a push), "object": "o1",
                               "direction": null|"dir1", "checked": bool,
                               "candidate": int|null (gripper candidate used: half-turn /
                               quarter-turn alternative), "joints_rad": [[one float per
@@ -37,8 +38,9 @@ plan); errors (3, 4, 6, 8) are one line on stderr.
     left                      [{"object", "reason": "unreachable"|"ungraspable"|"stuck",
                               "detail" (which pose failed and how; the measured width
                               against the opening, and why each other grasp kind is not
-                              offered; what holds it), "actions": {"grasp"|"rim grasp"|
-                              "slide grasp"|"push dirN": why it has no arm motion},
+                              offered; what holds it), "actions": {a grasp kind's label
+                              ("grasp", "rim grasp", "slide grasp", ...)|"push dirN": why
+                              it has no arm motion},
                               "blockers": [..],
                               "width_m": float|null}] for every object not removed
     no_plan_reason            null, or (status no_plan) the one-line reason also printed on stderr

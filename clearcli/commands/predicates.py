@@ -40,6 +40,7 @@ import typer
 
 from clearcli.commands import options as bo
 from clearcli.commands.common import stderr, stdout
+from clearcli.settings import kinds as grasp_kinds
 
 
 def print_state(doc: dict[str, Any]) -> None:
@@ -139,14 +140,14 @@ def domain_cmd(
         str,
         typer.Option(
             "--grasps",
-            help="Grasp kinds whose actions it has: pinch (the thesis's grasp; pddl/domain.pddl), rim "
-            "(grasp_rim), slide (slide_grasp).",
+            help=f"Grasp kinds whose actions it has: {grasp_kinds.help_text()}; "
+            f"{grasp_kinds.REQUIRED_KINDS[0]} is the thesis's grasp (pddl/domain.pddl).",
             metavar="KINDS",
         ),
-    ] = "pinch,rim,slide",
+    ] = grasp_kinds.default_kinds(),
 ) -> None:
-    """Print the PDDL domain (types obj/direction; actions grasp, push, and grasp_rim and
-    slide_grasp unless --grasps leaves them out)."""
+    """Print the PDDL domain (types obj/direction; actions grasp, push, and one per other
+    grasp kind, grasp_rim and slide_grasp among them, unless --grasps leaves them out)."""
     from clearcli.tasks.domain import domain_text
 
     typer.echo(domain_text(clearance_costs=clearance_cost, grasps=grasps), nl=False)

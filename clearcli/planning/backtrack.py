@@ -9,6 +9,8 @@
 
 The thesis checks only the first action (``check="first"``, `clear plan --first-only`,
 and what `replay` and `simulate` use: the robot replans after every action anyway).
+The loop is a `Search` object: its fields are the search's state (the base, the facts
+learnt, the fixed prefix), its bounds the [plan] settings it is given.
 
 **What is learnt, and where it holds.** The model's ``ik_unfeasible_*`` facts are
 initial-state facts, and ``push o`` deletes ``ik_unfeasible_grasp o``: "the grasp of o
@@ -57,8 +59,9 @@ from clearcli.planning.compile import removable_objects
 from clearcli.planning.feasibility import EMPTY, IKActionChecker, Infeasible, SceneContext, gripper_opening_text
 from clearcli.planning.solve import Solved, action_cost, action_space, deadline_error, progress, solve
 from clearcli.planning.types import Action, BacktrackStep, CheckedAction, LeftObject, Plan
-from clearcli.predicates.grasps import EXTRA_KINDS, KIND_FACTS
+from clearcli.predicates.grasps import kind as grasp_kind, kinds as grasp_kinds
 from clearcli.predicates.state import Fact, SymbolicState
+from clearcli.settings.plan import PlanSettings
 
 # check(action, context) -> CheckedAction, or Infeasible with the reason
 Checker = Callable[[Action, SceneContext], "CheckedAction | Infeasible"]
@@ -66,11 +69,10 @@ Checker = Callable[[Action, SceneContext], "CheckedAction | Infeasible"]
 CHECK_MODES = ("whole", "first")
 
 
-GRASP_LABELS = {"pinch": "grasp", "rim": "rim grasp", "slide": "slide grasp"}
-
-
 def _label(action: Action) -> str:
-    return GRASP_LABELS[action.grasp_kind] if action.kind == "grasp" else f"push {action.direction}"
+    """The action as reasons name it: its grasp kind's label ("grasp", "rim grasp", ...)
+    or "push dirN"."""
+    return grasp_kind(action.grasp_kind).label if action.kind == "grasp" else f"push {action.direction}"
 
 
 def with_grasp_kinds(state: SymbolicState, kinds: Sequence[str]) -> SymbolicState:
@@ -78,7 +80,7 @@ def with_grasp_kinds(state: SymbolicState, kinds: Sequence[str]) -> SymbolicStat
     grasps``): with "pinch" alone, exactly the thesis's facts, so exactly its plans."""
     import dataclasses
 
-    drop = {n for k in EXTRA_KINDS if k not in kinds for n in (KIND_FACTS[k].offered, KIND_FACTS[k].block)}
+    drop = {n for k in grasp_kinds() if k.name not in kinds for n in (k.facts.offered, k.facts.block) if n}
     if not drop or not any(f[0] in drop for f in state.facts):
         return state
     return dataclasses.replace(state, facts=frozenset(f for f in state.facts if f[0] not in drop))
@@ -87,93 +89,261 @@ def with_grasp_kinds(state: SymbolicState, kinds: Sequence[str]) -> SymbolicStat
 def backtrack(
     state: SymbolicState,
     check: Checker,
+    settings: PlanSettings,
     *,
-    time_limit_s: float | None = None,
-    optimal_max_objects: int | None = None,
-    optimal_time_s: float | None = None,
-    anytime_time_s: float | None = None,
-    max_backtracks: int | None = None,
-    formulation: str | None = None,
     goal_objects: Sequence[str] | None = None,
     precheck: Callable[[Action], str] | None = None,
-    mode: str = "whole",
+    mode: str | None = None,
     describe_width: Callable[[str], tuple[str, float | None]] | None = None,
 ) -> Plan:
     """Backtracking with ``check`` as HASIKSOLUTION, on every action (``mode="whole"``) or
-    the first (``"first"``). Raises NoPlanError when nothing can be removed (the reason
-    in the message, the result in ``error.plan``), PlannerError when the search fails or
-    ``time_limit_s`` (the whole planning) ends without a checked plan. A search bound
-    left None is [plan]'s (clearcli/settings/plan.py: the one home of its default)."""
-    from clearcli.settings.plan import PlanSettings
+    the first (``"first"``; default ``settings.check``), its bounds those of ``settings``
+    (the [plan] section of the settings tree the caller resolved). Raises NoPlanError
+    when nothing can be removed (the reason in the message, the result in
+    ``error.plan``), PlannerError when the search fails or ``settings.time_limit_s`` (the
+    whole planning) ends without a checked plan. See `Search`."""
+    return Search(
+        state, check, settings, goal_objects=goal_objects, precheck=precheck, mode=mode, describe_width=describe_width
+    ).run()
 
-    defaults = PlanSettings()
-    time_limit_s = defaults.time_limit_s if time_limit_s is None else time_limit_s
-    optimal_max_objects = defaults.optimal_max_objects if optimal_max_objects is None else optimal_max_objects
-    optimal_time_s = defaults.optimal_time_s if optimal_time_s is None else optimal_time_s
-    anytime_time_s = defaults.anytime_time_s if anytime_time_s is None else anytime_time_s
-    max_backtracks = defaults.max_backtracks if max_backtracks is None else max_backtracks
-    formulation = defaults.formulation if formulation is None else formulation
-    if mode not in CHECK_MODES:
-        raise SettingsError(f"settings: [plan] check must be one of {', '.join(CHECK_MODES)}, got {mode!r}")
-    t_start = time.perf_counter()
-    deadline_at = t_start + time_limit_s
-    names = state.names()
-    facts0 = frozenset(state.facts)
-    # too wide or narrow for the pinch, and no other grasp kind offered
-    offered_kinds = {KIND_FACTS[k].offered for k in EXTRA_KINDS}
-    offered_other = {f[1] for f in facts0 if f[0] in offered_kinds}
-    ungraspable = tuple(o for o in names if ("ungraspable", o) in facts0 and o not in offered_other)
-    wanted = [o for o in (goal_objects if goal_objects is not None else names) if o not in ungraspable]
-    learnt0: set[Fact] = set()  # learnt, true in the recorded scene
-    why: dict[str, dict[str, str]] = {}  # object -> action label -> why it has no arm motion
-    steps: list[BacktrackStep] = []
-    timings = {"planner_s": 0.0, "ik_s": 0.0}
 
-    # The base: the state plans are made from (the recorded scene until a prefix is fixed).
-    prefix: list[Action] = []
-    prefix_checked: list[CheckedAction] = []
-    base_ctx: SceneContext = EMPTY
-    base_facts: frozenset[Fact] = facts0
-    learnt_here: set[Fact] = set()  # learnt in the base after a prefix
-    learnt_later: list[tuple[int, Fact]] = []
-    goal: list[str] = list(wanted)
-    unreachable: list[str] = []
-    stuck: list[str] = []
+class Search:
+    """One backtracking search (the module's docstring): its state is its fields, its
+    bounds the [plan] settings it is given.
 
-    def known() -> frozenset[Fact]:
-        return base_facts | (learnt0 if not prefix else frozenset()) | learnt_here
+    The base is the state plans are made from: the recorded scene (``base_ctx`` empty,
+    ``base_facts`` the state's) until a prefix of checked actions is fixed (``prefix``);
+    ``learnt0`` holds what is learnt in the recorded scene, ``learnt_here`` what is learnt
+    in the base after a prefix. Each round (`step`) plans from the base, checks the
+    plan's actions and either returns the plan or learns from the first failure
+    (`learn`), after which the goal is worked out again (`refresh_goal`)."""
 
-    def base_names() -> tuple[str, ...]:
-        gone = {a.obj for a in prefix if a.kind == "grasp"}
-        return tuple(o for o in names if o not in gone)
+    def __init__(
+        self,
+        state: SymbolicState,
+        check: Checker,
+        settings: PlanSettings,
+        *,
+        goal_objects: Sequence[str] | None = None,
+        precheck: Callable[[Action], str] | None = None,
+        mode: str | None = None,
+        describe_width: Callable[[str], tuple[str, float | None]] | None = None,
+    ) -> None:
+        self.state = state
+        self.check = check
+        self.settings = settings
+        self.mode = settings.check if mode is None else mode
+        if self.mode not in CHECK_MODES:
+            raise SettingsError(f"settings: [plan] check must be one of {', '.join(CHECK_MODES)}, got {self.mode!r}")
+        self.precheck = precheck
+        self.describe_width = describe_width
+        self.t_start = time.perf_counter()
+        self.deadline_at = self.t_start + settings.time_limit_s
+        self.names = state.names()
+        self.facts0 = frozenset(state.facts)
+        # no grasp kind offered: too wide or narrow for the pinch, and no other kind
+        self.ungraspable = tuple(
+            o for o in self.names if not any(k.facts.offered_in(self.facts0, o) for k in grasp_kinds())
+        )
+        wanted = goal_objects if goal_objects is not None else self.names
+        self.wanted = [o for o in wanted if o not in self.ungraspable]
+        self.learnt0: set[Fact] = set()  # learnt, true in the recorded scene
+        self.why: dict[str, dict[str, str]] = {}  # object -> action label -> why it has no arm motion
+        self.steps: list[BacktrackStep] = []
+        self.timings = {"planner_s": 0.0, "ik_s": 0.0}
+        self.prefix: list[Action] = []
+        self.prefix_checked: list[CheckedAction] = []
+        self.base_ctx: SceneContext = EMPTY
+        self.base_facts: frozenset[Fact] = self.facts0
+        self.learnt_here: set[Fact] = set()  # learnt in the base after a prefix
+        self.learnt_later: list[tuple[int, Fact]] = []
+        self.goal: list[str] = list(self.wanted)
+        self.unreachable: list[str] = []
+        self.stuck: list[str] = []
 
-    def refresh_goal() -> None:
-        gone = {a.obj for a in prefix if a.kind == "grasp"}
-        goal[:] = [o for o in wanted if o not in gone]
-        unreachable.clear()
-        stuck.clear()
-        facts = known()
-        for o in list(goal):  # every allowed action IK-infeasible
+    # -- the base ------------------------------------------------------------------------
+    def known(self) -> frozenset[Fact]:
+        """The facts of the base, with what is learnt there."""
+        return self.base_facts | (self.learnt0 if not self.prefix else frozenset()) | self.learnt_here
+
+    def gone(self) -> set[str]:
+        return {a.obj for a in self.prefix if a.kind == "grasp"}
+
+    def base_names(self) -> tuple[str, ...]:
+        gone = self.gone()
+        return tuple(o for o in self.names if o not in gone)
+
+    def refresh_goal(self) -> None:
+        """The goal in the base: the wanted objects still there, less those no action of
+        which has an arm motion (``unreachable``) and those no sequence frees (``stuck``)."""
+        gone = self.gone()
+        self.goal = [o for o in self.wanted if o not in gone]
+        self.unreachable = []
+        self.stuck = []
+        facts = self.known()
+        for o in list(self.goal):  # every allowed action IK-infeasible
             space = action_space(facts, o)
             grasps = [a for a in space if a.kind == "grasp"]
-            # or its only grasps are slides without an arm motion: a push of it does not
-            # make a slide known (pddl.with_grasp_kinds), so no sequence frees them
-            slides_only = bool(grasps) and all(a.grasp_kind == "slide" for a in grasps)
-            if all(a.ik_fact() in facts for a in (grasps if slides_only else space)):
-                goal.remove(o)
-                unreachable.append(o)
-        removable = removable_objects(base_names(), facts, state.push_costs)
-        for o in list(goal):  # exact: the model is monotone
+            # or its only grasps are of kinds whose IK fact no push clears (a slide's,
+            # made for where the object stands): a push of it does not make them known,
+            # so no sequence frees them
+            fixed = bool(grasps) and all(not grasp_kind(a.grasp_kind).push_clears_ik for a in grasps)
+            if all(a.ik_fact() in facts for a in (grasps if fixed else space)):
+                self.goal.remove(o)
+                self.unreachable.append(o)
+        removable = removable_objects(self.base_names(), facts, self.state.push_costs)
+        for o in list(self.goal):  # exact: the model is monotone
             if o not in removable:
-                goal.remove(o)
-                stuck.append(o)
+                self.goal.remove(o)
+                self.stuck.append(o)
 
-    def result(solved: Solved, checked: Sequence[CheckedAction | None]) -> Plan:
-        timings["total_s"] = time.perf_counter() - t_start
-        actions = tuple(prefix) + solved.actions
-        all_checked = tuple(prefix_checked) + tuple(checked) + (None,) * (len(solved.actions) - len(checked))
-        costs = state.push_costs or {}
-        cost = sum(action_cost(a, costs) for a in prefix) + solved.cost
+    # -- the search ----------------------------------------------------------------------
+    def run(self) -> Plan:
+        if self.precheck is not None:
+            self.run_precheck()
+        self.refresh_goal()
+        while True:
+            plan = self.step()
+            if plan is not None:
+                return plan
+
+    def run_precheck(self) -> None:
+        """Cheap necessary conditions (reach) for every action, before any search: an
+        object far away is dropped without planning around it first."""
+        assert self.precheck is not None
+        t0 = time.perf_counter()
+        for o in self.names:
+            for a in action_space(self.facts0, o):
+                reason = self.precheck(a)
+                if reason:
+                    self.learnt0.add(a.ik_fact())
+                    self.why.setdefault(o, {})[_label(a)] = reason
+        self.timings["precheck_s"] = time.perf_counter() - t0
+
+    def step(self) -> Plan | None:
+        """One round: the plan with every checked action, or None after learning."""
+        s = self.settings
+        if not self.goal:
+            plan = self.result(Solved((), 0, True, "", 0.0), ())
+            if not self.names or plan.actions:
+                return plan  # an empty table is clear already; a fixed prefix is a plan
+            err = NoPlanError(f"no plan: {_no_plan_reason(plan)}")
+            err.plan = plan  # type: ignore[attr-defined]
+            raise err
+        if len(self.steps) >= s.max_backtracks:
+            raise PlannerError(f"backtracking gave up after {len(self.steps)} replans; raise [plan] max_backtracks")
+        if time.perf_counter() >= self.deadline_at:
+            raise deadline_error(s.time_limit_s)
+        t0 = time.perf_counter()
+        solved = solve(
+            self.base_names(),
+            self.known(),
+            self.goal,
+            self.state.push_costs,
+            time_limit_s=s.time_limit_s,
+            optimal_max_objects=s.optimal_max_objects,
+            optimal_time_s=s.optimal_time_s,
+            anytime_time_s=s.anytime_time_s,
+            formulation=s.formulation,
+            deadline_at=self.deadline_at,
+        )
+        self.timings["planner_s"] += time.perf_counter() - t0
+        if solved is None:
+            # Cannot happen after refresh_goal (the fixpoint is exact); guard anyway.
+            raise PlannerError("Fast Downward proved the goal unsolvable although it is reachable")
+
+        t0 = time.perf_counter()
+        ctx = self.base_ctx
+        checked: list[CheckedAction] = []
+        failure: tuple[int, Action, Infeasible, SceneContext] | None = None
+        for i, action in enumerate(solved.actions if self.mode == "whole" else solved.actions[:1]):
+            res = self.check(action, ctx)
+            if isinstance(res, Infeasible):
+                failure = (i, action, res, ctx)
+                break
+            checked.append(res)
+            ctx = ctx.after(action, self.state)
+        if failure is None:
+            self.timings["ik_s"] += time.perf_counter() - t0
+            self.steps.append(BacktrackStep(solved.actions, solved.cost, solved.optimal, True, prefix=len(self.prefix)))
+            return self.result(solved, checked)
+        self.learn(solved, checked, *failure, t0=t0)
+        self.refresh_goal()
+        return None
+
+    def learn(
+        self, solved: Solved, checked: Sequence[CheckedAction], i: int, action: Action, fail: Infeasible,
+        ctx_i: SceneContext, t0: float,
+    ) -> None:
+        """What the failure of the plan's ``i``-th action teaches, where it holds (the
+        module's docstring): facts of the base, or a fixed prefix and a new base."""
+        new: set[Fact] = set()
+        if i == 0:
+            new = set(fail.facts(action)) - self.known()
+            self.why.setdefault(action.obj, {})[_label(action)] = fail.reason
+        else:
+            pushes_before = [j for j, a in enumerate(solved.actions[:i]) if a.obj == action.obj]
+            if not pushes_before:
+                # The object stands where it stood in the base: does the action fail
+                # there too? Then what that failure teaches holds in the base.
+                at_base = self.check(action, self.base_ctx)
+                if isinstance(at_base, Infeasible):
+                    new = set(at_base.facts(action)) - self.known()
+                    if new:
+                        self.why.setdefault(action.obj, {})[_label(action)] = at_base.reason
+            elif action.kind == "grasp" and len(pushes_before) == 1:
+                # Pushed once from where it stood in the base, then not graspable: the
+                # push look-ahead's rule, in hindsight (the look-ahead saw the other
+                # objects as they stood at the push): that push is infeasible in the base.
+                push = solved.actions[pushes_before[0]]
+                if push.ik_fact() not in self.known():
+                    new = {push.ik_fact()}
+                    self.why.setdefault(action.obj, {})[_label(push)] = (
+                        f"the push leaves {action.obj} where it cannot be grasped ({fail.reason})"
+                    )
+        self.timings["ik_s"] += time.perf_counter() - t0
+        if new:
+            (self.learnt0 if not self.prefix else self.learnt_here).update(new)
+            if self.prefix:
+                self.learnt_later.extend((len(self.prefix), f) for f in sorted(new))
+            self.steps.append(
+                BacktrackStep(
+                    solved.actions, solved.cost, solved.optimal, False, fail.reason, i, tuple(sorted(new)), len(self.prefix)
+                )
+            )
+        elif i == 0:
+            # A failure in the base whose facts are known already: the planner would not
+            # have planned the action. A bug, not a scene: say so rather than loop.
+            raise PlannerError(f"backtracking learnt nothing from {action.pddl()} ({fail.reason})")
+        else:
+            # Nothing to say of the base: fix the checked actions before the failure and
+            # plan the rest from the state they leave, where the failure is learnt.
+            self.steps.append(
+                BacktrackStep(
+                    solved.actions, solved.cost, solved.optimal, False, fail.reason, i,
+                    tuple(sorted(fail.facts(action))), len(self.prefix),
+                )
+            )
+            # The facts known in the base, carried through the fixed actions by the
+            # domain's effects, are the new base's facts.
+            facts_now = self.known()
+            for a in solved.actions[:i]:
+                facts_now = progress(facts_now, a)
+            self.prefix.extend(solved.actions[:i])
+            self.prefix_checked.extend(checked[:i])
+            self.base_ctx = ctx_i
+            self.base_facts = facts_now
+            self.learnt_here = set(fail.facts(action)) - facts_now
+            self.learnt_later.extend((len(self.prefix), f) for f in sorted(self.learnt_here))
+            self.why.setdefault(action.obj, {})[_label(action)] = fail.reason
+
+    def result(self, solved: Solved, checked: Sequence[CheckedAction | None]) -> Plan:
+        """The plan: the fixed prefix and ``solved`` after it."""
+        self.timings["total_s"] = time.perf_counter() - self.t_start
+        actions = tuple(self.prefix) + solved.actions
+        all_checked = tuple(self.prefix_checked) + tuple(checked) + (None,) * (len(solved.actions) - len(checked))
+        costs = self.state.push_costs or {}
+        cost = sum(action_cost(a, costs) for a in self.prefix) + solved.cost
         # Pushes after the last grasp serve nothing (a fixed prefix can end so when the
         # rest turns out impossible): leave them out.
         keep = len(actions)
@@ -184,149 +354,30 @@ def backtrack(
             cost = sum(action_cost(a, costs) for a in actions)
         removed = tuple(a.obj for a in actions if a.kind == "grasp")
         left = _left_objects(
-            names, removed, ungraspable, unreachable, stuck, known(), why, describe_width
+            self.names, removed, self.ungraspable, self.unreachable, self.stuck, self.known(), self.why,
+            self.describe_width,
         )
         return Plan(
             actions=actions,
             cost=cost,
-            optimal=solved.optimal and not prefix,
+            optimal=solved.optimal and not self.prefix,
             first=all_checked[0] if all_checked else None,
-            ik_facts=frozenset(learnt0),
-            unreachable=tuple(unreachable),
-            replans=len(steps),
-            timings_s=dict(timings),
+            ik_facts=frozenset(self.learnt0),
+            unreachable=tuple(self.unreachable),
+            replans=len(self.steps),
+            timings_s=dict(self.timings),
             goal=removed,
-            ungraspable=ungraspable,
-            stuck=tuple(stuck),
+            ungraspable=self.ungraspable,
+            stuck=tuple(self.stuck),
             search=solved.config,
-            steps=tuple(steps),
+            steps=tuple(self.steps),
             checked=all_checked,
-            check=mode,
+            check=self.mode,
             deadline=solved.deadline,
-            learnt_later=tuple(learnt_later),
+            learnt_later=tuple(self.learnt_later),
             left=left,
-            max_backtracks=max_backtracks,
+            max_backtracks=self.settings.max_backtracks,
         )
-
-    if precheck is not None:
-        # Cheap necessary conditions (reach) for every action, before any search: an
-        # object far away is dropped without planning around it first.
-        t0 = time.perf_counter()
-        for o in names:
-            for a in action_space(facts0, o):
-                reason = precheck(a)
-                if reason:
-                    learnt0.add(a.ik_fact())
-                    why.setdefault(o, {})[_label(a)] = reason
-        timings["precheck_s"] = time.perf_counter() - t0
-    refresh_goal()
-    while True:
-        if not goal:
-            plan = result(Solved((), 0, True, "", 0.0), ())
-            if not names or plan.actions:
-                return plan  # an empty table is clear already; a fixed prefix is a plan
-            err = NoPlanError(f"no plan: {_no_plan_reason(plan)}")
-            err.plan = plan  # type: ignore[attr-defined]
-            raise err
-        if len(steps) >= max_backtracks:
-            raise PlannerError(
-                f"backtracking gave up after {len(steps)} replans; raise [plan] max_backtracks"
-            )
-        if time.perf_counter() >= deadline_at:
-            raise deadline_error(time_limit_s)
-        t0 = time.perf_counter()
-        solved = solve(
-            base_names(),
-            known(),
-            goal,
-            state.push_costs,
-            time_limit_s=time_limit_s,
-            optimal_max_objects=optimal_max_objects,
-            optimal_time_s=optimal_time_s,
-            anytime_time_s=anytime_time_s,
-            formulation=formulation,
-            deadline_at=deadline_at,
-        )
-        timings["planner_s"] += time.perf_counter() - t0
-        if solved is None:
-            # Cannot happen after refresh_goal (the fixpoint is exact); guard anyway.
-            raise PlannerError("Fast Downward proved the goal unsolvable although it is reachable")
-
-        t0 = time.perf_counter()
-        ctx = base_ctx
-        checked: list[CheckedAction] = []
-        failure: tuple[int, Action, Infeasible, SceneContext] | None = None
-        for i, action in enumerate(solved.actions if mode == "whole" else solved.actions[:1]):
-            res = check(action, ctx)
-            if isinstance(res, Infeasible):
-                failure = (i, action, res, ctx)
-                break
-            checked.append(res)
-            ctx = ctx.after(action, state)
-        if failure is None:
-            timings["ik_s"] += time.perf_counter() - t0
-            steps.append(BacktrackStep(solved.actions, solved.cost, solved.optimal, True, prefix=len(prefix)))
-            return result(solved, checked)
-
-        i, action, fail, ctx_i = failure
-        new: set[Fact] = set()
-        if i == 0:
-            new = set(fail.facts(action)) - known()
-            why.setdefault(action.obj, {})[_label(action)] = fail.reason
-        else:
-            pushes_before = [j for j, a in enumerate(solved.actions[:i]) if a.obj == action.obj]
-            if not pushes_before:
-                # The object stands where it stood in the base: does the action fail
-                # there too? Then what that failure teaches holds in the base.
-                at_base = check(action, base_ctx)
-                if isinstance(at_base, Infeasible):
-                    new = set(at_base.facts(action)) - known()
-                    if new:
-                        why.setdefault(action.obj, {})[_label(action)] = at_base.reason
-            elif action.kind == "grasp" and len(pushes_before) == 1:
-                # Pushed once from where it stood in the base, then not graspable: the
-                # push look-ahead's rule, in hindsight (the look-ahead saw the other
-                # objects as they stood at the push): that push is infeasible in the base.
-                push = solved.actions[pushes_before[0]]
-                if push.ik_fact() not in known():
-                    new = {push.ik_fact()}
-                    why.setdefault(action.obj, {})[_label(push)] = (
-                        f"the push leaves {action.obj} where it cannot be grasped ({fail.reason})"
-                    )
-        timings["ik_s"] += time.perf_counter() - t0
-        if new:
-            (learnt0 if not prefix else learnt_here).update(new)
-            if prefix:
-                learnt_later.extend((len(prefix), f) for f in sorted(new))
-            steps.append(
-                BacktrackStep(solved.actions, solved.cost, solved.optimal, False, fail.reason, i, tuple(sorted(new)), len(prefix))
-            )
-        elif i == 0:
-            # A failure in the base whose facts are known already: the planner would not
-            # have planned the action. A bug, not a scene: say so rather than loop.
-            raise PlannerError(f"backtracking learnt nothing from {action.pddl()} ({fail.reason})")
-        else:
-            # Nothing to say of the base: fix the checked actions before the failure and
-            # plan the rest from the state they leave, where the failure is learnt.
-            steps.append(
-                BacktrackStep(
-                    solved.actions, solved.cost, solved.optimal, False, fail.reason, i,
-                    tuple(sorted(fail.facts(action))), len(prefix),
-                )
-            )
-            # The facts known in the base, carried through the fixed actions by the
-            # domain's effects, are the new base's facts.
-            facts_now = known()
-            for a in solved.actions[:i]:
-                facts_now = progress(facts_now, a)
-            prefix.extend(solved.actions[:i])
-            prefix_checked.extend(checked[:i])
-            base_ctx = ctx_i
-            base_facts = facts_now
-            learnt_here = set(fail.facts(action)) - facts_now
-            learnt_later.extend((len(prefix), f) for f in sorted(learnt_here))
-            why.setdefault(action.obj, {})[_label(action)] = fail.reason
-        refresh_goal()
 
 
 def _left_objects(
@@ -419,7 +470,7 @@ def make_plan(
         width = float(obj.grasp_width_m)
         text = "too wide or narrow for the gripper" if width <= 0 else gripper_opening_text(width, gripper.opening_width_m, gripper.closing_width_m)
         # the other kinds tried, and why each is not offered
-        tried = [f"{GRASP_LABELS[k]}: {obj.kind_refusals[k]}" for k in kinds_on if k in obj.kind_refusals]
+        tried = [f"{grasp_kind(k).label}: {obj.kind_refusals[k]}" for k in kinds_on if k in obj.kind_refusals]
         if tried:
             text = f"{text}; " + "; ".join(tried)
         return text, (width if width > 0 else None)
@@ -428,12 +479,7 @@ def make_plan(
         plan = backtrack(
             state,
             checker,
-            time_limit_s=plan_s.time_limit_s,
-            optimal_max_objects=plan_s.optimal_max_objects,
-            optimal_time_s=plan_s.optimal_time_s,
-            anytime_time_s=plan_s.anytime_time_s,
-            max_backtracks=plan_s.max_backtracks,
-            formulation=plan_s.formulation,
+            plan_s,
             precheck=checker.beyond_reach if plan_s.reach_precheck else None,
             mode=check or plan_s.check,
             describe_width=describe_width,

@@ -17,7 +17,9 @@ or ``ik_unfeasible_*`` fact; they are only deleted. So
   existence a simple fixpoint (`removable_objects`) and LM-cut very well informed.
 
 Static facts (``ungraspable``, ``push_off_table``) remove the action instead, and the
-other grasp kinds' "offered" facts (``rim_graspable``, ``slidable``) add it.
+other grasp kinds' "offered" facts (``rim_graspable``, ``slidable``) add it. What a push
+deletes of each grasp kind's facts is the kind's own say (its ``push_clears_*`` flags,
+clearcli/predicates/grasps/base.py), as in the lifted domain (pddl.with_grasp_kinds).
 """
 
 from __future__ import annotations
@@ -27,16 +29,10 @@ from dataclasses import dataclass
 from typing import Iterable, Mapping, Sequence
 
 from clearcli.planning.types import Action
-from clearcli.predicates.grasps import EXTRA_KINDS, KIND_FACTS
+from clearcli.predicates.grasps import kinds as grasp_kinds
 from clearcli.predicates.state import DIRECTIONS, Fact
 
 _NAME_OK = re.compile(r"^[a-z][a-z0-9_]*$")
-
-# Fact kinds the planner can make false (the rest are static or added only between plans).
-DYNAMIC = (
-    "on", "block_grasp", "block_dir", "ik_unfeasible_grasp", "ik_unfeasible_dir",
-    "block_rim", "block_slide", "ik_unfeasible_rim", "ik_unfeasible_slide",
-)
 
 
 @dataclass(frozen=True)
@@ -80,30 +76,29 @@ def ground_actions(
         _check_name(name)
     for d in directions:
         _check_name(d)
-    ungraspable = {f[1] for f in true if f[0] == "ungraspable"}
+    kinds = grasp_kinds()  # in preference order, the thesis's pinch first
     off_table = {(f[1], f[2]) for f in true if f[0] == "push_off_table"}
-    offered = {k: {f[1] for f in true if f[0] == KIND_FACTS[k].offered} for k in EXTRA_KINDS}
+    static_names = {s for k in kinds for s in k.facts.static()}
+    static = {f for f in true if f[0] in static_names}
+    offered = {k.name: {o for o in objects if k.facts.offered_in(static, o)} for k in kinds}
     # Index the initially true dynamic facts by the objects they mention.
     on_over: dict[str, list[Fact]] = {o: [] for o in objects}  # on(x, o)
     on_under: dict[str, list[Fact]] = {o: [] for o in objects}  # on(o, x)
-    bg_of: dict[str, list[Fact]] = {o: [] for o in objects}  # block_grasp(x, o)
-    bg_by: dict[str, list[Fact]] = {o: [] for o in objects}  # block_grasp(o, x)
     bd_of: dict[tuple[str, str], list[Fact]] = {}  # block_dir(x, o, d)
     bd_any: dict[str, list[Fact]] = {o: [] for o in objects}  # block_dir with o either side
     bd_by: dict[str, list[Fact]] = {o: [] for o in objects}  # block_dir(o, x, d)
-    # the other grasp kinds' blocking facts (block_rim, block_slide): of o, by o
-    kb_of: dict[str, dict[str, list[Fact]]] = {k: {o: [] for o in objects} for k in EXTRA_KINDS}
-    kb_by: dict[str, dict[str, list[Fact]]] = {k: {o: [] for o in objects} for k in EXTRA_KINDS}
-    block_kind = {KIND_FACTS[k].block: k for k in EXTRA_KINDS}
+    # every grasp kind's blocking facts (block_grasp, block_rim, ...): of o, by o
+    kb_of: dict[str, dict[str, list[Fact]]] = {k.name: {o: [] for o in objects} for k in kinds}
+    kb_by: dict[str, dict[str, list[Fact]]] = {k.name: {o: [] for o in objects} for k in kinds}
+    block_kind = {k.facts.block: k.name for k in kinds}
+    thesis = [k for k in kinds if k.thesis]
+    others = [k for k in kinds if not k.thesis]
     known = set(objects)
     for f in sorted(true):
         kind = f[0]
         if kind == "on" and f[1] in known and f[2] in known:
             on_over[f[2]].append(f)
             on_under[f[1]].append(f)
-        elif kind == "block_grasp" and f[1] in known and f[2] in known:
-            bg_of[f[2]].append(f)
-            bg_by[f[1]].append(f)
         elif kind == "block_dir" and f[1] in known and f[2] in known:
             bd_of.setdefault((f[2], f[3]), []).append(f)
             bd_by[f[1]].append(f)
@@ -115,28 +110,23 @@ def ground_actions(
             kb_by[block_kind[kind]][f[1]].append(f)
     out: list[GroundAction] = []
     for o in objects:
-        # o gone: it stands on nothing and blocks nothing any more (any kind of grasp)
-        gone = list(on_under[o]) + list(bg_by[o]) + list(bd_by[o])
-        for k in EXTRA_KINDS:
-            gone += kb_by[k][o]
-        if o not in ungraspable:
-            pre = list(on_over[o]) + list(bg_of[o])
-            ikg = ("ik_unfeasible_grasp", o)
-            if ikg in true:
-                pre.append(ikg)
-            out.append(GroundAction(f"grasp_{o}", Action("grasp", o), tuple(pre), tuple(gone), 1))
-        for k in EXTRA_KINDS:
-            if o not in offered[k]:
+        # o gone: it stands on nothing and blocks nothing any more (any kind of grasp);
+        # the thesis's facts in the thesis's order, then the other kinds'
+        gone = list(on_under[o])
+        gone += [f for k in thesis for f in kb_by[k.name][o]] + list(bd_by[o])
+        gone += [f for k in others for f in kb_by[k.name][o]]
+        for k in kinds:
+            if o not in offered[k.name]:
                 continue
-            facts_k = KIND_FACTS[k]
-            pre = list(on_over[o]) + list(kb_of[k][o])
-            if k == "slide":  # slid along the table: nothing under it either
+            f_k = k.facts
+            pre = list(on_over[o]) + list(kb_of[k.name][o])
+            if k.on_table:  # slid along the table: nothing under it either
                 pre += on_under[o]
-            ikk = (facts_k.ik, o)
+            ikk = (f_k.ik, o)
             if ikk in true:
                 pre.append(ikk)
             out.append(
-                GroundAction(f"{facts_k.action}_{o}", Action("grasp", o, None, k), tuple(pre), tuple(gone), facts_k.cost)
+                GroundAction(f"{f_k.action}_{o}", Action("grasp", o, None, k.name), tuple(pre), tuple(gone), f_k.cost)
             )
         for d in directions:
             if (o, d) in off_table:
@@ -145,14 +135,15 @@ def ground_actions(
             ikd = ("ik_unfeasible_dir", o, d)
             if ikd in true:
                 pre.append(ikd)
-            deletes = list(bd_any[o]) + list(bg_of[o]) + list(bg_by[o])
-            for k in EXTRA_KINDS:
-                # a slide is made for where o stands: a push moves o out of others' slide
-                # paths but tells nothing of its own slide (its blocks and IK facts stay)
-                deletes += (kb_of[k][o] if k != "slide" else []) + kb_by[k][o]
-            for ik in ("ik_unfeasible_grasp", KIND_FACTS["rim"].ik):
-                if (ik, o) in true:
-                    deletes.append((ik, o))
+            deletes = list(bd_any[o])
+            for k in kinds:
+                # a push moves o out of the others' way always; what blocks its own grasp
+                # of a kind only when that kind's poses move with it (not a slide's, made
+                # for where o stands)
+                deletes += (kb_of[k.name][o] if k.push_clears_blocks else []) + kb_by[k.name][o]
+            for k in kinds:
+                if k.push_clears_ik and (k.facts.ik, o) in true:
+                    deletes.append((k.facts.ik, o))
             cost = int(push_costs.get((o, d), 1))
             if cost < 1:
                 raise ValueError(f"push cost of {o} {d} must be a positive integer, got {cost}")

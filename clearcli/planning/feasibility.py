@@ -31,7 +31,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from clearcli.planning.types import Action, CheckedAction
-from clearcli.predicates.grasps import KIND_FACTS
+from clearcli.predicates.grasps import kind as grasp_kind
 from clearcli.predicates.state import Fact, SymbolicState
 
 # Failure kinds whose fact is an ik_unfeasible_* fact (the action itself is impossible
@@ -52,7 +52,7 @@ class Infeasible:
         action's ik_unfeasible_* fact."""
         if self.kind == "collision" and self.colliders:
             if action.kind == "grasp":
-                block = KIND_FACTS[action.grasp_kind].block
+                block = grasp_kind(action.grasp_kind).facts.block
                 return tuple((block, x, action.obj) for x in self.colliders)
             return tuple(("block_dir", x, action.obj, str(action.direction)) for x in self.colliders)
         return (action.ik_fact(),)
@@ -206,10 +206,8 @@ class IKActionChecker:
         if got is not None:
             return got
         obj = self.state.by_name(action.obj)
-        if action.kind == "grasp" and action.grasp_kind != "pinch":
-            cands = tuple(obj.kind_candidates.get(action.grasp_kind, ()))
-        elif action.kind == "grasp":
-            cands = tuple(obj.grasp_candidates)
+        if action.kind == "grasp":  # the kind's own poses in the object model
+            cands = tuple(grasp_kind(action.grasp_kind).candidates(obj))
         else:
             push = obj.pushes.get(str(action.direction))
             cands = tuple(push.candidates) if push is not None else ()
@@ -255,11 +253,14 @@ class IKActionChecker:
         return result
 
     def _check(self, action: Action, ctx: SceneContext) -> "CheckedAction | Infeasible":
-        if action.kind == "grasp" and action.grasp_kind == "slide" and np.any(ctx.shift_of(action.obj)):
-            # a slide's path and pinch are made for where the object stands, to one side
-            # of the table: pushed first, it is somewhere else, and its slide is not known
-            # (backtracking then learns that the push before it is of no use)
-            return Infeasible("a slide is planned from where the object stands, not after a push", "poses")
+        if action.kind == "grasp" and np.any(ctx.shift_of(action.obj)):
+            # a kind whose poses are made for where the object stands (a slide's path and
+            # pinch, to one side of the table): pushed first, it is somewhere else, and its
+            # grasp is not known (backtracking then learns that the push before it is of
+            # no use)
+            why = grasp_kind(action.grasp_kind).after_push
+            if why:
+                return Infeasible(why, "poses")
         cands = self.poses(action, ctx)
         if not cands:
             return Infeasible("no gripper poses for this action", "poses")

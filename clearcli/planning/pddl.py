@@ -24,7 +24,8 @@ from clearcli.predicates.state import DIRECTIONS, Fact, SymbolicState
 DOMAIN_NAME = "table-clearing"
 DOMAIN_RESOURCE = "data/domain.pddl"
 
-# name -> arity (with the direction where it has one), for checking facts before writing
+# name -> arity (with the direction where it has one), for checking facts before writing:
+# the shipped domain's (the thesis's pinch), then `fact_arity` adds the other kinds'
 FACT_ARITY: dict[str, int] = {
     "on": 2,
     "block_grasp": 2,
@@ -34,14 +35,19 @@ FACT_ARITY: dict[str, int] = {
     "ik_unfeasible_dir": 2,
     "ungraspable": 1,
     "push_off_table": 2,
-    # the grasp kinds beyond the pinch (clearcli/predicates/grasps)
-    "rim_graspable": 1,
-    "block_rim": 2,
-    "ik_unfeasible_rim": 1,
-    "slidable": 1,
-    "block_slide": 2,
-    "ik_unfeasible_slide": 1,
 }
+
+
+def fact_arity() -> dict[str, int]:
+    """`FACT_ARITY` and, per grasp kind beyond the thesis's (clearcli/predicates/grasps),
+    in preference order, its offered, blocking and IK facts (the problem file's order)."""
+    from clearcli.predicates.grasps import kinds
+
+    out = dict(FACT_ARITY)
+    for k in kinds():
+        if not k.thesis:
+            out.update({k.facts.offered: 1, k.facts.block: 2, k.facts.ik: 1})
+    return out
 
 
 _FUNCTIONS_UNIT = "  (:functions\n    (total-cost) - number)"
@@ -63,16 +69,18 @@ def _domain_file() -> str:
 def domain_text(clearance_costs: bool = False, kinds: Sequence[str] = ("pinch",)) -> str:
     """The domain: the file as shipped (unit costs, the thesis's pinch grasp alone), or
     with ``clearance_costs`` the variant whose push costs (push-cost ?o ?d) come from the
-    problem, and with ``kinds`` beyond "pinch" the actions of those grasp kinds
-    (`with_grasp_kinds`). The unit-cost file uses only standard :action-costs (every
-    PDDL parser takes it); the variant's static cost function is accepted by Fast
-    Downward and unified-planning."""
+    problem, and with ``kinds`` beyond the thesis's pinch (whose grasp the file holds)
+    the actions of those grasp kinds (`with_grasp_kinds`). The unit-cost file uses only
+    standard :action-costs (every PDDL parser takes it); the variant's static cost
+    function is accepted by Fast Downward and unified-planning."""
+    from clearcli.predicates.grasps import kind
+
     text = _domain_file()
     if clearance_costs:  # first: the grasp kinds add effects between the anchors
         if _FUNCTIONS_UNIT not in text or _PUSH_COST_UNIT not in text:
             raise InputError(f"clearcli/{DOMAIN_RESOURCE}: edited so that the push cost cannot be swapped in")
         text = text.replace(_FUNCTIONS_UNIT, _FUNCTIONS_COST).replace(_PUSH_COST_UNIT, _PUSH_COST_VAR)
-    extra = [k for k in kinds if k != "pinch"]
+    extra = [k for k in kinds if not kind(k).thesis]
     return with_grasp_kinds(text, extra) if extra else text
 
 
@@ -82,53 +90,33 @@ _PUSH_EFFECT_END = "             (not (block_grasp ?x ?o))))\n      (not (ik_unf
 
 
 def with_grasp_kinds(text: str, kinds: Sequence[str]) -> str:
-    """The domain with one action per grasp kind in ``kinds`` ("rim", "slide"), as the
-    pinch's ``grasp`` is written: offered by a static fact, blocked by its own blocking
-    predicate, ruled out by its own IK fact; its effect the grasp's (the object removed,
-    every fact in which it blocks or stands on another deleted), its cost its own (the
-    planner prefers the cheapest, the surest: pinch 1, rim 2, slide 3). The grasp and the
-    push delete the new blocking facts as they delete the thesis's, and the push the rim's
-    IK fact as it deletes the grasp's (the object may be reachable where it ends up); a
-    slide is made for where the object stands, so a push of it deletes neither what
-    blocks its slide nor its slide's IK fact."""
-    from clearcli.predicates.grasps import KIND_FACTS
+    """The domain with one action per grasp kind in ``kinds`` (beyond the thesis's pinch,
+    in preference order), each the kind's own text (`GraspKind.pddl_action`: offered by
+    a static fact, blocked by its own blocking predicate, ruled out by its own IK fact,
+    its cost its own: the planner prefers the cheapest, the surest). The grasps delete
+    the new blocking facts as they delete the thesis's. A push deletes, per kind, what
+    the kind's flags say (clearcli/predicates/grasps/base.py): the object's blocking of
+    the others' grasps always (it moves out of their way), what blocks its own grasp of
+    that kind and its IK fact when the kind's poses move with it (``push_clears_blocks``,
+    ``push_clears_ik``; a slide's do not: it is made for where the object stands)."""
+    from clearcli.predicates.grasps import kind
 
     for piece in (_PREDICATES_END, _GRASP_EFFECT_END, _PUSH_EFFECT_END):
         if piece not in text:
             raise InputError(f"clearcli/{DOMAIN_RESOURCE}: edited so that the grasp kinds cannot be added")
+    chosen = [kind(k) for k in kinds]
+    blocks = [k.facts.block for k in chosen]
     preds, grasp_dels, push_dels, push_ik, actions = [], [], [], [], []
-    for k in kinds:
-        f = KIND_FACTS[k]
+    for k in chosen:
+        f = k.facts
         preds += [f"    ({f.offered} ?o - obj)", f"    ({f.block} ?a - obj ?b - obj)", f"    ({f.ik} ?o - obj)"]
         grasp_dels.append(f"\n             (not ({f.block} ?o ?x))")
-        # a slide is made for where the object stands: a push moves it out of the others'
-        # slide paths, but tells nothing of its own slide (its blocks and IK fact stay)
-        push_dels.append(f"\n             (not ({f.block} ?o ?x))" + ("" if k == "slide" else f"\n             (not ({f.block} ?x ?o))"))
-        if k != "slide":
+        push_dels.append(
+            f"\n             (not ({f.block} ?o ?x))" + (f"\n             (not ({f.block} ?x ?o))" if k.push_clears_blocks else "")
+        )
+        if k.push_clears_ik:
             push_ik.append(f"\n      (not ({f.ik} ?o))")
-        under = "\n      (not (exists (?x - obj) (on ?o ?x)))" if k == "slide" else ""
-        effect_dels = "".join(
-            f"\n             (not ({g.block} ?o ?x))" for kk, g in KIND_FACTS.items() if kk in kinds
-        )
-        actions.append(
-            f"""
-  (:action {f.action}
-    :parameters (?o - obj)
-    :precondition (and
-      (not (removed ?o))
-      ({f.offered} ?o)
-      (not ({f.ik} ?o))
-      (not (exists (?x - obj) (on ?x ?o))){under}
-      (not (exists (?x - obj) ({f.block} ?x ?o))))
-    :effect (and
-      (removed ?o)
-      (forall (?x - obj ?e - direction)
-        (and (not (on ?o ?x))
-             (not (block_grasp ?o ?x))
-             (not (block_dir ?o ?x ?e)){effect_dels}))
-      (increase (total-cost) {f.cost})))
-"""
-        )
+        actions.append(k.pddl_action(blocks))
     text = text.replace(_PREDICATES_END, _PREDICATES_END[:-1] + "\n" + "\n".join(preds) + ")")
     text = text.replace(
         _GRASP_EFFECT_END,
@@ -146,19 +134,19 @@ def with_grasp_kinds(text: str, kinds: Sequence[str]) -> str:
 def domain_for(state: SymbolicState) -> str:
     """The domain that goes with `write_problem(state)`: with clearance costs when the
     state carries push costs, with the actions of the grasp kinds its facts offer."""
-    from clearcli.predicates.grasps import EXTRA_KINDS, KIND_FACTS
+    from clearcli.predicates.grasps import kinds
 
     offered = {f[0] for f in state.facts}
-    kinds = ["pinch"] + [k for k in EXTRA_KINDS if KIND_FACTS[k].offered in offered]
-    return domain_text(clearance_costs=bool(state.push_costs), kinds=kinds)
+    chosen = [k.name for k in kinds() if k.thesis or k.facts.offered in offered]
+    return domain_text(clearance_costs=bool(state.push_costs), kinds=chosen)
 
 
 def unit_cost(state: SymbolicState) -> bool:
-    """Every action of `domain_for(state)` costs 1: no push costs, no grasp kind beyond
-    the pinch offered (a rim grasp costs 2, a slide 3)."""
-    from clearcli.predicates.grasps import EXTRA_KINDS, KIND_FACTS
+    """Every action of `domain_for(state)` costs 1: no push costs, no grasp kind that
+    costs more offered (a rim grasp costs 2, a slide 3)."""
+    from clearcli.predicates.grasps import kinds
 
-    offered = {KIND_FACTS[k].offered for k in EXTRA_KINDS}
+    offered = {f for k in kinds() if k.facts.cost != 1 for f in k.facts.static()}
     return not state.push_costs and not any(f[0] in offered for f in state.facts)
 
 
@@ -168,7 +156,8 @@ def fact_to_pddl(fact: Fact) -> str:
 
 
 def _check_fact(fact: Fact, names: set[str]) -> None:
-    if not fact or fact[0] not in FACT_ARITY or len(fact) != FACT_ARITY[fact[0]] + 1:
+    arity = fact_arity()
+    if not fact or fact[0] not in arity or len(fact) != arity[fact[0]] + 1:
         raise ValueError(f"not a fact of the domain: {fact!r}")
     for arg in fact[1:]:
         if arg not in names and arg not in DIRECTIONS:
@@ -202,7 +191,7 @@ def write_problem(
     lines.append(f"  (:domain {DOMAIN_NAME})")
     lines.append("  (:objects" + ("".join(f" {n}" for n in names) + " - obj" if names else "") + ")")
     lines.append("  (:init")
-    order = {k: i for i, k in enumerate(FACT_ARITY)}
+    order = {k: i for i, k in enumerate(fact_arity())}
 
     def sort_key(f: Fact) -> tuple:
         return (order[f[0]], *(_name_key(a) for a in f[1:]))

@@ -11,8 +11,8 @@ from typing import Iterable, Mapping, Sequence
 
 from clearcli.errors import PlannerError, SettingsError
 from clearcli.planning import downward
-from clearcli.predicates.grasps import EXTRA_KINDS, KIND_FACTS
 from clearcli.planning.types import Action
+from clearcli.predicates.grasps import kind as grasp_kind, kinds as grasp_kinds
 from clearcli.predicates.state import DIRECTIONS, Fact
 
 @dataclass(frozen=True)
@@ -126,18 +126,16 @@ def _task(objects: Sequence[str], facts: Iterable[Fact], goal: Sequence[str], pu
 
 def action_cost(action: Action, push_costs: Mapping[tuple[str, str], int]) -> int:
     if action.kind == "grasp":
-        return KIND_FACTS[action.grasp_kind].cost
+        return grasp_kind(action.grasp_kind).facts.cost
     return int(push_costs.get((action.obj, str(action.direction)), 1))
 
 
 def action_space(state_facts: frozenset[Fact], obj: str, directions: Sequence[str] = DIRECTIONS) -> list[Action]:
     """The actions the model allows for ``obj`` at all (static facts excluded)."""
     out = []
-    if ("ungraspable", obj) not in state_facts:
-        out.append(Action("grasp", obj))
-    for k in EXTRA_KINDS:
-        if (KIND_FACTS[k].offered, obj) in state_facts:
-            out.append(Action("grasp", obj, None, k))
+    for k in grasp_kinds():  # in preference order, the thesis's pinch first
+        if k.facts.offered_in(state_facts, obj):
+            out.append(Action("grasp", obj, None, k.name))
     for d in directions:
         if ("push_off_table", obj, d) not in state_facts:
             out.append(Action("push", obj, d))
@@ -145,21 +143,23 @@ def action_space(state_facts: frozenset[Fact], obj: str, directions: Sequence[st
 
 
 def progress(facts: frozenset[Fact], action: Action) -> frozenset[Fact]:
-    """The facts after ``action``, by the lifted domain's effects (pddl/domain.pddl)."""
+    """The facts after ``action``, by the lifted domain's effects (pddl/domain.pddl and
+    pddl.with_grasp_kinds: a push deletes of each grasp kind what the kind's flags say)."""
     o = action.obj
     if action.kind == "grasp":
         # o is gone: every fact that names it goes with it (what the domain deletes, plus
         # facts of others about o, which no action can consult any more)
         return frozenset(f for f in facts if o not in f[1:])
+    kinds = grasp_kinds()
+    # blocking facts o takes part in that stay: what blocks its own grasp of a kind whose
+    # poses do not move with it (a slide's); every other one goes, as do the IK facts of
+    # the kinds whose poses move with it
+    blocks = {"block_dir"} | {k.facts.block for k in kinds}
+    kept = {k.facts.block for k in kinds if not k.push_clears_blocks}
+    ik_pushed = {k.facts.ik for k in kinds if k.push_clears_ik}
     return frozenset(
         f
         for f in facts
-        if not (f[0] in _BLOCKS and o in f[1:3] and not (f[0] == _SLIDE_BLOCK and f[2] == o))
-        and not (f[0] in _IK_PUSHED and f[1:] == (o,))
+        if not (f[0] in blocks and o in f[1:3] and not (f[0] in kept and f[2] == o))
+        and not (f[0] in ik_pushed and f[1:] == (o,))
     )
-
-
-_BLOCKS = ("block_dir", "block_grasp") + tuple(KIND_FACTS[k].block for k in EXTRA_KINDS)
-# what a push of o deletes of its own (not the slide's: pddl.with_grasp_kinds)
-_SLIDE_BLOCK = KIND_FACTS["slide"].block
-_IK_PUSHED = ("ik_unfeasible_grasp", KIND_FACTS["rim"].ik)

@@ -7,7 +7,7 @@ from typing import Mapping
 
 import numpy as np
 
-from clearcli.predicates.grasps import KIND_FACTS
+from clearcli.predicates.grasps import kind as grasp_kind
 from clearcli.predicates.state import Fact
 from clearcli.status import PlanStatus
 
@@ -20,12 +20,12 @@ class Action:
     kind: str  # "grasp" | "push": a grasp of any kind removes the object
     obj: str
     direction: str | None = None
-    grasp_kind: str = "pinch"  # grasps only: a name of clearcli.predicates.grasps.KIND_FACTS
+    grasp_kind: str = "pinch"  # grasps only: a registered kind's name (clearcli/settings/kinds.py)
 
     @property
     def pddl_name(self) -> str:
         if self.kind == "grasp":
-            return KIND_FACTS[self.grasp_kind].action
+            return grasp_kind(self.grasp_kind).facts.action
         return "push"
 
     def pddl(self) -> str:
@@ -36,7 +36,7 @@ class Action:
     def ik_fact(self) -> Fact:
         """The fact backtracking adds when this action has no IK solution."""
         if self.kind == "grasp":
-            return (KIND_FACTS[self.grasp_kind].ik, self.obj)
+            return (grasp_kind(self.grasp_kind).facts.ik, self.obj)
         return ("ik_unfeasible_dir", self.obj, str(self.direction))
 
 

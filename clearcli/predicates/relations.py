@@ -1,4 +1,6 @@
-"""The geometric predicates, each a function of the modelled scene (table frame).
+"""The geometric predicates, each a function of the modelled scene (table frame); the
+grasp kinds' own (the pinch's block_grasp and ungraspable among them) are in
+clearcli/predicates/grasps/, which use the helpers here.
 
 Indices refer to the list of `ObjectGeometry` passed in. Every family runs a NumPy broad
 phase (axis-aligned boxes, or footprint boxes for `on`) before any narrow-phase test, so
@@ -20,7 +22,7 @@ import numpy as np
 
 from clearcli.geometry.gripper import GripperModel
 from clearcli.geometry.models import ObjectGeometry
-from clearcli.geometry.poses import GraspGeometry, PushGeometry
+from clearcli.geometry.poses import PushGeometry
 
 
 # ---------------------------------------------------------------------------- helpers
@@ -282,50 +284,6 @@ def _grasp_hits(
     return hits
 
 
-def block_grasp_pairs(
-    objects: Sequence[ObjectGeometry],
-    grasps: Sequence[GraspGeometry],
-    gripper: GripperModel,
-    exclude: set[tuple[int, int]],
-    clearance_m: float = 0.0,
-) -> set[tuple[int, int]]:
-    """(a, b): the open gripper at b's grasp pose collides with a, or a reaches into the
-    closing region between its fingers (thesis 4.4.1, plus the squeeze)."""
-    if not objects:
-        return set()
-    poses = np.stack([g.T_grasp for g in grasps])
-    openings = [grasp_opening_m(g.width_m, gripper, clearance_m) for g in grasps]
-    hits = _grasp_hits(gripper, poses, openings, objects, _allowed(len(objects), exclude))
-    return {(a, b) for b, a in hits}
-
-
-def least_blocked_grasps(
-    objects: Sequence[ObjectGeometry],
-    grasps: Sequence[GraspGeometry],
-    gripper: GripperModel,
-    exclude: set[tuple[int, int]],
-    clearance_m: float = 0.0,
-) -> list[GraspGeometry]:
-    """Each grasp as the gripper yaw (the grasp or one of its ``alternatives``) whose
-    open gripper hits the fewest other objects, the first on ties. The gripper turns
-    about its approach at will, so a neighbour that blocks one yaw need not block the
-    grasp; the planning model has no disjunction, so the least blocked yaw stands for
-    the grasp (its blocking facts), and the IK check sees its candidates first, then
-    those of the yaws no more blocked (`_with_fallbacks`)."""
-    allowed = _allowed(len(objects), exclude)
-    out = []
-    for b, grasp in enumerate(grasps):
-        options = (dataclasses.replace(grasp, alternatives=()), *grasp.alternatives)
-        if len(options) > 1:
-            poses = np.stack([g.T_grasp for g in options])
-            openings = [grasp_opening_m(g.width_m, gripper, clearance_m) for g in options]
-            hits = _grasp_hits(gripper, poses, openings, objects, np.repeat(allowed[b : b + 1], len(options), axis=0))
-            out.append(_with_fallbacks(options, hits))
-        else:
-            out.append(options[0])
-    return out
-
-
 def _with_fallbacks(options: Sequence[Any], hits: list[tuple[int, int]]) -> Any:
     """The least blocked option (the first on ties), its candidates followed by those of
     every other option blocked by no object it is not blocked by: the IK check tries
@@ -355,7 +313,7 @@ def least_blocked_pushes(
 ) -> list[dict[str, PushGeometry]]:
     """Each push as the gripper yaw and contact point whose closed gripper at the push's
     start hits the fewest other objects, the first on ties, with the others no more
-    blocked as IK fallbacks (see `least_blocked_grasps`)."""
+    blocked as IK fallbacks (as the pinch's grasps: grasps/pinch.py `least_blocked_grasps`)."""
     allowed = _allowed(len(objects), exclude)
     out = []
     for b, by_dir in enumerate(pushes):
@@ -467,18 +425,6 @@ def block_dir_triples(
 
 
 # ---------------------------------------------------------------------------- static facts
-def ungraspable(grasps: Sequence[GraspGeometry], gripper: GripperModel, margin_m: float = 0.0) -> set[int]:
-    """Objects wider than the opening, or narrower than the closing width, across the
-    closing direction of their grasp, by more than ``margin_m`` (the modelled width's
-    error: an object within it is tried, and the grasp's outcome tells)."""
-    s = gripper.settings
-    return {
-        i
-        for i, g in enumerate(grasps)
-        if g.width_m > s.opening_width_m + margin_m or g.width_m < s.closing_width_m - margin_m
-    }
-
-
 def push_off_table(
     objects: Sequence[ObjectGeometry],
     pushes: Sequence[dict[str, PushGeometry]],

@@ -17,12 +17,12 @@ import numpy as np
 
 from clearcli.io.frames import Frame
 from clearcli.perception.types import Segmentation
+from clearcli.predicates.grasps.base import Offer
 from clearcli.predicates.state import DIRECTIONS, Fact, ObjectModel, PushModel, SymbolicState
 
 if TYPE_CHECKING:
     from clearcli.geometry.models import ObjectGeometry, TableFrame
-    from clearcli.geometry.poses import GraspGeometry, PushGeometry
-    from clearcli.predicates.grasps import Offer
+    from clearcli.geometry.poses import PushGeometry
     from clearcli.settings import Settings
 
 log = logging.getLogger("clearcli.predicates")
@@ -32,7 +32,7 @@ def compute_state(frame: Frame, seg: Segmentation, settings: "Settings | None" =
     """Model the segmented objects and compute every fact the planner needs (no IK)."""
     from clearcli.geometry.gripper import gripper_model
     from clearcli.geometry.models import DegenerateObject, TableFrame, build_from_columns, object_columns
-    from clearcli.geometry.poses import grasp_geometry, push_geometry
+    from clearcli.geometry.poses import push_geometry
     from clearcli.predicates import relations as rel
     from clearcli.settings import Settings
 
@@ -65,7 +65,6 @@ def compute_state(frame: Frame, seg: Segmentation, settings: "Settings | None" =
     timings["models"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    grasps = [grasp_geometry(g, gripper, s.push, ps.max_grasp_tilt_deg, ps.grasp_offcentre_fraction) for g in geoms]
     pushes = [push_geometry(g, gripper, s.push) for g in geoms]
     timings["poses"] = time.perf_counter() - t0
 
@@ -93,13 +92,8 @@ def compute_state(frame: Frame, seg: Segmentation, settings: "Settings | None" =
     facts.update(("on", names[a], names[b]) for a, b in on)
     timings["on"] = time.perf_counter() - t0
     exclude = rel.related(on)
-    # the gripper yaw of each grasp and push that the neighbours block least
-    grasps = rel.least_blocked_grasps(geoms, grasps, gripper, exclude, ps.grasp_opening_clearance_m)
+    # the gripper yaw of each push that the neighbours block least
     pushes = rel.least_blocked_pushes(geoms, pushes, gripper, exclude)
-
-    t0 = time.perf_counter()
-    facts.update(("block_grasp", names[a], names[b]) for a, b in rel.block_grasp_pairs(geoms, grasps, gripper, exclude, ps.grasp_opening_clearance_m))
-    timings["block_grasp"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
     touching = rel.start_overlaps(geoms)
@@ -108,25 +102,23 @@ def compute_state(frame: Frame, seg: Segmentation, settings: "Settings | None" =
     timings["block_dir"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    too_wide_or_narrow = rel.ungraspable(grasps, gripper, ps.grasp_width_margin_m)
-    facts.update(("ungraspable", names[i]) for i in too_wide_or_narrow)
     table_xy = tf.to_table(np.asarray(seg.table_polygon, dtype=float).reshape(-1, 3))[:, :2]
     facts.update(("push_off_table", names[i], d) for i, d in rel.push_off_table(geoms, pushes, table_xy))
     timings["static"] = time.perf_counter() - t0
 
-    # the grasp kinds beyond the pinch: rims of open containers, slides to a seen edge
+    # every grasp kind, in preference order (the thesis's pinch first: block_grasp,
+    # ungraspable), each offered where it takes the object, with its blockers
     t0 = time.perf_counter()
-    kinds = _other_grasps(
-        geoms, openings, edges, tf, gripper, s, exclude, touching, too_wide_or_narrow
-    )
-    from clearcli.predicates.grasps import KIND_FACTS
+    kinds = _grasp_offers(geoms, openings, edges, tf, gripper, s, exclude, touching)
+    from clearcli.predicates.grasps import kind as grasp_kind
 
-    for kind, offers in kinds.items():
+    for name, offers in kinds.items():
+        f = grasp_kind(name).facts
         for i, offer in enumerate(offers):
-            if offer.why_not:
-                continue
-            facts.add((KIND_FACTS[kind].offered, names[i]))
-            facts.update((KIND_FACTS[kind].block, names[a], names[i]) for a in offer.blockers)
+            static = f.unoffered if offer.why_not else f.offered
+            if static:
+                facts.add((static, names[i]))
+            facts.update((f.block, names[a], names[i]) for a in offer.blockers)
     timings["grasp_kinds"] = time.perf_counter() - t0
 
     costs: dict[tuple[str, str], int] = {}
@@ -141,7 +133,7 @@ def compute_state(frame: Frame, seg: Segmentation, settings: "Settings | None" =
 
     t0 = time.perf_counter()
     objects = tuple(
-        _object_model(names[i], g, grasps[i], pushes[i], tf, {k: v[i] for k, v in kinds.items()})
+        _object_model(names[i], g, pushes[i], tf, {k: v[i] for k, v in kinds.items()})
         for i, g in enumerate(geoms)
     )
     timings["export"] = time.perf_counter() - t0
@@ -170,9 +162,10 @@ def _openings_and_edges(frame: Frame, seg: Segmentation) -> tuple[tuple[Any, ...
     return tuple(openings), tuple(edges)
 
 
-def _other_grasps(geoms, openings, edges, tf, gripper, settings, exclude, touching, ungraspable):  # type: ignore[no-untyped-def]
-    """kind -> one `Offer` per object (table frame), for the kinds beyond the pinch."""
-    from clearcli.predicates.grasps import Scene as GraspScene, kind_module
+def _grasp_offers(geoms, openings, edges, tf, gripper, settings, exclude, touching):  # type: ignore[no-untyped-def]
+    """kind name -> one `Offer` per object (table frame), every registered kind in
+    preference order, each seeing which objects the kinds before it are offered for."""
+    from clearcli.predicates.grasps import Scene as GraspScene, kinds
 
     edges_table = [(*tf.to_table(np.stack([e.start, e.end])), e.seen, e.why) for e in edges]
     scene = GraspScene(
@@ -182,22 +175,32 @@ def _other_grasps(geoms, openings, edges, tf, gripper, settings, exclude, touchi
         edges_table=edges_table,
         exclude=exclude,
         touching=touching,
-        ungraspable=set(ungraspable),
         tf=tf,
     )
-    rim = kind_module("rim").offers(scene, gripper, settings)
-    scene = dataclasses.replace(scene, rim_offered=frozenset(i for i, o in enumerate(rim) if not o.why_not))
-    return {"rim": rim, "slide": kind_module("slide").offers(scene, gripper, settings)}
+    out: dict[str, list[Offer]] = {}
+    for kind in kinds():
+        offers = kind.offers(scene, gripper, settings)
+        out[kind.name] = offers
+        offered = frozenset(i for i, o in enumerate(offers) if not o.why_not)
+        scene = dataclasses.replace(scene, offered_before=scene.offered_before + ((kind, offered),))
+    return out
 
 
 def _object_model(
     name: str,
     g: "ObjectGeometry",
-    grasp: "GraspGeometry",
     pushes: "dict[str, PushGeometry]",
     tf: "TableFrame",
-    offers: "dict[str, Offer] | None" = None,
+    offers: "dict[str, Offer]",
 ) -> ObjectModel:
+    """The object as the planner sees it: the thesis's grasp (its poses and width) in its
+    own fields, every other kind's poses, detail and refusal under its name."""
+    from clearcli.predicates.grasps import kind as grasp_kind
+
+    thesis = {k: o for k, o in offers.items() if grasp_kind(k).thesis}
+    others = {k: o for k, o in offers.items() if k not in thesis}
+    (pinch,) = thesis.values()
+
     def poses(seq: Sequence[np.ndarray]) -> tuple[np.ndarray, ...]:
         out = np.einsum("ij,njk->nik", tf.T_camera_table, np.asarray(seq))
         return tuple(out)
@@ -229,17 +232,21 @@ def _object_model(
         extents_m=g.extents.copy(),
         hull_vertices=tf.to_camera(g.hull_vertices),
         hull_faces=g.hull_faces.copy(),
-        grasp_candidates=tuple(poses(c) for c in grasp.candidates),
+        grasp_candidates=tuple(poses(c) for c in pinch.candidates),
         pushes=push_models,
-        grasp_width_m=float(grasp.width_m),
+        grasp_width_m=float((pinch.detail or {})["width_m"]),
         height_m=float(g.top_height_m),
-        kind_candidates={k: tuple(poses(c) for c in o.candidates) for k, o in (offers or {}).items() if not o.why_not},
-        kind_details={k: _detail_to_camera(o.detail or {}, tf) for k, o in (offers or {}).items() if not o.why_not},
-        kind_refusals={k: o.why_not for k, o in (offers or {}).items() if o.why_not},
-        slide_translation=(
-            tf.vector_to_camera(np.asarray(offers["slide"].slide_translation))
-            if offers and "slide" in offers and offers["slide"].slide_translation is not None and not offers["slide"].why_not
-            else None
+        kind_candidates={k: tuple(poses(c) for c in o.candidates) for k, o in others.items() if not o.why_not},
+        kind_details={k: _detail_to_camera(o.detail or {}, tf) for k, o in others.items() if not o.why_not},
+        kind_refusals={k: o.why_not for k, o in others.items() if o.why_not},
+        # a grasp that first moves it along the table (a slide): by how much
+        slide_translation=next(
+            (
+                tf.vector_to_camera(np.asarray(o.slide_translation))
+                for o in others.values()
+                if o.slide_translation is not None and not o.why_not
+            ),
+            None,
         ),
     )
 

@@ -81,12 +81,16 @@ def render_plan(path: Path, frame: Any, state: Any, plan: Any, seg: Any = None, 
         )
         ax_cam.set_title("camera view (colour; objects outlined, [plan steps])", fontsize=9)
     for i, a in enumerate(plan.actions, 1):
-        if a.kind == "grasp" and a.grasp_kind == "slide":
-            # the slide to the table's edge: a dashed arrow to where it is pinched
+        if a.kind == "grasp":
+            # a grasp that first moves the object (a slide to the table's edge): a dashed
+            # arrow to where it is grasped (its kind says, clearcli/predicates/grasps)
+            from clearcli.predicates.grasps import kind as grasp_kind
+
             obj = state.by_name(a.obj)
-            if obj.slide_translation is not None:
+            moved = grasp_kind(a.grasp_kind).moved_before(obj)
+            if moved is not None:
                 c = R @ np.asarray(obj.centroid, dtype=float) + t
-                u = R @ np.asarray(obj.slide_translation, dtype=float)
+                u = R @ np.asarray(moved, dtype=float)
                 ax.annotate("", xy=(c[0] + u[0], c[1] + u[1]), xytext=(c[0], c[1]),
                             arrowprops=dict(arrowstyle="->", color="k", lw=1.5, ls="--"), zorder=5)
             continue

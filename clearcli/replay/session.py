@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any, Iterable, Iterator, Mapping
 
 from clearcli.errors import ClearError, PartialLogError
 from clearcli.pipeline import CLEARED, FAILED, NO_PLAN, NO_TABLE, OK, FrameResult, Pipeline
-from clearcli.predicates.grasps import KIND_FACTS
+from clearcli.predicates.grasps import kind as grasp_kind, kinds as grasp_kinds
 from clearcli.predicates.state import DIRECTIONS
 from clearcli.replay import memory as push_memory
 from clearcli.replay.memory import MemoryParams, PushMemory, PushRecord
@@ -76,7 +76,7 @@ def expected_effect(
     seen = observations[obj.segment_index] if 0 <= obj.segment_index < len(observations) else None
     start = seen.centroid if seen is not None else vec3(obj.centroid)
     extents = seen.extents_m if seen is not None else shape_signature(obj.extents_m)
-    label = f"({action.kind} #{track_id}{' ' + action.direction if action.direction else ''})"
+    label = f"({action.pddl_name} #{track_id}{' ' + action.direction if action.direction else ''})"
     if action.kind == "push" and action.direction is not None:
         push = obj.pushes[action.direction]
         return ExpectedEffect(
@@ -143,10 +143,10 @@ class Session:
                     self.failed_grasps[tid] = self.failed_grasps.get(tid, 0) + 1
                     self.failed_kinds.setdefault(tid, set()).add(self.effect.grasp_kind)
                     stayed = execution.moved_m is not None and execution.moved_m < _STAYED_M
-                    if self.effect.grasp_kind == "slide" and stayed:
-                        # a slide that did not move the object met something the model
-                        # did not: the same slide would meet it again, so it is given
-                        # up at once (a pinch that slips may hold the next time)
+                    if grasp_kind(self.effect.grasp_kind).give_up_unmoved and stayed:
+                        # a try of that kind that did not move the object (a slide's) met
+                        # something the model did not: the same try would meet it again,
+                        # so it is given up at once (a pinch that slips may hold the next time)
                         self.failed_grasps[tid] = max(self.failed_grasps[tid], self.pipeline.settings.plan.max_failed_grasps)
                 elif self.effect.kind == "push" and execution.outcome == "done":
                     self.failed_grasps.pop(self.effect.track_id, None)  # it stands elsewhere now
@@ -161,11 +161,12 @@ class Session:
             limit = self.pipeline.settings.plan.max_failed_grasps
             # the kinds of grasp that kept failing on it (the pinch's fact as before; a rim
             # grasp's or a slide's their own)
+            thesis = grasp_kinds()[0].name
             failed = {
-                (KIND_FACTS[k].ik, n)
+                (grasp_kind(k).facts.ik, n)
                 for n, tid in ids.items()
                 if limit > 0 and self.failed_grasps.get(tid, 0) >= limit
-                for k in sorted(self.failed_kinds.get(tid, {"pinch"}))
+                for k in sorted(self.failed_kinds.get(tid, {thesis}))
             }
             if failed - state.facts:
                 from clearcli.planning.probe import off_seam

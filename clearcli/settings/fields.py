@@ -71,7 +71,8 @@ def param(default: Any, **bounds: Any) -> Any:
     if "choices" in bounds:
         bounds["choices"] = tuple(bounds["choices"])
     for key in ("lengths", "members", "required"):
-        if key in bounds:
+        # (members, required: a live sequence too, the grasp kinds' names, settings/kinds.py)
+        if key in bounds and isinstance(bounds[key], (list, set, frozenset)):
             bounds[key] = tuple(bounds[key])
     return dataclasses.field(default=default, metadata={"range": Range(**bounds)})
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from clearcli.settings import kinds
 from clearcli.settings.fields import Section, param
 
 
@@ -56,9 +57,10 @@ class PlanSettings(Section):
     # the other): a grasp at the middle of a segment that is two objects merged end to
     # end closes on both at their seam.
     regrasp_off_centre: bool = param(True)
-    # Which grasp kinds the planner may use (clearcli/predicates/grasps), cheapest first
-    # by action cost: the thesis's pinch from above (1), the rim of an open container
-    # (2), a flat object slid to a seen table edge and pinched there (3). "pinch" alone
-    # is the thesis's behaviour exactly (--grasps pinch). Any order, each kind at most once
+    # Which grasp kinds the planner may use: the registered ones (clearcli/settings/kinds.py,
+    # in preference order; each a module of clearcli/predicates/grasps), cheapest first by
+    # action cost: the thesis's pinch from above (1), the rim of an open container (2), a
+    # flat object slid to a seen table edge and pinched there (3). "pinch" alone is the
+    # thesis's behaviour exactly (--grasps pinch). Any order, each kind at most once
     # ("rim, pinch" is "pinch,rim"); a file, --set and --grasps follow the one rule.
-    grasps: str = param("pinch,rim,slide", members=("pinch", "rim", "slide"), required=("pinch",))
+    grasps: str = param(kinds.default_kinds(), members=kinds.KIND_NAMES, required=kinds.REQUIRED_KINDS)

@@ -11,10 +11,12 @@ planner's model of it:
   noise; an object it runs into is shoved along with it, and the push stops early when
   that one is blocked in turn or the pushed object would leave the table (then it
   falls off and is gone);
-* a grasp takes the object between the fingers away, unless another object lies under
-  or between the open fingers by more than ``GRASP_TOLERANCE_M`` (nothing is taken), or
-  the object is wider than the gripper was opened; a grasp across a width close to the
-  gripper's opening slips now and then (the object stays, slightly moved).
+* a grasp is what its kind's `simulate` makes of it (clearcli/predicates/grasps), on
+  the world's rules (`clearcli.sim.physics`): the pinch takes the object between the
+  fingers away, unless another object lies under or between the open fingers by more
+  than ``GRASP_TOLERANCE_M`` (nothing is taken), or the object is wider than the gripper
+  was opened; a grasp across a width close to the gripper's opening slips now and then
+  (the object stays, slightly moved); a rim grasp and a slide follow their own rules.
 
 What is left at the end is judged by the world too (`clearcli.sim.reach`).
 
@@ -34,18 +36,9 @@ from typing import TYPE_CHECKING, Any, Iterator
 import numpy as np
 
 from clearcli.settings.sim import WorldParams
-from clearcli.sim.physics import (
-    aligned_width,
-    grasp_contacts,
-    push_contacts,
-    truly_ungraspable_by,
-    world_grasp,
-    world_push,
-)
+from clearcli.predicates.grasps import kind as grasp_kind
+from clearcli.sim.physics import push_contacts, truly_ungraspable_by, world_push
 from clearcli.sim.scene import Scene, without_object
-
-# how much of a slid object's overhang the world's fingers need to hold it (m)
-EDGE_GRIP_M = 0.025
 from clearcli.sim.truth import world_object_of
 
 if TYPE_CHECKING:
@@ -422,32 +415,13 @@ class Episode:
         label = f"({first.kind} {wid}{' ' + first.direction if first.direction else ''})"
         if k is None:
             outcome = "missed: no object there"
-        elif first.kind == "grasp" and first.grasp_kind != "pinch":
-            label = f"({first.pddl_name} {wid})"
-            outcome = self._other_grasp(report, model, first.grasp_kind, k)
         elif first.kind == "grasp":
-            gripper = self.session.pipeline.settings.gripper
-            # The world closes the fingers on what lies between them, not on what the
-            # planner meant: two objects merged into one segment are both in there.
-            found = self._grasp_contacts(report, model, gripper)
-            held, closing, opening = found if found is not None else (None, None, gripper.opening_width_m)
-            if held is not None and len(held) > 1:
-                outcome = "closed on " + ", ".join(str(self.scene.objects[i].object_id) for i in held) + " at once: nothing taken"
-            elif held is not None and not held:
-                outcome = "missed: nothing between the fingers"
-            else:
-                k = held[0] if held else k
-                wid = self.scene.objects[k].object_id
-                label = f"(grasp {wid})"
-                # the width the closing fingers square the object to: its side nearest
-                # the closing direction (a box's) or its diameter
-                across = aligned_width(self.scene.objects[k], closing) if closing is not None else 0.0
-                if across > opening:
-                    outcome = f"the fingers, open {opening:.3f} m, came down on it ({across:.3f} m across)"
-                else:
-                    self.scene, outcome = world_grasp(
-                        self.scene, k, gripper.opening_width_m, self.rng, self.params, gripper.closing_width_m
-                    )
+            # the kind says what the world does with it, on the world's own rules
+            # (clearcli/predicates/grasps: each kind's simulate)
+            hand = _Hand(self, report, model, k)
+            outcome = grasp_kind(first.grasp_kind).simulate(hand)
+            self.scene, wid = hand.scene, hand.object_id
+            label = f"({first.pddl_name} {wid})"
         else:
             push = model.pushes[first.direction or ""]
             T_table_camera = np.linalg.inv(self.scene.T_camera_table)
@@ -484,6 +458,42 @@ class Episode:
             seen=seen,
         )
         return record, unreachable
+
+
+class _Hand:
+    """What the world lends a grasp kind's `simulate` (clearcli/predicates/grasps/base.py
+    `SimWorld`): the scene as it truly is, the world's rules (`clearcli.sim.physics`), the
+    first action's object and how the arm went there."""
+
+    def __init__(self, episode: "Episode", report: "FrameReport", model: Any, k: int) -> None:
+        from clearcli.sim import physics
+
+        settings = episode.session.pipeline.settings
+        self.scene = episode.scene
+        self.k = k
+        self.object_id = episode.scene.objects[k].object_id
+        self.model = model
+        self.settings = settings
+        self.gripper = settings.gripper
+        self.rng = episode.rng
+        self.params = episode.params
+        self.rules = physics
+        self.T_table_camera = np.linalg.inv(episode.scene.T_camera_table)
+        self._report = report
+
+    def aim(self, k: int) -> None:
+        self.k = k
+        self.object_id = self.scene.objects[k].object_id
+
+    def take(self) -> None:
+        self.scene = without_object(self.scene, self.k)
+
+    def chosen_pose(self, candidates: Any, pose: int = 1, candidate: int = 0) -> np.ndarray | None:
+        return _chosen_pose_camera(self._report, candidates, pose=pose, candidate=candidate)
+
+    def chosen_candidate(self) -> int | None:
+        plan = self._report.result.plan
+        return plan.first.candidate if plan is not None and plan.first is not None else None
 
 
 def _chosen_pose_camera(report: "FrameReport", candidates: Any, pose: int = 1, candidate: int = 0) -> np.ndarray | None:

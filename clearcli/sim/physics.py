@@ -69,27 +69,24 @@ def approach_tilt_deg(T_table_gripper: np.ndarray) -> float:
     return math.degrees(math.asin(float(np.clip(-z[2] / max(float(np.linalg.norm(z)), 1e-12), -1.0, 1.0))))
 
 
-def truly_ungraspable_by(obj: SceneObject, gripper: Any, kinds: tuple[str, ...] = ("pinch",)) -> bool:
-    """`truly_ungraspable` by the pinch, and by every other grasp kind in ``kinds`` the
-    world's own rules allow: "rim" an open cylinder whose wall the fingers close on (thicker
-    than the gripper's fully closed gap, at most its opening less 2 mm on either side) with
-    room inside for a finger; "slide" a box or a closed cylinder whose height the gripper
-    spans at an edge (from its closing width to `edge_pinch_span_m`) and whose narrowest
-    side can overhang the fingers' grip without tipping."""
-    if not truly_ungraspable(obj, gripper.opening_width_m, gripper.closing_width_m):
-        return False
-    if "rim" in kinds and isinstance(obj, Cylinder) and obj.is_open:
-        gap = min(float(getattr(gripper, "closed_gap_m", gripper.closing_width_m)), gripper.closing_width_m)
-        room = obj.radius_m - obj.wall_m - gripper.finger_thickness_m
-        if gap < obj.wall_m <= gripper.opening_width_m - 0.004 and room >= 0.01:
-            return False
-    if "slide" in kinds and not (isinstance(obj, Cylinder) and obj.is_open):
-        if (
-            gripper.closing_width_m <= obj.height_m <= edge_pinch_span_m(gripper.opening_width_m, EDGE_PINCH_MIN_TILT_DEG)
-            and grasp_width_m(obj) >= 0.08
-        ):
-            return False
-    return True
+def open_container(obj: SceneObject) -> bool:
+    """An open cylinder: a bowl, a cup, a mug (what a rim grasp may take)."""
+    return isinstance(obj, Cylinder) and obj.is_open
+
+
+def truly_ungraspable_by(obj: SceneObject, gripper: Any, kinds: tuple[str, ...] | None = None) -> bool:
+    """No grasp kind in ``kinds`` (clearcli/predicates/grasps; default the thesis's pinch
+    alone) can take the object by the world's own rules, each kind's `world_holds` (with
+    this module as its rules): the pinch when it is not `truly_ungraspable`, a rim grasp
+    an open cylinder whose wall the fingers close on, a slide a box or a closed cylinder
+    the gripper pinches at an edge."""
+    import sys
+
+    from clearcli.predicates.grasps import kind, kinds as registered
+
+    rules = sys.modules[__name__]
+    chosen = [kind(k) for k in kinds] if kinds is not None else [k for k in registered() if k.thesis]
+    return not any(k.world_holds(obj, gripper, rules) for k in chosen)
 
 
 def world_grasp(

@@ -149,7 +149,7 @@ def test_grasp_infeasible_push_then_grasp() -> None:
     # The thesis: a push makes an IK-infeasible grasp possible again.
     state = ps.dummy_state(["o0", "o1"], frozenset())
     ik = FakeIK({Action("grasp", "o0"), Action("grasp", "o1")})
-    plan = backtrack(state, ik)
+    plan = backtrack(state, ik, _settings().plan)
     assert plan.cost == 4 and plan.actions[0].kind == "push"
     assert ("ik_unfeasible_grasp", "o0") in plan.ik_facts or ("ik_unfeasible_grasp", "o1") in plan.ik_facts
     check_plan(state, plan)
@@ -163,7 +163,7 @@ def test_unreachable_blocker_leaves_others_stuck_but_plans_the_rest() -> None:
     )
     state = ps.dummy_state(["o0", "o1", "o2"], facts)
     everything_o0 = {Action("grasp", "o0")} | {Action("push", "o0", d) for d in DIRECTIONS}
-    plan = backtrack(state, FakeIK(everything_o0))
+    plan = backtrack(state, FakeIK(everything_o0), _settings().plan)
     assert plan.unreachable == ("o0",) and plan.stuck == ("o1",)
     assert plan.goal == ("o2",) and plan.cost == 2 and plan.replans == 6
     assert plan.actions[0].pddl().startswith("(push o2") and plan.actions[1].pddl() == "(grasp o2)"
@@ -173,7 +173,7 @@ def test_unreachable_blocker_leaves_others_stuck_but_plans_the_rest() -> None:
 def test_ungraspable_not_in_goal_but_pushed_out_of_the_way() -> None:
     facts = frozenset({("ungraspable", "o0"), ("block_grasp", "o0", "o1")})
     state = ps.dummy_state(["o0", "o1"], facts)
-    plan = backtrack(state, FakeIK(set()))
+    plan = backtrack(state, FakeIK(set()), _settings().plan)
     assert plan.ungraspable == ("o0",) and plan.goal == ("o1",)
     assert plan.cost == 2 and plan.actions[0].kind == "push"
     check_plan(state, plan)
@@ -191,7 +191,7 @@ def test_random_states_with_random_ik_failures(seed: int) -> None:
     infeasible = {a for a in all_actions if rng.random() < 0.3}
     ik = FakeIK(infeasible)
     try:
-        plan = backtrack(state, ik, mode="first")
+        plan = backtrack(state, ik, _settings().plan, mode="first")
     except NoPlanError:
         return
     assert plan.actions[0] not in infeasible
@@ -199,7 +199,7 @@ def test_random_states_with_random_ik_failures(seed: int) -> None:
     assert len(ik.calls) == plan.replans
     check_plan(state, plan)
     # the whole-plan check: no action of the plan is infeasible
-    whole = backtrack(state, FakeIK(infeasible))
+    whole = backtrack(state, FakeIK(infeasible), _settings().plan)
     for k, a in enumerate(whole.actions):  # infeasible as recorded: only after a push of it
         assert a not in infeasible or any(p.obj == a.obj for p in whole.actions[:k]), (k, a)
     assert all(c is not None for c in whole.checked) and len(whole.checked) == len(whole.actions)
@@ -381,7 +381,7 @@ def test_deadline_returns_the_checked_plan_found_so_far() -> None:
     whole planning's time limit ends it, and its best plan, every action checked, is the
     answer, marked deadline and not optimal."""
     state = _many_objects(80)
-    plan = backtrack(state, FakeIK(set()), time_limit_s=1.5, anytime_time_s=30.0)
+    plan = backtrack(state, FakeIK(set()), _settings(time_limit_s=1.5, anytime_time_s=30.0).plan)
     assert plan.deadline and not plan.optimal and plan.search == "seq-sat-lama-2011"
     assert plan.goal and all(c is not None for c in plan.checked)
     assert plan.timings_s["total_s"] < 1.5 + 1.0  # the limit bounds the whole planning
@@ -392,8 +392,9 @@ def test_deadline_returns_the_checked_plan_found_so_far() -> None:
 def test_deadline_without_a_checked_plan_is_a_planner_error() -> None:
     from clearcli.errors import PlannerError
 
-    with pytest.raises(PlannerError, match="time limit of 0.05 s"):
-        backtrack(_many_objects(120), FakeIK(set()), time_limit_s=0.05)
+    # (the least [plan] time_limit_s allows)
+    with pytest.raises(PlannerError, match="time limit of 0.1 s"):
+        backtrack(_many_objects(120), FakeIK(set()), _settings(time_limit_s=0.1).plan)
 
 
 @pytest.mark.parametrize("replay_check", ["first", "whole"])

@@ -234,7 +234,7 @@ def test_plans_with_each_new_action_pass_two_independent_validators(world, tmp_p
 
     from clearcli.planning.backtrack import make_plan
     from clearcli.planning.pddl import domain_for, write_plan, write_problem
-    from clearcli.predicates.grasps import KIND_FACTS
+    from clearcli.predicates.grasps import kind
 
     scene = S.make_scene("one", [world, S.Box(9, 0.04, 0.04, 0.06, -0.25, -0.15)])
     settings = _settings()
@@ -246,11 +246,11 @@ def test_plans_with_each_new_action_pass_two_independent_validators(world, tmp_p
     domain.write_text(domain_for(state))
     problem.write_text(write_problem(state, plan.goal, plan.ik_facts))
     plan_file.write_text(write_plan(plan.actions, plan.cost, unit_cost=False))
-    assert KIND_FACTS[next(iter(kinds - {"pinch"}))].action in domain.read_text()
+    assert kind(next(iter(kinds - {"pinch"}))).facts.action in domain.read_text()
     assert validate_files(domain, problem, plan_file)
     assert validate_files_second(domain, problem, plan_file), second_verdict(domain, problem, plan_file).reason
     # the same plan without the fact that offers the new kind: both refuse it
-    offered = {KIND_FACTS[k].offered for k in kinds}
+    offered = {kind(k).facts.offered for k in kinds}
     stripped = dataclasses.replace(state, facts=frozenset(f for f in state.facts if f[0] not in offered))
     problem.write_text(write_problem(stripped, plan.goal, plan.ik_facts))
     assert not validate_files(domain, problem, plan_file)

@@ -52,7 +52,7 @@ def test_the_world_refuses_a_rim_grasp_whose_finger_meets_the_handle() -> None:
 
 
 def test_a_slide_into_a_neighbour_stops_short_and_the_pinch_fails() -> None:
-    from clearcli.sim.episode import EDGE_GRIP_M
+    from clearcli.predicates.grasps.slide import EDGE_GRIP_M
     from clearcli.sim.physics import world_edge_pinch, world_slide
 
     # the world's rules alone, as _act applies them to the planner's slide: a block 2 cm

@@ -19,11 +19,11 @@ finger fits inside the rim and the inside is seen deep enough for the fingertips
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from clearcli.predicates.grasps.base import KindModule, Offer, Scene
+from clearcli.predicates.grasps.base import KindFacts, KindModule, Offer, Scene, SimWorld
 
 if TYPE_CHECKING:
     from clearcli.geometry.gripper import GripperModel
@@ -37,6 +37,9 @@ UP = np.array([0.0, 0.0, 1.0])
 
 class RimGrasp(KindModule):
     name = "rim"
+    label = "rim grasp"
+    facts = KindFacts("grasp_rim", "rim_graspable", "block_rim", "ik_unfeasible_rim", 2)
+    instead = "its rim is grasped instead"
 
     def offers(self, scene: Scene, gripper: "GripperModel", settings: "Settings") -> list[Offer]:
         from clearcli.geometry.poses import _pose
@@ -109,5 +112,37 @@ class RimGrasp(KindModule):
             )
         return out
 
+    def world_holds(self, obj: Any, gripper: Any, rules: Any) -> bool:
+        """The world's rule: an open cylinder whose wall the fingers close on (thicker than
+        the gripper's fully closed gap, at most its opening less 2 mm on either side) with
+        room inside for a finger."""
+        if not rules.open_container(obj):
+            return False
+        gap = min(float(getattr(gripper, "closed_gap_m", gripper.closing_width_m)), gripper.closing_width_m)
+        room = obj.radius_m - obj.wall_m - gripper.finger_thickness_m
+        return bool(gap < obj.wall_m <= gripper.opening_width_m - 0.004 and room >= 0.01)
 
-RIM = RimGrasp()
+    def simulate(self, world: SimWorld) -> str:
+        """The world's fingers at the pose the arm went to (`physics.world_rim_grasp`)."""
+        gripper = world.gripper
+        detail = world.model.kind_details.get(self.name, {})
+        T_camera_grasp = world.chosen_pose(world.model.kind_candidates.get(self.name, ()))
+        if T_camera_grasp is None:
+            return "missed: no rim pose"
+        ok, why = world.rules.world_rim_grasp(
+            world.scene,
+            world.k,
+            world.T_table_camera @ T_camera_grasp,
+            float(detail.get("opening_m", gripper.opening_width_m)),
+            gripper.finger_thickness_m,
+            gripper.finger_width_m,
+            gripper.finger_depth_m,
+            fingertip_z_m=gripper.closing_region_height_m / 2.0,
+        )
+        if not ok:
+            return f"rim grasp failed: {why}"
+        world.take()
+        return "removed"
+
+
+KIND = RIM = RimGrasp()

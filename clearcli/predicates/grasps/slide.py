@@ -23,14 +23,15 @@ edge: the object's reason says so.
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from clearcli.predicates.grasps.base import KindModule, Offer, Scene
+from clearcli.predicates.grasps.base import KindFacts, KindModule, Offer, Scene, SimWorld
 
 if TYPE_CHECKING:
     from clearcli.geometry.gripper import GripperModel
+    from clearcli.predicates.state import ObjectModel
     from clearcli.settings import Settings
 
 SLIDE_OVERHANG_M = 0.035
@@ -46,10 +47,24 @@ SLIDE_MAX_M = 0.6
 SLIDE_TILT_DEG = 45.0
 SLIDE_MIN_TILT_DEG = 20.0
 UP = np.array([0.0, 0.0, 1.0])
+# the simulated world: how much of a slid object's overhang its fingers need to hold it (m)
+EDGE_GRIP_M = 0.025
 
 
 class SlideGrasp(KindModule):
     name = "slide"
+    label = "slide grasp"
+    facts = KindFacts("slide_grasp", "slidable", "block_slide", "ik_unfeasible_slide", 3)
+    # a slide is made for where the object stands, to one side of the table: a push
+    # moves it out of the others' slide paths but tells nothing of its own slide (its
+    # blocks and IK fact stay), and its poses do not move with it
+    push_clears_ik = False
+    push_clears_blocks = False
+    after_push = "a slide is planned from where the object stands, not after a push"
+    on_table = True  # slid along the table: nothing under it either
+    # a slide that did not move the object met something the model did not: the same
+    # slide would meet it again (a pinch that slips may hold the next time)
+    give_up_unmoved = True
 
     def offers(self, scene: Scene, gripper: "GripperModel", settings: "Settings") -> list[Offer]:
         from clearcli.predicates import relations as rel
@@ -63,11 +78,10 @@ class SlideGrasp(KindModule):
         # (object, its candidates: one per seen side it can be slid to, nearest first)
         cands: dict[int, list[dict]] = {}
         for i, obj in enumerate(scene.objects):
-            if i not in scene.ungraspable:
-                offers[i] = Offer(why_not="the pinch from above fits it")
-                continue
-            if i in scene.rim_offered:
-                offers[i] = Offer(why_not="its rim is grasped instead")
+            # for what a kind before it takes (the pinch, a rim grasp): that one
+            taken = next((kind.instead for kind, offered in scene.offered_before if i in offered), "")
+            if taken:
+                offers[i] = Offer(why_not=taken)
                 continue
             thick = float(obj.top_height_m)
             tilt_deg = pinch_tilt_deg(thick, g.opening_width_m)
@@ -139,6 +153,47 @@ class SlideGrasp(KindModule):
                 slide_translation=first["direction"] * first["slide_m"],
             )
         return offers
+
+    def moved_before(self, obj: "ObjectModel") -> np.ndarray | None:
+        return obj.slide_translation
+
+    def world_holds(self, obj: Any, gripper: Any, rules: Any) -> bool:
+        """The world's rule: a box or a closed cylinder whose height the gripper spans at
+        an edge (from its closing width to `physics.edge_pinch_span_m`) and whose
+        narrowest side can overhang the fingers' grip without tipping."""
+        if rules.open_container(obj):
+            return False
+        return bool(
+            gripper.closing_width_m <= obj.height_m <= rules.edge_pinch_span_m(gripper.opening_width_m, rules.EDGE_PINCH_MIN_TILT_DEG)
+            and rules.grasp_width_m(obj) >= 0.08
+        )
+
+    def simulate(self, world: SimWorld) -> str:
+        """The slide of the candidate the IK check chose (one per seen side; a single one
+        comes with its half-turn, the same slide), as far as the world lets the object go
+        (`physics.world_slide`), then the pinch at the edge (`physics.world_edge_pinch`)."""
+        rules, gripper, model = world.rules, world.gripper, world.model
+        detail = model.kind_details.get(self.name, {})
+        slides = list(detail.get("slides") or [detail])
+        chosen = world.chosen_candidate()
+        chosen = chosen if chosen is not None and len(slides) > 1 else 0
+        slide = slides[min(int(chosen), len(slides) - 1)]
+        direction = world.T_table_camera[:3, :3] @ np.asarray(slide.get("direction", (1.0, 0.0, 0.0)), dtype=float)
+        world.scene, travelled = rules.world_slide(world.scene, world.k, direction[:2], float(slide.get("slide_m", 0.0)))
+        # the pinch's pose as the arm went there (its tilt sets the span the jaws take);
+        # the world's own figure: fingers need EDGE_GRIP_M of the overhang to hold it
+        T_camera_edge = world.chosen_pose(model.kind_candidates.get(self.name, ()), pose=-2, candidate=int(chosen))
+        tilt_deg = rules.EDGE_PINCH_TILT_DEG if T_camera_edge is None else rules.approach_tilt_deg(world.T_table_camera @ T_camera_edge)
+        ok, why = rules.world_edge_pinch(
+            world.scene, world.k, direction[:2], EDGE_GRIP_M, gripper.opening_width_m, gripper.closing_width_m, tilt_deg
+        )
+        if not ok:
+            if "tipped" in why:
+                world.take()
+                return f"slid {travelled:.3f} m, fell off the table"
+            return f"slid {travelled:.3f} m, then the pinch failed: {why}"
+        world.take()
+        return "removed"
 
 
 def _pinch_opening(thick_m: float, tilt_deg: float) -> float:
@@ -228,4 +283,4 @@ def _candidate(obj, plan, gripper: "GripperModel", settings: "Settings", tilt_de
     }
 
 
-SLIDE = SlideGrasp()
+KIND = SLIDE = SlideGrasp()
