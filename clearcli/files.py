@@ -38,6 +38,32 @@ def temporary_target(name: str) -> str | None:
     return m.group("target") if m else None
 
 
+def exists(path: str | Path) -> bool:
+    """``Path.exists`` that says False, not raises, for a name the system cannot look up
+    (past 255 bytes, through a file): text that may be a path or something else."""
+    try:
+        return Path(path).exists()
+    except (OSError, ValueError):
+        return False
+
+
+def require_regular(path: str | Path, what: str) -> None:
+    """InputError unless ``path`` is a regular file (links followed): a FIFO or a device
+    given as an input is refused, never opened (opening a FIFO waits for a writer)."""
+    from clearcli.errors import InputError
+
+    try:
+        mode = os.stat(path).st_mode
+    except FileNotFoundError:
+        raise InputError(f"{path}: file not found") from None
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read ({exc.strerror or exc})") from None
+    if stat.S_ISDIR(mode):
+        raise InputError(f"{path}: is a folder; give {what}")
+    if not stat.S_ISREG(mode):
+        raise InputError(f"{path}: not a regular file (a FIFO or a device); give {what}")
+
+
 def _default_mode() -> int:
     """The mode a plain open() would give: mkstemp's 0600 would surprise users."""
     umask = os.umask(0)
@@ -91,6 +117,13 @@ def check_output_path(path: Path, force: bool, inputs: tuple[Path, ...] = (), st
     --force needed, nothing the user had is lost (``streams`` False: refused instead,
     as in a batch's --out-dir, whose outputs are files)."""
     path = Path(path)
+    try:
+        _check_output_path(path, force, inputs, streams)
+    except OSError as exc:  # a name too long, a path through a file: the place, not clear
+        raise OutputError(f"{path}: cannot write ({exc.strerror or exc})", errno_=exc.errno) from None
+
+
+def _check_output_path(path: Path, force: bool, inputs: tuple[Path, ...], streams: bool) -> None:
     for inp in inputs:
         with contextlib.suppress(OSError):
             if path.resolve() == Path(inp).resolve() or os.path.samefile(path, inp):

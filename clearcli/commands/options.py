@@ -142,7 +142,9 @@ def with_images(settings: Any, intrinsics: str | None, depth_scale: float | None
     results' settings.toml) find the same file wherever they run."""
     from clearcli.settings import override
 
-    if intrinsics is not None and intrinsics.strip() and Path(intrinsics).exists():
+    from clearcli.files import exists
+
+    if intrinsics is not None and intrinsics.strip() and exists(intrinsics):
         intrinsics = str(Path(intrinsics).resolve())
     if intrinsics:
         from clearcli.tasks.sources import check_intrinsics

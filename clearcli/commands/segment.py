@@ -118,6 +118,10 @@ def segment_cmd(
     for out in (labels_out, png):
         if out is not None:
             check_output_path(out, force, files_read(frame_path, settings, color, also=(settings_file,)))
+    if labels_out is not None and png is not None and Path(labels_out).resolve() == Path(png).resolve():
+        from clearcli.errors import InputError
+
+        raise InputError(f"{labels_out}: -o and --png name the same file; give each its own")
     outcome = task.run(
         task.Request(settings, Outputs.of(labels=labels_out, png=png)), Source(str(frame_path), frame_index, topic, color=str(color) if color else None)
     )

@@ -75,6 +75,9 @@ def _open_image(path: Path, what: str):  # -> PIL.Image.Image
     # PIL's own bomb check (warn past 89 MP, raise past twice that) is replaced by ours,
     # which runs first and refuses with the reason: ours is the stricter of the two.
     Image.MAX_IMAGE_PIXELS = None
+    from clearcli.files import require_regular
+
+    require_regular(path, what)
     try:
         image = Image.open(path)  # reads the header only
         check_image_size(image.width, image.height, str(path))
@@ -121,8 +124,12 @@ def read_depth_m(path: Path, scale_m: float) -> np.ndarray:
             if len(shape) in (2, 3):
                 check_image_size(int(shape[1]), int(shape[0]), str(path))
             raw = np.load(path, allow_pickle=False)
-        except (ValueError, OSError, EOFError) as exc:
-            raise InputError(f"{path}: not a readable NPY array ({exc})") from None
+        except InputError:
+            raise
+        except MemoryError:
+            raise InputError(f"{path}: too large to read in this machine's memory") from None
+        except Exception as exc:  # a damaged header fails in numpy's parser as anything (TokenError, SyntaxError, ...)
+            raise InputError(f"{path}: not a readable NPY array ({type(exc).__name__}: {exc})") from None
     else:
         image = _open_image(path, "a depth image")
         mode = image.mode

@@ -94,7 +94,9 @@ def read_intrinsics(spec: str | Path) -> CameraModel:
     """The intrinsics in the file at `spec`, or in a string "fx fy cx cy" (commas or spaces)."""
     path = Path(spec)
     text = str(spec).strip()
-    if isinstance(spec, str) and not (text and path.exists()):
+    from clearcli.files import exists, require_regular
+
+    if isinstance(spec, str) and not (text and exists(path)):
         numbers = _four_numbers(text)
         if numbers is not None:
             where, fix = f'"{text}"', 'fix the string "fx fy cx cy"'
@@ -106,6 +108,8 @@ def read_intrinsics(spec: str | Path) -> CameraModel:
     where = str(path)
     if not path.is_file():
         what = "is a folder" if path.is_dir() else "no such file"
+        if exists(path) and not path.is_dir():
+            require_regular(path, 'an intrinsics file or "fx fy cx cy"')
         raise InputError(f'{where}: {what}; give an intrinsics file or "fx fy cx cy"')
     try:
         st = path.stat()
@@ -301,8 +305,9 @@ def _number(value: Any, name: str, where: str, fix: str) -> float:
         raise InputError(f"{where}: {name} = {value!r} is not a number; {fix}")
     try:
         return float(value)
-    except ValueError:
-        raise InputError(f"{where}: {name} = {value!r} is not a number; {fix}") from None
+    except (ValueError, OverflowError):
+        shown = repr(value) if len(repr(value)) <= 40 else repr(value)[:37] + "..."
+        raise InputError(f"{where}: {name} = {shown} is not a number a camera has; {fix}") from None
 
 
 def _count(value: Any, name: str, where: str, minimum: int) -> int:

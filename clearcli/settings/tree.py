@@ -142,7 +142,12 @@ def apply_sets(settings: Settings, sets: Iterable[str]) -> Settings:
 def read_settings_file(path: Path) -> dict[str, Any]:
     import tomllib
 
+    import os
+    import stat
+
     try:
+        if not stat.S_ISREG(os.stat(path).st_mode):  # a FIFO would be waited on for ever
+            raise SettingsError(f"{path}: not a regular file; give a TOML settings file")
         text = Path(path).read_text(encoding="utf-8")
     except FileNotFoundError:
         raise SettingsError(f"{path}: settings file not found") from None
@@ -152,6 +157,8 @@ def read_settings_file(path: Path) -> dict[str, Any]:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise SettingsError(f"{path}: not valid TOML ({exc})") from None
+    except RecursionError:
+        raise SettingsError(f"{path}: not valid TOML (nested too deeply to read)") from None
 
 
 def load_settings(path: Path | None = None, sets: Iterable[str] = ()) -> Settings:

@@ -214,3 +214,61 @@ def test_grasps_flag_and_set_follow_one_rule(kinds: str) -> None:
     if ok:  # the same settings, so the same digest, whichever way given
         digests = {json.loads(r.stdout)["clear"]["settings_digest"] for r in (plan_flag, plan_set)}
         assert len(digests) == 1
+
+
+# -- found by the harness (tests/test_harness.py) once the nine were fixed -----------------
+
+
+@pytest.fixture()
+def small_pair(tmp_path: Path) -> Path:
+    """A 64 x 48 depth image (a flat table 1 m away) with its colour and intrinsics."""
+    from PIL import Image
+
+    depth = np.full((48, 64), 1000, dtype=np.uint16)
+    Image.fromarray(depth).save(tmp_path / "f_depth.png")
+    Image.fromarray(np.zeros((48, 64, 3), dtype=np.uint8)).save(tmp_path / "f_color.png")
+    (tmp_path / "camera_params.json").write_text(json.dumps(
+        {"fx": 52.5, "fy": 52.5, "x_offset": 31.5, "y_offset": 23.5, "img_width": 64, "img_height": 48}))
+    return tmp_path
+
+
+def test_an_output_name_too_long_names_the_output_not_stdout(small_pair: Path) -> None:
+    for flag in ("-o", "--png"):
+        line = _one_line(clear("segment", small_pair / "f_depth.png", flag, small_pair / ("x" * 300 + ".png")), 8)
+        assert "File name too long" in line and "stdout" not in line
+
+
+def test_an_intrinsics_string_longer_than_a_file_name_is_bad_input(small_pair: Path) -> None:
+    line = _one_line(clear("info", small_pair / "f_depth.png", "--intrinsics", "9" * 400 + " 52.5 31.5 23.5"), 3)
+    assert "stdout" not in line
+
+
+def test_an_npy_whose_header_is_cut_is_bad_input(tmp_path: Path) -> None:
+    path = tmp_path / "d_depth.npy"
+    header = b"{'descr': '<f4', 'fortran_order': False, 'shape': (48, 64)"
+    path.write_bytes(b"\x93NUMPY\x01\x00" + struct.pack("<H", 118) + header.ljust(117) + b"\n" + b"\0" * 64)
+    assert "not a readable NPY array" in _one_line(clear("segment", path, "--intrinsics", "52.5 52.5 31.5 23.5"), 3)
+
+
+def test_an_intrinsics_number_too_large_for_a_float_is_bad_input(small_pair: Path) -> None:
+    (small_pair / "camera_params.json").write_text(
+        '{"fx": 52.5, "fy": 52.5, "x_offset": 31.5, "y_offset": ' + "9" * 400 + ', "img_width": 64, "img_height": 48}')
+    assert "cy = 999" in _one_line(clear("info", small_pair / "f_depth.png"), 3)  # y_offset is cy
+
+
+def test_a_fifo_given_as_colour_or_settings_is_refused_not_waited_on(small_pair: Path) -> None:
+    fifo = small_pair / "pipe"
+    os.mkfifo(fifo)
+    assert "not a regular file" in _one_line(clear("segment", small_pair / "f_depth.png", "--color", fifo, timeout=60), 3)
+    assert "not a regular file" in _one_line(clear("segment", BOX, "--settings", fifo, timeout=60), 3)
+
+
+def test_a_settings_file_nested_too_deeply_is_bad_input(tmp_path: Path) -> None:
+    deep = tmp_path / "deep.toml"
+    deep.write_text("a = " + "[" * 2000 + "\n")
+    assert "not valid TOML" in _one_line(clear("segment", BOX, "--settings", deep), 3)
+
+
+def test_two_outputs_naming_one_file_are_refused(tmp_path: Path) -> None:
+    line = _one_line(clear("segment", BOX, "-o", tmp_path / "out.png", "--png", tmp_path / "out.png"), 3)
+    assert "name the same file" in line and not (tmp_path / "out.png").exists()
