@@ -81,7 +81,7 @@ import numpy as np
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
-from clearcli.robot import kinematics as kin_mod  # noqa: E402
+from clearcli.robot import wam_kinematics as kin_mod  # noqa: E402
 
 TABLE_Z = -0.346  # table top in the base (shoulder) frame
 DOWN = np.diag([1.0, -1.0, -1.0])  # TCP z along -z of the base

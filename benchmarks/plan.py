@@ -89,7 +89,7 @@ def ik_per_action() -> None:
     from clearcli.planning.feasibility import IKActionChecker
     from clearcli.planning.types import Action, CheckedAction
     from clearcli.robot.collision import make_obstacles
-    from clearcli.robot.kinematics import WamKinematics
+    from clearcli.robot.wam_kinematics import WamKinematics
 
     state = ps.clutter(9)
     kin = WamKinematics()
@@ -147,7 +147,7 @@ def whole_plan(runs: int) -> None:
         from clearcli.io.read import read_frame
         from clearcli.perception.segment import segment
         from clearcli.predicates.state_builder import compute_state
-        from clearcli.robot.placement import placement_from_settings
+        from clearcli.robot.arm import resolve_arm
 
         frm = read_frame(pcd, None, 0)
         seg = segment(frm, s.segment)
@@ -155,7 +155,7 @@ def whole_plan(runs: int) -> None:
         # contacts, off-centre grasps) add IK fallback candidates; the thesis's poses alone
         # first. The robot placement is the default's for all four.
         state = compute_state(frm, seg, s)
-        T, _ = placement_from_settings(s.robot, state)
+        T, _ = resolve_arm(s).place(state)
         thesis_push = dataclasses.replace(s.push, raised_fingertips_m=())
         thesis_pred = dataclasses.replace(s.predicates, grasp_offcentre_fraction=0.0)
         for family, fs in (

@@ -82,7 +82,7 @@ def measure(log: Path) -> dict:
     import clearcli.perception.segment  # noqa: F401  heavy imports first: the baseline
     import clearcli.planning.backtrack  # noqa: F401
     import clearcli.predicates.state_builder  # noqa: F401
-    import clearcli.robot.kinematics  # noqa: F401
+    import clearcli.robot.wam_kinematics  # noqa: F401
     import mcap.reader  # noqa: F401
     import mcap_ros2.decoder  # noqa: F401
     import pinocchio  # noqa: F401

@@ -1,14 +1,15 @@
 """The one-frame pipeline: frame -> segmentation -> symbolic state -> plan.
 
-`Pipeline` holds what is worth keeping between frames (settings, the robot placement,
-the stage functions, resolved once) and runs the stages one by one, timing each, so that
-a replay can step in between them (tracking needs the segmentation before the state is
-planned on, push memory changes the state's costs). `Pipeline.run` chains them for one
-frame. The stages themselves are the stage modules' pure functions; they are looked up
-when first used, so importing this module stays cheap. What the stages build per call
-is cheap once their libraries are imported (measured: the WAM model from its URDF
-0.3 ms, the gripper boxes microseconds), so nothing else is cached: the first frame
-pays the imports (about 2 s), later frames only their own work.
+`Pipeline` holds what is worth keeping between frames (settings, the robot -- its
+profile and kinematics model, clearcli/robot/arm.py -- and its placement, the stage
+functions, resolved once) and runs the stages one by one, timing each, so that a replay
+can step in between them (tracking needs the segmentation before the state is planned
+on, push memory changes the state's costs). `Pipeline.run` chains them for one frame.
+The stages themselves are the stage modules' pure functions; they are looked up when
+first used, so importing this module stays cheap. What the stages build per call is
+cheap once their libraries are imported (an IK search on the arm's model, the gripper
+boxes: microseconds), so nothing else is cached: the first frame pays the imports (about
+2 s), later frames only their own work.
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ if TYPE_CHECKING:
     from clearcli.perception.types import Segmentation
     from clearcli.planning.types import Plan
     from clearcli.predicates.state import SymbolicState
+    from clearcli.robot.arm import Arm
     from clearcli.settings import Settings
 
 SegmentFn = Callable[["Frame", Any], "Segmentation"]
@@ -65,10 +67,12 @@ def _default_state() -> StateFn:
     return compute_state
 
 
-def _default_plan() -> PlanFn:
+def _default_plan(robot: "Arm") -> PlanFn:
+    import functools
+
     from clearcli.planning.backtrack import make_plan
 
-    return make_plan
+    return functools.partial(make_plan, robot=robot)
 
 
 class Pipeline:
@@ -76,7 +80,9 @@ class Pipeline:
 
     ``T_base_camera`` (4x4, robot base <- points' frame) is passed to the planner when
     known (a log's /tf_static); None lets the plan stage place the robot by its rules.
-    The stage functions can be replaced (tests, the simulator's fakes).
+    ``robot``: the arm, resolved once (clearcli/robot/arm.py; from the settings when
+    None, on first use). The stage functions can be replaced (tests, the simulator's
+    fakes).
     """
 
     def __init__(
@@ -86,12 +92,23 @@ class Pipeline:
         segment_fn: SegmentFn | None = None,
         state_fn: StateFn | None = None,
         plan_fn: PlanFn | None = None,
+        robot: "Arm | None" = None,
     ) -> None:
         self.settings = settings
         self.T_base_camera = T_base_camera
         self._segment_fn = segment_fn
         self._state_fn = state_fn
         self._plan_fn = plan_fn
+        self._robot = robot
+
+    @property
+    def robot(self) -> "Arm":
+        """The arm every stage and the simulated world use, resolved once."""
+        if self._robot is None:
+            from clearcli.robot.arm import resolve_arm
+
+            self._robot = resolve_arm(self.settings)
+        return self._robot
 
     # --- the stages, each timed ---------------------------------------------------------
 
@@ -107,7 +124,7 @@ class Pipeline:
 
     def plan(self, state: "SymbolicState") -> "Plan":
         if self._plan_fn is None:
-            self._plan_fn = _default_plan()
+            self._plan_fn = _default_plan(self.robot)
         # A replay acts on the first action and plans again from the next frame: it
         # checks what [plan] replay_check says (the first action, by default).
         return self._plan_fn(state, self.settings, T_base_camera=self.T_base_camera, check=self.settings.plan.replay_check)
@@ -233,15 +250,17 @@ class Planned:
     no_plan: NoPlanError | None = None
 
 
-def planned(state: "SymbolicState", settings: "Settings", camera_pose: str | None, check: str | None) -> Planned:
-    """Place the robot (``camera_pose`` as given on the command line, else [robot]'s
-    rules), then plan with every action IK-checked (``check``: None for [plan] check)."""
+def planned(
+    state: "SymbolicState", settings: "Settings", robot: "Arm", camera_pose: str | None, check: str | None
+) -> Planned:
+    """Place ``robot`` (``camera_pose`` as given on the command line, else [robot]'s
+    rules), then plan with every action IK-checked against it (``check``: None for
+    [plan] check)."""
     from clearcli.planning.backtrack import make_plan
-    from clearcli.robot.placement import placement_from_settings
 
-    T_base_camera, pose_source = placement_from_settings(settings.robot, state, camera_pose)
+    T_base_camera, pose_source = robot.place(state, camera_pose)
     try:
-        plan = make_plan(state, settings, T_base_camera, check=check)
+        plan = make_plan(state, settings, T_base_camera, check=check, robot=robot)
     except NoPlanError as err:
         if getattr(err, "plan", None) is None:
             raise

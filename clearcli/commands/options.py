@@ -13,6 +13,7 @@ from typing import Annotated, Any, Callable, Optional
 import typer
 
 from clearcli import interrupts
+from clearcli.settings.profiles import names_text as profile_names_text
 from clearcli.settings import kinds as grasp_kinds
 
 SettingsFile = Annotated[
@@ -37,7 +38,7 @@ Robot = Annotated[
     Optional[str],
     typer.Option(
         "--robot",
-        help="Robot profile: wam (default), panda, ur5e (`clear robots`). An alias of --set robot.name=NAME: "
+        help=f"Robot profile: {profile_names_text()} (`clear robots`). An alias of --set robot.name=NAME: "
         "the profile's [robot] and [gripper] values, under the file's and --set's.",
         metavar="NAME",
     ),

@@ -50,7 +50,7 @@ but can still be pushed out of the way.
 from __future__ import annotations
 
 import time
-from typing import Callable, Mapping, Sequence
+from typing import TYPE_CHECKING, Callable, Mapping, Sequence
 
 import numpy as np
 
@@ -61,6 +61,10 @@ from clearcli.planning.solve import Solved, action_cost, action_space, deadline_
 from clearcli.planning.types import Action, BacktrackStep, CheckedAction, LeftObject, Plan
 from clearcli.predicates.grasps import kind as grasp_kind, kinds as grasp_kinds
 from clearcli.predicates.state import Fact, SymbolicState
+
+if TYPE_CHECKING:
+    from clearcli.robot.arm import Arm
+    from clearcli.settings import Settings
 from clearcli.settings.plan import PlanSettings
 
 # check(action, context) -> CheckedAction, or Infeasible with the reason
@@ -441,28 +445,29 @@ def _no_plan_reason(plan: Plan) -> str:
 
 def make_plan(
     state: SymbolicState,
-    settings: object,
+    settings: "Settings",
     T_base_camera: np.ndarray | None = None,
     check: str | None = None,
+    robot: "Arm | None" = None,
 ) -> Plan:
-    """Plan for ``state`` (SymbolicState) with the WAM at ``T_base_camera`` (else from
-    ``[robot] camera_pose`` or derived from the table, see clearcli/robot/placement.py).
+    """Plan for ``state`` (SymbolicState) with ``robot`` (the command's resolved arm,
+    clearcli/robot/arm.py; else the one ``settings`` describe) at ``T_base_camera`` (else
+    from ``[robot] camera_pose`` or derived from the table, see clearcli/robot/placement.py).
     ``check``: "whole" or "first" (default ``[plan] check``)."""
+    from clearcli.robot.arm import resolve_arm
     from clearcli.robot.collision import make_obstacles
-    from clearcli.robot.profiles import kinematics_from_settings
     from clearcli.predicates.grasps import parse_kinds
-    from clearcli.robot.placement import placement_from_settings
 
-    robot = settings.robot  # type: ignore[attr-defined]
-    plan_s = settings.plan  # type: ignore[attr-defined]
-    gripper = settings.gripper  # type: ignore[attr-defined]
+    arm = robot if robot is not None else resolve_arm(settings)
+    plan_s = settings.plan
+    gripper = settings.gripper
     kinds_on = parse_kinds(plan_s.grasps)
     state = with_grasp_kinds(state, kinds_on)
     if T_base_camera is None:
-        T_base_camera, _ = placement_from_settings(robot, state)
+        T_base_camera, _ = arm.place(state)
     T_base_camera = np.asarray(T_base_camera, dtype=float)
-    kin = kinematics_from_settings(robot)
-    obstacles = make_obstacles(state, T_base_camera, robot.collision_margin_m)
+    kin = arm.kinematics()
+    obstacles = make_obstacles(state, T_base_camera, arm.settings.collision_margin_m)
     checker = IKActionChecker(state, T_base_camera, kin, obstacles, push_lookahead=plan_s.push_lookahead)
 
     def describe_width(name: str) -> tuple[str, float | None]:

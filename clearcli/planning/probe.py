@@ -21,13 +21,16 @@ the loop after two pushes at most.
 from __future__ import annotations
 
 import dataclasses
-from typing import Any, Collection, Mapping
+from typing import TYPE_CHECKING, Any, Collection, Mapping
 
 import numpy as np
 
 from clearcli.geometry.gripper import push_contact_halves
 from clearcli.planning.types import Action, CheckedAction, Plan
 from clearcli.predicates.state import DIRECTIONS, SymbolicState
+
+if TYPE_CHECKING:
+    from clearcli.robot.arm import Arm
 
 
 def probe_candidates(
@@ -130,16 +133,18 @@ def probe_push(
     T_base_camera: np.ndarray,
     tried: Mapping[str, frozenset[str]] | None = None,
     failed: Collection[str] = (),
+    robot: "Arm | None" = None,
 ) -> Plan | None:
     """A one-action plan pushing the first candidate that has a free, IK-feasible push
     along an axis not tried on it yet, or None. ``failed``: as `probe_candidates`.
     ``tried``: per name, the axes ("first":
     dir1/dir2, "second": dir3/dir4) of earlier probes. Both axes get a probe: a push across
     the seam of two merged objects drives the nearer into the other (they stay together),
-    one along the seam slides it past."""
+    one along the seam slides it past. ``robot``: the command's resolved arm (else the
+    one ``settings`` describe)."""
     from clearcli.planning.feasibility import IKActionChecker
+    from clearcli.robot.arm import resolve_arm
     from clearcli.robot.collision import make_obstacles
-    from clearcli.robot.profiles import kinematics_from_settings
 
     tried = tried or {}
     names = [
@@ -149,10 +154,10 @@ def probe_push(
     ]
     if not names:
         return None
-    robot = settings.robot
-    kin = kinematics_from_settings(robot)
+    arm = robot if robot is not None else resolve_arm(settings)
+    kin = arm.kinematics()
     T = np.asarray(T_base_camera, dtype=float)
-    obstacles = make_obstacles(state, T, robot.collision_margin_m)
+    obstacles = make_obstacles(state, T, arm.settings.collision_margin_m)
     for name in names:
         for d in free_pushes(state, name):
             if AXES[d] in tried.get(name, ()):

@@ -8,12 +8,15 @@ them; pushes are arrows; the robot's shoulder is at the origin, its reach circle
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+if TYPE_CHECKING:
+    from clearcli.robot.arm import Arm
 
-def render_plan(path: Path, frame: Any, state: Any, plan: Any, seg: Any = None, robot: str = "wam") -> None:
+
+def render_plan(path: Path, frame: Any, state: Any, plan: Any, seg: Any = None, robot: "Arm | None" = None) -> None:
     """Write the plan picture at ``path``: the objects from above in the robot's base
     frame, coloured by what the plan does with them, pushes as arrows; beside it, when
     the frame has colour and ``seg`` is given, the camera's picture with the same
@@ -24,9 +27,12 @@ def render_plan(path: Path, frame: Any, state: Any, plan: Any, seg: Any = None, 
     import matplotlib.pyplot as plt
     from scipy.spatial import ConvexHull
 
-    from clearcli.robot.profiles import profile
+    if robot is None:  # the default settings' arm
+        from clearcli.robot.arm import resolve_arm
+        from clearcli.settings import Settings
 
-    arm = profile(robot)
+        robot = resolve_arm(Settings())
+    arm = robot.profile
 
     T = plan.T_base_camera if plan.T_base_camera is not None else np.eye(4)
     R, t = T[:3, :3], T[:3, 3]
@@ -105,11 +111,11 @@ def render_plan(path: Path, frame: Any, state: Any, plan: Any, seg: Any = None, 
         ax.annotate("", xy=(c[0] + u[0], c[1] + u[1]), xytext=(c[0], c[1]),
                     arrowprops=dict(arrowstyle="->", color="k", lw=1.5), zorder=5)
     # the gripper's closing point at full stretch, round the shoulder's vertical axis
-    reach = arm.reach_m + arm.tcp_past_flange_m
+    reach = robot.reach_of_tcp_m
     sx, sy = arm.shoulder_base[0], arm.shoulder_base[1]
     ax.add_patch(plt.Circle((sx, sy), reach, fill=False, ls="--", color="#555555", zorder=1))
     ax.plot([0], [0], marker="o", color="k", zorder=5)
-    ax.text(0, -0.04, arm.name.upper() if arm.name != "ur5e" else "UR5e", ha="center", va="top", fontsize=8)
+    ax.text(0, -0.04, arm.picture_label, ha="center", va="top", fontsize=8)
     ax.set_aspect("equal")
     ax.set_xlabel("x (m, robot base)")
     ax.set_ylabel("y (m, robot base)")

@@ -215,7 +215,7 @@ class Session:
         tried = {name: self.probed[tid] for name, tid in ids.items() if tid in self.probed}
         limit = settings.plan.max_failed_grasps
         failed = {name for name, tid in ids.items() if self.failed_grasps.get(tid, 0) >= limit}
-        probe = probe_push(state, plan, settings, T_base_camera, tried=tried, failed=failed)
+        probe = probe_push(state, plan, settings, T_base_camera, tried=tried, failed=failed, robot=self.pipeline.robot)
         timings = dict(result.timings_s)
         timings["plan"] = timings.get("plan", 0.0) + time.perf_counter() - t0
         if probe is None:

@@ -1,6 +1,6 @@
 """Kinematics of any serial arm from its URDF (Pinocchio): forward kinematics, a damped
 least squares IK with restarts, and the arm's collision capsules from the URDF's
-collision geometry. The WAM keeps its analytic solver (kinematics.py); this serves the
+collision geometry. The WAM keeps its analytic solver (wam_kinematics.py); this serves the
 other profiles and a user's own URDF, and runs as the WAM's fallback in a test that
 compares the two.
 
@@ -17,6 +17,7 @@ closing point (z = approach, x = closing direction), as for the WAM.
 from __future__ import annotations
 
 import contextlib
+import copy
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -25,7 +26,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from clearcli.errors import SettingsError
-from clearcli.robot.kinematics import IKStats, _se3, cache_lookup, within_tolerance
+from clearcli.robot.kinematics import IKStats, cache_lookup, pose_error, se3, within_tolerance
 from clearcli.robot.urdf_joints import checked_urdf
 
 # a step of damped least squares moves no joint more than this (rad): the linearisation
@@ -284,8 +285,101 @@ def _reach_bounds(model: Any, shoulder: int, flange_id: int, lower: np.ndarray, 
     return out
 
 
+def _read_model(urdf: Path) -> Any:
+    """The URDF's whole model (every joint), or one line (SettingsError) saying why not:
+    what urdfdom would refuse with its reason on stderr only, or take silently (lower
+    limit above upper, a zero axis), is one line naming the joint; continuous joints come
+    back as revolute ones over a stated range (urdf_joints.CONTINUOUS_RANGE_RAD)."""
+    import pinocchio as pin
+
+    text = checked_urdf(urdf)
+    try:
+        with _quiet_stderr() as said:
+            return pin.buildModelFromXML(text)
+    except Exception as exc:  # Pinocchio raises ValueError/RuntimeError on bad files
+        reason = _first_error(said) or str(exc).splitlines()[0]
+        raise SettingsError(f"{urdf}: not a URDF Pinocchio can read ({reason})") from None
+
+
+def _arm_frames(full: Any, urdf: Path, base_frame: str, flange_frame: str, tcp_frame: str) -> tuple[str, str]:
+    """(base frame, flange frame): as given, else the root link and the end of the longest
+    chain; each a link of the URDF (frames are its links: Pinocchio's joint frames are not
+    offered), ``tcp_frame`` (if given) a frame of it, the base not the flange."""
+    import pinocchio as pin
+
+    links = [f.name for f in full.frames if f.type == pin.FrameType.BODY]
+    base_frame = base_frame or links[0]  # the root link
+    flange_frame = flange_frame or _chain_end(full)
+    for what, name in (("base_frame", base_frame), ("flange_frame", flange_frame)):
+        if name not in links:
+            raise SettingsError(f"{urdf}: no frame {name!r} ({what}); its frames (links): {', '.join(links)}")
+    if tcp_frame and not full.existFrame(tcp_frame):
+        raise SettingsError(f"{urdf}: no frame {tcp_frame!r} (tcp_frame); its frames (links): {', '.join(links)}")
+    if base_frame == flange_frame:
+        raise SettingsError(
+            f"{urdf}: base_frame and flange_frame are both {base_frame!r}; the base is the link the arm stands "
+            "on, the flange the one the gripper is mounted on"
+        )
+    return base_frame, flange_frame
+
+
+def _joints_off_the_arm(full: Any, urdf: Path, base_frame: str, flange_frame: str) -> list[int]:
+    """The joints to hold at 0: all but those between the base and the flange, which move
+    the flange. Any other (a gripper's fingers, a torso or a mobile base above the base
+    frame) is held: poses are in the base frame, which must not move with the arm's
+    joints. One line when the flange does not hang from the base or nothing moves it."""
+    import pinocchio as pin
+
+    base_joint = full.frames[full.getFrameId(base_frame, pin.FrameType.BODY)].parentJoint
+    chain = set()
+    j = full.frames[full.getFrameId(flange_frame, pin.FrameType.BODY)].parentJoint
+    while j > 0 and j != base_joint:
+        chain.add(j)
+        j = full.parents[j]
+    if j != base_joint:
+        raise SettingsError(
+            f"{urdf}: flange_frame {flange_frame!r} does not hang from base_frame {base_frame!r}; give a base "
+            "the flange is reached from through the arm's joints"
+        )
+    if not chain:
+        raise SettingsError(
+            f"{urdf}: no movable joint between base_frame {base_frame!r} and flange_frame {flange_frame!r} "
+            "(fixed to each other); give the arm's base and its flange"
+        )
+    return [k for k in range(1, full.njoints) if k not in chain]
+
+
+def _add_tcp(model: Any, flange_frame: str, tcp_xyz_m: Sequence[float], tcp_yaw_deg: float) -> str:
+    """The closing point as a frame ("clear_tcp") at an offset from the flange: ``tcp_xyz_m``
+    in the flange frame, turned ``tcp_yaw_deg`` about its z. Returns its name."""
+    import pinocchio as pin
+
+    yaw = math.radians(tcp_yaw_deg)
+    R = np.array([[math.cos(yaw), -math.sin(yaw), 0.0], [math.sin(yaw), math.cos(yaw), 0.0], [0.0, 0.0, 1.0]])
+    fl = model.frames[model.getFrameId(flange_frame)]
+    offset = pin.SE3(R, np.asarray(tcp_xyz_m if len(tcp_xyz_m) else (0.0, 0.0, 0.0), dtype=float))
+    name = "clear_tcp"
+    model.addFrame(pin.Frame(name, fl.parentJoint, model.getFrameId(flange_frame), fl.placement * offset, pin.FrameType.OP_FRAME))
+    return name
+
+
+def _check_revolute(model: Any, urdf: Path) -> None:
+    """The arm is a serial chain of six or more revolute joints and nothing else movable."""
+    revolute = [j for j in model.joints[1:] if j.shortname() in ("JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRevoluteUnaligned")]
+    if len(revolute) < 6 or model.nq != len(revolute):
+        raise SettingsError(
+            f"{urdf}: a chain of {len(revolute)} revolute joints (nq {model.nq}); the generic IK needs a "
+            "serial chain of 6 or more revolute joints and nothing else movable"
+        )
+
+
 class UrdfKinematics:
-    """A serial arm of six or more revolute joints read from a URDF."""
+    """A serial arm of six or more revolute joints read from a URDF.
+
+    Built in named steps (`__init__`): the description read and checked, the arm's
+    frames and the joints off it held, the closing point added, the frames placed, the
+    reach measured, the IK search set up, the collision capsules read, a closed form
+    attached when the arm has one."""
 
     def __init__(
         self,
@@ -310,67 +404,31 @@ class UrdfKinematics:
 
         self.pin = pin
         self.urdf = Path(urdf)
-        # what urdfdom would refuse with its reason on stderr only, or take silently (lower
-        # limit above upper, a zero axis), is one line naming the joint; continuous joints
-        # come back as revolute ones over a stated range (urdf_joints.CONTINUOUS_RANGE_RAD)
-        text = checked_urdf(self.urdf)
-        try:
-            with _quiet_stderr() as said:
-                full = pin.buildModelFromXML(text)
-        except Exception as exc:  # Pinocchio raises ValueError/RuntimeError on bad files
-            reason = _first_error(said) or str(exc).splitlines()[0]
-            raise SettingsError(f"{urdf}: not a URDF Pinocchio can read ({reason})") from None
-        # frames are the URDF's links (Pinocchio's joint frames are not offered: a URDF
-        # names its frames by its links)
-        links = [f.name for f in full.frames if f.type == pin.FrameType.BODY]
-        base_frame = base_frame or links[0]  # the root link
-        flange_frame = flange_frame or _chain_end(full)
-        for what, name in (("base_frame", base_frame), ("flange_frame", flange_frame)):
-            if name not in links:
-                raise SettingsError(f"{urdf}: no frame {name!r} ({what}); its frames (links): {', '.join(links)}")
-        if tcp_frame and not full.existFrame(tcp_frame):
-            raise SettingsError(f"{urdf}: no frame {tcp_frame!r} (tcp_frame); its frames (links): {', '.join(links)}")
-        if base_frame == flange_frame:
-            raise SettingsError(
-                f"{urdf}: base_frame and flange_frame are both {base_frame!r}; the base is the link the arm stands "
-                "on, the flange the one the gripper is mounted on"
-            )
-        # The joints between the base and the flange move the flange; any other (a
-        # gripper's fingers, a torso or a mobile base above the base frame) is held at 0:
-        # poses are in the base frame, which must not move with the arm's joints.
-        base_joint = full.frames[full.getFrameId(base_frame, pin.FrameType.BODY)].parentJoint
-        chain = set()
-        j = full.frames[full.getFrameId(flange_frame, pin.FrameType.BODY)].parentJoint
-        while j > 0 and j != base_joint:
-            chain.add(j)
-            j = full.parents[j]
-        if j != base_joint:
-            raise SettingsError(
-                f"{urdf}: flange_frame {flange_frame!r} does not hang from base_frame {base_frame!r}; give a base "
-                "the flange is reached from through the arm's joints"
-            )
-        if not chain:
-            raise SettingsError(
-                f"{urdf}: no movable joint between base_frame {base_frame!r} and flange_frame {flange_frame!r} "
-                "(fixed to each other); give the arm's base and its flange"
-            )
-        locked = [k for k in range(1, full.njoints) if k not in chain]
+        full = _read_model(self.urdf)
+        base_frame, flange_frame = _arm_frames(full, urdf, base_frame, flange_frame, tcp_frame)
+        locked = _joints_off_the_arm(full, urdf, base_frame, flange_frame)
         self.model = pin.buildReducedModel(full, locked, pin.neutral(full)) if locked else full
         self._locked = locked
-        model = self.model
         if not tcp_frame:  # the closing point as an offset from the flange
-            yaw = math.radians(tcp_yaw_deg)
-            R = np.array([[math.cos(yaw), -math.sin(yaw), 0.0], [math.sin(yaw), math.cos(yaw), 0.0], [0.0, 0.0, 1.0]])
-            fl = model.frames[model.getFrameId(flange_frame)]
-            offset = pin.SE3(R, np.asarray(tcp_xyz_m if len(tcp_xyz_m) else (0.0, 0.0, 0.0), dtype=float))
-            tcp_frame = "clear_tcp"
-            model.addFrame(pin.Frame(tcp_frame, fl.parentJoint, model.getFrameId(flange_frame), fl.placement * offset, pin.FrameType.OP_FRAME))
-        revolute = [j for j in model.joints[1:] if j.shortname() in ("JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRevoluteUnaligned")]
-        if len(revolute) < 6 or model.nq != len(revolute):
-            raise SettingsError(
-                f"{urdf}: a chain of {len(revolute)} revolute joints (nq {model.nq}); the generic IK needs a "
-                "serial chain of 6 or more revolute joints and nothing else movable"
-            )
+            tcp_frame = _add_tcp(self.model, flange_frame, tcp_xyz_m, tcp_yaw_deg)
+        _check_revolute(self.model, urdf)
+        self._place_frames(base_frame, flange_frame, tcp_frame)
+        self._measure_reach(int(arm_from_joint), tolerance_m, tolerance_rad)
+        self.rest = np.clip(np.asarray(rest if rest is not None else np.zeros(self.model.nq), dtype=float), self.lower, self.upper)
+        self.damping = float(damping)
+        self.max_iterations = int(max_iterations)
+        self.tolerance_m = float(tolerance_m)
+        self.tolerance_rad = float(tolerance_rad)
+        self.n_seeds = max(_MIN_STARTS, int(n_seeds))
+        self._new_search()
+        self._set_capsules(arm_from_joint, gripper_frames)
+        self._closed = self._closed_form_of(closed_form)
+
+    # -- the steps of __init__ --------------------------------------------------------
+    def _place_frames(self, base_frame: str, flange_frame: str, tcp_frame: str) -> None:
+        """The frames' ids, the joint limits, and the base, the flange and the TCP placed
+        at the zero configuration: poses are in the base frame, Pinocchio's in the root."""
+        pin, model = self.pin, self.model
         self.data = model.createData()
         self.joint_names = tuple(model.names[1:])
         self.tcp_id = model.getFrameId(tcp_frame)
@@ -381,13 +439,16 @@ class UrdfKinematics:
         self.M_root_base = self.data.oMf[model.getFrameId(base_frame)].copy()
         self.M_base_root = self.M_root_base.inverse()
         self.M_flange_tcp = self.data.oMf[self.flange_id].actInv(self.data.oMf[self.tcp_id])
+        self.base_frame = base_frame
         self.flange_frame = flange_frame
-        # What `reachable` tests: an upper bound on the flange's distance from the
-        # shoulder joint's origin; at first the sum of the chain's link lengths from
-        # there (the triangle inequality), then, where measured, tighter. The makers'
-        # reach figures are not bounds: a UR5e's flange reaches 0.97 m from its
-        # shoulder against the quoted 0.85 m.
-        j0 = int(arm_from_joint)
+
+    def _measure_reach(self, j0: int, tolerance_m: float, tolerance_rad: float) -> None:
+        """What `reachable` tests: an upper bound on the flange's distance from the
+        shoulder joint's origin (joint ``j0``); at first the sum of the chain's link
+        lengths from there (the triangle inequality), then, where measured, tighter. The
+        makers' reach figures are not bounds: a UR5e's flange reaches 0.97 m from its
+        shoulder against the quoted 0.85 m."""
+        pin, model = self.pin, self.model
         self._arm_from_joint = j0
         pin.forwardKinematics(model, self.data, np.zeros(model.nq))
         self.shoulder_bound = np.asarray((self.M_base_root * self.data.oMi[j0]).translation, dtype=float)
@@ -408,35 +469,49 @@ class UrdfKinematics:
             # TCP, plus the position)
             lever_m = float(np.linalg.norm(self._tcp_to_last[:3, 3])) + self._wrist.radius_m + abs(self._wrist.along_m)
             self._wrist_slack_m = float(tolerance_m) + float(tolerance_rad) * lever_m
-        self.rest = np.clip(np.asarray(rest if rest is not None else np.zeros(model.nq), dtype=float), self.lower, self.upper)
-        self.damping = float(damping)
-        self.max_iterations = int(max_iterations)
-        self.tolerance_m = float(tolerance_m)
-        self.tolerance_rad = float(tolerance_rad)
-        self.n_seeds = max(_MIN_STARTS, int(n_seeds))
+
+    def _new_search(self) -> None:
+        """An IK search's own state, empty: statistics, the cache, the random seeds (drawn
+        when first needed), the ring of recent solved poses (position, a tenth of the
+        rotation's entries) and their solutions."""
+        nq = self.model.nq
         self.stats = IKStats()
         self._cache: dict[bytes, np.ndarray | None] = {}
         self._random_seeds: list[np.ndarray] | None = None
-        # recent solved poses (position, a tenth of the rotation's entries) and solutions
         self._near_pose = np.zeros((_NEAR_KEEP, 12))
-        self._near_q = np.zeros((_NEAR_KEEP, model.nq))
+        self._near_q = np.zeros((_NEAR_KEEP, nq))
         self._n_solved = 0
+
+    def _set_capsules(self, arm_from_joint: int, gripper_frames: Sequence[str]) -> None:
+        """The arm's collision capsules (`_read_capsules`), and the same as arrays:
+        `capsules` places them all in one stacked product."""
         self._capsule_parts = self._read_capsules(arm_from_joint, set(gripper_frames))
-        # the parts as arrays: `capsules` places them all in one stacked product
         parts = self._capsule_parts
         self._capsule_joints = [j for j, *_ in parts]
         self._capsule_a = np.array([pa for _, pa, _, _ in parts], dtype=float).reshape(-1, 3)
         self._capsule_b = np.array([pb for _, _, pb, _ in parts], dtype=float).reshape(-1, 3)
         self._capsule_r = np.array([r for *_, r in parts], dtype=float)
-        # (solver, its base frame, its end frame): a closed form for this arm (the UR
-        # family's, ur_ik.py); its end frame's pose is the TCP's less a fixed offset
-        self._closed = None
-        if closed_form is not None:
-            solver, dh_base, dh_end = closed_form
-            pin.framesForwardKinematics(model, self.data, np.zeros(model.nq))
-            M_root_dh = self.data.oMf[model.getFrameId(dh_base)]
-            M_end_tcp = self.data.oMf[model.getFrameId(dh_end)].actInv(self.data.oMf[self.tcp_id])
-            self._closed = (solver, M_root_dh.inverse(), M_end_tcp.inverse())
+
+    def _closed_form_of(self, closed_form: tuple[Any, str, str] | None) -> tuple[Any, Any, Any] | None:
+        """(solver, its base frame, its end frame): a closed form for this arm (the UR
+        family's, ur_ik.py); its end frame's pose is the TCP's less a fixed offset. Kept
+        as (solver, M_dh_root, M_tcp_end)."""
+        if closed_form is None:
+            return None
+        pin, model = self.pin, self.model
+        solver, dh_base, dh_end = closed_form
+        pin.framesForwardKinematics(model, self.data, np.zeros(model.nq))
+        M_root_dh = self.data.oMf[model.getFrameId(dh_base)]
+        M_end_tcp = self.data.oMf[model.getFrameId(dh_end)].actInv(self.data.oMf[self.tcp_id])
+        return (solver, M_root_dh.inverse(), M_end_tcp.inverse())
+
+    def fresh(self) -> "UrdfKinematics":
+        """A new IK search on this model: the same arm and settings, its own Pinocchio
+        data and an empty search state (as if built again, without reading the URDF)."""
+        out = copy.copy(self)
+        out.data = self.model.createData()
+        out._new_search()
+        return out
 
     # -- collision model ------------------------------------------------------------
     def _read_capsules(self, arm_from_joint: int, gripper_frames: set[str]) -> list[tuple[int, np.ndarray, np.ndarray, float]]:
@@ -600,8 +675,24 @@ class UrdfKinematics:
         self.stats.iterations += n_it
         return None
 
-    def _within_tolerance(self, target: Any, q: np.ndarray) -> bool:
+    # -- what a solver of its own uses (the simulated world's) ------------------------
+    def target(self, T_base_tcp: np.ndarray) -> Any:
+        """``T_base_tcp`` as the solvers' target: Pinocchio's SE3 in the model's root."""
+        return self.M_root_base * se3(T_base_tcp)
+
+    def solve_from(self, target: Any, q0: np.ndarray, iterations: int | None = None) -> np.ndarray | None:
+        """Damped least squares from q0 towards ``target`` (`target`), within the joint
+        limits, for ``iterations`` (default ``max_iterations``; a start that stops
+        improving is given up); None if it does not converge within the tolerances."""
+        return self._solve_from(target, q0, iterations)
+
+    def within_tolerance(self, target: Any, q: np.ndarray) -> bool:
+        """q within the joint limits puts the TCP on ``target`` within the tolerances."""
         return within_tolerance(self, target, q)
+
+    def pose_error(self, target: Any, q: np.ndarray) -> np.ndarray:
+        """The TCP's pose error at q (log6, in the TCP frame)."""
+        return pose_error(self, target, q)
 
     def ik(self, T_base_tcp: np.ndarray, warm: np.ndarray | None = None) -> np.ndarray | None:
         """Joint angles putting the TCP at ``T_base_tcp`` within the tolerances and the
@@ -615,7 +706,7 @@ class UrdfKinematics:
         if self._closed is not None:
             q = self._closed_form(T_base_tcp, warm) if self.reachable(T_base_tcp) else None
         elif self.reachable(T_base_tcp):
-            target = self.M_root_base * _se3(T_base_tcp)
+            target = self.M_root_base * se3(T_base_tcp)
             near = self._nearest_solved(T_base_tcp) if warm is None else None
             starts = [np.asarray(x, dtype=float) for x in (warm, near) if x is not None] + self.seeds(T_base_tcp)
             for q0 in starts:
@@ -636,8 +727,9 @@ class UrdfKinematics:
         nearest solved pose's solution, else the rest shape), each joint taken at the turn
         (plus or minus 2 pi) nearest that start; None when no exact solution is within the
         limits. Every one is confirmed by Pinocchio's forward kinematics."""
+        assert self._closed is not None
         solver, M_dh_root, M_tcp_end = self._closed
-        target = self.M_root_base * _se3(T_base_tcp)
+        target = self.M_root_base * se3(T_base_tcp)
         T_dh_end = np.asarray((M_dh_root * target * M_tcp_end).homogeneous)
         ref = warm if warm is not None else self._nearest_solved(T_base_tcp)
         ref = self.rest if ref is None else np.asarray(ref, dtype=float)

@@ -1,30 +1,40 @@
-"""Where the robot stands: T_base_camera (the points' optical frame in the WAM base frame).
+"""Where the robot stands: T_base_camera (the points' optical frame in the robot's base
+frame).
 
 Three sources, in order of precedence:
 
 1. ``--camera-pose x y z qx qy qz qw`` / ``[robot] camera_pose``: the optical frame's
-   pose in the WAM base (DH frame 0, at the shoulder).
-2. ``--camera-pose thesis``: the thesis's Kinect extrinsic (parameters.md), which is
-   ``link_base -> camera_link`` (x forward, z up), composed with the fixed rotation from
-   camera_link to the optical frame (z forward, x right, y down) the points are in.
-3. Default, derived from the table found in the frame: the WAM's footprint lies on the
+   pose in the robot's base frame (the WAM's: DH frame 0, at the shoulder).
+2. ``--camera-pose thesis``, for a profile whose ``thesis_camera`` says so (the WAM): the
+   thesis's Kinect extrinsic (parameters.md), which is ``link_base -> camera_link`` (x
+   forward, z up), composed with the fixed rotation from camera_link to the optical frame
+   (z forward, x right, y down) the points are in.
+3. Default, derived from the table found in the frame: the arm's footprint lies on the
    table plane just outside the table edge nearest the camera, its x axis facing the
-   objects (their centroid on the plane), z along the table normal, the shoulder 0.346 m
-   above the footprint; moved back if needed so that no object centroid is nearer than
-   0.30 m (a WAM cannot reach down right beside its own base), and farther, towards
-   0.40 m from the nearest, while the farthest stays within 0.85 m (room for pushes
-   towards the base). Frames without calibration thus still give meaningful answers.
+   objects (their centroid on the plane), z along the table normal, the base frame the
+   profile's ``base_above_footprint_m`` above the footprint (the WAM's shoulder 0.346 m);
+   moved back if needed so that no object centroid is nearer than [robot]
+   base_min_object_distance_m (a WAM cannot reach down right beside its own base: 0.30
+   m), and farther, towards base_preferred_object_distance_m from the nearest, while the
+   farthest stays within base_max_object_distance_m (room for pushes towards the base).
+   Frames without calibration thus still give meaningful answers.
+
+The arm's resolved value calls this (clearcli/robot/arm.py `Arm.place`).
 """
 
 from __future__ import annotations
 
-from typing import Sequence
+from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
 from clearcli import transforms
 from clearcli.errors import SettingsError
-from clearcli.robot.kinematics import SHOULDER_ABOVE_FOOTPRINT_M
+
+if TYPE_CHECKING:
+    from clearcli.predicates.state import SymbolicState
+    from clearcli.robot.profiles.base import RobotProfile
+    from clearcli.settings.robot import RobotSettings
 
 # Thesis extrinsic: estirabot_link_base -> camera_link (x y z, qx qy qz qw).
 THESIS_BASE_CAMERA_LINK = (0.9014760, -0.0594, 0.7251720, -0.641407, 0.032404, 0.772933, 0.011045)
@@ -71,7 +81,7 @@ def default_T_base_camera(
     min_object_distance_m: float,
     preferred_object_distance_m: float,
     max_object_distance_m: float,
-    base_above_footprint_m: float = SHOULDER_ABOVE_FOOTPRINT_M,
+    base_above_footprint_m: float,
 ) -> np.ndarray:
     """Footprint just outside the table edge nearest the camera, facing the objects, and
     at least ``min_object_distance_m`` from every object's centroid (on the plane); then
@@ -142,23 +152,30 @@ def default_T_base_camera(
 
 def resolve_T_base_camera(
     camera_pose: Sequence[float] | str | None,
-    state: object | None = None,
-    robot: object | None = None,
+    state: "SymbolicState | None" = None,
+    robot: "RobotSettings | None" = None,
+    profile: "RobotProfile | None" = None,
 ) -> tuple[np.ndarray, str]:
     """T_base_camera and where it came from ("given", "thesis", "default from table");
     the default placement follows ``robot`` (the [robot] settings; their defaults when
-    None: the distances have one home, clearcli/settings/robot.py)."""
+    None: the distances have one home, clearcli/settings/robot.py) and ``profile`` (its
+    mount height, whether the thesis's camera pose is its; the default profile when
+    None)."""
     if robot is None:
         from clearcli.settings.robot import RobotSettings
 
         robot = RobotSettings()
+    if profile is None:
+        from clearcli.robot.profiles import profile as named
+        from clearcli.settings.profiles import DEFAULT_PROFILE
+
+        profile = named(DEFAULT_PROFILE)
     if isinstance(camera_pose, str):
         if camera_pose.strip().lower() == "thesis":
-            name = getattr(robot, "name", "wam")
-            if name != "wam":
+            if not profile.thesis_camera:
                 raise SettingsError(
                     f"camera pose 'thesis' is where the thesis's camera stood relative to its WAM; with robot "
-                    f"{name!r} give the camera's pose as 7 numbers x y z qx qy qz qw, or none (placed from the table)"
+                    f"{profile.name!r} give the camera's pose as 7 numbers x y z qx qy qz qw, or none (placed from the table)"
                 )
             return thesis_T_base_camera(), "thesis"
         try:
@@ -172,27 +189,16 @@ def resolve_T_base_camera(
         return pose_to_matrix(list(camera_pose)), "given"
     if state is None:
         raise SettingsError("camera pose: none given and no table to derive it from")
-    from clearcli.robot.profiles import profile_of
-
-    centroids = np.array([o.centroid for o in state.objects]) if state.objects else None  # type: ignore[attr-defined]
+    centroids = np.array([o.centroid for o in state.objects]) if state.objects else None
     T = default_T_base_camera(
-        state.table.normal,  # type: ignore[attr-defined]
-        state.table.offset,  # type: ignore[attr-defined]
-        state.table_polygon,  # type: ignore[attr-defined]
+        state.table.normal,
+        state.table.offset,
+        state.table_polygon,
         centroids,
-        robot.base_outside_edge_m,  # type: ignore[attr-defined]
-        robot.base_min_object_distance_m,  # type: ignore[attr-defined]
-        robot.base_preferred_object_distance_m,  # type: ignore[attr-defined]
-        robot.base_max_object_distance_m,  # type: ignore[attr-defined]
-        profile_of(robot).base_above_footprint_m,
+        robot.base_outside_edge_m,
+        robot.base_min_object_distance_m,
+        robot.base_preferred_object_distance_m,
+        robot.base_max_object_distance_m,
+        profile.base_above_footprint_m,
     )
     return T, "default from table"
-
-
-def placement_from_settings(
-    robot: object, state: object | None, camera_pose: Sequence[float] | str | None = None
-) -> tuple[np.ndarray, str]:
-    """`resolve_T_base_camera` with the [robot] settings' placement rule; ``camera_pose``
-    (a command-line value) overrides ``robot.camera_pose``."""
-    pose = camera_pose if camera_pose is not None else (getattr(robot, "camera_pose", None) or None)
-    return resolve_T_base_camera(pose, state, robot)

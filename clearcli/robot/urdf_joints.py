@@ -18,7 +18,7 @@ def joint_names(urdf: Path) -> tuple[str, ...]:
 
     root = ET.parse(urdf).getroot()
     joints = [j for j in root.iter("joint") if j.get("type") in ("revolute", "continuous", "prismatic")]
-    by_parent = {}
+    by_parent: dict[str | None, list[ET.Element]] = {}
     for j in root.iter("joint"):
         by_parent.setdefault(j.find("parent").get("link"), []).append(j)  # type: ignore[union-attr]
     children = {j.find("child").get("link") for j in root.iter("joint")}  # type: ignore[union-attr]

@@ -3,18 +3,50 @@
 Sections are plain frozen dataclasses; each value's default and range is declared once,
 in its section's class. This package sits at the bottom of the layers: it imports
 nothing from clearcli but `errors`.
+
+The package's API (`Settings`, `load_settings`, ...) is tree.py's, imported when first
+asked for: a module that reads only a registry of this package (profiles.py, the robot
+profiles' names, which the CLI's help text lists) does not pay for building every
+section's class.
 """
 
-from clearcli.settings.tree import (  # noqa: F401  (the package's API)
-    READS,
-    SECTIONS,
-    Settings,
-    apply_sets,
-    digest,
-    load_settings,
-    override,
-    parse_set,
-    read_settings_file,
-    settings_from_dict,
-    settings_to_toml,
-)
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from clearcli.settings.tree import (  # noqa: F401  (the package's API)
+        READS,
+        SECTIONS,
+        Settings,
+        apply_sets,
+        digest,
+        load_settings,
+        override,
+        parse_set,
+        read_settings_file,
+        settings_from_dict,
+        settings_to_toml,
+    )
+
+__all__ = [
+    "READS",
+    "SECTIONS",
+    "Settings",
+    "apply_sets",
+    "digest",
+    "load_settings",
+    "override",
+    "parse_set",
+    "read_settings_file",
+    "settings_from_dict",
+    "settings_to_toml",
+]
+
+
+def __getattr__(name: str) -> Any:
+    if name in __all__:
+        from clearcli.settings import tree
+
+        return getattr(tree, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -13,7 +13,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
-from typing import Any, ClassVar, get_type_hints
+from typing import Any, ClassVar, Sequence, get_type_hints
 
 from clearcli.errors import SettingsError
 
@@ -27,7 +27,7 @@ class Range:
     gt: float | None = None
     le: float | None = None
     lt: float | None = None
-    choices: tuple[str, ...] = ()
+    choices: Sequence[str] = ()
     max_items: int | None = None
     lengths: tuple[int, ...] = ()  # allowed tuple lengths (empty: any up to max_items)
     text: str = ""  # free text (a path, a name): what it may be, checked where it is used
@@ -67,8 +67,10 @@ class Range:
 
 def param(default: Any, **bounds: Any) -> Any:
     """A setting: its default and its range (``ge``, ``gt``, ``le``, ``lt``, ``choices``,
-    ``max_items``, ``lengths``; ``text`` for free text, saying what it may be)."""
-    if "choices" in bounds:
+    ``max_items``, ``lengths``; ``text`` for free text, saying what it may be). ``choices``
+    may be a live sequence (the robot profiles' names, settings/profiles.py): kept as it
+    is, read when a value is checked; a list or a set is taken as a tuple."""
+    if "choices" in bounds and isinstance(bounds["choices"], (list, set, frozenset)):
         bounds["choices"] = tuple(bounds["choices"])
     for key in ("lengths", "members", "required"):
         # (members, required: a live sequence too, the grasp kinds' names, settings/kinds.py)

@@ -1,21 +1,23 @@
 """Robot settings (section [robot]): which arm, where it stands and how IK is searched.
-The defaults are the WAM's; another profile (``name``) supplies its own for [robot] and
-[gripper] (clearcli/settings/profiles.py), which a user's values override."""
+The defaults are the WAM's (the default profile); another profile (``name``) supplies its
+own for [robot] and [gripper] (clearcli/settings/profiles.py), which a user's values
+override."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 from clearcli.settings.fields import Section, param, range_of
-from clearcli.settings.profiles import PROFILE_NAMES
+from clearcli.settings.profiles import DEFAULT_PROFILE, PROFILE_NAMES
 
 
 @dataclass(frozen=True)
 class RobotSettings(Section):
     NAME = "robot"
 
-    # the robot profile: arm, gripper, IK (`clear robots` lists them)
-    name: str = param("wam", choices=PROFILE_NAMES)
+    # the robot profile: arm, gripper, IK (`clear robots` lists them; their registry:
+    # clearcli/settings/profiles.py)
+    name: str = param(DEFAULT_PROFILE, choices=PROFILE_NAMES)
     # Your own arm: its URDF ("" = the profile's description). Any serial chain of 6 or
     # more revolute joints up to flange_frame (other joints, a gripper's fingers, are held
     # at 0); the profile named above still supplies the [robot] and [gripper] defaults.

@@ -95,14 +95,14 @@ def settings_from_dict(data: Mapping[str, Any], base: Settings | None = None) ->
 
 def with_profile(settings: Settings, name: Any) -> Settings:
     """``settings`` with [robot] and [gripper] at the defaults of profile ``name``."""
-    from clearcli.settings.profiles import PROFILE_DEFAULTS
+    from clearcli.settings.profiles import PROFILE_NAMES, profile_defaults
 
-    if not isinstance(name, str) or name not in PROFILE_DEFAULTS:
+    if not isinstance(name, str) or name not in PROFILE_NAMES:
         raise SettingsError(
-            f"settings: [robot] name = {name!r} is not a robot profile; known: {', '.join(PROFILE_DEFAULTS)} "
+            f"settings: [robot] name = {name!r} is not a robot profile; known: {', '.join(PROFILE_NAMES)} "
             "(`clear robots` lists them)"
         )
-    defaults = PROFILE_DEFAULTS[name]
+    defaults = profile_defaults(name)
     return dataclasses.replace(
         settings,
         robot=_section("robot", RobotSettings(), {**defaults.get("robot", {}), "name": name}),

@@ -171,18 +171,16 @@ class Episode:
     def robot_placement(self, frame: "Frame") -> np.ndarray:
         """T_base_camera fixed for the whole episode (the robot does not move), by the
         plan stage's rule on the first frame, unless the settings give one."""
-        from clearcli.robot.placement import placement_from_settings, resolve_T_base_camera
-
         pipeline = self.session.pipeline
         if pipeline.T_base_camera is not None:
             return np.asarray(pipeline.T_base_camera)
-        robot = pipeline.settings.robot
+        robot = pipeline.robot
         segmentation = pipeline.segment(frame)
         state = pipeline.state(frame, segmentation) if segmentation.objects else None
         if state is None:
-            T, _ = resolve_T_base_camera(robot.camera_pose, None) if robot.camera_pose else (np.eye(4), "")
+            T, _ = robot.place(None) if robot.settings.camera_pose else (np.eye(4), "")
         else:
-            T, _ = placement_from_settings(robot, state)
+            T, _ = robot.place(state)
         pipeline.T_base_camera = T
         return T
 
@@ -277,7 +275,7 @@ class Episode:
         settings = self.session.pipeline.settings
         reach = WorldReach(
             T_base_table_of(T_base_camera, self.scene), settings.gripper, settings.push,
-            params=settings.world_reach, table=self.scene.table, robot=settings.robot,
+            params=settings.world_reach, table=self.scene.table, robot=self.session.pipeline.robot,
         )
         return tuple(sorted(o.object_id for o in left if reach.why_not(o)))
 

@@ -15,10 +15,11 @@ object's true pose and size (`clearcli.sim.scene`), with a different IK:
   ``approach_m`` above and the grasp pose must have joint angles within the limits that
   Pinocchio's forward kinematics confirms, with no arm capsule under the table top.
   Joint angles come from ``n_seeds`` seeds (random within the joint limits, from a fixed
-  generator) by a solver the planner does not use: damped least squares for the WAM
-  (whose planner solves in closed form), SciPy's bounded least squares for another arm
-  (whose planner runs damped least squares). An error in the planner's solver cannot
-  excuse itself.
+  generator) by a solver the planner does not use, as the arm's profile says
+  (``world_solver``): damped least squares for the WAM (whose planner solves in closed
+  form), SciPy's bounded least squares for another arm (whose planner runs damped least
+  squares). An error in the planner's solver cannot excuse itself. The world uses the
+  arm's kinematics through their public interface (clearcli/robot/kinematics.py).
 """
 
 from __future__ import annotations
@@ -33,6 +34,7 @@ from clearcli.sim.scene import Box, Cylinder, Table
 from clearcli.settings.sim import WorldReachParams  # noqa: F401  ([world_reach])
 
 if TYPE_CHECKING:
+    from clearcli.robot.arm import Arm
     from clearcli.settings.geometry import GripperSettings, PushSettings
     from clearcli.sim.scene import Scene, SceneObject
 
@@ -80,50 +82,48 @@ class WorldReach:
         push: "PushSettings",
         params: WorldReachParams = WorldReachParams(),
         table: Table = Table(),
-        robot: Any = None,
+        robot: "Arm | None" = None,
     ) -> None:
-        """``robot``: the [robot] settings whose arm the world has (the WAM when None)."""
-        from clearcli.robot.kinematics import WamKinematics
+        """``robot``: the arm the world has (the command's resolved arm; the default
+        settings' when None). Its model gives FK, limits and capsules; the solving is the
+        world's own (``world_solver``)."""
+        if robot is None:
+            from clearcli.robot.arm import resolve_arm
+            from clearcli.settings import Settings
 
+            robot = resolve_arm(Settings())
         self.T_base_table = np.asarray(T_base_table, dtype=float)
         self.T_table_base = np.linalg.inv(self.T_base_table)
         self.gripper, self.push, self.params, self.table = gripper, push, params, table
-        self.wam = robot is None or (getattr(robot, "name", "wam") == "wam" and not getattr(robot, "urdf", ""))
-        if self.wam:
-            self.kin = WamKinematics(max_iterations=params.max_iterations)
-        else:  # its model (FK, limits, capsules); the solving below is the world's own
-            from clearcli.robot.profiles import kinematics_from_settings
-
-            self.kin = kinematics_from_settings(robot)
+        self.solver = robot.profile.world_solver
+        self.kin = robot.kinematics()
         rng = np.random.default_rng(20261122)
-        self.seeds = rng.uniform(self.kin.lower, self.kin.upper, size=(params.n_seeds, self.kin.model.nq))
+        self.seeds = rng.uniform(self.kin.lower, self.kin.upper, size=(params.n_seeds, self.kin.lower.size))
 
     def _solve(self, T_base_tcp: np.ndarray, warm: np.ndarray | None) -> np.ndarray | None:
-        from clearcli.robot.kinematics import _se3
-
-        target = self.kin.M_root_base * _se3(T_base_tcp)
+        target = self.kin.target(T_base_tcp)
         starts = ([warm] if warm is not None else []) + list(self.seeds)
         for q0 in starts:
             q0 = np.asarray(q0, dtype=float)
-            # the WAM: damped least squares (its planner solves in closed form); another
-            # arm: SciPy's bounded least squares (its planner runs damped least squares)
-            q = self.kin._solve_from(target, q0) if self.wam else self._least_squares(target, q0)
-            if q is not None and self.kin._within_tolerance(target, q) and self._clear_of_table(q):
+            # damped least squares (for an arm planned in closed form: the WAM), else
+            # SciPy's bounded least squares (its planner runs damped least squares)
+            if self.solver == "damped_least_squares":
+                q = self.kin.solve_from(target, q0, self.params.max_iterations)
+            else:
+                q = self._least_squares(target, q0)
+            if q is not None and self.kin.within_tolerance(target, q) and self._clear_of_table(q):
                 return q
         return None
 
     def _least_squares(self, target: Any, q0: np.ndarray) -> np.ndarray | None:
         """SciPy's trust-region reflective least squares on the pose error (Pinocchio's
         log6), within the joint limits: a solver the planner does not use."""
-        import pinocchio as pin
         from scipy.optimize import least_squares
 
         kin = self.kin
-        model, data, fid = kin.model, kin.data, kin.tcp_id
 
         def error(q: np.ndarray) -> np.ndarray:
-            pin.framesForwardKinematics(model, data, q)
-            return np.asarray(pin.log6(data.oMf[fid].actInv(target)).vector)
+            return kin.pose_error(target, q)
 
         lo, hi = kin.lower, kin.upper
         eps = 1e-9

@@ -11,13 +11,16 @@ from clearcli.sim.episode import Episode, EpisodeResult
 from clearcli.sim.scene import Scene
 from clearcli.sim.truth import truth_segment
 
-# the WAM's base as the thesis's logs name it; another arm's is its profile's base frame
-BASE_FRAME = "wam_base"
-
-
-def static_transforms(T_base_camera: np.ndarray, frame_id: str, base_frame: str = BASE_FRAME) -> list[Any]:
+def static_transforms(T_base_camera: np.ndarray, frame_id: str, base_frame: str | None = None) -> list[Any]:
+    """/tf_static's one transform: the points' frame in the robot's base, named
+    ``base_frame`` (None: as the default profile's logs name it, the WAM's "wam_base")."""
     from clearcli.io.mcap_write import StaticTransform
 
+    if base_frame is None:
+        from clearcli.robot.arm import resolve_arm
+        from clearcli.settings import Settings
+
+        base_frame = resolve_arm(Settings()).profile.tf_base_frame
     return [StaticTransform(parent_frame=base_frame, child_frame=frame_id, T_parent_child=np.asarray(T_base_camera))]
 
 
@@ -45,10 +48,8 @@ def record_session(
     episode = Episode(world, session, seed=seed, max_actions=max_actions, params=settings.world)
     first = episode.render(0)
     T_base_camera = episode.robot_placement(first)
-    from clearcli.robot.profiles import profile_of
-
-    arm = profile_of(settings.robot)
-    base = BASE_FRAME if arm.name == "wam" else arm.base_frame
+    # the base frame as the arm's profile names it on a log (the WAM's as the thesis's logs do)
+    base = pipeline.robot.profile.tf_base_frame
     count = write_pointcloud2_mcap(path, episode, tf_static=static_transforms(T_base_camera, first.frame_id, base))
     assert episode.result is not None
     return count, episode.result

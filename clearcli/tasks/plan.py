@@ -26,7 +26,10 @@ def run(request: Request, source: Source) -> Outcome:
     from clearcli import pipeline
     from clearcli.errors import EXIT_NO_PLAN, EXIT_OK, EXIT_PARTIAL_PLAN
     from clearcli.planning.payload import PLAN_SCHEMA, PLAN_VERSION, plan_payload
+    from clearcli.robot.arm import resolve_arm
 
+    # the robot, resolved once: placement, planning, the payload's block and the picture
+    robot = resolve_arm(request.settings)
     frame = pipeline.read(source.path, source.topic, source.index, request.settings, source.color)
     seg = pipeline.segmented(frame, request.settings)
     from clearcli.planning.backtrack import with_grasp_kinds
@@ -34,14 +37,12 @@ def run(request: Request, source: Source) -> Outcome:
     from clearcli.predicates.grasps import parse_kinds
 
     state = pipeline.stated(frame, seg, request.settings)
-    done = pipeline.planned(state, request.settings, request.camera_pose, "first" if request.first_only else None)
+    done = pipeline.planned(state, request.settings, robot, request.camera_pose, "first" if request.first_only else None)
     plan = done.plan
     # the model the plan was made in: the facts of the grasp kinds [plan] grasps allows
     state = with_grasp_kinds(state, parse_kinds(request.settings.plan.grasps))
     payload = plan_payload(plan, str(source.path), getattr(frame, "frame_id", ""), done.pose_source, unit_cost(state))
-    from clearcli.robot.profiles import robot_block
-
-    payload["robot"] = robot_block(request.settings)
+    payload["robot"] = robot.block()
     out = request.outputs
     write_plan_files(state, plan, problem=out.get("problem"), domain=out.get("domain"), output=out.get("plan"))
     png = out.get("png")
@@ -50,7 +51,7 @@ def run(request: Request, source: Source) -> Outcome:
         from clearcli.render.plan_png import render_plan
 
         with atomic_path(png) as tmp:
-            render_plan(tmp, frame, state, plan, seg, request.settings.robot.name)
+            render_plan(tmp, frame, state, plan, seg, robot)
     if done.no_plan is not None:
         payload["no_plan_reason"] = str(done.no_plan)
         code = EXIT_NO_PLAN

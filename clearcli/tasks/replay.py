@@ -72,11 +72,9 @@ def run(
         tracking=config.tracking, memory=config.memory,
     )
     session = Session(pipeline, options)
-    # the log's name for the robot base: --base-frame, else the profile's base frame
+    # the log's name for the robot base: --base-frame, else the resolved arm's base frame
     # first (panda_link0, base_link, wam_link_base), then the names WAM setups use
-    from clearcli.robot.profiles import profile
-
-    own = profile(config.robot.name).base_frame
+    own = pipeline.robot.profile.base_frame
     bases = (request.base_frame,) if request.base_frame else (own, *(b for b in BASE_FRAMES if b != own))
 
     def frames() -> Iterator["Frame"]:

@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from clearcli.settings.robot import RobotSettings
 
 SCHEMA, VERSION = "robots", 1
 
@@ -11,9 +14,10 @@ def robots_payload(name: str | None = None) -> dict[str, Any]:
     """{profiles: [{name, summary, default}]} or, for ``name``, {profile: facts} with the
     joints and their limits read from the shipped description."""
     from clearcli.robot.profiles import PROFILES, profile
+    from clearcli.settings.profiles import DEFAULT_PROFILE
 
     if name is None:
-        return {"profiles": [{"name": p.name, "summary": p.summary, "default": p.name == "wam"} for p in PROFILES.values()]}
+        return {"profiles": [{"name": p.name, "summary": p.summary, "default": p.name == DEFAULT_PROFILE} for p in PROFILES.values()]}
     p = profile(name)
     facts = p.facts()
     import pinocchio as pin
@@ -26,13 +30,13 @@ def robots_payload(name: str | None = None) -> dict[str, Any]:
     return {"profile": facts}
 
 
-def check_robot(robot: Any) -> None:
+def check_robot(robot: "RobotSettings") -> None:
     """Read a user's URDF (``[robot] urdf``) now: a file that does not parse, a joint's
     non-finite numbers, zero axis or lower limit above its upper, a base or flange frame
     that is not a link or makes no arm (the same, not above the flange, fixed to it), a
     chain of fewer than six revolute joints is one line, exit 3, before any frame is read
     (clearcli/robot/urdf_joints.py `checked_urdf`, clearcli/robot/generic.py)."""
-    if getattr(robot, "urdf", ""):
+    if robot.urdf:
         from clearcli.robot.profiles import profile_of
 
-        profile_of(robot)
+        profile_of(robot)  # kept (lru_cache): the arm resolved later reads the file no more

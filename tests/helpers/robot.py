@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from clearcli.robot.kinematics import WamKinematics
+from clearcli.robot.wam_kinematics import WamKinematics
 
 
 @pytest.fixture(scope="module")

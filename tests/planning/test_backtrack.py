@@ -111,7 +111,7 @@ def test_far_object_dropped_rest_planned() -> None:
     assert first is not None and first.action == plan.actions[0]
     assert len(first.joint_solutions) == len(first.T_base_gripper) == 3
     # FK of each joint solution is the pose it was solved for
-    from clearcli.robot.kinematics import WamKinematics
+    from clearcli.robot.wam_kinematics import WamKinematics
 
     kin = WamKinematics()
     for q, T in zip(first.joint_solutions, first.T_base_gripper):
@@ -209,7 +209,7 @@ def test_random_states_with_random_ik_failures(seed: int) -> None:
 def test_ik_checker_on_scene_grasp_and_push() -> None:
     state = ps.clutter(3)
     from clearcli.robot.collision import make_obstacles
-    from clearcli.robot.kinematics import WamKinematics
+    from clearcli.robot.wam_kinematics import WamKinematics
 
     kin = WamKinematics()
     checker = IKActionChecker(state, ps.T_BASE_CAMERA, kin, make_obstacles(state, ps.T_BASE_CAMERA))
@@ -267,7 +267,7 @@ def test_push_lookahead_rejects_a_push_that_leaves_the_object_out_of_reach(x: fl
     top-down grasp; from 0.40 m it ends at 0.30 m and stays graspable. The push itself
     has arm motions either way."""
     from clearcli.robot.collision import make_obstacles
-    from clearcli.robot.kinematics import WamKinematics
+    from clearcli.robot.wam_kinematics import WamKinematics
 
     state = ps.scene({"o0": ps.Box(x, 0.0, size=(0.10, 0.05, 0.08))})
     kin = WamKinematics()
@@ -292,7 +292,7 @@ def _plan_any(state, check: str = "whole") -> Plan:  # type: ignore[no-untyped-d
 
 
 def _assert_checked_by_fk(plan: Plan) -> None:
-    from clearcli.robot.kinematics import WamKinematics
+    from clearcli.robot.wam_kinematics import WamKinematics
 
     kin = WamKinematics()
     assert len(plan.checked) == len(plan.actions)

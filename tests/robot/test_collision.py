@@ -6,7 +6,7 @@ import numpy as np
 from helpers.robot import kin  # noqa: F401  (fixtures)
 
 from clearcli.robot.collision import Obstacles, capsule_spheres, hull_planes
-from clearcli.robot.kinematics import WamKinematics
+from clearcli.robot.wam_kinematics import WamKinematics
 
 
 def test_capsules_and_collisions(kin: WamKinematics) -> None:

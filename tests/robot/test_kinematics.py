@@ -1,4 +1,4 @@
-"""Tests of clearcli/robot/kinematics.py."""
+"""Tests of clearcli/robot/wam_kinematics.py (the WAM's kinematics)."""
 
 from __future__ import annotations
 
@@ -12,7 +12,8 @@ from helpers.robot import (
     kin,  # noqa: F401  (fixtures)
 )
 
-from clearcli.robot.kinematics import REACH_TOOL_PLATE_M, WamKinematics, half_turn
+from clearcli.robot.kinematics import half_turn
+from clearcli.robot.wam_kinematics import REACH_TOOL_PLATE_M, WamKinematics
 
 
 def test_urdf_straight_up_at_zero(kin: WamKinematics) -> None:
@@ -258,7 +259,7 @@ def test_ik_rejects_top_down_at_the_shoulder_axis(kin: WamKinematics) -> None:
 
 def test_dh_fk_is_the_urdf(kin: WamKinematics) -> None:
     # what the analytic IK inverts is the model Pinocchio loads
-    from clearcli.robot.kinematics import dh_fk
+    from clearcli.robot.wam_kinematics import dh_fk
 
     rng = np.random.default_rng(8)
     for q in rng.uniform(kin.lower, kin.upper, size=(50, 7)):

@@ -29,9 +29,9 @@ def _tool_down_poses(kin, n: int, seed: int) -> list[np.ndarray]:
 
 def test_the_registry_and_the_settings_name_the_same_profiles() -> None:
     from clearcli.robot.profiles import PROFILES, profile
-    from clearcli.settings.profiles import PROFILE_DEFAULTS
+    from clearcli.settings.profiles import PROFILE_NAMES, REGISTRY
 
-    assert tuple(PROFILES) == tuple(PROFILE_DEFAULTS) == ("wam", "panda", "ur5e")
+    assert tuple(PROFILES) == tuple(REGISTRY) == tuple(PROFILE_NAMES) == ("wam", "panda", "ur5e")
     with pytest.raises(SettingsError, match="known: wam, panda, ur5e"):
         profile("kuka")
     for p in PROFILES.values():
@@ -125,7 +125,7 @@ def test_the_measured_reach_bounds_hold_and_refuse_what_the_summed_links_let_thr
 
 def test_the_generic_solver_on_the_wam_agrees_with_the_analytic_one() -> None:
     from clearcli.robot.generic import UrdfKinematics
-    from clearcli.robot.kinematics import BASE_FRAME, TCP_FRAME, TOOL_PLATE_FRAME, URDF_PATH, WamKinematics
+    from clearcli.robot.wam_kinematics import BASE_FRAME, TCP_FRAME, TOOL_PLATE_FRAME, URDF_PATH, WamKinematics
 
     analytic = WamKinematics()
     generic = UrdfKinematics(URDF_PATH, BASE_FRAME, TCP_FRAME, flange_frame=TOOL_PLATE_FRAME,
@@ -281,12 +281,13 @@ def test_a_simulated_session_per_profile(tmp_path, name: str, base: str) -> None
 
 
 def test_the_worlds_solver_for_another_arm_lands_on_the_pose() -> None:
+    from clearcli.robot.arm import resolve_arm
     from clearcli.settings.geometry import GripperSettings, PushSettings
     from clearcli.sim.reach import WorldReach
 
-    robot = load_settings(sets=["robot.name=panda"]).robot
-    world = WorldReach(np.eye(4), GripperSettings(), PushSettings(), robot=robot)
-    assert not world.wam
+    settings = load_settings(sets=["robot.name=panda"])
+    world = WorldReach(np.eye(4), GripperSettings(), PushSettings(), robot=resolve_arm(settings))
+    assert world.solver == "least_squares"
     solved = 0
     for T in _tool_down_poses(world.kin, 20, seed=5):
         T = T.copy()
@@ -323,3 +324,50 @@ def test_the_ur_closed_form_matches_the_description_and_its_solutions_land() -> 
     far = np.eye(4)
     far[:3, 3] = [0.0, 0.0, 2.0]
     assert solutions(UR5E, far) == []
+
+
+def test_profile_names_are_written_in_the_registry_only() -> None:
+    # clearcli/settings/profiles.py names the profiles; no other module of the package
+    # holds a profile's name as text (no `name == "wam"`: a profile says what differs)
+    import ast
+    from pathlib import Path
+
+    import clearcli
+    from clearcli.settings.profiles import REGISTRY
+
+    root = Path(clearcli.__file__).parent
+    found = []
+    for path in sorted(root.rglob("*.py")):
+        if path == root / "settings" / "profiles.py":
+            continue
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Constant) and isinstance(node.value, str) and node.value in REGISTRY:
+                found.append(f"{path.relative_to(root)}:{node.lineno}: {node.value!r}")
+    assert not found, found
+    # the --robot help and the settings' choices are made from the registry
+    from clearcli.settings.fields import range_of
+    from clearcli.settings.profiles import DEFAULT_PROFILE, names_text
+    from clearcli.settings.robot import RobotSettings
+
+    assert tuple(range_of(RobotSettings, "name").choices) == tuple(REGISTRY)
+    assert RobotSettings().name == DEFAULT_PROFILE == next(iter(REGISTRY))
+    res = clear("plan", "--help")
+    assert res.returncode == 0 and " ".join(names_text().split()) in " ".join(res.stdout.split())
+
+
+def test_a_plan_resolves_its_robot_once(monkeypatch: pytest.MonkeyPatch, tmp_path) -> None:
+    # placement, planning, the payload's robot block and the picture share one resolved
+    # arm: the profile is looked up once per frame (it was four times)
+    from helpers import FIXTURES
+
+    import clearcli.robot.profiles as profiles
+    from clearcli.tasks import plan as task
+    from clearcli.tasks.base import Outputs, Source
+
+    looked_up: list[str] = []
+    real = profiles.profile
+    monkeypatch.setattr(profiles, "profile", lambda name: looked_up.append(name) or real(name))
+    png = tmp_path / "plan.png"
+    outcome = task.run(task.Request(load_settings(), outputs=Outputs.of(png=png)), Source(FIXTURES / "clutter10.pcd"))
+    assert outcome.exit_code == 0 and outcome.payload["robot"]["name"] == "wam" and png.stat().st_size > 0
+    assert looked_up == ["wam"]

@@ -7,7 +7,6 @@ from pathlib import Path
 from clearcli.robot.profiles.base import generic_profile
 
 PROFILE = generic_profile(
-    name="panda",
     summary="Franka Emika Panda, 7 joints, with the Franka Hand (0.08 m opening)",
     urdf=Path(__file__).resolve().parent.parent / "panda.urdf",
     base_frame="panda_link0",

@@ -18,7 +18,6 @@ def _closed_form():
 
 
 PROFILE = generic_profile(
-    name="ur5e",
     summary="Universal Robots UR5e, 6 joints, with a Robotiq 2F-85 (0.085 m opening)",
     urdf=Path(__file__).resolve().parent.parent / "ur5e.urdf",
     base_frame="base_link",
@@ -30,4 +29,5 @@ PROFILE = generic_profile(
     gripper="Robotiq 2F-85 (0.085 m open)",
     rest=(0.0, -1.571, 1.571, -1.571, -1.571, 0.0),  # shoulder up, elbow bent, wrist down
     closed_form=_closed_form,
+    label="UR5e",
 )

@@ -2,9 +2,8 @@
 
 from __future__ import annotations
 
-from typing import Any
-
-from clearcli.robot.kinematics import (
+from clearcli.robot.profiles.base import RobotProfile
+from clearcli.robot.wam_kinematics import (
     BASE_FRAME,
     REACH_TOOL_PLATE_M,
     SHOULDER_ABOVE_FOOTPRINT_M,
@@ -14,15 +13,8 @@ from clearcli.robot.kinematics import (
     URDF_PATH,
     kinematics_of_wam,
 )
-from clearcli.robot.profiles.base import RobotProfile
-
-
-def _make(robot: Any):
-    return kinematics_of_wam(robot)
-
 
 PROFILE = RobotProfile(
-    name="wam",
     summary="Barrett WAM, 7 joints, with the IRI parallel gripper (7 cm opening): the thesis's arm",
     urdf=URDF_PATH,
     base_frame=BASE_FRAME,
@@ -33,5 +25,9 @@ PROFILE = RobotProfile(
     tcp_past_flange_m=TCP_PAST_TOOL_PLATE_M,
     base_above_footprint_m=SHOULDER_ABOVE_FOOTPRINT_M,
     gripper="IRI parallel gripper (0.07 m open)",
-    make=_make,
+    make=kinematics_of_wam,
+    thesis_camera=True,  # the thesis's Kinect extrinsic is measured from this arm's base
+    log_base_frame="wam_base",  # the thesis's logs' name for it
+    # its planner solves in closed form (the swivel sweep): the world runs damped least squares
+    world_solver="damped_least_squares",
 )
