@@ -76,6 +76,7 @@ import typer
 
 from clearcli.commands import options as bo
 from clearcli.commands.common import stderr, stdout
+from clearcli.tasks.plan import PLAN_SCHEMA, PLAN_VERSION
 
 def print_plan(payload: dict[str, Any]) -> None:
     def out(text: str) -> None:
@@ -132,7 +133,7 @@ def plan_cmd(
         Optional[Path],
         typer.Option("--domain", help="Write the PDDL domain the plan is for (the push-cost variant when costs were used)."),
     ] = None,
-    json_out: Annotated[bool, typer.Option("--json", help="Machine-readable output (schema clear.plan, version 3).")] = False,
+    json_out: Annotated[bool, typer.Option("--json", help=f"Machine-readable output (schema clear.{PLAN_SCHEMA}, version {PLAN_VERSION}).")] = False,
     png: Annotated[Optional[Path], typer.Option("--png", help="Draw the scene and the plan to this PNG.")] = None,
     force: bo.Force = False,
     first_only: Annotated[

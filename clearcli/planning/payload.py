@@ -13,11 +13,7 @@ if TYPE_CHECKING:
     from clearcli.planning.types import Plan
     from clearcli.predicates.state import SymbolicState
 
-# version 1 had no grasp kinds beyond the pinch (objects' "grasp_kinds", "not_offered")
-PREDICATES_SCHEMA, PREDICATES_VERSION = "predicates", 2
-# version 1 had no status/left, and its optimal and steps meant less; version 2 had no
-# robot block and no gripper poses per step; version 3 no grasp kind per step
-PLAN_SCHEMA, PLAN_VERSION = "plan", 4
+from clearcli.planning.versions import PLAN_SCHEMA, PLAN_VERSION, PREDICATES_SCHEMA, PREDICATES_VERSION  # noqa: F401
 
 
 def predicates_payload(state: "SymbolicState") -> dict[str, Any]:

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from clearcli.planning.versions import PLAN_SCHEMA, PLAN_VERSION
 from clearcli.settings import Settings
 from clearcli.tasks.base import NO_OUTPUTS, Outcome, Outputs, Source
 
@@ -25,7 +26,7 @@ def run(request: Request, source: Source) -> Outcome:
     done), the output files written. Errors raise ClearError."""
     from clearcli import pipeline
     from clearcli.errors import EXIT_NO_PLAN, EXIT_OK, EXIT_PARTIAL_PLAN
-    from clearcli.planning.payload import PLAN_SCHEMA, PLAN_VERSION, plan_payload
+    from clearcli.planning.payload import plan_payload
     from clearcli.robot.arm import resolve_arm
 
     # the robot, resolved once: placement, planning, the payload's block and the picture
