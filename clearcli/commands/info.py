@@ -4,6 +4,8 @@ JSON schema (`clear info --json`), envelope {"schema": "clear.info", "version": 
 
     file:    str, the path as given
     format:  "pcd" | "mcap" | "rosbag1" (a ROS 1 bag) | "rosbag2" (a rosbag2 folder or .db3)
+             | "depth-image" | another input format's name (clearcli/io/formats/: its own
+             keys, if any, besides file, format and frame)
     pcd:     (format "pcd" only) the header as written:
              {encoding: "ascii"|"binary"|"binary_compressed",
               fields: [{name, type ("F4", "U4", ...), count}], width, height,
@@ -110,7 +112,12 @@ def _print_table(info: dict[str, Any]) -> None:
         stdout.print(kv)
         return
     m = info.get("mcap") or info.get("bag")
-    assert m is not None
+    if m is None:  # another format (clearcli/io/formats/): its name and its frame
+        kv.add_row("format", info["format"])
+        for key, value in _frame_rows(info["frame"]):
+            kv.add_row(key, value)
+        stdout.print(kv)
+        return
     if info["format"] == "rosbag1":
         kv.add_row("format", f"ROS 1 bag, {'indexed' if m['indexed'] else 'index missing: records scanned'}")
     elif info["format"] == "rosbag2":

@@ -32,8 +32,6 @@ if TYPE_CHECKING:
     from clearcli.io.intrinsics import CameraModel
     from clearcli.settings.images import ImageSettings
 
-# Suffixes of depth images a folder search takes (with the depth suffix in the name).
-IMAGE_SUFFIXES = (".png", ".tif", ".tiff", ".npy")
 # File names an intrinsics file beside the images may have, in the order they are tried.
 INTRINSICS_NAMES = (
     "camera_info.yaml", "camera_info.yml", "camera_params.json", "intrinsics.json",

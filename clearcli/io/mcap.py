@@ -13,8 +13,11 @@ every complete frame. Each frame message is checked to be the type its schema de
 foxglove.PointCloud carries a `pose` of the points in `frame_id`; it is APPLIED, so every
 Frame's points are in its `frame_id` like PointCloud2's.
 
-Messages become Frames in `clearcli.io.messages` (shared with the bag readers); writing
-logs is `clearcli.io.mcap_write`.
+Messages become Frames in `clearcli.io.messages` (shared with the bag readers); a depth
+image's camera info and colour are read through `McapAccess` (the log interface,
+`clearcli.io.log_access`); `read_mcap_transforms` reads /tf_static and /tf; writing logs
+is `clearcli.io.mcap_write`. The format's entry (what it recognises, how `read`, `info`
+and a batch reach this module): `clearcli.io.formats.mcap`.
 """
 
 from __future__ import annotations
@@ -23,7 +26,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, BinaryIO, Callable, Iterator, TypeVar
 
-from clearcli.errors import InputError, PartialLogError
+from clearcli.errors import ClearError, InputError, PartialLogError
 from clearcli.io.frames import Frame
 from clearcli.io.image_messages import CAMERA_INFO_SCHEMAS, COMPRESSED_SCHEMAS, IMAGE_SCHEMAS
 from clearcli.io.messages import (
@@ -358,7 +361,7 @@ def _message_frame(decoders: MessageDecoders, schema: Any, channel: Any, message
         from clearcli.io.mcap_images import depth_frame
 
         assert summary is not None
-        return depth_frame(LogAccess(path, summary, decoders), channel.topic, msg, message.log_time, source, images)
+        return depth_frame(McapAccess(path, summary, decoders), channel.topic, msg, message.log_time, source, images)
     if schema_name(schema) in POINTCLOUD2_SCHEMAS:
         return pointcloud2_frame(msg, message.log_time, source)
     return foxglove_frame(msg, message.log_time, source)
@@ -406,10 +409,11 @@ def until_damage(messages: Iterator[_T]) -> Iterator[_T]:
             close()
 
 
-class LogAccess:
-    """A log's decoded messages by topic, for readers that pair messages of several
-    topics (a depth image with its camera info and colour: clearcli/io/mcap_images.py).
-    The bag readers offer the same (`clearcli.io.rosbag.BagAccess`)."""
+class McapAccess:
+    """An MCAP log's decoded messages by topic: the log interface
+    (`clearcli.io.log_access.LogAccess`) for readers that pair messages of several topics
+    (a depth image with its camera info and colour: clearcli/io/mcap_images.py). The bag
+    readers offer the same (`clearcli.io.rosbag.BagAccess`)."""
 
     def __init__(self, path: Path, summary: McapSummary, decoders: MessageDecoders | None = None) -> None:
         self.path, self.summary = path, summary
@@ -515,3 +519,57 @@ def read_mcap_frame(path: Path, topic: str | None = None, index: int = 0, images
         _raise_damage(path, topic, seen, f"frame {index} is past the damage; the log is {summary.damage}")
     raise InputError(f"{path}: --frame {index} does not exist: {topic} has {seen} frames")
 
+
+# --- transforms -------------------------------------------------------------------------
+
+TF_TOPICS = ("/tf_static", "/tf")
+
+
+def _tf_matrix(translation: Any, rotation: Any) -> Any:
+    from clearcli.transforms import pose_to_matrix
+
+    q = [float(message_field(rotation, k) or 0.0) for k in ("x", "y", "z", "w")]
+    return pose_to_matrix([float(message_field(translation, k) or 0.0) for k in ("x", "y", "z")], q)
+
+
+def read_mcap_transforms(path: Path, max_messages: int = 1000) -> dict[tuple[str, str], Any]:
+    """T_parent_child (4x4) of every (parent, child) pair on the log's /tf_static and /tf
+    (tf2_msgs/TFMessage, foxglove.FrameTransform(s)): the first seen of each; at most
+    ``max_messages`` transform messages are read. A log without them, or whose transforms
+    cannot be read, gives {} (what `clearcli.io.rosbag.read_bag_transforms` gives for a bag)."""
+    try:
+        summary = read_summary(path)
+    except ClearError:
+        return {}
+    topics = [t for t, _ in summary.topics() if t in TF_TOPICS]
+    if not topics:
+        return {}
+    from mcap.reader import NonSeekingReader, SeekingReader
+
+    found: dict[tuple[str, str], Any] = {}
+    decoders = MessageDecoders()
+    try:
+        with open(path, "rb") as fp:
+            reader: Any = SeekingReader(fp) if summary.indexed else NonSeekingReader(fp)
+            for count, (schema, channel, message) in enumerate(reader.iter_messages(topics=topics)):
+                if count >= max_messages:
+                    break
+                try:
+                    msg = decoders.decode(schema, channel, message.data)
+                except Exception:
+                    continue
+                items = message_field(msg, "transforms")
+                for tf in items if items is not None else [msg]:
+                    try:
+                        header = message_field(tf, "header")
+                        parent = message_field(header, "frame_id") if header is not None else message_field(tf, "parent_frame_id")
+                        child = message_field(tf, "child_frame_id")
+                        inner = message_field(tf, "transform") or tf
+                        T = _tf_matrix(message_field(inner, "translation"), message_field(inner, "rotation"))
+                    except Exception:
+                        continue
+                    if parent and child:
+                        found.setdefault((str(parent).lstrip("/"), str(child).lstrip("/")), T)
+    except Exception:  # a damaged log: whatever was read before the damage
+        pass
+    return found

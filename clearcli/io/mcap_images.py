@@ -1,7 +1,7 @@
 """A depth image message of a log (MCAP, ROS 1 bag, rosbag2) -> a `Frame`, with its
-camera info and its colour. The log is reached through an access value (`decoded(topic)`,
-`window(topic, start, end)`, `can_seek`, `path`, `summary`): clearcli.io.mcap.LogAccess,
-clearcli.io.rosbag.BagAccess.
+camera info and its colour. The log is reached through the log interface
+(`clearcli.io.log_access.LogAccess`: `decoded(topic)`, `window(topic, start, end)`,
+`can_seek`, `path`, `summary`), which MCAP logs and ROS bags offer alike.
 
 Depth images come with their `CameraInfo` on the sibling `camera_info` topic (the
 drivers' layout: `.../image_raw` beside `.../camera_info`); the camera info recorded last
@@ -18,17 +18,15 @@ from __future__ import annotations
 
 from contextlib import closing
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from clearcli.errors import InputError
 from clearcli.io.frames import Frame
 from clearcli.io.image_messages import CAMERA_INFO_SCHEMAS, IMAGE_SCHEMAS, camera_model, color_rgb, depth_m, header_of, stamp_ns
+from clearcli.io.log_access import LogAccess, LogSummary
 from clearcli.io.messages import _stamp_s
-
-if TYPE_CHECKING:
-    from clearcli.io.mcap import LogAccess, McapSummary
 
 # Colour within this log time of its depth image is looked at for a stamp that matches
 # exactly (drivers publish the pair within milliseconds; a log's order may interleave).
@@ -56,7 +54,7 @@ def _note(path: Path, text: str) -> None:
     stderr.print(f"clear: note: {path.name}: {text}", markup=False, highlight=False)
 
 
-def camera_info_topic(summary: "McapSummary", depth_topic: str) -> str:
+def camera_info_topic(summary: LogSummary, depth_topic: str) -> str:
     """The camera info of ``depth_topic``: its sibling `camera_info` (ROS drivers), else
     the one camera info topic in the nearest enclosing namespace that has exactly one
     (RealSense SDK bags: `.../Depth_0/image/data` -> `.../Depth_0/info/camera_info`)."""
@@ -89,7 +87,7 @@ def _log_key(path: Path, topic: str) -> tuple[str, str, int, int]:
         return (str(path), topic, 0, 0)
 
 
-def _camera_at(log: "LogAccess", topic: str, log_time_ns: int) -> Any:
+def _camera_at(log: LogAccess, topic: str, log_time_ns: int) -> Any:
     path = log.path
     key = _log_key(path, topic)
     if key not in _infos:
@@ -104,14 +102,14 @@ def _camera_at(log: "LogAccess", topic: str, log_time_ns: int) -> Any:
     return before[-1] if before else models[0][1]
 
 
-def _color_topics(summary: "McapSummary", depth_topic: str) -> list[str]:
+def _color_topics(summary: LogSummary, depth_topic: str) -> list[str]:
     """Colour image topics, those named colour/rgb first."""
     others = [t for t in summary.image_topics() if t != depth_topic and "depth" not in t.lower()]
     return sorted(others, key=lambda t: not any(w in t.lower() for w in ("color", "colour", "rgb")))
 
 
 def _registered_color(
-    log: "LogAccess", depth_topic: str, frame_id: str,
+    log: LogAccess, depth_topic: str, frame_id: str,
     depth_stamp_ns: int, log_time_ns: int, shape: tuple[int, int], points_depth_m: np.ndarray,
 ) -> np.ndarray | None:
     path, summary = log.path, log.summary
@@ -166,7 +164,7 @@ def _rs_name(stream: str) -> str:
     return stream.rsplit("/", 1)[-1].split("_", 1)[0]
 
 
-def _rs_groups(log: "LogAccess", stream: str) -> dict[int, str]:
+def _rs_groups(log: LogAccess, stream: str) -> dict[int, str]:
     """{group index: topic} of the stream's recorded extrinsics (`<stream>/tf/<group>`)."""
     groups = {}
     for topic, _ in log.summary.topics():
@@ -176,7 +174,7 @@ def _rs_groups(log: "LogAccess", stream: str) -> dict[int, str]:
     return groups
 
 
-def _rs_transform(log: "LogAccess", topic: str) -> np.ndarray | None:
+def _rs_transform(log: LogAccess, topic: str) -> np.ndarray | None:
     """The 4 x 4 of the geometry_msgs/Transform on ``topic`` (its first message); None when
     it holds no usable one."""
     from clearcli.io.messages import message_field
@@ -194,7 +192,7 @@ def _rs_transform(log: "LogAccess", topic: str) -> np.ndarray | None:
     return None
 
 
-def _rs_color_from_depth(log: "LogAccess", depth_stream: str, color_stream: str) -> np.ndarray | str:
+def _rs_color_from_depth(log: LogAccess, depth_stream: str, color_stream: str) -> np.ndarray | str:
     """T_color_depth (4 x 4, metres) from the recorded extrinsics, or the note saying why not.
 
     The direction, from librealsense's recorder and player (IntelRealSense/librealsense):
@@ -250,7 +248,7 @@ def _rs_color_from_depth(log: "LogAccess", depth_stream: str, color_stream: str)
     return result
 
 
-def _realsense_color(log: "LogAccess", depth_topic: str, log_time_ns: int, points_depth_m: np.ndarray) -> np.ndarray | None:
+def _realsense_color(log: LogAccess, depth_topic: str, log_time_ns: int, points_depth_m: np.ndarray) -> np.ndarray | None:
     """(H*W, 3) uint8 colour of a RealSense SDK recording's depth frame, registered to it
     through the recorded extrinsics (clearcli/io/register.py); None, with a note naming
     what is missing, when the recording lacks what that needs."""
@@ -302,7 +300,7 @@ def _realsense_color(log: "LogAccess", depth_topic: str, log_time_ns: int, point
         return None
 
 
-def _recorded_depth_units(log: "LogAccess", depth_topic: str) -> float | None:
+def _recorded_depth_units(log: LogAccess, depth_topic: str) -> float | None:
     """Metres per depth unit as the recording states it: a RealSense SDK bag keeps the
     sensor's "Depth Units" option (`/device_0/sensor_0/option/Depth Units/value`) beside
     the stream; None when the log does not say (then [images] depth_scale_m)."""
@@ -329,7 +327,7 @@ def _recorded_depth_units(log: "LogAccess", depth_topic: str) -> float | None:
 
 
 def depth_frame(
-    log: "LogAccess", topic: str, msg: Any, log_time_ns: int,
+    log: LogAccess, topic: str, msg: Any, log_time_ns: int,
     source: str, images: Any = None,
 ) -> Frame:
     """The organized frame of one depth image message (see the module)."""

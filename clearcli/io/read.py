@@ -2,7 +2,8 @@
 
 PCD and MCAP files and ROS 1 bags (`#ROSBAG`) are told apart by their first bytes, not
 their names; a folder holding `metadata.yaml` (or that file itself, or a `.db3` SQLite
-file) is a rosbag2 bag. Logs and bags are streamed, never loaded whole.
+file) is a rosbag2 bag. Each format reads its own frames (clearcli/io/formats/: what it
+recognises, how it reads them). Logs and bags are streamed, never loaded whole.
 
 Every frame-reading subcommand calls `read_frame(path, topic, index)`; `iter_frames` walks
 a whole file. Only ClearError subclasses leave these functions for anything a file can
@@ -18,12 +19,14 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING, Iterator
 
-from clearcli.errors import InputError, SceneError
+from clearcli.errors import SceneError
+from clearcli.io.formats import check_color, format_of, sniff
 from clearcli.io.frames import Frame
-from clearcli.io.sniff import sniff
 
 if TYPE_CHECKING:
     from clearcli.settings.images import ImageSettings
+
+__all__ = ["iter_frames", "read_frame", "require_finite", "sniff"]
 
 
 def read_frame(
@@ -40,52 +43,15 @@ def read_frame(
     `images` ([images] settings) and `color` (its colour image) serve depth images.
     """
     path = Path(path)
-    kind = sniff(path)
-    if color is not None and kind != "image":
-        raise InputError(f"--color {color}: only a depth image takes a colour image; {path} is a {kind} file")
-    if kind == "image":
-        if index != 0:
-            raise InputError(f"{path}: --frame {index} does not exist: a depth image holds 1 frame (0)")
-        from clearcli.io.images import read_image_frame
-
-        return read_image_frame(path, images, color)
-    if kind == "pcd":
-        if index != 0:
-            raise InputError(f"{path}: --frame {index} does not exist: a PCD file holds 1 frame (0)")
-        from clearcli.io.pcd import read_pcd
-
-        return read_pcd(path)
-    if kind in ("rosbag1", "rosbag2"):
-        from clearcli.io.rosbag import read_bag_frame
-
-        return read_bag_frame(path, topic, index, images)
-    from clearcli.io.mcap import read_mcap_frame
-
-    return read_mcap_frame(path, topic, index, images)
+    fmt = format_of(path)
+    check_color(fmt, path, color)
+    return fmt.read_frame(path, topic, index, images, color)
 
 
 def iter_frames(path: Path, topic: str | None = None, images: "ImageSettings | None" = None) -> Iterator[Frame]:
     """Every frame of the file, one at a time (a log or bag is streamed, never loaded whole)."""
     path = Path(path)
-    kind = sniff(path)
-    if kind == "image":
-        from clearcli.io.images import read_image_frame
-
-        yield read_image_frame(path, images)
-        return
-    if kind == "pcd":
-        from clearcli.io.pcd import read_pcd
-
-        yield read_pcd(path)
-        return
-    if kind in ("rosbag1", "rosbag2"):
-        from clearcli.io.rosbag import iter_bag_frames
-
-        yield from iter_bag_frames(path, topic, images)
-        return
-    from clearcli.io.mcap import iter_mcap_frames
-
-    yield from iter_mcap_frames(path, topic, images)
+    yield from format_of(path).iter_frames(path, topic, images)
 
 
 def require_finite(frame: Frame, min_points: int = 1) -> Frame:

@@ -431,8 +431,9 @@ def _guarded(summary: BagSummary, topic: str, skip_to: int = 0) -> Iterator[tupl
 
 
 class BagAccess:
-    """A bag's decoded messages by topic (what `clearcli.io.mcap.LogAccess` is for a log),
-    for a depth image's camera info and colour (clearcli/io/mcap_images.py)."""
+    """A bag's decoded messages by topic: the log interface
+    (`clearcli.io.log_access.LogAccess`, what `clearcli.io.mcap.McapAccess` is for an MCAP
+    log), for a depth image's camera info and colour (clearcli/io/mcap_images.py)."""
 
     def __init__(self, summary: BagSummary, decoders: BagDecoders) -> None:
         self.path, self.summary, self.decoders = summary.path, summary, decoders

@@ -1,8 +1,10 @@
-"""What a file is, told by its first bytes, not its name: PCD, MCAP, a ROS 1 bag, or a
-rosbag2 bag (a folder holding `metadata.yaml`, that file itself, or a `.db3` file).
+"""What a file is told by: its first bytes (not its name), and the signatures of the
+built-in formats (PCD, MCAP, ROS 1 bag, rosbag2's SQLite storage and metadata.yaml, the
+depth images' PNG, TIFF and NPY).
 
-The signatures live here, below every reader, so that telling a PCD apart imports no log
-reader and the readers can share them without importing each other.
+The signatures live here, below every reader and every format (clearcli/io/formats/),
+so that telling a PCD apart imports no log reader and the readers can share them without
+importing each other. Which format a path is: `clearcli.io.formats.sniff`.
 """
 
 from __future__ import annotations
@@ -10,11 +12,11 @@ from __future__ import annotations
 import errno
 import stat
 from pathlib import Path
-from typing import BinaryIO, Literal
+from typing import BinaryIO
 
 from clearcli.errors import InputError
 
-_SNIFF_BYTES = 64
+SNIFF_BYTES = 64  # what a format is told by
 # File signatures.
 MCAP_MAGIC = b"\x89MCAP0\r\n"
 ROSBAG1_MAGIC = b"#ROSBAG"
@@ -25,7 +27,6 @@ TIFF_MAGICS = (b"II*\x00", b"MM\x00*")
 NPY_MAGIC = b"\x93NUMPY"
 # A PCD header opens with a comment or one of its keywords.
 PCD_HEADER_KEYS = (b"VERSION", b"FIELDS", b"SIZE", b"TYPE", b"COUNT", b"WIDTH", b"HEIGHT", b"VIEWPOINT", b"POINTS", b"DATA")
-FileKind = Literal["pcd", "mcap", "rosbag1", "rosbag2", "image"]
 
 
 def looks_like_pcd(head: bytes) -> bool:
@@ -49,31 +50,11 @@ def open_input(path: Path, what: str) -> BinaryIO:
         raise InputError(f"{path}: cannot read ({exc.strerror})") from None
 
 
-def _directory_kind(path: Path) -> FileKind:
-    if (path / ROSBAG2_METADATA).is_file():
-        return "rosbag2"
-    try:
-        storage = sorted(p.name for p in path.iterdir() if p.suffix in (".db3", ".mcap"))
-    except OSError:
-        storage = []
-    hint = (
-        f"; it holds {', '.join(storage[:3])}{' ...' if len(storage) > 3 else ''}: pass that file instead"
-        if storage
-        else ""
-    )
-    raise InputError(
-        f"{path}: is a directory without {ROSBAG2_METADATA} (not a rosbag2 bag); "
-        f"expected a .pcd, .mcap or .bag file or a rosbag2 folder{hint}"
-    )
-
-
-def sniff(path: Path) -> FileKind:
-    """"pcd", "mcap", "rosbag1" (a ROS 1 bag), "image" (PNG, TIFF, NPY: a depth image) from
-    the file's first bytes (not its name), or "rosbag2" for a rosbag2 folder, its
-    metadata.yaml or a .db3 file; InputError otherwise."""
-    path = Path(path)
-    if path.is_dir():
-        return _directory_kind(path)
+def read_head(path: Path) -> bytes | None:
+    """The first bytes of the regular file at ``path``, what a format is told by; None when
+    it is a folder after all (it became one since it was looked at). InputError for what
+    cannot be read: a FIFO, socket or device (reading would block, or never end), a link
+    loop, a missing, unreadable or empty file."""
     try:
         mode = path.stat().st_mode
     except OSError as exc:
@@ -85,31 +66,13 @@ def sniff(path: Path) -> FileKind:
         raise InputError(f"{path}: not a regular file (a FIFO, socket or device); expected a PCD, MCAP or bag file")
     try:
         with open(path, "rb") as fp:
-            head = fp.read(_SNIFF_BYTES)
+            head = fp.read(SNIFF_BYTES)
     except FileNotFoundError:
         raise InputError(f"{path}: file not found") from None
     except IsADirectoryError:
-        return _directory_kind(path)
+        return None
     except OSError as exc:
         raise InputError(f"{path}: cannot read ({exc.strerror})") from None
     if not head:
         raise InputError(f"{path}: empty file (0 bytes); expected a PCD or MCAP file or a bag")
-    if head.startswith(MCAP_MAGIC):
-        return "mcap"
-    if head.startswith(ROSBAG1_MAGIC):
-        return "rosbag1"
-    if head.startswith(SQLITE_MAGIC) or (
-        path.name == ROSBAG2_METADATA and head.lstrip().startswith(b"rosbag2_bagfile_information")
-    ):
-        return "rosbag2"
-    if head.startswith(PNG_MAGIC) or head.startswith(TIFF_MAGICS) or head.startswith(NPY_MAGIC):
-        return "image"  # a depth image (clearcli/io/images.py)
-    if looks_like_pcd(head):
-        return "pcd"
-    if path.suffix.lower() == ".pcd":
-        raise InputError(f"{path}: not a PCD file (it does not start with a PCD header)")
-    if path.suffix.lower() in (".png", ".tif", ".tiff", ".npy"):
-        raise InputError(f"{path}: not a {path.suffix[1:].upper()} file (unrecognised first bytes); is it truncated or renamed?")
-    raise InputError(
-        f"{path}: not an MCAP file, a ROS bag, a PCD file or a depth image (unrecognised first bytes)"
-    )
+    return head

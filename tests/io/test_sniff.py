@@ -1,4 +1,4 @@
-"""Tests of clearcli/io/sniff.py."""
+"""Tests of telling a file apart (clearcli/io/sniff.py, clearcli/io/formats/)."""
 
 from __future__ import annotations
 
@@ -37,7 +37,7 @@ def test_a_fifo_or_a_link_loop_is_refused_not_read(tmp_path: Path) -> None:
     import os
 
     from clearcli.errors import InputError
-    from clearcli.io.sniff import sniff
+    from clearcli.io.read import sniff
 
     os.mkfifo(tmp_path / "pipe.pcd")
     with pytest.raises(InputError, match="not a regular file"):
