@@ -279,28 +279,6 @@ class Episode:
         )
         return tuple(sorted(o.object_id for o in left if reach.why_not(o)))
 
-    def _grasp_contacts(
-        self, report: "FrameReport", model: Any, gripper: Any
-    ) -> tuple[list[int], np.ndarray, float] | None:
-        """The objects between the fingers (`grasp_contacts`), the closing direction
-        (table frame, 2D) and how far the robot opened the gripper (the planner's rule,
-        `relations.grasp_opening_m`); None without a grasp pose."""
-        from clearcli.geometry.gripper import gripper_model
-        from clearcli.predicates.relations import grasp_opening_m
-
-        T_camera_grasp = _chosen_pose_camera(report, model.grasp_candidates)
-        if T_camera_grasp is None:
-            return None
-        T = np.linalg.inv(self.scene.T_camera_table) @ T_camera_grasp
-        tips_z = float(T[2, 3]) - gripper.closing_region_height_m / 2.0
-        clearance = self.session.pipeline.settings.predicates.grasp_opening_clearance_m
-        opening = grasp_opening_m(float(model.grasp_width_m), gripper_model(gripper), clearance)
-        closing = T[:2, 0] / max(float(np.linalg.norm(T[:2, 0])), 1e-12)
-        held = grasp_contacts(
-            self.scene, T[:3, 3], T[:3, 0], opening, gripper.finger_width_m, tips_z, gripper.finger_thickness_m
-        )
-        return held, closing, opening
-
     def _push_contacts(
         self, report: "FrameReport", push: Any, direction_table: np.ndarray, T_table_camera: np.ndarray
     ) -> list[int] | None:
@@ -317,61 +295,6 @@ class Episode:
         start = T_table_start[:2, 3] + front * d
         reach = float(push.push_length_m) + 0.1
         return push_contacts(self.scene, start, d, half_width, reach)
-
-    def _other_grasp(self, report: "FrameReport", model: Any, kind: str, k: int) -> str:
-        """A rim grasp or a slide to the edge, judged by the world's own rules
-        (`physics.world_rim_grasp`, `world_slide`, `world_edge_pinch`), not the planner's."""
-        from clearcli.sim.physics import (
-            EDGE_PINCH_TILT_DEG,
-            approach_tilt_deg,
-            world_edge_pinch,
-            world_rim_grasp,
-            world_slide,
-        )
-
-        gripper = self.session.pipeline.settings.gripper
-        T_table_camera = np.linalg.inv(self.scene.T_camera_table)
-        detail = model.kind_details.get(kind, {})
-        if kind == "rim":
-            T_camera_grasp = _chosen_pose_camera(report, model.kind_candidates.get("rim", ()))
-            if T_camera_grasp is None:
-                return "missed: no rim pose"
-            ok, why = world_rim_grasp(
-                self.scene,
-                k,
-                T_table_camera @ T_camera_grasp,
-                float(detail.get("opening_m", gripper.opening_width_m)),
-                gripper.finger_thickness_m,
-                gripper.finger_width_m,
-                gripper.finger_depth_m,
-                fingertip_z_m=gripper.closing_region_height_m / 2.0,
-            )
-            if not ok:
-                return f"rim grasp failed: {why}"
-            self.scene = without_object(self.scene, k)
-            return "removed"
-        # the slide of the candidate the IK check chose (one per seen side; a single one
-        # comes with its half-turn, the same slide)
-        slides = list(detail.get("slides") or [detail])
-        plan = report.result.plan
-        chosen = plan.first.candidate if plan is not None and plan.first is not None and len(slides) > 1 else 0
-        slide = slides[min(int(chosen), len(slides) - 1)]
-        direction = T_table_camera[:3, :3] @ np.asarray(slide.get("direction", (1.0, 0.0, 0.0)), dtype=float)
-        self.scene, travelled = world_slide(self.scene, k, direction[:2], float(slide.get("slide_m", 0.0)))
-        # the pinch's pose as the arm went there (its tilt sets the span the jaws take);
-        # the world's own figure: fingers need 2.5 cm of the overhang to hold it
-        T_camera_edge = _chosen_pose_camera(report, model.kind_candidates.get("slide", ()), pose=-2, candidate=int(chosen))
-        tilt_deg = EDGE_PINCH_TILT_DEG if T_camera_edge is None else approach_tilt_deg(T_table_camera @ T_camera_edge)
-        ok, why = world_edge_pinch(
-            self.scene, k, direction[:2], EDGE_GRIP_M, gripper.opening_width_m, gripper.closing_width_m, tilt_deg
-        )
-        if not ok:
-            if "tipped" in why:
-                self.scene = without_object(self.scene, k)
-                return f"slid {travelled:.3f} m, fell off the table"
-            return f"slid {travelled:.3f} m, then the pinch failed: {why}"
-        self.scene = without_object(self.scene, k)
-        return "removed"
 
     def _act(self, frame: "Frame", report: "FrameReport", index: int) -> tuple[StepRecord, tuple[int, ...]]:
         result = report.result
