@@ -59,15 +59,19 @@ def plan_throughput(files: list[Path], loop: bool) -> float:
     wall, res = timed("plan", *files, "--json", "--jobs", "2")
     s = summary_of(res)
     pool_fps = len(files) / wall
-    print(f"plan --jobs 2: {len(files)} frames in {wall:.1f} s = {pool_fps:.2f} frames/s "
-          f"(exit codes {s['exit_codes']}, failed {s['failed']})")
+    print(
+        f"plan --jobs 2: {len(files)} frames in {wall:.1f} s = {pool_fps:.2f} frames/s "
+        f"(exit codes {s['exit_codes']}, failed {s['failed']})"
+    )
     if loop:
         t0 = time.perf_counter()
         for f in files:
             clear("plan", f, "--json")
         loop_wall = time.perf_counter() - t0
-        print(f"loop of single `clear plan` calls: {len(files)} frames in {loop_wall:.1f} s = "
-              f"{len(files) / loop_wall:.2f} frames/s; the batch is {loop_wall / wall:.1f}x faster")
+        print(
+            f"loop of single `clear plan` calls: {len(files)} frames in {loop_wall:.1f} s = "
+            f"{len(files) / loop_wall:.2f} frames/s; the batch is {loop_wall / wall:.1f}x faster"
+        )
     return wall
 
 
@@ -80,9 +84,11 @@ def ray_throughput(files: list[Path], pool_wall: float) -> None:
     wall, res = timed("plan", *files, "--json", "--ray")
     s = summary_of(res)
     init = s.get("ray_init_s") or 0.0
-    print(f"plan --ray (local): {len(files)} frames in {wall:.1f} s wall, of which ray.init {init:.1f} s; "
-          f"without ray.init {wall - init:.1f} s = {(wall - init) / pool_wall:.2f} x the pool's wall time "
-          f"(target <= 1.5); failed {s['failed']}")
+    print(
+        f"plan --ray (local): {len(files)} frames in {wall:.1f} s wall, of which ray.init {init:.1f} s; "
+        f"without ray.init {wall - init:.1f} s = {(wall - init) / pool_wall:.2f} x the pool's wall time "
+        f"(target <= 1.5); failed {s['failed']}"
+    )
 
 
 def memory(files: list[Path], passes: int) -> None:
@@ -112,8 +118,10 @@ def memory(files: list[Path], passes: int) -> None:
         if not first:
             continue
         at_first, at_end = first[-1], points[-1][1]
-        print(f"worker {pid}: resident {at_first:.0f} MB after the first {n1} frames, {at_end:.0f} MB after "
-              f"{n1 * passes} ({points[-1][0]} lines seen); ratio {at_end / at_first:.2f} (target <= 1.20)")
+        print(
+            f"worker {pid}: resident {at_first:.0f} MB after the first {n1} frames, {at_end:.0f} MB after "
+            f"{n1 * passes} ({points[-1][0]} lines seen); ratio {at_end / at_first:.2f} (target <= 1.20)"
+        )
     print(f"({n1 * passes} frames in {wall:.1f} s = {n1 * passes / wall:.2f} frames/s)")
 
 
@@ -130,8 +138,10 @@ def evaluate(files: list[Path], loop: bool) -> None:
                 clear("segment", f, "-o", lab)
                 f1.append(json.loads(clear("evaluate", "segmentation", lab, f, "--json").stdout)["f1"])
             loop_wall = time.perf_counter() - t0
-        print(f"loop of `segment -o` + `evaluate segmentation`: {loop_wall:.1f} s, mean F1 {statistics.mean(f1):.3f}; "
-              f"evaluate dataset takes {wall / loop_wall:.2f} of it (target <= 0.5)")
+        print(
+            f"loop of `segment -o` + `evaluate segmentation`: {loop_wall:.1f} s, mean F1 {statistics.mean(f1):.3f}; "
+            f"evaluate dataset takes {wall / loop_wall:.2f} of it (target <= 0.5)"
+        )
 
 
 def main() -> None:

@@ -131,7 +131,11 @@ def run_session(
         "slipped": sum(1 for s in r.steps if s.outcome == "slipped"),
         "rim": sum(1 for s in r.steps if s.action.startswith("(grasp_rim") and s.outcome == "removed"),
         "slide": sum(1 for s in r.steps if s.action.startswith("(slide_grasp") and s.outcome == "removed"),
-        "kinds_failed": [f"{s.action} -> {s.outcome}" for s in r.steps if s.action.startswith(("(grasp_rim", "(slide_grasp")) and s.outcome != "removed"],
+        "kinds_failed": [
+            f"{s.action} -> {s.outcome}"
+            for s in r.steps
+            if s.action.startswith(("(grasp_rim", "(slide_grasp")) and s.outcome != "removed"
+        ],
         "back_and_forth": r.back_and_forth,
         "left": dict(left_reasons(r)),
         "reason": r.reason,
@@ -180,10 +184,14 @@ def report(label: str, rows: list[dict[str, Any]], verbose: bool) -> dict[str, A
         f"those the world refused: {len(failed)} {failed[:6]}"
     )
     merged = [r["seed"] for r in rows if r["left"].get("merged with another or missed by the segmenter")]
-    print(f"    sessions ending with objects merged with another or missed by the segmenter: {len(merged)}/{n} {merged}")
+    print(
+        f"    sessions ending with objects merged with another or missed by the segmenter: {len(merged)}/{n} {merged}"
+    )
     for r in rows:
         if not r["cleared"]:
-            print(f"    not cleared: seed {r['seed']} {r['scene']} end {r['end']} left {r['left']}: {r['reason'][:160]}")
+            print(
+                f"    not cleared: seed {r['seed']} {r['scene']} end {r['end']} left {r['left']}: {r['reason'][:160]}"
+            )
             if verbose:
                 for s in r["steps"]:
                     print(f"        {s}")
@@ -216,7 +224,9 @@ def main() -> None:
     ap.add_argument("--settings", default="", help="a settings TOML (as `clear --settings`), for ablations")
     ap.add_argument("--robot", default="", help="a robot profile (`clear robots`); default the WAM")
     ap.add_argument(
-        "--scenes", choices=("mixed", "clutter", "wide"), default="mixed",
+        "--scenes",
+        choices=("mixed", "clutter", "wide"),
+        default="mixed",
         help="mixed: dense and clutter of 3-15 objects (above); clutter: `scene.clutter(3 + s %% 10, s)`, "
         "3-12 objects (issue 12's sessions: do touching objects merged by the segmenter end them?); wide: "
         "`families.wide_objects(s)`, 3-6 small objects with 1-3 bowls, mugs, plates, flat boxes (issue 25)",
@@ -231,6 +241,7 @@ def main() -> None:
         groups = {k: list(SETS[k])[: args.n] for k in names}
     modes = MODES if args.mode == "both" else (args.mode,)
     if args.scenes == "clutter":  # a seed whose clutter finds no room for every object is left out
+
         def builds(seed: int) -> bool:
             try:
                 session_scene(seed, "clutter")
@@ -242,7 +253,12 @@ def main() -> None:
         if skipped:
             print(f"seeds left out (no room in the clutter for every object): {skipped}")
         groups = {k: [s for s in g if s not in skipped] for k, g in groups.items()}
-    work = [(seed, mode, args.settings, args.scenes, args.robot, args.grasps) for group in groups.values() for mode in modes for seed in group]
+    work = [
+        (seed, mode, args.settings, args.scenes, args.robot, args.grasps)
+        for group in groups.values()
+        for mode in modes
+        for seed in group
+    ]
     t0 = time.perf_counter()
     with ProcessPoolExecutor(max_workers=max(1, args.jobs)) as pool:
         rows = list(pool.map(_run, work, chunksize=1))

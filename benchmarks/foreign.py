@@ -127,8 +127,15 @@ def show(name: str, out: Path) -> None:
         ax.plot(poly[:, 0], poly[:, 1], "--", color=palette(k % 20), lw=0.8)
         if seg.size:
             rows, cols = np.divmod(seg, frame.shape[1])
-            ax.text(cols.mean(), rows.mean(), f"{k} {obj['name']}\n{seg.size} px", fontsize=8, color="white",
-                    ha="center", bbox=dict(fc=palette(k % 20), alpha=0.8, ec="none"))
+            ax.text(
+                cols.mean(),
+                rows.mean(),
+                f"{k} {obj['name']}\n{seg.size} px",
+                fontsize=8,
+                color="white",
+                ha="center",
+                bbox=dict(fc=palette(k % 20), alpha=0.8, ec="none"),
+            )
     _pixel_grid(ax, *frame.shape)
     ax.set_title(f"{name}: {len(objs)} labelled objects (dashed: polygons; solid: the points taken)")
     fig.tight_layout()
@@ -151,7 +158,11 @@ def grid(name: str, out: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    spec = tomllib.loads((LABELS / f"{name}.toml").read_text(encoding="utf-8")) if (LABELS / f"{name}.toml").exists() else None
+    spec = (
+        tomllib.loads((LABELS / f"{name}.toml").read_text(encoding="utf-8"))
+        if (LABELS / f"{name}.toml").exists()
+        else None
+    )
     from clearcli.io.read import read_frame
 
     frame = read_frame(DATA / (spec["source"] if spec else f"scenes/uois_realsense/{name}.pcd"))
@@ -169,14 +180,14 @@ def report(part: str, sets: list[str] | None = None) -> None:
     from clearcli.evaluate.exact import exact_report
     from clearcli.evaluate.osd import osd_metrics
     from clearcli.evaluate.segmentation import score
-    from clearcli.settings import Settings
-
-    from clearcli.settings import apply_sets
+    from clearcli.settings import Settings, apply_sets
 
     settings = apply_sets(Settings(), sets or ())
     totals = dict(objects=0, right=0, merged=0, split=0, missed=0, spurious=0)
-    print(f"{'frame':34s} {'obj':>4s} {'right':>5s} {'merged':>6s} {'split':>5s} {'missed':>6s} {'spur':>5s}"
-          f" {'F1':>6s} {'Ov F':>6s} {'Bd F':>6s}")
+    print(
+        f"{'frame':34s} {'obj':>4s} {'right':>5s} {'merged':>6s} {'split':>5s} {'missed':>6s} {'spur':>5s}"
+        f" {'F1':>6s} {'Ov F':>6s} {'Bd F':>6s}"
+    )
     for name in names(part):
         frame, truth, spec = load(name)
         pred = pipeline.segmented(frame, settings).labels()
@@ -186,11 +197,15 @@ def report(part: str, sets: list[str] | None = None) -> None:
         for k in totals:
             totals[k] += getattr(r, "n_objects" if k == "objects" else k)
         wrong = ", ".join(f"{obj['name']}: {v}" for obj, v in zip(spec["object"], r.verdicts) if v != "right")
-        print(f"{name:34s} {r.n_objects:4d} {r.right:5d} {r.merged:6d} {r.split:5d} {r.missed:6d} {r.spurious:5d}"
-              f" {s.f1:6.3f} {o.overlap_f:6.3f} {o.boundary_f:6.3f}" + (f"   [{wrong}]" if wrong else ""))
+        print(
+            f"{name:34s} {r.n_objects:4d} {r.right:5d} {r.merged:6d} {r.split:5d} {r.missed:6d} {r.spurious:5d}"
+            f" {s.f1:6.3f} {o.overlap_f:6.3f} {o.boundary_f:6.3f}" + (f"   [{wrong}]" if wrong else "")
+        )
     n = max(totals["objects"], 1)
-    print(f"{part}: {totals['right']} of {totals['objects']} objects exactly right ({100 * totals['right'] / n:.1f} %); "
-          f"merged {totals['merged']}, split {totals['split']}, missed {totals['missed']}, spurious segments {totals['spurious']}")
+    print(
+        f"{part}: {totals['right']} of {totals['objects']} objects exactly right ({100 * totals['right'] / n:.1f} %); "
+        f"merged {totals['merged']}, split {totals['split']}, missed {totals['missed']}, spurious segments {totals['spurious']}"
+    )
 
 
 def main() -> None:
@@ -199,8 +214,13 @@ def main() -> None:
     parser.add_argument("--show", metavar="FRAME")
     parser.add_argument("--grid", metavar="FRAME")
     parser.add_argument("--out", type=Path)
-    parser.add_argument("--set", action="append", default=[], metavar="SECTION.KEY=VALUE",
-                        help="a setting to try (as clear's --set); choose on --part choose only")
+    parser.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="SECTION.KEY=VALUE",
+        help="a setting to try (as clear's --set); choose on --part choose only",
+    )
     args = parser.parse_args()
     if args.show:
         show(args.show, args.out or Path(f"/tmp/{args.show}_labels.png"))

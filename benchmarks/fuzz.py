@@ -40,7 +40,9 @@ def _one_case(args: argparse.Namespace, kinds: list[str]) -> int:
         if args.subprocess:
             for argv in case.runs:
                 run = H.run_subprocess(argv)
-                print(f"exit {run.code} ({run.seconds:.2f} s)\n--- stderr\n{run.stderr}--- stdout (first 600)\n{run.stdout[:600]}")
+                print(
+                    f"exit {run.code} ({run.seconds:.2f} s)\n--- stderr\n{run.stderr}--- stdout (first 600)\n{run.stdout[:600]}"
+                )
             return 0
         found, codes, secs = H.execute_case(case)
         print(f"exits {codes} ({secs:.2f} s); expected {sorted(case.expect) if case.expect else 'any documented'}")
@@ -80,8 +82,14 @@ def main() -> int:
     t0 = time.perf_counter()
     try:
         for seed in seeds:
-            report = H.run_cases(seed, args.n, kinds, budget_s=args.budget, mat=mat,
-                                 progress=None if args.quiet else (lambda line: print("  " + line[:1000], flush=True)))
+            report = H.run_cases(
+                seed,
+                args.n,
+                kinds,
+                budget_s=args.budget,
+                mat=mat,
+                progress=None if args.quiet else (lambda line: print("  " + line[:1000], flush=True)),
+            )
             print(report.summary(), flush=True)
             reports.append(report)
     finally:
@@ -96,8 +104,10 @@ def main() -> int:
     print(f"\n{total} cases over seeds {seeds} in {wall:.1f} s ({total / max(wall, 1e-9):.1f} cases/s)")
     print("cases per kind: " + ", ".join(f"{k} {per_kind[k]}" for k in kinds))
     groups: Counter[tuple[str, str, str]] = Counter((f.known or "new", f.kind, f.symptom) for f in failures)
-    print(f"failures: {len(failures)} ({sum(1 for f in failures if f.known)} known, {sum(1 for f in failures if not f.known)} new); "
-          f"notes: {len(notes)}")
+    print(
+        f"failures: {len(failures)} ({sum(1 for f in failures if f.known)} known, {sum(1 for f in failures if not f.known)} new); "
+        f"notes: {len(notes)}"
+    )
     for (known, kind, symptom), n in sorted(groups.items()):
         label = f"{known}: {H.KNOWN_FAULTS[known]}" if known in H.KNOWN_FAULTS else "NEW"
         print(f"  {n:5d}  {kind:10s} {symptom:18s} {label}")

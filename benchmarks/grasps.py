@@ -85,7 +85,7 @@ def uois() -> None:
             settings = _settings(robot, grasps)
             removed_segments = removed_right = 0
             kinds: Counter = Counter()
-            for name, frame, seg, seg_of, _ in loaded:
+            for _name, frame, seg, seg_of, _ in loaded:
                 state, plan = _plan(frame, seg, settings)
                 gone = {state.by_name(n).segment_index for n in plan.goal}
                 removed_segments += len(gone)
@@ -118,7 +118,9 @@ def mosd() -> None:
                     empty.append(name)
                 removed += len(plan.goal)
                 kinds.update(a.grasp_kind for a in plan.actions if a.kind == "grasp")
-            print(f"  {robot:6s} {grasps:16s} {len(empty):3d} remove nothing; {removed} objects removed in all; kinds {dict(kinds)}")
+            print(
+                f"  {robot:6s} {grasps:16s} {len(empty):3d} remove nothing; {removed} objects removed in all; kinds {dict(kinds)}"
+            )
             print(f"         ({', '.join(empty)})")
 
 

@@ -73,8 +73,9 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 
@@ -95,6 +96,7 @@ BLOCK = 20  # poses per turn of a solver (see run)
 
 # The last commit with the seeded damped-least-squares solver this one replaced.
 OLD_REV = "c25499e"
+
 
 def _rz(t: np.ndarray) -> np.ndarray:
     c, s, z, o = np.cos(t), np.sin(t), np.zeros_like(t), np.ones_like(t)
@@ -190,7 +192,11 @@ def old_module() -> Any | None:
     """clearcli/robot/kinematics.py as committed at OLD_REV (None if git cannot say)."""
     try:
         src = subprocess.run(
-            ["git", "show", f"{OLD_REV}:clearcli/robot/kinematics.py"], cwd=REPO, capture_output=True, text=True, check=True
+            ["git", "show", f"{OLD_REV}:clearcli/robot/kinematics.py"],
+            cwd=REPO,
+            capture_output=True,
+            text=True,
+            check=True,
         ).stdout
     except (OSError, subprocess.CalledProcessError):
         return None
@@ -412,11 +418,17 @@ def profile_bench(name: str, quick: bool) -> None:
 
     print(f"robot {name}: {prof.summary}")
     print(f"{'group':<34} {'poses':>5} {'median ms':>9} {'p95 ms':>9} {'solved':>8}")
-    for label, poses in (("(1) reachable tool-down", reach), ("(2) in reach, no solution", no_sol), ("(3) beyond reach: ik()", far)):
+    for label, poses in (
+        ("(1) reachable tool-down", reach),
+        ("(2) in reach, no solution", no_sol),
+        ("(3) beyond reach: ik()", far),
+    ):
         times, ok, wrong = timed_group(poses)
         ms = np.array(times) * 1000
-        print(f"{label:<34} {len(poses):>5} {np.median(ms):>9.3f} {np.percentile(ms, 95):>9.3f} {100 * ok / max(len(poses), 1):>7.1f}%"
-              + (f"  WRONG {wrong}" if wrong else ""))
+        print(
+            f"{label:<34} {len(poses):>5} {np.median(ms):>9.3f} {np.percentile(ms, 95):>9.3f} {100 * ok / max(len(poses), 1):>7.1f}%"
+            + (f"  WRONG {wrong}" if wrong else "")
+        )
     if links_m is not None:
         at_once = sum(not kin.reachable(T) for T in no_sol)
         print(f"    of group (2), {at_once} refused at once by the measured reach bounds")
@@ -433,7 +445,7 @@ def main() -> None:
     if args.robot:
         from clearcli.robot.profiles import PROFILES
 
-        for name in (list(PROFILES) if args.robot == "all" else [args.robot]):
+        for name in list(PROFILES) if args.robot == "all" else [args.robot]:
             profile_bench(name, args.quick)
             print()
         return
@@ -480,12 +492,14 @@ def main() -> None:
         row("(2b) no solution, any orient.", who, results["2b", who])
         results["3", who] = summary(rec3[who])
         row("(3) beyond reach: ik()", who, results["3", who])
-        per_call = timed(lambda: [solver.kin.reachable(T) for T in far], 5) / len(far)
+        per_call = timed(lambda: [solver.kin.reachable(T) for T in far], 5) / len(far)  # noqa: B023 (timed within the iteration)
         print(f"{'(3) beyond reach: reachable()':<32} {who:<4} {len(far):>5} {1000 * per_call:>9.4f} (mean)")
     if old is not None:
         print()
         ratios = [results[g, "old"]["median_ms"] / results[g, "new"]["median_ms"] for g in ("1", "2", "2b", "3")]
-        print("median speed-up, old/new: " + ", ".join(f"({g}) {r:.1f}x" for g, r in zip(("1", "2", "2b", "3"), ratios)))
+        print(
+            "median speed-up, old/new: " + ", ".join(f"({g}) {r:.1f}x" for g, r in zip(("1", "2", "2b", "3"), ratios))
+        )
 
 
 if __name__ == "__main__":

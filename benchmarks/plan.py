@@ -81,7 +81,9 @@ def fd_table(sizes: list[int], seeds: int, lifted_limit_s: float) -> None:
         for (form, search), vals in rows.items():
             med = statistics.median(v[0] for v in vals)
             costs = "/".join(str(v[1]) for v in vals)
-            print(f"{n:>4} {int(statistics.median(n_facts)):>5} {form:<26} {search:<20} {med:>8.3f} {costs:>5} {all(v[2] for v in vals)}")
+            print(
+                f"{n:>4} {int(statistics.median(n_facts)):>5} {form:<26} {search:<20} {med:>8.3f} {costs:>5} {all(v[2] for v in vals)}"
+            )
     print(f"(lifted domain: {which})")
 
 

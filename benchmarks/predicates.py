@@ -66,7 +66,12 @@ def broad_phase_counts(frame, seg, settings) -> dict[str, int]:  # type: ignore[
             hit = rel.overlap_matrix(rel.swept_box(objs[b], p.object_translations[-1])[None], boxes)[0]
             hit[b] = False
             swept += int(hit.sum())
-    return {"objects": len(objs), "all_pairs": len(objs) * (len(objs) - 1) // 2, "overlapping_pairs": pairs, "sweep_candidates": swept}
+    return {
+        "objects": len(objs),
+        "all_pairs": len(objs) * (len(objs) - 1) // 2,
+        "overlapping_pairs": pairs,
+        "sweep_candidates": swept,
+    }
 
 
 def bench(name: str, frame, seg, settings: Settings, repeat: int) -> None:  # type: ignore[no-untyped-def]
@@ -87,9 +92,13 @@ def bench(name: str, frame, seg, settings: Settings, repeat: int) -> None:  # ty
         kinds[f[0]] = kinds.get(f[0], 0) + 1
     print(f"\n== {name}: {len(state.objects)} objects, {len(state.facts)} facts {dict(sorted(kinds.items()))}")
     print(f"   broad phase: {counts}")
-    print(f"   whole stage: median wall {1e3 * statistics.median(wall):.1f} ms, CPU {1e3 * statistics.median(cpu):.1f} ms "
-          f"(min wall {1e3 * min(wall):.1f} ms, {repeat} runs)")
-    print("   per family (median wall ms): " + ", ".join(f"{k} {1e3 * statistics.median(v):.1f}" for k, v in fam.items()))
+    print(
+        f"   whole stage: median wall {1e3 * statistics.median(wall):.1f} ms, CPU {1e3 * statistics.median(cpu):.1f} ms "
+        f"(min wall {1e3 * min(wall):.1f} ms, {repeat} runs)"
+    )
+    print(
+        "   per family (median wall ms): " + ", ".join(f"{k} {1e3 * statistics.median(v):.1f}" for k, v in fam.items())
+    )
 
 
 def main() -> None:
@@ -112,7 +121,9 @@ def main() -> None:
 
             t0 = time.perf_counter()
             seg = segment(frame, settings.segment)
-            print(f"segmentation of test57: {len(seg.objects)} objects in {time.perf_counter() - t0:.2f} s (not counted below)")
+            print(
+                f"segmentation of test57: {len(seg.objects)} objects in {time.perf_counter() - t0:.2f} s (not counted below)"
+            )
             bench("test57, segmented", frame, seg, settings, args.repeat)
         except ImportError:
             print("segmentation stage not available: test57 measured on ground-truth objects only")

@@ -79,13 +79,14 @@ def write_repeated(path: Path, frames: list, count: int) -> None:
 
 def measure(log: Path) -> dict:
     """Run in a fresh process: replay ``log``; RSS baseline after imports, per frame."""
+    import mcap.reader  # noqa: F401
+    import mcap_ros2.decoder  # noqa: F401
+    import pinocchio  # noqa: F401
+
     import clearcli.perception.segment  # noqa: F401  heavy imports first: the baseline
     import clearcli.planning.backtrack  # noqa: F401
     import clearcli.predicates.state_builder  # noqa: F401
     import clearcli.robot.wam_kinematics  # noqa: F401
-    import mcap.reader  # noqa: F401
-    import mcap_ros2.decoder  # noqa: F401
-    import pinocchio  # noqa: F401
     from clearcli.io.read import iter_frames
     from clearcli.pipeline import Pipeline
     from clearcli.replay.session import ReplayOptions, Session, replay
@@ -192,7 +193,9 @@ def run_sessions(n_sessions: int, push_memory: bool, truth: bool, max_actions: i
         except ValueError:  # no room for that many objects with this seed: the next one
             continue
         pipeline = Pipeline(Settings(), segment_fn=truth_segment if truth else None)
-        episode = Episode(world, Session(pipeline, ReplayOptions(push_memory=push_memory)), seed=seed, max_actions=max_actions)
+        episode = Episode(
+            world, Session(pipeline, ReplayOptions(push_memory=push_memory)), seed=seed, max_actions=max_actions
+        )
         for _ in episode:
             pass
         results.append(episode.result)
@@ -229,20 +232,26 @@ def report_sessions(label: str, results: list) -> dict:
         f"actions per object acted on: mean {statistics.mean(per_object) if per_object else 0:.2f}, "
         f"max {max(per_object) if per_object else 0}; pushes {pushes}; slipped grasps {slips}"
     )
-    print(f"    pushes undoing the previous push of the object: {back} (in {sessions_back} sessions); budget ran out: {budget}")
+    print(
+        f"    pushes undoing the previous push of the object: {back} (in {sessions_back} sessions); budget ran out: {budget}"
+    )
     for r in results:
         if r.back_and_forth:
             steps = "; ".join(
-                f"{s.action} {s.outcome}" + (" [undoes the last push]" if s.undoes_push else "") for s in r.steps if s.action
+                f"{s.action} {s.outcome}" + (" [undoes the last push]" if s.undoes_push else "")
+                for s in r.steps
+                if s.action
             )
             print(f"    back and forth in {r.scene} seed {r.seed}: {steps}")
     unseen = sum(1 for r in results if not r.cleared_truly and r.unseen)
     print(f"    of the sessions not cleared, {unseen} left objects that no segment stood for (merged or missed)")
     for r in results:
         if not r.cleared_truly:
-            print(f"    not cleared: {r.scene} seed {r.seed}: end {r.end}, left {r.remaining}, "
-                  f"unreachable/ungraspable {r.unreachable} (truly too wide/narrow {r.truly_ungraspable}), "
-                  f"stuck {r.stuck}, merged/missed {r.unseen}, moved by the robot {r.moved}: {r.reason}")
+            print(
+                f"    not cleared: {r.scene} seed {r.seed}: end {r.end}, left {r.remaining}, "
+                f"unreachable/ungraspable {r.unreachable} (truly too wide/narrow {r.truly_ungraspable}), "
+                f"stuck {r.stuck}, merged/missed {r.unseen}, moved by the robot {r.moved}: {r.reason}"
+            )
     return {
         "sessions": n,
         "cleared_reachable": ok,

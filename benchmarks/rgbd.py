@@ -36,8 +36,9 @@ def _median_ms(fn, repeat: int) -> float:
 
 
 def _replay_fps(log: Path) -> tuple[float, int]:
-    res = subprocess.run([sys.executable, "-m", "clearcli.cli", "replay", str(log), "--json"],
-                         capture_output=True, text=True)
+    res = subprocess.run(
+        [sys.executable, "-m", "clearcli.cli", "replay", str(log), "--json"], capture_output=True, text=True
+    )
     lines = [json.loads(x) for x in res.stdout.splitlines() if x.strip()]
     summary = lines[-1]
     return float(summary["frames_per_s"]), int(summary["frames"])
@@ -54,16 +55,22 @@ def main() -> None:
 
     depth = DATA / "rgbd/uois/uois_0003_depth.png"
     pcd = DATA / "scenes/uois_realsense/uois_image_0003.pcd"
-    print(f"read one 640 x 480 pair (depth + colour PNG, intrinsics): {_median_ms(lambda: read_frame(depth), args.repeat):.1f} ms"
-          f" (median of {args.repeat}; target <= 15 ms)")
-    print(f"read the PCD of the same frame:                             {_median_ms(lambda: read_pcd(pcd), args.repeat):.1f} ms")
+    print(
+        f"read one 640 x 480 pair (depth + colour PNG, intrinsics): {_median_ms(lambda: read_frame(depth), args.repeat):.1f} ms"
+        f" (median of {args.repeat}; target <= 15 ms)"
+    )
+    print(
+        f"read the PCD of the same frame:                             {_median_ms(lambda: read_pcd(pcd), args.repeat):.1f} ms"
+    )
     rgbd_log = DATA / "rgbd/uois_realsense_ros2.mcap"
     with tempfile.TemporaryDirectory() as tmp:
         cloud_log = Path(tmp) / "uois_points.mcap"
         frames = []
         for k in range(9):
             f = read_pcd(DATA / f"scenes/uois_realsense/uois_image_{k:04d}.pcd")
-            frames.append(Frame(f.points, f.colors, f.shape, {}, 1_700_000_000.0 + k, "camera_color_optical_frame", f.source))
+            frames.append(
+                Frame(f.points, f.colors, f.shape, {}, 1_700_000_000.0 + k, "camera_color_optical_frame", f.source)
+            )
         write_pointcloud2_mcap(cloud_log, frames)
         fps_rgbd, n_rgbd = _replay_fps(rgbd_log)
         fps_cloud, n_cloud = _replay_fps(cloud_log)

@@ -63,8 +63,13 @@ print(json.dumps({"kind": kind, "points": int(frame.n_points), "s": dt, "peak_mb
 
 
 def run(kind: str, size: float, frame: Path) -> dict:
-    out = subprocess.run([sys.executable, "-c", CHILD, kind, str(size), str(frame)], capture_output=True, text=True,
-                         timeout=3600, cwd=REPO)
+    out = subprocess.run(
+        [sys.executable, "-c", CHILD, kind, str(size), str(frame)],
+        capture_output=True,
+        text=True,
+        timeout=3600,
+        cwd=REPO,
+    )
     if out.returncode != 0:
         raise SystemExit(f"{kind} {size}: {out.stderr[-2000:]}")
     return json.loads(out.stdout.strip().splitlines()[-1])
@@ -90,8 +95,13 @@ def quality() -> None:
         truth = np.asarray(frame.fields["label"]).ravel()
         f1["organized"].append(score(segment(frame, settings).labels(), truth).f1)
         fin = np.isfinite(frame.points).all(axis=1)
-        flat = Frame(points=frame.points[fin], colors=None if frame.colors is None else frame.colors[fin], shape=None,
-                     fields={}, source=path.name)
+        flat = Frame(
+            points=frame.points[fin],
+            colors=None if frame.colors is None else frame.colors[fin],
+            shape=None,
+            fields={},
+            source=path.name,
+        )
         f1["unorganized"].append(score(segment(flat, settings).labels(), truth[fin]).f1)
     for kind, values in f1.items():
         print(f"mOSD all {len(values)}, {kind:11s}: mean object F1 {np.mean(values):.3f}")
@@ -116,8 +126,11 @@ def main() -> None:
             if base is None:
                 base = r["s"]
             stages = ", ".join(f"{k} {v:.2f}" for k, v in r["stages"].items() if k != "total")
-            print(f"{kind:11s} {r['points'] / 1e6:5.2f} M points  {r['s']:7.2f} s  ({r['s'] / base:5.1f} x the "
-                  f"640 x 480 frame)  peak {r['peak_mb']:6.0f} MB  {r['objects']:2d} objects   [{stages}]", flush=True)
+            print(
+                f"{kind:11s} {r['points'] / 1e6:5.2f} M points  {r['s']:7.2f} s  ({r['s'] / base:5.1f} x the "
+                f"640 x 480 frame)  peak {r['peak_mb']:6.0f} MB  {r['objects']:2d} objects   [{stages}]",
+                flush=True,
+            )
 
 
 if __name__ == "__main__":

@@ -44,12 +44,13 @@ from clearcli.io.read import read_frame  # noqa: E402
 from clearcli.perception.segment import segment  # noqa: E402
 from clearcli.settings.segment import SegmentSettings  # noqa: E402
 
+
 def _categories() -> list[tuple[str, list[str]]]:
     """mOSD's categories from the groups file `clear evaluate dataset --groups mosd` uses."""
     import fnmatch
 
-    from clearcli.tasks.sources import natural_key
     from clearcli.evaluate.dataset import load_groups
+    from clearcli.tasks.sources import natural_key
 
     names = [f"learn/learn{i}.pcd" for i in range(45)] + [f"test/test{i}.pcd" for i in (44, 46, 47, 55, 57)]
     out = []

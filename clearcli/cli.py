@@ -39,7 +39,7 @@ def make_app(only: str | None = None) -> typer.Typer:
     module's attribute, built on first use) has them all, for tests and embedding.
     """
     # typer is imported here, not at the top: `main` holds Ctrl-C/SIGTERM first (clearcli/interrupts.py)
-    from typing import Annotated, Optional
+    from typing import Annotated
 
     import typer
 
@@ -50,14 +50,14 @@ def make_app(only: str | None = None) -> typer.Typer:
             typer.echo(f"clear {__version__}")
             raise typer.Exit(0)
 
-    def _root(version: Optional[bool] = None) -> None:
+    def _root(version: bool | None = None) -> None:
         pass
 
     # real objects, not this module's postponed strings: typer resolves them in the
     # module's globals, where typer is not (see above)
     _root.__annotations__ = {
         "version": Annotated[
-            Optional[bool],
+            bool | None,
             typer.Option("--version", callback=_version, is_eager=True, help="Print the version and exit."),
         ],
         "return": None,
@@ -156,12 +156,7 @@ def _quiet_stdout() -> None:
 
 def main() -> None:
     """Entry point of `clear` and `clearcli`: maps ClearError to its exit code."""
-    if (
-        len(sys.argv) == 1
-        and Path(sys.argv[0]).name == "clear"
-        and sys.stdout.isatty()
-        and sys.stdin.isatty()
-    ):
+    if len(sys.argv) == 1 and Path(sys.argv[0]).name == "clear" and sys.stdout.isatty() and sys.stdin.isatty():
         _run_terminal_clear()
         return
     interrupts.hold()  # until the command can answer a signal properly (clearcli/interrupts.py)

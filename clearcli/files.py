@@ -13,8 +13,9 @@ import os
 import re
 import stat
 import tempfile
+from collections.abc import Iterator
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any
 
 from clearcli.errors import OutputError
 
@@ -24,7 +25,8 @@ from clearcli.errors import OutputError
 PART_SUFFIX = ".part"
 # errno values of a write that failed for reasons of the place, not of clear: exit 8.
 WRITE_ERRNOS = frozenset(
-    getattr(errno, n) for n in ("ENOSPC", "EDQUOT", "EROFS", "EACCES", "EPERM", "ENAMETOOLONG", "EIO", "ENOENT", "EFBIG")
+    getattr(errno, n)
+    for n in ("ENOSPC", "EDQUOT", "EROFS", "EACCES", "EPERM", "ENAMETOOLONG", "EIO", "ENOENT", "EFBIG")
     if hasattr(errno, n)
 )
 # DOTALL and \Z: a file name may hold a newline, and its temporary is ours all the same
@@ -165,7 +167,7 @@ def _write_into(path: Path, tmp: str) -> None:
             while chunk := src.read(1 << 20):
                 view = memoryview(chunk)
                 while view:
-                    view = view[os.write(fd, view):]
+                    view = view[os.write(fd, view) :]
     finally:
         os.close(fd)
 

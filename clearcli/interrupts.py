@@ -16,8 +16,9 @@ and the CLI maps it to exit 143.
 from __future__ import annotations
 
 import signal
+from collections.abc import Iterator
 from contextlib import contextmanager
-from typing import Any, Iterator
+from typing import Any
 
 from clearcli.errors import Terminated
 

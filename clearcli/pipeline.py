@@ -16,8 +16,9 @@ from __future__ import annotations
 
 import os
 import time
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Callable, Mapping
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -46,9 +47,9 @@ class FrameResult:
     """Everything the pipeline made of one frame (None for stages not reached)."""
 
     status: str
-    segmentation: "Segmentation | None" = None
-    state: "SymbolicState | None" = None  # the state planned on (after any adjustment)
-    plan: "Plan | None" = None
+    segmentation: Segmentation | None = None
+    state: SymbolicState | None = None  # the state planned on (after any adjustment)
+    plan: Plan | None = None
     timings_s: Mapping[str, float] = field(default_factory=dict)
     error: str = ""
     stage: str = ""  # the stage that failed, when status is failed/no_table/no_plan
@@ -67,7 +68,7 @@ def _default_state() -> StateFn:
     return compute_state
 
 
-def _default_plan(robot: "Arm") -> PlanFn:
+def _default_plan(robot: Arm) -> PlanFn:
     import functools
 
     from clearcli.planning.backtrack import make_plan
@@ -87,12 +88,12 @@ class Pipeline:
 
     def __init__(
         self,
-        settings: "Settings",
+        settings: Settings,
         T_base_camera: np.ndarray | None = None,
         segment_fn: SegmentFn | None = None,
         state_fn: StateFn | None = None,
         plan_fn: PlanFn | None = None,
-        robot: "Arm | None" = None,
+        robot: Arm | None = None,
     ) -> None:
         self.settings = settings
         self.T_base_camera = T_base_camera
@@ -102,7 +103,7 @@ class Pipeline:
         self._robot = robot
 
     @property
-    def robot(self) -> "Arm":
+    def robot(self) -> Arm:
         """The arm every stage and the simulated world use, resolved once."""
         if self._robot is None:
             from clearcli.robot.arm import resolve_arm
@@ -112,28 +113,30 @@ class Pipeline:
 
     # --- the stages, each timed ---------------------------------------------------------
 
-    def segment(self, frame: "Frame") -> "Segmentation":
+    def segment(self, frame: Frame) -> Segmentation:
         if self._segment_fn is None:
             self._segment_fn = _default_segment()
         return self._segment_fn(frame, self.settings.segment)
 
-    def state(self, frame: "Frame", segmentation: "Segmentation") -> "SymbolicState":
+    def state(self, frame: Frame, segmentation: Segmentation) -> SymbolicState:
         if self._state_fn is None:
             self._state_fn = _default_state()
         return self._state_fn(frame, segmentation, self.settings)
 
-    def plan(self, state: "SymbolicState") -> "Plan":
+    def plan(self, state: SymbolicState) -> Plan:
         if self._plan_fn is None:
             self._plan_fn = _default_plan(self.robot)
         # A replay acts on the first action and plans again from the next frame: it
         # checks what [plan] replay_check says (the first action, by default).
-        return self._plan_fn(state, self.settings, T_base_camera=self.T_base_camera, check=self.settings.plan.replay_check)
+        return self._plan_fn(
+            state, self.settings, T_base_camera=self.T_base_camera, check=self.settings.plan.replay_check
+        )
 
     def run(
         self,
-        frame: "Frame",
-        adjust: Callable[["Segmentation", "SymbolicState"], "SymbolicState"] | None = None,
-        on_segmentation: Callable[["Segmentation"], None] | None = None,
+        frame: Frame,
+        adjust: Callable[[Segmentation, SymbolicState], SymbolicState] | None = None,
+        on_segmentation: Callable[[Segmentation], None] | None = None,
         catch_internal: bool = False,
     ) -> FrameResult:
         """All stages on one frame. ``on_segmentation`` sees the segmentation as soon as
@@ -209,21 +212,22 @@ class Pipeline:
 # Only this module chains the stages; a task picks how far to go and serialises.
 
 
-def read(path: Any, topic: str | None = None, index: int = 0, settings: "Settings | None" = None,
-         color: Any = None) -> "Frame":
+def read(
+    path: Any, topic: str | None = None, index: int = 0, settings: Settings | None = None, color: Any = None
+) -> Frame:
     """Frame ``index`` of ``path``; ``settings`` ([images]) and ``color`` serve depth images."""
     from clearcli.io.read import read_frame
 
     return read_frame(path, topic, index, settings.images if settings is not None else None, color)
 
 
-def segmented(frame: "Frame", settings: "Settings") -> "Segmentation":
+def segmented(frame: Frame, settings: Settings) -> Segmentation:
     from clearcli.perception.segment import segment
 
     return segment(frame, settings.segment)
 
 
-def truth_segmentation(frame: "Frame", path: Any) -> "Segmentation":
+def truth_segmentation(frame: Frame, path: Any) -> Segmentation:
     """The segmentation the frame's own 'label' field gives (mOSD ground truth)."""
     from clearcli.errors import InputError
     from clearcli.predicates.synthetic import segmentation_from_labels
@@ -233,7 +237,7 @@ def truth_segmentation(frame: "Frame", path: Any) -> "Segmentation":
     return segmentation_from_labels(frame)
 
 
-def stated(frame: "Frame", segmentation: "Segmentation", settings: "Settings") -> "SymbolicState":
+def stated(frame: Frame, segmentation: Segmentation, settings: Settings) -> SymbolicState:
     from clearcli.predicates.state_builder import compute_state
 
     return compute_state(frame, segmentation, settings)
@@ -244,14 +248,14 @@ class Planned:
     """A frame planned: the plan (also when nothing can be done: then ``no_plan`` holds
     the error that says why), the robot's placement and where it came from."""
 
-    plan: "Plan"
+    plan: Plan
     T_base_camera: np.ndarray | None
     pose_source: str
     no_plan: NoPlanError | None = None
 
 
 def planned(
-    state: "SymbolicState", settings: "Settings", robot: "Arm", camera_pose: str | None, check: str | None
+    state: SymbolicState, settings: Settings, robot: Arm, camera_pose: str | None, check: str | None
 ) -> Planned:
     """Place ``robot`` (``camera_pose`` as given on the command line, else [robot]'s
     rules), then plan with every action IK-checked against it (``check``: None for

@@ -13,8 +13,9 @@ from __future__ import annotations
 import functools
 import json
 import sys
+from collections.abc import Mapping
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Mapping
+from typing import TYPE_CHECKING, Any
 
 from clearcli import __version__
 
@@ -62,7 +63,7 @@ def source_identity() -> str:
     return f"git {commit}" if commit else f"package {__version__}"
 
 
-def stamp(settings: "Settings | None", command: str) -> dict[str, Any]:
+def stamp(settings: Settings | None, command: str) -> dict[str, Any]:
     """The ``clear`` object of a document made by ``command`` with ``settings``."""
     from clearcli.settings import READS, digest
 

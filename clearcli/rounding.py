@@ -8,7 +8,8 @@ same way in every document that carries it.
 
 from __future__ import annotations
 
-from typing import Any, Mapping
+from collections.abc import Mapping
+from typing import Any
 
 DIGITS = 6
 TIMING_DIGITS = 4

@@ -7,7 +7,7 @@ named ``T_<to>_<from>``. NumPy only: every layer may use this.
 from __future__ import annotations
 
 import math
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 

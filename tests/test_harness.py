@@ -66,7 +66,11 @@ def _normalised_stdout(text: str) -> str:
 
         def drop(x):  # type: ignore[no-untyped-def]
             if isinstance(x, dict):
-                return {k: drop(v) for k, v in x.items() if "timing" not in k and not k.endswith("time_s") and k != "seconds"}
+                return {
+                    k: drop(v)
+                    for k, v in x.items()
+                    if "timing" not in k and not k.endswith("time_s") and k != "seconds"
+                }
             if isinstance(x, list):
                 return [drop(v) for v in x]
             return x
@@ -78,13 +82,24 @@ def _normalised_stdout(text: str) -> str:
 # (seed, index, kind): cases whose in-process runs give exit 0, 3, 4, 8 and 11 between them:
 # an info table, JSON documents, a warning beside a result, one-line errors, a batch's table,
 # written outputs
-SAME_BOTH_WAYS = [(11, 7, "depth"), (11, 0, "depth"), (11, 8, "color"), (11, 3, "intrinsics"), (11, 6, "log"),
-                  (11, 10, "log"), (11, 1, "urdf"), (11, 1, "settings"), (11, 1, "outputs"), (11, 10, "outputs")]
+SAME_BOTH_WAYS = [
+    (11, 7, "depth"),
+    (11, 0, "depth"),
+    (11, 8, "color"),
+    (11, 3, "intrinsics"),
+    (11, 6, "log"),
+    (11, 10, "log"),
+    (11, 1, "urdf"),
+    (11, 1, "settings"),
+    (11, 1, "outputs"),
+    (11, 10, "outputs"),
+]
 
 
 @pytest.mark.parametrize("seed,index,kind", SAME_BOTH_WAYS)
-def test_in_process_runs_are_what_a_process_gives(tmp_path: Path, materials: H.Materials, seed: int, index: int,
-                                                 kind: str) -> None:
+def test_in_process_runs_are_what_a_process_gives(
+    tmp_path: Path, materials: H.Materials, seed: int, index: int, kind: str
+) -> None:
     folder = tmp_path / "case"
     inproc, sub, case = H.compare_with_subprocess(seed, index, kind, materials, folder)
     what = f"{'; '.join(case.recipe)} | {' ; '.join(case.command_lines())}"
@@ -130,7 +145,7 @@ def test_a_png_header_lie_keeps_its_crc_valid() -> None:
     assert Image.open(io.BytesIO(data)).size == (4, 3)
     big = H.png_set_ihdr(data, width=100000, height=100000)
     kind, body = H.png_chunks(big)[0]
-    crc = int.from_bytes(big[8 + 8 + 13:8 + 8 + 13 + 4], "big")
+    crc = int.from_bytes(big[8 + 8 + 13 : 8 + 8 + 13 + 4], "big")
     assert kind == b"IHDR" and crc == zlib.crc32(b"IHDR" + body)
     Image.MAX_IMAGE_PIXELS = None
     assert Image.open(io.BytesIO(big)).size == (100000, 100000)  # only the size lies
@@ -162,15 +177,24 @@ def test_a_naming_rule_suffix_that_is_no_name_ending_is_a_settings_error(tmp_pat
     depth = tmp_path / "f_depth.png"
     depth.write_bytes(b"\x89PNG\r\n\x1a\n")
     for key in ("color_suffix", "depth_suffix"):
-        run = H.run_inprocess(["segment", str(depth), "--intrinsics", "52.5 52.5 31.5 23.5",
-                               "--set", f"images.{key}={json.dumps(suffix)}"])
+        run = H.run_inprocess(
+            [
+                "segment",
+                str(depth),
+                "--intrinsics",
+                "52.5 52.5 31.5 23.5",
+                "--set",
+                f"images.{key}={json.dumps(suffix)}",
+            ]
+        )
         assert run.code == 3, run.stderr
         assert run.stderr.count("\n") == 1 and run.stderr.startswith(f"clear: error: settings: [images] {key}")
 
 
 @pytest.mark.parametrize("cy", ["-9223372036854775809", "-1e300", "1e12"])
-def test_a_principal_point_far_outside_the_image_is_no_table_not_a_crash(tmp_path: Path, materials: H.Materials,
-                                                                         cy: str) -> None:
+def test_a_principal_point_far_outside_the_image_is_no_table_not_a_crash(
+    tmp_path: Path, materials: H.Materials, cy: str
+) -> None:
     # found by the harness (intrinsics "52.5,52.5,31.5,-9223372036854775809": exit 1, "array is
     # too big" in the table's occupancy grid, whose size overflowed int64)
     depth = tmp_path / "f_depth.png"

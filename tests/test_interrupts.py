@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 import signal
 import time
-from typing import Iterator
+from collections.abc import Iterator
 
 import pytest
 
@@ -93,8 +93,9 @@ def test_a_signal_while_the_interpreter_exits_is_its_code_without_a_traceback(si
     from pathlib import Path
 
     frame = str(Path(__file__).resolve().parents[1] / "fixtures" / "box_on_box.pcd")
-    res = subprocess.run([sys.executable, "-c", _EXIT_SIGNAL.format(sig=sig, frame=frame)],
-                         capture_output=True, text=True, timeout=120)
+    res = subprocess.run(
+        [sys.executable, "-c", _EXIT_SIGNAL.format(sig=sig, frame=frame)], capture_output=True, text=True, timeout=120
+    )
     assert res.returncode == code, res.stderr
     assert res.stderr == "", res.stderr  # not a word: the batch's lines were out already
     lines = res.stdout.splitlines()

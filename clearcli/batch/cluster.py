@@ -8,7 +8,8 @@ is not retried (the frame may be what kills it): its frame gets an internal-erro
 
 from __future__ import annotations
 
-from typing import Any, Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from typing import Any
 
 from clearcli.batch.work import Job, frame_line, run_job
 from clearcli.errors import InputError
@@ -40,7 +41,9 @@ def connect(address: str) -> float:
         else:
             ray.init(address=address, **kwargs)
     except Exception as exc:  # ConnectionError, RuntimeError, ValueError by Ray version
-        raise InputError(f"--ray {address}: cannot connect to a Ray cluster there ({type(exc).__name__}: {exc})") from None
+        raise InputError(
+            f"--ray {address}: cannot connect to a Ray cluster there ({type(exc).__name__}: {exc})"
+        ) from None
     return time.perf_counter() - t0
 
 

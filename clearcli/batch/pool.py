@@ -18,9 +18,10 @@ import sys
 import threading
 import time
 from collections import deque
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from multiprocessing.connection import Connection, wait
-from typing import Any, Callable, Iterator, Sequence
+from typing import Any
 
 from clearcli import interrupts
 from clearcli.batch.work import Job, frame_line, run_job
@@ -128,7 +129,9 @@ class WorkerPool:
         child.close()
         return _Slot(proc, parent)
 
-    def run(self, jobs: Sequence[Job], stop: Callable[[], bool] = lambda: False) -> Iterator[tuple[int, dict[str, Any]]]:
+    def run(
+        self, jobs: Sequence[Job], stop: Callable[[], bool] = lambda: False
+    ) -> Iterator[tuple[int, dict[str, Any]]]:
         """(index, line) for every job, in completion order. ``stop()`` true: no new job
         is started (the running ones finish)."""
         pending = deque(range(len(jobs)))

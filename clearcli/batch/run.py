@@ -23,16 +23,17 @@ from __future__ import annotations
 import json
 import os
 import time
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Mapping, Sequence
+from typing import Any
 
 from clearcli import interrupts
-from clearcli.tasks.sources import BadInput, FrameRef, Skipped, check_unique_names, expand
 from clearcli.batch.work import MARK, RESULT_CODES, Job, run_job
-from clearcli.tasks.base import OUTPUT_FILES
-from clearcli.files import stream_kind
 from clearcli.errors import EXIT_BATCH_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_TERMINATED, InputError, Terminated
+from clearcli.files import stream_kind
+from clearcli.tasks.base import OUTPUT_FILES
+from clearcli.tasks.sources import BadInput, FrameRef, Skipped, check_unique_names, expand
 
 BATCH_SCHEMA_VERSION = 1
 
@@ -176,8 +177,12 @@ def _input_among_outputs(job: Job, inputs: set[Path]) -> Path | None:
 
 def _line_for_bad(item: BadInput) -> dict[str, Any]:
     return {
-        "type": "frame", "source": item.source, "frame": item.index, "name": item.name,
-        "exit_code": item.exit_code, "error": {"message": item.message, "exit_code": item.exit_code},
+        "type": "frame",
+        "source": item.source,
+        "frame": item.index,
+        "name": item.name,
+        "exit_code": item.exit_code,
+        "error": {"message": item.message, "exit_code": item.exit_code},
     }
 
 
@@ -267,7 +272,11 @@ def claim_out_dir(req: BatchRequest) -> None:
     has_results = any(req.out_dir.glob("*.json"))
     if (old is not None and old != record) or (old is None and has_results):
         if not req.force:
-            what = f"{path} records other settings or another version" if old is not None else "it holds results with no settings.toml"
+            what = (
+                f"{path} records other settings or another version"
+                if old is not None
+                else "it holds results with no settings.toml"
+            )
             raise InputError(
                 f"--out-dir {req.out_dir}: {what} than this `clear {req.command}`; "
                 "use another folder, or --force to redo what was made otherwise (with --resume: only those frames)"
@@ -354,14 +363,24 @@ def run_batch(
     backend = "in-process"
     interrupted = terminated = False
     progress = Progress(
-        TextColumn(f"{req.command}"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn(),
-        console=stderr, transient=True, disable=not stderr.is_terminal,
+        TextColumn(f"{req.command}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TimeRemainingColumn(),
+        console=stderr,
+        transient=True,
+        disable=not stderr.is_terminal,
     )
     try:
         interrupts.release()  # a Ctrl-C/SIGTERM held since start-up stops here, with a summary
         cfg = getattr(req.request, "settings", None)
-        items = expand(req.inputs, frame=req.frame, every=req.every, topic=req.topic,
-                       images=cfg.images if cfg is not None else None)
+        items = expand(
+            req.inputs,
+            frame=req.frame,
+            every=req.every,
+            topic=req.topic,
+            images=cfg.images if cfg is not None else None,
+        )
         if req.out_dir is not None:
             check_unique_names(items)
             if req.out_dir.exists() and not req.out_dir.is_dir():
@@ -386,22 +405,44 @@ def run_batch(
                 lines[k] = _line_for_bad(it)
                 continue
             if isinstance(it, Skipped):
-                lines[k] = {"type": "frame", "source": it.source, "frame": 0, "name": "", "exit_code": 0,
-                            "skipped": it.reason}
+                lines[k] = {
+                    "type": "frame",
+                    "source": it.source,
+                    "frame": 0,
+                    "name": "",
+                    "exit_code": 0,
+                    "skipped": it.reason,
+                }
                 continue
             assert isinstance(it, FrameRef)
-            job = Job(req.command, req.request, it.source, it.index, it.name, dict(req.made_by), req.topic,
-                      None if req.out_dir is None else str(req.out_dir), req.outputs, req.force, req.reads)
+            job = Job(
+                req.command,
+                req.request,
+                it.source,
+                it.index,
+                it.name,
+                dict(req.made_by),
+                req.topic,
+                None if req.out_dir is None else str(req.out_dir),
+                req.outputs,
+                req.force,
+                req.reads,
+            )
             # before anything in --out-dir is removed (--force, --resume): a file this
             # batch reads that one of the frame's outputs would name is never touched
             clash = _input_among_outputs(job, inputs_of_run)
             if clash is not None:
                 from clearcli.errors import EXIT_OUTPUT
 
-                lines[k] = _line_for_bad(BadInput(
-                    it.source, f"{clash}: is an input of this batch; refusing to overwrite it (even with --force)",
-                    EXIT_OUTPUT, it.index, it.name,
-                ))
+                lines[k] = _line_for_bad(
+                    BadInput(
+                        it.source,
+                        f"{clash}: is an input of this batch; refusing to overwrite it (even with --force)",
+                        EXIT_OUTPUT,
+                        it.index,
+                        it.name,
+                    )
+                )
                 continue
             if req.out_dir is not None:
                 mark = req.out_dir / MARK.format(name=it.name)
@@ -503,7 +544,13 @@ def run_command_batch(
 
     made_by = stamp(getattr(request, "settings", None), command)
     req = BatchRequest(
-        command, inputs, request, made_by, outputs=parse_outputs(command, outputs), jobs=jobs or default_jobs(), **fields
+        command,
+        inputs,
+        request,
+        made_by,
+        outputs=parse_outputs(command, outputs),
+        jobs=jobs or default_jobs(),
+        **fields,
     )
     return run_batch(req, on_line=on_line, extra_summary=extra_summary, render=render)
 
@@ -521,5 +568,6 @@ def _print_table(rows: Sequence[Mapping[str, Any]], summary: Mapping[str, Any], 
         f"{summary['failed']} failed, {summary['not_done']} not done, {summary['skipped']} skipped ({codes}); "
         f"{summary['backend']}, "
         f"{summary['wall_s']:.1f} s",
-        markup=False, highlight=False,
+        markup=False,
+        highlight=False,
     )

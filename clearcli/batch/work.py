@@ -14,9 +14,10 @@ import dataclasses
 import errno
 import json
 import os
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
 
 from clearcli.tasks.base import OUTPUT_FILES, Outcome, Outputs, Source
 
@@ -80,7 +81,11 @@ def frame_line(job: Job, outcome: Outcome | None, error: tuple[str, int] | None)
     from clearcli.provenance import envelope
 
     line: dict[str, Any] = {
-        "type": "frame", "source": job.source, "frame": job.index, "name": job.name, "clear": dict(job.made_by),
+        "type": "frame",
+        "source": job.source,
+        "frame": job.index,
+        "name": job.name,
+        "clear": dict(job.made_by),
     }
     if outcome is not None:
         line["exit_code"] = outcome.exit_code

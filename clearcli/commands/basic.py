@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Annotated, Optional
+from typing import Annotated
 
 import typer
 
@@ -23,8 +23,10 @@ def settings_cmd(
 
 
 def robots_cmd(
-    name: Annotated[Optional[str], typer.Argument(help="A profile: print its facts.", metavar="[NAME]")] = None,
-    json_out: Annotated[bool, typer.Option("--json", help="Machine-readable output (schema clear.robots, version 1).")] = False,
+    name: Annotated[str | None, typer.Argument(help="A profile: print its facts.", metavar="[NAME]")] = None,
+    json_out: Annotated[
+        bool, typer.Option("--json", help="Machine-readable output (schema clear.robots, version 1).")
+    ] = False,
 ) -> None:
     """List the robot profiles (--robot NAME, [robot] name), or print one's facts: its
     description, frames, reach, gripper, joints and the [robot]/[gripper] defaults it
@@ -41,8 +43,18 @@ def robots_cmd(
             typer.echo(f"{p['name']:8s} {p['summary']}" + ("  (default)" if p["default"] else ""))
         return
     facts = payload["profile"]
-    for key in ("name", "summary", "urdf", "base_frame", "flange_frame", "tcp_frame", "reach_m", "shoulder_base_m",
-                "base_above_footprint_m", "gripper"):
+    for key in (
+        "name",
+        "summary",
+        "urdf",
+        "base_frame",
+        "flange_frame",
+        "tcp_frame",
+        "reach_m",
+        "shoulder_base_m",
+        "base_above_footprint_m",
+        "gripper",
+    ):
         typer.echo(f"{key:24s} {facts[key]}")
     typer.echo("joints (rad)")
     for j in facts["joints"]:

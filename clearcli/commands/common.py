@@ -5,7 +5,8 @@ Only light imports here (typer, rich): `clear --help` must stay fast.
 
 from __future__ import annotations
 
-from typing import Any, Mapping
+from collections.abc import Mapping
+from typing import Any
 
 from clearcli.console import stderr, stdout  # noqa: F401  (re-exported)
 from clearcli.files import atomic_output, atomic_path, check_output_path  # noqa: F401  (re-exported)

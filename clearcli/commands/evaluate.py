@@ -23,7 +23,7 @@ true_ids, pred_ids), the OSD/OCID metrics as above, plus "pred" and "truth" (the
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated, Any, Optional
+from typing import Annotated, Any
 
 import typer
 
@@ -36,7 +36,6 @@ evaluate_app = typer.Typer(
     add_completion=False,
     rich_markup_mode=None,
 )
-
 
 
 @evaluate_app.command("segmentation")
@@ -61,8 +60,11 @@ def segmentation_cmd(
         f"mean best IoU {doc['mean_best_iou']:.3f}\n"
         f"over-segmented true objects {doc['over_segmented']}, under-segmenting predictions {doc['under_segmented']}\n"
         f"OSD/OCID: Overlap P/R/F {doc['overlap_precision']:.3f}/{doc['overlap_recall']:.3f}/{doc['overlap_f']:.3f}  "
-        + (f"Boundary P/R/F {doc['boundary_precision']:.3f}/{doc['boundary_recall']:.3f}/{doc['boundary_f']:.3f}  "
-           if doc["boundary_f"] is not None else "Boundary - (not an organized frame)  ")
+        + (
+            f"Boundary P/R/F {doc['boundary_precision']:.3f}/{doc['boundary_recall']:.3f}/{doc['boundary_f']:.3f}  "
+            if doc["boundary_f"] is not None
+            else "Boundary - (not an organized frame)  "
+        )
         + f"objects with F >= 0.75: {doc['objects_f75']:.3f}"
     )
 
@@ -75,16 +77,20 @@ def dataset_cmd(
         typer.Argument(help="Labelled frames (mOSD `label` field): files, and folders to search for them."),
     ],
     pred: Annotated[
-        Optional[Path],
-        typer.Option("--pred", help="Score the label files in this folder (as `--out-dir` names them) instead of segmenting."),
+        Path | None,
+        typer.Option(
+            "--pred", help="Score the label files in this folder (as `--out-dir` names them) instead of segmenting."
+        ),
     ] = None,
     groups: Annotated[
-        Optional[str],
-        typer.Option("--groups", help="Per-group means: a TOML file of [groups] name = [patterns], or 'mosd' (shipped)."),
+        str | None,
+        typer.Option(
+            "--groups", help="Per-group means: a TOML file of [groups] name = [patterns], or 'mosd' (shipped)."
+        ),
     ] = None,
     json_out: Annotated[bool, typer.Option("--json", help="JSON lines: one per frame, then the summary.")] = False,
-    csv_out: Annotated[Optional[Path], typer.Option("--csv", help="Write the per-frame table as CSV.")] = None,
-    png: Annotated[Optional[Path], typer.Option("--png", help="Draw the per-frame F1 as a bar chart.")] = None,
+    csv_out: Annotated[Path | None, typer.Option("--csv", help="Write the per-frame table as CSV.")] = None,
+    png: Annotated[Path | None, typer.Option("--png", help="Draw the per-frame F1 as a bar chart.")] = None,
     force: bo.Force = False,
     settings: bo.SettingsFile = None,
     sets: bo.Set = None,
@@ -123,43 +129,81 @@ def dataset_cmd(
         def num(v: Any) -> str:
             return "-" if v is None else f"{v:.3f}"
 
-        table = Table("frame", "group", "true", "pred", "P", "R", "F1", "IoU", "Ov F", "Bd F", "F>=.75", "over",
-                      "under", "ms")
+        table = Table(
+            "frame", "group", "true", "pred", "P", "R", "F1", "IoU", "Ov F", "Bd F", "F>=.75", "over", "under", "ms"
+        )
         for ln in rows:
             d = ln.get("document")
             if d is None:
                 table.add_row(str(ln["source"]), *[""] * 12, ln["error"]["message"])
                 continue
             table.add_row(
-                Path(d["source"]).name, d.get("group") or "", str(d["n_true"]), str(d["n_pred"]),
-                f"{d['precision']:.3f}", f"{d['recall']:.3f}", f"{d['f1']:.3f}", f"{d['mean_best_iou']:.3f}",
-                num(d.get("overlap_f")), num(d.get("boundary_f")), num(d.get("objects_f75")),
-                str(d["over_segmented"]), str(d["under_segmented"]), f"{1000 * d['time_s']:.0f}",
+                Path(d["source"]).name,
+                d.get("group") or "",
+                str(d["n_true"]),
+                str(d["n_pred"]),
+                f"{d['precision']:.3f}",
+                f"{d['recall']:.3f}",
+                f"{d['f1']:.3f}",
+                f"{d['mean_best_iou']:.3f}",
+                num(d.get("overlap_f")),
+                num(d.get("boundary_f")),
+                num(d.get("objects_f75")),
+                str(d["over_segmented"]),
+                str(d["under_segmented"]),
+                f"{1000 * d['time_s']:.0f}",
             )
         stdout.print(table)
         ev = summary["evaluation"]
-        means = Table("frames", "n", "mean F1", "mean IoU", "mean P", "mean R", "Overlap P/R/F", "Boundary P/R/F",
-                      "F>=.75", "over", "under", "median ms")
+        means = Table(
+            "frames",
+            "n",
+            "mean F1",
+            "mean IoU",
+            "mean P",
+            "mean R",
+            "Overlap P/R/F",
+            "Boundary P/R/F",
+            "F>=.75",
+            "over",
+            "under",
+            "median ms",
+        )
         for label, m in [("all", ev["all"])] + list(ev.get("groups", {}).items()):
             if m["frames"]:
                 means.add_row(
-                    label, str(m["frames"]), f"{m['mean_f1']:.3f}", f"{m['mean_best_iou']:.3f}",
-                    f"{m['mean_precision']:.3f}", f"{m['mean_recall']:.3f}",
+                    label,
+                    str(m["frames"]),
+                    f"{m['mean_f1']:.3f}",
+                    f"{m['mean_best_iou']:.3f}",
+                    f"{m['mean_precision']:.3f}",
+                    f"{m['mean_recall']:.3f}",
                     "/".join(num(m.get(f"mean_overlap_{k}")) for k in ("precision", "recall", "f")),
                     "/".join(num(m.get(f"mean_boundary_{k}")) for k in ("precision", "recall", "f")),
-                    num(m.get("mean_objects_f75")), str(m["over_segmented"]),
-                    str(m["under_segmented"]), f"{1000 * m['median_time_s']:.0f}",
+                    num(m.get("mean_objects_f75")),
+                    str(m["over_segmented"]),
+                    str(m["under_segmented"]),
+                    f"{1000 * m['median_time_s']:.0f}",
                 )
         stdout.print(means)
         stdout.print(
             f"{summary['frames']} frames, {summary['failed']} failed; {summary['backend']}, {summary['wall_s']:.1f} s",
-            markup=False, highlight=False,
+            markup=False,
+            highlight=False,
         )
 
     collected: list[dict[str, Any]] = []
     code = batch.run(
-        "evaluate", inputs, task.Request(cfg, pred=pred, groups=group_map), frame=frame_index, topic=topic,
-        force=force, json_out=json_out, on_line=collected.append, extra_summary=extra, render=render,
+        "evaluate",
+        inputs,
+        task.Request(cfg, pred=pred, groups=group_map),
+        frame=frame_index,
+        topic=topic,
+        force=force,
+        json_out=json_out,
+        on_line=collected.append,
+        extra_summary=extra,
+        render=render,
         reads=(settings, groups if groups and Path(groups).is_file() else None),
     )
     docs = docs_of(collected)

@@ -54,6 +54,7 @@ import typer
 
 from clearcli.commands import options as bo
 
+
 def _fmt_int(n: int) -> str:
     return f"{n:,}".replace(",", " ")
 
@@ -65,16 +66,22 @@ def _frame_rows(frame: dict[str, Any]) -> list[tuple[str, str]]:
     rows.append(("points", f"{_fmt_int(frame['points'])} ({organized})"))
     pct = 100.0 * frame["finite_points"] / frame["points"] if frame["points"] else 0.0
     rows.append(("finite points", f"{_fmt_int(frame['finite_points'])} ({pct:.1f} %)"))
-    rows.append((
-        "fields",
-        " ".join(f["name"] + (f"[{f['count']}]" if f["count"] > 1 else "") + f":{f['dtype']}" for f in frame["fields"]),
-    ))
+    rows.append(
+        (
+            "fields",
+            " ".join(
+                f["name"] + (f"[{f['count']}]" if f["count"] > 1 else "") + f":{f['dtype']}" for f in frame["fields"]
+            ),
+        )
+    )
     bounds = frame["bounds_m"]
     if bounds:
-        rows.append((
-            "bounds (m)",
-            "  ".join(f"{a} [{lo:.3f}, {hi:.3f}]" for a, lo, hi in zip("xyz", bounds["min"], bounds["max"])),
-        ))
+        rows.append(
+            (
+                "bounds (m)",
+                "  ".join(f"{a} [{lo:.3f}, {hi:.3f}]" for a, lo, hi in zip("xyz", bounds["min"], bounds["max"])),
+            )
+        )
     else:
         rows.append(("bounds (m)", "none: no finite point"))
     if frame["frame_id"] or frame["stamp_s"]:
@@ -101,8 +108,10 @@ def _print_table(info: dict[str, Any]) -> None:
     if info["format"] == "depth-image":
         im = info["image"]
         k = im["intrinsics"]
-        kv.add_row("format", f"depth image, {im['width']} x {im['height']}, {im['depth_scale_m']:g} m per unit if integer")
-        rng = (f"{im['depth_min_m']:.3f} .. {im['depth_max_m']:.3f} m" if im["valid_pixels"] else "none")
+        kv.add_row(
+            "format", f"depth image, {im['width']} x {im['height']}, {im['depth_scale_m']:g} m per unit if integer"
+        )
+        rng = f"{im['depth_min_m']:.3f} .. {im['depth_max_m']:.3f} m" if im["valid_pixels"] else "none"
         kv.add_row("depth", f"{_fmt_int(im['valid_pixels'])} pixels with a reading, {rng}")
         dist = f", {k['distortion_model']} distortion corrected" if k["distorted"] else ""
         kv.add_row("intrinsics", f"fx {k['fx']:g} fy {k['fy']:g} cx {k['cx']:g} cy {k['cy']:g}{dist} ({k['source']})")
@@ -123,7 +132,9 @@ def _print_table(info: dict[str, Any]) -> None:
     elif info["format"] == "rosbag2":
         kv.add_row("format", m["library"])
     else:
-        kv.add_row("format", f"MCAP, profile {m['profile'] or '(none)'}, {'indexed' if m['indexed'] else 'not indexed'}")
+        kv.add_row(
+            "format", f"MCAP, profile {m['profile'] or '(none)'}, {'indexed' if m['indexed'] else 'not indexed'}"
+        )
     if m["start_s"] is not None:
         kv.add_row("time span", f"{m['start_s']:.3f} .. {m['end_s']:.3f} s ({m['duration_s']:.3f} s)")
     kv.add_row("messages", _fmt_int(m["message_count"]))
@@ -132,8 +143,10 @@ def _print_table(info: dict[str, Any]) -> None:
     if m["pointcloud_topic"]:
         n_frames = m["frame_count"]
         depth = any(im["topic"] == m["pointcloud_topic"] for im in m.get("image_streams", []))
-        kv.add_row("depth images" if depth else "point cloud",
-                   f"{m['pointcloud_topic']} ({n_frames} frame{'s' if n_frames != 1 else ''})")
+        kv.add_row(
+            "depth images" if depth else "point cloud",
+            f"{m['pointcloud_topic']} ({n_frames} frame{'s' if n_frames != 1 else ''})",
+        )
     elif m["pointcloud_topics"]:
         kv.add_row("point cloud", f"several topics ({', '.join(m['pointcloud_topics'])}): choose with --topic")
     else:
@@ -144,14 +157,20 @@ def _print_table(info: dict[str, Any]) -> None:
             kv.add_row(key, value)
     for im in m.get("image_streams", []):
         size = f"{im['width']} x {im['height']}" if im["width"] else "?"
-        kv.add_row("image", f"{im['topic']}: {im['encoding'] or '?'}, {size}" + ("  <- depth" if im["topic"] == m["pointcloud_topic"] else ""))
+        kv.add_row(
+            "image",
+            f"{im['topic']}: {im['encoding'] or '?'}, {size}"
+            + ("  <- depth" if im["topic"] == m["pointcloud_topic"] else ""),
+        )
     stdout.print(kv)
     channels = Table(title="channels" if info["format"] == "mcap" else "topics", title_justify="left")
     for col in ("topic", "schema" if info["format"] == "mcap" else "type", "encoding", "messages", ""):
         # Fold, not ellipsize: topic and type names are what people come here to read.
         channels.add_column(col, justify="right" if col == "messages" else "left", overflow="fold")
     for ch in m["channels"]:
-        mark = "<- point cloud" if ch["topic"] == m["pointcloud_topic"] else ("point cloud" if ch["point_cloud"] else "")
+        mark = (
+            "<- point cloud" if ch["topic"] == m["pointcloud_topic"] else ("point cloud" if ch["point_cloud"] else "")
+        )
         channels.add_row(ch["topic"], ch["schema"] or "-", ch["message_encoding"], _fmt_int(ch["message_count"]), mark)
     stdout.print(channels)
 

@@ -6,21 +6,20 @@ from __future__ import annotations
 
 import functools
 import inspect
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated, Any, Callable, Optional
+from typing import Annotated, Any
 
 import typer
 
 from clearcli import interrupts
-from clearcli.settings.profiles import names_text as profile_names_text
 from clearcli.settings import kinds as grasp_kinds
+from clearcli.settings.profiles import names_text as profile_names_text
 
-SettingsFile = Annotated[
-    Optional[Path], typer.Option("--settings", help="TOML settings file (see `clear settings`).")
-]
+SettingsFile = Annotated[Path | None, typer.Option("--settings", help="TOML settings file (see `clear settings`).")]
 Set = Annotated[
-    Optional[list[str]],
+    list[str] | None,
     typer.Option(
         "--set",
         help="Override one setting, SECTION.KEY=VALUE (repeatable; checked like the file), "
@@ -29,13 +28,13 @@ Set = Annotated[
     ),
 ]
 Topic = Annotated[
-    Optional[str],
+    str | None,
     typer.Option("--topic", help="Logs (MCAP, ROS 1 bag, rosbag2): the point-cloud topic, when there are several."),
 ]
 FrameIndex = Annotated[int, typer.Option("--frame", help="Logs: which frame of the topic (from 0).", min=0)]
 Force = Annotated[bool, typer.Option("--force", help="Overwrite existing output files.")]
 Robot = Annotated[
-    Optional[str],
+    str | None,
     typer.Option(
         "--robot",
         help=f"Robot profile: {profile_names_text()} (`clear robots`). An alias of --set robot.name=NAME: "
@@ -44,7 +43,7 @@ Robot = Annotated[
     ),
 ]
 Grasps = Annotated[
-    Optional[str],
+    str | None,
     typer.Option(
         "--grasps",
         help=f"Grasp kinds the planner may use, cheapest first: {grasp_kinds.help_text()}. "
@@ -64,20 +63,20 @@ Inputs = Annotated[
     ),
 ]
 Every = Annotated[
-    Optional[int], typer.Option("--every", help="Batch: every N-th frame of each log (from --frame, default 0).", min=1)
+    int | None, typer.Option("--every", help="Batch: every N-th frame of each log (from --frame, default 0).", min=1)
 ]
 OutDir = Annotated[
-    Optional[Path],
+    Path | None,
     typer.Option("--out-dir", help="Batch: write each frame's outputs and its <name>.json line into this folder."),
 ]
 Resume = Annotated[
     bool, typer.Option("--resume", help="Batch: skip frames whose <name>.json is in --out-dir; redo the others.")
 ]
 Jobs = Annotated[
-    Optional[int], typer.Option("--jobs", help="Batch: worker processes (default: the cores available).", min=1)
+    int | None, typer.Option("--jobs", help="Batch: worker processes (default: the cores available).", min=1)
 ]
 Ray = Annotated[
-    Optional[str],
+    str | None,
     typer.Option(
         "--ray",
         help="Batch on a Ray cluster at ADDRESS (`--ray` alone: a local one); needs `pip install 'clear-table[ray]'`.",
@@ -85,7 +84,7 @@ Ray = Annotated[
     ),
 ]
 Intrinsics = Annotated[
-    Optional[str],
+    str | None,
     typer.Option(
         "--intrinsics",
         help="Depth images: the camera's intrinsics, a file (ROS camera_info YAML, Open3D JSON, camera_params.json) "
@@ -93,7 +92,7 @@ Intrinsics = Annotated[
     ),
 ]
 Color = Annotated[
-    Optional[Path],
+    Path | None,
     typer.Option(
         "--color",
         help="Depth image: its colour image (registered to the depth, same size); default: the image the naming "
@@ -101,12 +100,16 @@ Color = Annotated[
     ),
 ]
 DepthScale = Annotated[
-    Optional[float],
-    typer.Option("--depth-scale", help="Integer depth images: metres per unit (default 0.001: millimetres; [images] depth_scale_m)."),
+    float | None,
+    typer.Option(
+        "--depth-scale",
+        help="Integer depth images: metres per unit (default 0.001: millimetres; [images] depth_scale_m).",
+    ),
 ]
 FailFast = Annotated[bool, typer.Option("--fail-fast", help="Batch: stop at the first frame that fails.")]
 Wait = Annotated[
-    bool, typer.Option("--wait", help="Batch: when another batch is writing in --out-dir, wait for it instead of refusing.")
+    bool,
+    typer.Option("--wait", help="Batch: when another batch is writing in --out-dir, wait for it instead of refusing."),
 ]
 
 
@@ -141,9 +144,8 @@ def with_images(settings: Any, intrinsics: str | None, depth_scale: float | None
     """``settings`` with the depth-image flags applied ([images]: --intrinsics, --depth-scale).
     An intrinsics file is recorded by its absolute path, so that batch workers (and the
     results' settings.toml) find the same file wherever they run."""
-    from clearcli.settings import override
-
     from clearcli.files import exists
+    from clearcli.settings import override
 
     if intrinsics is not None and intrinsics.strip() and exists(intrinsics):
         intrinsics = str(Path(intrinsics).resolve())
@@ -175,8 +177,10 @@ def is_batch(inputs: Any, every: int | None, out_dir: Path | None, ray: str | No
 
 def outputs_option(kinds: tuple[str, ...]) -> Any:
     return Annotated[
-        Optional[str],
-        typer.Option("--outputs", help=f"Batch: what to write per frame into --out-dir, comma-separated: {','.join(kinds)}."),
+        str | None,
+        typer.Option(
+            "--outputs", help=f"Batch: what to write per frame into --out-dir, comma-separated: {','.join(kinds)}."
+        ),
     ]
 
 
@@ -224,18 +228,42 @@ class Batch:
     def wanted(self, inputs: Any) -> bool:
         return is_batch(inputs, self.every, self.out_dir, self.ray)
 
-    def run(self, command: str, inputs: Any, request: Any, *, frame: int, topic: str | None, force: bool,
-            json_out: bool, reads: tuple[Path | None, ...] = (), **more: Any) -> int:
+    def run(
+        self,
+        command: str,
+        inputs: Any,
+        request: Any,
+        *,
+        frame: int,
+        topic: str | None,
+        force: bool,
+        json_out: bool,
+        reads: tuple[Path | None, ...] = (),
+        **more: Any,
+    ) -> int:
         """The batch's exit code (clearcli/batch/run.py); ``reads``: files the run reads
         besides its frames (--settings), which no output may name; ``more``: its
         on_line, extra_summary and render hooks."""
         from clearcli.batch.run import run_command_batch
 
         return run_command_batch(
-            command, inputs, request, outputs=self.outputs, jobs=self.jobs, frame=frame, every=self.every,
-            topic=topic, out_dir=self.out_dir, force=force, resume=self.resume, ray=self.ray,
-            fail_fast=self.fail_fast, wait=self.wait, json_out=json_out,
-            reads=tuple(str(p) for p in reads if p is not None), **more,
+            command,
+            inputs,
+            request,
+            outputs=self.outputs,
+            jobs=self.jobs,
+            frame=frame,
+            every=self.every,
+            topic=topic,
+            out_dir=self.out_dir,
+            force=force,
+            resume=self.resume,
+            ray=self.ray,
+            fail_fast=self.fail_fast,
+            wait=self.wait,
+            json_out=json_out,
+            reads=tuple(str(p) for p in reads if p is not None),
+            **more,
         )
 
 
@@ -259,7 +287,9 @@ def batch_options(outputs: tuple[str, ...]) -> Callable[[Callable[..., Any]], Ca
     def wrap(fn: Callable[..., Any]) -> Callable[..., Any]:
         own = inspect.signature(fn, eval_str=True)
         params = [p for p in own.parameters.values() if p.name != "batch"]
-        params += [inspect.Parameter(n, inspect.Parameter.KEYWORD_ONLY, default=d, annotation=a) for n, a, d in declared]
+        params += [
+            inspect.Parameter(n, inspect.Parameter.KEYWORD_ONLY, default=d, annotation=a) for n, a, d in declared
+        ]
 
         @functools.wraps(fn)
         def command(*args: Any, **kwargs: Any) -> Any:

@@ -70,13 +70,14 @@ plan); errors (3, 4, 6, 8) are one line on stderr.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated, Any, Optional
+from typing import Annotated, Any
 
 import typer
 
 from clearcli.commands import options as bo
 from clearcli.commands.common import stderr, stdout
 from clearcli.tasks.plan import PLAN_SCHEMA, PLAN_VERSION
+
 
 def print_plan(payload: dict[str, Any]) -> None:
     def out(text: str) -> None:
@@ -87,7 +88,11 @@ def print_plan(payload: dict[str, Any]) -> None:
     status = payload["status"]
     n_goal, n_left = len(payload["goal"]), len(payload["left"])
     if status == "complete":
-        out("nothing to do: no objects on the table" if not payload["actions"] else f"complete: removes all {n_goal} objects")
+        out(
+            "nothing to do: no objects on the table"
+            if not payload["actions"]
+            else f"complete: removes all {n_goal} objects"
+        )
     elif status == "partial":
         out(f"partial: removes {n_goal} objects, leaves {n_left}")
     else:
@@ -105,7 +110,10 @@ def print_plan(payload: dict[str, Any]) -> None:
         for s in payload["backtracking"]:
             if not s["feasible"] and 0 <= s["failed_step"] < len(s["plan"]):
                 learnt = " ".join("(" + " ".join(f) + ")" for f in s["learnt"])
-                out(f"  step {s['prefix'] + s['failed_step'] + 1} {s['plan'][s['failed_step']]}: {s['reason']}" + (f" -> {learnt}" if learnt else ""))
+                out(
+                    f"  step {s['prefix'] + s['failed_step'] + 1} {s['plan'][s['failed_step']]}: {s['reason']}"
+                    + (f" -> {learnt}" if learnt else "")
+                )
     first = payload["first_action"]
     if first:
         out(f"first action {first['action']}, joint solution (rad) per pose:")
@@ -118,11 +126,13 @@ def print_plan(payload: dict[str, Any]) -> None:
 def plan_cmd(
     inputs: bo.Inputs,
     output: Annotated[
-        Optional[Path],
-        typer.Option("-o", "--output", help="Write the plan in Fast Downward's plan-file format (lifted domain terms)."),
+        Path | None,
+        typer.Option(
+            "-o", "--output", help="Write the plan in Fast Downward's plan-file format (lifted domain terms)."
+        ),
     ] = None,
     problem: Annotated[
-        Optional[Path],
+        Path | None,
         typer.Option(
             "--problem",
             help="Write the PDDL problem the plan solves: the scene's facts, what backtracking learnt, "
@@ -130,11 +140,16 @@ def plan_cmd(
         ),
     ] = None,
     domain: Annotated[
-        Optional[Path],
-        typer.Option("--domain", help="Write the PDDL domain the plan is for (the push-cost variant when costs were used)."),
+        Path | None,
+        typer.Option(
+            "--domain", help="Write the PDDL domain the plan is for (the push-cost variant when costs were used)."
+        ),
     ] = None,
-    json_out: Annotated[bool, typer.Option("--json", help=f"Machine-readable output (schema clear.{PLAN_SCHEMA}, version {PLAN_VERSION}).")] = False,
-    png: Annotated[Optional[Path], typer.Option("--png", help="Draw the scene and the plan to this PNG.")] = None,
+    json_out: Annotated[
+        bool,
+        typer.Option("--json", help=f"Machine-readable output (schema clear.{PLAN_SCHEMA}, version {PLAN_VERSION})."),
+    ] = False,
+    png: Annotated[Path | None, typer.Option("--png", help="Draw the scene and the plan to this PNG.")] = None,
     force: bo.Force = False,
     first_only: Annotated[
         bool,
@@ -148,17 +163,17 @@ def plan_cmd(
     robot: bo.Robot = None,
     grasps: bo.Grasps = None,
     camera_pose: Annotated[
-        Optional[str],
+        str | None,
         typer.Option(
             "--camera-pose",
             help="Pose of the points' (optical) frame in the robot's base frame: 'x y z qx qy qz qw' "
             "(one quoted argument), or 'thesis' for the thesis's Kinect extrinsic (the WAM only). "
             "Default: [robot] camera_pose, else the robot just outside the table edge "
-            "nearest the camera, facing the objects."
+            "nearest the camera, facing the objects.",
         ),
     ] = None,
     time_limit: Annotated[
-        Optional[float],
+        float | None,
         typer.Option(
             "--time-limit",
             help="Seconds for the whole planning, backtracking included. When it runs out with a plan "
@@ -186,12 +201,27 @@ def plan_cmd(
     from clearcli.tasks.base import Outputs, Source
     from clearcli.tasks.sources import files_read
 
-    cfg = bo.with_images(bo.resolve_settings(settings, sets, "plan", robot=robot, grasps=grasps, time_limit_s=time_limit), intrinsics, depth_scale)
+    cfg = bo.with_images(
+        bo.resolve_settings(settings, sets, "plan", robot=robot, grasps=grasps, time_limit_s=time_limit),
+        intrinsics,
+        depth_scale,
+    )
     request = task.Request(cfg, camera_pose=camera_pose, first_only=first_only)
     if batch.wanted(inputs):
         bo.no_color_in_batch(color)
         bo.single_only(**{"-o": output, "--problem": problem, "--domain": domain, "--png": png})
-        raise typer.Exit(batch.run("plan", inputs, request, frame=frame_index, topic=topic, force=force, json_out=json_out, reads=(settings,)))
+        raise typer.Exit(
+            batch.run(
+                "plan",
+                inputs,
+                request,
+                frame=frame_index,
+                topic=topic,
+                force=force,
+                json_out=json_out,
+                reads=(settings,),
+            )
+        )
     frame = inputs[0]
     outputs = [p for p in (problem, domain, output, png) if p is not None]
     read = files_read(frame, cfg, color, also=(settings,))
@@ -201,7 +231,9 @@ def plan_cmd(
     if len(set(resolved)) != len(resolved):
         raise InputError("-o, --problem, --domain and --png must name different files")
     request = task.Request(
-        cfg, camera_pose=camera_pose, first_only=first_only,
+        cfg,
+        camera_pose=camera_pose,
+        first_only=first_only,
         outputs=Outputs.of(problem=problem, domain=domain, plan=output, png=png),
     )
     outcome = task.run(request, Source(str(frame), frame_index, topic, color=str(color) if color else None))

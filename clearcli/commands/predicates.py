@@ -34,7 +34,7 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated, Any, Optional
+from typing import Annotated, Any
 
 import typer
 
@@ -61,7 +61,17 @@ def print_state(doc: dict[str, Any]) -> None:
             f"{o['grasp_width_m']:.3f}",
         )
     stdout.print(t)
-    kinds = ("on", "block_grasp", "block_dir", "ungraspable", "push_off_table", "rim_graspable", "block_rim", "slidable", "block_slide")
+    kinds = (
+        "on",
+        "block_grasp",
+        "block_dir",
+        "ungraspable",
+        "push_off_table",
+        "rim_graspable",
+        "block_rim",
+        "slidable",
+        "block_slide",
+    )
     f = Table(title=f"facts ({len(doc['facts'])})")
     f.add_column("predicate")
     f.add_column("n", justify="right")
@@ -79,11 +89,13 @@ def print_state(doc: dict[str, Any]) -> None:
 @bo.batch_options(("problem", "png"))
 def predicates_cmd(
     inputs: bo.Inputs,
-    output: Annotated[
-        Optional[Path], typer.Option("-o", "--output", help="Write the PDDL problem to this file.")
+    output: Annotated[Path | None, typer.Option("-o", "--output", help="Write the PDDL problem to this file.")] = None,
+    json_out: Annotated[
+        bool, typer.Option("--json", help="Machine-readable output (schema clear.predicates).")
+    ] = False,
+    png: Annotated[
+        Path | None, typer.Option("--png", help="Draw the top view with hulls, pushes, grasps, blocks.")
     ] = None,
-    json_out: Annotated[bool, typer.Option("--json", help="Machine-readable output (schema clear.predicates).")] = False,
-    png: Annotated[Optional[Path], typer.Option("--png", help="Draw the top view with hulls, pushes, grasps, blocks.")] = None,
     settings: bo.SettingsFile = None,
     sets: bo.Set = None,
     robot: bo.Robot = None,
@@ -116,7 +128,18 @@ def predicates_cmd(
         bo.no_color_in_batch(color)
         bo.single_only(**{"-o": output, "--png": png})
         request = task.Request(cfg, ground_truth=ground_truth)
-        raise typer.Exit(batch.run("predicates", inputs, request, frame=frame_index, topic=topic, force=force, json_out=json_out, reads=(settings,)))
+        raise typer.Exit(
+            batch.run(
+                "predicates",
+                inputs,
+                request,
+                frame=frame_index,
+                topic=topic,
+                force=force,
+                json_out=json_out,
+                reads=(settings,),
+            )
+        )
     frame = inputs[0]
     for out in (output, png):
         if out is not None:

@@ -26,7 +26,7 @@ no frame replayed held a usable table.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Any, Optional
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
@@ -39,10 +39,10 @@ if TYPE_CHECKING:
 def replay_cmd(
     log: Annotated[Path, typer.Argument(help="An MCAP log of point clouds (a PCD works too: one frame).")],
     topic: Annotated[
-        Optional[str], typer.Option("--topic", help="Point-cloud topic (needed when the log has several).")
+        str | None, typer.Option("--topic", help="Point-cloud topic (needed when the log has several).")
     ] = None,
     out: Annotated[
-        Optional[Path],
+        Path | None,
         typer.Option("--out", help="Write an annotated MCAP (frames + scene, predicates, plan) for Foxglove."),
     ] = None,
     force: Annotated[bool, typer.Option("--force", help="Overwrite --out if it exists.")] = False,
@@ -51,20 +51,18 @@ def replay_cmd(
     ] = False,
     every: Annotated[int, typer.Option("--every", min=1, help="Replay every N-th frame only.")] = 1,
     from_s: Annotated[
-        Optional[float], typer.Option("--from", help="Start at this many seconds from the start of the log.")
+        float | None, typer.Option("--from", help="Start at this many seconds from the start of the log.")
     ] = None,
     to_s: Annotated[
-        Optional[float], typer.Option("--to", help="Stop after this many seconds from the start of the log.")
+        float | None, typer.Option("--to", help="Stop after this many seconds from the start of the log.")
     ] = None,
     fail_fast: Annotated[bool, typer.Option("--fail-fast", help="Stop at the first frame that fails.")] = False,
     no_push_memory: Annotated[
         bool,
-        typer.Option(
-            "--no-push-memory", help="Plan every frame afresh, as the thesis did (pushes may be undone)."
-        ),
+        typer.Option("--no-push-memory", help="Plan every frame afresh, as the thesis did (pushes may be undone)."),
     ] = False,
     base_frame: Annotated[
-        Optional[str],
+        str | None,
         typer.Option(
             "--base-frame",
             help="The log's name for the robot's base frame, looked up in its /tf_static or /tf "
@@ -84,14 +82,18 @@ def replay_cmd(
     from clearcli.errors import SettingsError
     from clearcli.tasks import replay as task
 
-    config = bo.resolve_settings(settings, sets, "replay", robot=robot, grasps=grasps, push_memory=False if no_push_memory else None)
+    config = bo.resolve_settings(
+        settings, sets, "replay", robot=robot, grasps=grasps, push_memory=False if no_push_memory else None
+    )
     if from_s is not None and to_s is not None and to_s < from_s:
         raise SettingsError(f"--to {to_s} is before --from {from_s}")
     if out is not None:
         from clearcli.tasks.sources import files_read
 
         check_output_path(out, force, files_read(log, config, also=(settings,)))
-    request = task.Request(config, every=every, from_s=from_s, to_s=to_s, fail_fast=fail_fast, base_frame=base_frame, out=out)
+    request = task.Request(
+        config, every=every, from_s=from_s, to_s=to_s, fail_fast=fail_fast, base_frame=base_frame, out=out
+    )
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
     progress = Progress(
@@ -107,7 +109,7 @@ def replay_cmd(
     with progress:
         bar = progress.add_task("", total=None)
 
-        def on_report(report: "FrameReport", frames_read: int, total: int | None) -> None:
+        def on_report(report: FrameReport, frames_read: int, total: int | None) -> None:
             if json_out:
                 print_json(task.SCHEMA, task.VERSION, report.to_json(), config, "replay")
             progress.update(bar, total=total, completed=frames_read, description=_brief(report))
@@ -131,7 +133,7 @@ def replay_cmd(
         )
 
 
-def _brief(report: "FrameReport") -> str:
+def _brief(report: FrameReport) -> str:
     first = report.first_action()
     action = ""
     if first is not None:
@@ -142,7 +144,7 @@ def _brief(report: "FrameReport") -> str:
     return f"frame {report.index}: {report.status}, {len(report.objects)} objects{action}"
 
 
-def _print_summary(summary: "Summary", console: Any, out: Path | None) -> None:
+def _print_summary(summary: Summary, console: Any, out: Path | None) -> None:
     from rich.table import Table
 
     data = summary.to_json()

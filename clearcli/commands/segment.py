@@ -49,7 +49,7 @@ All coordinates in metres in the sensor frame of the input.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated, Optional
+from typing import Annotated
 
 import typer
 
@@ -61,30 +61,30 @@ def segment_cmd(
     inputs: bo.Inputs,
     json_out: Annotated[bool, typer.Option("--json", help="Machine-readable output (schema in the docs).")] = False,
     labels_out: Annotated[
-        Optional[Path], typer.Option("-o", "--output", help="Write a PCD of the frame with a `label` field.")
+        Path | None, typer.Option("-o", "--output", help="Write a PCD of the frame with a `label` field.")
     ] = None,
-    png: Annotated[Optional[Path], typer.Option("--png", help="Write a picture of the segmentation.")] = None,
+    png: Annotated[Path | None, typer.Option("--png", help="Write a picture of the segmentation.")] = None,
     settings_file: bo.SettingsFile = None,
     sets: bo.Set = None,
     force: bo.Force = False,
     topic: bo.Topic = None,
     frame_index: bo.FrameIndex = 0,
-    voxel_m: Annotated[Optional[float], typer.Option("--voxel-m", help="Supervoxel voxel size (m).")] = None,
-    seed_m: Annotated[Optional[float], typer.Option("--seed-m", help="Supervoxel seed spacing (m).")] = None,
+    voxel_m: Annotated[float | None, typer.Option("--voxel-m", help="Supervoxel voxel size (m).")] = None,
+    seed_m: Annotated[float | None, typer.Option("--seed-m", help="Supervoxel seed spacing (m).")] = None,
     concavity_deg: Annotated[
-        Optional[float], typer.Option("--concavity-deg", help="LCCP concavity tolerance (degrees).")
+        float | None, typer.Option("--concavity-deg", help="LCCP concavity tolerance (degrees).")
     ] = None,
     plane_distance_m: Annotated[
-        Optional[float], typer.Option("--plane-distance-m", help="RANSAC table inlier distance (m).")
+        float | None, typer.Option("--plane-distance-m", help="RANSAC table inlier distance (m).")
     ] = None,
     min_object_area_m2: Annotated[
-        Optional[float], typer.Option("--min-object-area-m2", help="Smallest object kept (visible area, m^2).")
+        float | None, typer.Option("--min-object-area-m2", help="Smallest object kept (visible area, m^2).")
     ] = None,
     outlier_method: Annotated[
-        Optional[str], typer.Option("--outlier-method", help="depth_radius, statistical or none.")
+        str | None, typer.Option("--outlier-method", help="depth_radius, statistical or none.")
     ] = None,
     occlusion_merge: Annotated[
-        Optional[bool],
+        bool | None,
         typer.Option("--occlusion-merge/--no-occlusion-merge", help="Join pieces of an object cut by a nearer one."),
     ] = None,
     intrinsics: bo.Intrinsics = None,
@@ -113,7 +113,18 @@ def segment_cmd(
         bo.no_color_in_batch(color)
         bo.single_only(**{"-o": labels_out, "--png": png})
         request = task.Request(settings)
-        raise typer.Exit(batch.run("segment", inputs, request, frame=frame_index, topic=topic, force=force, json_out=json_out, reads=(settings_file,)))
+        raise typer.Exit(
+            batch.run(
+                "segment",
+                inputs,
+                request,
+                frame=frame_index,
+                topic=topic,
+                force=force,
+                json_out=json_out,
+                reads=(settings_file,),
+            )
+        )
     frame_path = inputs[0]
     for out in (labels_out, png):
         if out is not None:
@@ -123,7 +134,8 @@ def segment_cmd(
 
         raise InputError(f"{labels_out}: -o and --png name the same file; give each its own")
     outcome = task.run(
-        task.Request(settings, Outputs.of(labels=labels_out, png=png)), Source(str(frame_path), frame_index, topic, color=str(color) if color else None)
+        task.Request(settings, Outputs.of(labels=labels_out, png=png)),
+        Source(str(frame_path), frame_index, topic, color=str(color) if color else None),
     )
     doc = outcome.payload
     if json_out:
@@ -142,8 +154,11 @@ def segment_cmd(
         for obj in doc["objects"]:
             c, e = obj["centroid"], obj["obb"]["extents"]
             table.add_row(
-                str(obj["id"]), str(obj["label"]), str(obj["n_points"]),
-                f"{c[0]:+.3f} {c[1]:+.3f} {c[2]:+.3f}", f"{e[0]:.3f} x {e[1]:.3f} x {e[2]:.3f}",
+                str(obj["id"]),
+                str(obj["label"]),
+                str(obj["n_points"]),
+                f"{c[0]:+.3f} {c[1]:+.3f} {c[2]:+.3f}",
+                f"{e[0]:.3f} x {e[1]:.3f} x {e[2]:.3f}",
             )
         stdout.print(table)
     times = ", ".join(f"{k} {v * 1000:.0f} ms" for k, v in doc["timings_s"].items())

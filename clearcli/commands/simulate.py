@@ -40,10 +40,17 @@ def simulate_cmd(
     from clearcli.commands.common import check_output_path, print_json, stderr, stdout
     from clearcli.tasks import simulate as task
 
-    config = bo.resolve_settings(settings, sets, "replay", robot=robot, grasps=grasps, push_memory=False if no_push_memory else None)
+    config = bo.resolve_settings(
+        settings, sets, "replay", robot=robot, grasps=grasps, push_memory=False if no_push_memory else None
+    )
     request = task.Request(
-        config, scene=scene, objects=objects, seed=seed, max_actions=max_actions,
-        push_memory=config.replay.push_memory, truth_segmentation=truth_segmentation,
+        config,
+        scene=scene,
+        objects=objects,
+        seed=seed,
+        max_actions=max_actions,
+        push_memory=config.replay.push_memory,
+        truth_segmentation=truth_segmentation,
     )
     task.check(request)
     from clearcli.tasks.sources import run_files

@@ -12,8 +12,9 @@ categories ships as `clearcli/data/mosd_groups.toml` (``--groups mosd``).
 from __future__ import annotations
 
 import fnmatch
+from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any, Mapping, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -67,8 +68,15 @@ def _labels(frame: Any, path: str, what: str) -> np.ndarray:
 
 SUMMARY_KEYS = ("precision", "recall", "f1", "mean_best_iou")
 # The OSD/OCID metrics (clearcli/evaluate/osd.py); Boundary over organized frames only.
-OSD_KEYS = ("overlap_precision", "overlap_recall", "overlap_f", "boundary_precision", "boundary_recall",
-            "boundary_f", "objects_f75")
+OSD_KEYS = (
+    "overlap_precision",
+    "overlap_recall",
+    "overlap_f",
+    "boundary_precision",
+    "boundary_recall",
+    "boundary_f",
+    "objects_f75",
+)
 
 
 def summarise(docs: Sequence[Mapping[str, Any]], groups: Mapping[str, Sequence[str]]) -> dict[str, Any]:
@@ -85,7 +93,9 @@ def summarise(docs: Sequence[Mapping[str, Any]], groups: Mapping[str, Sequence[s
             out[f"mean_{k}"] = round(float(np.mean(values)), 4) if values else None
         exact = [r["exact"] for r in rows if "exact" in r]
         if exact:  # objects exactly right, and what went wrong with the others (clearcli/evaluate/exact.py)
-            out["exact"] = {k: int(sum(e[k] for e in exact)) for k in ("objects", "right", "merged", "split", "missed", "spurious")}
+            out["exact"] = {
+                k: int(sum(e[k] for e in exact)) for k in ("objects", "right", "merged", "split", "missed", "spurious")
+            }
         out["over_segmented"] = int(sum(r["over_segmented"] for r in rows))
         out["under_segmented"] = int(sum(r["under_segmented"] for r in rows))
         times = [r["time_s"] for r in rows]
@@ -107,8 +117,21 @@ def write_csv(path: Path, docs: Sequence[Mapping[str, Any]]) -> None:
 
     from clearcli.files import atomic_output
 
-    cols = ["source", "group", "n_true", "n_pred", "true_positives", "precision", "recall", "f1",
-            "mean_best_iou", "over_segmented", "under_segmented", *OSD_KEYS, "time_s"]
+    cols = [
+        "source",
+        "group",
+        "n_true",
+        "n_pred",
+        "true_positives",
+        "precision",
+        "recall",
+        "f1",
+        "mean_best_iou",
+        "over_segmented",
+        "under_segmented",
+        *OSD_KEYS,
+        "time_s",
+    ]
     buf = io.StringIO()
     w = csv.writer(buf)
     w.writerow(cols)

@@ -43,8 +43,13 @@ class ExactReport:
 
     def as_dict(self) -> dict[str, object]:
         return {
-            "objects": self.n_objects, "right": self.right, "merged": self.merged, "split": self.split,
-            "missed": self.missed, "spurious": self.spurious, "verdicts": list(self.verdicts),
+            "objects": self.n_objects,
+            "right": self.right,
+            "merged": self.merged,
+            "split": self.split,
+            "missed": self.missed,
+            "spurious": self.spurious,
+            "verdicts": list(self.verdicts),
         }
 
 
@@ -74,6 +79,11 @@ def exact_report(pred_labels: np.ndarray, true_labels: np.ndarray) -> ExactRepor
     labelled_share = inter.sum(axis=1) / np.maximum(seg_size, 1)
     spurious = int((labelled_share <= SPURIOUS).sum())
     return ExactReport(
-        n_obj, verdicts.count("right"), verdicts.count("merged"), verdicts.count("split"),
-        verdicts.count("missed"), spurious, tuple(verdicts),
+        n_obj,
+        verdicts.count("right"),
+        verdicts.count("merged"),
+        verdicts.count("split"),
+        verdicts.count("missed"),
+        spurious,
+        tuple(verdicts),
     )

@@ -53,10 +53,18 @@ class OsdScore:
         def r(v: float | None) -> float | None:
             return None if v is None else round(float(v), 6)
 
-        return {k: r(getattr(self, k)) for k in (
-            "overlap_precision", "overlap_recall", "overlap_f",
-            "boundary_precision", "boundary_recall", "boundary_f", "objects_f75",
-        )}
+        return {
+            k: r(getattr(self, k))
+            for k in (
+                "overlap_precision",
+                "overlap_recall",
+                "overlap_f",
+                "boundary_precision",
+                "boundary_recall",
+                "boundary_f",
+                "objects_f75",
+            )
+        }
 
 
 def _f(p: float, r: float) -> float:
@@ -71,9 +79,7 @@ def _near(boundary: np.ndarray, radius: int) -> np.ndarray:
     return binary_dilation(boundary, structure=(x * x + y * y) <= radius * radius)
 
 
-def osd_metrics(
-    pred_labels: np.ndarray, true_labels: np.ndarray, shape: tuple[int, int] | None = None
-) -> OsdScore:
+def osd_metrics(pred_labels: np.ndarray, true_labels: np.ndarray, shape: tuple[int, int] | None = None) -> OsdScore:
     """The metrics of the module doc for per-point labels of one frame (our convention,
     mOSD's too); ``shape`` (height, width) when the frame is organized, for Boundary."""
     from scipy.optimize import linear_sum_assignment

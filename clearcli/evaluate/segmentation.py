@@ -107,8 +107,13 @@ def overlaps(pred_labels: np.ndarray, true_labels: np.ndarray) -> Overlaps:
     p_ids, t_ids, counts = _joint_counts(pred, true)
     p_keep, t_keep = p_ids != 0, t_ids != 0
     return Overlaps(
-        pred, true, p_ids[p_keep], t_ids[t_keep], counts[np.ix_(p_keep, t_keep)].astype(np.float64),
-        counts[p_keep].sum(axis=1).astype(np.float64), counts[:, t_keep].sum(axis=0).astype(np.float64),
+        pred,
+        true,
+        p_ids[p_keep],
+        t_ids[t_keep],
+        counts[np.ix_(p_keep, t_keep)].astype(np.float64),
+        counts[p_keep].sum(axis=1).astype(np.float64),
+        counts[:, t_keep].sum(axis=0).astype(np.float64),
     )
 
 
@@ -136,8 +141,18 @@ def score(pred_labels: np.ndarray, true_labels: np.ndarray, iou_threshold: float
         both_empty = n_pred == 0 and n_true == 0
         v = 1.0 if both_empty else 0.0
         return SegmentationScore(
-            n_true, n_pred, 0, v, v, v, 0.0 if n_true else 1.0, 0, 0,
-            tuple(0.0 for _ in range(n_true)), tuple(int(i) for i in t_ids), tuple(int(i) for i in p_ids),
+            n_true,
+            n_pred,
+            0,
+            v,
+            v,
+            v,
+            0.0 if n_true else 1.0,
+            0,
+            0,
+            tuple(0.0 for _ in range(n_true)),
+            tuple(int(i) for i in t_ids),
+            tuple(int(i) for i in p_ids),
         )
     union = p_size[:, None] + t_size[None, :] - inter
     iou = inter / np.maximum(union, 1)

@@ -39,9 +39,7 @@ class GripperBoxes:
 
     def corners(self) -> np.ndarray:
         """(B, 8, 3) box corners in the gripper frame."""
-        signs = np.array(
-            [[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], dtype=float
-        )
+        signs = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], dtype=float)
         return self.centers[:, None, :] + signs[None, :, :] * self.half_extents[:, None, :]
 
     def transformed_corners(self, T_to_gripper: np.ndarray) -> np.ndarray:
@@ -142,8 +140,7 @@ def check_gripper_settings(s: GripperSettings, where: str = "[gripper]") -> None
             raise SettingsError(f"settings: {where} {f.name} must be positive, got {value!r}")
     if s.closing_width_m > s.opening_width_m:
         raise SettingsError(
-            f"settings: {where} closing_width_m ({s.closing_width_m}) exceeds "
-            f"opening_width_m ({s.opening_width_m})"
+            f"settings: {where} closing_width_m ({s.closing_width_m}) exceeds opening_width_m ({s.opening_width_m})"
         )
 
 
@@ -173,7 +170,10 @@ def _gripper_model(s: GripperSettings) -> GripperModel:
     region = GripperBoxes(
         centers=np.vstack([open_boxes.centers, [[0.0, 0.0, 0.0]]]),
         half_extents=np.vstack(
-            [open_boxes.half_extents, [[s.opening_width_m / 2.0, s.finger_width_m / 2.0, s.closing_region_height_m / 2.0]]]
+            [
+                open_boxes.half_extents,
+                [[s.opening_width_m / 2.0, s.finger_width_m / 2.0, s.closing_region_height_m / 2.0]],
+            ]
         ),
     )
     model = GripperModel(

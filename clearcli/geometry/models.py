@@ -49,7 +49,7 @@ class TableFrame:
     T_camera_table: np.ndarray
 
     @staticmethod
-    def from_plane(table: TablePlane) -> "TableFrame":
+    def from_plane(table: TablePlane) -> TableFrame:
         n = np.asarray(table.normal, dtype=float)
         n = n / np.linalg.norm(n)
         # the sensor's forward axis, flattened onto the table: "away from the camera"
@@ -364,7 +364,7 @@ def build_object(
     points_camera: np.ndarray,
     frame: TableFrame,
     segment_index: int,
-    settings: "PredicateSettings",
+    settings: PredicateSettings,
     *,
     with_fcl: bool = True,
 ) -> ObjectGeometry:
@@ -381,7 +381,7 @@ def build_object(
 def build_from_columns(
     cols: Columns,
     segment_index: int,
-    settings: "PredicateSettings",
+    settings: PredicateSettings,
     *,
     with_fcl: bool = True,
 ) -> ObjectGeometry:

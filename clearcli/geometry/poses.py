@@ -84,7 +84,7 @@ class GraspGeometry:
     # The same grasp with the gripper turned a quarter turn about its approach (closing
     # across the other side of the footprint), when that side fits the opening; the
     # predicates stage keeps whichever of the two the neighbours block least.
-    alternatives: tuple["GraspGeometry", ...] = ()
+    alternatives: tuple[GraspGeometry, ...] = ()
 
     @property
     def T_grasp(self) -> np.ndarray:
@@ -103,7 +103,7 @@ class PushGeometry:
     # 0.11 m one way and 0.06 m the other, so beside a tall neighbour one yaw often
     # fits where the other does not. The predicates stage keeps the one the neighbours
     # block least.
-    alternatives: tuple["PushGeometry", ...] = ()
+    alternatives: tuple[PushGeometry, ...] = ()
 
     @property
     def T_start(self) -> np.ndarray:
@@ -239,7 +239,10 @@ def push_geometry(obj: ObjectGeometry, gripper: GripperModel, push: PushSettings
                 if k == 0:
                     raised.extend(
                         dataclasses.replace(
-                            geometry, candidates=_push_sequence(x, start + np.array([0.0, 0.0, lift]), up_approach, translations, n)
+                            geometry,
+                            candidates=_push_sequence(
+                                x, start + np.array([0.0, 0.0, lift]), up_approach, translations, n
+                            ),
                         )
                         for lift in lifts
                     )
@@ -247,7 +250,9 @@ def push_geometry(obj: ObjectGeometry, gripper: GripperModel, push: PushSettings
     return out
 
 
-def raised_contact_lifts(push: PushSettings, closing_region_m: float, extent_along_m: float, height_m: float) -> list[float]:
+def raised_contact_lifts(
+    push: PushSettings, closing_region_m: float, extent_along_m: float, height_m: float
+) -> list[float]:
     """How far above the standard push each raised push contact is (m): fingertips at
     each of ``raised_fingertips_m`` where the fingers still meet at least
     ``MIN_CONTACT_BAND_M`` of the object's rear face and the object stays upright. A box

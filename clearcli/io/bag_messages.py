@@ -76,8 +76,9 @@ class BagDecoders:
         if want is None or md5sum == want:
             return None
         other = next((t for t in _FRAME_TYPES if _standard_md5(store, t) == md5sum), None)
-        return (f"the connection's md5sum {md5sum} is not that of {_ros1_spelling(msgtype)} ({want})"
-                + (f" but that of {_ros1_spelling(other)}" if other else ""))
+        return f"the connection's md5sum {md5sum} is not that of {_ros1_spelling(msgtype)} ({want})" + (
+            f" but that of {_ros1_spelling(other)}" if other else ""
+        )
 
 
 # The ROS 1 types clear reads frames from, for naming what a mislabelled connection holds.

@@ -13,8 +13,9 @@ from clearcli.io.formats.base import describe_frame
 __all__ = ["describe_file", "describe_frame", "log_part"]
 
 
-def describe_file(path: Path, topic: str | None = None, index: int = 0, images: Any = None,
-                  color: Path | None = None) -> dict[str, Any]:
+def describe_file(
+    path: Path, topic: str | None = None, index: int = 0, images: Any = None, color: Path | None = None
+) -> dict[str, Any]:
     """The info payload (without envelope) for `path`; raises ClearError on bad input.
 
     A damaged MCAP log or bag is described (mcap/bag.complete false) without raising; the

@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Mapping
 
 import numpy as np
 
@@ -18,7 +18,7 @@ def object_label(k: int) -> int:
     return 10 * (k + 1)
 
 
-def labels_to_write(frame: "Frame", labels: np.ndarray | None) -> np.ndarray | None:
+def labels_to_write(frame: Frame, labels: np.ndarray | None) -> np.ndarray | None:
     """The (N,) labels a writer stores with ``frame``: ``labels`` when given, else the
     frame's own ``label`` field, else None; ValueError for a wrong shape."""
     if labels is None and "label" in frame.fields:

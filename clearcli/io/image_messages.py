@@ -15,22 +15,35 @@ import numpy as np
 from clearcli.errors import InputError
 from clearcli.io.messages import _as_bytes, _stamp_s, message_field
 
-IMAGE_SCHEMAS = frozenset({
-    "sensor_msgs/msg/Image", "sensor_msgs/Image", "foxglove.RawImage", "foxglove_msgs/msg/RawImage",
-})
-CAMERA_INFO_SCHEMAS = frozenset({
-    "sensor_msgs/msg/CameraInfo", "sensor_msgs/CameraInfo", "foxglove.CameraCalibration",
-    "foxglove_msgs/msg/CameraCalibration",
-})
+IMAGE_SCHEMAS = frozenset(
+    {
+        "sensor_msgs/msg/Image",
+        "sensor_msgs/Image",
+        "foxglove.RawImage",
+        "foxglove_msgs/msg/RawImage",
+    }
+)
+CAMERA_INFO_SCHEMAS = frozenset(
+    {
+        "sensor_msgs/msg/CameraInfo",
+        "sensor_msgs/CameraInfo",
+        "foxglove.CameraCalibration",
+        "foxglove_msgs/msg/CameraCalibration",
+    }
+)
 # Depth encodings: integer units ([images] depth_scale_m each, millimetres by default) or float metres.
 DEPTH_ENCODINGS = {"16UC1": ("u2", True), "mono16": ("u2", True), "32FC1": ("f4", False)}
 # Colour encodings -> (channels, order of R, G, B among them).
 COLOR_ENCODINGS = {
-    "rgb8": (3, (0, 1, 2)), "bgr8": (3, (2, 1, 0)), "rgba8": (4, (0, 1, 2)), "bgra8": (4, (2, 1, 0)),
+    "rgb8": (3, (0, 1, 2)),
+    "bgr8": (3, (2, 1, 0)),
+    "rgba8": (4, (0, 1, 2)),
+    "bgra8": (4, (2, 1, 0)),
     "mono8": (1, (0, 0, 0)),
 }
-COMPRESSED_SCHEMAS = frozenset({"sensor_msgs/msg/CompressedImage", "sensor_msgs/CompressedImage",
-                                "foxglove.CompressedImage"})
+COMPRESSED_SCHEMAS = frozenset(
+    {"sensor_msgs/msg/CompressedImage", "sensor_msgs/CompressedImage", "foxglove.CompressedImage"}
+)
 
 
 def header_of(msg: Any) -> tuple[Any, str]:
@@ -54,7 +67,9 @@ def _pixels(msg: Any, where: str, itemsize: int, channels: int) -> np.ndarray:
     if height <= 0 or width <= 0:
         raise ValueError(f"damaged image on {where}: {width} x {height} pixels with {len(data)} bytes of data")
     if step < width * itemsize * channels:
-        raise ValueError(f"damaged image on {where}: step {step} bytes is less than width {width} x {itemsize * channels}")
+        raise ValueError(
+            f"damaged image on {where}: step {step} bytes is less than width {width} x {itemsize * channels}"
+        )
     if height * step != len(data):
         raise ValueError(
             f"damaged image on {where}: height {height} x step {step} = {height * step} bytes, but it carries {len(data)}"
@@ -102,13 +117,20 @@ def camera_model(msg: Any, where: str) -> Any:
 
     roi = message_field(msg, "roi")
     return from_camera_info(
-        int(message_field(msg, "width", default=0)), int(message_field(msg, "height", default=0)),
-        _numbers(message_field(msg, "k", "K")), _numbers(message_field(msg, "d", "D")),
+        int(message_field(msg, "width", default=0)),
+        int(message_field(msg, "height", default=0)),
+        _numbers(message_field(msg, "k", "K")),
+        _numbers(message_field(msg, "d", "D")),
         str(message_field(msg, "distortion_model", default="") or ""),
-        int(message_field(msg, "binning_x", default=0) or 0), int(message_field(msg, "binning_y", default=0) or 0),
-        None if roi is None else (
-            int(message_field(roi, "x_offset", default=0)), int(message_field(roi, "y_offset", default=0)),
-            int(message_field(roi, "height", default=0)), int(message_field(roi, "width", default=0)),
+        int(message_field(msg, "binning_x", default=0) or 0),
+        int(message_field(msg, "binning_y", default=0) or 0),
+        None
+        if roi is None
+        else (
+            int(message_field(roi, "x_offset", default=0)),
+            int(message_field(roi, "y_offset", default=0)),
+            int(message_field(roi, "height", default=0)),
+            int(message_field(roi, "width", default=0)),
             bool(message_field(roi, "do_rectify", default=False)),
         ),
         source=where,

@@ -19,7 +19,6 @@ resolution, an all-zero depth image.
 from __future__ import annotations
 
 import logging
-
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -34,12 +33,18 @@ if TYPE_CHECKING:
 
 # File names an intrinsics file beside the images may have, in the order they are tried.
 INTRINSICS_NAMES = (
-    "camera_info.yaml", "camera_info.yml", "camera_params.json", "intrinsics.json",
-    "intrinsic.json", "camera_intrinsic.json", "camera.yaml", "camera.json",
+    "camera_info.yaml",
+    "camera_info.yml",
+    "camera_params.json",
+    "intrinsics.json",
+    "intrinsic.json",
+    "camera_intrinsic.json",
+    "camera.yaml",
+    "camera.json",
 )
 
 
-def or_defaults(images: "ImageSettings | None") -> "ImageSettings":
+def or_defaults(images: ImageSettings | None) -> ImageSettings:
     """``images``, or the [images] defaults when a caller has none (a library call)."""
     if images is None:
         from clearcli.settings.images import ImageSettings
@@ -159,7 +164,7 @@ def read_color(path: Path) -> np.ndarray:
     return np.asarray(image if image.mode == "RGB" else image.convert("RGB"))
 
 
-def color_pair(depth_path: Path, images: "ImageSettings") -> Path | None:
+def color_pair(depth_path: Path, images: ImageSettings) -> Path | None:
     """The colour image the naming rule pairs with ``depth_path`` (`<stem><depth_suffix>.x`
     -> `<stem><color_suffix>.png|.jpg|.x`), when it exists."""
     stem = depth_path.stem
@@ -173,14 +178,14 @@ def color_pair(depth_path: Path, images: "ImageSettings") -> Path | None:
     return None
 
 
-def frame_name(path: Path, images: "ImageSettings | None" = None) -> str:
+def frame_name(path: Path, images: ImageSettings | None = None) -> str:
     """The name a depth image's outputs take: its stem without the depth suffix."""
     suffix = or_defaults(images).depth_suffix
     stem = path.stem
     return stem[: len(stem) - len(suffix)] if stem.endswith(suffix) and len(stem) > len(suffix) else stem
 
 
-def find_intrinsics(depth_path: Path, images: "ImageSettings") -> "CameraModel":
+def find_intrinsics(depth_path: Path, images: ImageSettings) -> CameraModel:
     """The intrinsics for ``depth_path``: [images] intrinsics when set, else the one
     intrinsics file beside it (several that disagree: an error asking which)."""
     from clearcli.io.intrinsics import read_intrinsics
@@ -191,14 +196,20 @@ def find_intrinsics(depth_path: Path, images: "ImageSettings") -> "CameraModel":
     if not found:
         raise InputError(
             f"{depth_path}: a depth image needs the camera's intrinsics: give --intrinsics FILE (ROS camera_info "
-            f"YAML, Open3D JSON, camera_params.json) or --intrinsics \"fx fy cx cy\", or put one of "
+            f'YAML, Open3D JSON, camera_params.json) or --intrinsics "fx fy cx cy", or put one of '
             f"{', '.join(INTRINSICS_NAMES[:3])} beside it"
         )
     models = [read_intrinsics(p) for p in found]
     first = models[0]
     for p, m in zip(found[1:], models[1:]):
         same = (m.fx, m.fy, m.cx, m.cy, m.width, m.height, m.distorted) == (
-            first.fx, first.fy, first.cx, first.cy, first.width, first.height, first.distorted
+            first.fx,
+            first.fy,
+            first.cx,
+            first.cy,
+            first.width,
+            first.height,
+            first.distorted,
         ) and (not m.distorted or (m.distortion_model, m.distortion) == (first.distortion_model, first.distortion))
         if not same:
             raise InputError(
@@ -221,7 +232,7 @@ def _decoder():  # -> concurrent.futures.ThreadPoolExecutor
     return _executor
 
 
-def read_image_frame(path: Path, images: "ImageSettings | None" = None, color: Path | None = None) -> Frame:
+def read_image_frame(path: Path, images: ImageSettings | None = None, color: Path | None = None) -> Frame:
     """The organized frame of the depth image at ``path`` (see the module)."""
     from clearcli.io.intrinsics import back_project
 

@@ -14,9 +14,10 @@ from __future__ import annotations
 import functools
 import math
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -102,8 +103,8 @@ def read_intrinsics(spec: str | Path) -> CameraModel:
             where, fix = f'"{text}"', 'fix the string "fx fy cx cy"'
             return _build(*numbers, None, None, "", (), 1, 1, None, source=text, where=where, fix=fix)
         raise InputError(
-            f"{text or '(empty)'}: no such file, and not four numbers \"fx fy cx cy\"; give an intrinsics "
-            "file (ROS camera YAML, CameraInfo, Open3D or UOIS JSON) or \"fx fy cx cy\""
+            f'{text or "(empty)"}: no such file, and not four numbers "fx fy cx cy"; give an intrinsics '
+            'file (ROS camera YAML, CameraInfo, Open3D or UOIS JSON) or "fx fy cx cy"'
         )
     where = str(path)
     if not path.is_file():
@@ -136,8 +137,15 @@ def _read_file(path_text: str, mtime_ns: int, size: int, where: str) -> CameraMo
 
 
 def from_camera_info(
-    width: Any, height: Any, k: Sequence[float], d: Sequence[float], distortion_model: str,
-    binning_x: Any = 0, binning_y: Any = 0, roi: Any = None, source: str = "",
+    width: Any,
+    height: Any,
+    k: Sequence[float],
+    d: Sequence[float],
+    distortion_model: str,
+    binning_x: Any = 0,
+    binning_y: Any = 0,
+    roi: Any = None,
+    source: str = "",
 ) -> CameraModel:
     """The model of a sensor_msgs/CameraInfo message (k row-major; roi as in the message:
     (x_offset, y_offset, height, width, do_rectify), a mapping or an object with those names)."""
@@ -211,23 +219,75 @@ def _from_mapping(data: dict, where: str) -> CameraModel:
             layout = "ROS camera calibration YAML"
             fx, fy, cx, cy = _k_entries(data["camera_matrix"]["data"], "camera_matrix", where, row_major=True)
             dist = data.get("distortion_coefficients") or {}
-            return _build(fx, fy, cx, cy, data["image_width"], data["image_height"], data.get("distortion_model"),
-                          dist.get("data") or (), 1, 1, None, source=where, where=where, fix="fix the camera matrix")
+            return _build(
+                fx,
+                fy,
+                cx,
+                cy,
+                data["image_width"],
+                data["image_height"],
+                data.get("distortion_model"),
+                dist.get("data") or (),
+                1,
+                1,
+                None,
+                source=where,
+                where=where,
+                fix="fix the camera matrix",
+            )
         if "k" in data or "K" in data:
             layout = "sensor_msgs/CameraInfo"
             k = data["k"] if "k" in data else data["K"]
             d = data.get("d", data.get("D")) or ()
-            return _camera_info(data["width"], data["height"], k, d, data.get("distortion_model"),
-                                data.get("binning_x", 0), data.get("binning_y", 0), data.get("roi"), where, where)
+            return _camera_info(
+                data["width"],
+                data["height"],
+                k,
+                d,
+                data.get("distortion_model"),
+                data.get("binning_x", 0),
+                data.get("binning_y", 0),
+                data.get("roi"),
+                where,
+                where,
+            )
         if "intrinsic_matrix" in data:
             layout = "Open3D PinholeCameraIntrinsic JSON"
             fx, fy, cx, cy = _k_entries(data["intrinsic_matrix"], "intrinsic_matrix", where, row_major=False)
-            return _build(fx, fy, cx, cy, data["width"], data["height"], "", (), 1, 1, None,
-                          source=where, where=where, fix="fix intrinsic_matrix (column-major)")
+            return _build(
+                fx,
+                fy,
+                cx,
+                cy,
+                data["width"],
+                data["height"],
+                "",
+                (),
+                1,
+                1,
+                None,
+                source=where,
+                where=where,
+                fix="fix intrinsic_matrix (column-major)",
+            )
         if {"fx", "fy", "x_offset", "y_offset"} & set(data):
             layout = "UOIS camera_params.json"
-            return _build(data["fx"], data["fy"], data["x_offset"], data["y_offset"], data["img_width"],
-                          data["img_height"], "", (), 1, 1, None, source=where, where=where, fix="fix the file")
+            return _build(
+                data["fx"],
+                data["fy"],
+                data["x_offset"],
+                data["y_offset"],
+                data["img_width"],
+                data["img_height"],
+                "",
+                (),
+                1,
+                1,
+                None,
+                source=where,
+                where=where,
+                fix="fix the file",
+            )
     except KeyError as e:
         raise InputError(f"{where}: missing key {e.args[0]!r} of a {layout}; add it") from None
     except (TypeError, ValueError, AttributeError) as e:
@@ -262,8 +322,9 @@ def _k_entries(k: Any, name: str, where: str, row_major: bool) -> tuple[Any, Any
     return (values[0], values[4], values[2], values[5]) if row_major else (values[0], values[4], values[6], values[7])
 
 
-def _camera_info(width: Any, height: Any, k: Any, d: Any, model: Any, bx: Any, by: Any, roi: Any,
-                 source: str, where: str) -> CameraModel:
+def _camera_info(
+    width: Any, height: Any, k: Any, d: Any, model: Any, bx: Any, by: Any, roi: Any, source: str, where: str
+) -> CameraModel:
     fx, fy, cx, cy = _k_entries(k, "K", where, row_major=True)
     if fx == fy == cx == cy == 0.0:
         raise InputError(f"{where} has no intrinsics (K is all zero); the camera is not calibrated: give intrinsics")
@@ -274,8 +335,23 @@ def _camera_info(width: Any, height: Any, k: Any, d: Any, model: Any, bx: Any, b
     return _build(fx, fy, cx, cy, width, height, model, d, bx, by, roi, source=source, where=where, fix="fix K")
 
 
-def _build(fx: Any, fy: Any, cx: Any, cy: Any, width: Any, height: Any, model: Any, coeffs: Any,
-           bx: Any, by: Any, roi: Any, *, source: str, where: str, fix: str) -> CameraModel:
+def _build(
+    fx: Any,
+    fy: Any,
+    cx: Any,
+    cy: Any,
+    width: Any,
+    height: Any,
+    model: Any,
+    coeffs: Any,
+    bx: Any,
+    by: Any,
+    roi: Any,
+    *,
+    source: str,
+    where: str,
+    fix: str,
+) -> CameraModel:
     """A validated CameraModel; roi here in message order (x_offset, y_offset, height, width)."""
     values = {}
     for name, value in (("fx", fx), ("fy", fy), ("cx", cx), ("cy", cy)):
@@ -296,8 +372,20 @@ def _build(fx: Any, fy: Any, cx: Any, cy: Any, width: Any, height: Any, model: A
             if w is not None and h is not None and (x0 + rw > w or y0 + rh > h):
                 raise InputError(f"{where}: roi {rw} x {rh} at ({x0}, {y0}) leaves the {w} x {h} image; fix roi")
             roi_wh = (x0, y0, rw, rh)
-    return CameraModel(values["fx"], values["fy"], values["cx"], values["cy"], w, h, str(model or ""), distortion,
-                       _count(bx, "binning_x", where, 0) or 1, _count(by, "binning_y", where, 0) or 1, roi_wh, source)
+    return CameraModel(
+        values["fx"],
+        values["fy"],
+        values["cx"],
+        values["cy"],
+        w,
+        h,
+        str(model or ""),
+        distortion,
+        _count(bx, "binning_x", where, 0) or 1,
+        _count(by, "binning_y", where, 0) or 1,
+        roi_wh,
+        source,
+    )
 
 
 def _number(value: Any, name: str, where: str, fix: str) -> float:
@@ -353,8 +441,10 @@ def _undistorted_rays(model: CameraModel, h: int, w: int) -> tuple[np.ndarray, n
             "give rectified images or plumb_bob / rational_polynomial intrinsics"
         )
     if any(model.distortion[n:]):
-        raise InputError(f"{model.source or 'the intrinsics'}: {name} takes {n} distortion coefficients, "
-                         f"got {len(model.distortion)} with non-zero extras; fix the distortion coefficients")
+        raise InputError(
+            f"{model.source or 'the intrinsics'}: {name} takes {n} distortion coefficients, "
+            f"got {len(model.distortion)} with non-zero extras; fix the distortion coefficients"
+        )
     coeffs = (list(model.distortion[:n]) + [0.0] * 8)[:8]
     u, v = _pixel_grid(model, h, w)
     x0 = np.broadcast_to((u[None, :] - model.cx) / model.fx, (h, w))

@@ -7,8 +7,9 @@ never each other.
 
 from __future__ import annotations
 
+from collections.abc import Generator
 from pathlib import Path
-from typing import Any, Generator, Protocol
+from typing import Any, Protocol
 
 # (schema or type name, decoded message, log time ns)
 Decoded = tuple[str, Any, int]

@@ -22,13 +22,14 @@ and a batch reach this module): `clearcli.io.formats.mcap`.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, BinaryIO, Callable, Iterator, TypeVar
+from typing import Any, BinaryIO, TypeVar
 
 from clearcli.errors import ClearError, InputError, PartialLogError
 from clearcli.io.frames import Frame
-from clearcli.io.image_messages import CAMERA_INFO_SCHEMAS, COMPRESSED_SCHEMAS, IMAGE_SCHEMAS
+from clearcli.io.image_messages import COMPRESSED_SCHEMAS, IMAGE_SCHEMAS
 from clearcli.io.messages import (
     MessageDecoders,
     _as_bytes,
@@ -193,7 +194,8 @@ def decode_declared(declared: str, decode: Callable[[], Any]) -> Any:
             raise DeclaredTypeError(declared, error_reason(exc)) from None
         if height * step != n_bytes:
             raise DeclaredTypeError(
-                declared, f"damaged {kind}: height {height} x {step_name} {step} = {height * step} bytes, "
+                declared,
+                f"damaged {kind}: height {height} x {step_name} {step} = {height * step} bytes, "
                 f"but it carries {n_bytes}",
             )
     return msg
@@ -243,8 +245,16 @@ def _scan(path: Path, fp: BinaryIO) -> McapSummary:
         for cid, ch in channels.items()
     )
     return McapSummary(
-        path=path, profile=profile, library=library, channels=infos, message_count=n,
-        start_ns=start, end_ns=end, indexed=False, chunk_count=0, damage=damage,
+        path=path,
+        profile=profile,
+        library=library,
+        channels=infos,
+        message_count=n,
+        start_ns=start,
+        end_ns=end,
+        indexed=False,
+        chunk_count=0,
+        damage=damage,
     )
 
 
@@ -343,17 +353,23 @@ def choose_topic(summary: Any, topic: str | None) -> str:
         hint = "; for an image topic holding depth, name it with --topic" if summary.image_topics() else ""
         raise InputError(f"no point-cloud topic in {path}; topics: {_topic_list(summary)}{hint}")
     if len(candidates) > 1:
-        raise InputError(
-            f"{path}: several point-cloud topics ({', '.join(candidates)}); choose one with --topic"
-        )
+        raise InputError(f"{path}: several point-cloud topics ({', '.join(candidates)}); choose one with --topic")
     return candidates[0]
 
 
 # --- decoding -------------------------------------------------------------------------
 
 
-def _message_frame(decoders: MessageDecoders, schema: Any, channel: Any, message: Any, index: int, path: Path,
-                   images: Any = None, summary: "McapSummary | None" = None) -> Frame:
+def _message_frame(
+    decoders: MessageDecoders,
+    schema: Any,
+    channel: Any,
+    message: Any,
+    index: int,
+    path: Path,
+    images: Any = None,
+    summary: McapSummary | None = None,
+) -> Frame:
     source = f"{path.name}#{index} {channel.topic}"
     decode = decoders.decoder(schema, channel)
     msg = decode_declared(schema_name(schema), lambda: decode(message.data))
@@ -431,9 +447,9 @@ class McapAccess:
         from mcap.reader import SeekingReader
 
         with _open(self.path) as fp:
-            for schema, channel, message in until_damage(SeekingReader(fp).iter_messages(
-                topics=[topic], starting_at=start_ns, ending_at=end_ns
-            )):
+            for schema, channel, message in until_damage(
+                SeekingReader(fp).iter_messages(topics=[topic], starting_at=start_ns, ending_at=end_ns)
+            ):
                 yield schema_name(schema), self.decoders.decode(schema, channel, message.data), int(message.log_time)
 
 
@@ -449,8 +465,9 @@ def _guarded(path: Path, summary: McapSummary, topic: str) -> Iterator[tuple[int
             total = summary.count(topic)
             if summary.damage is None and index < total:
                 # the summary promises more: never a quiet end short of it
-                _raise_damage(path, topic, index,
-                              f"its summary counts {total} messages on {topic}, the log holds {index}")
+                _raise_damage(
+                    path, topic, index, f"its summary counts {total} messages on {topic}, the log holds {index}"
+                )
             return
         except InputError:
             raise
@@ -562,7 +579,11 @@ def read_mcap_transforms(path: Path, max_messages: int = 1000) -> dict[tuple[str
                 for tf in items if items is not None else [msg]:
                     try:
                         header = message_field(tf, "header")
-                        parent = message_field(header, "frame_id") if header is not None else message_field(tf, "parent_frame_id")
+                        parent = (
+                            message_field(header, "frame_id")
+                            if header is not None
+                            else message_field(tf, "parent_frame_id")
+                        )
                         child = message_field(tf, "child_frame_id")
                         inner = message_field(tf, "transform") or tf
                         T = _tf_matrix(message_field(inner, "translation"), message_field(inner, "rotation"))

@@ -24,7 +24,15 @@ import numpy as np
 
 from clearcli.errors import InputError
 from clearcli.io.frames import Frame
-from clearcli.io.image_messages import CAMERA_INFO_SCHEMAS, IMAGE_SCHEMAS, camera_model, color_rgb, depth_m, header_of, stamp_ns
+from clearcli.io.image_messages import (
+    CAMERA_INFO_SCHEMAS,
+    IMAGE_SCHEMAS,
+    camera_model,
+    color_rgb,
+    depth_m,
+    header_of,
+    stamp_ns,
+)
 from clearcli.io.log_access import LogAccess, LogSummary
 from clearcli.io.messages import _stamp_s
 
@@ -109,8 +117,13 @@ def _color_topics(summary: LogSummary, depth_topic: str) -> list[str]:
 
 
 def _registered_color(
-    log: LogAccess, depth_topic: str, frame_id: str,
-    depth_stamp_ns: int, log_time_ns: int, shape: tuple[int, int], points_depth_m: np.ndarray,
+    log: LogAccess,
+    depth_topic: str,
+    frame_id: str,
+    depth_stamp_ns: int,
+    log_time_ns: int,
+    shape: tuple[int, int],
+    points_depth_m: np.ndarray,
 ) -> np.ndarray | None:
     path, summary = log.path, log.summary
     topics = _color_topics(summary, depth_topic)
@@ -124,7 +137,9 @@ def _registered_color(
         # sensor, in its own optics, never aligned to depth (the SDK aligns at run time).
         return _realsense_color(log, depth_topic, log_time_ns, points_depth_m)
     for topic in topics:
-        with closing(log.window(topic, max(0, log_time_ns - _COLOR_WINDOW_NS), log_time_ns + _COLOR_WINDOW_NS)) as window:
+        with closing(
+            log.window(topic, max(0, log_time_ns - _COLOR_WINDOW_NS), log_time_ns + _COLOR_WINDOW_NS)
+        ) as window:
             for schema, msg, log_time in window:
                 if schema not in IMAGE_SCHEMAS:
                     continue
@@ -132,19 +147,28 @@ def _registered_color(
                     continue
                 color_frame = header_of(msg)[1]
                 if not frame_id or not color_frame:
-                    _note(path, f"colour on {topic} and the depth carry no frame ids: their registration cannot be "
-                                "told, so colour is left out")
+                    _note(
+                        path,
+                        f"colour on {topic} and the depth carry no frame ids: their registration cannot be "
+                        "told, so colour is left out",
+                    )
                     return None
                 if color_frame != frame_id:
-                    _note(path, f"colour on {topic} is in frame {color_frame!r}, not registered to the depth "
-                                f"({frame_id!r}): left out; record aligned depth (aligned_depth_to_color) for colour")
+                    _note(
+                        path,
+                        f"colour on {topic} is in frame {color_frame!r}, not registered to the depth "
+                        f"({frame_id!r}): left out; record aligned depth (aligned_depth_to_color) for colour",
+                    )
                     return None
                 rgb = color_rgb(msg, f"{path.name} {topic}")
                 if rgb is None:
                     continue
                 if rgb.shape[:2] != shape:
-                    _note(path, f"colour on {topic} is {rgb.shape[1]} x {rgb.shape[0]}, the depth "
-                                f"{shape[1]} x {shape[0]}: not registered, left out")
+                    _note(
+                        path,
+                        f"colour on {topic} is {rgb.shape[1]} x {rgb.shape[0]}, the depth "
+                        f"{shape[1]} x {shape[0]}: not registered, left out",
+                    )
                     return None
                 return rgb
     return None
@@ -225,21 +249,29 @@ def _rs_color_from_depth(log: LogAccess, depth_stream: str, color_stream: str) -
     common = sorted(set(depth_groups) & set(color_groups))
     result: np.ndarray | str
     if not common:
-        missing = [(s, g) for s, g, other in ((depth_stream, depth_groups, color_groups),
-                                              (color_stream, color_groups, depth_groups)) if not g]
+        missing = [
+            (s, g)
+            for s, g, other in ((depth_stream, depth_groups, color_groups), (color_stream, color_groups, depth_groups))
+            if not g
+        ]
         if missing:
             group = min(depth_groups or color_groups or {0: ""})
             names = " or ".join(f"{_rs_name(s)} extrinsics ({s}/tf/{group})" for s, _ in missing)
             result = f"a RealSense SDK recording without {names}: colour left out"
         else:
-            result = (f"a RealSense SDK recording whose {_rs_name(depth_stream)} and {_rs_name(color_stream)} "
-                      f"extrinsics are relative to different references ({', '.join(depth_groups.values())}; "
-                      f"{', '.join(color_groups.values())}): colour left out")
+            result = (
+                f"a RealSense SDK recording whose {_rs_name(depth_stream)} and {_rs_name(color_stream)} "
+                f"extrinsics are relative to different references ({', '.join(depth_groups.values())}; "
+                f"{', '.join(color_groups.values())}): colour left out"
+            )
     else:
         T_depth_ref = _rs_transform(log, depth_groups[common[0]])
         T_color_ref = _rs_transform(log, color_groups[common[0]])
-        bad = [topic for topic, T in ((depth_groups[common[0]], T_depth_ref), (color_groups[common[0]], T_color_ref))
-               if T is None]
+        bad = [
+            topic
+            for topic, T in ((depth_groups[common[0]], T_depth_ref), (color_groups[common[0]], T_color_ref))
+            if T is None
+        ]
         if bad:
             result = f"a RealSense SDK recording whose extrinsics on {', '.join(bad)} are no transform: colour left out"
         else:
@@ -248,7 +280,9 @@ def _rs_color_from_depth(log: LogAccess, depth_stream: str, color_stream: str) -
     return result
 
 
-def _realsense_color(log: LogAccess, depth_topic: str, log_time_ns: int, points_depth_m: np.ndarray) -> np.ndarray | None:
+def _realsense_color(
+    log: LogAccess, depth_topic: str, log_time_ns: int, points_depth_m: np.ndarray
+) -> np.ndarray | None:
     """(H*W, 3) uint8 colour of a RealSense SDK recording's depth frame, registered to it
     through the recorded extrinsics (clearcli/io/register.py); None, with a note naming
     what is missing, when the recording lacks what that needs."""
@@ -258,8 +292,14 @@ def _realsense_color(log: LogAccess, depth_topic: str, log_time_ns: int, points_
     depth_stream = _rs_stream(depth_topic)
     device = depth_stream.split("/")[1]
     types = dict(summary.topics())
-    color_topics = sorted(t for t in summary.image_topics() if (s := _rs_stream(t)) is not None
-                          and s.split("/")[1] == device and _rs_name(s) == "Color" and t == f"{s}/image/data")
+    color_topics = sorted(
+        t
+        for t in summary.image_topics()
+        if (s := _rs_stream(t)) is not None
+        and s.split("/")[1] == device
+        and _rs_name(s) == "Color"
+        and t == f"{s}/image/data"
+    )
     if not color_topics:
         return None  # no colour stream recorded
     color_topic = color_topics[0]
@@ -273,13 +313,20 @@ def _realsense_color(log: LogAccess, depth_topic: str, log_time_ns: int, points_
         _note(path, T_color_depth)
         return None
     nearest = None
-    with closing(log.window(color_topic, max(0, log_time_ns - _RS_COLOR_WINDOW_NS), log_time_ns + _RS_COLOR_WINDOW_NS)) as window:
+    with closing(
+        log.window(color_topic, max(0, log_time_ns - _RS_COLOR_WINDOW_NS), log_time_ns + _RS_COLOR_WINDOW_NS)
+    ) as window:
         for schema, msg, log_time in window:
-            if schema in IMAGE_SCHEMAS and (nearest is None or abs(log_time - log_time_ns) < abs(nearest[1] - log_time_ns)):
+            if schema in IMAGE_SCHEMAS and (
+                nearest is None or abs(log_time - log_time_ns) < abs(nearest[1] - log_time_ns)
+            ):
                 nearest = (msg, log_time)
     if nearest is None:
-        _note(path, f"a RealSense SDK recording with no Color image ({color_topic}) within "
-                    f"{_RS_COLOR_WINDOW_NS // 1_000_000} ms of a depth image: that frame has no colour")
+        _note(
+            path,
+            f"a RealSense SDK recording with no Color image ({color_topic}) within "
+            f"{_RS_COLOR_WINDOW_NS // 1_000_000} ms of a depth image: that frame has no colour",
+        )
         return None
     msg, color_log_time = nearest
     rgb = color_rgb(msg, f"{path.name} {color_topic}")
@@ -288,8 +335,11 @@ def _realsense_color(log: LogAccess, depth_topic: str, log_time_ns: int, points_
         from clearcli.io.messages import message_field
 
         encoding = str(message_field(msg, "encoding", default=""))
-        _note(path, f"a RealSense SDK recording whose colour on {color_topic} is {encoding or 'empty'!r}, not one "
-                    f"clear reads ({', '.join(COLOR_ENCODINGS)}): colour left out")
+        _note(
+            path,
+            f"a RealSense SDK recording whose colour on {color_topic} is {encoding or 'empty'!r}, not one "
+            f"clear reads ({', '.join(COLOR_ENCODINGS)}): colour left out",
+        )
         return None
     try:
         model = _camera_at(log, info_topic, color_log_time)
@@ -327,8 +377,12 @@ def _recorded_depth_units(log: LogAccess, depth_topic: str) -> float | None:
 
 
 def depth_frame(
-    log: LogAccess, topic: str, msg: Any, log_time_ns: int,
-    source: str, images: Any = None,
+    log: LogAccess,
+    topic: str,
+    msg: Any,
+    log_time_ns: int,
+    source: str,
+    images: Any = None,
 ) -> Frame:
     """The organized frame of one depth image message (see the module)."""
     from clearcli.io.images import or_defaults

@@ -4,9 +4,10 @@ Written whole or not at all (clearcli/files.py)."""
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Iterable, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -22,22 +23,35 @@ _SEP = "=" * 80 + "\n"
 POINTCLOUD2_MSGDEF = (
     "std_msgs/Header header\nuint32 height\nuint32 width\nPointField[] fields\n"
     "bool is_bigendian\nuint32 point_step\nuint32 row_step\nuint8[] data\nbool is_dense\n"
-    + _SEP + "MSG: std_msgs/Header\n" + _HEADER_DEF
-    + _SEP + "MSG: builtin_interfaces/Time\n" + _TIME_DEF
-    + _SEP + "MSG: sensor_msgs/PointField\n"
+    + _SEP
+    + "MSG: std_msgs/Header\n"
+    + _HEADER_DEF
+    + _SEP
+    + "MSG: builtin_interfaces/Time\n"
+    + _TIME_DEF
+    + _SEP
+    + "MSG: sensor_msgs/PointField\n"
     "uint8 INT8 = 1\nuint8 UINT8 = 2\nuint8 INT16 = 3\nuint8 UINT16 = 4\n"
     "uint8 INT32 = 5\nuint8 UINT32 = 6\nuint8 FLOAT32 = 7\nuint8 FLOAT64 = 8\n"
     "string name\nuint32 offset\nuint8 datatype\nuint32 count\n"
 )
 TFMESSAGE_MSGDEF = (
     "geometry_msgs/TransformStamped[] transforms\n"
-    + _SEP + "MSG: geometry_msgs/TransformStamped\nstd_msgs/Header header\nstring child_frame_id\n"
+    + _SEP
+    + "MSG: geometry_msgs/TransformStamped\nstd_msgs/Header header\nstring child_frame_id\n"
     "Transform transform\n"
-    + _SEP + "MSG: std_msgs/Header\n" + _HEADER_DEF
-    + _SEP + "MSG: builtin_interfaces/Time\n" + _TIME_DEF
-    + _SEP + "MSG: geometry_msgs/Transform\nVector3 translation\nQuaternion rotation\n"
-    + _SEP + "MSG: geometry_msgs/Vector3\nfloat64 x\nfloat64 y\nfloat64 z\n"
-    + _SEP + "MSG: geometry_msgs/Quaternion\nfloat64 x 0\nfloat64 y 0\nfloat64 z 0\nfloat64 w 1\n"
+    + _SEP
+    + "MSG: std_msgs/Header\n"
+    + _HEADER_DEF
+    + _SEP
+    + "MSG: builtin_interfaces/Time\n"
+    + _TIME_DEF
+    + _SEP
+    + "MSG: geometry_msgs/Transform\nVector3 translation\nQuaternion rotation\n"
+    + _SEP
+    + "MSG: geometry_msgs/Vector3\nfloat64 x\nfloat64 y\nfloat64 z\n"
+    + _SEP
+    + "MSG: geometry_msgs/Quaternion\nfloat64 x 0\nfloat64 y 0\nfloat64 z 0\nfloat64 w 1\n"
 )
 
 
@@ -55,7 +69,6 @@ def _time(stamp_s: float) -> dict[str, int]:
     total = int(round(stamp_s * 1e9))
     sec, nanosec = divmod(total, 1_000_000_000)
     return {"sec": int(sec), "nanosec": int(nanosec)}
-
 
 
 def _pointcloud2_dict(frame: Frame, labels: np.ndarray | None) -> dict[str, Any]:
@@ -146,8 +159,12 @@ def write_pointcloud2_mcap(
                 frame_labels = next(label_iter, None) if label_iter is not None else None
                 t_ns = int(round(frame.stamp_s * 1e9))
                 writer.write_message(
-                    topic, schema, _pointcloud2_dict(frame, frame_labels),
-                    log_time=t_ns, publish_time=t_ns, sequence=count,
+                    topic,
+                    schema,
+                    _pointcloud2_dict(frame, frame_labels),
+                    log_time=t_ns,
+                    publish_time=t_ns,
+                    sequence=count,
                 )
                 count += 1
             writer.finish()

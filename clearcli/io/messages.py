@@ -13,7 +13,8 @@ from __future__ import annotations
 import base64
 import contextlib
 import json
-from typing import Any, Callable, Sequence
+from collections.abc import Callable, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -130,7 +131,12 @@ def pointcloud2_frame(msg: Any, log_time_ns: int, source: str) -> Frame:
             continue
         specs.append(FieldSpec(str(f.name), int(f.offset), code, max(int(f.count), 1)))
     return _frame_from_blob(
-        msg.data, specs, point_step, width, height, row_step,
+        msg.data,
+        specs,
+        point_step,
+        width,
+        height,
+        row_step,
         bool(msg.is_bigendian),
         shape=(height, width) if height > 1 else None,
         stamp_s=_stamp_s(message_field(header, "stamp"), log_time_ns),
@@ -166,7 +172,14 @@ def foxglove_frame(msg: Any, log_time_ns: int, source: str) -> Frame:
         raise ValueError(f"point_stride is {stride}")
     n = len(data) // stride
     frame = _frame_from_blob(
-        data, specs, stride, n, 1, n * stride, False, shape=None,
+        data,
+        specs,
+        stride,
+        n,
+        1,
+        n * stride,
+        False,
+        shape=None,
         stamp_s=_stamp_s(message_field(msg, "timestamp"), log_time_ns),
         frame_id=str(message_field(msg, "frame_id", default="") or ""),
         source=source,
@@ -184,13 +197,30 @@ def foxglove_frame(msg: Any, log_time_ns: int, source: str) -> Frame:
     if np.allclose(R, np.eye(3)) and not t.any():
         return frame
     points = (frame.points.astype(np.float64) @ R.T + t).astype(np.float32)
-    return Frame(points=points, colors=frame.colors, shape=frame.shape, fields=frame.fields,
-                 stamp_s=frame.stamp_s, frame_id=frame.frame_id, source=frame.source)
+    return Frame(
+        points=points,
+        colors=frame.colors,
+        shape=frame.shape,
+        fields=frame.fields,
+        stamp_s=frame.stamp_s,
+        frame_id=frame.frame_id,
+        source=frame.source,
+    )
 
 
 def _frame_from_blob(
-    data: Any, specs: list[FieldSpec], point_step: int, width: int, height: int, row_step: int,
-    big_endian: bool, *, shape: tuple[int, int] | None, stamp_s: float, frame_id: str, source: str,
+    data: Any,
+    specs: list[FieldSpec],
+    point_step: int,
+    width: int,
+    height: int,
+    row_step: int,
+    big_endian: bool,
+    *,
+    shape: tuple[int, int] | None,
+    stamp_s: float,
+    frame_id: str,
+    source: str,
 ) -> Frame:
     problem = check_specs(specs, point_step)
     if problem:

@@ -29,8 +29,18 @@ from clearcli.io.sniff import PCD_HEADER_KEYS, open_input
 # A PCD header is ten short lines; anything without DATA in the first 64 KiB is not a PCD.
 _MAX_HEADER_BYTES = 1 << 16
 _HEADER_KEYS = tuple(k.decode() for k in PCD_HEADER_KEYS)
-_PCD_CODES = {("F", 4): "f4", ("F", 8): "f8", ("U", 1): "u1", ("U", 2): "u2", ("U", 4): "u4",
-              ("U", 8): "u8", ("I", 1): "i1", ("I", 2): "i2", ("I", 4): "i4", ("I", 8): "i8"}
+_PCD_CODES = {
+    ("F", 4): "f4",
+    ("F", 8): "f8",
+    ("U", 1): "u1",
+    ("U", 2): "u2",
+    ("U", 4): "u4",
+    ("U", 8): "u8",
+    ("I", 1): "i1",
+    ("I", 2): "i2",
+    ("I", 4): "i4",
+    ("I", 8): "i8",
+}
 # pypcd4 renames the PCL padding field "_" to this prefix plus random letters.
 _PYPCD4_PADDING_PREFIX = "#$%&~~"
 
@@ -137,9 +147,7 @@ def _decode_data(fp: BinaryIO, path: Path, meta, dtype: np.dtype, data_bytes: in
             first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
             raise InputError(f"{path}: bad ASCII point data ({first[:120]})") from None
         if records.shape[0] != n:
-            raise InputError(
-                f"{path}: the header declares {n} points but the ASCII data has {records.shape[0]} rows"
-            )
+            raise InputError(f"{path}: the header declares {n} points but the ASCII data has {records.shape[0]} rows")
         return records
     if encoding == "binary":
         if data_bytes < need:
@@ -206,8 +214,7 @@ def read_pcd(path: Path) -> Frame:
     names = [n for n in (records.dtype.names or ()) if not n.startswith("_pad")]
     if not {"x", "y", "z"} <= set(names):
         raise InputError(
-            f"{path}: the cloud has no x/y/z fields (fields: {' '.join(names) or 'none'}); "
-            "clear needs 3-D points"
+            f"{path}: the cloud has no x/y/z fields (fields: {' '.join(names) or 'none'}); clear needs 3-D points"
         )
     shape = (int(meta.height), int(meta.width)) if meta.height > 1 else None
     skip = tuple(n for n in records.dtype.names or () if n.startswith("_pad"))

@@ -78,9 +78,7 @@ def pack_rgb_float(colors: np.ndarray) -> np.ndarray:
     """(N, 3) uint8 RGB -> (N,) float32 whose bits are 0x00RRGGBB, as PCL stores `rgb`."""
     colors = np.asarray(colors, dtype=np.uint8)
     packed = (
-        (colors[:, 0].astype(np.uint32) << 16)
-        | (colors[:, 1].astype(np.uint32) << 8)
-        | colors[:, 2].astype(np.uint32)
+        (colors[:, 0].astype(np.uint32) << 16) | (colors[:, 1].astype(np.uint32) << 8) | colors[:, 2].astype(np.uint32)
     )
     return packed.view(np.float32)
 
@@ -108,7 +106,9 @@ def check_specs(specs: list[FieldSpec], point_step: int) -> str | None:
         seen.add(spec.name)
         end = spec.offset + np.dtype(spec.code).itemsize * max(spec.count, 1)
         if spec.offset < 0 or end > point_step or spec.count < 1:
-            return f"field {spec.name!r} (offset {spec.offset}, count {spec.count}) does not fit a {point_step}-byte point"
+            return (
+                f"field {spec.name!r} (offset {spec.offset}, count {spec.count}) does not fit a {point_step}-byte point"
+            )
     return None
 
 

@@ -16,8 +16,9 @@ stage that needs points calls `require_finite(frame)`, which raises SceneError (
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from pathlib import Path
-from typing import TYPE_CHECKING, Iterator
+from typing import TYPE_CHECKING
 
 from clearcli.errors import SceneError
 from clearcli.io.formats import check_color, format_of, sniff
@@ -33,7 +34,7 @@ def read_frame(
     path: Path,
     topic: str | None = None,
     index: int = 0,
-    images: "ImageSettings | None" = None,
+    images: ImageSettings | None = None,
     color: Path | None = None,
 ) -> Frame:
     """Frame `index` (from 0) of the file at `path`; a PCD or a depth image holds exactly
@@ -48,7 +49,7 @@ def read_frame(
     return fmt.read_frame(path, topic, index, images, color)
 
 
-def iter_frames(path: Path, topic: str | None = None, images: "ImageSettings | None" = None) -> Iterator[Frame]:
+def iter_frames(path: Path, topic: str | None = None, images: ImageSettings | None = None) -> Iterator[Frame]:
     """Every frame of the file, one at a time (a log or bag is streamed, never loaded whole)."""
     path = Path(path)
     yield from format_of(path).iter_frames(path, topic, images)

@@ -62,8 +62,12 @@ def project_to_pixels(points_m: np.ndarray, model) -> tuple[np.ndarray, np.ndarr
                     "project (plumb_bob, rational_polynomial, or no distortion)"
                 )
             rays_x, rays_y = _undistorted_rays(model, height, width)
-            border = np.concatenate([rays_x[[0, -1], :].ravel() ** 2 + rays_y[[0, -1], :].ravel() ** 2,
-                                     rays_x[:, [0, -1]].ravel() ** 2 + rays_y[:, [0, -1]].ravel() ** 2])
+            border = np.concatenate(
+                [
+                    rays_x[[0, -1], :].ravel() ** 2 + rays_y[[0, -1], :].ravel() ** 2,
+                    rays_x[:, [0, -1]].ravel() ** 2 + rays_y[:, [0, -1]].ravel() ** 2,
+                ]
+            )
             r2_max = float(np.nanmax(border, initial=0.0)) * _FIELD_MARGIN**2
             front &= (x * x + y * y) <= r2_max
             coeffs = (list(model.distortion[:n]) + [0.0] * 8)[:8]

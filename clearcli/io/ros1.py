@@ -10,8 +10,9 @@ import bz2
 import io
 import os
 import struct
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
-from typing import BinaryIO, Callable, Iterator
+from typing import BinaryIO
 
 from clearcli.io.mcap import error_reason
 
@@ -123,9 +124,13 @@ class Ros1Stream:
     def _connection(self, fields: dict[str, bytes], data: bytes) -> _Ros1Conn | None:
         cid = _u32(fields, "conn")
         inner = _fields(data)
-        conn = _Ros1Conn(cid, _text(fields, "topic"), _text(inner, "type"),
-                         inner.get("message_definition", b"").decode("utf-8", errors="replace"),
-                         inner.get("md5sum", b"").decode("latin-1"))
+        conn = _Ros1Conn(
+            cid,
+            _text(fields, "topic"),
+            _text(inner, "type"),
+            inner.get("message_definition", b"").decode("utf-8", errors="replace"),
+            inner.get("md5sum", b"").decode("latin-1"),
+        )
         if cid in self.conns:
             return None
         self.conns[cid] = conn

@@ -32,14 +32,17 @@ from __future__ import annotations
 
 import contextlib
 import os
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, BinaryIO, Iterator, Literal
+from typing import Any, BinaryIO, Literal
 
 import numpy as np
 
 from clearcli.errors import InputError, PartialLogError
+from clearcli.io.bag_messages import BagDecoders, _ZeroCopy, bag_frame
 from clearcli.io.frames import Frame
+from clearcli.io.image_messages import IMAGE_SCHEMAS
 from clearcli.io.mcap import (
     ChannelInfo,
     DeclaredTypeError,
@@ -49,8 +52,6 @@ from clearcli.io.mcap import (
     require_frame_index,
     until_damage,
 )
-from clearcli.io.bag_messages import BagDecoders, _ZeroCopy, bag_frame
-from clearcli.io.image_messages import IMAGE_SCHEMAS
 from clearcli.io.messages import quat_matrix
 from clearcli.io.ros1 import Damage, Ros1Msg, Ros1Stream
 from clearcli.io.sniff import ROSBAG1_MAGIC, ROSBAG2_METADATA, open_input
@@ -111,8 +112,14 @@ def _open_file(path: Path) -> BinaryIO:
 def _ros1_channels(conns: list[tuple[int, str, str, str, int]]) -> tuple[ChannelInfo, ...]:
     """(id, topic, ROS 1 type, msgdef, count) -> ChannelInfo."""
     return tuple(
-        ChannelInfo(id=cid, topic=topic, schema_name=msgtype,
-                    schema_encoding="ros1msg" if msgdef else "", message_encoding="ros1", message_count=n)
+        ChannelInfo(
+            id=cid,
+            topic=topic,
+            schema_name=msgtype,
+            schema_encoding="ros1msg" if msgdef else "",
+            message_encoding="ros1",
+            message_count=n,
+        )
         for cid, topic, msgtype, msgdef, n in conns
     )
 
@@ -140,9 +147,18 @@ def _ros1_scan(path: Path) -> BagSummary:
         [(c.id, c.topic, c.msgtype, c.msgdef, counts.get(c.id, 0)) for c in stream.conns.values()]
     )
     return BagSummary(
-        path=path, format="rosbag1", storage="rosbag1", profile="ros1", library="ROS 1 bag V2.0",
-        channels=channels, message_count=n, start_ns=start, end_ns=end, indexed=False,
-        chunk_count=stream.chunks, damage=damage,
+        path=path,
+        format="rosbag1",
+        storage="rosbag1",
+        profile="ros1",
+        library="ROS 1 bag V2.0",
+        channels=channels,
+        message_count=n,
+        start_ns=start,
+        end_ns=end,
+        indexed=False,
+        chunk_count=stream.chunks,
+        damage=damage,
     )
 
 
@@ -169,16 +185,20 @@ def _ros1_summary(path: Path) -> BagSummary:
         return _ros1_scan(path)
     try:
         conns = sorted(reader.connections, key=lambda c: c.id)
-        channels = _ros1_channels(
-            [(c.id, c.topic, _ros1_name(c.msgtype), c.msgdef.data, c.msgcount) for c in conns]
-        )
+        channels = _ros1_channels([(c.id, c.topic, _ros1_name(c.msgtype), c.msgdef.data, c.msgcount) for c in conns])
         n = sum(c.msgcount for c in conns)
         return BagSummary(
-            path=path, format="rosbag1", storage="rosbag1", profile="ros1", library="ROS 1 bag V2.0",
-            channels=channels, message_count=n,
+            path=path,
+            format="rosbag1",
+            storage="rosbag1",
+            profile="ros1",
+            library="ROS 1 bag V2.0",
+            channels=channels,
+            message_count=n,
             start_ns=int(reader.start_time) if n else None,
             end_ns=int(reader.end_time) - 1 if n else None,  # rosbags' end_time is exclusive
-            indexed=True, chunk_count=len(reader.chunk_infos),
+            indexed=True,
+            chunk_count=len(reader.chunk_infos),
         )
     finally:
         reader.close()
@@ -224,7 +244,9 @@ def _rosbag2_summary(path: Path) -> BagSummary:
         conns = list(reader.connections)
         channels = tuple(
             ChannelInfo(
-                id=c.id, topic=c.topic, schema_name=c.msgtype,
+                id=c.id,
+                topic=c.topic,
+                schema_name=c.msgtype,
                 schema_encoding={"MSG": "ros2msg", "IDL": "ros2idl"}.get(c.msgdef.format.name, ""),
                 message_encoding=getattr(c.ext, "serialization_format", "cdr"),
                 message_count=int(c.msgcount),
@@ -235,15 +257,23 @@ def _rosbag2_summary(path: Path) -> BagSummary:
         storage = _rosbag2_storage(reader)
         distro = reader.ros_distro
         compression = reader.compression_mode
-        library = f"rosbag2, {storage} storage" + (f", {distro}" if distro else "") + (
-            f", {reader.compression_format} {compression} compression" if compression else ""
+        library = (
+            f"rosbag2, {storage} storage"
+            + (f", {distro}" if distro else "")
+            + (f", {reader.compression_format} {compression} compression" if compression else "")
         )
         return BagSummary(
-            path=path, format="rosbag2", storage=storage, profile="ros2", library=library,
-            channels=channels, message_count=n,
+            path=path,
+            format="rosbag2",
+            storage=storage,
+            profile="ros2",
+            library=library,
+            channels=channels,
+            message_count=n,
             start_ns=int(reader.start_time) if n else None,
             end_ns=int(reader.end_time) - 1 if n else None,
-            indexed=True, chunk_count=0,
+            indexed=True,
+            chunk_count=0,
         )
     except InputError:
         raise
@@ -254,7 +284,7 @@ def _rosbag2_summary(path: Path) -> BagSummary:
 
 
 def bag_format(path: Path) -> BagFormat:
-    """"rosbag1" for a #ROSBAG file, else "rosbag2" (a folder, its metadata.yaml, a .db3)."""
+    """ "rosbag1" for a #ROSBAG file, else "rosbag2" (a folder, its metadata.yaml, a .db3)."""
     path = Path(path)
     if path.is_file() and path.name != ROSBAG2_METADATA:
         with _open_file(path) as fp:
@@ -353,8 +383,10 @@ def _rosbag2_messages(path: Path, topic: str) -> Iterator[_Raw]:
 def _type_remedy(summary: BagSummary, topic: str) -> str:
     """What to do about messages on ``topic`` that are not their declared type."""
     if summary.format == "rosbag1":
-        return ("the bag is damaged, or its connection header names another type than its messages are: "
-                "re-record it, or rewrite the connection with the type (and md5sum) of what it holds")
+        return (
+            "the bag is damaged, or its connection header names another type than its messages are: "
+            "re-record it, or rewrite the connection with the type (and md5sum) of what it holds"
+        )
     declared = {ch.schema_name for ch in summary.channels if ch.topic == topic}
     try:
         reader = _rosbag2_reader(summary.path)
@@ -365,8 +397,10 @@ def _type_remedy(summary: BagSummary, topic: str) -> str:
     except Exception:  # a hint only
         stored = []
     records = f" (its storage file records {', '.join(stored)})" if stored else ""
-    return (f"the bag is damaged, or its {ROSBAG2_METADATA} declares another type for the topic than its "
-            f"messages are{records}: correct the type in {ROSBAG2_METADATA}, or re-record the bag")
+    return (
+        f"the bag is damaged, or its {ROSBAG2_METADATA} declares another type for the topic than its "
+        f"messages are{records}: correct the type in {ROSBAG2_METADATA}, or re-record the bag"
+    )
 
 
 def _seeks(summary: BagSummary) -> bool:
@@ -414,8 +448,12 @@ def _guarded(summary: BagSummary, topic: str, skip_to: int = 0) -> Iterator[tupl
                 total = summary.count(topic)
                 if summary.damage is None and complete < total:
                     # the index promises more: never a quiet end short of it
-                    _raise_damage(summary, topic, complete,
-                                  f"its index counts {total} messages on {topic}, the bag holds {complete}")
+                    _raise_damage(
+                        summary,
+                        topic,
+                        complete,
+                        f"its index counts {total} messages on {topic}, the bag holds {complete}",
+                    )
                 return
             except InputError:
                 raise

@@ -26,7 +26,18 @@ PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 TIFF_MAGICS = (b"II*\x00", b"MM\x00*")
 NPY_MAGIC = b"\x93NUMPY"
 # A PCD header opens with a comment or one of its keywords.
-PCD_HEADER_KEYS = (b"VERSION", b"FIELDS", b"SIZE", b"TYPE", b"COUNT", b"WIDTH", b"HEIGHT", b"VIEWPOINT", b"POINTS", b"DATA")
+PCD_HEADER_KEYS = (
+    b"VERSION",
+    b"FIELDS",
+    b"SIZE",
+    b"TYPE",
+    b"COUNT",
+    b"WIDTH",
+    b"HEIGHT",
+    b"VIEWPOINT",
+    b"POINTS",
+    b"DATA",
+)
 
 
 def looks_like_pcd(head: bytes) -> bool:

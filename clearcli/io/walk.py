@@ -42,8 +42,12 @@ def special(path: Path) -> str | None:
         return None  # missing: reported as such by the caller
     if stat.S_ISREG(mode) or stat.S_ISDIR(mode):
         return None
-    kind = {stat.S_ISFIFO: "a FIFO (named pipe)", stat.S_ISSOCK: "a socket", stat.S_ISCHR: "a character device",
-            stat.S_ISBLK: "a block device"}
+    kind = {
+        stat.S_ISFIFO: "a FIFO (named pipe)",
+        stat.S_ISSOCK: "a socket",
+        stat.S_ISCHR: "a character device",
+        stat.S_ISBLK: "a block device",
+    }
     return next((name for test, name in kind.items() if test(mode)), "not a regular file")
 
 
@@ -52,8 +56,9 @@ def is_input_folder(path: Path) -> bool:
     return path.is_dir() and formats.folder_format(path) is not None
 
 
-def files_in(folder: Path, seen: set[tuple[int, int]], skipped: list[tuple[str, str]],
-             images: "ImageSettings") -> list[Path]:
+def files_in(
+    folder: Path, seen: set[tuple[int, int]], skipped: list[tuple[str, str]], images: ImageSettings
+) -> list[Path]:
     """Frame files below ``folder``, sorted; a folder a format holds whole (a rosbag2
     bag) is one entry, hidden entries (a batch's own temporaries, editors' backups) are
     passed over. Only regular files and folders are taken; each real folder is searched
@@ -100,7 +105,7 @@ def is_log(path: Path) -> bool:
     return fmt is not None and fmt.is_log
 
 
-def output_name(path: Path, images: "ImageSettings") -> str:
+def output_name(path: Path, images: ImageSettings) -> str:
     """The base name of the outputs of a single frame's file: its stem, or the name its
     format gives it (a depth image's stem without the depth suffix)."""
     for fmt in formats.FORMATS:
@@ -110,7 +115,7 @@ def output_name(path: Path, images: "ImageSettings") -> str:
     return path.stem
 
 
-def frame_files(source: str | Path, images: "ImageSettings", color: str | Path | None = None) -> tuple[Path, ...]:
+def frame_files(source: str | Path, images: ImageSettings, color: str | Path | None = None) -> tuple[Path, ...]:
     """The files a frame of ``source`` is read from: the file itself and those its format
     reads with it (a rosbag2 folder's files; a depth image's colour image, --color or the
     one the naming rule pairs, and its intrinsics file), or the colour image --color

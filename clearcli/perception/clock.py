@@ -4,8 +4,8 @@ refinement stages are timed by (`Segmentation.timings_s`)."""
 from __future__ import annotations
 
 import time
+from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
-from typing import Iterable, Iterator
 
 
 class Clock:

@@ -70,7 +70,9 @@ def split_by_colour(seg_of_sv: np.ndarray, ctx: RefineContext) -> np.ndarray:
     return color_splits(seg_of_sv, ctx.sv, lab, ctx.settings.color_split_delta, ctx.size.min_object_voxels)
 
 
-def color_splits(seg_of_sv: np.ndarray, sv: Supervoxels, lab: np.ndarray, min_delta: float, min_voxels: int) -> np.ndarray:
+def color_splits(
+    seg_of_sv: np.ndarray, sv: Supervoxels, lab: np.ndarray, min_delta: float, min_voxels: int
+) -> np.ndarray:
     """(S,) segment per supervoxel after the colour splits (module doc)."""
     e = sv.edges
     if e.shape[0] == 0:
@@ -81,7 +83,6 @@ def color_splits(seg_of_sv: np.ndarray, sv: Supervoxels, lab: np.ndarray, min_de
     d = sv.centroids[a] - sv.centroids[b]
     angle = _angle_deg(n1, n2)
     convex = _angle_deg(d, n1) - _angle_deg(d, n2) <= 0
-    crease = convex & (angle >= _CREASE_DEG)
     concave = ~convex & (angle >= _CONCAVE_DEG)
     delta = np.linalg.norm(lab[a] - lab[b], axis=1)
     cut = same & (delta >= min_delta)

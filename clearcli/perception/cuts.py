@@ -44,9 +44,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from clearcli.settings.segment import SegmentSettings
 from clearcli.perception.size import SegmentSize
 from clearcli.perception.supervoxels import Supervoxels
+from clearcli.settings.segment import SegmentSettings
 
 if TYPE_CHECKING:
     from clearcli.perception.refine import RefineContext
@@ -96,9 +96,7 @@ def seam_rise(sv: Supervoxels, voxel_centroids: np.ndarray, edges: np.ndarray) -
     return out
 
 
-def candidate_planes(
-    sv: Supervoxels, edges: np.ndarray, up: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def candidate_planes(sv: Supervoxels, edges: np.ndarray, up: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Vertical candidate planes through the adjacencies ``edges`` (K, 2): (points (C, 3),
     unit normals (C, 3), index into ``edges`` of the adjacency each came from (C,))."""
     xi, xj = sv.centroids[edges[:, 0]], sv.centroids[edges[:, 1]]
@@ -202,9 +200,24 @@ def planar_cuts(
         )
         if trace is not None:
             trace.append(
-                dict(seg=seg.copy(), cand_seg=cand_seg, score=score, n_concave=n_concave, n_crossed=crossed.sum(axis=1),
-                     vox_pos=vox_pos, vox_all=vox_all, side=side, good=good, normal=normal, p0=p0,
-                     crossed=crossed, ie=ie, rising=rising, explained=explained, flat_share=flat_share)
+                dict(
+                    seg=seg.copy(),
+                    cand_seg=cand_seg,
+                    score=score,
+                    n_concave=n_concave,
+                    n_crossed=crossed.sum(axis=1),
+                    vox_pos=vox_pos,
+                    vox_all=vox_all,
+                    side=side,
+                    good=good,
+                    normal=normal,
+                    p0=p0,
+                    crossed=crossed,
+                    ie=ie,
+                    rising=rising,
+                    explained=explained,
+                    flat_share=flat_share,
+                )
             )
         if not good.any():
             break

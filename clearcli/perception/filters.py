@@ -112,6 +112,4 @@ def clean_mask(points: np.ndarray, shape: tuple[int, int] | None, settings: Segm
         return finite_mask(points)
     from clearcli.errors import SettingsError
 
-    raise SettingsError(
-        f"settings: [segment] outlier_method must be depth_radius, statistical or none, got {method!r}"
-    )
+    raise SettingsError(f"settings: [segment] outlier_method must be depth_radius, statistical or none, got {method!r}")

@@ -25,7 +25,11 @@ def rejoin_fragments(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray
     """The stage: `join_fragments` on the frame's voxels; a fragment is smaller than
     LCCP's smallest segment in voxels."""
     return join_fragments(
-        seg_of_voxel, ctx.vox.centroids, ctx.vox.edges, ctx.voxel_is_top, ctx.size.min_segment_voxels,
+        seg_of_voxel,
+        ctx.vox.centroids,
+        ctx.vox.edges,
+        ctx.voxel_is_top,
+        ctx.size.min_segment_voxels,
         ctx.settings.fragment_join_m,
     )
 

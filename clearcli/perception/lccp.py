@@ -19,9 +19,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from clearcli.settings.segment import SegmentSettings
 from clearcli.perception.size import SegmentSize
 from clearcli.perception.supervoxels import Supervoxels
+from clearcli.settings.segment import SegmentSettings
 
 
 def _angle_deg(a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -32,7 +32,7 @@ def _rim(opening: Any) -> dict[str, Any] | None:
     }
 
 
-def segmentation_payload(seg: "Segmentation") -> dict[str, Any]:
+def segmentation_payload(seg: Segmentation) -> dict[str, Any]:
     return {
         "source": seg.source,
         "frame_id": seg.frame_id,

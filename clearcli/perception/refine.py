@@ -30,9 +30,9 @@ within a supervoxel until the first voxel-level stage; they come first).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Callable
 
 import numpy as np
 

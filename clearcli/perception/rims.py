@@ -30,7 +30,11 @@ def join_rims(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
     """The stage: `merge_rims` on the frame's voxels, top faces from the supervoxels."""
     s = ctx.settings
     return merge_rims(
-        seg_of_voxel, ctx.vox.centroids, ctx.voxel_height, s.rim_tolerance_m, s.rim_contact_m,
+        seg_of_voxel,
+        ctx.vox.centroids,
+        ctx.voxel_height,
+        s.rim_tolerance_m,
+        s.rim_contact_m,
         voxel_is_top=ctx.voxel_is_top,
     )
 

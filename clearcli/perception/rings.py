@@ -175,8 +175,16 @@ def merge_rings(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
             if wa.size == 0 or wb.size == 0:
                 continue
             if ring_pair(
-                band[a], band[b], sv_normals_xy[wa], sv_xy[wa], sv_normals_xy[wb], sv_xy[wb],
-                max_radius_m, settings.ring_max_residual, settings.ring_min_cover_deg, settings.ring_max_off_share,
+                band[a],
+                band[b],
+                sv_normals_xy[wa],
+                sv_xy[wa],
+                sv_normals_xy[wb],
+                sv_xy[wb],
+                max_radius_m,
+                settings.ring_max_residual,
+                settings.ring_min_cover_deg,
+                settings.ring_max_off_share,
             ):
                 joined.append((a, b))
     return join_pairs(seg_of_voxel, joined, n_seg)

@@ -22,14 +22,13 @@ timed by one `Clock` under its name; the sizes every step counts in are the fram
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 import numpy as np
 
 from clearcli.errors import SceneError
 from clearcli.io.frames import Frame
-from clearcli.settings.segment import SegmentSettings
 from clearcli.perception.clock import Clock
 from clearcli.perception.openings import Opening
 from clearcli.perception.refine import STAGES
@@ -37,6 +36,7 @@ from clearcli.perception.size import SegmentSize
 from clearcli.perception.supervoxels import Supervoxels, VoxelCloud
 from clearcli.perception.table import TableFit
 from clearcli.perception.types import Segmentation, SegmentedObject, TablePlane
+from clearcli.settings.segment import SegmentSettings
 
 # colour_state(): a frame is "all black" or "all saturated" when this share of its points
 # are (every channel at most _BLACK, or at least _SATURATED); "one flat value" when no
@@ -156,10 +156,16 @@ def color_state(frame: Frame, organized: bool, settings: SegmentSettings) -> tup
     """(colour used, why or what for): segmentation runs on geometry alone, and says so,
     when the frame has no colour, when it is all black or all saturated (a camera whose
     exposure failed, a colour topic that never came), or when no stage would read it."""
-    readers = [name for name, on in (("supervoxels", settings.color_importance > 0),
-                                      ("colour splits", settings.color_split),
-                                      ("flat objects", settings.flat_objects and organized),
-                                      ("containers' walls", settings.vessel_rebuild)) if on]
+    readers = [
+        name
+        for name, on in (
+            ("supervoxels", settings.color_importance > 0),
+            ("colour splits", settings.color_split),
+            ("flat objects", settings.flat_objects and organized),
+            ("containers' walls", settings.vessel_rebuild),
+        )
+        if on
+    ]
     if frame.colors is None:
         return False, frame.color_note or "the frame has no colour: geometry alone"
     if frame.colors.shape != (frame.n_points, 3):
@@ -177,7 +183,10 @@ def color_state(frame: Frame, organized: bool, settings: SegmentSettings) -> tup
     if float(np.ptp(rgb.astype(np.int16), axis=0).max()) <= _FLAT_COLOR:
         return False, "the colour is one flat value: geometry alone"
     if not readers:
-        return False, "no stage reads colour with these settings (color_importance 0, color_split, flat_objects and vessel_rebuild off)"
+        return (
+            False,
+            "no stage reads colour with these settings (color_importance 0, color_split, flat_objects and vessel_rebuild off)",
+        )
     return True, "read by: " + ", ".join(readers)
 
 
@@ -195,9 +204,17 @@ def _flat_objects(frame: Frame, table_idx: np.ndarray, obj_idx: np.ndarray, obje
         return float(np.unique(np.floor(xy / cell).astype(np.int64), axis=0).shape[0]) * cell * cell
 
     found = flat_objects(
-        frame.points, frame.colors, frame.shape, table_idx, loose, taken,
-        lambda p: fit.plane.height_of(p.astype(np.float64)), area,
-        settings.flat_min_color_delta, settings.flat_min_relief_m, settings.min_object_area_m2,
+        frame.points,
+        frame.colors,
+        frame.shape,
+        table_idx,
+        loose,
+        taken,
+        lambda p: fit.plane.height_of(p.astype(np.float64)),
+        area,
+        settings.flat_min_color_delta,
+        settings.flat_min_relief_m,
+        settings.min_object_area_m2,
         settings.flat_max_area_m2,
     )
     if not found:
@@ -393,7 +410,17 @@ STAGE_NAMES = tuple(st.name for st in STAGES)
 MERGED = tuple(name for name in STAGE_NAMES if name != "cuts")
 # the timings' keys, in the order the JSON reports them
 TIMINGS = (
-    "filter", "table", "supervoxels", "lccp", "merge", "edges", *STAGE_NAMES, "flat", "objects", "openings", "total",
+    "filter",
+    "table",
+    "supervoxels",
+    "lccp",
+    "merge",
+    "edges",
+    *STAGE_NAMES,
+    "flat",
+    "objects",
+    "openings",
+    "total",
 )
 
 

@@ -188,7 +188,8 @@ def join_supports(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
         if not np.isfinite(h) or h <= settings.standing_max_m:
             continue  # stands on the table
         near = [
-            s for s in sorted(neighbours.get(upper, ()))
+            s
+            for s in sorted(neighbours.get(upper, ()))
             if int((top & (seg == s) & (np.abs(voxel_height - h) <= settings.step_min_m)).sum()) >= min_level_vox
         ]
         for i, s1 in enumerate(near):

@@ -16,8 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from clearcli.settings.segment import SegmentSettings
 from clearcli.perception.size import SegmentSize
+from clearcli.settings.segment import SegmentSettings
 
 # 13 of the 26 neighbour offsets: each undirected adjacency found once
 _HALF_OFFSETS = np.array(
@@ -54,10 +54,13 @@ def voxelize(points: np.ndarray, voxel_m: float, colors: np.ndarray | None = Non
     cent /= counts[:, None]
     vcol = None
     if colors is not None:
-        vcol = np.stack(
-            [np.bincount(inverse, weights=colors[:, k].astype(np.float64), minlength=n_vox) for k in range(3)],
-            axis=1,
-        ) / counts[:, None]
+        vcol = (
+            np.stack(
+                [np.bincount(inverse, weights=colors[:, k].astype(np.float64), minlength=n_vox) for k in range(3)],
+                axis=1,
+            )
+            / counts[:, None]
+        )
     keys = np.stack([uniq // (dims[1] * dims[2]), (uniq // dims[2]) % dims[1], uniq % dims[2]], axis=1)
     src: list[np.ndarray] = []
     dst: list[np.ndarray] = []
@@ -211,13 +214,12 @@ def supervoxel_labels(
         valid = np.isfinite(dist)
         nb_safe = np.where(valid, nb, 0)
         cost = settings.spatial_importance * dist / seed_m
-        cost = cost + settings.normal_importance * (
-            1.0 - np.abs(np.einsum("vj,vkj->vk", normals, seed_nrm[nb_safe]))
-        )
+        cost = cost + settings.normal_importance * (1.0 - np.abs(np.einsum("vj,vkj->vk", normals, seed_nrm[nb_safe])))
         if seed_col is not None and vox.colors is not None:
-            cost = cost + settings.color_importance * np.linalg.norm(
-                vox.colors[:, None, :] - seed_col[nb_safe], axis=2
-            ) / 255.0
+            cost = (
+                cost
+                + settings.color_importance * np.linalg.norm(vox.colors[:, None, :] - seed_col[nb_safe], axis=2) / 255.0
+            )
         cost[~valid] = np.inf
         pick = np.argmin(cost, axis=1)
         labels = np.where(valid[np.arange(n_vox), pick], nb_safe[np.arange(n_vox), pick], -1)
@@ -227,7 +229,9 @@ def supervoxel_labels(
         cnt = np.bincount(labels[used], minlength=n_s)
         keep = cnt > 0
         new_pos = np.stack([np.bincount(labels[used], weights=cent[used, j], minlength=n_s) for j in range(3)], axis=1)
-        new_nrm = np.stack([np.bincount(labels[used], weights=normals[used, j], minlength=n_s) for j in range(3)], axis=1)
+        new_nrm = np.stack(
+            [np.bincount(labels[used], weights=normals[used, j], minlength=n_s) for j in range(3)], axis=1
+        )
         seed_pos = np.where(keep[:, None], new_pos / np.maximum(cnt, 1)[:, None], seed_pos)
         nn = np.linalg.norm(new_nrm, axis=1)
         seed_nrm = np.where((keep & (nn > 1e-9))[:, None], new_nrm / np.maximum(nn, 1e-9)[:, None], seed_nrm)

@@ -15,8 +15,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from clearcli.errors import SceneError
-from clearcli.settings.segment import SegmentSettings
 from clearcli.perception.types import PlaneVerdict, TablePlane
+from clearcli.settings.segment import SegmentSettings
 
 # Height band (m) in which points count as "standing on" a candidate plane when scoring
 # candidates: tabletop objects, not furniture standing on a floor.
@@ -309,14 +309,21 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
         basis = plane_basis(n)
         comp, area = largest_component(project(sample[inl], basis), settings.table_cell_m, settings.table_join_gap_m)
         if area < settings.table_min_area_m2:
-            small.append(PlaneVerdict(_tuple(n), float(d), area, 0, False,
-                                      f"smaller than table_min_area_m2 ({area:.3f} < {settings.table_min_area_m2:g} m^2)"))
+            small.append(
+                PlaneVerdict(
+                    _tuple(n),
+                    float(d),
+                    area,
+                    0,
+                    False,
+                    f"smaller than table_min_area_m2 ({area:.3f} < {settings.table_min_area_m2:g} m^2)",
+                )
+            )
             continue
         candidates.append(_Candidate(n, d, inl[comp], area, on_plane))
     if not candidates:
         raise SceneError(
-            f"{where}no table: no plane of at least {settings.table_min_area_m2} m^2 in the frame; "
-            "is a table in view?"
+            f"{where}no table: no plane of at least {settings.table_min_area_m2} m^2 in the frame; is a table in view?"
         )
 
     any_plane = np.zeros(sample.shape[0], dtype=bool)
@@ -332,8 +339,16 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
         n, d = fit_plane_lsq(sample[c.members])
         camera_is_origin = abs(d) >= _MIN_CAMERA_HEIGHT_M
         if camera_is_origin and abs(d) > settings.table_max_distance_m:
-            far.append(PlaneVerdict(_tuple(n), float(d), c.area_m2, 0, False,
-                                    f"farther than table_max_distance_m ({abs(d):.2f} > {settings.table_max_distance_m:g} m)"))
+            far.append(
+                PlaneVerdict(
+                    _tuple(n),
+                    float(d),
+                    c.area_m2,
+                    0,
+                    False,
+                    f"farther than table_max_distance_m ({abs(d):.2f} > {settings.table_max_distance_m:g} m)",
+                )
+            )
             continue
         basis = plane_basis(n)
         origin = -d * n
@@ -341,9 +356,7 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
         h = loose @ n + d
         # depth noise grows with the square of the range: far off-plane points are
         # noise of the plane itself, not things standing on it
-        band = (np.abs(h) > settings.prism_min_height_m + _NOISE_PER_M2 * loose_range2) & (
-            np.abs(h) <= _SCORE_HEIGHT_M
-        )
+        band = (np.abs(h) > settings.prism_min_height_m + _NOISE_PER_M2 * loose_range2) & (np.abs(h) <= _SCORE_HEIGHT_M)
         ins = np.zeros(loose.shape[0], dtype=bool)
         ins[band] = inside_convex(project(loose[band], basis) - origin @ basis.T, poly, -_EDGE_BAND_M)
         above = int((ins & (h > 0)).sum())
@@ -370,9 +383,16 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
     _, fit, above, below = best
     chosen_standing = abs(above - below)
     verdicts = [
-        PlaneVerdict(_tuple(f.plane.normal), f.plane.offset, area, standing, f is fit,
-                     "the most points standing on it" if f is fit else
-                     f"fewer points standing on it ({standing} against {chosen_standing})")
+        PlaneVerdict(
+            _tuple(f.plane.normal),
+            f.plane.offset,
+            area,
+            standing,
+            f is fit,
+            "the most points standing on it"
+            if f is fit
+            else f"fewer points standing on it ({standing} against {chosen_standing})",
+        )
         for f, standing, area in scored
     ]
     verdicts.sort(key=lambda v: not v.chosen)

@@ -83,7 +83,9 @@ _K = 7
 _MAX_SAMPLES = 2000
 
 
-def _by_colour(lab: np.ndarray, wall: np.ndarray, inside: np.ndarray, unsure: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+def _by_colour(
+    lab: np.ndarray, wall: np.ndarray, inside: np.ndarray, unsure: np.ndarray, rng: np.random.Generator
+) -> np.ndarray:
     """(len(unsure),) is each unsure voxel's colour nearer the wall's than the inside's
     (majority of its ``_K`` nearest among samples of both, CIELAB)?"""
     from scipy.spatial import cKDTree
@@ -112,7 +114,9 @@ def _circles3(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return centres, radii
 
 
-def find_rim(band_xy: np.ndarray, max_radius_m: float, rng: np.random.Generator) -> tuple[np.ndarray, float, np.ndarray] | None:
+def find_rim(
+    band_xy: np.ndarray, max_radius_m: float, rng: np.random.Generator
+) -> tuple[np.ndarray, float, np.ndarray] | None:
     """(centre, radius, inlier mask) of the circle most of ``band_xy`` (N, 2) lie on,
     going at least ``_MIN_COVER_DEG`` round it, or None. RANSAC over circles through
     three band points, all rounds at once, then least squares on the inliers."""
@@ -203,8 +207,10 @@ def rebuild_vessels(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
         if s in done:
             continue
         group = [
-            k for k in cand
-            if k not in done and abs(top[k] - top[s]) <= tolerance_m
+            k
+            for k in cand
+            if k not in done
+            and abs(top[k] - top[s]) <= tolerance_m
             and np.linalg.norm(mid[k] - mid[s]) <= 2 * max_radius_m
         ]
         band = np.concatenate([band_of[k] for k in group])

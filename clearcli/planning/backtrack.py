@@ -50,7 +50,8 @@ but can still be pushed out of the way.
 from __future__ import annotations
 
 import time
-from typing import TYPE_CHECKING, Callable, Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -59,7 +60,8 @@ from clearcli.planning.compile import removable_objects
 from clearcli.planning.feasibility import EMPTY, IKActionChecker, Infeasible, SceneContext, gripper_opening_text
 from clearcli.planning.solve import Solved, action_cost, action_space, deadline_error, progress, solve
 from clearcli.planning.types import Action, BacktrackStep, CheckedAction, LeftObject, Plan
-from clearcli.predicates.grasps import kind as grasp_kind, kinds as grasp_kinds
+from clearcli.predicates.grasps import kind as grasp_kind
+from clearcli.predicates.grasps import kinds as grasp_kinds
 from clearcli.predicates.state import Fact, SymbolicState
 
 if TYPE_CHECKING:
@@ -276,8 +278,14 @@ class Search:
         return None
 
     def learn(
-        self, solved: Solved, checked: Sequence[CheckedAction], i: int, action: Action, fail: Infeasible,
-        ctx_i: SceneContext, t0: float,
+        self,
+        solved: Solved,
+        checked: Sequence[CheckedAction],
+        i: int,
+        action: Action,
+        fail: Infeasible,
+        ctx_i: SceneContext,
+        t0: float,
     ) -> None:
         """What the failure of the plan's ``i``-th action teaches, where it holds (the
         module's docstring): facts of the base, or a fixed prefix and a new base."""
@@ -312,7 +320,14 @@ class Search:
                 self.learnt_later.extend((len(self.prefix), f) for f in sorted(new))
             self.steps.append(
                 BacktrackStep(
-                    solved.actions, solved.cost, solved.optimal, False, fail.reason, i, tuple(sorted(new)), len(self.prefix)
+                    solved.actions,
+                    solved.cost,
+                    solved.optimal,
+                    False,
+                    fail.reason,
+                    i,
+                    tuple(sorted(new)),
+                    len(self.prefix),
                 )
             )
         elif i == 0:
@@ -324,8 +339,14 @@ class Search:
             # plan the rest from the state they leave, where the failure is learnt.
             self.steps.append(
                 BacktrackStep(
-                    solved.actions, solved.cost, solved.optimal, False, fail.reason, i,
-                    tuple(sorted(fail.facts(action))), len(self.prefix),
+                    solved.actions,
+                    solved.cost,
+                    solved.optimal,
+                    False,
+                    fail.reason,
+                    i,
+                    tuple(sorted(fail.facts(action))),
+                    len(self.prefix),
                 )
             )
             # The facts known in the base, carried through the fixed actions by the
@@ -358,7 +379,13 @@ class Search:
             cost = sum(action_cost(a, costs) for a in actions)
         removed = tuple(a.obj for a in actions if a.kind == "grasp")
         left = _left_objects(
-            self.names, removed, self.ungraspable, self.unreachable, self.stuck, self.known(), self.why,
+            self.names,
+            removed,
+            self.ungraspable,
+            self.unreachable,
+            self.stuck,
+            self.known(),
+            self.why,
             self.describe_width,
         )
         return Plan(
@@ -412,7 +439,11 @@ def _left_objects(
                 {
                     f[1]
                     for f in facts
-                    if f[0] in ("on", "block_grasp", "block_dir") and len(f) > 2 and f[2] == o and f[1] in left_set and f[1] != o
+                    if f[0] in ("on", "block_grasp", "block_dir")
+                    and len(f) > 2
+                    and f[2] == o
+                    and f[1] in left_set
+                    and f[1] != o
                 }
                 | {f[2] for f in facts if f[0] == "on" and f[1] == o and f[2] in left_set},
                 key=_name_key,
@@ -445,18 +476,18 @@ def _no_plan_reason(plan: Plan) -> str:
 
 def make_plan(
     state: SymbolicState,
-    settings: "Settings",
+    settings: Settings,
     T_base_camera: np.ndarray | None = None,
     check: str | None = None,
-    robot: "Arm | None" = None,
+    robot: Arm | None = None,
 ) -> Plan:
     """Plan for ``state`` (SymbolicState) with ``robot`` (the command's resolved arm,
     clearcli/robot/arm.py; else the one ``settings`` describe) at ``T_base_camera`` (else
     from ``[robot] camera_pose`` or derived from the table, see clearcli/robot/placement.py).
     ``check``: "whole" or "first" (default ``[plan] check``)."""
+    from clearcli.predicates.grasps import parse_kinds
     from clearcli.robot.arm import resolve_arm
     from clearcli.robot.collision import make_obstacles
-    from clearcli.predicates.grasps import parse_kinds
 
     arm = robot if robot is not None else resolve_arm(settings)
     plan_s = settings.plan
@@ -473,7 +504,11 @@ def make_plan(
     def describe_width(name: str) -> tuple[str, float | None]:
         obj = state.by_name(name)
         width = float(obj.grasp_width_m)
-        text = "too wide or narrow for the gripper" if width <= 0 else gripper_opening_text(width, gripper.opening_width_m, gripper.closing_width_m)
+        text = (
+            "too wide or narrow for the gripper"
+            if width <= 0
+            else gripper_opening_text(width, gripper.opening_width_m, gripper.closing_width_m)
+        )
         # the other kinds tried, and why each is not offered
         tried = [f"{grasp_kind(k).label}: {obj.kind_refusals[k]}" for k in kinds_on if k in obj.kind_refusals]
         if tried:

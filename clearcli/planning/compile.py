@@ -25,8 +25,8 @@ clearcli/predicates/grasps/base.py), as in the lifted domain (pddl.with_grasp_ki
 from __future__ import annotations
 
 import re
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Iterable, Mapping, Sequence
 
 from clearcli.planning.types import Action
 from clearcli.predicates.grasps import kinds as grasp_kinds

@@ -252,14 +252,27 @@ def run_downward(
         (tmpdir / "domain.pddl").write_text(domain, encoding="utf-8")
         (tmpdir / "problem.pddl").write_text(problem, encoding="utf-8")
         return _run_driver(
-            driver, ["domain.pddl", "problem.pddl"], tmpdir, alias=alias, search=search,
-            time_limit_s=time_limit_s, config=config, optimal=bool(optimal and alias is None),
+            driver,
+            ["domain.pddl", "problem.pddl"],
+            tmpdir,
+            alias=alias,
+            search=search,
+            time_limit_s=time_limit_s,
+            config=config,
+            optimal=bool(optimal and alias is None),
         )
 
 
 def _run_driver(
-    driver: Path, inputs: list[str], tmpdir: Path, *, alias: str | None, search: str | None,
-    time_limit_s: float, config: str, optimal: bool,
+    driver: Path,
+    inputs: list[str],
+    tmpdir: Path,
+    *,
+    alias: str | None,
+    search: str | None,
+    time_limit_s: float,
+    config: str,
+    optimal: bool,
 ) -> DownwardResult:
     """The driver on ``inputs`` (PDDL files, or one .sas file: then it only searches)."""
     cpu_limit = _backstop_cpu_s(time_limit_s)
@@ -268,7 +281,9 @@ def _run_driver(
         cmd += ["--alias", alias, *inputs]
     else:
         cmd += [*inputs, "--search", str(search)]
-    return _execute(cmd, tmpdir, stdin_path=None, time_limit_s=time_limit_s, config=config, optimal=optimal, env=_clean_env())
+    return _execute(
+        cmd, tmpdir, stdin_path=None, time_limit_s=time_limit_s, config=config, optimal=optimal, env=_clean_env()
+    )
 
 
 def run_sas(
@@ -302,8 +317,14 @@ def run_sas(
         sas_path.write_text(sas_text, encoding="utf-8")
         if alias:
             return _run_driver(
-                find_fast_downward(), ["output.sas"], tmpdir, alias=alias, search=None,
-                time_limit_s=time_limit_s, config=config, optimal=False,
+                find_fast_downward(),
+                ["output.sas"],
+                tmpdir,
+                alias=alias,
+                search=None,
+                time_limit_s=time_limit_s,
+                config=config,
+                optimal=False,
             )
         binary = find_search_binary()
         cmd = [str(binary), "--search", str(search), "--internal-plan-file", "sas_plan"]

@@ -25,8 +25,9 @@ A failure says why, in a form backtracking can learn from (`Infeasible`):
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -76,7 +77,7 @@ class SceneContext:
         """The object was grasped or pushed in this context."""
         return name in self.removed or any(n == name for n, _ in self.shifts)
 
-    def after(self, action: Action, state: SymbolicState) -> "SceneContext":
+    def after(self, action: Action, state: SymbolicState) -> SceneContext:
         """The context once ``action`` is done (as the model predicts it)."""
         if action.kind == "grasp":
             return SceneContext(self.removed | {action.obj}, tuple(s for s in self.shifts if s[0] != action.obj))
@@ -190,7 +191,7 @@ class IKActionChecker:
     # check that a pushed object can be grasped where the push leaves it
     push_lookahead: bool = False
     per_action_s: list[float] = field(default_factory=list)
-    _cache: dict[tuple[Action, SceneContext], "CheckedAction | Infeasible"] = field(default_factory=dict)
+    _cache: dict[tuple[Action, SceneContext], CheckedAction | Infeasible] = field(default_factory=dict)
     _obstacles: dict[SceneContext, Any] = field(default_factory=dict)
     _spheres: dict[bytes, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
     _poses: dict[tuple[Action, bytes], tuple[tuple[np.ndarray, ...], ...]] = field(default_factory=dict)
@@ -239,7 +240,7 @@ class IKActionChecker:
             return "beyond the arm's reach"
         return ""
 
-    def __call__(self, action: Action, ctx: SceneContext = EMPTY) -> "CheckedAction | Infeasible":
+    def __call__(self, action: Action, ctx: SceneContext = EMPTY) -> CheckedAction | Infeasible:
         key = (action, ctx)
         hit = self._cache.get(key)
         if hit is not None:
@@ -252,7 +253,7 @@ class IKActionChecker:
         self._cache[key] = result
         return result
 
-    def _check(self, action: Action, ctx: SceneContext) -> "CheckedAction | Infeasible":
+    def _check(self, action: Action, ctx: SceneContext) -> CheckedAction | Infeasible:
         if action.kind == "grasp" and np.any(ctx.shift_of(action.obj)):
             # a kind whose poses are made for where the object stands (a slide's path and
             # pinch, to one side of the table): pushed first, it is somewhere else, and its
@@ -317,4 +318,3 @@ __all__ = [
     "context_obstacles",
     "gripper_opening_text",
 ]
-

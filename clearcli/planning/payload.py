@@ -16,7 +16,7 @@ if TYPE_CHECKING:
 from clearcli.planning.versions import PLAN_SCHEMA, PLAN_VERSION, PREDICATES_SCHEMA, PREDICATES_VERSION  # noqa: F401
 
 
-def predicates_payload(state: "SymbolicState") -> dict[str, Any]:
+def predicates_payload(state: SymbolicState) -> dict[str, Any]:
     """The payload of schema ``clear.predicates``."""
     objects = []
     for o in state.objects:
@@ -39,7 +39,10 @@ def predicates_payload(state: "SymbolicState") -> dict[str, Any]:
                 # a slide's direction and length; the poses each candidate grasps at), and
                 # why the others are not
                 "grasp_kinds": {
-                    k: {**_rounded_detail(o.kind_details.get(k, {})), "grasp_poses": [rounded(_grasp_pose(c)) for c in cands]}
+                    k: {
+                        **_rounded_detail(o.kind_details.get(k, {})),
+                        "grasp_poses": [rounded(_grasp_pose(c)) for c in cands],
+                    }
                     for k, cands in o.kind_candidates.items()
                 },
                 "not_offered": dict(o.kind_refusals),
@@ -79,7 +82,7 @@ def _grasp_pose(seq: Any) -> Any:
     return seq[-2]
 
 
-def plan_payload(plan: "Plan", source: str, frame_id: str, pose_source: str, unit_cost: bool) -> dict[str, Any]:
+def plan_payload(plan: Plan, source: str, frame_id: str, pose_source: str, unit_cost: bool) -> dict[str, Any]:
     """The payload of schema ``clear.plan`` (documented in `clearcli/commands/plan.py`)."""
     first = None
     if plan.first is not None:

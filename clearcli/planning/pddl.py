@@ -15,8 +15,8 @@ object removed, (and) when there is none (already true).
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Sequence
 from functools import lru_cache
-from typing import Iterable, Sequence
 
 from clearcli.errors import InputError
 from clearcli.predicates.state import DIRECTIONS, Fact, SymbolicState
@@ -112,7 +112,8 @@ def with_grasp_kinds(text: str, kinds: Sequence[str]) -> str:
         preds += [f"    ({f.offered} ?o - obj)", f"    ({f.block} ?a - obj ?b - obj)", f"    ({f.ik} ?o - obj)"]
         grasp_dels.append(f"\n             (not ({f.block} ?o ?x))")
         push_dels.append(
-            f"\n             (not ({f.block} ?o ?x))" + (f"\n             (not ({f.block} ?x ?o))" if k.push_clears_blocks else "")
+            f"\n             (not ({f.block} ?o ?x))"
+            + (f"\n             (not ({f.block} ?x ?o))" if k.push_clears_blocks else "")
         )
         if k.push_clears_ik:
             push_ik.append(f"\n      (not ({f.ik} ?o))")
@@ -124,7 +125,10 @@ def with_grasp_kinds(text: str, kinds: Sequence[str]) -> str:
     )
     text = text.replace(
         _PUSH_EFFECT_END,
-        "             (not (block_grasp ?x ?o))" + "".join(push_dels) + "))\n      (not (ik_unfeasible_grasp ?o))" + "".join(push_ik),
+        "             (not (block_grasp ?x ?o))"
+        + "".join(push_dels)
+        + "))\n      (not (ik_unfeasible_grasp ?o))"
+        + "".join(push_ik),
     )
     body = text.rstrip()
     assert body.endswith(")")

@@ -21,7 +21,8 @@ the loop after two pushes at most.
 from __future__ import annotations
 
 import dataclasses
-from typing import TYPE_CHECKING, Any, Collection, Mapping
+from collections.abc import Collection, Mapping
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -122,7 +123,9 @@ def off_seam(state: SymbolicState, name: str, direction: str, gripper: Any) -> S
                 T2[:3, 3] += sign * reach * side
                 shifted.append(T2)
             variants.append(tuple(shifted))
-    moved = dataclasses.replace(obj, pushes={**obj.pushes, direction: dataclasses.replace(push, candidates=tuple(variants))})
+    moved = dataclasses.replace(
+        obj, pushes={**obj.pushes, direction: dataclasses.replace(push, candidates=tuple(variants))}
+    )
     return dataclasses.replace(state, objects=tuple(moved if o.name == name else o for o in state.objects))
 
 
@@ -133,7 +136,7 @@ def probe_push(
     T_base_camera: np.ndarray,
     tried: Mapping[str, frozenset[str]] | None = None,
     failed: Collection[str] = (),
-    robot: "Arm | None" = None,
+    robot: Arm | None = None,
 ) -> Plan | None:
     """A one-action plan pushing the first candidate that has a free, IK-feasible push
     along an axis not tried on it yet, or None. ``failed``: as `probe_candidates`.
@@ -149,7 +152,9 @@ def probe_push(
     tried = tried or {}
     names = [
         n
-        for n in probe_candidates(state, plan, settings.gripper.opening_width_m, settings.plan.probe_max_width_m, failed)
+        for n in probe_candidates(
+            state, plan, settings.gripper.opening_width_m, settings.plan.probe_max_width_m, failed
+        )
         if len(tried.get(n, ())) < 2
     ]
     if not names:

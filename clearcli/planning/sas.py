@@ -27,8 +27,8 @@ the translator's ``sas_tasks.py``.
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Iterable, Mapping, Sequence
 
 from clearcli.planning.compile import _atom, ground_actions
 from clearcli.planning.types import Action

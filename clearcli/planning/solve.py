@@ -6,14 +6,16 @@ from __future__ import annotations
 
 import functools
 import time
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Iterable, Mapping, Sequence
 
 from clearcli.errors import PlannerError, SettingsError
 from clearcli.planning import downward
 from clearcli.planning.types import Action
-from clearcli.predicates.grasps import kind as grasp_kind, kinds as grasp_kinds
+from clearcli.predicates.grasps import kind as grasp_kind
+from clearcli.predicates.grasps import kinds as grasp_kinds
 from clearcli.predicates.state import DIRECTIONS, Fact
+
 
 @dataclass(frozen=True)
 class Solved:
@@ -54,7 +56,7 @@ def solve(
     so far with ``deadline=True``.
     """
     if formulation not in ("positive", "negative"):
-        raise SettingsError(f"settings: [plan] formulation must be \"positive\" or \"negative\", got {formulation!r}")
+        raise SettingsError(f'settings: [plan] formulation must be "positive" or "negative", got {formulation!r}')
     if not goal:
         return Solved((), 0, True, "", 0.0)
     if deadline_at is None:

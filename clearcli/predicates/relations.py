@@ -16,7 +16,8 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import Any, Iterable, Sequence
+from collections.abc import Iterable, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -37,9 +38,7 @@ def overlapping(box: np.ndarray, boxes: np.ndarray, margin: float = 0.0) -> np.n
     """(N,) bool: which of ``boxes`` (N, 2, 3) overlap ``box`` (2, 3), grown by margin."""
     if len(boxes) == 0:
         return np.zeros(0, dtype=bool)
-    return np.all(
-        (boxes[:, 0, :] <= box[1] + margin) & (boxes[:, 1, :] >= box[0] - margin), axis=1
-    )
+    return np.all((boxes[:, 0, :] <= box[1] + margin) & (boxes[:, 1, :] >= box[0] - margin), axis=1)
 
 
 def _collide(a: Any, b: Any) -> bool:
@@ -394,7 +393,10 @@ def block_dir_triples(
     owner = np.array([b for b, _ in keys])
     start_boxes = boxes[owner]
     swept = np.stack(
-        [np.minimum(start_boxes[:, 0], start_boxes[:, 0] + ends), np.maximum(start_boxes[:, 1], start_boxes[:, 1] + ends)],
+        [
+            np.minimum(start_boxes[:, 0], start_boxes[:, 0] + ends),
+            np.maximum(start_boxes[:, 1], start_boxes[:, 1] + ends),
+        ],
         axis=1,
     )
     allowed_k = allowed[owner]  # (K, N)

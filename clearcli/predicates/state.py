@@ -6,8 +6,9 @@ named o0..oN-1 in a stable order by position, not by segmentation order.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, Mapping
+from typing import Any
 
 import numpy as np
 

@@ -11,7 +11,8 @@ from __future__ import annotations
 import dataclasses
 import logging
 import time
-from typing import TYPE_CHECKING, Any, Sequence
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -28,7 +29,7 @@ if TYPE_CHECKING:
 log = logging.getLogger("clearcli.predicates")
 
 
-def compute_state(frame: Frame, seg: Segmentation, settings: "Settings | None" = None) -> SymbolicState:
+def compute_state(frame: Frame, seg: Segmentation, settings: Settings | None = None) -> SymbolicState:
     """Model the segmented objects and compute every fact the planner needs (no IK)."""
     from clearcli.geometry.gripper import gripper_model
     from clearcli.geometry.models import DegenerateObject, TableFrame, build_from_columns, object_columns
@@ -51,9 +52,7 @@ def compute_state(frame: Frame, seg: Segmentation, settings: "Settings | None" =
         try:
             if cols is None:
                 raise DegenerateObject("no finite points")
-            geoms.append(
-                build_from_columns(cols, k, ps)
-            )
+            geoms.append(build_from_columns(cols, k, ps))
         except DegenerateObject as exc:
             log.warning("segment %d left out: %s", k, exc)
             skipped.append((k, str(exc)))
@@ -133,8 +132,7 @@ def compute_state(frame: Frame, seg: Segmentation, settings: "Settings | None" =
 
     t0 = time.perf_counter()
     objects = tuple(
-        _object_model(names[i], g, pushes[i], tf, {k: v[i] for k, v in kinds.items()})
-        for i, g in enumerate(geoms)
+        _object_model(names[i], g, pushes[i], tf, {k: v[i] for k, v in kinds.items()}) for i, g in enumerate(geoms)
     )
     timings["export"] = time.perf_counter() - t0
     timings["total"] = time.perf_counter() - t_all
@@ -155,8 +153,10 @@ def _openings_and_edges(frame: Frame, seg: Segmentation) -> tuple[tuple[Any, ...
     segmentation saw, or (a segmentation from labels) worked out here."""
     from clearcli.perception.openings import rim_of, seen_edges
 
-    openings = seg.openings if len(seg.openings) == len(seg.objects) else tuple(
-        rim_of(frame.points[o.indices], seg.table) for o in seg.objects
+    openings = (
+        seg.openings
+        if len(seg.openings) == len(seg.objects)
+        else tuple(rim_of(frame.points[o.indices], seg.table) for o in seg.objects)
     )
     edges = seg.table_edges or seen_edges(frame.points, frame.shape, seg.table, seg.table_polygon)
     return tuple(openings), tuple(edges)
@@ -165,7 +165,8 @@ def _openings_and_edges(frame: Frame, seg: Segmentation) -> tuple[tuple[Any, ...
 def _grasp_offers(geoms, openings, edges, tf, gripper, settings, exclude, touching):  # type: ignore[no-untyped-def]
     """kind name -> one `Offer` per object (table frame), every registered kind in
     preference order, each seeing which objects the kinds before it are offered for."""
-    from clearcli.predicates.grasps import Scene as GraspScene, kinds
+    from clearcli.predicates.grasps import Scene as GraspScene
+    from clearcli.predicates.grasps import kinds
 
     edges_table = [(*tf.to_table(np.stack([e.start, e.end])), e.seen, e.why) for e in edges]
     scene = GraspScene(
@@ -188,10 +189,10 @@ def _grasp_offers(geoms, openings, edges, tf, gripper, settings, exclude, touchi
 
 def _object_model(
     name: str,
-    g: "ObjectGeometry",
-    pushes: "dict[str, PushGeometry]",
-    tf: "TableFrame",
-    offers: "dict[str, Offer]",
+    g: ObjectGeometry,
+    pushes: dict[str, PushGeometry],
+    tf: TableFrame,
+    offers: dict[str, Offer],
 ) -> ObjectModel:
     """The object as the planner sees it: the thesis's grasp (its poses and width) in its
     own fields, every other kind's poses, detail and refusal under its name."""
@@ -251,7 +252,7 @@ def _object_model(
     )
 
 
-def _detail_to_camera(detail: Any, tf: "TableFrame") -> dict[str, Any]:
+def _detail_to_camera(detail: Any, tf: TableFrame) -> dict[str, Any]:
     # the JSON's points and directions in the sensor frame, as every other pose there
     out = dict(detail)
     if "center" in out:

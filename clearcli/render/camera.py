@@ -4,7 +4,8 @@ organized and has colour (a Kinect or RealSense frame, an RGB-D pair)."""
 
 from __future__ import annotations
 
-from typing import Any, Sequence
+from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -33,7 +34,10 @@ def _thicken(edge: np.ndarray, mask: np.ndarray, px: int) -> np.ndarray:
 
 
 def outlined(
-    rgb: np.ndarray, shape: tuple[int, int], segments: Sequence[np.ndarray], colors: Sequence[Sequence[float]],
+    rgb: np.ndarray,
+    shape: tuple[int, int],
+    segments: Sequence[np.ndarray],
+    colors: Sequence[Sequence[float]],
     width_px: int = 2,
 ) -> np.ndarray:
     """(H, W, 3) uint8: the colour image ``rgb`` ((H*W, 3) or (H, W, 3) uint8) with the
@@ -65,8 +69,17 @@ def draw_camera_view(
         if len(indices) == 0:
             continue
         rows, cols = np.divmod(np.asarray(indices, dtype=np.int64), w)
-        ax.text(cols.mean(), rows.mean(), name, ha="center", va="center", fontsize=8, weight="bold",
-                color="white", bbox=dict(boxstyle="round,pad=0.15", fc=tuple(color[:3]), ec="none", alpha=0.85))
+        ax.text(
+            cols.mean(),
+            rows.mean(),
+            name,
+            ha="center",
+            va="center",
+            fontsize=8,
+            weight="bold",
+            color="white",
+            bbox=dict(boxstyle="round,pad=0.15", fc=tuple(color[:3]), ec="none", alpha=0.85),
+        )
     ax.set_xticks([])
     ax.set_yticks([])
     ax.set_xlim(-0.5, w - 0.5)

@@ -16,7 +16,7 @@ if TYPE_CHECKING:
     from clearcli.robot.arm import Arm
 
 
-def render_plan(path: Path, frame: Any, state: Any, plan: Any, seg: Any = None, robot: "Arm | None" = None) -> None:
+def render_plan(path: Path, frame: Any, state: Any, plan: Any, seg: Any = None, robot: Arm | None = None) -> None:
     """Write the plan picture at ``path``: the objects from above in the robot's base
     frame, coloured by what the plan does with them, pushes as arrows; beside it, when
     the frame has colour and ``seg`` is given, the camera's picture with the same
@@ -81,12 +81,14 @@ def render_plan(path: Path, frame: Any, state: Any, plan: Any, seg: Any = None, 
 
         objs = [o for o in state.objects if 0 <= o.segment_index < len(seg.objects)]
         draw_camera_view(
-            ax_cam, frame, [seg.objects[o.segment_index].indices for o in objs],
+            ax_cam,
+            frame,
+            [seg.objects[o.segment_index].indices for o in objs],
             [to_rgb(colours.get(o.name, "#3a6ea5")) for o in objs],
             [o.name + (f" [{','.join(steps[o.name])}]" if o.name in steps else "") for o in objs],
         )
         ax_cam.set_title("camera view (colour; objects outlined, [plan steps])", fontsize=9)
-    for i, a in enumerate(plan.actions, 1):
+    for a in plan.actions:
         if a.kind == "grasp":
             # a grasp that first moves the object (a slide to the table's edge): a dashed
             # arrow to where it is grasped (its kind says, clearcli/predicates/grasps)
@@ -97,8 +99,13 @@ def render_plan(path: Path, frame: Any, state: Any, plan: Any, seg: Any = None, 
             if moved is not None:
                 c = R @ np.asarray(obj.centroid, dtype=float) + t
                 u = R @ np.asarray(moved, dtype=float)
-                ax.annotate("", xy=(c[0] + u[0], c[1] + u[1]), xytext=(c[0], c[1]),
-                            arrowprops=dict(arrowstyle="->", color="k", lw=1.5, ls="--"), zorder=5)
+                ax.annotate(
+                    "",
+                    xy=(c[0] + u[0], c[1] + u[1]),
+                    xytext=(c[0], c[1]),
+                    arrowprops=dict(arrowstyle="->", color="k", lw=1.5, ls="--"),
+                    zorder=5,
+                )
             continue
         if a.kind != "push":
             continue
@@ -108,8 +115,13 @@ def render_plan(path: Path, frame: Any, state: Any, plan: Any, seg: Any = None, 
             continue
         c = R @ np.asarray(obj.centroid, dtype=float) + t
         u = R @ np.asarray(push.unit_vector, dtype=float) * max(push.push_length_m, 0.05)
-        ax.annotate("", xy=(c[0] + u[0], c[1] + u[1]), xytext=(c[0], c[1]),
-                    arrowprops=dict(arrowstyle="->", color="k", lw=1.5), zorder=5)
+        ax.annotate(
+            "",
+            xy=(c[0] + u[0], c[1] + u[1]),
+            xytext=(c[0], c[1]),
+            arrowprops=dict(arrowstyle="->", color="k", lw=1.5),
+            zorder=5,
+        )
     # the gripper's closing point at full stretch, round the shoulder's vertical axis
     reach = robot.reach_of_tcp_m
     sx, sy = arm.shoulder_base[0], arm.shoulder_base[1]
@@ -120,7 +132,11 @@ def render_plan(path: Path, frame: Any, state: Any, plan: Any, seg: Any = None, 
     ax.set_xlabel("x (m, robot base)")
     ax.set_ylabel("y (m, robot base)")
     status = "optimal" if plan.optimal else "not proven optimal"
-    outcome = {"complete": "every object removed", "partial": f"{len(plan.left)} left", "no_plan": "nothing can be done"}
+    outcome = {
+        "complete": "every object removed",
+        "partial": f"{len(plan.left)} left",
+        "no_plan": "nothing can be done",
+    }
     checked = "every action IK-checked" if plan.check == "whole" else "first action IK-checked"
     ax.set_title(
         f"{plan.status}: {outcome.get(plan.status, '')}; {len(plan.actions)} actions, cost {plan.cost} ({status}); {checked}",

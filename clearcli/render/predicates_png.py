@@ -69,7 +69,9 @@ def render_predicates_png(state: SymbolicState, path: Path, title: str = "") -> 
             u = (tf.T_table_camera[:3, :3] @ push.unit_vector)[:2]
             tip = c + u * min(0.05, push.push_length_m)
             ax.annotate(
-                "", view(tip)[0], view(c)[0],
+                "",
+                view(tip)[0],
+                view(c)[0],
                 arrowprops={"arrowstyle": "->", "color": _DIR_COLOURS[d], "lw": 1.2},
             )
         if obj.grasp_candidates:
@@ -93,9 +95,17 @@ def render_predicates_png(state: SymbolicState, path: Path, title: str = "") -> 
         a, b = view(centres[fact[1]])[0], view(centres[fact[2]])[0]
         ax.add_patch(
             FancyArrowPatch(
-                a, b, arrowstyle="-|>", mutation_scale=12, color=colour, ls=ls,
-                lw=2.0 if kind == "on" else 0.9, alpha=0.8, connectionstyle="arc3,rad=0.15",
-                shrinkA=8, shrinkB=8,
+                a,
+                b,
+                arrowstyle="-|>",
+                mutation_scale=12,
+                color=colour,
+                ls=ls,
+                lw=2.0 if kind == "on" else 0.9,
+                alpha=0.8,
+                connectionstyle="arc3,rad=0.15",
+                shrinkA=8,
+                shrinkB=8,
             )
         )
     ax.set_aspect("equal")

@@ -52,8 +52,11 @@ def render_segmentation(path: Path, frame: Frame, seg: Segmentation, title: str 
     palette = _object_colors(n_obj)
     if has_camera_picture(frame):
         draw_camera_view(
-            ax_cam, frame, [o.indices for o in seg.objects],
-            [palette[k % palette.shape[0]] for k in range(n_obj)], [str(k) for k in range(n_obj)],
+            ax_cam,
+            frame,
+            [o.indices for o in seg.objects],
+            [palette[k % palette.shape[0]] for k in range(n_obj)],
+            [str(k) for k in range(n_obj)],
         )
         ax_cam.set_title("camera view (colour, segments outlined)")
     elif frame.shape is not None and frame.shape[0] > 1:
@@ -99,7 +102,9 @@ def render_segmentation(path: Path, frame: Frame, seg: Segmentation, title: str 
     for k, obj in enumerate(seg.objects):
         corners = []
         for sx, sy in ((-1, -1), (1, -1), (1, 1), (-1, 1), (-1, -1)):
-            c = obj.obb_center + 0.5 * (sx * obj.obb_extents[0] * obj.obb_axes[0] + sy * obj.obb_extents[1] * obj.obb_axes[1])
+            c = obj.obb_center + 0.5 * (
+                sx * obj.obb_extents[0] * obj.obb_axes[0] + sy * obj.obb_extents[1] * obj.obb_axes[1]
+            )
             corners.append((c @ u, c @ v))
         cc = np.array(corners)
         ax_top.plot(cc[:, 0], cc[:, 1], "-", color="black", lw=0.6)

@@ -17,8 +17,9 @@ to a temporary file beside the output and moved into place only when complete.
 from __future__ import annotations
 
 import contextlib
+from collections.abc import Iterator
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Iterator
+from typing import TYPE_CHECKING, Any
 
 from clearcli.errors import OutputError
 from clearcli.replay.foxglove import (
@@ -42,6 +43,7 @@ if TYPE_CHECKING:
     from clearcli.replay.report import FrameReport
     from clearcli.settings import Settings
 
+
 class AnnotatedLog:
     """Writes the annotated MCAP, frame by frame; use as a context manager.
 
@@ -54,7 +56,7 @@ class AnnotatedLog:
         out_path: Path,
         source: Path | None,
         topic: str | None,
-        settings: "Settings | None" = None,
+        settings: Settings | None = None,
     ) -> None:
         self.out_path = Path(out_path)
         self.source = Path(source) if source is not None else None
@@ -70,7 +72,7 @@ class AnnotatedLog:
         self._sequence = 0
         self.frames_written = 0
 
-    def __enter__(self) -> "AnnotatedLog":
+    def __enter__(self) -> AnnotatedLog:
         from mcap.writer import CompressionType, Writer
 
         from clearcli.files import atomic_output
@@ -127,7 +129,9 @@ class AnnotatedLog:
             if self._raw_channel is None:
                 schema_id = 0
                 if schema is not None:
-                    schema_id = self._writer.register_schema(name=schema.name, encoding=schema.encoding, data=schema.data)
+                    schema_id = self._writer.register_schema(
+                        name=schema.name, encoding=schema.encoding, data=schema.data
+                    )
                 self._raw_channel = self._writer.register_channel(
                     topic=channel.topic,
                     message_encoding=channel.message_encoding,
@@ -145,7 +149,7 @@ class AnnotatedLog:
             return int(message.log_time)
         return None
 
-    def write(self, report: "FrameReport", frame: "Frame") -> None:
+    def write(self, report: FrameReport, frame: Frame) -> None:
         """The frame (copied from the input when it is an MCAP) and its annotations, all
         at the input message's log time."""
         try:

@@ -265,7 +265,7 @@ def _entity(frame_id: str, stamp_s: float, entity_id: str, **primitives: Any) ->
     return entity
 
 
-def scene_update(report: "FrameReport", frame_id: str, settings: "Settings | None" = None) -> dict[str, Any]:
+def scene_update(report: FrameReport, frame_id: str, settings: Settings | None = None) -> dict[str, Any]:
     """The `foxglove.SceneUpdate` of one replayed frame: one entity per object (id
     ``object/<track id>``), plus ``gripper`` at the next action's pose when planned."""
     result = report.result
@@ -357,7 +357,9 @@ def scene_update(report: "FrameReport", frame_id: str, settings: "Settings | Non
         for center, half in zip(boxes.centers, boxes.half_extents):
             T = gripper_pose.copy()
             T[:3, 3] = gripper_pose[:3, :3] @ center + gripper_pose[:3, 3]
-            cubes.append({"pose": _pose(T), "size": _vec(2.0 * half), "color": {"r": 0.85, "g": 0.85, "b": 0.9, "a": 0.8}})
+            cubes.append(
+                {"pose": _pose(T), "size": _vec(2.0 * half), "color": {"r": 0.85, "g": 0.85, "b": 0.9, "a": 0.8}}
+            )
         assert first is not None
         update["entities"].append(
             _entity(
@@ -371,7 +373,7 @@ def scene_update(report: "FrameReport", frame_id: str, settings: "Settings | Non
     return update
 
 
-def next_action_pose(report: "FrameReport") -> np.ndarray | None:
+def next_action_pose(report: FrameReport) -> np.ndarray | None:
     """T_camera_gripper of the first action's working pose (the grasp, or the push's
     start), from the candidate the IK check accepted."""
     first = report.first_action()
@@ -397,7 +399,7 @@ def next_action_pose(report: "FrameReport") -> np.ndarray | None:
     return np.asarray(sequence[min(1, len(sequence) - 1)], dtype=float)
 
 
-def predicates_json(report: "FrameReport") -> dict[str, Any] | None:
+def predicates_json(report: FrameReport) -> dict[str, Any] | None:
     state = report.result.state
     if state is None:
         return None
@@ -417,7 +419,7 @@ def predicates_json(report: "FrameReport") -> dict[str, Any] | None:
     }
 
 
-def pointcloud_json(frame: "Frame") -> dict[str, Any]:
+def pointcloud_json(frame: Frame) -> dict[str, Any]:
     """A frame as `foxglove.PointCloud` (finite points, x y z float32, rgb as 3 uint8)."""
     keep = frame.finite_mask
     points = np.ascontiguousarray(frame.points[keep], dtype="<f4")

@@ -14,8 +14,8 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Mapping
 
 import numpy as np
 
@@ -70,9 +70,7 @@ def forget(memory: PushMemory, track_ids: set[int] | frozenset[int]) -> PushMemo
 
 def expire(memory: PushMemory, frame_index: int, params: MemoryParams = MemoryParams()) -> PushMemory:
     """Memory without pushes older than the horizon."""
-    return PushMemory(
-        records=tuple(r for r in memory.records if frame_index - r.frame_index <= params.horizon_frames)
-    )
+    return PushMemory(records=tuple(r for r in memory.records if frame_index - r.frame_index <= params.horizon_frames))
 
 
 def mark_failed(memory: PushMemory, track_id: int) -> PushMemory:
@@ -81,9 +79,7 @@ def mark_failed(memory: PushMemory, track_id: int) -> PushMemory:
     if not own:
         return memory
     last = own[-1]
-    return PushMemory(
-        records=tuple(dataclasses.replace(r, moved=False) if r is last else r for r in memory.records)
-    )
+    return PushMemory(records=tuple(dataclasses.replace(r, moved=False) if r is last else r for r in memory.records))
 
 
 def undone_count(
@@ -105,7 +101,9 @@ def undone_count(
     return count
 
 
-def reverses_last(memory: PushMemory, track_id: int, unit_vector: np.ndarray, params: MemoryParams = MemoryParams()) -> bool:
+def reverses_last(
+    memory: PushMemory, track_id: int, unit_vector: np.ndarray, params: MemoryParams = MemoryParams()
+) -> bool:
     """Does a push along ``unit_vector`` go back along the last push that moved the object?
     (The thesis's back-and-forth, counted by replays and the benchmark.)"""
     moved = [r for r in memory.of(track_id) if r.moved]

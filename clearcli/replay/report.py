@@ -5,8 +5,9 @@ lines of `clear replay --json` (schema documented in `clearcli/commands/replay.p
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Mapping
+from typing import TYPE_CHECKING, Any
 
 from clearcli.pipeline import FrameResult
 from clearcli.replay.tracking import ExecutionReport
@@ -39,7 +40,7 @@ class FrameReport:
     execution: ExecutionReport | None = None
     undoes_push: bool = False  # the first action pushes an object back where it came from
     timings_s: Mapping[str, float] = field(default_factory=dict)
-    frame: "Frame | None" = None  # the frame itself, for writers (not in the JSON)
+    frame: Frame | None = None  # the frame itself, for writers (not in the JSON)
 
     @property
     def status(self) -> str:
@@ -49,7 +50,7 @@ class FrameReport:
     def ids_by_name(self) -> dict[str, int]:
         return {o.name: o.track_id for o in self.objects if o.name}
 
-    def first_action(self) -> "Action | None":
+    def first_action(self) -> Action | None:
         plan = self.result.plan
         if plan is None or not plan.actions:
             return None
@@ -120,7 +121,7 @@ def _finite(value: float) -> float | None:
     return float(value) if math.isfinite(value) else None
 
 
-def action_json(action: "Action", ids_by_name: Mapping[str, int]) -> dict[str, Any]:
+def action_json(action: Action, ids_by_name: Mapping[str, int]) -> dict[str, Any]:
     out: dict[str, Any] = {"kind": action.kind, "id": ids_by_name.get(action.obj), "name": action.obj}
     if action.kind == "grasp":  # which grasp: "pinch", "rim", "slide"
         out["grasp_kind"] = action.grasp_kind

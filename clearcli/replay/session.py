@@ -12,13 +12,14 @@ from __future__ import annotations
 
 import dataclasses
 import time
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Iterable, Iterator, Mapping
-
+from typing import TYPE_CHECKING, Any
 
 from clearcli.errors import ClearError, PartialLogError
 from clearcli.pipeline import CLEARED, FAILED, NO_PLAN, NO_TABLE, OK, FrameResult, Pipeline
-from clearcli.predicates.grasps import kind as grasp_kind, kinds as grasp_kinds
+from clearcli.predicates.grasps import kind as grasp_kind
+from clearcli.predicates.grasps import kinds as grasp_kinds
 from clearcli.predicates.state import DIRECTIONS
 from clearcli.replay import memory as push_memory
 from clearcli.replay.memory import MemoryParams, PushMemory, PushRecord
@@ -58,15 +59,14 @@ class ReplayOptions:
     memory: MemoryParams | None = None
 
 
-def observations_of(segmentation: "Segmentation") -> list[Observation]:
+def observations_of(segmentation: Segmentation) -> list[Observation]:
     return [
-        Observation(centroid=vec3(o.centroid), extents_m=shape_signature(o.obb_extents))
-        for o in segmentation.objects
+        Observation(centroid=vec3(o.centroid), extents_m=shape_signature(o.obb_extents)) for o in segmentation.objects
     ]
 
 
 def expected_effect(
-    action: "Action", state: "SymbolicState", ids_by_name: Mapping[str, int], observations: list[Observation]
+    action: Action, state: SymbolicState, ids_by_name: Mapping[str, int], observations: list[Observation]
 ) -> ExpectedEffect | None:
     """What ``action`` (the first of this frame's plan) should do, for the next frame."""
     track_id = ids_by_name.get(action.obj)
@@ -88,10 +88,12 @@ def expected_effect(
             push_length_m=float(push.push_length_m),
             extents_m=extents,
         )
-    if action.grasp_kind != "pinch":
-        label = f"({action.pddl_name} #{track_id})"
     return ExpectedEffect(
-        kind="grasp", track_id=track_id, start_centroid=start, action=label, extents_m=extents,
+        kind="grasp",
+        track_id=track_id,
+        start_centroid=start,
+        action=label,
+        extents_m=extents,
         grasp_kind=action.grasp_kind,
     )
 
@@ -118,18 +120,16 @@ class Session:
         # track id -> push axes tried on it to see whether it comes apart (probe.py)
         self.probed: dict[int, frozenset[str]] = {}
 
-    def step(self, frame: "Frame", index: int, time_s: float = 0.0, read_s: float = 0.0) -> FrameReport:
+    def step(self, frame: Frame, index: int, time_s: float = 0.0, read_s: float = 0.0) -> FrameReport:
         clock = self.frame_count
         self.frame_count += 1
         options = self.options
         self.memory = push_memory.expire(self.memory, clock, options.memory)
         found: dict[str, Any] = {}
 
-        def on_segmentation(segmentation: "Segmentation") -> None:
+        def on_segmentation(segmentation: Segmentation) -> None:
             observations = observations_of(segmentation)
-            self.tracker, assignment = update(
-                self.tracker, observations, clock, self.effect, options.tracking
-            )
+            self.tracker, assignment = update(self.tracker, observations, clock, self.effect, options.tracking)
             found["observations"] = observations
             found["assignment"] = assignment
             if self.effect is not None:
@@ -147,14 +147,16 @@ class Session:
                         # a try of that kind that did not move the object (a slide's) met
                         # something the model did not: the same try would meet it again,
                         # so it is given up at once (a pinch that slips may hold the next time)
-                        self.failed_grasps[tid] = max(self.failed_grasps[tid], self.pipeline.settings.plan.max_failed_grasps)
+                        self.failed_grasps[tid] = max(
+                            self.failed_grasps[tid], self.pipeline.settings.plan.max_failed_grasps
+                        )
                 elif self.effect.kind == "push" and execution.outcome == "done":
                     self.failed_grasps.pop(self.effect.track_id, None)  # it stands elsewhere now
                     self.failed_kinds.pop(self.effect.track_id, None)
                 elif execution.outcome != "done" and self.effect.kind == "push":
                     self.memory = push_memory.mark_failed(self.memory, self.effect.track_id)
 
-        def adjust(segmentation: "Segmentation", state: "SymbolicState") -> "SymbolicState":
+        def adjust(segmentation: Segmentation, state: SymbolicState) -> SymbolicState:
             assignment: Assignment = found["assignment"]
             ids = {o.name: assignment.ids[o.segment_index] for o in state.objects}
             found["ids_by_name"] = ids
@@ -204,7 +206,12 @@ class Session:
         settings = self.pipeline.settings
         state, plan = result.state, result.plan
         ids: dict[str, int] = found.get("ids_by_name", {})
-        if settings.plan.probe_max_width_m <= 0 or state is None or plan is None or not (plan.ungraspable or plan.unreachable):
+        if (
+            settings.plan.probe_max_width_m <= 0
+            or state is None
+            or plan is None
+            or not (plan.ungraspable or plan.unreachable)
+        ):
             return result
         T_base_camera = plan.T_base_camera if plan.T_base_camera is not None else self.pipeline.T_base_camera
         if T_base_camera is None:
@@ -229,7 +236,7 @@ class Session:
 
     def _report(
         self,
-        frame: "Frame",
+        frame: Frame,
         index: int,
         time_s: float,
         read_s: float,
@@ -329,7 +336,7 @@ class Session:
 
 
 def replay(
-    frames: Iterable["Frame"],
+    frames: Iterable[Frame],
     session: Session,
     log_start_s: float | None = None,
 ) -> Iterator[FrameReport]:
@@ -389,4 +396,3 @@ def replay(
         close = getattr(iterator, "close", None)
         if close is not None:
             close()
-

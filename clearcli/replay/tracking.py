@@ -15,10 +15,11 @@ contact. `check_execution` then says whether that action did what it should.
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
-from typing import Iterable, Sequence
 
 import numpy as np
+
 from clearcli.settings.replay import TrackingParams  # noqa: F401  ([tracking]: defaults and ranges)
 
 Vec3 = tuple[float, float, float]
@@ -114,9 +115,7 @@ def _point_segment_distance(points: np.ndarray, a: np.ndarray, b: np.ndarray) ->
     return np.linalg.norm(points - (a + t[:, None] * ab), axis=1)
 
 
-def predicted_segments(
-    tracks: Sequence[Track], effect: ExpectedEffect | None
-) -> tuple[np.ndarray, np.ndarray]:
+def predicted_segments(tracks: Sequence[Track], effect: ExpectedEffect | None) -> tuple[np.ndarray, np.ndarray]:
     """Per track, the segment (start, end) where it is expected now, (T, 3) each.
 
     Unmoved tracks get a zero-length segment at their centroid. With a push, the pushed
@@ -218,9 +217,7 @@ def update(
             )
         )
     previous_frame = max((t.last_seen for t in tracks), default=None)
-    gone = tuple(
-        sorted(t.track_id for t in tracks if t.track_id not in seen and t.last_seen == previous_frame)
-    )
+    gone = tuple(sorted(t.track_id for t in tracks if t.track_id not in seen and t.last_seen == previous_frame))
     for t in tracks:
         if t.track_id not in seen and frame_index - t.last_seen <= params.max_missing_frames:
             kept.append(t)
@@ -313,4 +310,3 @@ def check_execution(
         along,
         across,
     )
-

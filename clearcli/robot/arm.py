@@ -12,8 +12,9 @@ from __future__ import annotations
 
 import functools
 import hashlib
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -49,7 +50,9 @@ class Arm:
         earlier plans): what each plan and the simulated world solve with."""
         return self.model.fresh()
 
-    def place(self, state: "SymbolicState | None", camera_pose: Sequence[float] | str | None = None) -> tuple[np.ndarray, str]:
+    def place(
+        self, state: SymbolicState | None, camera_pose: Sequence[float] | str | None = None
+    ) -> tuple[np.ndarray, str]:
         """T_base_camera and where it came from: ``camera_pose`` (a command line's) over
         [robot] camera_pose, else placed from the table in ``state`` by the placement
         rule with this arm's distances and mount (clearcli/robot/placement.py)."""
@@ -88,7 +91,7 @@ class Arm:
         return {**b, "joint_names": list(b["joint_names"]), "gripper": dict(b["gripper"])}
 
 
-def resolve_arm(settings: "Settings") -> Arm:
+def resolve_arm(settings: Settings) -> Arm:
     """The arm ``settings`` describe ([robot], [gripper]); the same value for the same
     sections (a batch's worker resolves once for all its frames). An unknown profile or
     a user's URDF that cannot be used is one line (SettingsError)."""

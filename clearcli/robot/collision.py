@@ -3,9 +3,9 @@ frame, tested against spheres covering the arm's capsules (the IK check of thesi
 
 from __future__ import annotations
 
-import math
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -32,7 +32,11 @@ def hull_planes(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
 
 def capsule_spheres(a: np.ndarray, b: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Spheres covering capsules, spaced at half a radius: (S,3) centres, (S,) radii."""
-    a, b, r = np.asarray(a, dtype=float).reshape(-1, 3), np.asarray(b, dtype=float).reshape(-1, 3), np.asarray(r, dtype=float)
+    a, b, r = (
+        np.asarray(a, dtype=float).reshape(-1, 3),
+        np.asarray(b, dtype=float).reshape(-1, 3),
+        np.asarray(r, dtype=float),
+    )
     if r.size == 0:  # an arm without collision geometry (its meshes missing)
         return np.zeros((0, 3)), np.zeros(0)
     # n spheres a capsule, evenly from a to b (t = k / (n - 1)): one array operation for

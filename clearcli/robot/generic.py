@@ -19,9 +19,10 @@ from __future__ import annotations
 import contextlib
 import copy
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -105,7 +106,9 @@ def _without_missing_meshes(urdf: Path) -> tuple[str | None, int]:
     return ET.tostring(root, encoding="unicode"), dropped
 
 
-def _without_covered(parts: list[tuple[int, np.ndarray, np.ndarray, float]]) -> list[tuple[int, np.ndarray, np.ndarray, float]]:
+def _without_covered(
+    parts: list[tuple[int, np.ndarray, np.ndarray, float]],
+) -> list[tuple[int, np.ndarray, np.ndarray, float]]:
     """The capsules without those inside another of the same joint: a description's
     cylinder capped by two spheres is one capsule (the Panda's links), not three."""
     keep = []
@@ -160,7 +163,7 @@ def _first_error(said: list[str]) -> str:
     """urdfdom's first ``Error:`` line in what it said, without the prefix ("" if none)."""
     for line in "".join(said).splitlines():
         if line.strip().startswith("Error:"):
-            return " ".join(line.strip()[len("Error:"):].split())
+            return " ".join(line.strip()[len("Error:") :].split())
     return ""
 
 
@@ -190,10 +193,12 @@ class _ReachBounds:
 # measured bounds are a search's best, short of the true greatest distance by a little:
 # this much is added (m), and a test checks them against forward kinematics
 _BOUND_SLACK_M = 0.002
-_bounds_cache: dict[tuple[Any, ...], "_ReachBounds | None"] = {}
+_bounds_cache: dict[tuple[Any, ...], _ReachBounds | None] = {}
 
 
-def _reach_bounds(model: Any, shoulder: int, flange_id: int, lower: np.ndarray, upper: np.ndarray) -> "_ReachBounds | None":
+def _reach_bounds(
+    model: Any, shoulder: int, flange_id: int, lower: np.ndarray, upper: np.ndarray
+) -> _ReachBounds | None:
     """The greatest distances from the shoulder joint's origin (joint ``shoulder``) of
     the flange and of the origin of the joint before the last, over the joint limits:
     random configurations, the best few then climbed to a local maximum within the
@@ -280,7 +285,9 @@ def _reach_bounds(model: Any, shoulder: int, flange_id: int, lower: np.ndarray, 
         along = float(before @ axis)
         radius = float(np.linalg.norm(before - along * axis))
         if all(np.isfinite([*best, along, radius])):
-            out = _ReachBounds(best[0], best[1], axis, along, radius, np.asarray(flange.placement.inverse().homogeneous))
+            out = _ReachBounds(
+                best[0], best[1], axis, along, radius, np.asarray(flange.placement.inverse().homogeneous)
+            )
     _bounds_cache[key] = out
     return out
 
@@ -359,13 +366,19 @@ def _add_tcp(model: Any, flange_frame: str, tcp_xyz_m: Sequence[float], tcp_yaw_
     fl = model.frames[model.getFrameId(flange_frame)]
     offset = pin.SE3(R, np.asarray(tcp_xyz_m if len(tcp_xyz_m) else (0.0, 0.0, 0.0), dtype=float))
     name = "clear_tcp"
-    model.addFrame(pin.Frame(name, fl.parentJoint, model.getFrameId(flange_frame), fl.placement * offset, pin.FrameType.OP_FRAME))
+    model.addFrame(
+        pin.Frame(name, fl.parentJoint, model.getFrameId(flange_frame), fl.placement * offset, pin.FrameType.OP_FRAME)
+    )
     return name
 
 
 def _check_revolute(model: Any, urdf: Path) -> None:
     """The arm is a serial chain of six or more revolute joints and nothing else movable."""
-    revolute = [j for j in model.joints[1:] if j.shortname() in ("JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRevoluteUnaligned")]
+    revolute = [
+        j
+        for j in model.joints[1:]
+        if j.shortname() in ("JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRevoluteUnaligned")
+    ]
     if len(revolute) < 6 or model.nq != len(revolute):
         raise SettingsError(
             f"{urdf}: a chain of {len(revolute)} revolute joints (nq {model.nq}); the generic IK needs a "
@@ -414,7 +427,9 @@ class UrdfKinematics:
         _check_revolute(self.model, urdf)
         self._place_frames(base_frame, flange_frame, tcp_frame)
         self._measure_reach(int(arm_from_joint), tolerance_m, tolerance_rad)
-        self.rest = np.clip(np.asarray(rest if rest is not None else np.zeros(self.model.nq), dtype=float), self.lower, self.upper)
+        self.rest = np.clip(
+            np.asarray(rest if rest is not None else np.zeros(self.model.nq), dtype=float), self.lower, self.upper
+        )
         self.damping = float(damping)
         self.max_iterations = int(max_iterations)
         self.tolerance_m = float(tolerance_m)
@@ -505,7 +520,7 @@ class UrdfKinematics:
         M_end_tcp = self.data.oMf[model.getFrameId(dh_end)].actInv(self.data.oMf[self.tcp_id])
         return (solver, M_root_dh.inverse(), M_end_tcp.inverse())
 
-    def fresh(self) -> "UrdfKinematics":
+    def fresh(self) -> UrdfKinematics:
         """A new IK search on this model: the same arm and settings, its own Pinocchio
         data and an empty search state (as if built again, without reading the URDF)."""
         out = copy.copy(self)
@@ -514,7 +529,9 @@ class UrdfKinematics:
         return out
 
     # -- collision model ------------------------------------------------------------
-    def _read_capsules(self, arm_from_joint: int, gripper_frames: set[str]) -> list[tuple[int, np.ndarray, np.ndarray, float]]:
+    def _read_capsules(
+        self, arm_from_joint: int, gripper_frames: set[str]
+    ) -> list[tuple[int, np.ndarray, np.ndarray, float]]:
         """(joint, a, b, radius) in the joint's frame for every collision shape of the arm
         moved by joint ``arm_from_joint`` or later, the gripper's left out: what hangs
         from the flange and ``gripper_frames`` (what the gripper touches is what
@@ -528,7 +545,9 @@ class UrdfKinematics:
             warnings.simplefilter("ignore")
             try:
                 with _quiet_stderr():
-                    geom = pin.buildGeomFromUrdf(self.model, str(self.urdf), pin.GeometryType.COLLISION, package_dirs=[str(self.urdf.parent)])
+                    geom = pin.buildGeomFromUrdf(
+                        self.model, str(self.urdf), pin.GeometryType.COLLISION, package_dirs=[str(self.urdf.parent)]
+                    )
             except Exception as exc:  # missing package:// meshes: the rest without them
                 kept, dropped = _without_missing_meshes(self.urdf)
                 geom = None
@@ -541,10 +560,14 @@ class UrdfKinematics:
                 if self.urdf not in _WARNED:  # once per file and process
                     _WARNED.add(self.urdf)
                     logging.getLogger(__name__).warning(
-                        "%s: %s (%s); %s", self.urdf,
-                        f"{dropped} collision mesh(es) not found, left out" if geom is not None else "collision geometry not loaded",
+                        "%s: %s (%s); %s",
+                        self.urdf,
+                        f"{dropped} collision mesh(es) not found, left out"
+                        if geom is not None
+                        else "collision geometry not loaded",
                         str(exc).splitlines()[0],
-                        f"the arm's collision check uses the {len(geom.geometryObjects)} shape(s) left" if geom is not None
+                        f"the arm's collision check uses the {len(geom.geometryObjects)} shape(s) left"
+                        if geom is not None
                         else "the arm's collision check is off",
                     )
                 if geom is None:
@@ -758,6 +781,8 @@ class UrdfKinematics:
             return None
         key = np.concatenate([T[:3, 3], 0.1 * T[:3, :3].ravel()])
         diff = self._near_pose[:n] - key
-        d = np.sqrt(np.einsum("ij,ij->i", diff[:, :3], diff[:, :3])) + np.sqrt(np.einsum("ij,ij->i", diff[:, 3:], diff[:, 3:]))
+        d = np.sqrt(np.einsum("ij,ij->i", diff[:, :3], diff[:, :3])) + np.sqrt(
+            np.einsum("ij,ij->i", diff[:, 3:], diff[:, 3:])
+        )
         k = int(np.argmin(d))
         return self._near_q[k].copy() if d[k] <= _NEAR_M else None

@@ -37,7 +37,7 @@ class Kinematics(Protocol):
 
     def capsules(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]: ...
 
-    def fresh(self) -> "Kinematics": ...
+    def fresh(self) -> Kinematics: ...
 
     def target(self, T_base_tcp: np.ndarray) -> Any: ...
 
@@ -93,9 +93,10 @@ def within_tolerance(kin: Any, target: Any, q: np.ndarray) -> bool:
     pin.forwardKinematics(kin.model, kin.data, q)
     pin.updateFramePlacement(kin.model, kin.data, kin.tcp_id)
     vx, vy, vz, wx, wy, wz = pin.log6(kin.data.oMf[kin.tcp_id].actInv(target)).vector.tolist()
-    return math.sqrt(vx * vx + vy * vy + vz * vz) < kin.tolerance_m and math.sqrt(
-        wx * wx + wy * wy + wz * wz
-    ) < kin.tolerance_rad
+    return (
+        math.sqrt(vx * vx + vy * vy + vz * vz) < kin.tolerance_m
+        and math.sqrt(wx * wx + wy * wy + wz * wz) < kin.tolerance_rad
+    )
 
 
 def pose_error(kin: Any, target: Any, q: np.ndarray) -> np.ndarray:

@@ -24,7 +24,8 @@ The arm's resolved value calls this (clearcli/robot/arm.py `Arm.place`).
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Sequence
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -46,9 +47,7 @@ R_CAMERA_LINK_OPTICAL = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0,
 def pose_to_matrix(pose: Sequence[float]) -> np.ndarray:
     """x y z qx qy qz qw -> 4x4."""
     if len(pose) != 7 or not all(np.isfinite(float(v)) for v in pose):
-        raise SettingsError(
-            f"camera pose: expected 7 finite numbers x y z qx qy qz qw, got {list(pose)!r}"
-        )
+        raise SettingsError(f"camera pose: expected 7 finite numbers x y z qx qy qz qw, got {list(pose)!r}")
     try:
         return transforms.pose_to_matrix(pose[:3], pose[3:])
     except ValueError:
@@ -152,9 +151,9 @@ def default_T_base_camera(
 
 def resolve_T_base_camera(
     camera_pose: Sequence[float] | str | None,
-    state: "SymbolicState | None" = None,
-    robot: "RobotSettings | None" = None,
-    profile: "RobotProfile | None" = None,
+    state: SymbolicState | None = None,
+    robot: RobotSettings | None = None,
+    profile: RobotProfile | None = None,
 ) -> tuple[np.ndarray, str]:
     """T_base_camera and where it came from ("given", "thesis", "default from table");
     the default placement follows ``robot`` (the [robot] settings; their defaults when

@@ -44,7 +44,9 @@ UR5E = URDH(d1=0.1625, a2=-0.425, a3=-0.3922, d4=0.1333, d5=0.0997, d6=0.0996)
 
 def _dh(theta: float, d: float, a: float, alpha: float) -> np.ndarray:
     ct, st, ca, sa = math.cos(theta), math.sin(theta), math.cos(alpha), math.sin(alpha)
-    return np.array([[ct, -st * ca, st * sa, a * ct], [st, ct * ca, -ct * sa, a * st], [0.0, sa, ca, d], [0.0, 0.0, 0.0, 1.0]])
+    return np.array(
+        [[ct, -st * ca, st * sa, a * ct], [st, ct * ca, -ct * sa, a * st], [0.0, sa, ca, d], [0.0, 0.0, 0.0, 1.0]]
+    )
 
 
 def fk(dh: URDH, q: np.ndarray) -> np.ndarray:
@@ -84,8 +86,10 @@ def solutions(dh: URDH, T: np.ndarray) -> list[np.ndarray]:
             q5 = s5 * math.acos(max(-1.0, min(1.0, c5)))
             sq5 = math.sin(q5)
             # a wrist singularity (q5 = 0): q6 is free; 0 is as good as any
-            q6 = 0.0 if abs(sq5) < 1e-9 else math.atan2(
-                (-R[0, 1] * sn1 + R[1, 1] * c1) / sq5, (R[0, 0] * sn1 - R[1, 0] * c1) / sq5
+            q6 = (
+                0.0
+                if abs(sq5) < 1e-9
+                else math.atan2((-R[0, 1] * sn1 + R[1, 1] * c1) / sq5, (R[0, 0] * sn1 - R[1, 0] * c1) / sq5)
             )
             T14 = T1 @ _inv(_dh(q5, dh.d5, 0.0, _ALPHA[4]) @ _dh(q6, dh.d6, 0.0, _ALPHA[5]))
             x, y = T14[0, 3], T14[1, 3]

@@ -95,7 +95,7 @@ def checked_urdf(urdf: Path) -> str:
         if len(values) != count or not all(math.isfinite(v) for v in values):
             what = "a finite number" if count == 1 else f"{count} finite numbers"
             raise SettingsError(
-                f"{urdf}: {owner.tag} {owner.get('name')!r}: <{element.tag} {attribute}=\"{raw}\"> must be {what}"
+                f'{urdf}: {owner.tag} {owner.get("name")!r}: <{element.tag} {attribute}="{raw}"> must be {what}'
             )
         return values
 
@@ -113,7 +113,7 @@ def checked_urdf(urdf: Path) -> str:
         xyz = numbers(owner, axis, "xyz", 3) if axis is not None else None
         if kind in ("revolute", "continuous", "prismatic") and xyz is not None and math.hypot(*xyz) < _MIN_AXIS_LENGTH:
             raise SettingsError(
-                f"{urdf}: joint {name!r}: <axis xyz=\"{axis.get('xyz')}\"> has no direction; give the joint's axis"  # type: ignore[union-attr]
+                f'{urdf}: joint {name!r}: <axis xyz="{axis.get("xyz")}"> has no direction; give the joint\'s axis'  # type: ignore[union-attr]
             )
         limit = owner.find("limit")
         if kind in ("revolute", "prismatic"):
@@ -124,7 +124,10 @@ def checked_urdf(urdf: Path) -> str:
                     + (", or make it continuous" if kind == "revolute" else "")
                 )
             # URDF's defaults for an absent bound
-            lower, upper = (numbers(owner, limit, "lower", 1) or [0.0])[0], (numbers(owner, limit, "upper", 1) or [0.0])[0]
+            lower, upper = (
+                (numbers(owner, limit, "lower", 1) or [0.0])[0],
+                (numbers(owner, limit, "upper", 1) or [0.0])[0],
+            )
             if lower > upper:
                 raise SettingsError(
                     f"{urdf}: joint {name!r}: its lower limit {lower:g} is above its upper limit {upper:g} ({unit}); "

@@ -13,8 +13,9 @@ from __future__ import annotations
 
 import copy
 import math
+from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -291,7 +292,7 @@ class WamKinematics:
         """The TCP's pose error at q (log6, in the TCP frame)."""
         return pose_error(self, target, q)
 
-    def fresh(self) -> "WamKinematics":
+    def fresh(self) -> WamKinematics:
         """A new IK search on this model: the same arm and settings, an empty cache and
         statistics, its own Pinocchio data (as if built again, without reading the URDF)."""
         out = copy.copy(self)
@@ -541,7 +542,7 @@ class WamKinematics:
         return float(np.linalg.norm(plate)) <= REACH_TOOL_PLATE_M + slack_m
 
 
-def kinematics_of_wam(robot: "RobotSettings") -> WamKinematics:
+def kinematics_of_wam(robot: RobotSettings) -> WamKinematics:
     """The WAM model with the IK search of ``[robot]`` (`RobotSettings`)."""
     return WamKinematics(
         damping=robot.ik_damping,

@@ -12,8 +12,9 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, ClassVar, Sequence, get_type_hints
+from typing import Any, ClassVar, get_type_hints
 
 from clearcli.errors import SettingsError
 
@@ -41,7 +42,7 @@ class Range:
             return self.text
         if self.members:
             need = f" that includes {', '.join(self.required)}" if self.required else ""
-            return (f"a comma-separated list of {', '.join(self.members)} (any order, each at most once){need}")
+            return f"a comma-separated list of {', '.join(self.members)} (any order, each at most once){need}"
         if self.choices:
             return "one of " + ", ".join(repr(c) for c in self.choices)
         parts = []
@@ -91,7 +92,7 @@ def _type_name(typ: Any) -> str:
 
 
 def set_of_names(where: str, text: Any, rng: Range) -> str:
-    """"rim, pinch" -> "pinch,rim": a set of ``rng.members`` in their order; SettingsError
+    """ "rim, pinch" -> "pinch,rim": a set of ``rng.members`` in their order; SettingsError
     (naming ``where``) for an unknown name, a repeat, an empty item or a required one
     missing. One rule for a file, --set and a flag that is its alias (--grasps)."""
     items = [x.strip() for x in text] if isinstance(text, (list, tuple)) else str(text).split(",")

@@ -13,8 +13,9 @@ implementing `clearcli.predicates.grasps.base.GraspKind`) and one entry below.
 
 from __future__ import annotations
 
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
-from typing import Any, Iterator, Sequence
+from typing import Any
 
 
 @dataclass(frozen=True)
@@ -77,10 +78,10 @@ def entries() -> tuple[KindEntry, ...]:
 
 
 def default_kinds() -> str:
-    """"pinch,rim,slide": every registered kind (the default of [plan] grasps)."""
+    """ "pinch,rim,slide": every registered kind (the default of [plan] grasps)."""
     return ",".join(KIND_NAMES)
 
 
 def help_text() -> str:
-    """"pinch (the thesis's, from above), rim (...), ...": the kinds as --help lists them."""
+    """ "pinch (the thesis's, from above), rim (...), ...": the kinds as --help lists them."""
     return ", ".join(f"{e.name} ({e.help})" for e in GRASP_KINDS)

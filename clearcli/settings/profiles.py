@@ -13,8 +13,9 @@ and one entry below; the WAM's values are the sections' own defaults.
 
 from __future__ import annotations
 
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Iterator, Mapping, Sequence
+from typing import Any
 
 
 @dataclass(frozen=True, eq=False)
@@ -119,5 +120,5 @@ def profile_defaults(name: str) -> Mapping[str, Mapping[str, Any]]:
 
 
 def names_text() -> str:
-    """"wam (default), panda, ur5e": the profiles as help texts list them."""
+    """ "wam (default), panda, ur5e": the profiles as help texts list them."""
     return ", ".join(f"{n} (default)" if n == DEFAULT_PROFILE else n for n in REGISTRY)

@@ -64,9 +64,15 @@ class RobotSettings(Section):
         if not self.urdf:
             for key in ("base_frame", "flange_frame", "tcp_xyz_m", "tcp_yaw_deg"):
                 if getattr(self, key):
-                    self.fail(key, f"accepted: {range_of(type(self), key).describe()}, with [robot] urdf: it describes "
-                              "your own URDF; give urdf too")
+                    self.fail(
+                        key,
+                        f"accepted: {range_of(type(self), key).describe()}, with [robot] urdf: it describes "
+                        "your own URDF; give urdf too",
+                    )
         if self.camera_pose and sum(v * v for v in self.camera_pose[3:]) < 1e-6:
             self.fail("camera_pose", "its quaternion (the last four numbers) must not be zero")
         if self.base_max_object_distance_m < self.base_min_object_distance_m:
-            self.fail("base_max_object_distance_m", f"must be at least base_min_object_distance_m ({self.base_min_object_distance_m:g})")
+            self.fail(
+                "base_max_object_distance_m",
+                f"must be at least base_min_object_distance_m ({self.base_min_object_distance_m:g})",
+            )

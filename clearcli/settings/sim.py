@@ -81,9 +81,7 @@ class PinholeCamera(Section):
         import numpy as np
 
         p = np.asarray(points_camera, dtype=np.float64)
-        return np.stack(
-            [self.fx * p[:, 0] / p[:, 2] + self.cx, self.fy * p[:, 1] / p[:, 2] + self.cy], axis=1
-        )
+        return np.stack([self.fx * p[:, 0] / p[:, 2] + self.cx, self.fy * p[:, 1] / p[:, 2] + self.cy], axis=1)
 
 
 @dataclass(frozen=True)

@@ -11,9 +11,10 @@ sections or keys are an error: a typo must not be silently ignored.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Iterable, Mapping
+from typing import Any
 
 from clearcli.errors import SettingsError
 from clearcli.settings.geometry import GripperSettings, PredicateSettings, PushSettings
@@ -126,7 +127,9 @@ def parse_set(text: str) -> tuple[str, str, Any]:
     except tomllib.TOMLDecodeError:
         # a bare word, or bare words with commas ("pinch,rim": a set of names), is text
         if not raw or any(c in raw for c in "[]{}\"'="):
-            raise SettingsError(f"--set {text!r}: {raw!r} is not a value (a number, true/false, a [list] or a word)") from None
+            raise SettingsError(
+                f"--set {text!r}: {raw!r} is not a value (a number, true/false, a [list] or a word)"
+            ) from None
         value = raw
     return section.strip(), key.strip(), value
 
@@ -140,10 +143,9 @@ def apply_sets(settings: Settings, sets: Iterable[str]) -> Settings:
 
 
 def read_settings_file(path: Path) -> dict[str, Any]:
-    import tomllib
-
     import os
     import stat
+    import tomllib
 
     try:
         if not stat.S_ISREG(os.stat(path).st_mode):  # a FIFO would be waited on for ever
@@ -179,7 +181,10 @@ def load_settings(path: Path | None = None, sets: Iterable[str] = ()) -> Setting
         # a profile given by --set: the file's [robot] and [gripper] values still win
         # over the profile's defaults, as a file's values win over the tree's
         name = names[-1]
-        own = {"robot": {k: v for k, v in dict(data.get("robot", {})).items() if k != "name"}, "gripper": data.get("gripper", {})}
+        own = {
+            "robot": {k: v for k, v in dict(data.get("robot", {})).items() if k != "name"},
+            "gripper": data.get("gripper", {}),
+        }
         settings = settings_from_dict(own, base=with_profile(settings, name))
     return apply_sets(settings, sets)
 

@@ -13,13 +13,11 @@ projects back exactly onto its pixel grid.
 
 from __future__ import annotations
 
-
 import numpy as np
 
 from clearcli.io.frames import LABEL_NONE, LABEL_TABLE, Frame, object_label
-from clearcli.sim.scene import Box, Cylinder, Scene, SceneObject, invert_transform
 from clearcli.settings.sim import DepthNoise, PinholeCamera  # noqa: F401  ([camera], [depth_noise])
-
+from clearcli.sim.scene import Box, Cylinder, Scene, SceneObject, invert_transform
 
 FRAME_ID = "camera_rgb_optical_frame"
 
@@ -110,7 +108,9 @@ def render(
             t, normal_table = _intersect(part, origin, rays_table[idx])
             hit = np.isfinite(t)
             colour = OBJECT_RGB[part.object_id % len(OBJECT_RGB)]
-            commit(idx[hit], t[hit], object_label(part.object_id), colour, _shade(rays_table[idx[hit]], normal_table[hit]))
+            commit(
+                idx[hit], t[hit], object_label(part.object_id), colour, _shade(rays_table[idx[hit]], normal_table[hit])
+            )
 
     seen = np.isfinite(depth)
     depth_clean = np.where(seen, depth, np.nan)

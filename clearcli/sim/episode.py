@@ -30,13 +30,14 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections import Counter
+from collections.abc import Iterator
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Iterator
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from clearcli.settings.sim import WorldParams
 from clearcli.predicates.grasps import kind as grasp_kind
+from clearcli.settings.sim import WorldParams
 from clearcli.sim.physics import push_contacts, truly_ungraspable_by, world_push
 from clearcli.sim.scene import Scene, without_object
 from clearcli.sim.truth import world_object_of
@@ -139,7 +140,7 @@ class Episode:
     def __init__(
         self,
         scene: Scene,
-        session: "Session",
+        session: Session,
         seed: int = 0,
         max_actions: int = 40,
         params: WorldParams | None = None,
@@ -157,18 +158,21 @@ class Episode:
         self.result: EpisodeResult | None = None
         self.reports: list[dict[str, Any]] = []  # the JSON of every frame, for callers
 
-    def render(self, index: int) -> "Frame":
+    def render(self, index: int) -> Frame:
         from clearcli.sim.camera import render
 
         # the camera and its noise as the settings say ([camera], [depth_noise])
         settings = self.session.pipeline.settings
         frame = render(
-            self.scene, seed=self.seed * 1000 + index, stamp_s=self.start_s + index * self.params.frame_interval_s,
-            noise=settings.depth_noise, camera=settings.camera,
+            self.scene,
+            seed=self.seed * 1000 + index,
+            stamp_s=self.start_s + index * self.params.frame_interval_s,
+            noise=settings.depth_noise,
+            camera=settings.camera,
         )
         return dataclasses.replace(frame, source=f"{self.scene.name}#{index}")
 
-    def robot_placement(self, frame: "Frame") -> np.ndarray:
+    def robot_placement(self, frame: Frame) -> np.ndarray:
         """T_base_camera fixed for the whole episode (the robot does not move), by the
         plan stage's rule on the first frame, unless the settings give one."""
         pipeline = self.session.pipeline
@@ -184,7 +188,7 @@ class Episode:
         pipeline.T_base_camera = T
         return T
 
-    def __iter__(self) -> Iterator["Frame"]:
+    def __iter__(self) -> Iterator[Frame]:
         ids_at_start = tuple(o.object_id for o in self.scene.objects)
         start_xy = {o.object_id: (o.x_m, o.y_m) for o in self.scene.objects}
         actions = 0
@@ -270,17 +274,21 @@ class Episode:
         T_base_camera = self.session.pipeline.T_base_camera
         if not left or T_base_camera is None:
             return ()
-        from clearcli.sim.reach import WorldReach, T_base_table_of
+        from clearcli.sim.reach import T_base_table_of, WorldReach
 
         settings = self.session.pipeline.settings
         reach = WorldReach(
-            T_base_table_of(T_base_camera, self.scene), settings.gripper, settings.push,
-            params=settings.world_reach, table=self.scene.table, robot=self.session.pipeline.robot,
+            T_base_table_of(T_base_camera, self.scene),
+            settings.gripper,
+            settings.push,
+            params=settings.world_reach,
+            table=self.scene.table,
+            robot=self.session.pipeline.robot,
         )
         return tuple(sorted(o.object_id for o in left if reach.why_not(o)))
 
     def _push_contacts(
-        self, report: "FrameReport", push: Any, direction_table: np.ndarray, T_table_camera: np.ndarray
+        self, report: FrameReport, push: Any, direction_table: np.ndarray, T_table_camera: np.ndarray
     ) -> list[int] | None:
         """The objects the fingers meet (`push_contacts`), None when the push has no pose."""
         from clearcli.geometry.gripper import push_contact_halves
@@ -296,7 +304,7 @@ class Episode:
         reach = float(push.push_length_m) + 0.1
         return push_contacts(self.scene, start, d, half_width, reach)
 
-    def _act(self, frame: "Frame", report: "FrameReport", index: int) -> tuple[StepRecord, tuple[int, ...]]:
+    def _act(self, frame: Frame, report: FrameReport, index: int) -> tuple[StepRecord, tuple[int, ...]]:
         result = report.result
         n = len(self.scene.objects)
         unreachable: tuple[int, ...] = ()
@@ -386,7 +394,7 @@ class _Hand:
     `SimWorld`): the scene as it truly is, the world's rules (`clearcli.sim.physics`), the
     first action's object and how the arm went there."""
 
-    def __init__(self, episode: "Episode", report: "FrameReport", model: Any, k: int) -> None:
+    def __init__(self, episode: Episode, report: FrameReport, model: Any, k: int) -> None:
         from clearcli.sim import physics
 
         settings = episode.session.pipeline.settings
@@ -417,14 +425,19 @@ class _Hand:
         return plan.first.candidate if plan is not None and plan.first is not None else None
 
 
-def _chosen_pose_camera(report: "FrameReport", candidates: Any, pose: int = 1, candidate: int = 0) -> np.ndarray | None:
+def _chosen_pose_camera(report: FrameReport, candidates: Any, pose: int = 1, candidate: int = 0) -> np.ndarray | None:
     """A pose (camera frame) of the first action's sequence, the ``pose``-th (the grasp
     or push start by default; -2 a slide's pinch at the edge): of the candidate the IK
     check chose, else of the model's ``candidate``-th of ``candidates``; None without
     either."""
     plan = report.result.plan
     checked = plan.first if plan is not None else None
-    if checked is not None and plan is not None and plan.T_base_camera is not None and -len(checked.T_base_gripper) <= pose < len(checked.T_base_gripper):
+    if (
+        checked is not None
+        and plan is not None
+        and plan.T_base_camera is not None
+        and -len(checked.T_base_gripper) <= pose < len(checked.T_base_gripper)
+    ):
         return np.linalg.inv(np.asarray(plan.T_base_camera, dtype=float)) @ np.asarray(checked.T_base_gripper[pose])
     if not candidates:
         return None

@@ -15,9 +15,9 @@ from the camera).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import replace
 from functools import partial
-from typing import Callable
 
 import numpy as np
 
@@ -112,8 +112,13 @@ def small_against_tall(seed: int) -> Scene:
         tall: SceneObject = Cylinder(0, round(float(rng.uniform(0.04, 0.06)), 4), round(tall_h, 4), 0.0, 0.05)
     else:
         tall = Box(
-            0, round(float(rng.uniform(0.08, 0.16)), 4), round(float(rng.uniform(0.06, 0.10)), 4),
-            round(tall_h, 4), 0.0, 0.05, round(float(rng.uniform(-0.4, 0.4)), 4),
+            0,
+            round(float(rng.uniform(0.08, 0.16)), 4),
+            round(float(rng.uniform(0.06, 0.10)), 4),
+            round(tall_h, 4),
+            0.0,
+            0.05,
+            round(float(rng.uniform(-0.4, 0.4)), 4),
         )
     small = _small(rng, 1, max_height_m=min(0.12, 0.7 * tall_h))
     # -y is towards the camera: in front is -90 degrees; keep within 75 degrees of it
@@ -140,7 +145,9 @@ def gap_row(seed: int, gap_m: float, away: bool) -> Scene:
         length = round(float(rng.uniform(0.05, 0.10)), 4)
         offset = (k - (n - 1) / 2) * (width + gap_m)
         sx, sy = (width, length) if away else (length, width)
-        objs.append(Box(k, sx, sy, height, round(float(x0 + offset * u[0]), 5), round(float(y0 + offset * u[1]), 5), yaw))
+        objs.append(
+            Box(k, sx, sy, height, round(float(x0 + offset * u[0]), 5), round(float(y0 + offset * u[1]), 5), yaw)
+        )
     way = "away" if away else "across"
     return make_scene(f"gap_row({seed}, {gap_m * 1000:.0f} mm, {way})", objs)
 
@@ -157,8 +164,12 @@ def dense_mix(seed: int) -> Scene:
         if object_id < n_large:
             obj: SceneObject = _flat_box(rng, object_id)
             if rng.random() < 0.4:  # a tall one instead (a cereal box)
-                obj = replace(obj, size_x_m=round(obj.size_x_m * 0.6, 4), size_y_m=0.07,
-                              size_z_m=round(float(rng.uniform(0.15, 0.25)), 4))
+                obj = replace(
+                    obj,
+                    size_x_m=round(obj.size_x_m * 0.6, 4),
+                    size_y_m=0.07,
+                    size_z_m=round(float(rng.uniform(0.15, 0.25)), 4),
+                )
         else:
             obj = _small(rng, object_id)
         for _attempt in range(300):
@@ -224,23 +235,42 @@ def _wide(rng: np.random.Generator, object_id: int) -> SceneObject:
     yaw = round(float(rng.uniform(-math.pi, math.pi)), 4)  # the mug's handle direction
     if kind == 0:  # bowl
         return Cylinder(
-            object_id, round(float(rng.uniform(0.06, 0.09)), 4), round(float(rng.uniform(0.05, 0.08)), 4),
-            0.0, 0.0, yaw, wall_m=round(float(rng.uniform(0.003, 0.006)), 4),
+            object_id,
+            round(float(rng.uniform(0.06, 0.09)), 4),
+            round(float(rng.uniform(0.05, 0.08)), 4),
+            0.0,
+            0.0,
+            yaw,
+            wall_m=round(float(rng.uniform(0.003, 0.006)), 4),
         )
     if kind == 1:  # mug
         return Cylinder(
-            object_id, round(float(rng.uniform(0.04, 0.045)), 4), round(float(rng.uniform(0.09, 0.10)), 4),
-            0.0, 0.0, yaw, wall_m=round(float(rng.uniform(0.003, 0.005)), 4),
+            object_id,
+            round(float(rng.uniform(0.04, 0.045)), 4),
+            round(float(rng.uniform(0.09, 0.10)), 4),
+            0.0,
+            0.0,
+            yaw,
+            wall_m=round(float(rng.uniform(0.003, 0.005)), 4),
             handle_m=round(float(rng.uniform(0.02, 0.025)), 4),
         )
     if kind == 2:  # plate: closed and low
         return Cylinder(
-            object_id, round(float(rng.uniform(0.09, 0.12)), 4), round(float(rng.uniform(0.015, 0.025)), 4),
-            0.0, 0.0, yaw,
+            object_id,
+            round(float(rng.uniform(0.09, 0.12)), 4),
+            round(float(rng.uniform(0.015, 0.025)), 4),
+            0.0,
+            0.0,
+            yaw,
         )
     return Box(  # flat box
-        object_id, round(float(rng.uniform(0.15, 0.22)), 4), round(float(rng.uniform(0.10, 0.16)), 4),
-        round(float(rng.uniform(0.02, 0.04)), 4), 0.0, 0.0, yaw,
+        object_id,
+        round(float(rng.uniform(0.15, 0.22)), 4),
+        round(float(rng.uniform(0.10, 0.16)), 4),
+        round(float(rng.uniform(0.02, 0.04)), 4),
+        0.0,
+        0.0,
+        yaw,
     )
 
 
@@ -266,8 +296,9 @@ def wide_objects(seed: int) -> Scene:
     placed: list[SceneObject] = []
     for obj in objs:
         for _attempt in range(500):
-            cand = replace(obj, x_m=round(float(rng.uniform(-lim_x, lim_x)), 4),
-                           y_m=round(float(rng.uniform(-lim_y, lim_y)), 4))
+            cand = replace(
+                obj, x_m=round(float(rng.uniform(-lim_x, lim_x)), 4), y_m=round(float(rng.uniform(-lim_y, lim_y)), 4)
+            )
             if not placed:
                 # the first (wide) object: moved towards a random side until its footprint
                 # is 3-10 cm (a drawn gap) from that edge, keeping its place along it

@@ -5,11 +5,10 @@ model of it (see `clearcli.sim.episode`)."""
 from __future__ import annotations
 
 import math
-from typing import Any, Sequence
+from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
-
-from clearcli.transforms import rot2
 
 from clearcli.settings.sim import WorldParams
 from clearcli.sim.scene import (
@@ -22,11 +21,11 @@ from clearcli.sim.scene import (
     with_object_pose,
     without_object,
 )
+from clearcli.transforms import rot2
 
 # A neighbour that reaches less than this (m) into the space the open fingers take is
 # nudged aside as they come down and close; more, and the grasp takes nothing.
 GRASP_TOLERANCE_M = 0.003
-
 
 
 def grasp_width_m(obj: SceneObject) -> float:
@@ -82,7 +81,8 @@ def truly_ungraspable_by(obj: SceneObject, gripper: Any, kinds: tuple[str, ...] 
     the gripper pinches at an edge."""
     import sys
 
-    from clearcli.predicates.grasps import kind, kinds as registered
+    from clearcli.predicates.grasps import kind
+    from clearcli.predicates.grasps import kinds as registered
 
     rules = sys.modules[__name__]
     chosen = [kind(k) for k in kinds] if kinds is not None else [k for k in registered() if k.thesis]
@@ -231,7 +231,7 @@ def push_contacts(
 
 def world_push(
     scene: Scene,
-    k: "int | Sequence[int]",
+    k: int | Sequence[int],
     direction_table: np.ndarray,
     length_m: float,
     rng: np.random.Generator,
@@ -256,7 +256,9 @@ def world_push(
         trial = scene
         for i in members:
             obj = trial.objects[i]
-            trial = with_object_pose(trial, i, obj.x_m + heading[0] * step, obj.y_m + heading[1] * step, obj.yaw_rad + turn)
+            trial = with_object_pose(
+                trial, i, obj.x_m + heading[0] * step, obj.y_m + heading[1] * step, obj.yaw_rad + turn
+            )
         fixed = frozenset(members)
         shoved: Scene | None = trial
         for i in members:
@@ -411,8 +413,10 @@ def world_rim_grasp(
     faces = [float((tcp[:2] + side * opening_m / 2 * unit_closing[:2] - axis) @ radial[:2]) for side in (1.0, -1.0)]
     face_in, face_out = min(faces), max(faces)
     if not (face_in <= r_in and face_out >= r_out):
-        return False, (f"wall ({r_in * 1000:.1f}-{r_out * 1000:.1f} mm from the axis) not between the fingers' "
-                       f"inner faces ({face_in * 1000:.1f} and {face_out * 1000:.1f} mm)")
+        return False, (
+            f"wall ({r_in * 1000:.1f}-{r_out * 1000:.1f} mm from the axis) not between the fingers' "
+            f"inner faces ({face_in * 1000:.1f} and {face_out * 1000:.1f} mm)"
+        )
     tip_z = finger_depth_m / 2 if fingertip_z_m is None else float(fingertip_z_m)
     fingers = _finger_corners(T, opening_m, finger_thickness_m, finger_width_m, finger_depth_m, tip_z)
     # the inner finger is the one nearer the axis (the other has the outer wall to clear)
@@ -423,22 +427,33 @@ def world_rim_grasp(
     for name, finger in (("inner", inner), ("outer", outer)):
         tip_centre = finger.mean(axis=0) + unit_approach * finger_depth_m / 2  # centre of its tip face
         if tip_centre[2] > rim_z - RIM_MIN_TIP_DEPTH_M:
-            return False, (f"{name} fingertip {(rim_z - tip_centre[2]) * 1000:.1f} mm below the rim "
-                           f"(at least {RIM_MIN_TIP_DEPTH_M * 1000:.0f} mm)")
+            return False, (
+                f"{name} fingertip {(rim_z - tip_centre[2]) * 1000:.1f} mm below the rim "
+                f"(at least {RIM_MIN_TIP_DEPTH_M * 1000:.0f} mm)"
+            )
     floor_z = obj.base_z_m + obj.floor_m
     if inner[:, 2].min() <= floor_z:
-        return False, f"inner fingertip at the container's floor ({(floor_z - inner[:, 2].min()) * 1000:.1f} mm into it)"
+        return (
+            False,
+            f"inner fingertip at the container's floor ({(floor_z - inner[:, 2].min()) * 1000:.1f} mm into it)",
+        )
     if outer[:, 2].min() <= obj.base_z_m:
         return False, "outer fingertip below the container's base"
     # what of each finger is below the rim meets the wall if it crosses r_in or r_out
     inner_low = _below(inner, rim_z)
     reach = float(np.linalg.norm(inner_low[:, :2] - axis, axis=1).max())
     if reach >= r_in:
-        return False, f"inner finger meets the wall (reaches {reach * 1000:.1f} mm from the axis, inner wall at {r_in * 1000:.1f})"
+        return (
+            False,
+            f"inner finger meets the wall (reaches {reach * 1000:.1f} mm from the axis, inner wall at {r_in * 1000:.1f})",
+        )
     outer_low = convex_hull(_below(outer, rim_z)[:, :2])
     gap = _distance_to_polygon(axis, outer_low)
     if gap <= r_out:
-        return False, f"outer finger meets the wall ({gap * 1000:.1f} mm from the axis, outer wall at {r_out * 1000:.1f})"
+        return (
+            False,
+            f"outer finger meets the wall ({gap * 1000:.1f} mm from the axis, outer wall at {r_out * 1000:.1f})",
+        )
     # the mug's own handle, then every other object: footprints at overlapping heights
     handle = obj.handle_box()
     blockers: list[tuple[str, SceneObject]] = [("the handle", handle)] if handle is not None else []
@@ -517,15 +532,19 @@ def world_edge_pinch(
     a tilt below `EDGE_PINCH_MIN_TILT_DEG` does not get there at all."""
     d = _unit_xy(direction_xy, "world_edge_pinch")
     if not tilt_deg >= EDGE_PINCH_MIN_TILT_DEG - 1e-6:
-        return False, f"the gripper cannot come that low: {tilt_deg:.1f} deg below the horizontal, at least {EDGE_PINCH_MIN_TILT_DEG:g}"
+        return (
+            False,
+            f"the gripper cannot come that low: {tilt_deg:.1f} deg below the horizontal, at least {EDGE_PINCH_MIN_TILT_DEG:g}",
+        )
     obj = scene.objects[k]
     if not on_table(scene, obj):
         return False, "tipped off the table: its centre is past the edge"
     half = np.array([scene.table.size_x_m / 2, scene.table.size_y_m / 2])
     centre = np.array([obj.x_m, obj.y_m])
     # the side the direction leaves through: the axis whose border the ray meets first
-    exits = [(half[a] - math.copysign(1.0, d[a]) * centre[a]) / abs(d[a]) if abs(d[a]) > 1e-12 else math.inf
-             for a in (0, 1)]
+    exits = [
+        (half[a] - math.copysign(1.0, d[a]) * centre[a]) / abs(d[a]) if abs(d[a]) > 1e-12 else math.inf for a in (0, 1)
+    ]
     a = int(np.argmin(exits))
     sign = math.copysign(1.0, d[a])
     poly = obj.footprint()

@@ -30,8 +30,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from clearcli.robot.collision import capsule_spheres
-from clearcli.sim.scene import Box, Cylinder, Table
 from clearcli.settings.sim import WorldReachParams  # noqa: F401  ([world_reach])
+from clearcli.sim.scene import Box, Cylinder, Table
 
 if TYPE_CHECKING:
     from clearcli.robot.arm import Arm
@@ -40,7 +40,7 @@ if TYPE_CHECKING:
 
 
 def grasp_poses_T_table_tcp(
-    obj: "SceneObject", gripper: "GripperSettings", push: "PushSettings", n_yaws: int = 8
+    obj: SceneObject, gripper: GripperSettings, push: PushSettings, n_yaws: int = 8
 ) -> list[tuple[np.ndarray, np.ndarray]]:
     """(pre-grasp, grasp) pose pairs of a top-down grasp of ``obj``, in the table frame."""
     half = gripper.closing_region_height_m / 2.0
@@ -78,11 +78,11 @@ class WorldReach:
     def __init__(
         self,
         T_base_table: np.ndarray,
-        gripper: "GripperSettings",
-        push: "PushSettings",
+        gripper: GripperSettings,
+        push: PushSettings,
         params: WorldReachParams = WorldReachParams(),
         table: Table = Table(),
-        robot: "Arm | None" = None,
+        robot: Arm | None = None,
     ) -> None:
         """``robot``: the arm the world has (the command's resolved arm; the default
         settings' when None). Its model gives FK, limits and capsules; the solving is the
@@ -140,7 +140,7 @@ class WorldReach:
         over = (np.abs(c_table[:, 0]) <= half_x + radii) & (np.abs(c_table[:, 1]) <= half_y + radii)
         return not bool(np.any(over & (c_table[:, 2] < radii + self.params.table_margin_m)))
 
-    def grasp_motion(self, obj: "SceneObject") -> tuple[np.ndarray, np.ndarray] | None:
+    def grasp_motion(self, obj: SceneObject) -> tuple[np.ndarray, np.ndarray] | None:
         """(T_base_tcp, joint angles) of the first top-down grasp of ``obj`` whose
         pre-grasp and grasp poses both have arm configurations; None when none has."""
         pairs = grasp_poses_T_table_tcp(obj, self.gripper, self.push, self.params.n_yaws)
@@ -154,7 +154,7 @@ class WorldReach:
                 return T_base_tcp, q
         return None
 
-    def why_not(self, obj: "SceneObject") -> str:
+    def why_not(self, obj: SceneObject) -> str:
         """Empty when the gripper can hold ``obj`` and some top-down grasp of it has an
         arm motion; else why not."""
         from clearcli.sim.physics import truly_ungraspable
@@ -165,9 +165,9 @@ class WorldReach:
             return "no arm motion reaches a top-down grasp of it"
         return ""
 
-    def reachable(self, scene: "Scene", k: int) -> bool:
+    def reachable(self, scene: Scene, k: int) -> bool:
         return not self.why_not(scene.objects[k])
 
 
-def T_base_table_of(T_base_camera: Any, scene: "Scene") -> np.ndarray:
+def T_base_table_of(T_base_camera: Any, scene: Scene) -> np.ndarray:
     return np.asarray(T_base_camera, dtype=float) @ scene.T_camera_table

@@ -11,6 +11,7 @@ from clearcli.sim.episode import Episode, EpisodeResult
 from clearcli.sim.scene import Scene
 from clearcli.sim.truth import truth_segment
 
+
 def static_transforms(T_base_camera: np.ndarray, frame_id: str, base_frame: str | None = None) -> list[Any]:
     """/tf_static's one transform: the points' frame in the robot's base, named
     ``base_frame`` (None: as the default profile's logs name it, the WAM's "wam_base")."""
@@ -33,7 +34,7 @@ def record_session(
     max_actions: int = 40,
     push_memory: bool = True,
     truth_segmentation: bool = False,
-) -> tuple[int, "EpisodeResult"]:
+) -> tuple[int, EpisodeResult]:
     """Run a closed-loop episode on ``world`` and write its frames, with the robot base
     on /tf_static, to the MCAP at ``path``; returns (frames written, the episode's result)."""
     from clearcli.io.mcap_write import write_pointcloud2_mcap

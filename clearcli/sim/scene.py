@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
-from typing import Union
 
 import numpy as np
 
@@ -46,9 +45,7 @@ HANDLE_THICKNESS_M = 0.012
 HANDLE_SPAN = 0.6
 
 
-def camera_pose_T_camera_table(
-    height_m: float = CAMERA_HEIGHT_M, pitch_deg: float = CAMERA_PITCH_DEG
-) -> np.ndarray:
+def camera_pose_T_camera_table(height_m: float = CAMERA_HEIGHT_M, pitch_deg: float = CAMERA_PITCH_DEG) -> np.ndarray:
     """T_camera_table (4x4) of a camera ``height_m`` above the table plane, in the plane
     x = 0, looking along +y of the table, pitched ``pitch_deg`` below the horizontal so
     that its optical axis hits the table-frame origin."""
@@ -209,7 +206,7 @@ class Cylinder:
         return convex_hull(np.vstack([circle, handle.footprint()]))
 
 
-SceneObject = Union[Box, Cylinder]
+SceneObject = Box | Cylinder
 
 
 @dataclass(frozen=True)
@@ -236,7 +233,6 @@ class Scene:
 
 def _rows(T: np.ndarray) -> tuple[tuple[float, ...], ...]:
     return tuple(tuple(float(v) for v in row) for row in np.asarray(T))
-
 
 
 def make_scene(
@@ -275,9 +271,7 @@ def two_touching_boxes() -> Scene:
 def box_on_box() -> Scene:
     """A 4 x 3 x 4 cm box lying on top of an 8 x 6 x 5 cm box, turned 20 degrees on it."""
     lower = Box(0, 0.08, 0.06, 0.05, x_m=0.0, y_m=0.02, yaw_rad=math.radians(-10.0))
-    upper = Box(
-        1, 0.04, 0.03, 0.04, x_m=0.005, y_m=0.015, yaw_rad=math.radians(10.0), base_z_m=lower.top_z_m
-    )
+    upper = Box(1, 0.04, 0.03, 0.04, x_m=0.005, y_m=0.015, yaw_rad=math.radians(10.0), base_z_m=lower.top_z_m)
     return make_scene("box_on_box()", [lower, upper])
 
 
@@ -321,9 +315,7 @@ def polygons_overlap(a: np.ndarray, b: np.ndarray, clearance_m: float = 0.0) -> 
         normals /= np.linalg.norm(normals, axis=1, keepdims=True)
         pa = a @ normals.T  # (na, k)
         pb = b @ normals.T
-        separated = (pa.max(axis=0) + clearance_m <= pb.min(axis=0)) | (
-            pb.max(axis=0) + clearance_m <= pa.min(axis=0)
-        )
+        separated = (pa.max(axis=0) + clearance_m <= pb.min(axis=0)) | (pb.max(axis=0) + clearance_m <= pa.min(axis=0))
         if separated.any():
             return False
     return True
@@ -344,9 +336,7 @@ def _random_object(rng: np.random.Generator, object_id: int) -> SceneObject:
 
 
 def _in_region(poly: np.ndarray) -> bool:
-    return bool(
-        (np.abs(poly[:, 0]) <= CLUTTER_HALF_X_M).all() and (np.abs(poly[:, 1]) <= CLUTTER_HALF_Y_M).all()
-    )
+    return bool((np.abs(poly[:, 0]) <= CLUTTER_HALF_X_M).all() and (np.abs(poly[:, 1]) <= CLUTTER_HALF_Y_M).all())
 
 
 def _place_touching(obj: SceneObject, anchor: SceneObject, direction: float) -> SceneObject:
@@ -426,9 +416,14 @@ def dense(n_objects: int, seed: int) -> Scene:
             # a row (or a 2 x 2 block) of boxes sharing a length and a yaw
             block = left >= 4 and kind < 0.2
             count = 4 if block else int(rng.integers(2, min(4, left) + 1))
-            length = float(rng.uniform(0.08, 0.14)) if rng.random() < 0.6 else float(rng.uniform(MIN_WIDTH_M, MAX_WIDTH_M))
+            length = (
+                float(rng.uniform(0.08, 0.14)) if rng.random() < 0.6 else float(rng.uniform(MIN_WIDTH_M, MAX_WIDTH_M))
+            )
             yaw = float(rng.uniform(-math.pi / 2, math.pi / 2))
-            cx, cy = float(rng.uniform(-CLUTTER_HALF_X_M, CLUTTER_HALF_X_M)), float(rng.uniform(-CLUTTER_HALF_Y_M, CLUTTER_HALF_Y_M))
+            cx, cy = (
+                float(rng.uniform(-CLUTTER_HALF_X_M, CLUTTER_HALF_X_M)),
+                float(rng.uniform(-CLUTTER_HALF_Y_M, CLUTTER_HALF_Y_M)),
+            )
             widths = rng.uniform(MIN_WIDTH_M, MAX_WIDTH_M, size=count)
             heights = rng.uniform(0.04, 0.15, size=count)
             gaps = rng.uniform(0.0, 0.002, size=count)  # touching, or a hair apart
@@ -447,8 +442,17 @@ def dense(n_objects: int, seed: int) -> Scene:
                     w = float(widths[i])
                     pos = np.array([cx, cy]) + across * (offset + w / 2) + along * r * (length + float(gaps[i]))
                     offset += w + float(gaps[i])
-                    group.append(Box(object_id + i, round(length, 4), round(w, 4), round(float(heights[i]), 4),
-                                     float(pos[0]), float(pos[1]), round(yaw, 4)))
+                    group.append(
+                        Box(
+                            object_id + i,
+                            round(length, 4),
+                            round(w, 4),
+                            round(float(heights[i]), 4),
+                            float(pos[0]),
+                            float(pos[1]),
+                            round(yaw, 4),
+                        )
+                    )
             if all(_in_region(o.footprint()) for o in group) and not any(
                 polygons_overlap(o.footprint(), p.footprint(), CLUTTER_MIN_GAP_M) for o in group for p in placed
             ):
@@ -462,8 +466,11 @@ def dense(n_objects: int, seed: int) -> Scene:
                 cand = _place_touching(obj, anchor_obj, float(rng.uniform(-math.pi, math.pi)))
                 others = [p for p in placed if p is not anchor_obj]
             else:
-                cand = replace(obj, x_m=float(rng.uniform(-CLUTTER_HALF_X_M, CLUTTER_HALF_X_M)),
-                               y_m=float(rng.uniform(-CLUTTER_HALF_Y_M, CLUTTER_HALF_Y_M)))
+                cand = replace(
+                    obj,
+                    x_m=float(rng.uniform(-CLUTTER_HALF_X_M, CLUTTER_HALF_X_M)),
+                    y_m=float(rng.uniform(-CLUTTER_HALF_Y_M, CLUTTER_HALF_Y_M)),
+                )
                 others = placed
             poly = cand.footprint()
             if _in_region(poly) and not any(polygons_overlap(poly, p.footprint(), CLUTTER_MIN_GAP_M) for p in others):

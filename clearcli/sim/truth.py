@@ -14,7 +14,8 @@ if TYPE_CHECKING:
     from clearcli.io.frames import Frame
     from clearcli.perception.types import Segmentation
 
-def truth_segment(frame: "Frame", settings: Any = None) -> "Segmentation":
+
+def truth_segment(frame: Frame, settings: Any = None) -> Segmentation:
     """A perfect segmentation from the camera's labels (for fast tests and as an oracle
     that separates the planner's behaviour from the segmenter's errors)."""
     from scipy.spatial import ConvexHull
@@ -61,7 +62,7 @@ def truth_segment(frame: "Frame", settings: Any = None) -> "Segmentation":
     )
 
 
-def world_object_of(frame: "Frame", segmentation: "Segmentation", segment_index: int) -> int | None:
+def world_object_of(frame: Frame, segmentation: Segmentation, segment_index: int) -> int | None:
     """The world's object id under a segment: the most common label among its points."""
     labels = frame.fields.get("label")
     if labels is None:

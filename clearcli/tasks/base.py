@@ -8,9 +8,10 @@ single call and a batch worker call the same ``run``.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
 
 # The file each output kind is written to in a batch's --out-dir.
 OUTPUT_FILES: dict[str, str] = {
@@ -54,7 +55,7 @@ class Outputs:
     paths: tuple[tuple[str, Path], ...] = ()
 
     @staticmethod
-    def of(**given: Path | None) -> "Outputs":
+    def of(**given: Path | None) -> Outputs:
         return Outputs(tuple((k, Path(v)) for k, v in given.items() if v is not None))
 
     def get(self, kind: str) -> Path | None:

@@ -10,4 +10,3 @@ def domain_text(clearance_costs: bool = False, grasps: str = "pinch") -> str:
     from clearcli.predicates.grasps import parse_kinds
 
     return text(clearance_costs=clearance_costs, kinds=parse_kinds(grasps))
-

@@ -4,14 +4,14 @@ folder of predictions) and scored against its own labels."""
 from __future__ import annotations
 
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping
-
-from clearcli.settings import Settings
-from clearcli.tasks.base import NO_OUTPUTS, OUTPUT_FILES, Outcome, Outputs, Source
+from typing import Any
 
 from clearcli.evaluate.dataset import load_groups, summarise, write_csv, write_png  # noqa: F401  (the command's)
+from clearcli.settings import Settings
+from clearcli.tasks.base import NO_OUTPUTS, OUTPUT_FILES, Outcome, Outputs, Source
 
 SCHEMA, VERSION = "evaluate.frame", 1
 OUTPUTS = ("labels",)
@@ -83,13 +83,17 @@ def score_files(pred: Path, truth: Path) -> dict[str, Any]:
     schema ``clear.evaluate.segmentation``)."""
     from clearcli import pipeline
     from clearcli.errors import InputError
-    from clearcli.evaluate.segmentation import score
-
     from clearcli.evaluate.osd import osd_metrics
+    from clearcli.evaluate.segmentation import score
 
     p = _labels(pipeline.read(pred), pred, "prediction")
     truth_frame = pipeline.read(truth)
     t = _labels(truth_frame, truth, "ground truth")
     if p.shape != t.shape:
         raise InputError(f"{pred}: {p.size} points but {truth} has {t.size}; both must be the same frame")
-    return {"pred": str(pred), "truth": str(truth), **score(p, t).as_dict(), **osd_metrics(p, t, truth_frame.shape).as_dict()}
+    return {
+        "pred": str(pred),
+        "truth": str(truth),
+        **score(p, t).as_dict(),
+        **osd_metrics(p, t, truth_frame.shape).as_dict(),
+    }

@@ -38,7 +38,9 @@ def run(request: Request, source: Source) -> Outcome:
     from clearcli.predicates.grasps import parse_kinds
 
     state = pipeline.stated(frame, seg, request.settings)
-    done = pipeline.planned(state, request.settings, robot, request.camera_pose, "first" if request.first_only else None)
+    done = pipeline.planned(
+        state, request.settings, robot, request.camera_pose, "first" if request.first_only else None
+    )
     plan = done.plan
     # the model the plan was made in: the facts of the grasp kinds [plan] grasps allows
     state = with_grasp_kinds(state, parse_kinds(request.settings.plan.grasps))

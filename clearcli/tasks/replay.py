@@ -3,9 +3,10 @@ object ids, execution monitoring and push memory; optionally an annotated log.""
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Callable, Iterator
+from typing import TYPE_CHECKING, Any
 
 from clearcli.settings import Settings
 
@@ -32,17 +33,17 @@ def run(
     request: Request,
     log: Path,
     topic: str | None,
-    on_report: Callable[["FrameReport", int, int | None], None],
+    on_report: Callable[[FrameReport, int, int | None], None],
     note: Callable[[str], None],
-) -> tuple["Summary", "PartialLogError | None"]:
+) -> tuple[Summary, PartialLogError | None]:
     """Replay ``log``; ``on_report`` sees each frame's report (with frames read so far
     and the topic's frame count when known), ``note`` gets remarks for people. Returns
     the summary, and the error that ended a damaged log early (the caller raises it
     after printing)."""
     from clearcli.errors import PartialLogError
     from clearcli.io.read import iter_frames, sniff
-    from clearcli.pipeline import Pipeline
     from clearcli.io.tf import BASE_FRAMES, base_camera_from_log
+    from clearcli.pipeline import Pipeline
     from clearcli.replay.session import ReplayOptions, Session, replay
 
     config = request.settings
@@ -67,9 +68,14 @@ def run(
 
     pipeline = Pipeline(config)
     options = ReplayOptions(
-        every=request.every, from_s=request.from_s, to_s=request.to_s, fail_fast=request.fail_fast,
-        push_memory=config.replay.push_memory, stop_when_cleared=config.replay.stop_when_cleared,
-        tracking=config.tracking, memory=config.memory,
+        every=request.every,
+        from_s=request.from_s,
+        to_s=request.to_s,
+        fail_fast=request.fail_fast,
+        push_memory=config.replay.push_memory,
+        stop_when_cleared=config.replay.stop_when_cleared,
+        tracking=config.tracking,
+        memory=config.memory,
     )
     session = Session(pipeline, options)
     # the log's name for the robot base: --base-frame, else the resolved arm's base frame
@@ -77,7 +83,7 @@ def run(
     own = pipeline.robot.profile.base_frame
     bases = (request.base_frame,) if request.base_frame else (own, *(b for b in BASE_FRAMES if b != own))
 
-    def frames() -> Iterator["Frame"]:
+    def frames() -> Iterator[Frame]:
         first = True
         for frame in iter_frames(log, topic, config.images):
             if first and kind == "mcap" and not config.robot.camera_pose:

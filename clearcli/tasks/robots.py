@@ -17,7 +17,11 @@ def robots_payload(name: str | None = None) -> dict[str, Any]:
     from clearcli.settings.profiles import DEFAULT_PROFILE
 
     if name is None:
-        return {"profiles": [{"name": p.name, "summary": p.summary, "default": p.name == DEFAULT_PROFILE} for p in PROFILES.values()]}
+        return {
+            "profiles": [
+                {"name": p.name, "summary": p.summary, "default": p.name == DEFAULT_PROFILE} for p in PROFILES.values()
+            ]
+        }
     p = profile(name)
     facts = p.facts()
     import pinocchio as pin
@@ -30,7 +34,7 @@ def robots_payload(name: str | None = None) -> dict[str, Any]:
     return {"profile": facts}
 
 
-def check_robot(robot: "RobotSettings") -> None:
+def check_robot(robot: RobotSettings) -> None:
     """Read a user's URDF (``[robot] urdf``) now: a file that does not parse, a joint's
     non-finite numbers, zero axis or lower limit above its upper, a base or flange frame
     that is not a link or makes no arm (the same, not above the flange, fixed to it), a

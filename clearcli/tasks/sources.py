@@ -19,9 +19,10 @@ read) becomes a `BadInput`: the batch reports it in its own line and goes on.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Sequence, Union
+from typing import TYPE_CHECKING, Any
 
 from clearcli.io.walk import natural_key
 
@@ -29,8 +30,17 @@ if TYPE_CHECKING:
     from clearcli.settings.images import ImageSettings
 
 __all__ = [
-    "BadInput", "FrameRef", "Item", "Skipped", "check_intrinsics", "check_unique_names", "count_frames", "expand",
-    "files_read", "natural_key", "run_files",
+    "BadInput",
+    "FrameRef",
+    "Item",
+    "Skipped",
+    "check_intrinsics",
+    "check_unique_names",
+    "count_frames",
+    "expand",
+    "files_read",
+    "natural_key",
+    "run_files",
 ]
 
 
@@ -64,7 +74,7 @@ class Skipped:
     reason: str
 
 
-Item = Union[FrameRef, BadInput, Skipped]
+Item = FrameRef | BadInput | Skipped
 
 
 def count_frames(path: Path, topic: str | None) -> tuple[int, Exception | None]:
@@ -82,7 +92,7 @@ def expand(
     frame: int | None = None,
     every: int | None = None,
     topic: str | None = None,
-    images: "ImageSettings | None" = None,
+    images: ImageSettings | None = None,
 ) -> list[Item]:
     """The frames of ``inputs`` in order (folders expanded), and the inputs that fail.
     ``images``: the naming rule of depth images ([images]; defaults when None)."""
@@ -110,10 +120,14 @@ def expand(
             files = files_in(path, seen, skipped, images)
             items.extend(Skipped(source, reason) for source, reason in skipped)
             if not files and not skipped:
-                items.append(BadInput(
-                    str(path), f"{path}: folder holds no .pcd, .mcap or .bag file and no depth image named "
-                    f"<stem>{images.depth_suffix}.png (.tif, .npy)", EXIT_INPUT,
-                ))
+                items.append(
+                    BadInput(
+                        str(path),
+                        f"{path}: folder holds no .pcd, .mcap or .bag file and no depth image named "
+                        f"<stem>{images.depth_suffix}.png (.tif, .npy)",
+                        EXIT_INPUT,
+                    )
+                )
             paths = files
         elif not path.exists():
             items.append(BadInput(str(path), f"{path}: file not found", EXIT_INPUT))
@@ -142,11 +156,18 @@ def expand(
             start = frame or 0
             if start >= n and broken is None:
                 # a selection that selects nothing is a mistake, not an empty result
-                items.append(BadInput(
-                    str(p), f"{p}: --frame {start} with --every {every} selects no frame: the log has {n} "
-                    f"frame(s) on its point-cloud topic (0-{n - 1})" if n else f"{p}: the log has no point-cloud frame",
-                    EXIT_INPUT, start, f"{stem}_f{start}",
-                ))
+                items.append(
+                    BadInput(
+                        str(p),
+                        f"{p}: --frame {start} with --every {every} selects no frame: the log has {n} "
+                        f"frame(s) on its point-cloud topic (0-{n - 1})"
+                        if n
+                        else f"{p}: the log has no point-cloud frame",
+                        EXIT_INPUT,
+                        start,
+                        f"{stem}_f{start}",
+                    )
+                )
                 continue
             items.extend(FrameRef(str(p), k, True, f"{stem}_f{k}") for k in range(start, n, every))
             if broken is not None:  # every complete frame is in; the break is reported
@@ -221,6 +242,6 @@ def _urdf_files(urdf: Path) -> list[Path]:
     for name in re.findall(r'filename\s*=\s*["\']([^"\']+)["\']', text):
         if name.startswith("package://"):
             continue
-        name = name[len("file://"):] if name.startswith("file://") else name
+        name = name[len("file://") :] if name.startswith("file://") else name
         meshes.append(urdf.parent / name)
     return [urdf, *meshes]

@@ -8,7 +8,7 @@ from pathlib import Path
 from helpers import FIXTURES
 from helpers.batch import FRAMES, clear, lines_of
 
-KILL_ONE = '''
+KILL_ONE = """
 import os, signal
 import clearcli.batch.work as work
 _orig = work.run_job
@@ -19,7 +19,7 @@ def run_job(job):
 work.run_job = run_job
 import clearcli.batch.pool as pool
 pool.run_job = run_job
-'''
+"""
 
 
 def test_a_worker_killed_mid_batch_fails_its_frame_only(tmp_path: Path) -> None:

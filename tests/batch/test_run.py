@@ -47,8 +47,21 @@ def test_bad_inputs_reported_each_in_its_line(tmp_path: Path) -> None:
     nothing.mkdir()
     out = tmp_path / "out"
     res = clear(
-        "plan", FRAMES[0], empty, corrupt, truncated, text, nothing, FRAMES[1], "--json",
-        "--out-dir", out, "--outputs", "plan,problem", "--jobs", "2",
+        "plan",
+        FRAMES[0],
+        empty,
+        corrupt,
+        truncated,
+        text,
+        nothing,
+        FRAMES[1],
+        "--json",
+        "--out-dir",
+        out,
+        "--outputs",
+        "plan,problem",
+        "--jobs",
+        "2",
     )
     assert res.returncode == 11, res.stderr  # some frames failed
     rows, summary = lines_of(res.stdout)
@@ -69,7 +82,7 @@ def test_bad_inputs_reported_each_in_its_line(tmp_path: Path) -> None:
     assert names == sorted(good + ["settings.toml", ".clear-batch.lock"])
 
 
-SLOW_WRITES = '''
+SLOW_WRITES = """
 import time
 import clearcli.files as files
 _orig = files.atomic_output
@@ -81,7 +94,7 @@ def slow(path, mode="wb"):
         handle.flush()
         time.sleep(0.4)  # the write is half done: the temporary exists, the target not yet
 files.atomic_output = slow
-'''
+"""
 
 
 def test_sigkill_during_a_write_then_resume(tmp_path: Path) -> None:
@@ -90,8 +103,20 @@ def test_sigkill_during_a_write_then_resume(tmp_path: Path) -> None:
     (hook / "sitecustomize.py").write_text(SLOW_WRITES)
     env = dict(os.environ, PYTHONPATH=str(hook))
     out = tmp_path / "out"
-    args = [sys.executable, "-m", "clearcli.cli", "plan", *map(str, FRAMES), "--json", "--out-dir", str(out),
-            "--outputs", "plan,problem", "--jobs", "1"]
+    args = [
+        sys.executable,
+        "-m",
+        "clearcli.cli",
+        "plan",
+        *map(str, FRAMES),
+        "--json",
+        "--out-dir",
+        str(out),
+        "--outputs",
+        "plan,problem",
+        "--jobs",
+        "1",
+    ]
     proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env, start_new_session=True)
     deadline = time.time() + 300
     killed_during_write = False
@@ -142,13 +167,29 @@ def test_ctrl_c_stops_cleanly(tmp_path: Path) -> None:
     frames = [tmp_path / f"f{k}.pcd" for k in range(len(FRAMES) * 10)]
     for f, src in zip(frames, FRAMES * 10):
         f.write_bytes(src.read_bytes())
-    args = [sys.executable, "-m", "clearcli.cli", "plan", *map(str, frames), "--json", "--jobs", "2",
-            "--out-dir", str(out), "--outputs", "plan,problem,png"]
+    args = [
+        sys.executable,
+        "-m",
+        "clearcli.cli",
+        "plan",
+        *map(str, frames),
+        "--json",
+        "--jobs",
+        "2",
+        "--out-dir",
+        str(out),
+        "--outputs",
+        "plan,problem,png",
+    ]
     # SIGINT back to its default in the child: a test run started in the background of
     # a non-interactive shell (`cmd &`) inherits SIGINT ignored, and Python then keeps
     # ignoring it, as a shell's background job should (the batch ran to the end: exit 0)
     proc = subprocess.Popen(
-        args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
+        args,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
     deadline = time.time() + 300
@@ -263,8 +304,20 @@ def test_a_second_batch_on_the_folder_refuses_or_waits(tmp_path: Path) -> None:
         assert len(line) == 1 and f"pid {os.getpid()}" in line[0] and "--wait" in line[0]
         assert not list(out.glob("*.json"))  # nothing written
         waiting = subprocess.Popen(
-            [sys.executable, "-m", "clearcli.cli", "segment", str(FIXTURES / "isolated_box.pcd"), "--out-dir", str(out),
-             "--json", "--wait"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+            [
+                sys.executable,
+                "-m",
+                "clearcli.cli",
+                "segment",
+                str(FIXTURES / "isolated_box.pcd"),
+                "--out-dir",
+                str(out),
+                "--json",
+                "--wait",
+            ],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
         )
         time.sleep(1.5)
         assert waiting.poll() is None  # still waiting for the lock
@@ -343,7 +396,10 @@ def test_sigterm_stops_a_batch_with_its_summary_and_exit_143(tmp_path: Path) -> 
     frames = _many_frames()
     proc = subprocess.Popen(
         [sys.executable, "-m", "clearcli.cli", "plan", *frames, "--json", "--jobs", "2"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
     )
     time.sleep(4.0)
     proc.send_signal(signal.SIGTERM)
@@ -365,7 +421,9 @@ def test_workers_die_with_a_killed_batch(tmp_path: Path) -> None:
     frames = _many_frames()
     proc = subprocess.Popen(
         [sys.executable, "-m", "clearcli.cli", "plan", *frames, "--json", "--jobs", "2"],
-        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        start_new_session=True,
     )
     time.sleep(3.0)
     assert len(_alive_in_group(proc.pid)) >= 3  # the batch and its two workers (and a tracker)
@@ -389,8 +447,11 @@ def test_walking_a_folder_skips_fifos_and_link_cycles(tmp_path: Path) -> None:
     assert res.returncode == 0, res.stderr
     rows, summary = lines_of(res.stdout)
     skipped = {Path(r["source"]).name: r["skipped"] for r in rows if "skipped" in r}
-    assert skipped == {"recorder.pcd": "a FIFO (named pipe)", "again": "a link to a folder already searched",
-                       "loop.pcd": "a symbolic link loop"}
+    assert skipped == {
+        "recorder.pcd": "a FIFO (named pipe)",
+        "again": "a link to a folder already searched",
+        "loop.pcd": "a symbolic link loop",
+    }
     assert [Path(r["source"]).name for r in rows if "document" in r] == ["a.pcd"]  # found once
     assert summary["skipped"] == 3 and summary["failed"] == 0
 
@@ -422,7 +483,9 @@ def test_a_signal_during_start_up_still_gives_the_summary_and_its_exit_code(tmp_
         out = tmp_path / f"out-{code}"
         proc = subprocess.Popen(
             [sys.executable, "-m", "clearcli.cli", "plan", str(FIXTURES), "--json", "--out-dir", str(out)],
-            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
         )
         deadline = time.time() + 10
         # SIGTERM's handler, not SIGINT's: Python catches SIGINT from its own start
@@ -433,6 +496,10 @@ def test_a_signal_during_start_up_still_gives_the_summary_and_its_exit_code(tmp_
         assert proc.returncode == code, stderr
         assert "Traceback" not in stderr and "Exception" not in stderr and word in stderr
         rows, summary = lines_of(stdout)
-        assert summary["interrupted"] and summary["done"] == len(rows) and summary["not_done"] == summary["frames"] - len(rows)
+        assert (
+            summary["interrupted"]
+            and summary["done"] == len(rows)
+            and summary["not_done"] == summary["frames"] - len(rows)
+        )
         if out.exists():  # no temporaries
             assert [p.name for p in out.iterdir() if p.name.startswith(".")] in ([], [".clear-batch.lock"])

@@ -16,8 +16,20 @@ from helpers.evaluate import _labels
 
 def test_evaluate_dataset_on_the_given_mosd_frames(tmp_path: Path) -> None:
     mosd = shared_path("mosd")
-    res = clear("evaluate", "dataset", mosd, "--groups", "mosd", "--json", "--jobs", "2",
-                "--csv", tmp_path / "scores.csv", "--png", tmp_path / "f1.png")
+    res = clear(
+        "evaluate",
+        "dataset",
+        mosd,
+        "--groups",
+        "mosd",
+        "--json",
+        "--jobs",
+        "2",
+        "--csv",
+        tmp_path / "scores.csv",
+        "--png",
+        tmp_path / "f1.png",
+    )
     assert res.returncode == 0, res.stderr
     rows, summary = lines_of(res.stdout)
     assert len(rows) == 50 and summary["failed"] == 0
@@ -26,7 +38,12 @@ def test_evaluate_dataset_on_the_given_mosd_frames(tmp_path: Path) -> None:
     ev = summary["evaluation"]
     assert ev["all"]["frames"] == 50 and ev["all"]["mean_f1"] >= 0.95
     assert {g: m["frames"] for g, m in ev["groups"].items()} == {
-        "boxes": 17, "stacked": 8, "occluded": 8, "cylindrical": 12, "mixed (test)": 3, "complex (test)": 2
+        "boxes": 17,
+        "stacked": 8,
+        "occluded": 8,
+        "cylindrical": 12,
+        "mixed (test)": 3,
+        "complex (test)": 2,
     }
     assert len((tmp_path / "scores.csv").read_text().splitlines()) == 51
     assert (tmp_path / "f1.png").read_bytes()[:4] == b"\x89PNG"
@@ -92,8 +109,15 @@ def test_dataset_reports_the_osd_metrics_per_frame_and_in_the_means() -> None:
     lines = [json.loads(x) for x in res.stdout.splitlines()]
     docs, summary = [ln["document"] for ln in lines[:-1]], lines[-1]["evaluation"]["all"]
     for d in docs:
-        for k in ("overlap_precision", "overlap_recall", "overlap_f", "boundary_precision", "boundary_recall",
-                  "boundary_f", "objects_f75"):
+        for k in (
+            "overlap_precision",
+            "overlap_recall",
+            "overlap_f",
+            "boundary_precision",
+            "boundary_recall",
+            "boundary_f",
+            "objects_f75",
+        ):
             assert 0.0 <= d[k] <= 1.0, (k, d[k])  # organized mOSD frames: Boundary too
     assert summary["mean_boundary_f"] == round(sum(d["boundary_f"] for d in docs) / 2, 4)
     assert summary["mean_overlap_f"] == round(sum(d["overlap_f"] for d in docs) / 2, 4)

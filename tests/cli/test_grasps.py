@@ -46,8 +46,19 @@ def test_plan_files_with_a_rim_grasp_validate_and_pinch_only_files_are_the_thesi
         out.mkdir()
         files = [out / "domain.pddl", out / "problem.pddl", out / "plan.txt"]
         res = clear(
-            "plan", str(pcd), "--robot", "panda", "--grasps", grasps, "--json",
-            "--domain", str(files[0]), "--problem", str(files[1]), "-o", str(files[2]),
+            "plan",
+            str(pcd),
+            "--robot",
+            "panda",
+            "--grasps",
+            grasps,
+            "--json",
+            "--domain",
+            str(files[0]),
+            "--problem",
+            str(files[1]),
+            "-o",
+            str(files[2]),
         )
         doc = json.loads(res.stdout)
         assert ("(grasp_rim o0)" in doc["actions"] or "(grasp_rim o1)" in doc["actions"]) == rim, doc["actions"]

@@ -51,16 +51,29 @@ def test_single_frame_flags_intrinsics_color_and_depth_scale(tmp_path: Path) -> 
     shutil.copy(src / "uois_0003_depth.png", depth)
     res = clear("segment", depth, "--json")
     assert res.returncode == 3 and "--intrinsics" in res.stderr
-    res = clear("segment", depth, "--json", "--intrinsics", "612.937 613.173 322.549 248.158",
-                "--color", src / "uois_0003_color.png")
+    res = clear(
+        "segment",
+        depth,
+        "--json",
+        "--intrinsics",
+        "612.937 613.173 322.549 248.158",
+        "--color",
+        src / "uois_0003_color.png",
+    )
     assert res.returncode == 0, res.stderr
     want = clear("segment", shared_path("scenes/uois_realsense/uois_image_0003.pcd"), "--json")
     assert json.loads(res.stdout)["objects"] == json.loads(want.stdout)["objects"]
-    for bad in (("--intrinsics", "0 613 322 248"), ("--intrinsics", "nope.yaml"), ("--depth-scale", "0"),
-                ("--depth-scale", "nan")):
+    for bad in (
+        ("--intrinsics", "0 613 322 248"),
+        ("--intrinsics", "nope.yaml"),
+        ("--depth-scale", "0"),
+        ("--depth-scale", "nan"),
+    ):
         res = clear("segment", depth, *bad)
         assert res.returncode == 3 and len(res.stderr.strip().splitlines()) == 1, (bad, res.stderr)
-    res = clear("segment", shared_path("scenes/uois_realsense/uois_image_0003.pcd"), "--color", src / "uois_0003_color.png")
+    res = clear(
+        "segment", shared_path("scenes/uois_realsense/uois_image_0003.pcd"), "--color", src / "uois_0003_color.png"
+    )
     assert res.returncode == 3 and "only a depth image takes a colour image" in res.stderr
 
 

@@ -6,7 +6,6 @@ import shutil
 from pathlib import Path
 
 import pytest
-
 from helpers import FIXTURES, REPO
 from helpers import run_clear as clear
 
@@ -45,8 +44,12 @@ def test_a_full_stdout_is_one_line_exit_8() -> None:
     import sys
 
     with open("/dev/full", "w") as full:
-        proc = subprocess.run([sys.executable, "-m", "clearcli.cli", "info", str(REPO / "fixtures" / "isolated_box.pcd"),
-                               "--json"], stdout=full, stderr=subprocess.PIPE, text=True)
+        proc = subprocess.run(
+            [sys.executable, "-m", "clearcli.cli", "info", str(REPO / "fixtures" / "isolated_box.pcd"), "--json"],
+            stdout=full,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
     assert proc.returncode == 8
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and "No space left on device" in lines[0]
@@ -66,9 +69,24 @@ def test_sigterm_stops_a_single_call_with_143(tmp_path: Path) -> None:
     import time
 
     out = tmp_path / "sim.mcap"
-    proc = subprocess.Popen([sys.executable, "-m", "clearcli.cli", "simulate", str(out), "--scene", "dense",
-                             "--objects", "16", "--max-actions", "40"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True)
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "clearcli.cli",
+            "simulate",
+            str(out),
+            "--scene",
+            "dense",
+            "--objects",
+            "16",
+            "--max-actions",
+            "40",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     time.sleep(2.5)
     proc.send_signal(signal.SIGTERM)
     _, err = proc.communicate(timeout=60)

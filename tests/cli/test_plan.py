@@ -20,7 +20,11 @@ DOMAIN = REPO / "pddl" / "domain.pddl"
 def clear(*args: str, cwd: Path | None = None, env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
         [sys.executable, "-m", "clearcli.cli", *map(str, args)],
-        capture_output=True, text=True, timeout=300, cwd=cwd, env=env,
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=cwd,
+        env=env,
     )
 
 
@@ -121,7 +125,9 @@ def test_object_two_metres_away_unreachable_rest_planned(scenes: dict[str, Path]
     doc = json.loads(res.stdout)
     assert doc["status"] == "partial" and doc["actions"] == [f"(grasp {doc['goal'][0]})"] and len(doc["goal"]) == 1
     # (at 2.4 m the far box may come out in pieces: each is unreachable, none is planned)
-    assert doc["left"] and all(x["reason"] == "unreachable" and "beyond the arm's reach" in x["detail"] for x in doc["left"])
+    assert doc["left"] and all(
+        x["reason"] == "unreachable" and "beyond the arm's reach" in x["detail"] for x in doc["left"]
+    )
     assert validate_files(DOMAIN, prob, out)
     # the problem file gives each object's centroid (sensor frame): the ones left stand
     # more than 2 m from the shoulder, the one planned within reach
@@ -159,8 +165,17 @@ def test_non_unit_costs_write_their_domain(tmp_path: Path) -> None:
     settings.write_text("[predicates]\nclearance_cost = true\n")
     out, prob, dom = tmp_path / "plan.txt", tmp_path / "problem.pddl", tmp_path / "domain.pddl"
     res = clear(
-        "plan", FIXTURES / "clutter10.pcd", "--settings", settings, "--json",
-        "-o", out, "--problem", prob, "--domain", dom,
+        "plan",
+        FIXTURES / "clutter10.pcd",
+        "--settings",
+        settings,
+        "--json",
+        "-o",
+        out,
+        "--problem",
+        prob,
+        "--domain",
+        dom,
     )
     assert res.returncode in (0, 10), res.stderr
     doc = json.loads(res.stdout)

@@ -16,10 +16,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
-from helpers import FIXTURES
+from helpers import FIXTURES, shared_path
 from helpers import run_clear as clear
-from helpers import shared_path
 
 BOX = FIXTURES / "box_on_box.pcd"
 
@@ -49,7 +47,8 @@ def _png(path: Path, width: int, height: int, bit_depth: int, rows: int | None =
     path.write_bytes(
         b"\x89PNG\r\n\x1a\n"
         + _png_chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, bit_depth, 0, 0, 0, 0))
-        + _png_chunk(b"IDAT", body) + _png_chunk(b"IEND", b"")
+        + _png_chunk(b"IDAT", body)
+        + _png_chunk(b"IEND", b"")
     )
     return path
 
@@ -95,8 +94,9 @@ def pair(tmp_path: Path) -> Path:
     return tmp_path
 
 
-@pytest.mark.parametrize("flag, name", [("-o", "uois_0003_color.png"), ("--png", "camera_info.yaml"),
-                                        ("--problem", "camera_info.yaml")])
+@pytest.mark.parametrize(
+    "flag, name", [("-o", "uois_0003_color.png"), ("--png", "camera_info.yaml"), ("--problem", "camera_info.yaml")]
+)
 def test_an_output_naming_a_paired_input_is_refused_even_with_force(pair: Path, flag: str, name: str) -> None:
     before = _digest(pair)
     line = _one_line(clear("plan", pair / "uois_0003_depth.png", flag, pair / name, "--force"), 8)
@@ -112,8 +112,19 @@ def test_an_output_naming_the_settings_file_or_the_urdf_is_refused(tmp_path: Pat
     urdf = tmp_path / "arm.urdf"
     shutil.copy(Path(__file__).resolve().parents[2] / "clearcli" / "robot" / "panda.urdf", urdf)
     before = urdf.read_bytes()
-    res = clear("plan", BOX, "--set", f"robot.urdf={urdf}", "--set", "robot.base_frame=panda_link0",
-                "--set", "robot.flange_frame=panda_link8", "--png", urdf, "--force")
+    res = clear(
+        "plan",
+        BOX,
+        "--set",
+        f"robot.urdf={urdf}",
+        "--set",
+        "robot.base_frame=panda_link0",
+        "--set",
+        "robot.flange_frame=panda_link8",
+        "--png",
+        urdf,
+        "--force",
+    )
     _one_line(res, 8)
     assert urdf.read_bytes() == before
 
@@ -121,8 +132,18 @@ def test_an_output_naming_the_settings_file_or_the_urdf_is_refused(tmp_path: Pat
 def test_a_batch_output_naming_an_intrinsics_file_beside_a_frame_is_refused(pair: Path) -> None:
     # a frame named `camera` writes its mark camera.json, which is the intrinsics file
     # the depth image beside it reads
-    (pair / "camera.json").write_text(json.dumps({"fx": 612.937, "fy": 613.173, "x_offset": 322.549,
-                                                 "y_offset": 248.158, "img_width": 640, "img_height": 480}))
+    (pair / "camera.json").write_text(
+        json.dumps(
+            {
+                "fx": 612.937,
+                "fy": 613.173,
+                "x_offset": 322.549,
+                "y_offset": 248.158,
+                "img_width": 640,
+                "img_height": 480,
+            }
+        )
+    )
     (pair / "camera_info.yaml").unlink()
     shutil.copy(BOX, pair / "camera.pcd")
     before = _digest(pair)
@@ -227,8 +248,9 @@ def small_pair(tmp_path: Path) -> Path:
     depth = np.full((48, 64), 1000, dtype=np.uint16)
     Image.fromarray(depth).save(tmp_path / "f_depth.png")
     Image.fromarray(np.zeros((48, 64, 3), dtype=np.uint8)).save(tmp_path / "f_color.png")
-    (tmp_path / "camera_params.json").write_text(json.dumps(
-        {"fx": 52.5, "fy": 52.5, "x_offset": 31.5, "y_offset": 23.5, "img_width": 64, "img_height": 48}))
+    (tmp_path / "camera_params.json").write_text(
+        json.dumps({"fx": 52.5, "fy": 52.5, "x_offset": 31.5, "y_offset": 23.5, "img_width": 64, "img_height": 48})
+    )
     return tmp_path
 
 
@@ -252,14 +274,17 @@ def test_an_npy_whose_header_is_cut_is_bad_input(tmp_path: Path) -> None:
 
 def test_an_intrinsics_number_too_large_for_a_float_is_bad_input(small_pair: Path) -> None:
     (small_pair / "camera_params.json").write_text(
-        '{"fx": 52.5, "fy": 52.5, "x_offset": 31.5, "y_offset": ' + "9" * 400 + ', "img_width": 64, "img_height": 48}')
+        '{"fx": 52.5, "fy": 52.5, "x_offset": 31.5, "y_offset": ' + "9" * 400 + ', "img_width": 64, "img_height": 48}'
+    )
     assert "cy = 999" in _one_line(clear("info", small_pair / "f_depth.png"), 3)  # y_offset is cy
 
 
 def test_a_fifo_given_as_colour_or_settings_is_refused_not_waited_on(small_pair: Path) -> None:
     fifo = small_pair / "pipe"
     os.mkfifo(fifo)
-    assert "not a regular file" in _one_line(clear("segment", small_pair / "f_depth.png", "--color", fifo, timeout=60), 3)
+    assert "not a regular file" in _one_line(
+        clear("segment", small_pair / "f_depth.png", "--color", fifo, timeout=60), 3
+    )
     assert "not a regular file" in _one_line(clear("segment", BOX, "--settings", fifo, timeout=60), 3)
 
 

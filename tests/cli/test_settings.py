@@ -61,7 +61,11 @@ def test_set_and_settings_reach_the_simulated_world(tmp_path: Path) -> None:
     runs = {}
     file = tmp_path / "slow.toml"
     file.write_text("[world]\nframe_interval_s = 2.5\n")
-    for key, extra in (("default", ()), ("set", ("--set", "world.frame_interval_s=2.5")), ("file", ("--settings", file))):
+    for key, extra in (
+        ("default", ()),
+        ("set", ("--set", "world.frame_interval_s=2.5")),
+        ("file", ("--settings", file)),
+    ):
         out = tmp_path / f"{key}.mcap"
         proc = clear("simulate", out, "--scene", "isolated_box", "--json", *extra)
         assert proc.returncode == 0, proc.stderr

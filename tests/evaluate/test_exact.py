@@ -16,7 +16,7 @@ def test_each_kind_worked_by_hand() -> None:
     # truth: A = points 0-9, B = 10-19, C = 20-29, D = 30-39, E = 40-43, the table 44-63
     true = _labels((10, 10), (20, 10), (30, 10), (40, 10), (50, 4), (1, 20))
     pred = np.zeros(64, dtype=np.int64)
-    pred[0:20] = 10   # A and B in one segment: both merged
+    pred[0:20] = 10  # A and B in one segment: both merged
     pred[20:26] = 30  # C in two pieces, 6 and 4: split, although the larger has IoU 0.6 (a
     pred[26:30] = 70  # planner would see two objects)
     pred[30:39] = 40  # D: 9 of its 10 points in one segment (IoU 0.9): right

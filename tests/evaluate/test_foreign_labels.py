@@ -10,7 +10,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from helpers import REPO, shared_path
 
 LABELS = sorted((REPO / "benchmarks" / "foreign").glob("*.toml"))

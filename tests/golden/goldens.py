@@ -25,8 +25,9 @@ import os
 import subprocess
 import sys
 import tempfile
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 REPO = Path(__file__).resolve().parents[2]
 DATA = Path(__file__).resolve().parent / "data"
@@ -35,8 +36,15 @@ CLEAR = [str(Path(sys.executable).with_name("clear"))]
 
 # Keys dropped wherever they appear: what a run varies in without the data changing.
 VOLATILE = {
-    "timings_s", "time_s", "mean_time_s", "wall_s", "frames_per_s", "ray_init_s", "backend",
-    "clear", "settings_digest",
+    "timings_s",
+    "time_s",
+    "mean_time_s",
+    "wall_s",
+    "frames_per_s",
+    "ray_init_s",
+    "backend",
+    "clear",
+    "settings_digest",
 }
 SIM_SEEDS = range(10)
 

@@ -5,7 +5,6 @@ record`) in the same commit and summarises the diff in its note."""
 from __future__ import annotations
 
 import pytest
-
 from golden import goldens
 from helpers import shared_path
 

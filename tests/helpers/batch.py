@@ -15,7 +15,10 @@ FRAMES = [FIXTURES / n for n in ("isolated_box.pcd", "two_touching_boxes.pcd", "
 def clear(*args: Any, env: dict[str, str] | None = None, timeout: float = 600) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
         [sys.executable, "-m", "clearcli.cli", *map(str, args)],
-        capture_output=True, text=True, timeout=timeout, env=env,
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        env=env,
     )
 
 

@@ -10,8 +10,11 @@ def solve(*args, **given):
     """`solving.solve` with [plan]'s search bounds unless the test gives its own."""
     p = PlanSettings()
     bounds = dict(
-        time_limit_s=p.time_limit_s, optimal_max_objects=p.optimal_max_objects, optimal_time_s=p.optimal_time_s,
-        anytime_time_s=p.anytime_time_s, formulation=p.formulation,
+        time_limit_s=p.time_limit_s,
+        optimal_max_objects=p.optimal_max_objects,
+        optimal_time_s=p.optimal_time_s,
+        anytime_time_s=p.anytime_time_s,
+        formulation=p.formulation,
     )
     return solving.solve(*args, **{**bounds, **given})
 

@@ -111,7 +111,9 @@ def _text_stream(fd: int, stderr: bool) -> io.TextIOWrapper:
     """A stream on ``fd`` as the interpreter makes one for a pipe."""
     raw = io.FileIO(fd, "w", closefd=False)
     return io.TextIOWrapper(
-        io.BufferedWriter(raw), encoding="utf-8", errors="backslashreplace" if stderr else "strict",
+        io.BufferedWriter(raw),
+        encoding="utf-8",
+        errors="backslashreplace" if stderr else "strict",
         line_buffering=stderr,
     )
 
@@ -239,13 +241,28 @@ def run_subprocess(args: Sequence[str], timeout_s: float = 120.0) -> Run:
     env = {k: v for k, v in os.environ.items() if k != "CLEAR_DEBUG"}
     t0 = time.perf_counter()
     try:
-        res = subprocess.run([*cmd, *map(str, args)], capture_output=True, timeout=timeout_s, cwd=REPO, env=env,
-                             stdin=subprocess.DEVNULL, check=False)
+        res = subprocess.run(
+            [*cmd, *map(str, args)],
+            capture_output=True,
+            timeout=timeout_s,
+            cwd=REPO,
+            env=env,
+            stdin=subprocess.DEVNULL,
+            check=False,
+        )
     except subprocess.TimeoutExpired as exc:
-        return Run("timeout", (exc.stdout or b"").decode("utf-8", "replace"), (exc.stderr or b"").decode("utf-8", "replace"),
-                   time.perf_counter() - t0)
-    return Run(res.returncode, res.stdout.decode("utf-8", "replace"), res.stderr.decode("utf-8", "replace"),
-               time.perf_counter() - t0)
+        return Run(
+            "timeout",
+            (exc.stdout or b"").decode("utf-8", "replace"),
+            (exc.stderr or b"").decode("utf-8", "replace"),
+            time.perf_counter() - t0,
+        )
+    return Run(
+        res.returncode,
+        res.stdout.decode("utf-8", "replace"),
+        res.stderr.decode("utf-8", "replace"),
+        time.perf_counter() - t0,
+    )
 
 
 # ----------------------------------------------------------------------------- bytes
@@ -258,8 +275,13 @@ def png_chunk(kind: bytes, body: bytes) -> bytes:
     return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body) & 0xFFFFFFFF)
 
 
-def png_encode(pixels: np.ndarray, *, extra: Sequence[tuple[bytes, bytes]] = (), colortype: int | None = None,
-               bitdepth: int | None = None) -> bytes:
+def png_encode(
+    pixels: np.ndarray,
+    *,
+    extra: Sequence[tuple[bytes, bytes]] = (),
+    colortype: int | None = None,
+    bitdepth: int | None = None,
+) -> bytes:
     """A PNG of ``pixels`` (H, W) or (H, W, C), uint8 or uint16, filter 0, one IDAT."""
     a = np.asarray(pixels)
     h, w = a.shape[:2]
@@ -272,14 +294,20 @@ def png_encode(pixels: np.ndarray, *, extra: Sequence[tuple[bytes, bytes]] = (),
     raw = np.concatenate([np.zeros((h, 1), np.uint8), rows], axis=1).tobytes()
     ihdr = struct.pack(">IIBBBBB", w, h, bitdepth, colortype, 0, 0, 0)
     body = b"".join(png_chunk(k, v) for k, v in extra)
-    return PNG_MAGIC + png_chunk(b"IHDR", ihdr) + body + png_chunk(b"IDAT", zlib.compress(raw, 6)) + png_chunk(b"IEND", b"")
+    return (
+        PNG_MAGIC
+        + png_chunk(b"IHDR", ihdr)
+        + body
+        + png_chunk(b"IDAT", zlib.compress(raw, 6))
+        + png_chunk(b"IEND", b"")
+    )
 
 
 def png_chunks(data: bytes) -> list[tuple[bytes, bytes]]:
     out, pos = [], 8
     while pos + 8 <= len(data):
-        (n,) = struct.unpack(">I", data[pos:pos + 4])
-        out.append((data[pos + 4:pos + 8], data[pos + 8:pos + 8 + n]))
+        (n,) = struct.unpack(">I", data[pos : pos + 4])
+        out.append((data[pos + 4 : pos + 8], data[pos + 8 : pos + 8 + n]))
         pos += 12 + n
     return out
 
@@ -322,17 +350,17 @@ def tiff_set_tag(data: bytes, tag: int, value: int) -> bytes:
     (ifd,) = struct.unpack("<I", b[4:8])
     if ifd + 2 > len(b):
         return data
-    (n,) = struct.unpack("<H", b[ifd:ifd + 2])
+    (n,) = struct.unpack("<H", b[ifd : ifd + 2])
     for k in range(n):
         e = ifd + 2 + 12 * k
         if e + 12 > len(b):
             break
-        t, typ = struct.unpack("<HH", b[e:e + 4])
+        t, typ = struct.unpack("<HH", b[e : e + 4])
         if t == tag:
             if typ == 3:
-                b[e + 8:e + 10] = struct.pack("<H", min(value, 0xFFFF))
+                b[e + 8 : e + 10] = struct.pack("<H", min(value, 0xFFFF))
             else:
-                b[e + 8:e + 12] = struct.pack("<I", min(value, 0xFFFFFFFF))
+                b[e + 8 : e + 12] = struct.pack("<I", min(value, 0xFFFFFFFF))
     return bytes(b)
 
 
@@ -403,10 +431,13 @@ class Materials:
         from clearcli.sim.camera import render
         from clearcli.sim.scene import Box, make_scene
 
-        scene = make_scene("harness", [
-            Box(0, 0.05, 0.04, 0.08, x_m=-0.1, y_m=0.0, yaw_rad=0.4),
-            Box(1, 0.06, 0.05, 0.06, x_m=0.1, y_m=0.05),
-        ])
+        scene = make_scene(
+            "harness",
+            [
+                Box(0, 0.05, 0.04, 0.08, x_m=-0.1, y_m=0.0, yaw_rad=0.4),
+                Box(1, 0.06, 0.05, 0.06, x_m=0.1, y_m=0.05),
+            ],
+        )
         f = w / 640 * 525.0
         cam = PinholeCamera(width=w, height=h, fx=f, fy=f, cx=(w - 1) / 2, cy=(h - 1) / 2)
         fr = render(scene, camera=cam, seed=0)
@@ -431,6 +462,7 @@ class Materials:
     def mcap_bytes(self, layout: str = "zstd") -> bytes:
         """Three 64 x 48 frames: "zstd" (the writer's default: one compressed chunk) or
         "plain" (uncompressed chunks of 4 KiB: a cut leaves whole frames before it)."""
+
         def make() -> bytes:
             fr = self.frames[SMALL]
             path = self.root / f"small-{layout}.mcap"
@@ -506,8 +538,11 @@ def _encode_depth(depth_mm: np.ndarray, fmt: str) -> bytes:
         Image.fromarray(depth_mm.astype(np.float32) / 1000.0, mode="F").save(buf, format="TIFF")
         return buf.getvalue()
     buf = io.BytesIO()
-    arr = {"npy_f32": depth_mm.astype(np.float32) / 1000.0, "npy_u16": depth_mm,
-           "npy_f64": depth_mm.astype(np.float64) / 1000.0}[fmt]
+    arr = {
+        "npy_f32": depth_mm.astype(np.float32) / 1000.0,
+        "npy_u16": depth_mm,
+        "npy_f64": depth_mm.astype(np.float64) / 1000.0,
+    }[fmt]
     np.save(buf, arr)
     return buf.getvalue()
 
@@ -527,19 +562,38 @@ def intrinsics_files(k: tuple[float, float, float, float], size: tuple[int, int]
     fx, fy, cx, cy = k
     w, h = size
     return {
-        "ros_yaml": ("camera_info.yaml", {
-            "image_width": w, "image_height": h, "camera_name": "cam",
-            "camera_matrix": {"rows": 3, "cols": 3, "data": [fx, 0.0, cx, 0.0, fy, cy, 0.0, 0.0, 1.0]},
-            "distortion_model": "plumb_bob",
-            "distortion_coefficients": {"rows": 1, "cols": 5, "data": [0.0] * 5},
-        }),
-        "camera_info": ("camera_info.yaml", {
-            "width": w, "height": h, "distortion_model": "plumb_bob", "d": [0.0] * 5,
-            "k": [fx, 0.0, cx, 0.0, fy, cy, 0.0, 0.0, 1.0], "binning_x": 0, "binning_y": 0,
-            "roi": {"x_offset": 0, "y_offset": 0, "height": 0, "width": 0, "do_rectify": False},
-        }),
-        "open3d": ("intrinsics.json", {"width": w, "height": h, "intrinsic_matrix": [fx, 0.0, 0.0, 0.0, fy, 0.0, cx, cy, 1.0]}),
-        "uois": ("camera_params.json", {"fx": fx, "fy": fy, "x_offset": cx, "y_offset": cy, "img_width": w, "img_height": h}),
+        "ros_yaml": (
+            "camera_info.yaml",
+            {
+                "image_width": w,
+                "image_height": h,
+                "camera_name": "cam",
+                "camera_matrix": {"rows": 3, "cols": 3, "data": [fx, 0.0, cx, 0.0, fy, cy, 0.0, 0.0, 1.0]},
+                "distortion_model": "plumb_bob",
+                "distortion_coefficients": {"rows": 1, "cols": 5, "data": [0.0] * 5},
+            },
+        ),
+        "camera_info": (
+            "camera_info.yaml",
+            {
+                "width": w,
+                "height": h,
+                "distortion_model": "plumb_bob",
+                "d": [0.0] * 5,
+                "k": [fx, 0.0, cx, 0.0, fy, cy, 0.0, 0.0, 1.0],
+                "binning_x": 0,
+                "binning_y": 0,
+                "roi": {"x_offset": 0, "y_offset": 0, "height": 0, "width": 0, "do_rectify": False},
+            },
+        ),
+        "open3d": (
+            "intrinsics.json",
+            {"width": w, "height": h, "intrinsic_matrix": [fx, 0.0, 0.0, 0.0, fy, 0.0, cx, cy, 1.0]},
+        ),
+        "uois": (
+            "camera_params.json",
+            {"fx": fx, "fy": fy, "x_offset": cx, "y_offset": cy, "img_width": w, "img_height": h},
+        ),
     }
 
 
@@ -572,8 +626,9 @@ def default_log_frame(fr: Frame2D, k: int) -> dict[str, Any]:
     }
 
 
-def write_image_mcap(path: Path, frames: list[dict[str, Any]], ns: str = "/camera",
-                     depth_topic: str | None = None, plain: bool = False) -> None:
+def write_image_mcap(
+    path: Path, frames: list[dict[str, Any]], ns: str = "/camera", depth_topic: str | None = None, plain: bool = False
+) -> None:
     """Frames of dicts {t, info, color, depth} (message dicts, any of them None) as ROS 2
     CameraInfo + Image messages, in that order per frame."""
     from helpers.rgbd_logs import CAMERA_INFO_MSGDEF, IMAGE_MSGDEF
@@ -593,10 +648,13 @@ def write_image_mcap(path: Path, frames: list[dict[str, Any]], ns: str = "/camer
             if f.get("info") is not None:
                 writer.write_message(f"{ns}/depth/camera_info", camera, f["info"], log_time=t, publish_time=t)
             if f.get("color") is not None:
-                writer.write_message(f"{ns}/color/image_raw", image, f["color"], log_time=t + 1000, publish_time=t + 1000)
+                writer.write_message(
+                    f"{ns}/color/image_raw", image, f["color"], log_time=t + 1000, publish_time=t + 1000
+                )
             if f.get("depth") is not None:
-                writer.write_message(depth_topic or f"{ns}/depth/image_raw", image, f["depth"], log_time=t + 2000,
-                                     publish_time=t + 2000)
+                writer.write_message(
+                    depth_topic or f"{ns}/depth/image_raw", image, f["depth"], log_time=t + 2000, publish_time=t + 2000
+                )
         writer.finish()
 
 
@@ -705,12 +763,44 @@ class Ctx:
 
 # odd numbers for numeric fields: (text for TOML/YAML/strings, Python value)
 SPECIAL_NUMBERS: list[tuple[str, Any]] = [
-    ("nan", float("nan")), ("inf", float("inf")), ("-inf", float("-inf")), ("0", 0), ("-0.0", -0.0), ("-1", -1),
-    ("-1e-9", -1e-9), ("1e-300", 1e-300), ("5e-324", 5e-324), ("1e9", 1e9), ("1e308", 1e308), ("1e400", float("inf")),
-    ("1" + "0" * 400, 10 ** 400), ("9223372036854775808", 2 ** 63), ("-9223372036854775809", -(2 ** 63) - 1),
-    ("4294967296", 2 ** 32), ("0.5", 0.5), ("1.5", 1.5), ("3", 3), ("65535", 65535),
+    ("nan", float("nan")),
+    ("inf", float("inf")),
+    ("-inf", float("-inf")),
+    ("0", 0),
+    ("-0.0", -0.0),
+    ("-1", -1),
+    ("-1e-9", -1e-9),
+    ("1e-300", 1e-300),
+    ("5e-324", 5e-324),
+    ("1e9", 1e9),
+    ("1e308", 1e308),
+    ("1e400", float("inf")),
+    ("1" + "0" * 400, 10**400),
+    ("9223372036854775808", 2**63),
+    ("-9223372036854775809", -(2**63) - 1),
+    ("4294967296", 2**32),
+    ("0.5", 0.5),
+    ("1.5", 1.5),
+    ("3", 3),
+    ("65535", 65535),
 ]
-ODD_VALUES: list[Any] = ["abc", "", "1e3", "0x10", "nan", None, [], [1, 2], {}, {"a": 1}, True, False, "١٢٣", "1_000", " 5 "]
+ODD_VALUES: list[Any] = [
+    "abc",
+    "",
+    "1e3",
+    "0x10",
+    "nan",
+    None,
+    [],
+    [1, 2],
+    {},
+    {"a": 1},
+    True,
+    False,
+    "١٢٣",
+    "1_000",
+    " 5 ",
+]
 
 
 def odd_number(ctx: Ctx) -> tuple[str, Any]:
@@ -744,11 +834,30 @@ def gen_depth(ctx: Ctx) -> None:
     data = ctx.mat.depth_bytes(fmt, size)
     name = "f_depth" + DEPTH_SUFFIX[fmt]
     ctx.tag(fmt)
-    mutation = ctx.pick({
-        "valid": 0.03, "truncate": 0.16, "flip": 0.14, "ihdr_huge": 0.08, "ihdr_size": 0.08, "ihdr_format": 0.06,
-        "idat_bad_crc_fixed": 0.04, "values": 0.12, "npy_header": 0.07, "empty": 0.02, "directory": 0.02,
-        "wrong_content": 0.08, "bomb_text": 0.02, "bomb_idat": 0.01, "shapes": 0.05, "tiff_tags": 0.02,
-    }) if not ctx.case.heavy else ctx.pick({"valid": 0.2, "values": 0.8})
+    mutation = (
+        ctx.pick(
+            {
+                "valid": 0.03,
+                "truncate": 0.16,
+                "flip": 0.14,
+                "ihdr_huge": 0.08,
+                "ihdr_size": 0.08,
+                "ihdr_format": 0.06,
+                "idat_bad_crc_fixed": 0.04,
+                "values": 0.12,
+                "npy_header": 0.07,
+                "empty": 0.02,
+                "directory": 0.02,
+                "wrong_content": 0.08,
+                "bomb_text": 0.02,
+                "bomb_idat": 0.01,
+                "shapes": 0.05,
+                "tiff_tags": 0.02,
+            }
+        )
+        if not ctx.case.heavy
+        else ctx.pick({"valid": 0.2, "values": 0.8})
+    )
     ctx.tag(mutation)
     path = ctx.dir / name
     if mutation == "valid":
@@ -763,18 +872,32 @@ def gen_depth(ctx: Ctx) -> None:
         data, how = flip_bytes(data, ctx.rng, 2, start=min(8, len(data) - 1))
         ctx.note(f"{fmt} depth (no PNG header to change): {how}")
     elif mutation == "ihdr_huge":
-        w, h = ctx.choice([(100000, 100000), (16385, 1), (1, 16385), (6000, 6000), (70000, 2), (2 ** 31 - 1, 2 ** 31 - 1),
-                           (2 ** 32 - 1, 1), (40000, 40000)])
+        w, h = ctx.choice(
+            [
+                (100000, 100000),
+                (16385, 1),
+                (1, 16385),
+                (6000, 6000),
+                (70000, 2),
+                (2**31 - 1, 2**31 - 1),
+                (2**32 - 1, 1),
+                (40000, 40000),
+            ]
+        )
         data = png_set_ihdr(data, width=w, height=h)
         ctx.tag("bomb")
         ctx.note(f"png depth, IHDR says {w}x{h} (CRC recomputed)")
     elif mutation == "ihdr_size":
         w0, h0 = size
-        w, h = ctx.choice([(w0 * 2, h0), (w0, h0 + 1), (w0 - 1, h0), (1, 1), (0, h0), (w0, 0), (h0, w0), (w0 // 2, h0 * 2)])
+        w, h = ctx.choice(
+            [(w0 * 2, h0), (w0, h0 + 1), (w0 - 1, h0), (1, 1), (0, h0), (w0, 0), (h0, w0), (w0 // 2, h0 * 2)]
+        )
         data = png_set_ihdr(data, width=w, height=h)
         ctx.note(f"png depth, IHDR size {w}x{h} for {w0}x{h0} data (CRC recomputed)")
     elif mutation == "ihdr_format":
-        bd, ct = ctx.choice([(8, 0), (1, 0), (4, 0), (16, 2), (16, 4), (8, 3), (16, 6), (3, 0), (32, 0), (16, 1), (8, 7)])
+        bd, ct = ctx.choice(
+            [(8, 0), (1, 0), (4, 0), (16, 2), (16, 4), (8, 3), (16, 6), (3, 0), (32, 0), (16, 1), (8, 7)]
+        )
         inter = ctx.choice([0, 0, 1, 2])
         data = png_set_ihdr(data, bitdepth=bd, colortype=ct, interlace=inter)
         ctx.note(f"png depth, IHDR bit depth {bd}, colour type {ct}, interlace {inter} (CRC recomputed)")
@@ -791,11 +914,24 @@ def gen_depth(ctx: Ctx) -> None:
         ctx.note(f"png depth, IDAT {how} (CRC recomputed)")
     elif mutation == "values":
         arr = fr.depth_mm.astype(np.float32) / 1000.0
-        special = ctx.choice(["nan", "inf", "-inf", "neg", "zero", "huge", "tiny", "max16", "noise", "one_pixel", "all_nan"])
+        special = ctx.choice(
+            ["nan", "inf", "-inf", "neg", "zero", "huge", "tiny", "max16", "noise", "one_pixel", "all_nan"]
+        )
         frac = ctx.choice([0.01, 0.2, 1.0])
         mask = ctx.np.random(arr.shape) < frac
-        value = {"nan": np.nan, "inf": np.inf, "-inf": -np.inf, "neg": -0.5, "zero": 0.0, "huge": 3e38, "tiny": 1e-40,
-                 "max16": 65.535, "noise": None, "one_pixel": None, "all_nan": np.nan}[special]
+        value = {
+            "nan": np.nan,
+            "inf": np.inf,
+            "-inf": -np.inf,
+            "neg": -0.5,
+            "zero": 0.0,
+            "huge": 3e38,
+            "tiny": 1e-40,
+            "max16": 65.535,
+            "noise": None,
+            "one_pixel": None,
+            "all_nan": np.nan,
+        }[special]
         if special == "noise":
             arr = arr + ctx.np.normal(0, 0.05, arr.shape).astype(np.float32)
         elif special == "one_pixel":
@@ -819,36 +955,41 @@ def gen_depth(ctx: Ctx) -> None:
         else:
             buf = io.BytesIO()
             with np.errstate(invalid="ignore", over="ignore"):
-                out = (np.nan_to_num(arr * 1000, nan=0, posinf=65535, neginf=0).clip(0, 65535).astype(np.uint16)
-                       if fmt == "npy_u16" else arr.astype(np.float64 if fmt == "npy_f64" else np.float32))
+                out = (
+                    np.nan_to_num(arr * 1000, nan=0, posinf=65535, neginf=0).clip(0, 65535).astype(np.uint16)
+                    if fmt == "npy_u16"
+                    else arr.astype(np.float64 if fmt == "npy_f64" else np.float32)
+                )
             np.save(buf, out)
             data = buf.getvalue()
     elif mutation == "npy_header":
         payload = (fr.depth_mm.astype(np.float32) / 1000.0).tobytes()
-        header = ctx.choice([
-            {"descr": "<f4", "fortran_order": False, "shape": (100000, 100000)},
-            {"descr": "<f4", "fortran_order": False, "shape": (size[1] * 2, size[0])},
-            {"descr": "<f4", "fortran_order": True, "shape": (size[1], size[0])},
-            {"descr": "<f4", "fortran_order": False, "shape": (0, size[0])},
-            {"descr": "<f4", "fortran_order": False, "shape": (size[1], size[0], 0)},
-            {"descr": "<f4", "fortran_order": False, "shape": (-1, size[0])},
-            {"descr": "|O", "fortran_order": False, "shape": (size[1], size[0])},
-            {"descr": "<c8", "fortran_order": False, "shape": (size[1], size[0] // 2)},
-            {"descr": "<U1", "fortran_order": False, "shape": (size[1], size[0])},
-            {"descr": "|b1", "fortran_order": False, "shape": (size[1], size[0] * 4)},
-            {"descr": ">f4", "fortran_order": False, "shape": (size[1], size[0])},
-            {"descr": "<f2", "fortran_order": False, "shape": (size[1], size[0] * 2)},
-            {"descr": "|V4", "fortran_order": False, "shape": (size[1], size[0])},
-            {"descr": [("a", "<f4")], "fortran_order": False, "shape": (size[1], size[0])},
-            {"descr": "<f4", "fortran_order": False, "shape": (size[1], size[0], 1, 1)},
-            {"descr": "<f4", "fortran_order": False, "shape": ()},
-            {"descr": "<f4", "fortran_order": False, "shape": (2 ** 62, 2)},
-            "{'descr': '<f4', 'fortran_order': False, 'shape': (48, 64), }" + " " * 5000,
-            "{'descr': '<f4', 'fortran_order': False, 'shape': (48, 64)",
-            "[1, 2, 3]",
-            "{'descr': '<f4', 'fortran_order': False, 'shape': (1e9, 64), }",
-            "{'descr': '<f4', 'fortran_order': False, 'shape': ('a', 64), }",
-        ])
+        header = ctx.choice(
+            [
+                {"descr": "<f4", "fortran_order": False, "shape": (100000, 100000)},
+                {"descr": "<f4", "fortran_order": False, "shape": (size[1] * 2, size[0])},
+                {"descr": "<f4", "fortran_order": True, "shape": (size[1], size[0])},
+                {"descr": "<f4", "fortran_order": False, "shape": (0, size[0])},
+                {"descr": "<f4", "fortran_order": False, "shape": (size[1], size[0], 0)},
+                {"descr": "<f4", "fortran_order": False, "shape": (-1, size[0])},
+                {"descr": "|O", "fortran_order": False, "shape": (size[1], size[0])},
+                {"descr": "<c8", "fortran_order": False, "shape": (size[1], size[0] // 2)},
+                {"descr": "<U1", "fortran_order": False, "shape": (size[1], size[0])},
+                {"descr": "|b1", "fortran_order": False, "shape": (size[1], size[0] * 4)},
+                {"descr": ">f4", "fortran_order": False, "shape": (size[1], size[0])},
+                {"descr": "<f2", "fortran_order": False, "shape": (size[1], size[0] * 2)},
+                {"descr": "|V4", "fortran_order": False, "shape": (size[1], size[0])},
+                {"descr": [("a", "<f4")], "fortran_order": False, "shape": (size[1], size[0])},
+                {"descr": "<f4", "fortran_order": False, "shape": (size[1], size[0], 1, 1)},
+                {"descr": "<f4", "fortran_order": False, "shape": ()},
+                {"descr": "<f4", "fortran_order": False, "shape": (2**62, 2)},
+                "{'descr': '<f4', 'fortran_order': False, 'shape': (48, 64), }" + " " * 5000,
+                "{'descr': '<f4', 'fortran_order': False, 'shape': (48, 64)",
+                "[1, 2, 3]",
+                "{'descr': '<f4', 'fortran_order': False, 'shape': (1e9, 64), }",
+                "{'descr': '<f4', 'fortran_order': False, 'shape': ('a', 64), }",
+            ]
+        )
         data = npy_bytes(header, payload)
         path = ctx.dir / "f_depth.npy"
         ctx.note(f"npy depth with header {str(header)[:90]!s}")
@@ -861,8 +1002,23 @@ def gen_depth(ctx: Ctx) -> None:
         data = None
         ctx.note(f"{name} is a directory")
     elif mutation == "wrong_content":
-        what = ctx.choice(["color_png", "color_jpeg", "mcap", "text", "pcd_header", "rgb16", "gray_alpha16", "gray8",
-                           "palette", "tiff_rgb", "tiff_int32", "tiff_multi", "png_named_tif"])
+        what = ctx.choice(
+            [
+                "color_png",
+                "color_jpeg",
+                "mcap",
+                "text",
+                "pcd_header",
+                "rgb16",
+                "gray_alpha16",
+                "gray8",
+                "palette",
+                "tiff_rgb",
+                "tiff_int32",
+                "tiff_multi",
+                "png_named_tif",
+            ]
+        )
         from PIL import Image
 
         buf = io.BytesIO()
@@ -905,10 +1061,13 @@ def gen_depth(ctx: Ctx) -> None:
         ctx.note(f"{what} given as the depth image {path.name}")
     elif mutation == "bomb_text":
         chunks = png_chunks(ctx.mat.depth_bytes("png", size))
-        payload = zlib.compress(b"\x00" * ctx.choice([2 ** 21, 2 ** 26]), 9)
+        payload = zlib.compress(b"\x00" * ctx.choice([2**21, 2**26]), 9)
         kind = ctx.choice([b"zTXt", b"iCCP", b"iTXt"])
-        body = {b"zTXt": b"Comment\x00\x00" + payload, b"iCCP": b"icc\x00\x00" + payload,
-                b"iTXt": b"Comment\x00\x01\x00\x00\x00" + payload}[kind]
+        body = {
+            b"zTXt": b"Comment\x00\x00" + payload,
+            b"iCCP": b"icc\x00\x00" + payload,
+            b"iTXt": b"Comment\x00\x01\x00\x00\x00" + payload,
+        }[kind]
         chunks.insert(1, (kind, body))
         data = png_build(chunks)
         path = ctx.dir / "f_depth.png"
@@ -922,9 +1081,21 @@ def gen_depth(ctx: Ctx) -> None:
         ctx.note(f"png depth whose IDAT really inflates to {w}x{h} zeros (within the size limit)")
     elif mutation == "shapes":
         arr = fr.depth_mm.astype(np.float32) / 1000.0
-        shaped = ctx.choice([arr.ravel(), arr[:, :, None], np.stack([arr] * 3, -1), arr[:1, :1], arr[None], arr.astype(bool),
-                             arr.astype(np.int8), arr.astype(np.complex64), np.zeros((0, 0), np.float32),
-                             (arr * 1000).astype(np.int64), (arr * 1000).astype(np.uint64) * (2 ** 40)])
+        shaped = ctx.choice(
+            [
+                arr.ravel(),
+                arr[:, :, None],
+                np.stack([arr] * 3, -1),
+                arr[:1, :1],
+                arr[None],
+                arr.astype(bool),
+                arr.astype(np.int8),
+                arr.astype(np.complex64),
+                np.zeros((0, 0), np.float32),
+                (arr * 1000).astype(np.int64),
+                (arr * 1000).astype(np.uint64) * (2**40),
+            ]
+        )
         buf = io.BytesIO()
         np.save(buf, shaped, allow_pickle=False)
         data = buf.getvalue()
@@ -934,8 +1105,20 @@ def gen_depth(ctx: Ctx) -> None:
         if fmt != "tiff":
             data = ctx.mat.depth_bytes("tiff", size)
             path = ctx.dir / "f_depth.tif"
-        tag, value = ctx.choice([(256, 100000), (257, 100000), (256, 0), (257, 1), (258, 64), (277, 4), (259, 8), (273, 2 ** 31),
-                                 (279, 2 ** 31), (278, 0)])
+        tag, value = ctx.choice(
+            [
+                (256, 100000),
+                (257, 100000),
+                (256, 0),
+                (257, 1),
+                (258, 64),
+                (277, 4),
+                (259, 8),
+                (273, 2**31),
+                (279, 2**31),
+                (278, 0),
+            ]
+        )
         data = tiff_set_tag(data, tag, value)
         ctx.tag("bomb" if value >= 100000 else "tiff_tag")
         ctx.note(f"tiff depth with tag {tag} set to {value}")
@@ -975,12 +1158,30 @@ def gen_color(ctx: Ctx) -> None:
     depth_suffix, color_suffix = "_depth", "_color"
     flags: list[str] = []
     if ctx.rng.random() < 0.15:  # the naming rule changed through [images]
-        depth_suffix, color_suffix = ctx.choice([
-            ("_d", "_c"), ("-depth", "-rgb"), (".depth", ".color"), ("_depth", ""), ("_depth", "_depth_color"),
-            ("_depth", "_x" * 200), ("_depth", "a/b"), ("_depth", "../up"), ("_depth", "_dépth"), ("_depth", "\u0000"),
-            ("", "_color"), ("_depth", "_depth"), ("_depth", " "), ("_depth", "*"),
-        ])
-        flags += ["--set", f"images.depth_suffix={json.dumps(depth_suffix)}", "--set", f"images.color_suffix={json.dumps(color_suffix)}"]
+        depth_suffix, color_suffix = ctx.choice(
+            [
+                ("_d", "_c"),
+                ("-depth", "-rgb"),
+                (".depth", ".color"),
+                ("_depth", ""),
+                ("_depth", "_depth_color"),
+                ("_depth", "_x" * 200),
+                ("_depth", "a/b"),
+                ("_depth", "../up"),
+                ("_depth", "_dépth"),
+                ("_depth", "\u0000"),
+                ("", "_color"),
+                ("_depth", "_depth"),
+                ("_depth", " "),
+                ("_depth", "*"),
+            ]
+        )
+        flags += [
+            "--set",
+            f"images.depth_suffix={json.dumps(depth_suffix)}",
+            "--set",
+            f"images.color_suffix={json.dumps(color_suffix)}",
+        ]
         ctx.tag("suffixes")
         ctx.note(f"[images] depth_suffix {depth_suffix!r}, color_suffix {color_suffix!r}")
     depth_name = f"f{depth_suffix}.png"
@@ -989,11 +1190,30 @@ def gen_color(ctx: Ctx) -> None:
         color_name = f"f_color{ext}"
     depth = ctx.write(depth_name, ctx.mat.depth_bytes("png", size))
     ctx.write("camera_params.json", dump_mapping("camera_params.json", intrinsics_files(fr.k, size)["uois"][1]))
-    mutation = ctx.pick({
-        "valid": 0.04, "truncate": 0.15, "flip": 0.12, "ihdr_huge": 0.08, "ihdr_size": 0.06, "other_size": 0.12,
-        "modes": 0.15, "empty": 0.03, "directory": 0.03, "fifo": 0.04, "wrong_content": 0.06, "bomb_idat": 0.01,
-        "bomb_text": 0.02, "garbage_pixels": 0.05, "symlink_loop": 0.02, "dangling": 0.02,
-    }) if not ctx.case.heavy else ctx.pick({"garbage_pixels": 0.5, "modes": 0.3, "other_size": 0.2})
+    mutation = (
+        ctx.pick(
+            {
+                "valid": 0.04,
+                "truncate": 0.15,
+                "flip": 0.12,
+                "ihdr_huge": 0.08,
+                "ihdr_size": 0.06,
+                "other_size": 0.12,
+                "modes": 0.15,
+                "empty": 0.03,
+                "directory": 0.03,
+                "fifo": 0.04,
+                "wrong_content": 0.06,
+                "bomb_idat": 0.01,
+                "bomb_text": 0.02,
+                "garbage_pixels": 0.05,
+                "symlink_loop": 0.02,
+                "dangling": 0.02,
+            }
+        )
+        if not ctx.case.heavy
+        else ctx.pick({"garbage_pixels": 0.5, "modes": 0.3, "other_size": 0.2})
+    )
     ctx.tag(mutation, fmt)
     from PIL import Image
 
@@ -1011,14 +1231,16 @@ def gen_color(ctx: Ctx) -> None:
         data = ctx.mat.color_bytes("png", size)
         cpath = cpath.with_suffix(".png")
         if mutation == "ihdr_huge":
-            w, h = ctx.choice([(100000, 100000), (16385, 16385), (70000, 3), (2 ** 31 - 1, 1), (30000, 30000)])
+            w, h = ctx.choice([(100000, 100000), (16385, 16385), (70000, 3), (2**31 - 1, 1), (30000, 30000)])
             ctx.tag("bomb")
         else:
             w, h = ctx.choice([(size[0] * 2, size[1]), (size[0], size[1] + 7), (1, 1), (0, 0)])
         data = png_set_ihdr(data, width=w, height=h)
         ctx.note(f"png colour, IHDR says {w}x{h} (CRC recomputed)")
     elif mutation == "other_size":
-        w, h = ctx.choice([(size[0] + 1, size[1]), (size[1], size[0]), (1, 1), (size[0] * 2, size[1] * 2), (size[0], size[1] - 1)])
+        w, h = ctx.choice(
+            [(size[0] + 1, size[1]), (size[1], size[0]), (1, 1), (size[0] * 2, size[1] * 2), (size[0], size[1] - 1)]
+        )
         img = Image.fromarray(fr.color).resize((w, h))
         buf = io.BytesIO()
         img.save(buf, format="PNG" if fmt == "png" else "JPEG")
@@ -1035,7 +1257,9 @@ def gen_color(ctx: Ctx) -> None:
             img = Image.fromarray(fr.color)
             try:
                 conv = img.convert(mode) if mode not in ("I;16B",) else Image.fromarray(fr.color[:, :, 0].astype(">u2"))
-                target = {"CMYK": "JPEG", "YCbCr": "JPEG", "LAB": "TIFF", "F": "TIFF", "I;16B": "TIFF"}.get(mode, "PNG" if fmt == "png" else "JPEG")
+                target = {"CMYK": "JPEG", "YCbCr": "JPEG", "LAB": "TIFF", "F": "TIFF", "I;16B": "TIFF"}.get(
+                    mode, "PNG" if fmt == "png" else "JPEG"
+                )
                 if target == "JPEG" and mode in ("LA", "RGBA", "P", "I", "F"):
                     target = "PNG"
                 conv.save(buf, format=target)
@@ -1065,8 +1289,13 @@ def gen_color(ctx: Ctx) -> None:
         ctx.note("the colour path is a dangling symlink")
     elif mutation == "wrong_content":
         what = ctx.choice(["depth_png", "mcap", "text", "tiff_float", "npy"])
-        data = {"depth_png": ctx.mat.depth_bytes("png", size), "mcap": ctx.mat.mcap_bytes(), "text": b"colour\n",
-                "tiff_float": ctx.mat.depth_bytes("tiff", size), "npy": ctx.mat.depth_bytes("npy_f32", size)}[what]
+        data = {
+            "depth_png": ctx.mat.depth_bytes("png", size),
+            "mcap": ctx.mat.mcap_bytes(),
+            "text": b"colour\n",
+            "tiff_float": ctx.mat.depth_bytes("tiff", size),
+            "npy": ctx.mat.depth_bytes("npy_f32", size),
+        }[what]
         ctx.note(f"{what} given as the colour image")
     elif mutation == "bomb_idat":
         w, h = ctx.choice([(5000, 5000), (4096, 4096)])
@@ -1075,15 +1304,19 @@ def gen_color(ctx: Ctx) -> None:
         ctx.note(f"colour png whose IDAT inflates to {w}x{h} RGB zeros")
     elif mutation == "bomb_text":
         chunks = png_chunks(ctx.mat.color_bytes("png", size))
-        chunks.insert(1, (b"zTXt", b"Comment\x00\x00" + zlib.compress(b"\x00" * 2 ** 26, 9)))
+        chunks.insert(1, (b"zTXt", b"Comment\x00\x00" + zlib.compress(b"\x00" * 2**26, 9)))
         data = png_build(chunks)
         ctx.tag("bomb")
         ctx.note("colour png with a zTXt chunk inflating to 64 MB")
     elif mutation == "garbage_pixels":
         noise = ctx.np.integers(0, 256, fr.color.shape, dtype=np.uint8)
         choice = ctx.choice(["noise", "black", "white", "one_colour"])
-        pixels = {"noise": noise, "black": np.zeros_like(noise), "white": np.full_like(noise, 255),
-                  "one_colour": np.broadcast_to(noise[0, 0], noise.shape).copy()}[choice]
+        pixels = {
+            "noise": noise,
+            "black": np.zeros_like(noise),
+            "white": np.full_like(noise, 255),
+            "one_colour": np.broadcast_to(noise[0, 0], noise.shape).copy(),
+        }[choice]
         data = png_encode(pixels)
         ctx.note(f"colour of {choice} pixels")
     if data is not None and not cpath.exists() and not cpath.is_symlink():
@@ -1142,9 +1375,28 @@ def gen_intrinsics(ctx: Ctx) -> None:
         elif m == "count":
             text = " ".join(parts[: ctx.choice([0, 1, 2, 3])] + ([] if ctx.rng.random() < 0.5 else parts + ["1"]))
         else:
-            text = ctx.choice(["", " ", "fx fy cx cy", "1,,2,3,4", "1 2 3 4 5", "١ ٢ ٣ ٤", "1_0 1_0 5 5", "0x1p4 16 8 8",
-                               "nan", "missing_file.yaml", "-", "/dev/null", "~", "1e5 1e5 1e5 1e5", "5 5 -1e308 1e308",
-                               "1e-300 1e-300 31.5 23.5", "3e38 3e38 3e38 3e38", "52.5 52.5 1e30 1e30"])
+            text = ctx.choice(
+                [
+                    "",
+                    " ",
+                    "fx fy cx cy",
+                    "1,,2,3,4",
+                    "1 2 3 4 5",
+                    "١ ٢ ٣ ٤",
+                    "1_0 1_0 5 5",
+                    "0x1p4 16 8 8",
+                    "nan",
+                    "missing_file.yaml",
+                    "-",
+                    "/dev/null",
+                    "~",
+                    "1e5 1e5 1e5 1e5",
+                    "5 5 -1e308 1e308",
+                    "1e-300 1e-300 31.5 23.5",
+                    "3e38 3e38 3e38 3e38",
+                    "52.5 52.5 1e30 1e30",
+                ]
+            )
         ctx.note(f"--intrinsics {text!r}")
         flags = ["--intrinsics", text]
         ctx.case.allowed = DOCUMENTED
@@ -1157,12 +1409,27 @@ def gen_intrinsics(ctx: Ctx) -> None:
             fname = ctx.choice([fname, "calib" + Path(fname).suffix, "calib.txt", "k"])
         if layout in ("camera_info", "ros_yaml") and ctx.rng.random() < 0.3:
             fname = ctx.choice(["camera_info.yml", "camera.yaml", "camera_info.json"])
-        m = ctx.pick({"value": 0.35, "missing_key": 0.08, "type": 0.1, "distortion": 0.12, "roi_binning": 0.08,
-                      "text_damage": 0.12, "whole": 0.1, "size": 0.08, "yaml_tricks": 0.07})
+        m = ctx.pick(
+            {
+                "value": 0.35,
+                "missing_key": 0.08,
+                "type": 0.1,
+                "distortion": 0.12,
+                "roi_binning": 0.08,
+                "text_damage": 0.12,
+                "whole": 0.1,
+                "size": 0.08,
+                "yaml_tricks": 0.07,
+            }
+        )
         ctx.tag(m, layout)
         text: str | bytes
         if m == "value":
-            paths = [p for p in _leaf_paths(mapping) if not isinstance(p[-1], str) or p[-1] not in ("rows", "cols", "camera_name")]
+            paths = [
+                p
+                for p in _leaf_paths(mapping)
+                if not isinstance(p[-1], str) or p[-1] not in ("rows", "cols", "camera_name")
+            ]
             for _ in range(ctx.choice([1, 1, 2])):
                 p = ctx.choice(paths)
                 tv, v = odd_number(ctx)
@@ -1171,7 +1438,11 @@ def gen_intrinsics(ctx: Ctx) -> None:
                 except (TypeError, KeyError, IndexError):  # a parent already made a scalar by the first change
                     continue
                 ctx.note(f"{fname} ({layout}) {'.'.join(map(str, p))} = {tv[:40]}")
-                paths = [q for q in _leaf_paths(mapping) if not isinstance(q[-1], str) or q[-1] not in ("rows", "cols", "camera_name")]
+                paths = [
+                    q
+                    for q in _leaf_paths(mapping)
+                    if not isinstance(q[-1], str) or q[-1] not in ("rows", "cols", "camera_name")
+                ]
             text = _dump_any(fname, mapping, ctx)
         elif m == "missing_key":
             key = ctx.choice(list(mapping))
@@ -1185,9 +1456,14 @@ def gen_intrinsics(ctx: Ctx) -> None:
             ctx.note(f"{fname} ({layout}) {'.'.join(map(str, p))} = {json.dumps(v)[:40]}")
             text = dump_mapping(fname, mapping)
         elif m == "distortion":
-            model = ctx.choice(["plumb_bob", "rational_polynomial", "equidistant", "", "none", "fisheye", "PLUMB_BOB", 5, None])
+            model = ctx.choice(
+                ["plumb_bob", "rational_polynomial", "equidistant", "", "none", "fisheye", "PLUMB_BOB", 5, None]
+            )
             n = ctx.choice([0, 1, 4, 5, 8, 12, 14])
-            coeffs = [float(ctx.choice([0.0, 0.1, -0.4, 1e-3, 5.0, -50.0, 1e10, float("nan"), float("inf")])) for _ in range(n)]
+            coeffs = [
+                float(ctx.choice([0.0, 0.1, -0.4, 1e-3, 5.0, -50.0, 1e10, float("nan"), float("inf")]))
+                for _ in range(n)
+            ]
             if layout == "ros_yaml":
                 mapping["distortion_model"] = model
                 mapping["distortion_coefficients"] = {"rows": 1, "cols": n, "data": coeffs}
@@ -1205,12 +1481,17 @@ def gen_intrinsics(ctx: Ctx) -> None:
             mapping = json.loads(json.dumps(mapping))
             for key in ctx.rng.sample(["binning_x", "binning_y", "roi"], ctx.choice([1, 2])):
                 if key == "roi":
-                    roi = {k: ctx.choice([0, 1, 8, 16, 32, 48, 64, 1000, -1, 2 ** 32]) for k in ("x_offset", "y_offset", "height", "width")}
+                    roi = {
+                        k: ctx.choice([0, 1, 8, 16, 32, 48, 64, 1000, -1, 2**32])
+                        for k in ("x_offset", "y_offset", "height", "width")
+                    }
                     roi["do_rectify"] = ctx.choice([True, False])
                     mapping["roi"] = ctx.choice([roi, list(roi.values())[:4], "roi", [1, 2]])
                 else:
-                    mapping[key] = ctx.choice([0, 1, 2, 3, 4, 64, 65, 10 ** 6, -2, 0.5])
-            ctx.note(f"{fname} binning/roi: binning {mapping['binning_x']}x{mapping['binning_y']}, roi {mapping['roi']}")
+                    mapping[key] = ctx.choice([0, 1, 2, 3, 4, 64, 65, 10**6, -2, 0.5])
+            ctx.note(
+                f"{fname} binning/roi: binning {mapping['binning_x']}x{mapping['binning_y']}, roi {mapping['roi']}"
+            )
             text = dump_mapping(fname, mapping)
         elif m == "text_damage":
             raw = dump_mapping(fname, mapping).encode()
@@ -1228,40 +1509,71 @@ def gen_intrinsics(ctx: Ctx) -> None:
                 raw = b"\xef\xbb\xbf" + raw
                 ctx.note(f"{fname} ({layout}) with a UTF-8 BOM")
             else:
-                raw = raw[: len(raw) // 2] + b"\x00" + raw[len(raw) // 2:]
+                raw = raw[: len(raw) // 2] + b"\x00" + raw[len(raw) // 2 :]
                 ctx.note(f"{fname} ({layout}) with a NUL byte")
             text = raw
         elif m == "whole":
-            text = ctx.choice(["", "   \n", "[]", "[1, 2, 3]", "5", "null", "~", "'just a string'", "{}", "{\"k\": 1}",
-                               "- a\n- b\n", "\x00\x01\x02", "{" * 3000, "[" * 3000, "a: &a [1,2]\nb: [*a, *a, *a]\nk: [*a, *a]\n",
-                               "!!python/object/apply:os.system ['echo pwned']\n", "fx: 1\n" * 3, "%YAML 9.9\n---\nfx: 1\n"])
+            text = ctx.choice(
+                [
+                    "",
+                    "   \n",
+                    "[]",
+                    "[1, 2, 3]",
+                    "5",
+                    "null",
+                    "~",
+                    "'just a string'",
+                    "{}",
+                    '{"k": 1}',
+                    "- a\n- b\n",
+                    "\x00\x01\x02",
+                    "{" * 3000,
+                    "[" * 3000,
+                    "a: &a [1,2]\nb: [*a, *a, *a]\nk: [*a, *a]\n",
+                    "!!python/object/apply:os.system ['echo pwned']\n",
+                    "fx: 1\n" * 3,
+                    "%YAML 9.9\n---\nfx: 1\n",
+                ]
+            )
             ctx.note(f"{fname} holding {text[:40]!r}")
         elif m == "size":
-            w, h = ctx.choice([(size[0] * 2, size[1] * 2), (size[0] + 1, size[1]), (size[1], size[0]), (1, 1), (0, 0), (10 ** 9, 10 ** 9)])
+            w, h = ctx.choice(
+                [(size[0] * 2, size[1] * 2), (size[0] + 1, size[1]), (size[1], size[0]), (1, 1), (0, 0), (10**9, 10**9)]
+            )
             for wk, hk in (("image_width", "image_height"), ("width", "height"), ("img_width", "img_height")):
                 if wk in mapping:
                     mapping[wk], mapping[hk] = w, h
             ctx.note(f"{fname} ({layout}) for a {w}x{h} image, the depth is {size[0]}x{size[1]}")
             text = dump_mapping(fname, mapping)
         else:  # yaml_tricks: valid YAML that is not what JSON/YAML readers expect
-            y = ctx.choice([
-                "image_width: 64\nimage_height: 48\ncamera_matrix:\n  data: !!binary AAAA\n",
-                "width: 64\nheight: 48\nk: [52.5, 0, 31.5, 0, 52.5, 23.5, 0, 0, 1]\nk: [0, 0, 0, 0, 0, 0, 0, 0, 0]\n",
-                "width: 64\nheight: 48\nK: !!set {1, 2}\n",
-                "width: 0x40\nheight: 0o60\nk: [52.5, 0, 31.5, 0, 52.5, 23.5, 0, 0, 1]\n",
-                "width: 64\nheight: 48\nk: [.nan, 0, 31.5, 0, 52.5, 23.5, 0, 0, 1]\n",
-                "width: 64\nheight: 48\nk: [52.5, 0, 31.5, 0, 52.5, 23.5, 0, 0, 1]\nroi: {x_offset: 2012-01-01}\n",
-                "fx: 52.5\nfy: 52.5\nx_offset: 31.5\ny_offset: 23.5\nimg_width: 64\nimg_height: 48\n" * 1 + "? [a, b]\n: c\n",
-                "{\"fx\": 52.5, \"fy\": 52.5, \"x_offset\": 31.5, \"y_offset\": 23.5, \"img_width\": 64, \"img_height\": 48,}",
-                "{\"fx\": NaN, \"fy\": Infinity, \"x_offset\": 31.5, \"y_offset\": 23.5, \"img_width\": 64, \"img_height\": 48}",
-                "{\"fx\": 52.5, \"fy\": 52.5, \"x_offset\": 31.5, \"y_offset\": 23.5, \"img_width\": 64, \"img_height\": 4" + "8" * 5000 + "}",
-            ])
+            y = ctx.choice(
+                [
+                    "image_width: 64\nimage_height: 48\ncamera_matrix:\n  data: !!binary AAAA\n",
+                    "width: 64\nheight: 48\nk: [52.5, 0, 31.5, 0, 52.5, 23.5, 0, 0, 1]\nk: [0, 0, 0, 0, 0, 0, 0, 0, 0]\n",
+                    "width: 64\nheight: 48\nK: !!set {1, 2}\n",
+                    "width: 0x40\nheight: 0o60\nk: [52.5, 0, 31.5, 0, 52.5, 23.5, 0, 0, 1]\n",
+                    "width: 64\nheight: 48\nk: [.nan, 0, 31.5, 0, 52.5, 23.5, 0, 0, 1]\n",
+                    "width: 64\nheight: 48\nk: [52.5, 0, 31.5, 0, 52.5, 23.5, 0, 0, 1]\nroi: {x_offset: 2012-01-01}\n",
+                    "fx: 52.5\nfy: 52.5\nx_offset: 31.5\ny_offset: 23.5\nimg_width: 64\nimg_height: 48\n" * 1
+                    + "? [a, b]\n: c\n",
+                    '{"fx": 52.5, "fy": 52.5, "x_offset": 31.5, "y_offset": 23.5, "img_width": 64, "img_height": 48,}',
+                    '{"fx": NaN, "fy": Infinity, "x_offset": 31.5, "y_offset": 23.5, "img_width": 64, "img_height": 48}',
+                    '{"fx": 52.5, "fy": 52.5, "x_offset": 31.5, "y_offset": 23.5, "img_width": 64, "img_height": 4'
+                    + "8" * 5000
+                    + "}",
+                ]
+            )
             fname = "camera_info.yaml" if not y.startswith("{") else "camera_params.json"
             text = y
             ctx.note(f"{fname}: {y[:60]!r}")
         ipath = ctx.dir / fname
         if how in ("file_beside", "several") and fname not in (
-            "camera_info.yaml", "camera_info.yml", "camera_params.json", "intrinsics.json", "camera.yaml", "camera.json"
+            "camera_info.yaml",
+            "camera_info.yml",
+            "camera_params.json",
+            "intrinsics.json",
+            "camera.yaml",
+            "camera.json",
         ):
             fname = "camera_info.yaml"
             ipath = ctx.dir / fname
@@ -1325,7 +1637,9 @@ def gen_log(ctx: Ctx) -> None:
             data, off = truncate(data, ctx.rng)
             n = complete_depth_frames(data)
             ctx.tag("truncate", "mcap")
-            ctx.note(f"3-frame 64x48 depth MCAP ({layout} chunks) truncated at {off} of {len(whole)} ({n} complete depth frames before)")
+            ctx.note(
+                f"3-frame 64x48 depth MCAP ({layout} chunks) truncated at {off} of {len(whole)} ({n} complete depth frames before)"
+            )
             _truncation_oracle(ctx, n, frame_flag)
         else:
             data, how = flip_bytes(data, ctx.rng, ctx.choice([1, 2, 4, 16]), start=8)
@@ -1341,7 +1655,9 @@ def gen_log(ctx: Ctx) -> None:
         n = complete_depth_frames(data)
         path = ctx.write("realsense.mcap", data)
         ctx.tag("truncate", "mcap")
-        ctx.note(f"the shared uois_realsense_ros2.mcap truncated at {off} of {len(full)} ({n} complete depth frames before)")
+        ctx.note(
+            f"the shared uois_realsense_ros2.mcap truncated at {off} of {len(full)} ({n} complete depth frames before)"
+        )
         _truncation_oracle(ctx, n, frame_flag, segment_share=0.15)
     elif sub == "rosbag2":
         path = ctx.dir / "bag2"
@@ -1399,28 +1715,73 @@ def _mcap_messages(ctx: Ctx, path: Path) -> None:
     frames = [default_log_frame(fr, k) for k in range(ctx.choice([1, 2, 3]))]
     target = ctx.rng.randrange(len(frames))
     f = frames[target]
-    m = ctx.pick({"encoding": 0.14, "step": 0.12, "dims": 0.12, "data": 0.08, "info_k": 0.12, "info_d": 0.08,
-                  "info_size": 0.07, "no_info": 0.05, "colour": 0.1, "values": 0.06, "order": 0.04, "topic": 0.02})
+    m = ctx.pick(
+        {
+            "encoding": 0.14,
+            "step": 0.12,
+            "dims": 0.12,
+            "data": 0.08,
+            "info_k": 0.12,
+            "info_d": 0.08,
+            "info_size": 0.07,
+            "no_info": 0.05,
+            "colour": 0.1,
+            "values": 0.06,
+            "order": 0.04,
+            "topic": 0.02,
+        }
+    )
     ctx.tag(m)
     depth = f["depth"]
     if m == "encoding":
-        enc = ctx.choice(["mono16", "32FC1", "8UC1", "mono8", "rgb8", "16SC1", "32FC2", "64FC1", "", "garbage", "16UC1; compressedDepth",
-                          "compressedDepth", "bgra8", "32SC1", "16UC3", "8UC4", "bayer_rggb16"])
+        enc = ctx.choice(
+            [
+                "mono16",
+                "32FC1",
+                "8UC1",
+                "mono8",
+                "rgb8",
+                "16SC1",
+                "32FC2",
+                "64FC1",
+                "",
+                "garbage",
+                "16UC1; compressedDepth",
+                "compressedDepth",
+                "bgra8",
+                "32SC1",
+                "16UC3",
+                "8UC4",
+                "bayer_rggb16",
+            ]
+        )
         depth["encoding"] = enc
         if enc == "32FC1":
             raw = (fr.depth_mm.astype(np.float32) / 1000).tobytes()
             depth["data"], depth["step"] = raw, w * 4
         ctx.note(f"frame {target}: depth encoding {enc!r}")
     elif m == "step":
-        depth["step"] = ctx.choice([0, 1, w, w * 2 - 1, w * 2 + 2, w * 4, 2 ** 31, 2 ** 32 - 1, w * 2 * h])
+        depth["step"] = ctx.choice([0, 1, w, w * 2 - 1, w * 2 + 2, w * 4, 2**31, 2**32 - 1, w * 2 * h])
         ctx.note(f"frame {target}: depth step {depth['step']} (width {w}, 16UC1)")
     elif m == "dims":
-        depth["height"], depth["width"] = ctx.choice([(0, w), (h, 0), (0, 0), (h * 2, w), (h, w * 2), (1, w * h), (h // 2, w * 2),
-                                                      (2 ** 31, w), (2 ** 32 - 1, 2 ** 32 - 1), (100000, 100000)])
+        depth["height"], depth["width"] = ctx.choice(
+            [
+                (0, w),
+                (h, 0),
+                (0, 0),
+                (h * 2, w),
+                (h, w * 2),
+                (1, w * h),
+                (h // 2, w * 2),
+                (2**31, w),
+                (2**32 - 1, 2**32 - 1),
+                (100000, 100000),
+            ]
+        )
         if ctx.rng.random() < 0.5:
-            depth["step"] = depth["width"] * 2 % 2 ** 32
+            depth["step"] = depth["width"] * 2 % 2**32
         ctx.note(f"frame {target}: depth {depth['width']}x{depth['height']} step {depth['step']} over {w}x{h} data")
-        ctx.tag("bomb" if depth["height"] * depth["width"] > 2 ** 25 else "dims")
+        ctx.tag("bomb" if depth["height"] * depth["width"] > 2**25 else "dims")
     elif m == "data":
         raw = depth["data"]
         depth["data"] = ctx.choice([b"", raw[:-1], raw[: len(raw) // 2], raw + b"\x00", raw * 2, b"\x00" * 7])
@@ -1428,20 +1789,25 @@ def _mcap_messages(ctx: Ctx, path: Path) -> None:
     elif m == "info_k":
         k = list(f["info"]["k"])
         which = ctx.choice([[0], [4], [2], [5], [0, 4], [8], [6], list(range(9))])
-        tv, v = ctx.choice([(t, x) for t, x in SPECIAL_NUMBERS if isinstance(x, float) or abs(x) < 2 ** 60])
+        tv, v = ctx.choice([(t, x) for t, x in SPECIAL_NUMBERS if isinstance(x, float) or abs(x) < 2**60])
         for i in which:
             k[i] = float(v)
         f["info"]["k"] = k
         ctx.note(f"frame {target}: camera info k[{which}] = {tv}")
     elif m == "info_d":
         model = ctx.choice(["plumb_bob", "rational_polynomial", "equidistant", "", "weird"])
-        d = [ctx.choice([0.0, 0.1, -0.3, 5.0, 1e12, float("nan"), float("inf")]) for _ in range(ctx.choice([0, 3, 5, 8, 14]))]
+        d = [
+            ctx.choice([0.0, 0.1, -0.3, 5.0, 1e12, float("nan"), float("inf")])
+            for _ in range(ctx.choice([0, 3, 5, 8, 14]))
+        ]
         f["info"]["distortion_model"], f["info"]["d"] = model, d
         ctx.note(f"frame {target}: camera info distortion {model!r} {d}")
     elif m == "info_size":
-        f["info"]["width"], f["info"]["height"] = ctx.choice([(w * 2, h * 2), (0, 0), (w + 1, h), (2 ** 32 - 1, 1)])
+        f["info"]["width"], f["info"]["height"] = ctx.choice([(w * 2, h * 2), (0, 0), (w + 1, h), (2**32 - 1, 1)])
         f["info"]["binning_x"] = ctx.choice([0, 0, 2, 1000])
-        ctx.note(f"frame {target}: camera info {f['info']['width']}x{f['info']['height']} binning {f['info']['binning_x']}")
+        ctx.note(
+            f"frame {target}: camera info {f['info']['width']}x{f['info']['height']} binning {f['info']['binning_x']}"
+        )
     elif m == "no_info":
         for fr_ in frames:
             fr_["info"] = None
@@ -1461,7 +1827,7 @@ def _mcap_messages(ctx: Ctx, path: Path) -> None:
         elif c == "data":
             col["data"] = col["data"][: ctx.rng.randrange(len(col["data"]))]
         else:
-            col["step"] = ctx.choice([0, 1, w * 3 + 1, 2 ** 32 - 1])
+            col["step"] = ctx.choice([0, 1, w * 3 + 1, 2**32 - 1])
         ctx.note(f"frame {target}: colour image {c} changed")
     elif m == "values":
         v = ctx.choice(["zero", "max", "nan32", "neg32", "inf32"])
@@ -1474,7 +1840,7 @@ def _mcap_messages(ctx: Ctx, path: Path) -> None:
         ctx.note(f"frame {target}: depth values {v}")
     elif m == "order":
         for fr_ in frames:
-            fr_["t"] = ctx.choice([0, 1, 2 ** 63, 1_700_000_000_000_000_000])
+            fr_["t"] = ctx.choice([0, 1, 2**63, 1_700_000_000_000_000_000])
         ctx.note(f"time stamps {[fr_['t'] for fr_ in frames]}")
     else:
         ctx.note("depth topic named without 'depth'")
@@ -1489,9 +1855,23 @@ def _rosbag2_damage(ctx: Ctx, bag: Path) -> None:
     if m == "type":
         ctx.tag("metadata-type")
         topics = re.findall(r"type: (\S+)", text)
-        old = "sensor_msgs/msg/Image" if ctx.rng.random() < 0.6 else ctx.choice(sorted(set(topics)) or ["sensor_msgs/msg/Image"])
-        new = ctx.choice(["sensor_msgs/msg/PointCloud2"] * 3 + ["sensor_msgs/msg/CameraInfo", "std_msgs/msg/String",
-                          "sensor_msgs/msg/CompressedImage", "garbage/msg/Nope", "sensor_msgs/msg/Image", "", "std_msgs/msg/Float32"])
+        old = (
+            "sensor_msgs/msg/Image"
+            if ctx.rng.random() < 0.6
+            else ctx.choice(sorted(set(topics)) or ["sensor_msgs/msg/Image"])
+        )
+        new = ctx.choice(
+            ["sensor_msgs/msg/PointCloud2"] * 3
+            + [
+                "sensor_msgs/msg/CameraInfo",
+                "std_msgs/msg/String",
+                "sensor_msgs/msg/CompressedImage",
+                "garbage/msg/Nope",
+                "sensor_msgs/msg/Image",
+                "",
+                "std_msgs/msg/Float32",
+            ]
+        )
         if new == old:
             new = "sensor_msgs/msg/PointCloud2"
         which = ctx.choice(["first", "all"])
@@ -1507,8 +1887,18 @@ def _rosbag2_damage(ctx: Ctx, bag: Path) -> None:
             ctx.note(f"rosbag2 metadata.yaml: {how}")
         text = raw.decode("utf-8", "replace")
     elif m == "fields":
-        key = ctx.choice(["message_count", "version", "nanoseconds", "relative_file_paths", "serialization_format",
-                          "offered_qos_profiles", "topics_with_message_count", "name"])
+        key = ctx.choice(
+            [
+                "message_count",
+                "version",
+                "nanoseconds",
+                "relative_file_paths",
+                "serialization_format",
+                "offered_qos_profiles",
+                "topics_with_message_count",
+                "name",
+            ]
+        )
         val = ctx.choice(["-1", "999999999999", "abc", "[]", "{}", "", "null", "1e400", "[nope.db3]"])
         text, n = re.subn(rf"^(\s*-?\s*{key}:)(.*)$", rf"\g<1> {val}", text, count=1, flags=re.MULTILINE)
         ctx.note(f"rosbag2 metadata.yaml: {key}: {val} ({n} replaced)")
@@ -1553,12 +1943,25 @@ def gen_urdf(ctx: Ctx) -> None:
     text = ctx.mat.panda_urdf()
     sets: list[str] = []
     urdf = ctx.dir / "arm.urdf"
-    m = ctx.pick({"xml": 0.16, "limits": 0.18, "joint_type": 0.1, "axis_origin": 0.12, "structure": 0.1,
-                  "geometry": 0.08, "mesh": 0.1, "frames": 0.1, "path": 0.06})
+    m = ctx.pick(
+        {
+            "xml": 0.16,
+            "limits": 0.18,
+            "joint_type": 0.1,
+            "axis_origin": 0.12,
+            "structure": 0.1,
+            "geometry": 0.08,
+            "mesh": 0.1,
+            "frames": 0.1,
+            "path": 0.06,
+        }
+    )
     ctx.tag(m)
     joints = re.findall(r'<joint name="(\w+)" type="revolute"', text)
     if m == "xml":
-        sub = ctx.choice(["truncate", "flip", "unclosed", "root", "garbage", "empty", "binary", "entities", "no_joints", "bom"])
+        sub = ctx.choice(
+            ["truncate", "flip", "unclosed", "root", "garbage", "empty", "binary", "entities", "no_joints", "bom"]
+        )
         if sub == "truncate":
             raw, off = truncate(text.encode(), ctx.rng)
             text = raw.decode("utf-8", "replace")
@@ -1583,9 +1986,11 @@ def gen_urdf(ctx: Ctx) -> None:
             text = "\x00\x01\x89PNG garbage"
             ctx.note("URDF of binary junk")
         elif sub == "entities":
-            text = ('<?xml version="1.0"?>\n<!DOCTYPE r [<!ENTITY a "aaaaaaaaaa"><!ENTITY b "&a;&a;&a;&a;&a;&a;&a;&a;&a;&a;">'
-                    '<!ENTITY c "&b;&b;&b;&b;&b;&b;&b;&b;&b;&b;"><!ENTITY d "&c;&c;&c;&c;&c;&c;&c;&c;&c;&c;">]>\n'
-                    + text.split("?>", 1)[1].replace('name="clear_panda"', 'name="&d;"'))
+            text = (
+                '<?xml version="1.0"?>\n<!DOCTYPE r [<!ENTITY a "aaaaaaaaaa"><!ENTITY b "&a;&a;&a;&a;&a;&a;&a;&a;&a;&a;">'
+                '<!ENTITY c "&b;&b;&b;&b;&b;&b;&b;&b;&b;&b;"><!ENTITY d "&c;&c;&c;&c;&c;&c;&c;&c;&c;&c;">]>\n'
+                + text.split("?>", 1)[1].replace('name="clear_panda"', 'name="&d;"')
+            )
             ctx.note("URDF with nested entities in the robot's name")
         elif sub == "no_joints":
             text = re.sub(r"<joint .*?</joint>", "", text, flags=re.DOTALL)
@@ -1606,7 +2011,13 @@ def gen_urdf(ctx: Ctx) -> None:
             ctx.tag("limit-lower>upper")
             ctx.note(f"{j}: lower {hi} > upper {lo}")
         elif lim and sub in ("nan", "inf", "text", "huge", "empty"):
-            v = {"nan": "nan", "inf": ctx.choice(["inf", "-inf"]), "text": "abc", "huge": ctx.choice(["1e308", "-1e308", "1e6"]), "empty": ""}[sub]
+            v = {
+                "nan": "nan",
+                "inf": ctx.choice(["inf", "-inf"]),
+                "text": "abc",
+                "huge": ctx.choice(["1e308", "-1e308", "1e6"]),
+                "empty": "",
+            }[sub]
             side = ctx.choice(["lower", "upper"])
             nb = re.sub(rf'{side}="[^"]*"', f'{side}="{v}"', b, count=1)
             ctx.note(f"{j}: {side}={v!r}")
@@ -1640,22 +2051,33 @@ def gen_urdf(ctx: Ctx) -> None:
         assert block
         b = block.group(0)
         what = ctx.choice(["axis", "xyz", "rpy"])
-        v = ctx.choice(["0 0 0", "nan 0 1", "1 0", "", "1e308 0 0", "inf 0 0", "0 0 -1", "a b c", "1 1 1 1", "0 0 1e-300"])
+        v = ctx.choice(
+            ["0 0 0", "nan 0 1", "1 0", "", "1e308 0 0", "inf 0 0", "0 0 -1", "a b c", "1 1 1 1", "0 0 1e-300"]
+        )
         if what == "axis":
-            nb = re.sub(r'<axis xyz="[^"]*"', f'<axis xyz="{v}"', b) if "<axis" in b else b.replace("</joint>", f'<axis xyz="{v}"/></joint>')
+            nb = (
+                re.sub(r'<axis xyz="[^"]*"', f'<axis xyz="{v}"', b)
+                if "<axis" in b
+                else b.replace("</joint>", f'<axis xyz="{v}"/></joint>')
+            )
         else:
             nb = re.sub(rf'{what}="[^"]*"', f'{what}="{v}"', b, count=1)
         text = text.replace(b, nb)
         ctx.note(f"{j}: {what}={v!r}")
     elif m == "structure":
-        sub = ctx.choice(["child_missing", "parent_missing", "cycle", "dup_link", "dup_joint", "drop_link", "two_roots"])
+        sub = ctx.choice(
+            ["child_missing", "parent_missing", "cycle", "dup_link", "dup_joint", "drop_link", "two_roots"]
+        )
         if sub == "child_missing":
             text = text.replace('<child link="panda_link3"/>', '<child link="nowhere"/>', 1)
         elif sub == "parent_missing":
             text = text.replace('<parent link="panda_link4"/>', '<parent link="nowhere"/>', 1)
         elif sub == "cycle":
-            text = text.replace("</robot>", '<joint name="loop" type="revolute"><parent link="panda_link7"/><child link="panda_link0"/>'
-                                '<axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>')
+            text = text.replace(
+                "</robot>",
+                '<joint name="loop" type="revolute"><parent link="panda_link7"/><child link="panda_link0"/>'
+                '<axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>',
+            )
         elif sub == "dup_link":
             text = text.replace('<link name="panda_link5">', '<link name="panda_link4">', 1)
         elif sub == "dup_joint":
@@ -1666,15 +2088,39 @@ def gen_urdf(ctx: Ctx) -> None:
             text = text.replace("</robot>", '<link name="floating_root"/></robot>')
         ctx.note(f"URDF structure: {sub}")
     elif m == "geometry":
-        sub = ctx.choice(['<cylinder radius="0" length="0"/>', '<cylinder radius="-1" length="0.1"/>', '<cylinder radius="nan" length="0.1"/>',
-                          '<sphere radius="inf"/>', '<sphere/>', '<box size="0 0 0"/>', '<box size="1 2"/>', '<capsule radius="0.1" length="-1"/>',
-                          '<cylinder radius="1e308" length="1e308"/>'])
+        sub = ctx.choice(
+            [
+                '<cylinder radius="0" length="0"/>',
+                '<cylinder radius="-1" length="0.1"/>',
+                '<cylinder radius="nan" length="0.1"/>',
+                '<sphere radius="inf"/>',
+                "<sphere/>",
+                '<box size="0 0 0"/>',
+                '<box size="1 2"/>',
+                '<capsule radius="0.1" length="-1"/>',
+                '<cylinder radius="1e308" length="1e308"/>',
+            ]
+        )
         n = ctx.choice([1, 3])
         text = re.sub(r"<(cylinder|sphere)[^>]*/>", sub, text, count=n)
         ctx.note(f"collision shapes ({n}) made {sub}")
     elif m == "mesh":
-        sub = ctx.choice(["package_missing", "empty", "garbage", "binary_stl", "binary_stl_lies", "ascii_stl_damaged", "dae_garbage",
-                          "obj_garbage", "directory", "fifo", "shared_stl", "scale"])
+        sub = ctx.choice(
+            [
+                "package_missing",
+                "empty",
+                "garbage",
+                "binary_stl",
+                "binary_stl_lies",
+                "ascii_stl_damaged",
+                "dae_garbage",
+                "obj_garbage",
+                "directory",
+                "fifo",
+                "shared_stl",
+                "scale",
+            ]
+        )
         mesh_name = {"dae_garbage": "part.dae", "obj_garbage": "part.obj"}.get(sub, "part.stl")
         mesh = ctx.dir / mesh_name
         filename = str(mesh)
@@ -1688,7 +2134,7 @@ def gen_urdf(ctx: Ctx) -> None:
             mesh.write_bytes(_binary_stl())
         elif sub == "binary_stl_lies":
             raw = bytearray(_binary_stl())
-            raw[80:84] = struct.pack("<I", ctx.choice([0, 10 ** 6, 2 ** 32 - 1]))
+            raw[80:84] = struct.pack("<I", ctx.choice([0, 10**6, 2**32 - 1]))
             mesh.write_bytes(bytes(raw))
         elif sub == "ascii_stl_damaged":
             mesh.write_bytes(b"solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex nan 0 0\nendloop\n")
@@ -1710,8 +2156,11 @@ def gen_urdf(ctx: Ctx) -> None:
             mesh.write_bytes(_binary_stl())
         scale = ' scale="0 0 0"' if sub == "scale" else ""
         link = ctx.choice(PANDA_LINKS[1:9])
-        text = text.replace(f'<link name="{link}">', f'<link name="{link}"><collision><geometry><mesh filename="{filename}"{scale}/>'
-                            "</geometry></collision>", 1)
+        text = text.replace(
+            f'<link name="{link}">',
+            f'<link name="{link}"><collision><geometry><mesh filename="{filename}"{scale}/></geometry></collision>',
+            1,
+        )
         ctx.note(f"{link} gets a collision mesh: {sub} ({Path(filename).name})")
     elif m == "frames":
         base = ctx.choice(PANDA_LINKS + ["", "nowhere", "panda_joint1", "world"])
@@ -1755,13 +2204,29 @@ def gen_urdf(ctx: Ctx) -> None:
         arm.write_bytes(text.encode("utf-8", "surrogateescape"))
     if ctx.rng.random() < 0.2:
         xyz = [round(ctx.rng.uniform(-0.3, 0.3), 3) for _ in range(3)]
-        sets += ["--set", f"robot.tcp_xyz_m={json.dumps(xyz)}", "--set", f"robot.tcp_yaw_deg={ctx.choice([0, 90, -180, 45.5])}"]
+        sets += [
+            "--set",
+            f"robot.tcp_xyz_m={json.dumps(xyz)}",
+            "--set",
+            f"robot.tcp_yaw_deg={ctx.choice([0, 90, -180, 45.5])}",
+        ]
         ctx.note(f"tcp_xyz_m {xyz}")
     robot = ["--robot", ctx.choice(["panda", "ur5e", "wam"])] if ctx.rng.random() < 0.2 else []
-    size = PLAN if ctx.case.heavy and m in ("limits", "axis_origin", "geometry", "frames", "mesh", "joint_type") else SMALL
+    size = (
+        PLAN if ctx.case.heavy and m in ("limits", "axis_origin", "geometry", "frames", "mesh", "joint_type") else SMALL
+    )
     fr = ctx.mat.frames[size]
     depth = ctx.write("f_depth.png", ctx.mat.depth_bytes("png", size))
-    argv = ["plan", str(depth), "--intrinsics", four_numbers(fr.k), "--set", f"robot.urdf={json.dumps(str(urdf))}", *sets, *robot]
+    argv = [
+        "plan",
+        str(depth),
+        "--intrinsics",
+        four_numbers(fr.k),
+        "--set",
+        f"robot.urdf={json.dumps(str(urdf))}",
+        *sets,
+        *robot,
+    ]
     if size == PLAN:
         argv += ["--json", "--time-limit", "20"]
         ctx.case.timeout_s = HEAVY_TIMEOUT_S
@@ -1797,10 +2262,25 @@ def gen_settings(ctx: Ctx) -> None:
     image = [str(depth), "--intrinsics", four_numbers(fr.k)]
     ranges = ctx.mat.settings_ranges()
     if sub == "grasps":
-        value = ctx.choice([
-            ",".join(p) for r in (1, 2, 3) for p in itertools.permutations(GRASP_KINDS, r)
-        ] + ["pinch,pinch", "rim", "", " ", "pinch, rim", "PINCH", "pinch,rim,slide,push", "pinch;rim", "pinch,", ",pinch",
-             "pinch,rim,rim", "slide,rim", "all", "pinch\nrim"])
+        value = ctx.choice(
+            [",".join(p) for r in (1, 2, 3) for p in itertools.permutations(GRASP_KINDS, r)]
+            + [
+                "pinch,pinch",
+                "rim",
+                "",
+                " ",
+                "pinch, rim",
+                "PINCH",
+                "pinch,rim,slide,push",
+                "pinch;rim",
+                "pinch,",
+                ",pinch",
+                "pinch,rim,rim",
+                "slide,rim",
+                "all",
+                "pinch\nrim",
+            ]
+        )
         ctx.tag("grasps")
         ctx.note(f"grasps {value!r} as --grasps, --set plan.grasps and a settings file")
         f = ctx.write("grasps.toml", f"[plan]\ngrasps = {json.dumps(value)}\n")
@@ -1820,13 +2300,36 @@ def gen_settings(ctx: Ctx) -> None:
         ctx.run(ctx.choice(["plan", "predicates"]), *image, "--robot", name)
         return
     if sub == "flags":
-        flag, cmd = ctx.choice([("--voxel-m", "segment"), ("--seed-m", "segment"), ("--concavity-deg", "segment"),
-                                ("--plane-distance-m", "segment"), ("--min-object-area-m2", "segment"),
-                                ("--outlier-method", "segment"), ("--time-limit", "plan"), ("--camera-pose", "plan"),
-                                ("--depth-scale", "info"), ("--frame", "segment")])
+        flag, cmd = ctx.choice(
+            [
+                ("--voxel-m", "segment"),
+                ("--seed-m", "segment"),
+                ("--concavity-deg", "segment"),
+                ("--plane-distance-m", "segment"),
+                ("--min-object-area-m2", "segment"),
+                ("--outlier-method", "segment"),
+                ("--time-limit", "plan"),
+                ("--camera-pose", "plan"),
+                ("--depth-scale", "info"),
+                ("--frame", "segment"),
+            ]
+        )
         if flag == "--camera-pose":
-            v = ctx.choice(["thesis", "1 2 3 0 0 0 1", "0 0 0 0 0 0 0", "nan 0 0 0 0 0 1", "1 2 3", "", "1e9 0 0 0 0 0 1",
-                            "0 0 0 0 0 0 inf", "a b c d e f g", "0,0,0,0,0,0,1", " 1 2 3 0 0 0 1 "])
+            v = ctx.choice(
+                [
+                    "thesis",
+                    "1 2 3 0 0 0 1",
+                    "0 0 0 0 0 0 0",
+                    "nan 0 0 0 0 0 1",
+                    "1 2 3",
+                    "",
+                    "1e9 0 0 0 0 0 1",
+                    "0 0 0 0 0 0 inf",
+                    "a b c d e f g",
+                    "0,0,0,0,0,0,1",
+                    " 1 2 3 0 0 0 1 ",
+                ]
+            )
         elif flag == "--outlier-method":
             v = ctx.choice(["none", "statistical", "depth_radius", "", "NONE", "magic"])
         else:
@@ -1836,9 +2339,27 @@ def gen_settings(ctx: Ctx) -> None:
         ctx.run(cmd, *image, flag, v)
         return
     if sub == "malformed":
-        s = ctx.choice(["segment.voxel_m", "voxel_m=1", "=1", "segment.=1", ".voxel_m=1", "segment.voxel_m==1", "a.b.c=1",
-                        "segment.voxel_m=", "nosuch.key=1", "segment.nosuch=1", "SEGMENT.voxel_m=0.005", " segment.voxel_m=0.005",
-                        "segment.voxel_m=0.005 # c", "segment.voxel_m=[", "plan.grasps=pinch", "robot.urdf=", "images.intrinsics=5"])
+        s = ctx.choice(
+            [
+                "segment.voxel_m",
+                "voxel_m=1",
+                "=1",
+                "segment.=1",
+                ".voxel_m=1",
+                "segment.voxel_m==1",
+                "a.b.c=1",
+                "segment.voxel_m=",
+                "nosuch.key=1",
+                "segment.nosuch=1",
+                "SEGMENT.voxel_m=0.005",
+                " segment.voxel_m=0.005",
+                "segment.voxel_m=0.005 # c",
+                "segment.voxel_m=[",
+                "plan.grasps=pinch",
+                "robot.urdf=",
+                "images.intrinsics=5",
+            ]
+        )
         ctx.note(f"--set {s!r}")
         if ctx.rng.random() < 0.5:
             ctx.run("segment", *image, "--set", s)
@@ -1882,17 +2403,41 @@ def gen_settings(ctx: Ctx) -> None:
         data, how = flip_bytes(toml.encode(), ctx.rng, ctx.choice([1, 2, 6]))
         ctx.note(f"`clear settings` output as --settings: {how}")
     elif m == "structure":
-        extra = ctx.choice(["[segment]\nvoxel_m = 0.005\n", "[nosuch]\nx = 1\n", "segment = 5\n", "[segment.sub]\nx = 1\n",
-                            "[[segment]]\nx = 1\n", "[plan]\ngrasps = [\"pinch\"]\n", "[robot]\ncamera_pose = [1, 2, 3]\n",
-                            "[robot]\ntcp_xyz_m = [0.6, 0, 0]\n", "[images]\ndepth_suffix = \"\"\n", "x = 1\n",
-                            "[segment]\nvoxel_m = 0.005\nvoxel_m = 0.006\n", "[robot]\nurdf = 5\n", "[gripper]\nopening_width_m = \"7 cm\"\n",
-                            "[robot]\nbase_min_object_distance_m = 1.5\nbase_max_object_distance_m = 1.0\n"])
+        extra = ctx.choice(
+            [
+                "[segment]\nvoxel_m = 0.005\n",
+                "[nosuch]\nx = 1\n",
+                "segment = 5\n",
+                "[segment.sub]\nx = 1\n",
+                "[[segment]]\nx = 1\n",
+                '[plan]\ngrasps = ["pinch"]\n',
+                "[robot]\ncamera_pose = [1, 2, 3]\n",
+                "[robot]\ntcp_xyz_m = [0.6, 0, 0]\n",
+                '[images]\ndepth_suffix = ""\n',
+                "x = 1\n",
+                "[segment]\nvoxel_m = 0.005\nvoxel_m = 0.006\n",
+                "[robot]\nurdf = 5\n",
+                '[gripper]\nopening_width_m = "7 cm"\n',
+                "[robot]\nbase_min_object_distance_m = 1.5\nbase_max_object_distance_m = 1.0\n",
+            ]
+        )
         where = ctx.choice(["start", "end"])
         data = ((extra + toml) if where == "start" else (toml + extra)).encode()
         ctx.note(f"settings file with {extra!r} at its {where}")
     elif m == "whole":
-        data = ctx.choice([b"", b"\n", b"\x00\xff", b"\xef\xbb\xbf[segment]\nvoxel_m = 0.005\n", b"= = =", b"[" * 5000,
-                           b"a = " + b"[" * 2000 + b"]" * 2000, b"# only a comment\n", "[segment]\nvoxel_m = ٠.005\n".encode()])
+        data = ctx.choice(
+            [
+                b"",
+                b"\n",
+                b"\x00\xff",
+                b"\xef\xbb\xbf[segment]\nvoxel_m = 0.005\n",
+                b"= = =",
+                b"[" * 5000,
+                b"a = " + b"[" * 2000 + b"]" * 2000,
+                b"# only a comment\n",
+                "[segment]\nvoxel_m = ٠.005\n".encode(),
+            ]
+        )
         ctx.note(f"settings file {data[:30]!r}")
     else:
         data = None
@@ -1922,15 +2467,69 @@ def _odd_setting_value(ctx: Ctx, default: str, range_text: str, in_range: bool) 
         eps = 1e-9 if ">" in range_text and ">=" not in range_text else 0
         return repr(ctx.choice([lo + eps, hi, ctx.rng.uniform(lo, hi)]))
     if default.startswith("["):
-        return ctx.choice(["[]", "[nan]", "[1, 2, 3]", "[1e9, 0, 0]", "[0, 0, 0, 0, 0, 0, 0]", "[\"a\"]", "[[1]]", "1",
-                           "[inf, 0, 0, 0, 0, 0, 1]", "[" + ", ".join(["0.1"] * 11) + "]", "[-1]", "[0.0, 0.0, 0.0]"])
+        return ctx.choice(
+            [
+                "[]",
+                "[nan]",
+                "[1, 2, 3]",
+                "[1e9, 0, 0]",
+                "[0, 0, 0, 0, 0, 0, 0]",
+                '["a"]',
+                "[[1]]",
+                "1",
+                "[inf, 0, 0, 0, 0, 0, 1]",
+                "[" + ", ".join(["0.1"] * 11) + "]",
+                "[-1]",
+                "[0.0, 0.0, 0.0]",
+            ]
+        )
     if default.startswith('"'):
-        return ctx.choice(['""', '"x"', '"none"', "5", "true", '"' + "a" * 3000 + '"', '"/dev/null"', '"~"', '"\\u0000"',
-                           "[\"pinch\"]", '"pinch, rim"', '"-"', '"../../etc/passwd"'])
+        return ctx.choice(
+            [
+                '""',
+                '"x"',
+                '"none"',
+                "5",
+                "true",
+                '"' + "a" * 3000 + '"',
+                '"/dev/null"',
+                '"~"',
+                '"\\u0000"',
+                '["pinch"]',
+                '"pinch, rim"',
+                '"-"',
+                '"../../etc/passwd"',
+            ]
+        )
     if default in ("true", "false"):
         return ctx.choice(["1", "0", '"true"', "yes", "nan", "[]", "TRUE"])
-    return ctx.choice(["nan", "inf", "-inf", "+nan", "0", "-0.0", "-1", "1e9", "1e308", "1e-320", "1" + "0" * 30, "9223372036854775807",
-                       "-9223372036854775808", "0.5", "\"1\"", "[1]", "true", "abc", "0x10", "1_000", "1e400", "", "1979-05-27"])
+    return ctx.choice(
+        [
+            "nan",
+            "inf",
+            "-inf",
+            "+nan",
+            "0",
+            "-0.0",
+            "-1",
+            "1e9",
+            "1e308",
+            "1e-320",
+            "1" + "0" * 30,
+            "9223372036854775807",
+            "-9223372036854775808",
+            "0.5",
+            '"1"',
+            "[1]",
+            "true",
+            "abc",
+            "0x10",
+            "1_000",
+            "1e400",
+            "",
+            "1979-05-27",
+        ]
+    )
 
 
 # --- outputs onto odd files ---------------------------------------------------------------
@@ -1939,8 +2538,12 @@ def _odd_setting_value(ctx: Ctx, default: str, range_text: str, in_range: bool) 
 OUTPUT_FLAGS = {
     "segment": [("-o", "labels.pcd", "pcd"), ("--png", "seg.png", "png")],
     "predicates": [("-o", "problem.pddl", "pddl"), ("--png", "pred.png", "png")],
-    "plan": [("-o", "plan.txt", "text"), ("--problem", "problem.pddl", "pddl"), ("--domain", "domain.pddl", "pddl"),
-             ("--png", "plan.png", "png")],
+    "plan": [
+        ("-o", "plan.txt", "text"),
+        ("--problem", "problem.pddl", "pddl"),
+        ("--domain", "domain.pddl", "pddl"),
+        ("--png", "plan.png", "png"),
+    ],
 }
 
 
@@ -1968,6 +2571,7 @@ def gen_outputs(ctx: Ctx) -> None:
         if heavy:
             ctx.case.timeout_s = HEAVY_TIMEOUT_S
             ctx.note(f"the frame is {size[0]}x{size[1]} (it segments)")
+
     sub = ctx.pick({"single": 0.8, "replay": 0.08, "batch": 0.12})
     ctx.tag(sub)
     if sub != "single":
@@ -1987,8 +2591,21 @@ def gen_outputs(ctx: Ctx) -> None:
         folder.mkdir()
         for k in range(2):
             (folder / f"p{k}_depth.png").write_bytes(ctx.mat.depth_bytes("png", SMALL))
-        (folder / "camera_params.json").write_text(dump_mapping("camera_params.json", intrinsics_files(ctx.mat.frames[SMALL].k, SMALL)["uois"][1]))
-        kind = ctx.choice(["file", "fifo", "missing_parent", "input_folder", "chardev", "symlink_to_input_folder", "fresh", "input_file"])
+        (folder / "camera_params.json").write_text(
+            dump_mapping("camera_params.json", intrinsics_files(ctx.mat.frames[SMALL].k, SMALL)["uois"][1])
+        )
+        kind = ctx.choice(
+            [
+                "file",
+                "fifo",
+                "missing_parent",
+                "input_folder",
+                "chardev",
+                "symlink_to_input_folder",
+                "fresh",
+                "input_file",
+            ]
+        )
         out = ctx.dir / "out"
         if kind == "file":
             out.write_text("x")
@@ -2015,8 +2632,16 @@ def gen_outputs(ctx: Ctx) -> None:
         cmd = ctx.choice(["segment", "plan", "predicates"])
         outputs = {"segment": "labels,png", "plan": "plan,problem", "predicates": "problem"}[cmd]
         ctx.note(f"batch {cmd} of a folder with --out-dir onto {kind}")
-        ctx.run(cmd, folder, "--out-dir", out, "--jobs", "1", *(["--outputs", outputs] if outputs else []),
-                *(["--force"] if ctx.rng.random() < 0.3 else []))
+        ctx.run(
+            cmd,
+            folder,
+            "--out-dir",
+            out,
+            "--jobs",
+            "1",
+            *(["--outputs", outputs] if outputs else []),
+            *(["--force"] if ctx.rng.random() < 0.3 else []),
+        )
         return
     cmd = ctx.choice(["segment", "segment", "predicates", "plan"])
     flags = OUTPUT_FLAGS[cmd]
@@ -2048,9 +2673,21 @@ def gen_outputs(ctx: Ctx) -> None:
         ctx.note("with --force")
     if refused:
         ctx.case.expect = frozenset({8})
-    writes = {"fifo", "chardev", "symlink_input", "paired_input", "existing", "dangling", "hardlink_input", "odd_name", "fresh",
-              "same-target"} & ctx.case.tags
-    heavy = heavy or (bool(writes) and (force or not ({"fifo", "chardev", "existing"} >= writes)) and ctx.rng.random() < 0.6)
+    writes = {
+        "fifo",
+        "chardev",
+        "symlink_input",
+        "paired_input",
+        "existing",
+        "dangling",
+        "hardlink_input",
+        "odd_name",
+        "fresh",
+        "same-target",
+    } & ctx.case.tags
+    heavy = heavy or (
+        bool(writes) and (force or not ({"fifo", "chardev", "existing"} >= writes)) and ctx.rng.random() < 0.6
+    )
     frame_files(heavy)
     if cmd == "plan" and heavy:
         argv += ["--time-limit", "20"]
@@ -2068,8 +2705,22 @@ def _mknod_null(path: Path) -> None:
 
 def _odd_target(ctx: Ctx, default_name: str, inputs: dict[str, Path], force: bool) -> tuple[Path, str, bool]:
     """(path, how it was made, whether the run must refuse it) for an output flag."""
-    kind = ctx.pick({"fresh": 0.15, "fifo": 0.1, "chardev": 0.12, "symlink_input": 0.12, "paired_input": 0.14, "missing_dir": 0.07,
-                     "existing": 0.1, "folder": 0.05, "too_long": 0.03, "dangling": 0.04, "odd_name": 0.04, "hardlink_input": 0.04})
+    kind = ctx.pick(
+        {
+            "fresh": 0.15,
+            "fifo": 0.1,
+            "chardev": 0.12,
+            "symlink_input": 0.12,
+            "paired_input": 0.14,
+            "missing_dir": 0.07,
+            "existing": 0.1,
+            "folder": 0.05,
+            "too_long": 0.03,
+            "dangling": 0.04,
+            "odd_name": 0.04,
+            "hardlink_input": 0.04,
+        }
+    )
     ctx.tag(kind)
     if kind == "fresh":
         return ctx.dir / default_name, f"a new file {default_name}", False
@@ -2114,15 +2765,31 @@ def _odd_target(ctx: Ctx, default_name: str, inputs: dict[str, Path], force: boo
         ctx.tag("hardlink-input")
         return p, f"a hard link to the {what} input", not force
     ctx.tag("odd_name")
-    name = ctx.choice(["with space.png", "new\nline.png", "ünïcode.png", "-o.png", ".hidden.png", "a*b?.png", "x.part", ".x.abcdefgh.part"])
+    name = ctx.choice(
+        [
+            "with space.png",
+            "new\nline.png",
+            "ünïcode.png",
+            "-o.png",
+            ".hidden.png",
+            "a*b?.png",
+            "x.part",
+            ".x.abcdefgh.part",
+        ]
+    )
     if not name.endswith(Path(default_name).suffix):
         name += Path(default_name).suffix
     return ctx.dir / name, f"an odd name {name!r}", False
 
 
 GENERATORS: dict[str, Callable[[Ctx], None]] = {
-    "depth": gen_depth, "color": gen_color, "intrinsics": gen_intrinsics, "log": gen_log, "urdf": gen_urdf,
-    "settings": gen_settings, "outputs": gen_outputs,
+    "depth": gen_depth,
+    "color": gen_color,
+    "intrinsics": gen_intrinsics,
+    "log": gen_log,
+    "urdf": gen_urdf,
+    "settings": gen_settings,
+    "outputs": gen_outputs,
 }
 
 
@@ -2185,7 +2852,9 @@ def snapshot(folder: Path) -> dict[str, Entry]:
 
 @dataclass
 class Problem:
-    symptom: str  # exit1 | traceback | undocumented-exit | expected-code | stderr-lines | input-changed | special-replaced |
+    symptom: (
+        str  # exit1 | traceback | undocumented-exit | expected-code | stderr-lines | input-changed | special-replaced |
+    )
     #               output-broken | output-missing | temporary-left | unexpected-file | timeout | inconsistent | json-stdout |
     #               self-contradiction | misattributed-error | same-target |
     #               python-warning (soft: reported as a note, not a failure)
@@ -2284,8 +2953,14 @@ class _FifoDrain:
                 os.close(fd)
 
 
-def check_run(case: Case, argv: list[str], run: Run, before: dict[str, Entry], after: dict[str, Entry],
-              watched_before: dict[Path, str]) -> list[Problem]:
+def check_run(
+    case: Case,
+    argv: list[str],
+    run: Run,
+    before: dict[str, Entry],
+    after: dict[str, Entry],
+    watched_before: dict[Path, str],
+) -> list[Problem]:
     problems: list[Problem] = []
     code = run.code
     last_err = next((line for line in reversed(run.stderr.splitlines()) if line.strip()), "")
@@ -2296,17 +2971,26 @@ def check_run(case: Case, argv: list[str], run: Run, before: dict[str, Entry], a
     elif code not in case.allowed:
         problems.append(Problem("undocumented-exit", f"exit {code}: {last_err[:300]}"))
     elif code == 9 and not _is_log(argv):
-        problems.append(Problem("expected-code", f"exit 9 (a log read in part) for an input that is no log: {last_err[:300]}"))
+        problems.append(
+            Problem("expected-code", f"exit 9 (a log read in part) for an input that is no log: {last_err[:300]}")
+        )
     elif code == 11 and not _is_batch(argv):
         problems.append(Problem("expected-code", f"exit 11 (a batch) for one frame: {last_err[:300]}"))
     elif case.expect is not None and code not in case.expect and not case.consistent:
         problems.append(Problem("expected-code", f"exit {code}, expected {sorted(case.expect)}: {last_err[:300]}"))
     if "Traceback (most recent call last)" in run.stderr or "Traceback (most recent call last)" in run.stdout:
-        problems.append(Problem("traceback", run.stderr.strip().splitlines()[-1][:200] if run.stderr.strip() else "in stdout"))
+        problems.append(
+            Problem("traceback", run.stderr.strip().splitlines()[-1][:200] if run.stderr.strip() else "in stdout")
+        )
     err_lines = [line for line in run.stderr.splitlines() if line.startswith("clear: error:")]
     if isinstance(code, int) and code in ONE_LINE_ERRORS:
         if len(err_lines) != 1 or not last_err.startswith("clear: error:"):
-            problems.append(Problem("stderr-lines", f"exit {code} with {len(err_lines)} error line(s); stderr: {run.stderr.strip()[-300:]!r}"))
+            problems.append(
+                Problem(
+                    "stderr-lines",
+                    f"exit {code} with {len(err_lines)} error line(s); stderr: {run.stderr.strip()[-300:]!r}",
+                )
+            )
     elif isinstance(code, int) and code in (0, 5, 10, 11) and len(err_lines) > 1:
         problems.append(Problem("stderr-lines", f"exit {code} with {len(err_lines)} error lines"))
     if any("\n" in line for line in err_lines):
@@ -2319,14 +3003,18 @@ def check_run(case: Case, argv: list[str], run: Run, before: dict[str, Entry], a
     targets = [str(o.path) for o in case.outputs if o.kind != "dir"]
     doubled = {t for t in targets if targets.count(t) > 1}
     if code == 0 and any(os.path.isfile(t) for t in doubled):  # (into a device or FIFO both may go)
-        problems.append(Problem("same-target", "two outputs named the same file and the run said nothing: the later "
-                                               "replaced the earlier"))
+        problems.append(
+            Problem(
+                "same-target",
+                "two outputs named the same file and the run said nothing: the later replaced the earlier",
+            )
+        )
     said = re.search(r"--frame (\d+) does not exist: .*? has (\d+) frames", run.stderr)
     if said and int(said.group(1)) < int(said.group(2)):
         problems.append(Problem("self-contradiction", said.group(0)[:200]))
     w = _PY_WARNING.search(run.stderr)
     if w:
-        line = run.stderr[w.start():].splitlines()[0]
+        line = run.stderr[w.start() :].splitlines()[0]
         problems.append(Problem("python-warning", line[:200]))
     if "--json" in argv and code in (0, 5, 10) and run.stdout.strip():
         for line in run.stdout.strip().splitlines():
@@ -2341,7 +3029,9 @@ def check_run(case: Case, argv: list[str], run: Run, before: dict[str, Entry], a
         with contextlib.suppress(ValueError):
             rel = str(o.path.relative_to(case.dir))
             if rel in out_paths and out_paths[rel].kind != o.kind:  # two flags, one file: either kind is whole
-                o = dataclasses.replace(o, kind=f"{out_paths[rel].kind}|{o.kind}", must_refuse=o.must_refuse or out_paths[rel].must_refuse)
+                o = dataclasses.replace(
+                    o, kind=f"{out_paths[rel].kind}|{o.kind}", must_refuse=o.must_refuse or out_paths[rel].must_refuse
+                )
             out_paths[rel] = o
     for rel, e in before.items():
         a = after.get(rel)
@@ -2355,8 +3045,13 @@ def check_run(case: Case, argv: list[str], run: Run, before: dict[str, Entry], a
         if a is None:
             problems.append(Problem("input-changed", f"{rel}: removed"))
         elif (a.kind, a.digest, a.target) != (e.kind, e.digest, e.target):
-            problems.append(Problem("input-changed", f"{rel}: its {'content' if a.kind == e.kind else 'type'} changed"
-                                                     f"{' (an output target that had to be refused)' if o else ''}"))
+            problems.append(
+                Problem(
+                    "input-changed",
+                    f"{rel}: its {'content' if a.kind == e.kind else 'type'} changed"
+                    f"{' (an output target that had to be refused)' if o else ''}",
+                )
+            )
     for rel, a in after.items():
         name = Path(rel).name
         if rel in before:
@@ -2381,8 +3076,11 @@ def check_run(case: Case, argv: list[str], run: Run, before: dict[str, Entry], a
             continue  # inside a batch's --out-dir
         if any(r.startswith(rel + "/") for r, oo in out_paths.items() if oo.kind == "dir"):
             continue  # a parent of a batch's --out-dir, made with it
-        if any(oo.kind == "dir" and Path(rel).parent == oo.path.relative_to(case.dir) for oo in case.outputs
-               if _is_within(oo.path, case.dir)):
+        if any(
+            oo.kind == "dir" and Path(rel).parent == oo.path.relative_to(case.dir)
+            for oo in case.outputs
+            if _is_within(oo.path, case.dir)
+        ):
             continue
         problems.append(Problem("unexpected-file", f"{rel} ({a.kind}) appeared"))
     for o in case.outputs:  # the batch folder's own files: whole, no temporaries
@@ -2394,7 +3092,12 @@ def check_run(case: Case, argv: list[str], run: Run, before: dict[str, Entry], a
                     why = _validate_output(p, "json")
                     if why:
                         problems.append(Problem("output-broken", f"{p.name}: {why}"))
-                elif p.suffix == ".png" and p.is_file() and not p.name.endswith("_depth.png") and not p.name.endswith("_color.png"):
+                elif (
+                    p.suffix == ".png"
+                    and p.is_file()
+                    and not p.name.endswith("_depth.png")
+                    and not p.name.endswith("_color.png")
+                ):
                     why = _validate_output(p, "png")
                     if why:
                         problems.append(Problem("output-broken", f"{p.name}: {why}"))
@@ -2445,12 +3148,21 @@ def _is_within(p: Path, folder: Path) -> bool:
 def known_fault(case: Case, problem: Problem, code: int | str) -> str | None:
     """Which of KNOWN_FAULTS a problem is, by the case's tags and the symptom, or None (new)."""
     t = case.tags
-    if "bomb" in t and (problem.symptom == "timeout" or (problem.symptom == "exit1" and any(
-            w in problem.detail for w in ("DecompressionBomb", "MemoryError", "exceeds limit", "too large")))):
+    if "bomb" in t and (
+        problem.symptom == "timeout"
+        or (
+            problem.symptom == "exit1"
+            and any(w in problem.detail for w in ("DecompressionBomb", "MemoryError", "exceeds limit", "too large"))
+        )
+    ):
         return "K1"
     if case.kind == "log" and "truncate" in t and "mcap" in t and problem.symptom == "expected-code" and code == 3:
         return "K2"
-    if case.kind == "outputs" and ({"paired-colour", "paired-intrinsics"} & t) and problem.symptom in ("input-changed", "expected-code"):
+    if (
+        case.kind == "outputs"
+        and ({"paired-colour", "paired-intrinsics"} & t)
+        and problem.symptom in ("input-changed", "expected-code")
+    ):
         return "K3"
     if "chardev" in t and problem.symptom == "special-replaced" and "chr" in problem.detail:
         return "K4"
@@ -2492,28 +3204,38 @@ class Report:
         return sum(self.cases.values())
 
     def summary(self) -> str:
-        lines = [f"seed {self.seed}: {self.total} cases in {self.wall_s:.1f} s"
-                 + (" (stopped at the time budget)" if self.stopped_early else "")]
+        lines = [
+            f"seed {self.seed}: {self.total} cases in {self.wall_s:.1f} s"
+            + (" (stopped at the time budget)" if self.stopped_early else "")
+        ]
         for k in self.cases:
             codes = ", ".join(f"{c}:{n}" for c, n in sorted(self.codes.get(k, {}).items(), key=lambda x: str(x[0])))
             nf = sum(1 for f in self.failures if f.kind == k)
-            lines.append(f"  {k:11s} {self.cases[k]:5d} cases {self.seconds.get(k, 0):7.1f} s  failures {nf:3d}  exits {{{codes}}}"
-                         + (f"  skipped {self.skipped[k]}" if self.skipped.get(k) else ""))
+            lines.append(
+                f"  {k:11s} {self.cases[k]:5d} cases {self.seconds.get(k, 0):7.1f} s  failures {nf:3d}  exits {{{codes}}}"
+                + (f"  skipped {self.skipped[k]}" if self.skipped.get(k) else "")
+            )
         known = [f for f in self.failures if f.known]
-        lines.append(f"  failures: {len(self.failures)} ({len(known)} known, {len(self.failures) - len(known)} new); "
-                     f"notes (Python warnings on stderr): {len(self.notes)}")
+        lines.append(
+            f"  failures: {len(self.failures)} ({len(known)} known, {len(self.failures) - len(known)} new); "
+            f"notes (Python warnings on stderr): {len(self.notes)}"
+        )
         return "\n".join(lines)
 
 
 def _repro(case: Case, problem: Problem, code: int | str) -> str:
     cmds = " ; ".join(case.command_lines())
-    line = (f"[{case.kind}#{case.index} seed={case.seed}] {problem.symptom}: {problem.detail} | exit {code} | "
-            f"made: {'; '.join(case.recipe)} | cmd: {cmds} | rebuild: python benchmarks/fuzz.py --seed {case.seed} "
-            f"--case {case.index} --kinds {case.kind} --keep DIR")
+    line = (
+        f"[{case.kind}#{case.index} seed={case.seed}] {problem.symptom}: {problem.detail} | exit {code} | "
+        f"made: {'; '.join(case.recipe)} | cmd: {cmds} | rebuild: python benchmarks/fuzz.py --seed {case.seed} "
+        f"--case {case.index} --kinds {case.kind} --keep DIR"
+    )
     return line.replace("\r", "\\r").replace("\n", "\\n")
 
 
-def execute_case(case: Case, mat: Materials | None = None) -> tuple[list[tuple[Problem, int | str]], list[int | str], float]:
+def execute_case(
+    case: Case, mat: Materials | None = None
+) -> tuple[list[tuple[Problem, int | str]], list[int | str], float]:
     """Run every command of ``case`` and check it: (problems with the exit they came with,
     the exit codes, seconds)."""
     found: list[tuple[Problem, int | str]] = []
@@ -2554,9 +3276,17 @@ def confirm_in_subprocess(seed: int, index: int, kind: str, folder: Path, mat: M
     return f"own process: exit {codes[0] if len(codes) == 1 else codes}"
 
 
-def run_cases(seed: int, n: int, kinds: Sequence[str] = KINDS, *, budget_s: float | None = None,
-              start: int = 0, progress: Callable[[str], None] | None = None,
-              mat: Materials | None = None, confirm: int = 25) -> Report:
+def run_cases(
+    seed: int,
+    n: int,
+    kinds: Sequence[str] = KINDS,
+    *,
+    budget_s: float | None = None,
+    start: int = 0,
+    progress: Callable[[str], None] | None = None,
+    mat: Materials | None = None,
+    confirm: int = 25,
+) -> Report:
     """``n`` cases of ``seed`` (indices start..start+n-1, kinds in turn), each checked;
     stops starting new ones past ``budget_s``. The first ``confirm`` failing cases are run
     again as their own process, and their lines say what that gave (an in-process run can
@@ -2579,9 +3309,17 @@ def run_cases(seed: int, n: int, kinds: Sequence[str] = KINDS, *, budget_s: floa
                 import traceback
 
                 where = traceback.extract_tb(exc.__traceback__)[-1]
-                report.failures.append(Failure(kind, index, seed, "harness-error", None,
-                                               f"[{kind}#{index} seed={seed}] harness-error: the case could not be made: "
-                                               f"{type(exc).__name__}: {exc} at {Path(where.filename).name}:{where.lineno}"))
+                report.failures.append(
+                    Failure(
+                        kind,
+                        index,
+                        seed,
+                        "harness-error",
+                        None,
+                        f"[{kind}#{index} seed={seed}] harness-error: the case could not be made: "
+                        f"{type(exc).__name__}: {exc} at {Path(where.filename).name}:{where.lineno}",
+                    )
+                )
                 shutil.rmtree(folder, ignore_errors=True)
                 continue
             report.cases[kind] = report.cases.get(kind, 0) + 1
@@ -2604,8 +3342,14 @@ def run_cases(seed: int, n: int, kinds: Sequence[str] = KINDS, *, budget_s: floa
                 if key in seen:
                     continue
                 seen.add(key)
-                f = Failure(kind, index, seed, problem.symptom, known_fault(case, problem, code),
-                            _repro(case, problem, code) + ("" if problem.soft else also))
+                f = Failure(
+                    kind,
+                    index,
+                    seed,
+                    problem.symptom,
+                    known_fault(case, problem, code),
+                    _repro(case, problem, code) + ("" if problem.soft else also),
+                )
                 (report.notes if problem.soft else report.failures).append(f)
                 if progress:
                     progress(("note " if problem.soft else "") + f.line)

@@ -25,8 +25,15 @@ def _small_frame(n_rows: int = 4, n_cols: int = 5, nan_rows: tuple[int, ...] = (
         points[r] = np.nan
     colors = np.stack([idx % 256, (idx * 7) % 256, 255 - idx % 256], axis=1).astype(np.uint8)
     labels = (np.arange(n) % 3 * 10).astype(np.uint32)
-    return Frame(points=points, colors=colors, shape=(n_rows, n_cols), fields={"label": labels},
-                 stamp_s=12.25, frame_id="cam", source="small")
+    return Frame(
+        points=points,
+        colors=colors,
+        shape=(n_rows, n_cols),
+        fields={"label": labels},
+        stamp_s=12.25,
+        frame_id="cam",
+        source="small",
+    )
 
 
 _HEADER = (

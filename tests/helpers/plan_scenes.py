@@ -23,9 +23,7 @@ from clearcli.predicates.state import (
 from clearcli.predicates.synthetic import camera_pose
 
 # The robot footprint in W: 0.10 m outside the near edge (x = 0), facing +x.
-T_WORLD_BASE = np.array(
-    [[1.0, 0, 0, -0.10], [0, 1.0, 0, 0.0], [0, 0, 1.0, 0.346], [0, 0, 0, 1.0]]
-)
+T_WORLD_BASE = np.array([[1.0, 0, 0, -0.10], [0, 1.0, 0, 0.0], [0, 0, 1.0, 0.346], [0, 0, 0, 1.0]])
 TABLE_X = (0.0, 1.6)
 TABLE_Y = (-0.8, 0.8)
 
@@ -74,7 +72,12 @@ def box_object(name: str, box: Box, index: int = 0) -> ObjectModel:
     L, W, H = box.size
     centre = np.array([box.x, box.y, box.z0 + H / 2])
     corners = np.array(
-        [centre + sx * L / 2 * a1 + sy * W / 2 * a2 + sz * H / 2 * up for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]
+        [
+            centre + sx * L / 2 * a1 + sy * W / 2 * a2 + sz * H / 2 * up
+            for sx in (-1, 1)
+            for sy in (-1, 1)
+            for sz in (-1, 1)
+        ]
     )
     hull = ConvexHull(corners)
     down = -up
@@ -131,7 +134,12 @@ def table_camera() -> tuple[TablePlane, np.ndarray]:
     n = R @ np.array([0.0, 0.0, 1.0])
     p0 = t  # the world origin (on the table) in the camera frame
     poly_w = np.array(
-        [[TABLE_X[0], TABLE_Y[0], 0], [TABLE_X[1], TABLE_Y[0], 0], [TABLE_X[1], TABLE_Y[1], 0], [TABLE_X[0], TABLE_Y[1], 0]]
+        [
+            [TABLE_X[0], TABLE_Y[0], 0],
+            [TABLE_X[1], TABLE_Y[0], 0],
+            [TABLE_X[1], TABLE_Y[1], 0],
+            [TABLE_X[0], TABLE_Y[1], 0],
+        ]
     )
     return TablePlane(normal=n, offset=float(-n @ p0)), poly_w @ R.T + t
 
@@ -273,9 +281,15 @@ def dummy_state(names: list[str], facts: frozenset[Fact], push_costs: dict | Non
     table, polygon = table_camera()
     objs = tuple(
         ObjectModel(
-            name=n, segment_index=i, centroid=np.zeros(3), principal_axes=np.eye(3), extents_m=np.zeros(3),
-            hull_vertices=np.zeros((0, 3)), hull_faces=np.zeros((0, 3), dtype=np.int64),
-            grasp_candidates=(), pushes={},
+            name=n,
+            segment_index=i,
+            centroid=np.zeros(3),
+            principal_axes=np.eye(3),
+            extents_m=np.zeros(3),
+            hull_vertices=np.zeros((0, 3)),
+            hull_faces=np.zeros((0, 3), dtype=np.int64),
+            grasp_candidates=(),
+            pushes={},
         )
         for i, n in enumerate(names)
     )

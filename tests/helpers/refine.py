@@ -26,8 +26,12 @@ def hand_context(
     n = voxels.shape[0]
     edges = np.zeros((0, 2), dtype=np.int64) if voxel_edges is None else np.asarray(voxel_edges, dtype=np.int64)
     vox = VoxelCloud(
-        point_voxel=np.arange(n), centroids=voxels, counts=np.ones(n, dtype=np.int64),
-        keys=np.zeros((n, 3), dtype=np.int64), colors=None, edges=edges,
+        point_voxel=np.arange(n),
+        centroids=voxels,
+        counts=np.ones(n, dtype=np.int64),
+        keys=np.zeros((n, 3), dtype=np.int64),
+        colors=None,
+        edges=edges,
     )
     frame = Frame(points=voxels.astype(np.float32), source="by hand")
     plane = TablePlane(normal=np.asarray(normal, dtype=np.float64), offset=offset)

@@ -15,7 +15,7 @@ CANDIDATES = ((6, 1), (5, 8), (7, 3), (7, 7))
 
 
 def _moved_most(outcome: str) -> bool:
-    """"pushed 0.076 m of 0.076 m, ..." -> did the push carry the object half its length?"""
+    """ "pushed 0.076 m of 0.076 m, ..." -> did the push carry the object half its length?"""
     words = outcome.split()
     if len(words) < 5 or words[0] != "pushed":
         return False

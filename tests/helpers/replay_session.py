@@ -10,7 +10,9 @@ import pytest
 from helpers.replay import simulated_session
 
 
-def _clear_inprocess(capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch, *args: str) -> tuple[int, str, str]:
+def _clear_inprocess(
+    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch, *args: str
+) -> tuple[int, str, str]:
     """The real entry point in this process (so that monkeypatched stages apply)."""
     from clearcli import cli
 

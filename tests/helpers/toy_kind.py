@@ -40,7 +40,9 @@ class SuctionGrasp(KindModule):
                 out.append(Offer(why_not=f"its top is narrower than {SUCTION_MIN_TOP_M:.2f} m"))
                 continue
             centre = np.asarray(obj.center, dtype=float)
-            point = np.array([centre[0], centre[1], float(obj.top_height_m) + gripper.settings.closing_region_height_m / 2])
+            point = np.array(
+                [centre[0], centre[1], float(obj.top_height_m) + gripper.settings.closing_region_height_m / 2]
+            )
             T = _pose(np.array([1.0, 0.0, 0.0]), -UP, point)
             pre, lift = T.copy(), T.copy()
             pre[:3, 3] += settings.push.approach_m * UP

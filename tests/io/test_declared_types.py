@@ -48,16 +48,27 @@ def _no_output_left(folder: Path, name: str) -> None:
 def _metadata_yaml(storage_file: str, topics: list[tuple[str, str, int]], start_ns: int, duration_ns: int) -> str:
     """A rosbag2 metadata.yaml (version 5, mcap storage) for ``topics`` [(name, type, count)]."""
     lines = [
-        "rosbag2_bagfile_information:", "  version: 5", "  storage_identifier: mcap",
-        "  relative_file_paths:", f"  - {storage_file}",
-        "  duration:", f"    nanoseconds: {duration_ns}",
-        "  starting_time:", f"    nanoseconds_since_epoch: {start_ns}",
+        "rosbag2_bagfile_information:",
+        "  version: 5",
+        "  storage_identifier: mcap",
+        "  relative_file_paths:",
+        f"  - {storage_file}",
+        "  duration:",
+        f"    nanoseconds: {duration_ns}",
+        "  starting_time:",
+        f"    nanoseconds_since_epoch: {start_ns}",
         f"  message_count: {sum(n for _, _, n in topics)}",
         "  topics_with_message_count:",
     ]
     for name, msgtype, count in topics:
-        lines += ["  - topic_metadata:", f"      name: {name}", f"      type: {msgtype}",
-                  "      serialization_format: cdr", "      offered_qos_profiles: ''", f"    message_count: {count}"]
+        lines += [
+            "  - topic_metadata:",
+            f"      name: {name}",
+            f"      type: {msgtype}",
+            "      serialization_format: cdr",
+            "      offered_qos_profiles: ''",
+            f"    message_count: {count}",
+        ]
     lines += ["  compression_format: ''", "  compression_mode: ''", ""]
     return "\n".join(lines)
 
@@ -166,14 +177,20 @@ def _rewrite_mcap(out: Path, name: str, data: bytes | None = None, lie_from: int
             lie = i >= lie_from
             if lie not in channels:
                 sid = writer.register_schema(
-                    name=name if lie else schema.name, encoding=schema.encoding,
+                    name=name if lie else schema.name,
+                    encoding=schema.encoding,
                     data=(data if data is not None else schema.data) if lie else schema.data,
                 )
                 channels[lie] = writer.register_channel(
                     topic=channel.topic, message_encoding=channel.message_encoding, schema_id=sid
                 )
-            writer.add_message(channel_id=channels[lie], log_time=message.log_time,
-                               publish_time=message.publish_time, data=message.data, sequence=i)
+            writer.add_message(
+                channel_id=channels[lie],
+                log_time=message.log_time,
+                publish_time=message.publish_time,
+                data=message.data,
+                sequence=i,
+            )
         writer.finish()
     return out
 
@@ -185,8 +202,9 @@ def test_an_mcap_whose_schema_names_image_for_point_clouds_is_exit_3(tmp_path: P
     a message that has no Image fields)."""
     from helpers.rgbd_logs import IMAGE_MSGDEF
 
-    log = _rewrite_mcap(tmp_path / "lie.mcap", "sensor_msgs/msg/Image",
-                        IMAGE_MSGDEF.encode() if definition == "image" else None)
+    log = _rewrite_mcap(
+        tmp_path / "lie.mcap", "sensor_msgs/msg/Image", IMAGE_MSGDEF.encode() if definition == "image" else None
+    )
     result = run_clear("replay", log, "--json", "--out", tmp_path / "out.mcap")
     assert result.returncode == EXIT_INPUT, (result.returncode, result.stderr)
     _assert_names(_one_error_line(result.stderr), TOPIC, "sensor_msgs/msg/Image", "schema", "re-record")

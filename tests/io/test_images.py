@@ -7,13 +7,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import shared_path
 
 from clearcli.errors import InputError
 from clearcli.io.images import read_image_frame
 from clearcli.io.pcd import read_pcd
 from clearcli.io.read import read_frame
 from clearcli.settings.images import ImageSettings
-from helpers import shared_path
 
 UOIS = "rgbd/uois"
 
@@ -95,7 +95,7 @@ def test_bad_image_inputs_are_one_input_error(tmp_path: Path, damage: str, words
     from PIL import Image
 
     png = _copy_uois(tmp_path, intrinsics=damage != "no_intrinsics")
-    color = png.with_name("uois_0003_color.png")
+    png.with_name("uois_0003_color.png")
     params = tmp_path / "camera_params.json"
     if damage == "truncated":
         data = png.read_bytes()
@@ -127,8 +127,9 @@ def test_a_colour_image_of_another_size_is_left_out_and_said_so(tmp_path: Path) 
 
 def test_intrinsics_files_beside_it_that_disagree_ask_which(tmp_path: Path) -> None:
     png = _copy_uois(tmp_path)
-    (tmp_path / "intrinsics.json").write_text('{"fx": 600, "fy": 600, "x_offset": 320, "y_offset": 240, '
-                                              '"img_width": 640, "img_height": 480}')
+    (tmp_path / "intrinsics.json").write_text(
+        '{"fx": 600, "fy": 600, "x_offset": 320, "y_offset": 240, "img_width": 640, "img_height": 480}'
+    )
     with pytest.raises(InputError, match="disagree.*--intrinsics"):
         read_frame(png)
     assert read_image_frame(png, ImageSettings(intrinsics=str(tmp_path / "intrinsics.json"))).n_points == 640 * 480

@@ -111,20 +111,32 @@ def test_from_camera_info_roi_and_binning() -> None:
 def test_bad_values_name_file_and_value(tmp_path: Path) -> None:
     good = {"img_width": 640, "img_height": 480, "fx": FX, "fy": FY, "x_offset": CX, "y_offset": CY}
     _bad(_write(tmp_path, "zero.json", {**good, "fx": 0}), "zero.json: fx = 0 (must be a positive finite number)")
-    _bad(_write(tmp_path, "nan.json", {**good, "y_offset": float("nan")}), "nan.json: cy = nan (must be a finite number)")
+    _bad(
+        _write(tmp_path, "nan.json", {**good, "y_offset": float("nan")}), "nan.json: cy = nan (must be a finite number)"
+    )
     _bad(_write(tmp_path, "text.json", {**good, "fy": "big"}), "text.json: fy = 'big' is not a number")
     _bad(_write(tmp_path, "width.json", {**good, "img_width": -640}), "width.json: width = -640", "positive whole")
     missing = {k: v for k, v in good.items() if k != "img_height"}
     _bad(_write(tmp_path, "missing.json", missing), "missing.json: missing key 'img_height'")
     yaml_text = shared_path("rgbd/uois/camera_info.yaml").read_text().replace("612.937, 0.0", "0, 0.0", 1)
-    _bad(_write(tmp_path, "camera.yaml", yaml_text), "camera.yaml: fx = 0.0 (must be a positive finite number); fix the camera matrix")
+    _bad(
+        _write(tmp_path, "camera.yaml", yaml_text),
+        "camera.yaml: fx = 0.0 (must be a positive finite number); fix the camera matrix",
+    )
     no_matrix = "image_width: 640\nimage_height: 480\ncamera_matrix:\n  rows: 3\n"
     _bad(_write(tmp_path, "nodata.yaml", no_matrix), "nodata.yaml: missing key 'data'")
 
 
 def test_bad_files_and_strings(tmp_path: Path) -> None:
-    _bad(_write(tmp_path, "other.json", {"focal": 600, "centre": [320, 240]}), "other.json: unknown intrinsics layout",
-         "centre, focal", "Open3D", "UOIS", "ROS camera calibration", "CameraInfo")
+    _bad(
+        _write(tmp_path, "other.json", {"focal": 600, "centre": [320, 240]}),
+        "other.json: unknown intrinsics layout",
+        "centre, focal",
+        "Open3D",
+        "UOIS",
+        "ROS camera calibration",
+        "CameraInfo",
+    )
     _bad(tmp_path / "absent.yaml", "absent.yaml: no such file")
     _bad(str(tmp_path / "absent.yaml"), "absent.yaml: no such file, and not four numbers")
     _bad("600 600 320", '"fx fy cx cy"')
@@ -287,7 +299,7 @@ def test_a_distorted_depth_image_gives_the_known_undistorted_points() -> None:
 
         def miss(ray: np.ndarray) -> np.ndarray:
             xd, yd = _forward(np.array([ray[0]]), np.array([ray[1]]), PLUMB_BOB)
-            return np.array([xd[0], yd[0]]) - target
+            return np.array([xd[0], yd[0]]) - target  # noqa: B023 (called within the iteration)
 
         ray = fsolve(miss, target, xtol=1e-12)
         np.testing.assert_allclose(points[v, u], [ray[0] * 1.2, ray[1] * 1.2, 1.2], atol=2e-6)

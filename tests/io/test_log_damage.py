@@ -41,8 +41,9 @@ def _layout(path: Path) -> tuple[list[tuple[int, int]], int]:
     with open(path, "rb") as fp:
         summary = make_reader(fp).get_summary()
     assert summary is not None
-    frame_channels = {cid for cid, ch in summary.channels.items()
-                      if ch.topic in (DEPTH_TOPIC, "/camera/depth_registered/points")}
+    frame_channels = {
+        cid for cid, ch in summary.channels.items() if ch.topic in (DEPTH_TOPIC, "/camera/depth_registered/points")
+    }
     chunks = sorted(summary.chunk_indexes, key=lambda c: c.chunk_start_offset)
     for c in chunks:
         assert len(set(c.message_index_offsets) & frame_channels) == 1

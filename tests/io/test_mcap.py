@@ -128,7 +128,9 @@ def _big_frame(seed: int) -> Frame:
     more than one of the writer's chunks."""
     rng = np.random.default_rng(seed)
     points = rng.uniform(-1, 1, (300 * 280, 3)).astype(np.float32)
-    return Frame(points=points, colors=None, shape=(300, 280), fields={}, stamp_s=float(seed), frame_id="cam", source="big")
+    return Frame(
+        points=points, colors=None, shape=(300, 280), fields={}, stamp_s=float(seed), frame_id="cam", source="big"
+    )
 
 
 def test_mcap_truncation_fuzz_reads_every_whole_frame_or_errs(tmp_path: Path) -> None:

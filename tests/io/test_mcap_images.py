@@ -6,16 +6,16 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import shared_path
+from helpers.rgbd_logs import write_rgbd_mcap
 from PIL import Image
 
 from clearcli.errors import InputError, PartialLogError
 from clearcli.io.pcd import read_pcd
 from clearcli.io.read import iter_frames, read_frame
-from helpers import shared_path
-from helpers.rgbd_logs import write_rgbd_mcap
 
 
-def _uois(k: int) -> tuple[np.ndarray, np.ndarray, "object"]:
+def _uois(k: int) -> tuple[np.ndarray, np.ndarray, object]:
     depth = np.asarray(Image.open(shared_path(f"rgbd/uois/uois_{k:04d}_depth.png")))
     color = np.asarray(Image.open(shared_path(f"rgbd/uois/uois_{k:04d}_color.png")))
     return depth, color, read_pcd(shared_path(f"scenes/uois_realsense/uois_image_{k:04d}.pcd"))
@@ -36,9 +36,12 @@ def test_the_realsense_recording_gives_the_pcds_frames_with_colour() -> None:
 def test_float_metres_and_bgr_colour_from_a_written_log(tmp_path: Path) -> None:
     depth, color, want = _uois(3)
     metres = depth.astype(np.float32) / np.float32(1000)
-    log = write_rgbd_mcap(tmp_path / "f.mcap", [
-        {"depth": metres, "depth_encoding": "32FC1", "color": color[:, :, ::-1], "color_encoding": "bgr8"},
-    ])
+    log = write_rgbd_mcap(
+        tmp_path / "f.mcap",
+        [
+            {"depth": metres, "depth_encoding": "32FC1", "color": color[:, :, ::-1], "color_encoding": "bgr8"},
+        ],
+    )
     frame = read_frame(log)
     np.testing.assert_array_equal(frame.points, want.points)
     np.testing.assert_array_equal(frame.colors, want.colors)
@@ -46,10 +49,17 @@ def test_float_metres_and_bgr_colour_from_a_written_log(tmp_path: Path) -> None:
 
 def test_an_unregistered_colour_stream_is_left_out_not_painted_on(tmp_path: Path) -> None:
     depth, color, want = _uois(3)
-    log = write_rgbd_mcap(tmp_path / "u.mcap", [
-        {"depth": depth, "frame_id": "camera_depth_optical_frame", "color": color,
-         "color_frame_id": "camera_color_optical_frame"},
-    ])
+    log = write_rgbd_mcap(
+        tmp_path / "u.mcap",
+        [
+            {
+                "depth": depth,
+                "frame_id": "camera_depth_optical_frame",
+                "color": color,
+                "color_frame_id": "camera_color_optical_frame",
+            },
+        ],
+    )
     frame = read_frame(log)
     assert frame.colors is None
     np.testing.assert_array_equal(frame.points, want.points)
@@ -85,9 +95,8 @@ def test_bad_image_logs_are_one_input_error(tmp_path: Path, case: str, words: st
 
 
 def _write_with_info_size(path: Path, depth: np.ndarray, w: int, h: int) -> None:
-    from mcap_ros2.writer import Writer
-
     from helpers.rgbd_logs import CAMERA_INFO_MSGDEF, IMAGE_MSGDEF, image_msg, info_msg
+    from mcap_ros2.writer import Writer
 
     t = 1_700_000_000_000_000_000
     with open(path, "wb") as fp:
@@ -95,7 +104,9 @@ def _write_with_info_size(path: Path, depth: np.ndarray, w: int, h: int) -> None
         image = writer.register_msgdef("sensor_msgs/msg/Image", IMAGE_MSGDEF)
         camera = writer.register_msgdef("sensor_msgs/msg/CameraInfo", CAMERA_INFO_MSGDEF)
         writer.write_message("/cam/depth/camera_info", camera, info_msg(w, h, t, "f"), log_time=t, publish_time=t)
-        writer.write_message("/cam/depth/image_raw", image, image_msg(depth, "16UC1", t, "f"), log_time=t + 1, publish_time=t + 1)
+        writer.write_message(
+            "/cam/depth/image_raw", image, image_msg(depth, "16UC1", t, "f"), log_time=t + 1, publish_time=t + 1
+        )
         writer.finish()
 
 
@@ -127,7 +138,9 @@ def test_bags_with_depth_and_colour_images_read_as_the_pcd(tmp_path: Path, kind:
         np.testing.assert_array_equal(frame.colors, want.colors)
 
 
-def test_a_realsense_sdk_recording_reads_depth_with_its_units_and_leaves_unregistered_colour_out(tmp_path: Path) -> None:
+def test_a_realsense_sdk_recording_reads_depth_with_its_units_and_leaves_unregistered_colour_out(
+    tmp_path: Path,
+) -> None:
     from helpers.rgbd_logs import write_realsense_sdk_bag
 
     depth, color, want = _uois(3)

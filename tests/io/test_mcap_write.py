@@ -24,8 +24,7 @@ def test_write_pointcloud2_round_trip(tmp_path: Path) -> None:
     T = np.eye(4)
     T[:3, :3] = [[0, -1, 0], [1, 0, 0], [0, 0, 1]]  # 90 degrees about z
     T[:3, 3] = [0.1, -0.2, 0.75]
-    n = write_pointcloud2_mcap(out, [a, b], labels=labels,
-                               tf_static=[StaticTransform("table", "cam", T, stamp_s=12.0)])
+    n = write_pointcloud2_mcap(out, [a, b], labels=labels, tf_static=[StaticTransform("table", "cam", T, stamp_s=12.0)])
     assert n == 2
     summary = read_summary(out)
     assert summary.profile == "ros2"
@@ -44,7 +43,7 @@ def test_write_pointcloud2_round_trip(tmp_path: Path) -> None:
 
     with open(out, "rb") as fp:
         reader = make_reader(fp, decoder_factories=[DecoderFactory()])
-        (_, _, _, msg), = list(reader.iter_decoded_messages(topics=["/tf_static"]))
+        ((_, _, _, msg),) = list(reader.iter_decoded_messages(topics=["/tf_static"]))
     tf = msg.transforms[0]
     assert (tf.header.frame_id, tf.child_frame_id) == ("table", "cam")
     r = tf.transform.rotation

@@ -14,8 +14,14 @@ def _cloud(height: int, width: int, data: bytes, row_step: int | None = None) ->
     fields = [SimpleNamespace(name=n, offset=4 * k, datatype=7, count=1) for k, n in enumerate("xyz")]
     return SimpleNamespace(
         header=SimpleNamespace(stamp=SimpleNamespace(sec=1, nanosec=0), frame_id="cam"),
-        height=height, width=width, fields=fields, is_bigendian=False, point_step=12,
-        row_step=width * 12 if row_step is None else row_step, data=data, is_dense=True,
+        height=height,
+        width=width,
+        fields=fields,
+        is_bigendian=False,
+        point_step=12,
+        row_step=width * 12 if row_step is None else row_step,
+        data=data,
+        is_dense=True,
     )
 
 

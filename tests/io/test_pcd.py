@@ -165,9 +165,7 @@ def test_bad_pcd_inputs(tmp_path: Path) -> None:
         ),
         "ascii_short.pcd": (_header(d="ascii") + b"1 2 3\n4 5 6\n", "2 rows"),
         "ascii_bad_token.pcd": (_header(d="ascii") + b"1 2 3\n4 x 6\n7 8 9\n", "bad ASCII point data"),
-        "fields_mismatch.pcd": (
-            _header().replace(b"SIZE 4 4 4", b"SIZE 4 4"), "3 FIELDS but 2 SIZE"
-        ),
+        "fields_mismatch.pcd": (_header().replace(b"SIZE 4 4 4", b"SIZE 4 4"), "3 FIELDS but 2 SIZE"),
         "bad_type.pcd": (_header().replace(b"TYPE F F F", b"TYPE F F Q"), "bad PCD header"),
         "bad_width.pcd": (_header().replace(b"WIDTH 3", b"WIDTH three"), "bad PCD header"),
         "no_xyz.pcd": (_header().replace(b"FIELDS x y z", b"FIELDS a b c") + _xyz(3), "no x/y/z"),

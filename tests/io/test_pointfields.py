@@ -23,11 +23,21 @@ def test_pointcloud2_blob_big_endian_with_row_padding() -> None:
     from clearcli.io.pointfields import FieldSpec, frame_from_records, records_from_blob
 
     height, width, step, pad = 2, 3, 20, 4
-    specs = [FieldSpec("x", 0, "f4"), FieldSpec("y", 4, "f4"), FieldSpec("z", 8, "f4"),
-             FieldSpec("rgb", 12, "f4"), FieldSpec("uv", 16, "u2", 2)]
-    dtype = np.dtype({"names": ["x", "y", "z", "rgb", "uv"],
-                      "formats": [">f4", ">f4", ">f4", ">u4", (">u2", (2,))],
-                      "offsets": [0, 4, 8, 12, 16], "itemsize": step})
+    specs = [
+        FieldSpec("x", 0, "f4"),
+        FieldSpec("y", 4, "f4"),
+        FieldSpec("z", 8, "f4"),
+        FieldSpec("rgb", 12, "f4"),
+        FieldSpec("uv", 16, "u2", 2),
+    ]
+    dtype = np.dtype(
+        {
+            "names": ["x", "y", "z", "rgb", "uv"],
+            "formats": [">f4", ">f4", ">f4", ">u4", (">u2", (2,))],
+            "offsets": [0, 4, 8, 12, 16],
+            "itemsize": step,
+        }
+    )
     rows = []
     for r in range(height):
         rec = np.zeros(width, dtype=dtype)

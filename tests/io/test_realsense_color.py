@@ -14,9 +14,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers.rgbd_logs import write_realsense_sdk_bag
 
 from clearcli.io.read import iter_frames, read_frame
-from helpers.rgbd_logs import write_realsense_sdk_bag
 
 W_D, H_D, K_D = 64, 48, (50.0, 50.0, 32.0, 24.0)  # depth: fx, fy, cx, cy
 W_C, H_C, K_C = 80, 60, (70.0, 72.0, 40.3, 29.6)  # colour: another size and other intrinsics
@@ -29,7 +29,7 @@ T0 = 1_700_000_000_000_000_000
 
 def _depth_mm() -> np.ndarray:
     depth = np.full((H_D, W_D), 800, dtype=np.uint16)
-    depth[:, W_D // 2:] = 1200  # the right half farther: another parallax
+    depth[:, W_D // 2 :] = 1200  # the right half farther: another parallax
     depth[5, 5] = 0  # no depth
     return depth
 
@@ -76,8 +76,7 @@ def _write(path: Path, *, reference: str = "depth", **kw) -> Path:
         a = (0.01, -0.004, 0.003)
         c, s = math.cos(THETA), math.sin(THETA)
         ra = (c * a[0] + s * a[2], a[1], -s * a[0] + c * a[2])
-        extrinsics = {"Depth": (a, IDENTITY[1]),
-                      "Color": (tuple(ra[i] + T_XYZ[i] for i in range(3)), Q_COLOR_DEPTH)}
+        extrinsics = {"Depth": (a, IDENTITY[1]), "Color": (tuple(ra[i] + T_XYZ[i] for i in range(3)), Q_COLOR_DEPTH)}
     decoy = np.zeros((H_C, W_C, 3), dtype=np.uint8)
     decoy[...] = (255, 0, 255)
     args = dict(depth_k=K_D, color_k=K_C, extrinsics=extrinsics, color_at_ns=[-30_000_000, 6_000_000])
@@ -131,20 +130,37 @@ def test_plumb_bob_colour_distortion_is_projected(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     "case, kw, words",
     [
-        ("no tf topics", {"extrinsics": {}},
-         "without Depth extrinsics (/device_0/sensor_0/Depth_0/tf/0) or Color extrinsics "
-         "(/device_0/sensor_1/Color_0/tf/0): colour left out"),
-        ("no Depth tf", {"extrinsics": {"Color": (T_XYZ, Q_COLOR_DEPTH)}},
-         "without Depth extrinsics (/device_0/sensor_0/Depth_0/tf/0): colour left out"),
-        ("no colour camera info", {"color_info": False},
-         "without Color intrinsics (/device_0/sensor_1/Color_0/info/camera_info): colour left out"),
-        ("unreadable encoding", {"color_encoding": "yuv422", "color": [np.zeros((H_C, W_C, 2), np.uint8)],
-                                 "color_at_ns": [0]},
-         "is 'yuv422', not one clear reads"),
-        ("unprojectable distortion", {"color_model": "Inverse Brown Conrady", "color_d": (0.1, -0.05, 0, 0, 0)},
-         "'Inverse Brown Conrady'"),
-        ("no colour near the depth", {"color_at_ns": [-90_000_000, 80_000_000]},
-         "no Color image (/device_0/sensor_1/Color_0/image/data) within 50 ms of a depth image"),
+        (
+            "no tf topics",
+            {"extrinsics": {}},
+            "without Depth extrinsics (/device_0/sensor_0/Depth_0/tf/0) or Color extrinsics "
+            "(/device_0/sensor_1/Color_0/tf/0): colour left out",
+        ),
+        (
+            "no Depth tf",
+            {"extrinsics": {"Color": (T_XYZ, Q_COLOR_DEPTH)}},
+            "without Depth extrinsics (/device_0/sensor_0/Depth_0/tf/0): colour left out",
+        ),
+        (
+            "no colour camera info",
+            {"color_info": False},
+            "without Color intrinsics (/device_0/sensor_1/Color_0/info/camera_info): colour left out",
+        ),
+        (
+            "unreadable encoding",
+            {"color_encoding": "yuv422", "color": [np.zeros((H_C, W_C, 2), np.uint8)], "color_at_ns": [0]},
+            "is 'yuv422', not one clear reads",
+        ),
+        (
+            "unprojectable distortion",
+            {"color_model": "Inverse Brown Conrady", "color_d": (0.1, -0.05, 0, 0, 0)},
+            "'Inverse Brown Conrady'",
+        ),
+        (
+            "no colour near the depth",
+            {"color_at_ns": [-90_000_000, 80_000_000]},
+            "no Color image (/device_0/sensor_1/Color_0/image/data) within 50 ms of a depth image",
+        ),
     ],
 )
 def test_what_registration_lacks_leaves_colour_out_by_name_and_depth_read(
@@ -164,22 +180,30 @@ def test_every_frame_of_a_recording_gets_its_own_colour(tmp_path: Path) -> None:
     painted = _painted()
     other = painted.copy()
     other[..., 2] = 100  # the second frame's colour image, told apart by its blue
-    log = write_realsense_sdk_bag(tmp_path / "two.bag", [_depth_mm(), _depth_mm()], [painted, other],
-                                  depth_k=K_D, color_k=K_C, extrinsics={"Depth": IDENTITY, "Color": (T_XYZ, Q_COLOR_DEPTH)})
+    log = write_realsense_sdk_bag(
+        tmp_path / "two.bag",
+        [_depth_mm(), _depth_mm()],
+        [painted, other],
+        depth_k=K_D,
+        color_k=K_C,
+        extrinsics={"Depth": IDENTITY, "Color": (T_XYZ, Q_COLOR_DEPTH)},
+    )
     frames = list(iter_frames(log))
     assert [int(f.colors.reshape(H_D, W_D, 3)[20, 30, 2]) for f in frames] == [200, 100]
 
 
 def test_identity_extrinsics_and_the_same_intrinsics_give_the_colour_image_itself(tmp_path: Path) -> None:
+    from helpers import shared_path
     from PIL import Image
 
     from clearcli.io.pcd import read_pcd
-    from helpers import shared_path
 
     depth = np.asarray(Image.open(shared_path("rgbd/uois/uois_0003_depth.png")))
     color = np.asarray(Image.open(shared_path("rgbd/uois/uois_0003_color.png")))
     want = read_pcd(shared_path("scenes/uois_realsense/uois_image_0003.pcd"))
-    log = write_realsense_sdk_bag(tmp_path / "same.bag", [depth], [color], extrinsics={"Depth": IDENTITY, "Color": IDENTITY})
+    log = write_realsense_sdk_bag(
+        tmp_path / "same.bag", [depth], [color], extrinsics={"Depth": IDENTITY, "Color": IDENTITY}
+    )
     frame = read_frame(log)
     finite = np.isfinite(frame.points).all(axis=1)
     np.testing.assert_array_equal(frame.points, want.points)

@@ -6,8 +6,9 @@ import json
 import shutil
 import subprocess
 import sys
+from collections.abc import Iterable
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Any
 
 import numpy as np
 import pytest
@@ -86,9 +87,16 @@ def _frames(n: int, rows: int | None = None) -> list[Frame]:
     for i in range(n):
         points = box.points[:k].copy()
         points[:, 0] += np.float32(0.01 * i)
-        out.append(Frame(points=points, colors=box.colors[:k].copy(), shape=(rows, w),
-                         fields={"label": (np.asarray(box.fields["label"])[:k] + i).astype(np.uint32)},
-                         stamp_s=100.0 + 0.5 * i, frame_id="camera_rgb_optical_frame"))
+        out.append(
+            Frame(
+                points=points,
+                colors=box.colors[:k].copy(),
+                shape=(rows, w),
+                fields={"label": (np.asarray(box.fields["label"])[:k] + i).astype(np.uint32)},
+                stamp_s=100.0 + 0.5 * i,
+                frame_id="camera_rgb_optical_frame",
+            )
+        )
     return out
 
 
@@ -104,8 +112,10 @@ def _cloud_msg(store: Any, frame: Frame, ros1: bool) -> Any:
     blob["label"] = frame.fields["label"]
     height, width = frame.shape if frame.shape else (1, n)
     PointField = T["sensor_msgs/msg/PointField"]
-    fields = [PointField(name=name, offset=record.fields[name][1], datatype=6 if name == "label" else 7, count=1)
-              for name in record.names]
+    fields = [
+        PointField(name=name, offset=record.fields[name][1], datatype=6 if name == "label" else 7, count=1)
+        for name in record.names
+    ]
     sec, nsec = divmod(int(round(frame.stamp_s * 1e9)), 1_000_000_000)
     stamp = T["builtin_interfaces/msg/Time"](sec=sec, nanosec=nsec)
     Header = T["std_msgs/msg/Header"]
@@ -114,9 +124,15 @@ def _cloud_msg(store: Any, frame: Frame, ros1: bool) -> Any:
     else:
         header = Header(stamp=stamp, frame_id=frame.frame_id)
     return T["sensor_msgs/msg/PointCloud2"](
-        header=header, height=height, width=width, fields=fields, is_bigendian=False,
-        point_step=record.itemsize, row_step=record.itemsize * width,
-        data=np.frombuffer(blob.tobytes(), dtype=np.uint8), is_dense=False,
+        header=header,
+        height=height,
+        width=width,
+        fields=fields,
+        is_bigendian=False,
+        point_step=record.itemsize,
+        row_step=record.itemsize * width,
+        data=np.frombuffer(blob.tobytes(), dtype=np.uint8),
+        is_dense=False,
     )
 
 
@@ -128,7 +144,8 @@ def _tf_msg(store: Any, parent: str, child: str, xyz: Iterable[float], quat_xyzw
     x, y, z = xyz
     qx, qy, qz, qw = quat_xyzw
     tf = T["geometry_msgs/msg/TransformStamped"](
-        header=header, child_frame_id=child,
+        header=header,
+        child_frame_id=child,
         transform=T["geometry_msgs/msg/Transform"](
             translation=T["geometry_msgs/msg/Vector3"](x=x, y=y, z=z),
             rotation=T["geometry_msgs/msg/Quaternion"](x=qx, y=qy, z=qz, w=qw),
@@ -147,9 +164,15 @@ def _ros1_store() -> Any:
     return store
 
 
-def write_ros1(path: Path, clouds: dict[str, list[Frame]], *, strings: dict[str, int] | None = None,
-               tf: tuple[str, str, list[float], list[float]] | None = None,
-               times: list[float] | None = None, compression: str | None = None) -> Path:
+def write_ros1(
+    path: Path,
+    clouds: dict[str, list[Frame]],
+    *,
+    strings: dict[str, int] | None = None,
+    tf: tuple[str, str, list[float], list[float]] | None = None,
+    times: list[float] | None = None,
+    compression: str | None = None,
+) -> Path:
     """A ROS 1 bag written by rosbags: PointCloud2 on each topic of `clouds`, String topics, a /tf_static."""
     store = _ros1_store()
     writer = Writer1(path)
@@ -174,9 +197,14 @@ def write_ros1(path: Path, clouds: dict[str, list[Frame]], *, strings: dict[str,
     return path
 
 
-def write_rosbag2(path: Path, clouds: dict[str, list[Frame]], *, storage: str = "sqlite3",
-                  strings: dict[str, int] | None = None,
-                  tf: tuple[str, str, list[float], list[float]] | None = None) -> Path:
+def write_rosbag2(
+    path: Path,
+    clouds: dict[str, list[Frame]],
+    *,
+    storage: str = "sqlite3",
+    strings: dict[str, int] | None = None,
+    tf: tuple[str, str, list[float], list[float]] | None = None,
+) -> Path:
     """A rosbag2 bag folder written by rosbags (sqlite3 or mcap storage), cdr messages."""
     store = get_typestore(Stores.LATEST)
     plugin = {"sqlite3": StoragePlugin.SQLITE3, "mcap": StoragePlugin.MCAP}[storage]
@@ -239,8 +267,16 @@ def test_cli_plan_and_info_on_real_ros1_bag() -> None:
     b = doc["bag"]
     assert b["profile"] == "ros1" and b["indexed"] and b["complete"] and b["storage"] == "rosbag1"
     assert b["pointcloud_topic"] == TOPIC and b["frame_count"] == 1 and b["message_count"] == 1
-    assert b["channels"] == [{"topic": TOPIC, "schema": "sensor_msgs/PointCloud2", "schema_encoding": "ros1msg",
-                              "message_encoding": "ros1", "message_count": 1, "point_cloud": True}]
+    assert b["channels"] == [
+        {
+            "topic": TOPIC,
+            "schema": "sensor_msgs/PointCloud2",
+            "schema_encoding": "ros1msg",
+            "message_encoding": "ros1",
+            "message_count": 1,
+            "point_cloud": True,
+        }
+    ]
     assert b["start_s"] == pytest.approx(1.3e9) and b["duration_s"] == 0.0
     assert doc["frame"]["shape"] == [480, 640] and doc["frame"]["finite_points"] == 171483
 
@@ -257,8 +293,9 @@ def test_truncated_real_ros1_bag(tmp_path: Path) -> None:
         cut = tmp_path / f"cut{n}.bag"
         cut.write_bytes(data[:n])
         _one_line_error(_clear("plan", str(cut), "--json"), (EXIT_INPUT,), str(cut), "truncated", "ROS 1 bag")
-        _one_line_error(_clear("info", "--json", str(cut)), (EXIT_PARTIAL,), str(cut),
-                        "breaks after 0 complete messages")
+        _one_line_error(
+            _clear("info", "--json", str(cut)), (EXIT_PARTIAL,), str(cut), "breaks after 0 complete messages"
+        )
         with pytest.raises(InputError, match="(truncated or corrupt|corrupt or truncated) ROS 1 bag"):
             read_frame(cut)
     # Just before the end: the chunk survives, the index is lost.
@@ -322,8 +359,13 @@ def test_ros1_written_by_rosbags_reads_back_and_seeks(tmp_path: Path) -> None:
     # Frames 1 and 2 share one log time: --frame 2 must still be frame 2, not frame 1.
     times = [100.0, 101.0, 101.0, 102.0]
     for compression in (None, "lz4", "bz2"):
-        bag = write_ros1(tmp_path / f"four_{compression}.bag", {TOPIC: frames}, strings={"/rosout": 2},
-                         times=times, compression=compression)
+        bag = write_ros1(
+            tmp_path / f"four_{compression}.bag",
+            {TOPIC: frames},
+            strings={"/rosout": 2},
+            times=times,
+            compression=compression,
+        )
         got = list(iter_frames(bag))
         assert len(got) == 4
         for g, want in zip(got, frames):
@@ -353,11 +395,18 @@ def test_topic_rules(tmp_path: Path) -> None:
         assert json.loads(info.stdout)["frame"] is None
 
     two = write_ros1(tmp_path / "two.bag", {"/a/points": frames, "/b/points": frames}, strings={"/chatter": 1})
-    _one_line_error(_clear("plan", str(two), "--json"), (EXIT_INPUT,),
-                    "several point-cloud topics (/a/points, /b/points)", "--topic")
+    _one_line_error(
+        _clear("plan", str(two), "--json"),
+        (EXIT_INPUT,),
+        "several point-cloud topics (/a/points, /b/points)",
+        "--topic",
+    )
     _assert_same_frame(read_frame(two, topic="/b/points"), frames[0])
-    _one_line_error(_clear("info", str(two), "--topic", "/chatter"), (EXIT_INPUT,),
-                    "topic /chatter has type std_msgs/String, not a point cloud")
+    _one_line_error(
+        _clear("info", str(two), "--topic", "/chatter"),
+        (EXIT_INPUT,),
+        "topic /chatter has type std_msgs/String, not a point cloud",
+    )
     _one_line_error(_clear("info", str(two), "--topic", "/x"), (EXIT_INPUT,), "no topic '/x'")
 
     plain = tmp_path / "plain_dir"
@@ -417,8 +466,11 @@ def test_truncated_and_corrupt_written_bags(tmp_path: Path) -> None:
                 _assert_same_frame(g, want)
         else:
             assert isinstance(err.value, InputError) and "ROS 1 bag" in str(err.value)
-        _one_line_error(_clear("info", str(bad), "--frame", str(want_frames)),
-                        (EXIT_PARTIAL,) if want_frames else (EXIT_INPUT, EXIT_PARTIAL), str(bad))
+        _one_line_error(
+            _clear("info", str(bad), "--frame", str(want_frames)),
+            (EXIT_PARTIAL,) if want_frames else (EXIT_INPUT, EXIT_PARTIAL),
+            str(bad),
+        )
 
     # rosbag2 storage cut short: sqlite3 is unreadable; an MCAP storage file is read alone
     # up to its damage, and the error says so.

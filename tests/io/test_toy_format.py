@@ -22,7 +22,6 @@ from clearcli.errors import InputError
 from clearcli.io.formats.base import InputFormat, SingleFrame
 from clearcli.io.frames import Frame
 
-
 # --- the toy format: what would be clearcli/io/formats/xyz.py -------------------------------
 
 

@@ -21,8 +21,11 @@ def _patches(wall: bool) -> tuple[Supervoxels, np.ndarray]:
         centroids = [[0.0, 0, 0], [-0.03, 0, 0], [0.03, 0, 0], [0.06, 0, 0]]
         normals = [[0, 0, 1.0]] * 4
     sv = Supervoxels(
-        voxel_label=np.arange(4), centroids=np.array(centroids), normals=np.array(normals, dtype=float),
-        n_voxels=np.full(4, 50), edges=np.array([[0, 1], [0, 2], [2, 3]]),
+        voxel_label=np.arange(4),
+        centroids=np.array(centroids),
+        normals=np.array(normals, dtype=float),
+        n_voxels=np.full(4, 50),
+        edges=np.array([[0, 1], [0, 2], [2, 3]]),
     )
     return sv, np.array([RED, RED, BLUE, BLUE])
 

@@ -18,6 +18,8 @@ def test_fragments_of_a_face_seen_edge_on_join_their_object() -> None:
     frame = render(FAMILIES["small_against_tall"](73), seed=73)
     assert _right(frame)
     assert not _right(frame, replace(S, fragment_join_m=0.0))
-    apart = make_scene("apart", [Box(0, 0.10, 0.08, 0.20, x_m=0.0, y_m=0.05), Box(1, 0.04, 0.04, 0.05, x_m=0.0, y_m=-0.02)])
+    apart = make_scene(
+        "apart", [Box(0, 0.10, 0.08, 0.20, x_m=0.0, y_m=0.05), Box(1, 0.04, 0.04, 0.05, x_m=0.0, y_m=-0.02)]
+    )
     for seed in range(3):
         assert _right(render(apart, seed=seed))

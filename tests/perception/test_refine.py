@@ -19,14 +19,29 @@ def test_refinement_stages_run_from_one_list() -> None:
     from clearcli.perception.refine import STAGES
     from clearcli.perception.segment import segment
 
-    assert [s.name for s in STAGES] == ["stacks", "cuts", "occlusion", "colors", "steps", "rims", "rings", "vessels", "fragments"]
+    assert [s.name for s in STAGES] == [
+        "stacks",
+        "cuts",
+        "occlusion",
+        "colors",
+        "steps",
+        "rims",
+        "rings",
+        "vessels",
+        "fragments",
+    ]
     assert [s.name for s in STAGES if s.needs_grid] == ["occlusion"]
     frame = read_frame(FIXTURES / "clutter10.pcd")
     seg = segment(frame, SegmentSettings())
     assert {"cuts", "occlusion", "steps", "rims", "merge"} <= set(seg.timings_s)
     finite = np.isfinite(frame.points).all(axis=1)
-    flat = Frame(points=frame.points[finite], colors=None if frame.colors is None else frame.colors[finite],
-                 shape=None, fields={}, source="unorganized")
+    flat = Frame(
+        points=frame.points[finite],
+        colors=None if frame.colors is None else frame.colors[finite],
+        shape=None,
+        fields={},
+        source="unorganized",
+    )
     unorganized = segment(flat, SegmentSettings(occlusion_merge=True))
     # colour is read there by the containers' walls only: the flat objects need the grid
     assert unorganized.color_used and unorganized.color_note == "read by: containers' walls"
@@ -54,8 +69,11 @@ def _context():  # type: ignore[no-untyped-def]
     voxels = np.array([[0.0, 0.0, 0.5], [0.0, 1.0, 0.0], [0.3, 0.0, 0.5], [0.0, 0.3, 0.9], [0.0, 0.6, 1.3]])
     normals = np.array([_tilted(19.0), _tilted(21.0), [1.0, 0.0, 0.0]])
     sv = Supervoxels(
-        voxel_label=np.array([2, 0, 0, 1, 2]), centroids=voxels[[1, 3, 0]], normals=normals,
-        n_voxels=np.array([2, 1, 2]), edges=np.array([[0, 1], [1, 2]]),
+        voxel_label=np.array([2, 0, 0, 1, 2]),
+        centroids=voxels[[1, 3, 0]],
+        normals=normals,
+        n_voxels=np.array([2, 1, 2]),
+        edges=np.array([[0, 1], [1, 2]]),
     )
     return hand_context(voxels, sv, SegmentSettings(), normal=(0.0, 0.6, 0.8), offset=-0.1)
 

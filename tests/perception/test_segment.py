@@ -58,8 +58,19 @@ def test_timings_keep_their_names_order_and_sums(box_frame: Frame) -> None:
     from clearcli.perception.segment import TIMINGS, segment
 
     stages = [st.name for st in STAGES]
-    assert list(TIMINGS) == ["filter", "table", "supervoxels", "lccp", "merge", "edges", *stages, "flat", "objects",
-                             "openings", "total"]
+    assert list(TIMINGS) == [
+        "filter",
+        "table",
+        "supervoxels",
+        "lccp",
+        "merge",
+        "edges",
+        *stages,
+        "flat",
+        "objects",
+        "openings",
+        "total",
+    ]
     t = segment(box_frame, S).timings_s
     assert list(t) == list(TIMINGS)
     assert t["merge"] == sum(t[k] for k in stages if k != "cuts")
@@ -185,7 +196,10 @@ def test_mosd_cylindrical_category_keeps_containers_whole() -> None:
 
     frames = [read_frame(shared_path(f"mosd/learn/learn{i}.pcd")) for i in range(33, 39)]
     on = [score(segment(f, S).labels(), f.fields["label"]).f1 for f in frames]
-    off = [score(segment(f, replace(S, ring_merge=False, vessel_rebuild=False)).labels(), f.fields["label"]).f1 for f in frames]
+    off = [
+        score(segment(f, replace(S, ring_merge=False, vessel_rebuild=False)).labels(), f.fields["label"]).f1
+        for f in frames
+    ]
     assert np.mean(on) >= 0.93, on
     assert np.mean(off) < 0.8, off
 
@@ -196,11 +210,14 @@ SEEDS = (0, 1, 2)
 def _specks_scene() -> Scene:
     """Three objects 1.5 cm across: each shows less visible surface than the smallest
     object segmentation keeps (`min_object_area_m2`)."""
-    return make_scene("specks", [
-        Box(0, 0.015, 0.015, 0.015, x_m=-0.12, y_m=0.0, yaw_rad=0.5),
-        Cylinder(1, 0.0075, 0.02, x_m=0.0, y_m=0.08),
-        Box(2, 0.015, 0.015, 0.015, x_m=0.14, y_m=-0.06),
-    ])
+    return make_scene(
+        "specks",
+        [
+            Box(0, 0.015, 0.015, 0.015, x_m=-0.12, y_m=0.0, yaw_rad=0.5),
+            Cylinder(1, 0.0075, 0.02, x_m=0.0, y_m=0.08),
+            Box(2, 0.015, 0.015, 0.015, x_m=0.14, y_m=-0.06),
+        ],
+    )
 
 
 def _owners(seg: Segmentation, truth: np.ndarray, what: str) -> list[int]:

@@ -141,10 +141,13 @@ def test_two_bowls_side_by_side_are_each_rebuilt() -> None:
         centre = CENTRE + [dx, 0.0]
         r_out = lambda z: 0.045 + 0.025 * z / 0.07  # noqa: E731
         outer = _wall(r_out, 0.0, 0.07, 180, 360, outward=True, centre=centre)
-        inner_l = _wall(lambda z: r_out(z) - 0.004, 0.01, 0.07, 0, 90, outward=False, centre=centre)
-        inner_r = _wall(lambda z: r_out(z) - 0.004, 0.01, 0.07, 90, 180, outward=False, centre=centre)
-        parts += [(inner_l[0], inner_l[1], True, 3 * i), (inner_r[0], inner_r[1], True, 3 * i + 1),
-                  (outer[0], outer[1], True, 3 * i + 2)]
+        inner_l = _wall(lambda z: r_out(z) - 0.004, 0.01, 0.07, 0, 90, outward=False, centre=centre)  # noqa: B023 (used within the iteration)
+        inner_r = _wall(lambda z: r_out(z) - 0.004, 0.01, 0.07, 90, 180, outward=False, centre=centre)  # noqa: B023 (used within the iteration)
+        parts += [
+            (inner_l[0], inner_l[1], True, 3 * i),
+            (inner_r[0], inner_r[1], True, 3 * i + 1),
+            (outer[0], outer[1], True, 3 * i + 2),
+        ]
     seg, out = _rebuild(parts)
     first, second = np.isin(seg, [0, 1, 2]), np.isin(seg, [3, 4, 5])
     assert np.unique(out).size == 2

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import dataclasses
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -80,7 +82,9 @@ def test_figure_3_1_backtracking_sequence() -> None:
     assert all(not s.feasible and "reach" in s.reason for s in steps)
     assert plan.unreachable == ("o2",)
     assert set(plan.stuck) == {"o0", "o1"}
-    assert plan.ik_facts == frozenset({("ik_unfeasible_grasp", "o2")} | {("ik_unfeasible_dir", "o2", d) for d in DIRECTIONS})
+    assert plan.ik_facts == frozenset(
+        {("ik_unfeasible_grasp", "o2")} | {("ik_unfeasible_dir", "o2", d) for d in DIRECTIONS}
+    )
     assert "o2" in str(info.value) and "reach" in str(info.value)
     # each intermediate plan is valid for the state it was made for
     facts = set(state.facts)
@@ -138,7 +142,7 @@ class FakeIK:
         self.infeasible = infeasible
         self.calls: list[Action] = []
 
-    def __call__(self, action: Action, ctx: SceneContext = SceneContext()) -> "CheckedAction | Infeasible":
+    def __call__(self, action: Action, ctx: SceneContext = SceneContext()) -> CheckedAction | Infeasible:
         self.calls.append(action)
         if action in self.infeasible and not ctx.moved(action.obj):
             return Infeasible("no IK solution", "ik")
@@ -158,8 +162,7 @@ def test_grasp_infeasible_push_then_grasp() -> None:
 def test_unreachable_blocker_leaves_others_stuck_but_plans_the_rest() -> None:
     # o0 is out of reach and blocks grasping/pushing o1, and grasping o2 (o2 can be pushed).
     facts = frozenset(
-        {("block_grasp", "o0", "o1"), ("block_grasp", "o0", "o2")}
-        | {("block_dir", "o0", "o1", d) for d in DIRECTIONS}
+        {("block_grasp", "o0", "o1"), ("block_grasp", "o0", "o2")} | {("block_dir", "o0", "o1", d) for d in DIRECTIONS}
     )
     state = ps.dummy_state(["o0", "o1", "o2"], facts)
     everything_o0 = {Action("grasp", "o0")} | {Action("push", "o0", d) for d in DIRECTIONS}
@@ -231,13 +234,8 @@ def test_ik_checker_on_scene_grasp_and_push() -> None:
     assert failed.facts(Action("grasp", "o0")) == (("block_grasp", "o1", "o0"),)
 
 
-def _clear(*args: str) -> "subprocess.CompletedProcess[str]":
-    import subprocess
-    import sys
-
-    return subprocess.run(
-        [sys.executable, "-m", "clearcli.cli", *args], capture_output=True, text=True, timeout=300
-    )
+def _clear(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "clearcli.cli", *args], capture_output=True, text=True, timeout=300)
 
 
 def test_cli_plan_on_a_real_frame() -> None:
@@ -316,7 +314,13 @@ def test_later_action_without_ik_found_by_whole_check_only() -> None:
     assert [a.pddl() for a in whole.actions] == ["(grasp o0)"] and whole.status == "partial"
     (left,) = whole.left
     assert left.name == "o1" and left.reason == "unreachable"
-    assert "no IK solution" in left.actions["grasp"] and set(left.actions) == {"grasp", "push dir1", "push dir2", "push dir3", "push dir4"}
+    assert "no IK solution" in left.actions["grasp"] and set(left.actions) == {
+        "grasp",
+        "push dir1",
+        "push dir2",
+        "push dir3",
+        "push dir4",
+    }
     failed = [s for s in whole.steps if not s.feasible]
     assert failed[0].failed_step == 1 and failed[0].learnt == (("ik_unfeasible_grasp", "o1"),)
     assert len(whole.steps) == 6 and whole.steps[-1].feasible  # relearnt 5 times, then ended
@@ -328,7 +332,12 @@ def _walled_scene(wall_movable: bool):  # type: ignore[no-untyped-def]
     # o2: a 0.6 m tall, 0.20 m wide box between the robot and o1, too wide to grasp
     boxes = {"o0": ps.Box(0.45, -0.30), "o1": ps.Box(0.65, 0.0), "o2": ps.Box(0.35, 0.0, (0.20, 0.20, 0.6))}
     # o1 stands in o2's way along dir1 (+x), o0 along dir4 (-y)
-    facts = {("block_grasp", "o0", "o1"), ("ungraspable", "o2"), ("block_dir", "o1", "o2", "dir1"), ("block_dir", "o0", "o2", "dir4")}
+    facts = {
+        ("block_grasp", "o0", "o1"),
+        ("ungraspable", "o2"),
+        ("block_dir", "o1", "o2", "dir1"),
+        ("block_dir", "o0", "o2", "dir4"),
+    }
     if not wall_movable:
         facts |= {("push_off_table", "o2", d) for d in DIRECTIONS}
     return ps.scene(boxes, facts)
@@ -370,7 +379,7 @@ def test_relearning_loop_ends_with_a_fixed_prefix() -> None:
     check_plan(state, plan)
 
 
-def _many_objects(n: int) -> "SymbolicState":  # type: ignore[name-defined]  # noqa: F821
+def _many_objects(n: int) -> SymbolicState:  # type: ignore[name-defined]  # noqa: F821
     from clearcli.planning.compile import random_facts
 
     return ps.dummy_state([f"o{i}" for i in range(n)], random_facts(n, 3, density=0.5))

@@ -22,7 +22,9 @@ def test_planner_errors(monkeypatch: pytest.MonkeyPatch) -> None:
         run_downward(task.domain, task.problem, search="astar(nosuchheuristic())", time_limit_s=20)
     # missing binary: an install hint
     real = importlib.util.find_spec
-    monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: None if name == "up_fast_downward" else real(name, *a))
+    monkeypatch.setattr(
+        importlib.util, "find_spec", lambda name, *a: None if name == "up_fast_downward" else real(name, *a)
+    )
     with pytest.raises(PlannerError, match="pip install up-fast-downward"):
         run_downward(task.domain, task.problem)
 

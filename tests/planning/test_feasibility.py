@@ -59,7 +59,14 @@ def _cube_obstacles(margin_m: float = 0.0) -> Obstacles:
     lo, hi = np.array([0.4, -0.1, 0.0]), np.array([0.6, 0.1, 0.2])
     # n.x + d <= 0 inside: one plane per face
     planes = np.array(
-        [[1, 0, 0, -hi[0]], [-1, 0, 0, lo[0]], [0, 1, 0, -hi[1]], [0, -1, 0, lo[1]], [0, 0, 1, -hi[2]], [0, 0, -1, lo[2]]],
+        [
+            [1, 0, 0, -hi[0]],
+            [-1, 0, 0, lo[0]],
+            [0, 1, 0, -hi[1]],
+            [0, -1, 0, lo[1]],
+            [0, 0, 1, -hi[2]],
+            [0, 0, -1, lo[2]],
+        ],
         dtype=float,
     )
     return Obstacles(np.array([0.0, 0.0, 1.0]), 0.0, ("o1",), (planes,), ((lo, hi),), margin_m)
@@ -93,9 +100,7 @@ def test_a_context_moves_pushed_objects_and_forgets_grasped_ones() -> None:
 # --- what a failure teaches -------------------------------------------------------------------
 
 
-@pytest.mark.parametrize(
-    "kind, block", [("pinch", "block_grasp"), ("rim", "block_rim"), ("slide", "block_slide")]
-)
+@pytest.mark.parametrize("kind, block", [("pinch", "block_grasp"), ("rim", "block_rim"), ("slide", "block_slide")])
 def test_a_collision_teaches_the_blocking_facts_of_the_actions_grasp_kind(kind: str, block: str) -> None:
     grasp = Action("grasp", "o2", None, kind)
     hit = Infeasible("arm collides with o1, o3 at pose 2/3", "collision", ("o1", "o3"))
@@ -103,7 +108,10 @@ def test_a_collision_teaches_the_blocking_facts_of_the_actions_grasp_kind(kind: 
     # anything else: the action's own IK fact
     for why in ("reach", "ik", "lookahead", "poses"):
         assert Infeasible("x", why).facts(grasp) == (grasp.ik_fact(),)
-    assert grasp.ik_fact()[0] == {"pinch": "ik_unfeasible_grasp", "rim": "ik_unfeasible_rim", "slide": "ik_unfeasible_slide"}[kind]
+    assert (
+        grasp.ik_fact()[0]
+        == {"pinch": "ik_unfeasible_grasp", "rim": "ik_unfeasible_rim", "slide": "ik_unfeasible_slide"}[kind]
+    )
 
 
 def test_a_collision_of_a_push_teaches_block_dir_in_its_direction() -> None:
@@ -178,7 +186,9 @@ def test_check_sequence_says_which_pose_fails_and_how() -> None:
 
 
 def _checker(state, arm: PointArm | None = None, **kw) -> IKActionChecker:  # type: ignore[no-untyped-def]
-    return IKActionChecker(state, ps.T_BASE_CAMERA, arm or PointArm(), make_obstacles(state, ps.T_BASE_CAMERA, 0.0), **kw)
+    return IKActionChecker(
+        state, ps.T_BASE_CAMERA, arm or PointArm(), make_obstacles(state, ps.T_BASE_CAMERA, 0.0), **kw
+    )
 
 
 def _with_kinds(state):  # type: ignore[no-untyped-def]
@@ -209,7 +219,9 @@ def test_each_kind_is_checked_on_its_own_poses() -> None:
         # one candidate: its half-turn is added (the gripper is symmetric)
         assert len(cands) == 2
         assert np.allclose(cands[0][1][:3, 3], pinch[0][1][:3, 3] + [0.0, 0.0, dz], atol=1e-9)
-        assert np.allclose(cands[1][1][:3, :2], -cands[0][1][:3, :2]) and np.allclose(cands[1][1][:3, 2], cands[0][1][:3, 2])
+        assert np.allclose(cands[1][1][:3, :2], -cands[0][1][:3, :2]) and np.allclose(
+            cands[1][1][:3, 2], cands[0][1][:3, 2]
+        )
     # an object without a kind's poses: no motion, and it says so
     assert checker(Action("grasp", "o1", None, "rim")) == Infeasible("no gripper poses for this action", "poses")
 

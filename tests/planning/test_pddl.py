@@ -66,8 +66,14 @@ def test_domain_parses_and_has_the_thesis_actions() -> None:
     assert {a.name for a in dom.actions} == {"grasp", "push"}
     names = {p.name for p in dom.predicates}
     assert names == {
-        "on", "block_grasp", "block_dir", "removed", "ik_unfeasible_grasp",
-        "ik_unfeasible_dir", "ungraspable", "push_off_table",
+        "on",
+        "block_grasp",
+        "block_dir",
+        "removed",
+        "ik_unfeasible_grasp",
+        "ik_unfeasible_dir",
+        "ungraspable",
+        "push_off_table",
     }
 
 
@@ -79,7 +85,11 @@ def test_problems_parse(scene: str, tmp_path: Path) -> None:
 
 def test_problem_text_names_goal_and_extra_facts(tmp_path: Path) -> None:
     state = state_of(SCENES["row"])
-    text = write_problem(state, goal_objects=["o0", "o2"], extra_facts=[("ik_unfeasible_grasp", "o1"), ("ik_unfeasible_dir", "o0", "dir3")])
+    text = write_problem(
+        state,
+        goal_objects=["o0", "o2"],
+        extra_facts=[("ik_unfeasible_grasp", "o1"), ("ik_unfeasible_dir", "o0", "dir3")],
+    )
     assert "(:objects o0 o1 o2 - obj)" in text
     for obj in state.objects:
         c = obj.centroid
@@ -130,7 +140,10 @@ def solve(tmp_path: Path, domain: str, problem: str) -> list[str] | None:
     plan = tmp_path / "plan"
     res = subprocess.run(
         [sys.executable, str(_fd_driver()), "--plan-file", str(plan), str(d), str(p), "--search", "astar(blind())"],
-        capture_output=True, text=True, cwd=tmp_path, timeout=120,
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        timeout=120,
     )
     if res.returncode == 11:  # proven unsolvable
         return None
@@ -151,7 +164,9 @@ def test_fast_downward_plans(tmp_path: Path) -> None:
     # the IK facts the planner adds take effect
     lone = state_of(SCENES["lone"])
     assert solve(tmp_path, domain_text(), write_problem(lone, extra_facts=[("ik_unfeasible_grasp", "o0")])) is not None
-    everything = [("ik_unfeasible_grasp", "o0")] + [("ik_unfeasible_dir", "o0", d) for d in ("dir1", "dir2", "dir3", "dir4")]
+    everything = [("ik_unfeasible_grasp", "o0")] + [
+        ("ik_unfeasible_dir", "o0", d) for d in ("dir1", "dir2", "dir3", "dir4")
+    ]
     assert solve(tmp_path, domain_text(), write_problem(lone, extra_facts=everything)) is None
 
 

@@ -48,14 +48,28 @@ def test_probe_candidates_exclude_what_fits_and_what_is_far_too_wide() -> None:
     from clearcli.planning.probe import probe_candidates
     from clearcli.planning.types import Plan
 
-    _, state = _state(S.make_scene("three", [
-        S.Box(0, 0.05, 0.05, 0.08, x_m=-0.15, y_m=0.05),  # fits the gripper
-        S.Box(1, 0.10, 0.10, 0.08, x_m=0.0, y_m=0.05),  # 10 cm: may be two
-        S.Box(2, 0.20, 0.20, 0.05, x_m=0.2, y_m=0.05),  # 20 cm: more than two of the widest
-    ]), _settings())
+    _, state = _state(
+        S.make_scene(
+            "three",
+            [
+                S.Box(0, 0.05, 0.05, 0.08, x_m=-0.15, y_m=0.05),  # fits the gripper
+                S.Box(1, 0.10, 0.10, 0.08, x_m=0.0, y_m=0.05),  # 10 cm: may be two
+                S.Box(2, 0.20, 0.20, 0.05, x_m=0.2, y_m=0.05),  # 20 cm: more than two of the widest
+            ],
+        ),
+        _settings(),
+    )
     by_width = sorted(state.objects, key=lambda o: o.grasp_width_m)
-    plan = Plan(actions=(), cost=0, optimal=True, first=None, ik_facts=frozenset(), unreachable=(), replans=0,
-                ungraspable=tuple(o.name for o in by_width))
+    plan = Plan(
+        actions=(),
+        cost=0,
+        optimal=True,
+        first=None,
+        ik_facts=frozenset(),
+        unreachable=(),
+        replans=0,
+        ungraspable=tuple(o.name for o in by_width),
+    )
     assert probe_candidates(state, plan, 0.07, 0.14) == [by_width[1].name]
 
 
@@ -67,14 +81,28 @@ def test_a_wide_object_whose_slide_failed_is_probed_too() -> None:
     # grasps (a slide) kept failing when carried out, it may still be two merged objects:
     # a probe candidate. Unreachable with no failure (its slide has no arm motion), it is
     # not one: a push would not make it graspable. Nor is an object the pinch fits.
-    _, state = _state(S.make_scene("two", [
-        S.Box(0, 0.05, 0.05, 0.08, x_m=-0.15, y_m=0.05),
-        S.Box(1, 0.10, 0.10, 0.08, x_m=0.0, y_m=0.05),
-    ]), _settings())
+    _, state = _state(
+        S.make_scene(
+            "two",
+            [
+                S.Box(0, 0.05, 0.05, 0.08, x_m=-0.15, y_m=0.05),
+                S.Box(1, 0.10, 0.10, 0.08, x_m=0.0, y_m=0.05),
+            ],
+        ),
+        _settings(),
+    )
     narrow, wide = sorted(state.objects, key=lambda o: o.grasp_width_m)
     assert ("ungraspable", wide.name) in state.facts and ("ungraspable", narrow.name) not in state.facts
-    plan = Plan(actions=(), cost=0, optimal=True, first=None, ik_facts=frozenset(),
-                unreachable=(narrow.name, wide.name), replans=0, ungraspable=())
+    plan = Plan(
+        actions=(),
+        cost=0,
+        optimal=True,
+        first=None,
+        ik_facts=frozenset(),
+        unreachable=(narrow.name, wide.name),
+        replans=0,
+        ungraspable=(),
+    )
     assert probe_candidates(state, plan, 0.07, 0.14) == []
     assert probe_candidates(state, plan, 0.07, 0.14, failed={wide.name, narrow.name}) == [wide.name]
 
@@ -95,7 +123,7 @@ def test_off_seam_moves_the_push_contact_towards_either_end_of_the_face() -> Non
             along = abs(float(closing @ np.asarray(push.unit_vector))) >= 0.7
             contact_half = 0.015 if along else 0.025  # a finger's width, or the closed pair
             reach = across / 2 - contact_half - 0.005
-            for sign, shifted in zip((1.0, -1.0), moved.candidates[2 * k : 2 * k + 2]):
+            for _sign, shifted in zip((1.0, -1.0), moved.candidates[2 * k : 2 * k + 2]):
                 offset = np.asarray(shifted[1])[:3, 3] - np.asarray(seq[1])[:3, 3]
                 # across the push, in the table plane, by the reach
                 assert abs(float(offset @ np.asarray(push.unit_vector))) < 1e-9
@@ -104,4 +132,7 @@ def test_off_seam_moves_the_push_contact_towards_either_end_of_the_face() -> Non
     # a face too narrow to move the contact by 1 cm: unchanged
     _, narrow = _state(S.make_scene("narrow", [S.Box(0, 0.12, 0.04, 0.06, x_m=0.0, y_m=0.05)]), _settings())
     o = narrow.objects[0]
-    assert off_seam(narrow, o.name, "dir1", gripper).by_name(o.name).pushes["dir1"].candidates == o.pushes["dir1"].candidates
+    assert (
+        off_seam(narrow, o.name, "dir1", gripper).by_name(o.name).pushes["dir1"].candidates
+        == o.pushes["dir1"].candidates
+    )

@@ -250,7 +250,9 @@ def test_sas_planner_errors(monkeypatch: pytest.MonkeyPatch) -> None:
     with pytest.raises(PlannerError, match="exit code"):
         run_sas("begin_version\n3\nend_version\nnonsense\n", time_limit_s=20)
     real = importlib.util.find_spec
-    monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: None if name == "up_fast_downward" else real(name, *a))
+    monkeypatch.setattr(
+        importlib.util, "find_spec", lambda name, *a: None if name == "up_fast_downward" else real(name, *a)
+    )
     with pytest.raises(PlannerError, match="pip install up-fast-downward"):
         run_sas(sas.text, time_limit_s=20)
     with pytest.raises(PlannerError, match="pip install up-fast-downward"):

@@ -23,7 +23,7 @@ class FakeIK:
         self.infeasible = infeasible
         self.calls: list[Action] = []
 
-    def __call__(self, action: Action, ctx: SceneContext = SceneContext()) -> "CheckedAction | Infeasible":
+    def __call__(self, action: Action, ctx: SceneContext = SceneContext()) -> CheckedAction | Infeasible:
         self.calls.append(action)
         if action in self.infeasible and not ctx.moved(action.obj):
             return Infeasible("no IK solution", "ik")

@@ -218,9 +218,7 @@ KINDS = [  # name, offered (positive static), blocking, IK predicate, cost
 
 
 def kinds_domain() -> str:
-    grasps = "".join(
-        GRASP.format(name=n, offered="\n      " + o, block=b, ik=ik, cost=c) for n, o, b, ik, c in KINDS
-    )
+    grasps = "".join(GRASP.format(name=n, offered="\n      " + o, block=b, ik=ik, cost=c) for n, o, b, ik, c in KINDS)
     return RIM_DOMAIN.replace("{grasps}", grasps)
 
 
@@ -242,9 +240,15 @@ def kinds_problem(extra: str = "") -> str:
 def test_kinds_domain_has_the_forms_it_is_for() -> None:
     text = kinds_domain()
     for form in (
-        "(:action grasp_rim", "(:action slide_grasp", "(rim_graspable ?o)\n", "(slidable ?o)\n",
-        "(not (exists (?x - obj) (block_rim ?x ?o)))", "(not (ik_unfeasible_slide ?o))",
-        "(increase (total-cost) 2)", "(increase (total-cost) 3)", "(forall (?x - obj ?e - direction)",
+        "(:action grasp_rim",
+        "(:action slide_grasp",
+        "(rim_graspable ?o)\n",
+        "(slidable ?o)\n",
+        "(not (exists (?x - obj) (block_rim ?x ?o)))",
+        "(not (ik_unfeasible_slide ?o))",
+        "(increase (total-cost) 2)",
+        "(increase (total-cost) 3)",
+        "(forall (?x - obj ?e - direction)",
     ):
         assert form in text, form
 

@@ -38,7 +38,10 @@ def _by_position(state, scene: S.Scene, obj: S.SceneObject):  # type: ignore[no-
     """The state's object nearest to a world object (table frame x, y)."""
     T = scene.T_camera_table
     want = T[:3, :3] @ np.array([obj.x_m, obj.y_m, 0.0]) + T[:3, 3]
-    return min(state.objects, key=lambda o: float(np.linalg.norm((o.centroid - want)[[0]])) + 0.3 * float(np.linalg.norm(o.centroid - want)))
+    return min(
+        state.objects,
+        key=lambda o: float(np.linalg.norm((o.centroid - want)[[0]])) + 0.3 * float(np.linalg.norm(o.centroid - want)),
+    )
 
 
 def test_rim_offered_on_a_bowl_and_a_mug_with_their_walls_not_on_a_can() -> None:
@@ -156,7 +159,9 @@ def _only_right_edge_seen(scene: S.Scene, seg):  # type: ignore[no-untyped-def]
     def x_of(p: np.ndarray) -> float:
         return float((T_table_camera[:3, :3] @ p + T_table_camera[:3, 3])[0])
 
-    edges = tuple(dataclasses.replace(e, seen=e.seen and min(x_of(e.start), x_of(e.end)) > 0.38) for e in seg.table_edges)
+    edges = tuple(
+        dataclasses.replace(e, seen=e.seen and min(x_of(e.start), x_of(e.end)) > 0.38) for e in seg.table_edges
+    )
     assert sum(e.seen for e in edges) == 1
     return dataclasses.replace(seg, table_edges=edges)
 
@@ -220,7 +225,10 @@ def test_no_slide_when_the_edge_is_beyond_the_arms_reach() -> None:
     with pytest.raises(NoPlanError) as err:
         make_plan(state, settings, T_base_camera)
     (left,) = err.value.plan.left  # type: ignore[attr-defined]
-    assert "slide grasp: beyond the arm's reach" in left.detail or left.actions.get("slide grasp") == "beyond the arm's reach"
+    assert (
+        "slide grasp: beyond the arm's reach" in left.detail
+        or left.actions.get("slide grasp") == "beyond the arm's reach"
+    )
 
 
 # near the robot's side of the table (its base 0.25 m before the near edge, y = -0.3):

@@ -86,7 +86,10 @@ def test_block_grasp_follows_the_opening(seed: int) -> None:
     def blocked(clearance: float) -> bool:
         s = Settings()
         s = dataclasses.replace(
-            s, predicates=dataclasses.replace(s.predicates, grasp_opening_clearance_m=clearance, grasp_offcentre_fraction=0.0)
+            s,
+            predicates=dataclasses.replace(
+                s.predicates, grasp_opening_clearance_m=clearance, grasp_offcentre_fraction=0.0
+            ),
         )
         _, state = _state(world, s, seed)
         return ("block_grasp", "o1", "o0") in state.facts

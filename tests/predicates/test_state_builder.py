@@ -23,12 +23,19 @@ def _seg_with(frame, seg: Segmentation, extra: np.ndarray) -> tuple:
     points = np.vstack([frame.points, extra.astype(np.float32)])
     idx = np.arange(len(frame.points), len(points))
     bad = SegmentedObject(
-        indices=idx, centroid=extra.mean(axis=0), obb_center=extra.mean(axis=0), obb_axes=np.eye(3),
-        obb_extents=np.zeros(3), principal_axes=np.eye(3),
+        indices=idx,
+        centroid=extra.mean(axis=0),
+        obb_center=extra.mean(axis=0),
+        obb_axes=np.eye(3),
+        obb_extents=np.zeros(3),
+        principal_axes=np.eye(3),
     )
     seg2 = Segmentation(
-        n_points=len(points), table=seg.table, table_polygon=seg.table_polygon,
-        table_indices=seg.table_indices, objects=seg.objects + (bad,),
+        n_points=len(points),
+        table=seg.table,
+        table_polygon=seg.table_polygon,
+        table_indices=seg.table_indices,
+        objects=seg.objects + (bad,),
     )
     return Frame(points=points), seg2
 

@@ -151,8 +151,10 @@ def test_carried_out_in_the_simulated_world(toy) -> None:  # type: ignore[no-unt
     assert truly_ungraspable_by(WIDE, settings.gripper, ("pinch", "rim", "slide"))
     assert not truly_ungraspable_by(WIDE, settings.gripper, ("pinch", "rim", "slide", "suction"))
     episode = Episode(
-        S.make_scene("toy", [WIDE, SMALL]), Session(Pipeline(settings, segment_fn=truth_segment), ReplayOptions()),
-        seed=0, max_actions=4,
+        S.make_scene("toy", [WIDE, SMALL]),
+        Session(Pipeline(settings, segment_fn=truth_segment), ReplayOptions()),
+        seed=0,
+        max_actions=4,
     )
     for _ in episode:
         pass

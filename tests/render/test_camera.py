@@ -28,13 +28,13 @@ def test_outlines_are_drawn_inside_their_segment_and_every_other_pixel_is_the_im
 
 
 def test_the_segmentation_picture_of_a_colour_frame_shows_the_camera_image(tmp_path: Path) -> None:
+    from helpers import shared_path
     from PIL import Image
 
     from clearcli import pipeline
     from clearcli.io.read import read_frame
     from clearcli.render.segment_png import render_segmentation
     from clearcli.settings import Settings
-    from helpers import shared_path
 
     depth = shared_path("rgbd/uois/uois_0003_depth.png")
     frame = read_frame(depth)

@@ -23,7 +23,9 @@ def test_plan_picture_draws_the_table_and_the_objects_it_removes(tmp_path: Path)
     import matplotlib.image
 
     png = tmp_path / "plan.png"
-    out = task.run(task.Request(Settings(), outputs=Outputs.of(png=png)), Source(str(FIXTURES / "two_touching_boxes.pcd")))
+    out = task.run(
+        task.Request(Settings(), outputs=Outputs.of(png=png)), Source(str(FIXTURES / "two_touching_boxes.pcd"))
+    )
     assert out.payload["status"] == "complete" and len(out.payload["goal"]) == 2
     img = matplotlib.image.imread(png)
     # the fixture has colour: the camera's picture (7 x 7 inches) beside the top view (7 x 7) at 110 dpi

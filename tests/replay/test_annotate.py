@@ -80,8 +80,7 @@ def test_annotated_log_matches_the_json_lines(
 
     with open(sim_log["path"], "rb") as fp:
         originals = {
-            m.log_time: m.data
-            for _, c, m in make_reader(fp).iter_messages(topics=["/camera/depth_registered/points"])
+            m.log_time: m.data for _, c, m in make_reader(fp).iter_messages(topics=["/camera/depth_registered/points"])
         }
     pushed_arrows = 0
     for line, (stamp_ns, topics) in zip(frames, sorted(messages.items())):
@@ -115,8 +114,11 @@ def test_annotated_log_matches_the_json_lines(
         if line["first_action"]:
             gripper = entities["gripper"]
             assert len(gripper["cubes"]) == 3  # two fingers and the base
-            assert {"key": "action", "value": f"({line['first_action']['kind']} {line['first_action']['name']}"
-                    + (f" {line['first_action']['direction']})" if line["first_action"].get("direction") else ")")} in gripper["metadata"]
+            assert {
+                "key": "action",
+                "value": f"({line['first_action']['kind']} {line['first_action']['name']}"
+                + (f" {line['first_action']['direction']})" if line["first_action"].get("direction") else ")"),
+            } in gripper["metadata"]
     pushes = sum(1 for d in frames if d["first_action"] and d["first_action"]["kind"] == "push")
     assert pushes >= 1 and pushed_arrows == pushes  # the planned push stands out
 
@@ -149,7 +151,9 @@ def test_existing_output_needs_force(
     assert code == EXIT_OUTPUT and "input" in err
 
 
-def test_pcd_input_is_written_as_a_foxglove_point_cloud(truth_segmentation: None, tmp_path: Path, capsys, monkeypatch) -> None:
+def test_pcd_input_is_written_as_a_foxglove_point_cloud(
+    truth_segmentation: None, tmp_path: Path, capsys, monkeypatch
+) -> None:
     import base64
 
     from clearcli.io.pcd import write_pcd
@@ -169,7 +173,12 @@ def test_pcd_input_is_written_as_a_foxglove_point_cloud(truth_segmentation: None
     # x y z float32 then red green blue uint8, padded to 16 bytes
     assert cloud["point_stride"] == 16
     assert [(f["name"], f["offset"], f["type"]) for f in cloud["fields"]] == [
-        ("x", 0, 7), ("y", 4, 7), ("z", 8, 7), ("red", 12, 1), ("green", 13, 1), ("blue", 14, 1)
+        ("x", 0, 7),
+        ("y", 4, 7),
+        ("z", 8, 7),
+        ("red", 12, 1),
+        ("green", 13, 1),
+        ("blue", 14, 1),
     ]
     record = np.dtype([("p", "<f4", 3), ("c", "u1", 3), ("pad", "u1")])
     blob = np.frombuffer(base64.b64decode(cloud["data"]), dtype=record)

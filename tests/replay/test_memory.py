@@ -33,7 +33,12 @@ def unit(angle_deg: float) -> np.ndarray:
 def make_object(name: str, centroid: np.ndarray, first_axis_deg: float) -> ObjectModel:
     """An object whose dir1..dir4 are +a1, -a1, +a2, -a2 with a1 at ``first_axis_deg``
     on the table (x-z plane of the camera looking down)."""
-    axes = {"dir1": first_axis_deg, "dir2": first_axis_deg + 180, "dir3": first_axis_deg + 90, "dir4": first_axis_deg - 90}
+    axes = {
+        "dir1": first_axis_deg,
+        "dir2": first_axis_deg + 180,
+        "dir3": first_axis_deg + 90,
+        "dir4": first_axis_deg - 90,
+    }
     pushes = {
         d: PushModel(direction=d, unit_vector=unit(a), push_length_m=0.1, object_path=(), candidates=())
         for d, a in axes.items()
@@ -135,7 +140,7 @@ def _run_session(with_memory: bool, frames: int = 12) -> list[str]:
         ties = [d for d in candidates if cost[d] == best]
 
         def backwards(d: str) -> float:
-            return float(-(obj.pushes[d].unit_vector @ last_motion)) if last_motion is not None else 0.0
+            return float(-(obj.pushes[d].unit_vector @ last_motion)) if last_motion is not None else 0.0  # noqa: B023 (used within the iteration)
 
         choice = max(ties, key=backwards)
         u = obj.pushes[choice].unit_vector

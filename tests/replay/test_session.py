@@ -61,16 +61,23 @@ def test_two_boxes_merged_end_to_end_are_taken_after_one_failed_grasp(seed: int)
     from clearcli.replay.session import ReplayOptions, Session
     from clearcli.sim.episode import Episode
 
-    world = S.make_scene("end to end", [
-        S.Box(0, 0.055, 0.044, 0.047, x_m=-0.0275, y_m=0.05),
-        S.Box(1, 0.065, 0.044, 0.047, x_m=0.0325, y_m=0.05),
-    ])
+    world = S.make_scene(
+        "end to end",
+        [
+            S.Box(0, 0.055, 0.044, 0.047, x_m=-0.0275, y_m=0.05),
+            S.Box(1, 0.065, 0.044, 0.047, x_m=0.0325, y_m=0.05),
+        ],
+    )
     settings = Settings()
     results = {}
     for on in (True, False):
         plan = dataclasses.replace(settings.plan, regrasp_off_centre=on)
-        episode = Episode(world, Session(Pipeline(dataclasses.replace(settings, plan=plan)), ReplayOptions(push_memory=True)),
-                          seed=seed, max_actions=12)
+        episode = Episode(
+            world,
+            Session(Pipeline(dataclasses.replace(settings, plan=plan)), ReplayOptions(push_memory=True)),
+            seed=seed,
+            max_actions=12,
+        )
         for _ in episode:
             pass
         assert episode.result is not None
@@ -180,9 +187,7 @@ def test_no_table_and_failed_frames_are_reported_and_skipped() -> None:
     s = session.summary
     assert (s.frames, s.ok, s.no_table, s.failed) == (4, 2, 1, 1)
     # the same with --fail-fast stops at the failing frame, with its error type
-    session = Session(
-        Pipeline(Settings(), segment_fn=segment_fn, state_fn=state_fn), ReplayOptions(fail_fast=True)
-    )
+    session = Session(Pipeline(Settings(), segment_fn=segment_fn, state_fn=state_fn), ReplayOptions(fail_fast=True))
     with pytest.raises(InputError, match="--fail-fast"):
         for _ in replay(frames, session):
             pass

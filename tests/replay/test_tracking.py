@@ -158,9 +158,7 @@ def test_grasp_monitoring() -> None:
     assert "still on the table" in report.detail
 
 
-@pytest.mark.parametrize(
-    ("moved", "outcome"), [(0.12, "done"), (0.076, "done"), (0.05, "failed"), (0.0, "failed")]
-)
+@pytest.mark.parametrize(("moved", "outcome"), [(0.12, "done"), (0.076, "done"), (0.05, "failed"), (0.0, "failed")])
 def test_push_monitoring(moved: float, outcome: str) -> None:
     u = np.array([0.6, 0.8, 0.0])
     start = (0.0, 0.0, 0.8)

@@ -85,7 +85,10 @@ def _robotiq_closing_point() -> np.ndarray:
     # open, the pads stand apart along the gripper's x: its closing direction, which is
     # clear's gripper frame's x (robotiq_tcp is not turned against tool0)
     pin.framesForwardKinematics(model, data, model.lowerPositionLimit.copy())
-    apart = data.oMf[model.getFrameId("left_inner_finger_pad")].translation - data.oMf[model.getFrameId("right_inner_finger_pad")].translation
+    apart = (
+        data.oMf[model.getFrameId("left_inner_finger_pad")].translation
+        - data.oMf[model.getFrameId("right_inner_finger_pad")].translation
+    )
     assert abs(apart[0]) > 0.98 * np.linalg.norm(apart)
     return (pads[0] + pads[1]) / 2
 

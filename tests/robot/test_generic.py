@@ -177,7 +177,8 @@ def test_the_steps_that_read_a_description(tmp_path: Path) -> None:
     links = "".join(f"<link name='l{k}'/>" for k in range(4))
     joints = "".join(
         f"<joint name='j{k}' type='revolute'><parent link='l{k}'/><child link='l{k + 1}'/><axis xyz='0 0 1'/>"
-        f"<origin xyz='0 0 0.1'/><limit lower='-1' upper='1' effort='1' velocity='1'/></joint>" for k in range(3)
+        f"<origin xyz='0 0 0.1'/><limit lower='-1' upper='1' effort='1' velocity='1'/></joint>"
+        for k in range(3)
     )
     short = tmp_path / "short.urdf"
     short.write_text(f"<robot name='s'>{links}{joints}</robot>")

@@ -78,8 +78,12 @@ def test_default_placement_steps_back_within_reach(
     from clearcli.settings.robot import RobotSettings
 
     state = ps.scene({"a": ps.Box(near_x, 0.0), "b": ps.Box(far_x, 0.0)})
-    robot = RobotSettings(base_outside_edge_m=0.10, base_min_object_distance_m=0.30,
-                          base_preferred_object_distance_m=preferred, base_max_object_distance_m=0.85)
+    robot = RobotSettings(
+        base_outside_edge_m=0.10,
+        base_min_object_distance_m=0.30,
+        base_preferred_object_distance_m=preferred,
+        base_max_object_distance_m=0.85,
+    )
     T, _ = placement.resolve_T_base_camera(None, state, robot)
     T_world_base = ps.T_WORLD_CAMERA @ np.linalg.inv(T)
     np.testing.assert_allclose(T_world_base[:3, 3], [footprint_x, 0.0, 0.346], atol=1e-3)

@@ -128,8 +128,14 @@ def test_the_generic_solver_on_the_wam_agrees_with_the_analytic_one() -> None:
     from clearcli.robot.wam_kinematics import BASE_FRAME, TCP_FRAME, TOOL_PLATE_FRAME, URDF_PATH, WamKinematics
 
     analytic = WamKinematics()
-    generic = UrdfKinematics(URDF_PATH, BASE_FRAME, TCP_FRAME, flange_frame=TOOL_PLATE_FRAME,
-                             rest=(0.0, 0.9, 0.0, 1.6, 0.0, 0.6, 0.0), n_seeds=16)
+    generic = UrdfKinematics(
+        URDF_PATH,
+        BASE_FRAME,
+        TCP_FRAME,
+        flange_frame=TOOL_PLATE_FRAME,
+        rest=(0.0, 0.9, 0.0, 1.6, 0.0, 0.6, 0.0),
+        n_seeds=16,
+    )
     poses = _tool_down_poses(analytic, 100, seed=3)
     both = 0
     for T in poses:
@@ -187,9 +193,21 @@ def test_a_users_urdf_plans_as_the_profile_of_that_arm() -> None:
     from helpers import shared_path
 
     urdf = shared_path("robots/panda/panda_collision.urdf")
-    user = clear("plan", "fixtures/clutter10.pcd", "--robot", "panda", "--json", "--set", f"robot.urdf={urdf}",
-                 "--set", "robot.flange_frame=panda_link8", "--set", "robot.tcp_xyz_m=[0, 0, 0.1034]",
-                 "--set", "robot.tcp_yaw_deg=45")
+    user = clear(
+        "plan",
+        "fixtures/clutter10.pcd",
+        "--robot",
+        "panda",
+        "--json",
+        "--set",
+        f"robot.urdf={urdf}",
+        "--set",
+        "robot.flange_frame=panda_link8",
+        "--set",
+        "robot.tcp_xyz_m=[0, 0, 0.1034]",
+        "--set",
+        "robot.tcp_yaw_deg=45",
+    )
     ours = clear("plan", "fixtures/clutter10.pcd", "--robot", "panda", "--json")
     assert user.returncode == ours.returncode == 0, user.stderr
     a, b = json.loads(user.stdout), json.loads(ours.stdout)
@@ -210,7 +228,8 @@ def test_bad_robot_settings_are_one_line_exit_3(tmp_path) -> None:
     links = "".join(f"<link name='l{k}'/>" for k in range(4))
     joints = "".join(
         f"<joint name='j{k}' type='revolute'><parent link='l{k}'/><child link='l{k + 1}'/><axis xyz='0 0 1'/>"
-        f"<origin xyz='0 0 0.1'/><limit lower='-1' upper='1' effort='1' velocity='1'/></joint>" for k in range(3)
+        f"<origin xyz='0 0 0.1'/><limit lower='-1' upper='1' effort='1' velocity='1'/></joint>"
+        for k in range(3)
     )
     short.write_text(f"<robot name='s'>{links}{joints}</robot>")
     cases = [
@@ -237,9 +256,20 @@ def test_a_urdf_whose_meshes_are_missing_loads_with_one_warning() -> None:
     from helpers import shared_path
 
     urdf = shared_path("robots/panda/panda.urdf")  # mesh references, meshes not shipped
-    res = clear("plan", "fixtures/clutter10.pcd", "--robot", "panda", "--set", f"robot.urdf={urdf}",
-                "--set", "robot.flange_frame=panda_link8", "--set", "robot.tcp_xyz_m=[0, 0, 0.1034]",
-                "--set", "robot.tcp_yaw_deg=45")
+    res = clear(
+        "plan",
+        "fixtures/clutter10.pcd",
+        "--robot",
+        "panda",
+        "--set",
+        f"robot.urdf={urdf}",
+        "--set",
+        "robot.flange_frame=panda_link8",
+        "--set",
+        "robot.tcp_xyz_m=[0, 0, 0.1034]",
+        "--set",
+        "robot.tcp_yaw_deg=45",
+    )
     assert res.returncode in (0, 10), res.stderr
     warnings = [line for line in res.stderr.splitlines() if "collision mesh(es) not found, left out" in line]
     assert len(warnings) == 1 and "Traceback" not in res.stderr
@@ -252,11 +282,15 @@ def test_a_missing_mesh_leaves_the_other_collision_shapes(tmp_path) -> None:
     from clearcli.robot.profiles import PROFILES
 
     text = PROFILES["panda"].urdf.read_text()
-    start = text.index("<link name=\"panda_link3\"")
+    start = text.index('<link name="panda_link3"')
     end = text.index("</link>", start)
     body = text[start:end]
     first, last = body.index("<collision>"), body.rindex("</collision>") + len("</collision>")
-    body = body[:first] + '<collision><geometry><mesh filename="package://nowhere/link3.stl"/></geometry></collision>' + body[last:]
+    body = (
+        body[:first]
+        + '<collision><geometry><mesh filename="package://nowhere/link3.stl"/></geometry></collision>'
+        + body[last:]
+    )
     urdf = tmp_path / "panda_mixed.urdf"
     urdf.write_text(text[:start] + body + text[end:])
     args = dict(flange_frame="panda_link8", tcp_xyz_m=(0, 0, 0.1034))

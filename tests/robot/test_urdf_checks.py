@@ -54,25 +54,50 @@ def test_a_joint_whose_lower_limit_exceeds_its_upper_is_one_line_exit_3(tmp_path
 def test_a_base_frame_equal_to_the_flange_frame_is_one_line_exit_3() -> None:
     # before: exit 5, "no plan: out of the robot's reach" (the base frame moved with the
     # arm's joints, and the flange never left it)
-    line = _refused("--set", f"robot.urdf={PANDA}", "--set", "robot.base_frame=panda_link8", "--set", "robot.flange_frame=panda_link8")
+    line = _refused(
+        "--set",
+        f"robot.urdf={PANDA}",
+        "--set",
+        "robot.base_frame=panda_link8",
+        "--set",
+        "robot.flange_frame=panda_link8",
+    )
     assert str(PANDA) in line and "both 'panda_link8'" in line
 
 
 @pytest.mark.parametrize(
     "old, new, words",
     [
-        ('xyz="0.0825 0 0"', 'xyz="0.0825 nan 0"', ["joint 'panda_joint4'", '<origin xyz="0.0825 nan 0">', "3 finite numbers"]),
+        (
+            'xyz="0.0825 0 0"',
+            'xyz="0.0825 nan 0"',
+            ["joint 'panda_joint4'", '<origin xyz="0.0825 nan 0">', "3 finite numbers"],
+        ),
         ('rpy="1.5707963267948966 0 0"', 'rpy="inf 0 0"', ["joint 'panda_joint4'", '<origin rpy="inf 0 0">']),
         ('<axis xyz="0 0 1"/>', '<axis xyz="0 0 nan"/>', ["joint 'panda_joint4'", '<axis xyz="0 0 nan">']),
         ('<axis xyz="0 0 1"/>', '<axis xyz="0 0 0"/>', ["joint 'panda_joint4'", "has no direction"]),
         ('<axis xyz="0 0 1"/>', '<axis xyz="0 1"/>', ["joint 'panda_joint4'", '<axis xyz="0 1">', "3 finite numbers"]),
         ('upper="-0.0698"', 'upper="inf"', ["joint 'panda_joint4'", '<limit upper="inf">', "a finite number"]),
         ('lower="-3.0718"', 'lower="nan"', ["joint 'panda_joint4'", '<limit lower="nan">']),
-        ('<limit lower="-3.0718" upper="-0.0698" effort="87" velocity="2.175"/>', "", ["'panda_joint4' (revolute) has no <limit>"]),
+        (
+            '<limit lower="-3.0718" upper="-0.0698" effort="87" velocity="2.175"/>',
+            "",
+            ["'panda_joint4' (revolute) has no <limit>"],
+        ),
         # what urdfdom refuses that the checks do not know: its own reason, not its dump
         ('<child link="panda_link4"/>', '<child link="nowhere"/>', ["not a URDF Pinocchio can read", "[nowhere]"]),
     ],
-    ids=["nan-origin", "inf-rpy", "nan-axis", "zero-axis", "short-axis", "inf-limit", "nan-limit", "no-limit", "unknown-link"],
+    ids=[
+        "nan-origin",
+        "inf-rpy",
+        "nan-axis",
+        "zero-axis",
+        "short-axis",
+        "inf-limit",
+        "nan-limit",
+        "no-limit",
+        "unknown-link",
+    ],
 )
 def test_bad_numbers_of_a_joint_are_one_line_exit_3(tmp_path: Path, old: str, new: str, words: list[str]) -> None:
     urdf = _panda_with(tmp_path, "bad", old, new)
@@ -104,14 +129,20 @@ def test_a_file_that_is_no_urdf_is_one_line_exit_3(tmp_path: Path) -> None:
     "base, flange, words",
     [
         ("panda_link8", "panda_link3", "flange_frame 'panda_link3' does not hang from base_frame 'panda_link8'"),
-        ("panda_link8", "panda_hand", "no movable joint between base_frame 'panda_link8' and flange_frame 'panda_hand'"),
+        (
+            "panda_link8",
+            "panda_hand",
+            "no movable joint between base_frame 'panda_link8' and flange_frame 'panda_hand'",
+        ),
         ("panda_joint1", "panda_link8", "no frame 'panda_joint1' (base_frame); its frames (links): panda_link0"),
         ("panda_link0", "panda_tcp_joint", "no frame 'panda_tcp_joint' (flange_frame)"),
     ],
     ids=["flange-upstream", "fixed-to-each-other", "base-a-joint", "flange-a-joint"],
 )
 def test_frames_that_make_no_arm_are_one_line_exit_3(base: str, flange: str, words: str) -> None:
-    line = _refused("--set", f"robot.urdf={PANDA}", "--set", f"robot.base_frame={base}", "--set", f"robot.flange_frame={flange}")
+    line = _refused(
+        "--set", f"robot.urdf={PANDA}", "--set", f"robot.base_frame={base}", "--set", f"robot.flange_frame={flange}"
+    )
     assert words in line, line
 
 
@@ -124,7 +155,9 @@ def test_a_flange_on_another_branch_than_the_base_is_one_line_exit_3(tmp_path: P
     )
     urdf = tmp_path / "branched.urdf"
     urdf.write_text(text.replace("</robot>", side))
-    line = _refused("--set", f"robot.urdf={urdf}", "--set", "robot.base_frame=side", "--set", "robot.flange_frame=panda_link8")
+    line = _refused(
+        "--set", f"robot.urdf={urdf}", "--set", "robot.base_frame=side", "--set", "robot.flange_frame=panda_link8"
+    )
     assert "flange_frame 'panda_link8' does not hang from base_frame 'side'" in line
 
 
@@ -155,11 +188,16 @@ def test_checked_before_any_frame_is_read(tmp_path: Path) -> None:
     "sets, words",
     [
         (["robot.urdf={swapped}"], "its lower limit -0.0698 is above its upper limit -3.0718"),
-        (["robot.urdf={panda}", "robot.base_frame=panda_link8", "robot.flange_frame=panda_link8"], "both 'panda_link8'"),
+        (
+            ["robot.urdf={panda}", "robot.base_frame=panda_link8", "robot.flange_frame=panda_link8"],
+            "both 'panda_link8'",
+        ),
     ],
     ids=["swapped-limits", "base-is-flange"],
 )
-def test_a_batch_with_a_bad_description_fails_once_with_no_frame_line(tmp_path: Path, sets: list[str], words: str) -> None:
+def test_a_batch_with_a_bad_description_fails_once_with_no_frame_line(
+    tmp_path: Path, sets: list[str], words: str
+) -> None:
     folder = tmp_path / "frames"
     folder.mkdir()
     for name in ("isolated_box.pcd", "two_touching_boxes.pcd"):
@@ -206,4 +244,6 @@ def test_joints_above_the_base_frame_are_held_at_zero() -> None:
     T_link0_link1 = whole.fk(np.zeros(7), "panda_link1")
     for q in np.random.default_rng(4).uniform(upper.lower, upper.upper, size=(10, 6)):
         T_link0_flange = whole.fk(np.concatenate([[0.0], q]), "panda_link8")
-        np.testing.assert_allclose(upper.fk(q, "panda_link8"), np.linalg.inv(T_link0_link1) @ T_link0_flange, atol=1e-12)
+        np.testing.assert_allclose(
+            upper.fk(q, "panda_link8"), np.linalg.inv(T_link0_link1) @ T_link0_flange, atol=1e-12
+        )

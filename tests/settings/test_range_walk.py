@@ -39,7 +39,9 @@ def _run_plan(settings: Settings) -> None:
 def _run_replay(settings: Settings) -> None:
     from clearcli.tasks import replay
 
-    replay.run(replay.Request(settings), REPO / "fixtures" / "simulated_session.mcap", None, lambda *a: None, lambda t: None)
+    replay.run(
+        replay.Request(settings), REPO / "fixtures" / "simulated_session.mcap", None, lambda *a: None, lambda t: None
+    )
 
 
 def _run_simulate(settings: Settings, tmp: Path) -> None:

@@ -31,7 +31,9 @@ def test_every_parameter_set_is_a_section_of_the_tree() -> None:
 
 
 def test_printed_tree_reads_back_as_the_same_settings(tmp_path) -> None:
-    changed = apply_sets(Settings(), ["tracking.gate_m=0.05", "world.frame_interval_s=2.5", "segment.outlier_method=none"])
+    changed = apply_sets(
+        Settings(), ["tracking.gate_m=0.05", "world.frame_interval_s=2.5", "segment.outlier_method=none"]
+    )
     path = tmp_path / "s.toml"
     path.write_text(settings_to_toml(changed))
     assert load_settings(path) == changed
@@ -95,9 +97,15 @@ def test_every_field_declares_a_range_or_is_a_flag() -> None:
             if isinstance(value, bool):
                 continue
             rng = range_of(cls, f.name)
-            assert rng.choices or rng.members and isinstance(value, str) or rng.text and isinstance(value, str) or (rng.ge is not None or rng.gt is not None) and (rng.le is not None or rng.lt is not None), (
-                f"[{name}] {f.name} has no range"
-            )
+            assert (
+                rng.choices
+                or rng.members
+                and isinstance(value, str)
+                or rng.text
+                and isinstance(value, str)
+                or (rng.ge is not None or rng.gt is not None)
+                and (rng.le is not None or rng.lt is not None)
+            ), f"[{name}] {f.name} has no range"
 
 
 def test_defaults_in_one_place_placement_follows_the_robot_section() -> None:

@@ -44,7 +44,9 @@ def test_hemmed_in_scene_ends_with_no_plan_and_the_reason_without_spinning() -> 
     # most once along each of its two axes: [plan] probe_max_width_m), then stops with
     # "no plan" and the reason, well before the action budget; the world agrees that
     # nothing there fits the gripper, so the session counts as cleared
-    episode = Episode(world, Session(Pipeline(settings, segment_fn=truth_segment), ReplayOptions()), seed=0, max_actions=40)
+    episode = Episode(
+        world, Session(Pipeline(settings, segment_fn=truth_segment), ReplayOptions()), seed=0, max_actions=40
+    )
     frames = sum(1 for _ in episode)
     result = episode.result
     assert result is not None and result.end == "no_plan" and "too wide" in result.reason
@@ -63,7 +65,9 @@ def test_hemmed_in_scene_ends_with_no_plan_and_the_reason_without_spinning() -> 
     assert longest <= settings.plan.max_failed_grasps
     # without probing: no action at all
     no_probe = dataclasses.replace(settings, plan=dataclasses.replace(settings.plan, probe_max_width_m=0.0))
-    episode = Episode(world, Session(Pipeline(no_probe, segment_fn=truth_segment), ReplayOptions()), seed=0, max_actions=40)
+    episode = Episode(
+        world, Session(Pipeline(no_probe, segment_fn=truth_segment), ReplayOptions()), seed=0, max_actions=40
+    )
     assert sum(1 for _ in episode) == 1 and episode.result is not None and episode.result.actions == 0
     assert set(result.truly_ungraspable) == {0, 1, 2, 3, 4} and result.cleared_truly
 
@@ -75,7 +79,9 @@ def test_budget_spent_on_the_last_object_counts_as_cleared() -> None:
     from clearcli.sim.truth import truth_segment
 
     world = S.make_scene("one", [S.Box(0, 0.05, 0.04, 0.08, x_m=0.0, y_m=0.05)])
-    episode = Episode(world, Session(Pipeline(_settings(), segment_fn=truth_segment), ReplayOptions()), seed=3, max_actions=1)
+    episode = Episode(
+        world, Session(Pipeline(_settings(), segment_fn=truth_segment), ReplayOptions()), seed=3, max_actions=1
+    )
     for _ in episode:
         pass
     result = episode.result

@@ -17,7 +17,9 @@ def _session(world: S.Scene, robot: str = "panda", max_actions: int = 6):  # typ
 
     settings = load_settings(None, [f"robot.name={robot}"])
     settings = dataclasses.replace(settings, plan=dataclasses.replace(settings.plan, probe_max_width_m=0.0))
-    episode = Episode(world, Session(Pipeline(settings, segment_fn=truth_segment), ReplayOptions()), seed=0, max_actions=max_actions)
+    episode = Episode(
+        world, Session(Pipeline(settings, segment_fn=truth_segment), ReplayOptions()), seed=0, max_actions=max_actions
+    )
     for _ in episode:
         pass
     assert episode.result is not None

@@ -214,8 +214,12 @@ def test_rings_do_not_join_objects_side_by_side() -> None:
     a label."""
     off = replace(S, ring_merge=False, vessel_rebuild=False)
     scenes = [
-        make_scene("cans", [Cylinder(0, 0.035, 0.10, x_m=-0.035, y_m=0.0), Cylinder(1, 0.035, 0.10, x_m=0.035, y_m=0.0)]),
-        make_scene("cans apart", [Cylinder(0, 0.03, 0.08, x_m=-0.04, y_m=0.0), Cylinder(1, 0.03, 0.08, x_m=0.04, y_m=0.0)]),
+        make_scene(
+            "cans", [Cylinder(0, 0.035, 0.10, x_m=-0.035, y_m=0.0), Cylinder(1, 0.035, 0.10, x_m=0.035, y_m=0.0)]
+        ),
+        make_scene(
+            "cans apart", [Cylinder(0, 0.03, 0.08, x_m=-0.04, y_m=0.0), Cylinder(1, 0.03, 0.08, x_m=0.04, y_m=0.0)]
+        ),
         gap_row(3, 0.010, True),
         gap_row(4, 0.005, False),
         # seven boxes; two of them, near each other, have side edges on one circle of

@@ -79,7 +79,9 @@ def test_world_push_slides_shoves_and_stalls() -> None:
     assert moved.objects[0].x_m == pytest.approx(0.1) and moved.objects[0].y_m == pytest.approx(0.0)
     assert outcome == "pushed 0.100 m of 0.100 m"
     # a box in the way, touching: it is shoved ahead by the same distance
-    pair = make_scene("pair", [Box(0, 0.05, 0.04, 0.08, x_m=0.0, y_m=0.0), Box(1, 0.04, 0.04, 0.06, x_m=0.046, y_m=0.0)])
+    pair = make_scene(
+        "pair", [Box(0, 0.05, 0.04, 0.08, x_m=0.0, y_m=0.0), Box(1, 0.04, 0.04, 0.06, x_m=0.046, y_m=0.0)]
+    )
     moved, outcome = world_push(pair, 0, np.array([1.0, 0.0]), 0.05, rng, quiet)
     assert moved.objects[0].x_m == pytest.approx(0.05)
     assert moved.objects[1].x_m - moved.objects[0].x_m >= 0.045 - 1e-6

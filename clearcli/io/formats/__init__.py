@@ -54,9 +54,7 @@ def format_of(path: Path) -> InputFormat:
         message = fmt.misnamed(path)
         if message is not None:
             raise InputError(message)
-    raise InputError(
-        f"{path}: not an MCAP file, a ROS bag, a PCD file or a depth image (unrecognised first bytes)"
-    )
+    raise InputError(f"{path}: not an MCAP file, a ROS bag, a PCD file or a depth image (unrecognised first bytes)")
 
 
 def sniff(path: Path) -> str:

@@ -9,8 +9,9 @@ must not pay for the MCAP or rosbags libraries.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Iterator, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 from clearcli.errors import InputError
 
@@ -59,7 +60,7 @@ class InputFormat(Protocol):
         folder of inputs to search."""
         ...
 
-    def searched(self, path: Path, images: "ImageSettings") -> bool:
+    def searched(self, path: Path, images: ImageSettings) -> bool:
         """Whether a folder search takes the file ``path``, by its name."""
         ...
 
@@ -68,19 +69,21 @@ class InputFormat(Protocol):
         recognises (a truncated or renamed file), None to leave it to the general one."""
         ...
 
-    def read_frame(self, path: Path, topic: str | None, index: int, images: "ImageSettings | None",
-                   color: Path | None) -> "Frame":
+    def read_frame(
+        self, path: Path, topic: str | None, index: int, images: ImageSettings | None, color: Path | None
+    ) -> Frame:
         """Frame ``index`` (from 0); InputError for one that does not exist. ``topic``
         picks a log's frame topic; ``images`` ([images] settings) and ``color`` serve
         depth images."""
         ...
 
-    def iter_frames(self, path: Path, topic: str | None, images: "ImageSettings | None") -> Iterator["Frame"]:
+    def iter_frames(self, path: Path, topic: str | None, images: ImageSettings | None) -> Iterator[Frame]:
         """Every frame, one at a time (a log is streamed, never loaded whole)."""
         ...
 
-    def describe(self, path: Path, topic: str | None, index: int, images: "ImageSettings | None",
-                 color: Path | None) -> dict[str, Any]:
+    def describe(
+        self, path: Path, topic: str | None, index: int, images: ImageSettings | None, color: Path | None
+    ) -> dict[str, Any]:
         """The payload of `clear info` (schema documented in clearcli/commands/info.py):
         ``file``, ``format``, what the format knows and ``frame`` (`describe_frame`)."""
         ...
@@ -89,12 +92,12 @@ class InputFormat(Protocol):
         """Frames in the file, and the PartialLogError that ended a damaged log early."""
         ...
 
-    def output_name(self, path: Path, images: "ImageSettings") -> str | None:
+    def output_name(self, path: Path, images: ImageSettings) -> str | None:
         """The base name of a single frame's outputs when this format names it (a depth
         image: its stem without the depth suffix), None for the file's stem."""
         ...
 
-    def reads_with(self, path: Path, images: "ImageSettings", color: Path | None) -> list[Path] | None:
+    def reads_with(self, path: Path, images: ImageSettings, color: Path | None) -> list[Path] | None:
         """The other files a frame of ``path`` is read with (a rosbag2 folder's files, a
         depth image's colour and intrinsics) when ``path`` is named as this format's
         files are, None when it is not."""
@@ -119,16 +122,16 @@ class BaseFormat:
     def holds_folder(self, path: Path) -> bool:
         return False
 
-    def searched(self, path: Path, images: "ImageSettings") -> bool:
+    def searched(self, path: Path, images: ImageSettings) -> bool:
         return path.suffix.lower() in self.suffixes
 
     def misnamed(self, path: Path) -> str | None:
         return None
 
-    def output_name(self, path: Path, images: "ImageSettings") -> str | None:
+    def output_name(self, path: Path, images: ImageSettings) -> str | None:
         return None
 
-    def reads_with(self, path: Path, images: "ImageSettings", color: Path | None) -> list[Path] | None:
+    def reads_with(self, path: Path, images: ImageSettings, color: Path | None) -> list[Path] | None:
         return None
 
     def transforms(self, path: Path, max_messages: int) -> dict[tuple[str, str], Any]:
@@ -141,20 +144,22 @@ class SingleFrame(BaseFormat):
 
     what: str  # "a PCD file": for the message about a --frame past 0
 
-    def read(self, path: Path, images: "ImageSettings | None", color: Path | None) -> "Frame":
+    def read(self, path: Path, images: ImageSettings | None, color: Path | None) -> Frame:
         raise NotImplementedError
 
-    def read_frame(self, path: Path, topic: str | None, index: int, images: "ImageSettings | None",
-                   color: Path | None) -> "Frame":
+    def read_frame(
+        self, path: Path, topic: str | None, index: int, images: ImageSettings | None, color: Path | None
+    ) -> Frame:
         if index != 0:
             raise InputError(f"{path}: --frame {index} does not exist: {self.what} holds 1 frame (0)")
         return self.read(path, images, color)
 
-    def iter_frames(self, path: Path, topic: str | None, images: "ImageSettings | None") -> Iterator["Frame"]:
+    def iter_frames(self, path: Path, topic: str | None, images: ImageSettings | None) -> Iterator[Frame]:
         yield self.read(path, images, None)
 
-    def describe(self, path: Path, topic: str | None, index: int, images: "ImageSettings | None",
-                 color: Path | None) -> dict[str, Any]:
+    def describe(
+        self, path: Path, topic: str | None, index: int, images: ImageSettings | None, color: Path | None
+    ) -> dict[str, Any]:
         frame = self.read_frame(path, topic, index, images, color)
         return {"file": str(path), "format": self.name, "frame": describe_frame(frame, index)}
 
@@ -162,7 +167,7 @@ class SingleFrame(BaseFormat):
         return 1, None
 
 
-def describe_frame(frame: "Frame", index: int = 0) -> dict[str, Any]:
+def describe_frame(frame: Frame, index: int = 0) -> dict[str, Any]:
     """The `frame` object of the info schema."""
     import numpy as np
 

@@ -28,22 +28,24 @@ class DepthImage(SingleFrame):
 
     def misnamed(self, path: Path) -> str | None:
         if path.suffix.lower() in IMAGE_SUFFIXES:
-            return f"{path}: not a {path.suffix[1:].upper()} file (unrecognised first bytes); is it truncated or renamed?"
+            return (
+                f"{path}: not a {path.suffix[1:].upper()} file (unrecognised first bytes); is it truncated or renamed?"
+            )
         return None
 
-    def searched(self, path: Path, images: "ImageSettings") -> bool:
+    def searched(self, path: Path, images: ImageSettings) -> bool:
         """A depth image by the naming rule (a folder search takes only these: a colour
         image goes with its depth image)."""
         return path.suffix.lower() in IMAGE_SUFFIXES and path.stem.endswith(images.depth_suffix)
 
-    def output_name(self, path: Path, images: "ImageSettings") -> str | None:
+    def output_name(self, path: Path, images: ImageSettings) -> str | None:
         if not self.searched(path, images):
             return None
         from clearcli.io.images import frame_name
 
         return frame_name(path, images)
 
-    def reads_with(self, path: Path, images: "ImageSettings", color: Path | None) -> list[Path] | None:
+    def reads_with(self, path: Path, images: ImageSettings, color: Path | None) -> list[Path] | None:
         """The colour image (--color, or the one the naming rule pairs) and the
         intrinsics file ([images] intrinsics, or the ones beside the image)."""
         if path.suffix.lower() not in IMAGE_SUFFIXES:
@@ -60,17 +62,18 @@ class DepthImage(SingleFrame):
             found.extend(path.parent / n for n in INTRINSICS_NAMES)
         return found
 
-    def read(self, path: Path, images: "ImageSettings | None", color: Path | None) -> "Frame":
+    def read(self, path: Path, images: ImageSettings | None, color: Path | None) -> Frame:
         from clearcli.io.images import read_image_frame
 
         return read_image_frame(path, images, color)
 
-    def describe(self, path: Path, topic: str | None, index: int, images: "ImageSettings | None",
-                 color: Path | None) -> dict[str, Any]:
+    def describe(
+        self, path: Path, topic: str | None, index: int, images: ImageSettings | None, color: Path | None
+    ) -> dict[str, Any]:
         return describe_image(self.read_frame(path, topic, index, images, color), path, images, color)
 
 
-def describe_image(frame: "Frame", path: Path, images: Any = None, color: Path | None = None) -> dict[str, Any]:
+def describe_image(frame: Frame, path: Path, images: Any = None, color: Path | None = None) -> dict[str, Any]:
     """The info payload of a depth image, from the frame it made: its size, depth range,
     the intrinsics found and the colour image paired with it."""
     from clearcli.io.images import color_pair, find_intrinsics, or_defaults
@@ -89,8 +92,12 @@ def describe_image(frame: "Frame", path: Path, images: Any = None, color: Path |
         "depth_min_m": round(float(valid.min()), 6) if valid.size else None,
         "depth_max_m": round(float(valid.max()), 6) if valid.size else None,
         "intrinsics": {
-            "fx": model.fx, "fy": model.fy, "cx": model.cx, "cy": model.cy,
-            "width": model.width, "height": model.height,
+            "fx": model.fx,
+            "fy": model.fy,
+            "cx": model.cx,
+            "cy": model.cy,
+            "width": model.width,
+            "height": model.height,
             "distortion_model": model.distortion_model or None,
             "distorted": model.distorted,
             "source": model.source,

@@ -4,14 +4,23 @@ one way to count frames."""
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import Any, Callable, Iterator
+from typing import Any
 
 from clearcli.io.formats.base import describe_frame
 
 
-def describe_log(path: Path, summary: Any, access: Any, choose_topic: Callable[[Any, str | None], str],
-                 read_one: Callable[..., Any], topic: str | None, index: int, images: Any) -> dict[str, Any]:
+def describe_log(
+    path: Path,
+    summary: Any,
+    access: Any,
+    choose_topic: Callable[[Any, str | None], str],
+    read_one: Callable[..., Any],
+    topic: str | None,
+    index: int,
+    images: Any,
+) -> dict[str, Any]:
     """The ``mcap`` (or ``bag``) object of a log's info payload and its ``frame`` part
     (None when no topic is chosen, or the chosen one holds no message yet)."""
     candidates = summary.frame_topics()  # no point cloud: depth images are the frames
@@ -64,12 +73,20 @@ def image_streams(access: Any) -> list[dict[str, Any]]:
     summary = access.summary
     depth = set(summary.depth_topics())
     for topic in summary.image_topics():
-        entry: dict[str, Any] = {"topic": topic, "depth": topic in depth, "encoding": None, "width": None, "height": None}
+        entry: dict[str, Any] = {
+            "topic": topic,
+            "depth": topic in depth,
+            "encoding": None,
+            "width": None,
+            "height": None,
+        }
         try:
             for _, msg, _ in access.decoded(topic):
-                entry.update(encoding=str(message_field(msg, "encoding", default="")),
-                             width=int(message_field(msg, "width", default=0)),
-                             height=int(message_field(msg, "height", default=0)))
+                entry.update(
+                    encoding=str(message_field(msg, "encoding", default="")),
+                    width=int(message_field(msg, "width", default=0)),
+                    height=int(message_field(msg, "height", default=0)),
+                )
                 break
         except Exception:  # a damaged log: the channel list says what is known
             pass
@@ -77,8 +94,9 @@ def image_streams(access: Any) -> list[dict[str, Any]]:
     return streams
 
 
-def count_log_frames(summary: Any, topic: str | None, choose_topic: Callable[[Any, str | None], str],
-                     frames: Callable[[], Iterator[Any]]) -> tuple[int, Exception | None]:
+def count_log_frames(
+    summary: Any, topic: str | None, choose_topic: Callable[[Any, str | None], str], frames: Callable[[], Iterator[Any]]
+) -> tuple[int, Exception | None]:
     """Frames on a log's frame topic, and the PartialLogError that ended it early, if
     any. An intact log or bag is counted from its summary (index); a damaged one is
     read through to its break (``frames()``)."""

@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Iterator
+from typing import TYPE_CHECKING, Any
 
 from clearcli.io.formats.base import BaseFormat
 from clearcli.io.sniff import MCAP_MAGIC
@@ -21,24 +22,28 @@ class Mcap(BaseFormat):
     def recognises(self, path: Path, head: bytes) -> bool:
         return head.startswith(MCAP_MAGIC)
 
-    def read_frame(self, path: Path, topic: str | None, index: int, images: "ImageSettings | None",
-                   color: Path | None) -> "Frame":
+    def read_frame(
+        self, path: Path, topic: str | None, index: int, images: ImageSettings | None, color: Path | None
+    ) -> Frame:
         from clearcli.io.mcap import read_mcap_frame
 
         return read_mcap_frame(path, topic, index, images)
 
-    def iter_frames(self, path: Path, topic: str | None, images: "ImageSettings | None") -> Iterator["Frame"]:
+    def iter_frames(self, path: Path, topic: str | None, images: ImageSettings | None) -> Iterator[Frame]:
         from clearcli.io.mcap import iter_mcap_frames
 
         yield from iter_mcap_frames(path, topic, images)
 
-    def describe(self, path: Path, topic: str | None, index: int, images: "ImageSettings | None",
-                 color: Path | None) -> dict[str, Any]:
+    def describe(
+        self, path: Path, topic: str | None, index: int, images: ImageSettings | None, color: Path | None
+    ) -> dict[str, Any]:
         from clearcli.io.formats.logs import describe_log
         from clearcli.io.mcap import McapAccess, choose_topic, read_mcap_frame, read_summary
 
         summary = read_summary(path)
-        part = describe_log(path, summary, McapAccess(path, summary), choose_topic, read_mcap_frame, topic, index, images)
+        part = describe_log(
+            path, summary, McapAccess(path, summary), choose_topic, read_mcap_frame, topic, index, images
+        )
         return {"file": str(path), "format": "mcap", "mcap": part["log"], "frame": part["frame"]}
 
     def count_frames(self, path: Path, topic: str | None) -> tuple[int, Exception | None]:

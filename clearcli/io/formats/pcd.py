@@ -26,13 +26,14 @@ class Pcd(SingleFrame):
             return f"{path}: not a PCD file (it does not start with a PCD header)"
         return None
 
-    def read(self, path: Path, images: "ImageSettings | None", color: Path | None) -> "Frame":
+    def read(self, path: Path, images: ImageSettings | None, color: Path | None) -> Frame:
         from clearcli.io.pcd import read_pcd
 
         return read_pcd(path)
 
-    def describe(self, path: Path, topic: str | None, index: int, images: "ImageSettings | None",
-                 color: Path | None) -> dict[str, Any]:
+    def describe(
+        self, path: Path, topic: str | None, index: int, images: ImageSettings | None, color: Path | None
+    ) -> dict[str, Any]:
         from clearcli.io.pcd import pcd_header_fields
 
         header = pcd_header_fields(path)

@@ -4,8 +4,9 @@ reader, two formats."""
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Iterator
+from typing import TYPE_CHECKING, Any
 
 from clearcli.io.formats.base import BaseFormat
 from clearcli.io.sniff import ROSBAG1_MAGIC, ROSBAG2_METADATA, SQLITE_MAGIC
@@ -18,19 +19,21 @@ if TYPE_CHECKING:
 class _Bag(BaseFormat):
     is_log = True
 
-    def read_frame(self, path: Path, topic: str | None, index: int, images: "ImageSettings | None",
-                   color: Path | None) -> "Frame":
+    def read_frame(
+        self, path: Path, topic: str | None, index: int, images: ImageSettings | None, color: Path | None
+    ) -> Frame:
         from clearcli.io.rosbag import read_bag_frame
 
         return read_bag_frame(path, topic, index, images)
 
-    def iter_frames(self, path: Path, topic: str | None, images: "ImageSettings | None") -> Iterator["Frame"]:
+    def iter_frames(self, path: Path, topic: str | None, images: ImageSettings | None) -> Iterator[Frame]:
         from clearcli.io.rosbag import iter_bag_frames
 
         yield from iter_bag_frames(path, topic, images)
 
-    def describe(self, path: Path, topic: str | None, index: int, images: "ImageSettings | None",
-                 color: Path | None) -> dict[str, Any]:
+    def describe(
+        self, path: Path, topic: str | None, index: int, images: ImageSettings | None, color: Path | None
+    ) -> dict[str, Any]:
         from clearcli.io.bag_messages import BagDecoders
         from clearcli.io.formats.logs import describe_log
         from clearcli.io.rosbag import BagAccess, choose_bag_topic, read_bag_frame, read_bag_summary
@@ -45,8 +48,9 @@ class _Bag(BaseFormat):
         from clearcli.io.formats.logs import count_log_frames
         from clearcli.io.rosbag import choose_bag_topic, read_bag_summary
 
-        return count_log_frames(read_bag_summary(path), topic, choose_bag_topic,
-                                lambda: self.iter_frames(path, topic, None))
+        return count_log_frames(
+            read_bag_summary(path), topic, choose_bag_topic, lambda: self.iter_frames(path, topic, None)
+        )
 
     def transforms(self, path: Path, max_messages: int) -> dict[tuple[str, str], Any]:
         from clearcli.io.rosbag import read_bag_transforms
@@ -75,10 +79,10 @@ class Rosbag2(_Bag):
     def holds_folder(self, path: Path) -> bool:
         return (path / ROSBAG2_METADATA).is_file()
 
-    def searched(self, path: Path, images: "ImageSettings") -> bool:
+    def searched(self, path: Path, images: ImageSettings) -> bool:
         return False  # its storage files are found as its folder
 
-    def reads_with(self, path: Path, images: "ImageSettings", color: Path | None) -> list[Path] | None:
+    def reads_with(self, path: Path, images: ImageSettings, color: Path | None) -> list[Path] | None:
         if not (path.is_dir() and self.holds_folder(path)):
             return None
         return [p for p in path.iterdir() if p.is_file()]

@@ -14,6 +14,15 @@ from clearcli.predicates.grasps.base import GraspKind, KindFacts, KindModule, Of
 from clearcli.predicates.grasps.registry import kind, kind_names, kind_of_action, kinds, parse_kinds
 
 __all__ = [
-    "GraspKind", "KindFacts", "KindModule", "Offer", "Scene", "SimWorld",
-    "kind", "kind_names", "kind_of_action", "kinds", "parse_kinds",
+    "GraspKind",
+    "KindFacts",
+    "KindModule",
+    "Offer",
+    "Scene",
+    "SimWorld",
+    "kind",
+    "kind_names",
+    "kind_of_action",
+    "kinds",
+    "parse_kinds",
 ]

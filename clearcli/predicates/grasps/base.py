@@ -24,8 +24,9 @@ A kind that is not offered for an object says why (the object's reason).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Protocol, Sequence
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
@@ -74,16 +75,16 @@ class Offer:
 class Scene:
     """What every kind may look at (table frame)."""
 
-    objects: Sequence["ObjectGeometry"]
+    objects: Sequence[ObjectGeometry]
     points_table: Sequence[np.ndarray]  # each object's points, table frame
     openings: Sequence[Any]  # perception.openings.Opening per object
     edges_table: Sequence[tuple[np.ndarray, np.ndarray, bool, str]]  # (a, b, seen, why)
     exclude: set[tuple[int, int]]  # (a, b) related by `on`: never block each other
     touching: set[tuple[int, int]]
-    tf: "TableFrame"
+    tf: TableFrame
     # the kinds before this one in preference order, each with the objects it is offered
     # for: a kind may leave to them what they take (the slide does)
-    offered_before: tuple[tuple["GraspKind", frozenset[int]], ...] = ()
+    offered_before: tuple[tuple[GraspKind, frozenset[int]], ...] = ()
 
 
 class SimWorld(Protocol):
@@ -94,9 +95,9 @@ class SimWorld(Protocol):
     scene: Any  # clearcli.sim.scene.Scene; a kind's simulate replaces it by what it leaves
     k: int  # index of the action's object in scene.objects
     object_id: int  # its world id (the action's label and record)
-    model: "ObjectModel"  # the planner's model of it
+    model: ObjectModel  # the planner's model of it
     gripper: Any  # settings.gripper
-    settings: "Settings"
+    settings: Settings
     rng: np.random.Generator
     params: Any  # settings.world (WorldParams)
     rules: Any  # clearcli.sim.physics
@@ -143,11 +144,11 @@ class GraspKind(Protocol):
     # closed loop gives the kind up on that object at once (a slide that moved nothing)
     give_up_unmoved: bool
 
-    def offers(self, scene: Scene, gripper: "GripperModel", settings: "Settings") -> list[Offer]:
+    def offers(self, scene: Scene, gripper: GripperModel, settings: Settings) -> list[Offer]:
         """One Offer per object of ``scene`` (the kind's poses, its blockers, or why not)."""
         ...
 
-    def candidates(self, obj: "ObjectModel") -> tuple[tuple[np.ndarray, ...], ...]:
+    def candidates(self, obj: ObjectModel) -> tuple[tuple[np.ndarray, ...], ...]:
         """Its pose sequences T_camera_gripper in the object model."""
         ...
 
@@ -157,7 +158,7 @@ class GraspKind(Protocol):
         effect deletes for the object taken, as the thesis's grasp deletes its own."""
         ...
 
-    def moved_before(self, obj: "ObjectModel") -> np.ndarray | None:
+    def moved_before(self, obj: ObjectModel) -> np.ndarray | None:
         """The translation (sensor frame) it moves the object by before it grasps it
         (a picture draws it), or None."""
         ...
@@ -192,10 +193,10 @@ class KindModule:
     on_table = False
     give_up_unmoved = False
 
-    def candidates(self, obj: "ObjectModel") -> tuple[tuple[np.ndarray, ...], ...]:
+    def candidates(self, obj: ObjectModel) -> tuple[tuple[np.ndarray, ...], ...]:
         return tuple(obj.kind_candidates.get(self.name, ()))
 
-    def moved_before(self, obj: "ObjectModel") -> np.ndarray | None:
+    def moved_before(self, obj: ObjectModel) -> np.ndarray | None:
         return None
 
     def pddl_action(self, blocks: Sequence[str]) -> str:

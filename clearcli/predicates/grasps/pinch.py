@@ -13,7 +13,8 @@ closing direction (`ungraspable`). Its action is the shipped domain's ``grasp``
 from __future__ import annotations
 
 import dataclasses
-from typing import TYPE_CHECKING, Any, Sequence
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -29,9 +30,9 @@ if TYPE_CHECKING:
 
 
 def block_grasp_pairs(
-    objects: Sequence["ObjectGeometry"],
-    grasps: Sequence["GraspGeometry"],
-    gripper: "GripperModel",
+    objects: Sequence[ObjectGeometry],
+    grasps: Sequence[GraspGeometry],
+    gripper: GripperModel,
     exclude: set[tuple[int, int]],
     clearance_m: float = 0.0,
 ) -> set[tuple[int, int]]:
@@ -46,12 +47,12 @@ def block_grasp_pairs(
 
 
 def least_blocked_grasps(
-    objects: Sequence["ObjectGeometry"],
-    grasps: Sequence["GraspGeometry"],
-    gripper: "GripperModel",
+    objects: Sequence[ObjectGeometry],
+    grasps: Sequence[GraspGeometry],
+    gripper: GripperModel,
     exclude: set[tuple[int, int]],
     clearance_m: float = 0.0,
-) -> list["GraspGeometry"]:
+) -> list[GraspGeometry]:
     """Each grasp as the gripper yaw (the grasp or one of its ``alternatives``) whose
     open gripper hits the fewest other objects, the first on ties. The gripper turns
     about its approach at will, so a neighbour that blocks one yaw need not block the
@@ -72,7 +73,7 @@ def least_blocked_grasps(
     return out
 
 
-def ungraspable(grasps: Sequence["GraspGeometry"], gripper: "GripperModel", margin_m: float = 0.0) -> set[int]:
+def ungraspable(grasps: Sequence[GraspGeometry], gripper: GripperModel, margin_m: float = 0.0) -> set[int]:
     """Objects wider than the opening, or narrower than the closing width, across the
     closing direction of their grasp, by more than ``margin_m`` (the modelled width's
     error: an object within it is tried, and the grasp's outcome tells)."""
@@ -91,7 +92,7 @@ class PinchGrasp(KindModule):
     thesis = True
     instead = "the pinch from above fits it"
 
-    def offers(self, scene: Scene, gripper: "GripperModel", settings: "Settings") -> list[Offer]:
+    def offers(self, scene: Scene, gripper: GripperModel, settings: Settings) -> list[Offer]:
         """Every object gets its poses (an ungraspable one too: the object model keeps
         them, and its blockers, as the thesis's facts do); not offered when too wide or
         narrow (``detail["width_m"]``: the width across the closing direction)."""
@@ -99,7 +100,9 @@ class PinchGrasp(KindModule):
 
         ps = settings.predicates
         geoms = list(scene.objects)
-        grasps = [grasp_geometry(g, gripper, settings.push, ps.max_grasp_tilt_deg, ps.grasp_offcentre_fraction) for g in geoms]
+        grasps = [
+            grasp_geometry(g, gripper, settings.push, ps.max_grasp_tilt_deg, ps.grasp_offcentre_fraction) for g in geoms
+        ]
         # the gripper yaw of each grasp that the neighbours block least
         grasps = least_blocked_grasps(geoms, grasps, gripper, scene.exclude, ps.grasp_opening_clearance_m)
         blockers: list[set[int]] = [set() for _ in geoms]
@@ -116,7 +119,7 @@ class PinchGrasp(KindModule):
             for i, g in enumerate(grasps)
         ]
 
-    def candidates(self, obj: "ObjectModel") -> tuple[tuple[np.ndarray, ...], ...]:
+    def candidates(self, obj: ObjectModel) -> tuple[tuple[np.ndarray, ...], ...]:
         return tuple(obj.grasp_candidates)
 
     def pddl_action(self, blocks: Sequence[str]) -> str:
@@ -144,7 +147,11 @@ class PinchGrasp(KindModule):
                 world.scene, T[:3, 3], T[:3, 0], opening, gripper.finger_width_m, tips_z, gripper.finger_thickness_m
             )
         if held is not None and len(held) > 1:
-            return "closed on " + ", ".join(str(world.scene.objects[i].object_id) for i in held) + " at once: nothing taken"
+            return (
+                "closed on "
+                + ", ".join(str(world.scene.objects[i].object_id) for i in held)
+                + " at once: nothing taken"
+            )
         if held is not None and not held:
             return "missed: nothing between the fingers"
         if held:

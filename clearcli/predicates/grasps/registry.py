@@ -22,7 +22,9 @@ def kinds() -> tuple[GraspKind, ...]:
         for e in entries:
             kind = importlib.import_module(e.module_name).KIND
             if kind.name != e.name:
-                raise AssertionError(f"clearcli/settings/kinds.py: {e.module_name}.KIND is {kind.name!r}, not {e.name!r}")
+                raise AssertionError(
+                    f"clearcli/settings/kinds.py: {e.module_name}.KIND is {kind.name!r}, not {e.name!r}"
+                )
             out.append(kind)
         if not out or not out[0].thesis or any(k.thesis for k in out[1:]):
             raise AssertionError("clearcli/settings/kinds.py: the thesis's pinch comes first, and only it")
@@ -51,7 +53,7 @@ def kind_of_action(action_name: str) -> GraspKind:
 
 
 def parse_kinds(text: str) -> tuple[str, ...]:
-    """"rim,pinch" -> ("pinch", "rim"); one line SettingsError for anything else: the
+    """ "rim,pinch" -> ("pinch", "rim"); one line SettingsError for anything else: the
     rule of [plan] grasps itself (`clear domain --grasps` and the settings agree)."""
     from clearcli.settings.fields import range_of, set_of_names
     from clearcli.settings.plan import PlanSettings

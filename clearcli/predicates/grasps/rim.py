@@ -41,7 +41,7 @@ class RimGrasp(KindModule):
     facts = KindFacts("grasp_rim", "rim_graspable", "block_rim", "ik_unfeasible_rim", 2)
     instead = "its rim is grasped instead"
 
-    def offers(self, scene: Scene, gripper: "GripperModel", settings: "Settings") -> list[Offer]:
+    def offers(self, scene: Scene, gripper: GripperModel, settings: Settings) -> list[Offer]:
         from clearcli.geometry.poses import _pose
         from clearcli.predicates import relations as rel
 
@@ -73,7 +73,11 @@ class RimGrasp(KindModule):
                 continue
             grip = min(RIM_GRIP_DEPTH_M, g.finger_depth_m - 0.005)
             if rim.inside_depth_m < grip + 0.005:
-                out.append(Offer(why_not=f"the inside is seen only {rim.inside_depth_m:.3f} m deep (the fingers need {grip + 0.005:.3f} m)"))
+                out.append(
+                    Offer(
+                        why_not=f"the inside is seen only {rim.inside_depth_m:.3f} m deep (the fingers need {grip + 0.005:.3f} m)"
+                    )
+                )
                 continue
             c = scene.tf.to_table(np.asarray(rim.center, dtype=float)[None])[0]
             half = g.closing_region_height_m / 2.0
@@ -90,7 +94,13 @@ class RimGrasp(KindModule):
                 lift[:3, 3] += settings.push.approach_m * UP
                 seqs.append((pre, T, lift))
                 grasps.append(T)
-            hits = rel._grasp_hits(gripper, np.stack(grasps), [opening_m] * len(grasps), scene.objects, np.repeat(allowed[i][None], len(grasps), axis=0))
+            hits = rel._grasp_hits(
+                gripper,
+                np.stack(grasps),
+                [opening_m] * len(grasps),
+                scene.objects,
+                np.repeat(allowed[i][None], len(grasps), axis=0),
+            )
             by_pose: list[set[int]] = [set() for _ in grasps]
             for p, a in hits:
                 by_pose[p].add(a)

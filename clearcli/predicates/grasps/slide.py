@@ -66,7 +66,7 @@ class SlideGrasp(KindModule):
     # slide would meet it again (a pinch that slips may hold the next time)
     give_up_unmoved = True
 
-    def offers(self, scene: Scene, gripper: "GripperModel", settings: "Settings") -> list[Offer]:
+    def offers(self, scene: Scene, gripper: GripperModel, settings: Settings) -> list[Offer]:
         from clearcli.predicates import relations as rel
 
         g = gripper.settings
@@ -95,7 +95,9 @@ class SlideGrasp(KindModule):
             if thick < g.closing_width_m + SLIDE_CLEARANCE_M:
                 # (the modelled height is the top's, noise included: 5 mm to be sure the
                 # fingers close on it, as a failed slide leaves it at the edge)
-                offers[i] = Offer(why_not=f"{thick:.3f} m thick: too thin for the gripper to close on (it closes to {g.closing_width_m:.3f} m)")
+                offers[i] = Offer(
+                    why_not=f"{thick:.3f} m thick: too thin for the gripper to close on (it closes to {g.closing_width_m:.3f} m)"
+                )
                 continue
             if not seen:
                 offers[i] = Offer(why_not="no side of the table is seen to end (" + "; ".join(why_unseen) + ")")
@@ -121,13 +123,20 @@ class SlideGrasp(KindModule):
             pushes[i][f"slide{j}"] = cands[i][j]["geometry"]
         blockers: dict[tuple[int, int], set[int]] = {k: set() for k in keys}
         triples = rel.block_dir_triples(
-            list(scene.objects), pushes, gripper, scene.exclude, scene.touching, settings.predicates.touching_block_angle_deg
+            list(scene.objects),
+            pushes,
+            gripper,
+            scene.exclude,
+            scene.touching,
+            settings.predicates.touching_block_angle_deg,
         )
         for a, b, name in triples:
             blockers[(b, int(name[5:]))].add(a)
         allowed = rel._allowed(n, scene.exclude)
         poses = np.stack([cands[i][j]["T_edge"] for i, j in keys])
-        openings = [min(g.opening_width_m, _pinch_opening(cands[i][j]["thickness_m"], cands[i][j]["tilt_deg"])) for i, j in keys]
+        openings = [
+            min(g.opening_width_m, _pinch_opening(cands[i][j]["thickness_m"], cands[i][j]["tilt_deg"])) for i, j in keys
+        ]
         rows = allowed[[i for i, _ in keys]]
         for p, a in rel._grasp_hits(gripper, poses, openings, list(scene.objects), rows):
             blockers[keys[p]].add(a)
@@ -154,7 +163,7 @@ class SlideGrasp(KindModule):
             )
         return offers
 
-    def moved_before(self, obj: "ObjectModel") -> np.ndarray | None:
+    def moved_before(self, obj: ObjectModel) -> np.ndarray | None:
         return obj.slide_translation
 
     def world_holds(self, obj: Any, gripper: Any, rules: Any) -> bool:
@@ -164,7 +173,9 @@ class SlideGrasp(KindModule):
         if rules.open_container(obj):
             return False
         return bool(
-            gripper.closing_width_m <= obj.height_m <= rules.edge_pinch_span_m(gripper.opening_width_m, rules.EDGE_PINCH_MIN_TILT_DEG)
+            gripper.closing_width_m
+            <= obj.height_m
+            <= rules.edge_pinch_span_m(gripper.opening_width_m, rules.EDGE_PINCH_MIN_TILT_DEG)
             and rules.grasp_width_m(obj) >= 0.08
         )
 
@@ -179,11 +190,17 @@ class SlideGrasp(KindModule):
         chosen = chosen if chosen is not None and len(slides) > 1 else 0
         slide = slides[min(int(chosen), len(slides) - 1)]
         direction = world.T_table_camera[:3, :3] @ np.asarray(slide.get("direction", (1.0, 0.0, 0.0)), dtype=float)
-        world.scene, travelled = rules.world_slide(world.scene, world.k, direction[:2], float(slide.get("slide_m", 0.0)))
+        world.scene, travelled = rules.world_slide(
+            world.scene, world.k, direction[:2], float(slide.get("slide_m", 0.0))
+        )
         # the pinch's pose as the arm went there (its tilt sets the span the jaws take);
         # the world's own figure: fingers need EDGE_GRIP_M of the overhang to hold it
         T_camera_edge = world.chosen_pose(model.kind_candidates.get(self.name, ()), pose=-2, candidate=int(chosen))
-        tilt_deg = rules.EDGE_PINCH_TILT_DEG if T_camera_edge is None else rules.approach_tilt_deg(world.T_table_camera @ T_camera_edge)
+        tilt_deg = (
+            rules.EDGE_PINCH_TILT_DEG
+            if T_camera_edge is None
+            else rules.approach_tilt_deg(world.T_table_camera @ T_camera_edge)
+        )
         ok, why = rules.world_edge_pinch(
             world.scene, world.k, direction[:2], EDGE_GRIP_M, gripper.opening_width_m, gripper.closing_width_m, tilt_deg
         )
@@ -228,14 +245,17 @@ def _slide_to(obj, a: np.ndarray, b: np.ndarray, table_mid: np.ndarray):  # type
     proj = fp @ out_dir
     extent = float(proj.max() - proj.min())
     if SLIDE_OVERHANG_M > extent / 2.0 - SLIDE_KEEP_ON_M:
-        return None, f"{extent:.3f} m long towards the edge: too short to overhang {SLIDE_OVERHANG_M:.3f} m without tipping"
+        return (
+            None,
+            f"{extent:.3f} m long towards the edge: too short to overhang {SLIDE_OVERHANG_M:.3f} m without tipping",
+        )
     dist = float(a @ out_dir - proj.max() + SLIDE_OVERHANG_M)
     if dist > SLIDE_MAX_M:
         return None, f"the nearest seen edge is {dist:.2f} m away"
     return (max(dist, 0.0), out_dir, float(a @ out_dir)), ""
 
 
-def _candidate(obj, plan, gripper: "GripperModel", settings: "Settings", tilt_deg: float) -> dict:  # type: ignore[no-untyped-def]
+def _candidate(obj, plan, gripper: GripperModel, settings: Settings, tilt_deg: float) -> dict:  # type: ignore[no-untyped-def]
     """The pose sequence of one slide: the push along the table, then the pinch at the edge."""
     from clearcli.geometry.poses import PushGeometry, _pose, _push_sequence
 

@@ -16,8 +16,8 @@ from __future__ import annotations
 import dataclasses
 import functools
 import importlib
+from collections.abc import Iterator, Mapping
 from pathlib import Path
-from typing import Iterator, Mapping
 
 from clearcli.errors import SettingsError
 from clearcli.robot.profiles.base import Kinematics, RobotProfile
@@ -35,7 +35,7 @@ def profile(name: str) -> RobotProfile:
     return _load(name, entry)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _load(name: str, entry: ProfileEntry) -> RobotProfile:
     """The ``PROFILE`` of ``entry``'s module, named ``name`` (once per registry entry)."""
     found = importlib.import_module(entry.module).PROFILE
@@ -76,9 +76,17 @@ def _urdf_kinematics(path: Path, s: RobotSettings) -> Kinematics:
     from clearcli.robot.generic import UrdfKinematics
 
     return UrdfKinematics(
-        path, s.base_frame, "", flange_frame=s.flange_frame, tcp_xyz_m=s.tcp_xyz_m, tcp_yaw_deg=s.tcp_yaw_deg,
-        damping=s.ik_damping, max_iterations=s.ik_max_iterations,
-        tolerance_m=s.ik_tolerance_m, tolerance_rad=s.ik_tolerance_rad, n_seeds=s.ik_seeds,
+        path,
+        s.base_frame,
+        "",
+        flange_frame=s.flange_frame,
+        tcp_xyz_m=s.tcp_xyz_m,
+        tcp_yaw_deg=s.tcp_yaw_deg,
+        damping=s.ik_damping,
+        max_iterations=s.ik_max_iterations,
+        tolerance_m=s.ik_tolerance_m,
+        tolerance_rad=s.ik_tolerance_rad,
+        n_seeds=s.ik_seeds,
     )
 
 
@@ -98,10 +106,19 @@ def _user_profile(robot: RobotSettings) -> RobotProfile:
 
     x, y, z = (float(v) for v in kin.shoulder_bound)
     return RobotProfile(
-        name="urdf", summary=f"your arm from {path}", urdf=path, base_frame=robot.base_frame or "(root link)",
-        flange_frame=kin.flange_frame, tcp_frame="clear_tcp", shoulder_base=(x, y, z),
-        reach_m=kin.stretch_m, tcp_past_flange_m=float(sum(v * v for v in robot.tcp_xyz_m) ** 0.5),
-        base_above_footprint_m=0.0, gripper="[gripper]", make=make, joint_names=tuple(kin.joint_names),
+        name="urdf",
+        summary=f"your arm from {path}",
+        urdf=path,
+        base_frame=robot.base_frame or "(root link)",
+        flange_frame=kin.flange_frame,
+        tcp_frame="clear_tcp",
+        shoulder_base=(x, y, z),
+        reach_m=kin.stretch_m,
+        tcp_past_flange_m=float(sum(v * v for v in robot.tcp_xyz_m) ** 0.5),
+        base_above_footprint_m=0.0,
+        gripper="[gripper]",
+        make=make,
+        joint_names=tuple(kin.joint_names),
     )
 
 

@@ -11,9 +11,10 @@ tests an arm's name.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable, Literal
+from typing import Any, Literal
 
 from clearcli.robot.kinematics import Kinematics
 from clearcli.settings.robot import RobotSettings
@@ -93,8 +94,16 @@ class RobotProfile:
 
 
 def generic_profile(
-    *, summary: str, urdf: Path, base_frame: str, flange_frame: str, tcp_frame: str,
-    shoulder_base: tuple[float, float, float], reach_m: float, tcp_past_flange_m: float, gripper: str,
+    *,
+    summary: str,
+    urdf: Path,
+    base_frame: str,
+    flange_frame: str,
+    tcp_frame: str,
+    shoulder_base: tuple[float, float, float],
+    reach_m: float,
+    tcp_past_flange_m: float,
+    gripper: str,
     rest: tuple[float, ...],
     closed_form: Callable[[], tuple[Any, str, str]] | None = None,
     label: str = "",
@@ -107,14 +116,30 @@ def generic_profile(
         from clearcli.robot.generic import UrdfKinematics
 
         return UrdfKinematics(
-            urdf, base_frame, tcp_frame, flange_frame=flange_frame,
+            urdf,
+            base_frame,
+            tcp_frame,
+            flange_frame=flange_frame,
             closed_form=closed_form() if closed_form is not None else None,
-            rest=rest, damping=robot.ik_damping, max_iterations=robot.ik_max_iterations,
-            tolerance_m=robot.ik_tolerance_m, tolerance_rad=robot.ik_tolerance_rad, n_seeds=robot.ik_seeds,
+            rest=rest,
+            damping=robot.ik_damping,
+            max_iterations=robot.ik_max_iterations,
+            tolerance_m=robot.ik_tolerance_m,
+            tolerance_rad=robot.ik_tolerance_rad,
+            n_seeds=robot.ik_seeds,
         )
 
     return RobotProfile(
-        summary=summary, urdf=urdf, base_frame=base_frame, flange_frame=flange_frame,
-        tcp_frame=tcp_frame, shoulder_base=shoulder_base, reach_m=reach_m, tcp_past_flange_m=tcp_past_flange_m,
-        base_above_footprint_m=0.0, gripper=gripper, make=make, label=label,
+        summary=summary,
+        urdf=urdf,
+        base_frame=base_frame,
+        flange_frame=flange_frame,
+        tcp_frame=tcp_frame,
+        shoulder_base=shoulder_base,
+        reach_m=reach_m,
+        tcp_past_flange_m=tcp_past_flange_m,
+        base_above_footprint_m=0.0,
+        gripper=gripper,
+        make=make,
+        label=label,
     )
