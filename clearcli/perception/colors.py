@@ -24,15 +24,12 @@ it is off by default: measured on mOSD, prints mislead it (settings/segment.py).
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 
+from clearcli.perception.context import RefineContext
+from clearcli.perception.flat import group_lab
 from clearcli.perception.lccp import _angle_deg, join_pairs
 from clearcli.perception.supervoxels import Supervoxels
-
-if TYPE_CHECKING:
-    from clearcli.perception.refine import RefineContext
 
 # a seam between two pieces: this share of the adjacencies between them are concave by
 # this many degrees between their normals
@@ -40,19 +37,6 @@ _MIN_CONCAVE_SHARE = 0.25
 _CONCAVE_DEG = 20.0
 # a convex crease (never cut by colour): normals this far apart
 _CREASE_DEG = 30.0
-
-
-def group_lab(group_of_point: np.ndarray, colors: np.ndarray, n_groups: int) -> np.ndarray:
-    """(n_groups, 3) CIELAB of each group's mean colour (``colors`` (M, 3) uint8 of the
-    points, ``group_of_point`` (M,) their group: a voxel, a supervoxel)."""
-    from clearcli.perception.flat import cielab
-
-    counts = np.maximum(np.bincount(group_of_point, minlength=n_groups), 1)
-    mean = np.stack(
-        [np.bincount(group_of_point, weights=colors[:, c].astype(np.float64), minlength=n_groups) for c in range(3)],
-        axis=1,
-    )
-    return cielab(np.clip(mean / counts[:, None], 0, 255).round().astype(np.uint8))
 
 
 def supervoxel_lab(sv: Supervoxels, point_voxel: np.ndarray, colors: np.ndarray) -> np.ndarray:

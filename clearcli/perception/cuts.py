@@ -40,16 +40,13 @@ Here (per round, every segment at once):
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 
+from clearcli.perception.context import RefineContext
+from clearcli.perception.lccp import _angle_deg, convex_edges, rejoin_pieces
 from clearcli.perception.size import SegmentSize
 from clearcli.perception.supervoxels import Supervoxels
 from clearcli.settings.segment import SegmentSettings
-
-if TYPE_CHECKING:
-    from clearcli.perception.refine import RefineContext
 
 
 def _unit(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -64,7 +61,6 @@ def concave_adjacencies(sv: Supervoxels, settings: SegmentSettings, size: Segmen
     e = sv.edges
     if e.shape[0] == 0:
         return np.zeros(0, dtype=bool)
-    from clearcli.perception.lccp import _angle_deg, convex_edges
 
     n1, n2 = sv.normals[e[:, 0]], sv.normals[e[:, 1]]
     return ~convex_edges(sv, settings, size) & (_angle_deg(n1, n2) >= settings.cut_concave_deg)
@@ -120,8 +116,6 @@ def planar_cuts(
     """The stage (supervoxel level): (S,) segment of every supervoxel after the cuts,
     0..G-1 (``seg`` from LCCP). ``trace``, when given, receives a dict per round with
     every candidate's figures (for choosing the thresholds)."""
-    from clearcli.perception.lccp import rejoin_pieces
-
     settings, size, sv, up = ctx.settings, ctx.size, ctx.sv, ctx.up
     seg = np.asarray(seg, dtype=np.int64).copy()
     e = sv.edges
@@ -131,7 +125,6 @@ def planar_cuts(
     if not concave.any():
         return seg
     d_unit, _ = _unit(sv.centroids[e[:, 0]] - sv.centroids[e[:, 1]])
-    from clearcli.perception.lccp import _angle_deg, convex_edges
 
     # convex creases (a box's edge between its top and its front) count extra against a
     # cut: a plane along a box's edge crosses the odd patch straddling the edge, whose

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from clearcli.errors import SettingsError
 from clearcli.settings.segment import SegmentSettings
 
 
@@ -110,6 +111,5 @@ def clean_mask(points: np.ndarray, shape: tuple[int, int] | None, settings: Segm
         return statistical_mask(points, settings.outlier_k, settings.outlier_std)
     if method == "none":
         return finite_mask(points)
-    from clearcli.errors import SettingsError
 
     raise SettingsError(f"settings: [segment] outlier_method must be depth_radius, statistical or none, got {method!r}")

@@ -51,6 +51,17 @@ def cielab(rgb: np.ndarray) -> np.ndarray:
     return np.stack([116.0 * f[:, 1] - 16.0, 500.0 * (f[:, 0] - f[:, 1]), 200.0 * (f[:, 1] - f[:, 2])], axis=1)
 
 
+def group_lab(group_of_point: np.ndarray, colors: np.ndarray, n_groups: int) -> np.ndarray:
+    """(n_groups, 3) CIELAB of each group's mean colour (``colors`` (M, 3) uint8 of the
+    points, ``group_of_point`` (M,) their group: a voxel, a supervoxel)."""
+    counts = np.maximum(np.bincount(group_of_point, minlength=n_groups), 1)
+    mean = np.stack(
+        [np.bincount(group_of_point, weights=colors[:, c].astype(np.float64), minlength=n_groups) for c in range(3)],
+        axis=1,
+    )
+    return cielab(np.clip(mean / counts[:, None], 0, 255).round().astype(np.uint8))
+
+
 @functools.cache
 def _lab_table() -> np.ndarray:
     """(64^3, 3) float32 CIELAB of every colour quantized to 6 bits a channel (the

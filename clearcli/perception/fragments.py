@@ -13,12 +13,9 @@ it is left alone (the size filter drops it if it is tiny).
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 
-if TYPE_CHECKING:
-    from clearcli.perception.refine import RefineContext
+from clearcli.perception.context import RefineContext
 
 
 def rejoin_fragments(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:

@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from clearcli.perception.size import SegmentSize
-from clearcli.perception.supervoxels import Supervoxels
+from clearcli.perception.supervoxels import Supervoxels, _components
 from clearcli.settings.segment import SegmentSettings
 
 
@@ -132,8 +132,6 @@ def rejoin_pieces(
 ) -> np.ndarray:
     """After a cut: every segment of ``seg`` split into its connected pieces over
     ``edges``, and small pieces joined to their largest neighbour (`merge_small_segments`)."""
-    from clearcli.perception.supervoxels import _components
-
     keep = seg[edges[:, 0]] == seg[edges[:, 1]]
     pieces = _components(seg.size, edges[keep]).astype(np.int64)
     return merge_small_segments(pieces, edges, min_size, sizes, min_voxels)

@@ -15,12 +15,9 @@ the frame itself (pixel coordinates against x/z, y/z).
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 
-if TYPE_CHECKING:
-    from clearcli.perception.refine import RefineContext
+from clearcli.perception.context import RefineContext
 
 # patch normals within this angle count as the same surface
 _MAX_ANGLE_DEG = 15.0

@@ -14,12 +14,10 @@ their contact lies within ``rim_tolerance_m`` of the top of each:
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 
-if TYPE_CHECKING:
-    from clearcli.perception.refine import RefineContext
+from clearcli.perception.context import RefineContext
+from clearcli.perception.lccp import join_pairs
 
 # share of the contact (voxel adjacencies) that must be near both tops
 _MIN_SHARE_AT_TOP = 0.9
@@ -52,8 +50,6 @@ def merge_rims(
     "Touch": voxels of the two within ``contact_m`` (a thin wall seen edge-on at the
     sides of a container loses its depth, so the two walls need not be adjacent)."""
     from scipy.spatial import cKDTree
-
-    from clearcli.perception.lccp import join_pairs
 
     n_seg = int(seg_of_voxel.max()) + 1 if seg_of_voxel.size else 0
     if n_seg < 2:

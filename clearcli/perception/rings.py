@@ -26,12 +26,10 @@ For two segments whose tops lie within ``rim_tolerance_m`` of each other:
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 
-if TYPE_CHECKING:
-    from clearcli.perception.refine import RefineContext
+from clearcli.perception.context import RefineContext
+from clearcli.perception.lccp import join_pairs
 
 _MIN_RADIUS_M = 0.015
 # average facing (cosine between a wall's in-plane normal and the direction to the
@@ -140,8 +138,6 @@ def merge_rings(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
     from ``ctx``; only supervoxels that are not a top face (`RefineContext.sv_is_wall`)
     count for facing. Segments of fewer than the smallest object's voxels
     (`SegmentSize.min_object_voxels`) are left alone."""
-    from clearcli.perception.lccp import join_pairs
-
     settings = ctx.settings
     voxel_xy, voxel_height, voxel_label = ctx.voxel_xy, ctx.voxel_height, ctx.sv.voxel_label
     sv_normals_xy, sv_xy, sv_is_wall = ctx.sv_normals_xy, ctx.sv_xy, ctx.sv_is_wall

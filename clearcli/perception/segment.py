@@ -22,6 +22,7 @@ timed by one `Clock` under its name; the sizes every step counts in are the fram
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -30,11 +31,24 @@ import numpy as np
 from clearcli.errors import SceneError
 from clearcli.io.frames import Frame
 from clearcli.perception.clock import Clock
-from clearcli.perception.openings import Opening
-from clearcli.perception.refine import STAGES
+from clearcli.perception.context import RefineContext
+from clearcli.perception.edges import cut_depth_edges
+from clearcli.perception.filters import clean_mask
+from clearcli.perception.flat import flat_objects
+from clearcli.perception.lccp import lccp_segments
+from clearcli.perception.openings import Opening, rim_of, seen_edges
+from clearcli.perception.refine import STAGES, refine
 from clearcli.perception.size import SegmentSize
-from clearcli.perception.supervoxels import Supervoxels, VoxelCloud
-from clearcli.perception.table import TableFit
+from clearcli.perception.supervoxels import Supervoxels, VoxelCloud, compute_supervoxels, voxelize
+from clearcli.perception.table import (
+    TableFit,
+    beyond_the_edge,
+    convex_hull_2d,
+    find_table,
+    polygon_area,
+    project,
+    table_and_prism,
+)
 from clearcli.perception.types import Segmentation, SegmentedObject, TablePlane
 from clearcli.settings.segment import SegmentSettings
 
@@ -133,10 +147,6 @@ def _without_what_lies_beyond(frame: Frame, idx: np.ndarray, pts: np.ndarray, fi
     `beyond_the_edge`): its hull drawn again round the rest, and the prism with it, so
     that a chair's back standing over a seat in the table's plane is no object.
     Returns (fit, table mask, prism mask, area of the plane dropped in m^2)."""
-    import dataclasses
-
-    from clearcli.perception.table import beyond_the_edge, convex_hull_2d, polygon_area, table_and_prism
-
     on_table = np.flatnonzero(table_mask)
     drop, solid = beyond_the_edge(frame.points, frame.shape, idx[on_table], fit.plane, settings)
     if not drop.any():
@@ -192,9 +202,6 @@ def color_state(frame: Frame, organized: bool, settings: SegmentSettings) -> tup
 
 def _flat_objects(frame: Frame, table_idx: np.ndarray, obj_idx: np.ndarray, objects: list, fit, settings, size):
     """(table indices without the flat objects' points, the flat objects): flat.py."""
-    from clearcli.perception.flat import flat_objects
-    from clearcli.perception.table import project
-
     taken = np.concatenate([o.indices for o in objects]) if objects else np.zeros(0, dtype=np.int64)
     loose = np.setdiff1d(obj_idx, taken, assume_unique=True)
     cell = size.voxel_m
@@ -260,8 +267,6 @@ class _Work:
 
 def _filter(w: _Work) -> None:
     """1. finite points, outliers (filters.py)."""
-    from clearcli.perception.filters import clean_mask
-
     where = f"{w.frame.source}: " if w.frame.source else ""
     points = w.frame.points
     keep = clean_mask(points, w.frame.shape if w.organized else None, w.settings)
@@ -275,8 +280,6 @@ def _filter(w: _Work) -> None:
 
 def _table(w: _Work) -> None:
     """2. the table, its hull, the prism above it (table.py)."""
-    from clearcli.perception.table import find_table, table_and_prism
-
     fit = find_table(w.pts, w.settings, w.organized, w.frame.source)
     table_mask, prism_mask, _ = table_and_prism(w.pts, fit, w.settings)
     if w.organized and w.settings.beyond_edge_check:
@@ -289,8 +292,6 @@ def _table(w: _Work) -> None:
 def _voxels(w: _Work) -> None:
     """3. the points above the table, whether their colour is usable, the frame's sizes
     (fitted to an unorganized cloud's density), the voxel grid."""
-    from clearcli.perception.supervoxels import voxelize
-
     w.obj_idx = w.idx[w.prism_mask]
     w.color_used, w.color_note = color_state(w.frame, w.organized, w.settings)
     w.obj_pts = w.pts[w.prism_mask]
@@ -304,8 +305,6 @@ def _voxels(w: _Work) -> None:
 def _depth_edges(w: _Work) -> None:
     """3a'. the voxel adjacency cut at depth discontinuities (edges.py, organized)."""
     if w.organized and w.settings.depth_edges:
-        from clearcli.perception.edges import cut_depth_edges
-
         w.vox = cut_depth_edges(
             w.vox, w.frame.points, w.frame.shape, w.obj_idx, w.settings.depth_edge_rel, w.size.min_edge_piece_voxels
         )
@@ -314,8 +313,6 @@ def _depth_edges(w: _Work) -> None:
 def _supervoxels(w: _Work) -> None:
     """3a. supervoxels (supervoxels.py), seen from the camera, or from above the table's
     middle for a cloud in the table's frame."""
-    from clearcli.perception.supervoxels import compute_supervoxels
-
     fit = w.fit
     viewpoint = np.zeros(3) if fit.camera_is_origin else fit.polygon.mean(axis=0) + 1.0 * fit.plane.normal
     w.sv = compute_supervoxels(w.vox, viewpoint, w.settings, w.size)
@@ -324,8 +321,6 @@ def _supervoxels(w: _Work) -> None:
 def _lccp(w: _Work) -> None:
     """3b. LCCP (lccp.py): a small segment standing on the table with a top of its own
     is kept."""
-    from clearcli.perception.lccp import lccp_segments
-
     plane, sv = w.fit.plane, w.sv
     voxel_h = plane.height_of(w.vox.centroids)
     sv_low = np.full(sv.centroids.shape[0], np.inf)
@@ -338,8 +333,6 @@ def _lccp(w: _Work) -> None:
 
 def _refine(w: _Work) -> None:
     """3c. the refinements after LCCP, each a stage of refine.STAGES timed by its name."""
-    from clearcli.perception.refine import RefineContext, refine
-
     ctx = RefineContext(w.frame, w.organized, w.vox, w.sv, w.fit.plane, w.settings, w.size, w.obj_idx, w.color_used)
     w.seg_of_voxel = refine(w.seg_of_voxel, ctx, w.clock)
 
@@ -380,8 +373,6 @@ def _flat(w: _Work) -> None:
 def _openings(w: _Work) -> None:
     """What the grasps beyond the pinch need: rims of open containers, seen table edges
     (openings.py)."""
-    from clearcli.perception.openings import rim_of, seen_edges
-
     w.openings = tuple(rim_of(w.frame.points[o.indices], w.fit.plane) for o in w.objects)
     w.table_edges = seen_edges(w.frame.points, w.frame.shape, w.fit.plane, w.fit.polygon)
 

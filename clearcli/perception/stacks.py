@@ -39,12 +39,11 @@ upper object's foot, mostly lower top, stays with the lower object.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 
-if TYPE_CHECKING:
-    from clearcli.perception.refine import RefineContext
+from clearcli.perception.context import RefineContext
+from clearcli.perception.lccp import join_pairs
+from clearcli.perception.supervoxels import _components
 
 # share of the candidate upper object that must stand within the lower top's hull
 _MIN_INSIDE = 0.9
@@ -75,8 +74,6 @@ def _inside_hull(xy: np.ndarray, hull_xy: np.ndarray, slack_m: float) -> np.ndar
 
 def _component(seed_mask: np.ndarray, allowed: np.ndarray, edges: np.ndarray) -> np.ndarray:
     """(V,) voxels reachable from ``seed_mask`` through ``allowed`` voxels."""
-    from clearcli.perception.supervoxels import _components
-
     keep = allowed[edges[:, 0]] & allowed[edges[:, 1]]
     comp = _components(allowed.size, edges[keep])
     seeds = np.unique(comp[seed_mask & allowed])
@@ -161,8 +158,6 @@ def stack_splits(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
 def join_supports(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
     """(V,) segment of every voxel after joining touching segments that are pieces of
     the one top another object stands on (module docstring), 0..G-1."""
-    from clearcli.perception.lccp import join_pairs
-
     settings, voxel_height, voxel_edges = ctx.settings, ctx.voxel_height, ctx.vox.edges
     seg = np.asarray(seg_of_voxel, dtype=np.int64)
     n_seg = int(seg.max()) + 1 if seg.size else 0

@@ -26,12 +26,10 @@ Per segment (every round, every segment):
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 
-if TYPE_CHECKING:
-    from clearcli.perception.refine import RefineContext
+from clearcli.perception.context import RefineContext
+from clearcli.perception.lccp import rejoin_pieces
 
 _N_DIRECTIONS = 90  # 2 degree steps over half a turn
 _SEAM_BAND_VOXELS = 1.5
@@ -90,8 +88,6 @@ def step_splits(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
     Works on voxels, not supervoxels: a supervoxel may straddle the seam (the two
     objects' end faces nearly in one plane), and the plane must cut through it. The
     supervoxels give the top patches (`RefineContext.voxel_is_top`)."""
-    from clearcli.perception.lccp import rejoin_pieces
-
     settings, size, sv, voxel_height = ctx.settings, ctx.size, ctx.sv, ctx.voxel_height
     seg = np.asarray(seg_of_voxel, dtype=np.int64).copy()
     if seg.size == 0:

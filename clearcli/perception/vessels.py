@@ -42,14 +42,11 @@ bowls side by side).
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 
+from clearcli.perception.context import RefineContext
 from clearcli.perception.rings import cover_deg, facing_cos, fit_circle
-
-if TYPE_CHECKING:
-    from clearcli.perception.refine import RefineContext
+from clearcli.perception.supervoxels import _components
 
 _MIN_RADIUS_M = 0.02
 _RANSAC_ROUNDS = 200
@@ -176,8 +173,6 @@ def rebuild_vessels(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
     it, their adjacency, the walls (`RefineContext.sv_is_wall`) and the voxels' colour
     (CIELAB, when the frame's is usable) come from ``ctx``; a piece is an object of its
     own from the smallest object's voxels (`SegmentSize.min_object_voxels`)."""
-    from clearcli.perception.supervoxels import _components
-
     settings = ctx.settings
     voxel_xy, voxel_height, voxel_edges, voxel_label = ctx.voxel_xy, ctx.voxel_height, ctx.vox.edges, ctx.sv.voxel_label
     sv_normals_xy, sv_xy, sv_is_wall, voxel_lab = ctx.sv_normals_xy, ctx.sv_xy, ctx.sv_is_wall, ctx.voxel_lab

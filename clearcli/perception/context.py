@@ -1,0 +1,110 @@
+"""What every refinement stage after LCCP reads: one `RefineContext` a frame.
+
+The stages (stacks.py, cuts.py, ... fragments.py, listed in refine.py) each take
+``(segments, ctx)``; they import this module for its type, and refine.py imports them to
+list them, so the context lives here, apart from both.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+from clearcli.io.frames import Frame
+from clearcli.perception.flat import group_lab
+from clearcli.perception.size import SegmentSize
+from clearcli.perception.supervoxels import Supervoxels, VoxelCloud
+from clearcli.perception.table import plane_basis
+from clearcli.perception.types import TablePlane
+from clearcli.settings.segment import SegmentSettings
+
+
+@dataclass(frozen=True)
+class RefineContext:
+    """Everything a refinement stage reads: what LCCP ran on, and what several stages
+    derive from it (cached: worked out once, by the first stage that asks)."""
+
+    frame: Frame  # the whole frame: stages on the pixel grid read it
+    organized: bool  # the frame's pixel grid is usable
+    vox: VoxelCloud  # voxels of the points above the table
+    sv: Supervoxels
+    plane: TablePlane
+    settings: SegmentSettings  # as given: thresholds in metres and degrees
+    size: SegmentSize  # the sizes in voxels (fitted to an unorganized cloud's density)
+    point_index: np.ndarray | None = None  # (M,) frame index of each point above the table
+    color_used: bool = False  # the frame's colour is usable (segment.color_state)
+
+    @cached_property
+    def up(self) -> np.ndarray:
+        """(3,) the table's unit normal."""
+        return self.plane.normal / np.linalg.norm(self.plane.normal)
+
+    @cached_property
+    def voxel_height(self) -> np.ndarray:
+        """(V,) height of each voxel centroid above the table."""
+        return self.plane.height_of(self.vox.centroids)
+
+    @cached_property
+    def sv_height(self) -> np.ndarray:
+        """(S,) height of each supervoxel centroid above the table."""
+        return self.plane.height_of(self.sv.centroids)
+
+    @cached_property
+    def plane_basis(self) -> np.ndarray:
+        """(2, 3) two unit axes of the table plane: voxels and normals in it are ``@ .T``."""
+        return plane_basis(self.up)
+
+    @cached_property
+    def voxel_xy(self) -> np.ndarray:
+        """(V, 2) the voxels in the table plane."""
+        return self.vox.centroids @ self.plane_basis.T
+
+    @cached_property
+    def sv_xy(self) -> np.ndarray:
+        """(S, 2) the supervoxel centroids in the table plane."""
+        return self.sv.centroids @ self.plane_basis.T
+
+    @cached_property
+    def sv_normals_xy(self) -> np.ndarray:
+        """(S, 2) the supervoxel normals' part in the table plane."""
+        return self.sv.normals @ self.plane_basis.T
+
+    @cached_property
+    def sv_is_top(self) -> np.ndarray:
+        """(S,) top faces: supervoxels within step_max_tilt_deg of level."""
+        return np.abs(self.sv.normals @ self.up) >= np.cos(np.radians(self.settings.step_max_tilt_deg))
+
+    @cached_property
+    def sv_is_wall(self) -> np.ndarray:
+        """(S,) supervoxels that are not a top face (tilted more than step_max_tilt_deg)."""
+        return np.abs(self.sv.normals @ self.up) < np.cos(np.radians(self.settings.step_max_tilt_deg))
+
+    @cached_property
+    def voxel_is_top(self) -> np.ndarray:
+        """(V,) voxels of a top face (`sv_is_top`)."""
+        return self.sv_is_top[self.sv.voxel_label]
+
+    @cached_property
+    def point_colors(self) -> np.ndarray | None:
+        """(M, 3) RGB of the points above the table, or None without usable colour."""
+        if not self.color_used or self.point_index is None or self.frame.colors is None:
+            return None
+        return self.frame.colors[self.point_index]
+
+    @cached_property
+    def voxel_lab(self) -> np.ndarray | None:
+        """(V, 3) CIELAB of each voxel's mean colour, or None without usable colour."""
+        if self.point_colors is None:
+            return None
+        return group_lab(self.vox.point_voxel, self.point_colors, self.vox.centroids.shape[0])
+
+    @cached_property
+    def first_voxel(self) -> np.ndarray:
+        """(S,) one voxel of each supervoxel (to read a supervoxel's segment)."""
+        n_sv = self.sv.centroids.shape[0]
+        first = np.zeros(n_sv, dtype=np.int64)
+        order = np.arange(self.sv.voxel_label.size)[::-1]
+        first[self.sv.voxel_label[::-1]] = order
+        return first
