@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from clearcli.errors import SettingsError
+from clearcli.settings import settings_from_dict
 from clearcli.settings.geometry import GripperSettings
 
 
@@ -198,7 +199,6 @@ def load_gripper_settings(path: Path) -> GripperSettings:
     table = data.get("gripper", data)
     if not isinstance(table, dict):
         raise SettingsError(f"{path}: [gripper] must be a table of keys")
-    from clearcli.settings import settings_from_dict
 
     s = settings_from_dict({"gripper": table}).gripper
     check_gripper_settings(s, where=f"{path} [gripper]")

@@ -161,8 +161,8 @@ def grasp_geometry(
         a3 = a3 / np.linalg.norm(a3)
         for sign in (1.0, -1.0):
             offset = sign * reach * a3
-            cands = tuple(tuple(_moved(T, offset) for T in seq) for seq in centred.candidates)
-            grasps.append(dataclasses.replace(centred, candidates=cands))
+            moved = tuple(tuple(_moved(T, offset) for T in seq) for seq in centred.candidates)
+            grasps.append(dataclasses.replace(centred, candidates=moved))
     return dataclasses.replace(grasps[0], alternatives=tuple(grasps[1:]))
 
 
@@ -210,8 +210,8 @@ def push_geometry(obj: ObjectGeometry, gripper: GripperModel, push: PushSettings
         across = hull_xy @ side[:2]
         face_half = float(np.ptp(across)) / 2.0
         centre_across = float((across.max() + across.min()) / 2.0 - c[:2] @ side[:2])
-        yaws = []
-        shifted = []
+        yaws: list[PushGeometry] = []
+        shifted: list[PushGeometry] = []
         raised: list[PushGeometry] = []
         lifts = raised_contact_lifts(push, g.closing_region_height_m, extent, obj.top_height_m)
         for along in (parallel, not parallel):  # the documented yaw first, then the other

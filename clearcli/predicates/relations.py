@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from clearcli.geometry.gripper import GripperModel
+from clearcli.geometry.gripper import GripperModel, gripper_model
 from clearcli.geometry.models import ObjectGeometry
 from clearcli.geometry.poses import PushGeometry
 
@@ -232,9 +232,9 @@ def _gripper_hits(
     for p in np.nonzero(cand.any(axis=1))[0]:
         fcl_parts = gripper.fcl_objects(closed, poses[p])
         near = overlap_matrix(parts[p], boxes)  # (B, N)
-        for i in np.nonzero(cand[p])[0]:
+        for i in np.nonzero(cand[p])[0].tolist():
             if any(_collide(fcl_parts[k], objects[i].fcl_object) for k in np.nonzero(near[:, i])[0]):
-                hits.append((int(p), int(i)))
+                hits.append((int(p), i))
     return hits
 
 
@@ -269,8 +269,6 @@ def _grasp_hits(
     allowed: np.ndarray,
 ) -> list[tuple[int, int]]:
     """`_gripper_hits` of the open gripper, each pose with its own opening."""
-    from clearcli.geometry.gripper import gripper_model
-
     hits: list[tuple[int, int]] = []
     openings_arr = np.asarray(openings, dtype=float)
     for opening in np.unique(openings_arr):
@@ -288,7 +286,7 @@ def _with_fallbacks(options: Sequence[Any], hits: list[tuple[int, int]]) -> Any:
     every other option blocked by no object it is not blocked by: the IK check tries
     them in turn, so a yaw or contact point the arm cannot reach falls back on another
     that the neighbours allow as well."""
-    blockers = [set() for _ in options]
+    blockers: list[set[int]] = [set() for _ in options]
     for p, i in hits:
         blockers[p].add(i)
     best = min(range(len(options)), key=lambda k: (len(blockers[k]), k))
@@ -403,12 +401,11 @@ def block_dir_triples(
     cand = overlap_matrix(swept, boxes) & allowed_k
     cos_limit = math.cos(math.radians(touching_angle_deg))
     out: set[tuple[int, int, str]] = set()
-    for k in np.nonzero(cand.any(axis=1))[0]:
+    for k in np.nonzero(cand.any(axis=1))[0].tolist():
         b, name = keys[k]
         push = pushes[b][name]
         solid = None
-        for a in np.nonzero(cand[k])[0]:
-            a = int(a)
+        for a in np.nonzero(cand[k])[0].tolist():
             if (a, b) in touching:
                 delta = objects[a].center[:2] - objects[b].center[:2]
                 norm = float(np.linalg.norm(delta))
@@ -461,7 +458,7 @@ def clearance_distances(
     for b, by_dir in enumerate(pushes):
         for name, push in by_dir.items():
             t = push.object_translations[-1]
-            corners = gripper.boxes(True).transformed_corners(push.T_start).reshape(-1, 3)  # noqa: E501
+            corners = gripper.boxes(True).transformed_corners(push.T_start).reshape(-1, 3)
             gbox = np.array([corners.min(axis=0), corners.max(axis=0)])
             sbox = swept_box(objects[b], t)
             best = horizon_m

@@ -12,31 +12,29 @@ import dataclasses
 import logging
 import time
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
+from clearcli.geometry.gripper import GripperModel, gripper_model
+from clearcli.geometry.models import DegenerateObject, ObjectGeometry, TableFrame, build_from_columns, object_columns
+from clearcli.geometry.poses import PushGeometry, push_geometry
 from clearcli.io.frames import Frame
+from clearcli.perception.openings import TableEdge, rim_of, seen_edges
 from clearcli.perception.types import Segmentation
+from clearcli.predicates import relations as rel
+from clearcli.predicates.grasps import Scene as GraspScene
+from clearcli.predicates.grasps import kind as grasp_kind
+from clearcli.predicates.grasps import kinds as grasp_kinds
 from clearcli.predicates.grasps.base import Offer
 from clearcli.predicates.state import DIRECTIONS, Fact, ObjectModel, PushModel, SymbolicState
-
-if TYPE_CHECKING:
-    from clearcli.geometry.models import ObjectGeometry, TableFrame
-    from clearcli.geometry.poses import PushGeometry
-    from clearcli.settings import Settings
+from clearcli.settings import Settings
 
 log = logging.getLogger("clearcli.predicates")
 
 
 def compute_state(frame: Frame, seg: Segmentation, settings: Settings | None = None) -> SymbolicState:
     """Model the segmented objects and compute every fact the planner needs (no IK)."""
-    from clearcli.geometry.gripper import gripper_model
-    from clearcli.geometry.models import DegenerateObject, TableFrame, build_from_columns, object_columns
-    from clearcli.geometry.poses import push_geometry
-    from clearcli.predicates import relations as rel
-    from clearcli.settings import Settings
-
     s = settings if settings is not None else Settings()
     ps = s.predicates
     timings: dict[str, float] = {}
@@ -81,11 +79,14 @@ def compute_state(frame: Frame, seg: Segmentation, settings: Settings | None = N
     )
     # what stands in an open container is on it (relations.inside_rims)
     openings, edges = _openings_and_edges(frame, seg)
-    rims = []
+    rims: list[tuple[float, float, float] | None] = []
     for g in geoms:
         rim = getattr(openings[g.segment_index], "rim", None)
-        c = tf.to_table(np.asarray(rim.center, dtype=float)[None])[0] if rim is not None else None
-        rims.append(None if rim is None else (float(c[0]), float(c[1]), float(rim.radius_m - rim.wall_m / 2.0)))
+        if rim is None:
+            rims.append(None)
+        else:
+            c = tf.to_table(np.asarray(rim.center, dtype=float)[None])[0]
+            rims.append((float(c[0]), float(c[1]), float(rim.radius_m - rim.wall_m / 2.0)))
     # (not where the container stands on the other: then the other is under it)
     on = set(on) | {(a, b) for a, b in rel.inside_rims(geoms, rims) if (b, a) not in on}
     facts.update(("on", names[a], names[b]) for a, b in on)
@@ -109,7 +110,6 @@ def compute_state(frame: Frame, seg: Segmentation, settings: Settings | None = N
     # ungraspable), each offered where it takes the object, with its blockers
     t0 = time.perf_counter()
     kinds = _grasp_offers(geoms, openings, edges, tf, gripper, s, exclude, touching)
-    from clearcli.predicates.grasps import kind as grasp_kind
 
     for name, offers in kinds.items():
         f = grasp_kind(name).facts
@@ -151,8 +151,6 @@ def compute_state(frame: Frame, seg: Segmentation, settings: Settings | None = N
 def _openings_and_edges(frame: Frame, seg: Segmentation) -> tuple[tuple[Any, ...], tuple[Any, ...]]:
     """Per segment its rim or why not, and the table's sides seen to end: what
     segmentation saw, or (a segmentation from labels) worked out here."""
-    from clearcli.perception.openings import rim_of, seen_edges
-
     openings = (
         seg.openings
         if len(seg.openings) == len(seg.objects)
@@ -162,12 +160,18 @@ def _openings_and_edges(frame: Frame, seg: Segmentation) -> tuple[tuple[Any, ...
     return tuple(openings), tuple(edges)
 
 
-def _grasp_offers(geoms, openings, edges, tf, gripper, settings, exclude, touching):  # type: ignore[no-untyped-def]
+def _grasp_offers(
+    geoms: Sequence[ObjectGeometry],
+    openings: Sequence[Any],
+    edges: Sequence[TableEdge],
+    tf: TableFrame,
+    gripper: GripperModel,
+    settings: Settings,
+    exclude: set[tuple[int, int]],
+    touching: set[tuple[int, int]],
+) -> dict[str, list[Offer]]:
     """kind name -> one `Offer` per object (table frame), every registered kind in
     preference order, each seeing which objects the kinds before it are offered for."""
-    from clearcli.predicates.grasps import Scene as GraspScene
-    from clearcli.predicates.grasps import kinds
-
     edges_table = [(*tf.to_table(np.stack([e.start, e.end])), e.seen, e.why) for e in edges]
     scene = GraspScene(
         objects=geoms,
@@ -179,7 +183,7 @@ def _grasp_offers(geoms, openings, edges, tf, gripper, settings, exclude, touchi
         tf=tf,
     )
     out: dict[str, list[Offer]] = {}
-    for kind in kinds():
+    for kind in grasp_kinds():
         offers = kind.offers(scene, gripper, settings)
         out[kind.name] = offers
         offered = frozenset(i for i, o in enumerate(offers) if not o.why_not)
@@ -196,8 +200,6 @@ def _object_model(
 ) -> ObjectModel:
     """The object as the planner sees it: the thesis's grasp (its poses and width) in its
     own fields, every other kind's poses, detail and refusal under its name."""
-    from clearcli.predicates.grasps import kind as grasp_kind
-
     thesis = {k: o for k, o in offers.items() if grasp_kind(k).thesis}
     others = {k: o for k, o in offers.items() if k not in thesis}
     (pinch,) = thesis.values()

@@ -44,7 +44,9 @@ def pca_object(indices: np.ndarray, points: np.ndarray) -> SegmentedObject:
     )
 
 
-def camera_pose(camera_xyz=(-0.5, 0.0, 0.6), target_xyz=(0.0, 0.0, 0.0)) -> np.ndarray:
+def camera_pose(
+    camera_xyz: tuple[float, float, float] = (-0.5, 0.0, 0.6), target_xyz: tuple[float, float, float] = (0.0, 0.0, 0.0)
+) -> np.ndarray:
     """T_world_camera of an optical-frame camera (z forward, y down) at camera_xyz."""
     c = np.asarray(camera_xyz, float)
     z = np.asarray(target_xyz, float) - c
@@ -103,7 +105,7 @@ def _inside(points: np.ndarray, box: Box, tol: float) -> np.ndarray:
 
 def make_scene(
     boxes: list[Box],
-    camera_xyz=(-0.5, 0.0, 0.6),
+    camera_xyz: tuple[float, float, float] = (-0.5, 0.0, 0.6),
     table_half_size_m: tuple[float, float] = (0.4, 0.5),
     spacing_m: float = 0.005,
     source: str = "synthetic",

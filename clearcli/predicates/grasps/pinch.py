@@ -18,13 +18,13 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from clearcli.geometry.gripper import GripperModel, gripper_model
+from clearcli.geometry.poses import GraspGeometry, grasp_geometry
 from clearcli.predicates.grasps.base import KindFacts, KindModule, Offer, Scene, SimWorld
 from clearcli.predicates.relations import _allowed, _grasp_hits, _with_fallbacks, grasp_opening_m
 
 if TYPE_CHECKING:
-    from clearcli.geometry.gripper import GripperModel
     from clearcli.geometry.models import ObjectGeometry
-    from clearcli.geometry.poses import GraspGeometry
     from clearcli.predicates.state import ObjectModel
     from clearcli.settings import Settings
 
@@ -96,8 +96,6 @@ class PinchGrasp(KindModule):
         """Every object gets its poses (an ungraspable one too: the object model keeps
         them, and its blockers, as the thesis's facts do); not offered when too wide or
         narrow (``detail["width_m"]``: the width across the closing direction)."""
-        from clearcli.geometry.poses import grasp_geometry
-
         ps = settings.predicates
         geoms = list(scene.objects)
         grasps = [
@@ -132,8 +130,6 @@ class PinchGrasp(KindModule):
         """The world closes the fingers on what lies between them, not on what the
         planner meant: two objects merged into one segment are both in there. The robot
         opens the gripper as the planner's rule says (`relations.grasp_opening_m`)."""
-        from clearcli.geometry.gripper import gripper_model
-
         rules, gripper, model = world.rules, world.gripper, world.model
         held, closing, opening = None, None, gripper.opening_width_m
         T_camera_grasp = world.chosen_pose(model.grasp_candidates)

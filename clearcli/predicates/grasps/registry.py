@@ -9,6 +9,8 @@ import importlib
 
 from clearcli.predicates.grasps.base import GraspKind
 from clearcli.settings import kinds as registered
+from clearcli.settings.fields import range_of, set_of_names
+from clearcli.settings.plan import PlanSettings
 
 _loaded: tuple[tuple[object, ...], tuple[GraspKind, ...]] = ((), ())
 
@@ -55,8 +57,5 @@ def kind_of_action(action_name: str) -> GraspKind:
 def parse_kinds(text: str) -> tuple[str, ...]:
     """ "rim,pinch" -> ("pinch", "rim"); one line SettingsError for anything else: the
     rule of [plan] grasps itself (`clear domain --grasps` and the settings agree)."""
-    from clearcli.settings.fields import range_of, set_of_names
-    from clearcli.settings.plan import PlanSettings
-
     canonical = set_of_names(f"settings: [plan] grasps = {text!r}", text, range_of(PlanSettings, "grasps"))
     return tuple(canonical.split(","))

@@ -23,6 +23,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from clearcli.geometry.poses import _pose
+from clearcli.predicates import relations as rel
 from clearcli.predicates.grasps.base import KindFacts, KindModule, Offer, Scene, SimWorld
 
 if TYPE_CHECKING:
@@ -42,9 +44,6 @@ class RimGrasp(KindModule):
     instead = "its rim is grasped instead"
 
     def offers(self, scene: Scene, gripper: GripperModel, settings: Settings) -> list[Offer]:
-        from clearcli.geometry.poses import _pose
-        from clearcli.predicates import relations as rel
-
         g = gripper.settings
         out: list[Offer] = []
         n = len(scene.objects)

@@ -27,10 +27,13 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from clearcli.geometry.poses import PushGeometry, _pose, _push_sequence
+from clearcli.predicates import relations as rel
 from clearcli.predicates.grasps.base import KindFacts, KindModule, Offer, Scene, SimWorld
 
 if TYPE_CHECKING:
     from clearcli.geometry.gripper import GripperModel
+    from clearcli.geometry.models import ObjectGeometry
     from clearcli.predicates.state import ObjectModel
     from clearcli.settings import Settings
 
@@ -67,8 +70,6 @@ class SlideGrasp(KindModule):
     give_up_unmoved = True
 
     def offers(self, scene: Scene, gripper: GripperModel, settings: Settings) -> list[Offer]:
-        from clearcli.predicates import relations as rel
-
         g = gripper.settings
         n = len(scene.objects)
         seen = [(a[:2], b[:2]) for a, b, ok, _ in scene.edges_table if ok]
@@ -76,7 +77,7 @@ class SlideGrasp(KindModule):
         table_mid = np.mean([a[:2] for a, *_ in scene.edges_table], axis=0) if scene.edges_table else np.zeros(2)
         offers: list[Offer] = [Offer(why_not="not modelled")] * n
         # (object, its candidates: one per seen side it can be slid to, nearest first)
-        cands: dict[int, list[dict]] = {}
+        cands: dict[int, list[dict[str, Any]]] = {}
         for i, obj in enumerate(scene.objects):
             # for what a kind before it takes (the pinch, a rim grasp): that one
             taken = next((kind.instead for kind, offered in scene.offered_before if i in offered), "")
@@ -103,8 +104,8 @@ class SlideGrasp(KindModule):
                 offers[i] = Offer(why_not="no side of the table is seen to end (" + "; ".join(why_unseen) + ")")
                 continue
             found, why = [], "no seen side of the table is long enough to take it"
-            for a, b in seen:
-                plan, why_side = _slide_to(obj, a, b, table_mid)
+            for side_a, side_b in seen:
+                plan, why_side = _slide_to(obj, side_a, side_b, table_mid)
                 if plan is None:
                     why = why_side or why
                     continue
@@ -118,7 +119,7 @@ class SlideGrasp(KindModule):
         # blockers of every candidate: its swept volume and the pusher behind it (as
         # block_dir: relations.block_dir_triples), and the open gripper at the edge
         keys = [(i, j) for i in sorted(cands) for j in range(len(cands[i]))]
-        pushes: list[dict] = [{} for _ in range(n)]
+        pushes: list[dict[str, PushGeometry]] = [{} for _ in range(n)]
         for i, j in keys:
             pushes[i][f"slide{j}"] = cands[i][j]["geometry"]
         blockers: dict[tuple[int, int], set[int]] = {k: set() for k in keys}
@@ -230,7 +231,9 @@ def pinch_tilt_deg(thick_m: float, opening_m: float) -> float | None:
     return min(SLIDE_TILT_DEG, math.floor(10.0 * math.degrees(math.acos(thick_m / room))) / 10.0)
 
 
-def _slide_to(obj, a: np.ndarray, b: np.ndarray, table_mid: np.ndarray):  # type: ignore[no-untyped-def]
+def _slide_to(
+    obj: ObjectGeometry, a: np.ndarray, b: np.ndarray, table_mid: np.ndarray
+) -> tuple[tuple[float, np.ndarray, float] | None, str]:
     """(slide length, outward unit (2,), the side's offset along it) to side a-b, or
     (None, why not)."""
     fp = np.asarray(obj.footprint, dtype=float)
@@ -255,10 +258,14 @@ def _slide_to(obj, a: np.ndarray, b: np.ndarray, table_mid: np.ndarray):  # type
     return (max(dist, 0.0), out_dir, float(a @ out_dir)), ""
 
 
-def _candidate(obj, plan, gripper: GripperModel, settings: Settings, tilt_deg: float) -> dict:  # type: ignore[no-untyped-def]
+def _candidate(
+    obj: ObjectGeometry,
+    plan: tuple[float, np.ndarray, float],
+    gripper: GripperModel,
+    settings: Settings,
+    tilt_deg: float,
+) -> dict[str, Any]:
     """The pose sequence of one slide: the push along the table, then the pinch at the edge."""
-    from clearcli.geometry.poses import PushGeometry, _pose, _push_sequence
-
     g, push = gripper.settings, settings.push
     dist, out_dir, edge_at = plan
     thick = float(obj.top_height_m)
