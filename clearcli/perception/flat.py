@@ -29,6 +29,7 @@ unchanged.
 from __future__ import annotations
 
 import functools
+from collections.abc import Callable
 
 import numpy as np
 
@@ -85,8 +86,8 @@ def flat_objects(
     table_pixels: np.ndarray,
     loose_pixels: np.ndarray,
     object_pixels: np.ndarray,
-    height_of,
-    pixel_area_m2,
+    height_of: Callable[[np.ndarray], np.ndarray],
+    pixel_area_m2: Callable[[np.ndarray], float],
     min_color_delta: float,
     min_relief_m: float,
     min_area_m2: float,
@@ -118,10 +119,10 @@ def flat_objects(
     grid = cand.reshape(height, width)
     comps, n = ndimage.label(grid, structure=np.ones((3, 3), dtype=bool))
     sizes = np.bincount(comps.ravel(), minlength=n + 1)
-    taken = np.zeros(height * width, dtype=bool)
+    taken: np.ndarray = np.zeros(height * width, dtype=bool)  # flat, then (height, width)
     taken[object_pixels] = True
     taken = taken.reshape(height, width)
-    is_table = np.zeros(height * width, dtype=bool)
+    is_table: np.ndarray = np.zeros(height * width, dtype=bool)  # flat, then (height, width)
     is_table[table_pixels] = True
     is_table = is_table.reshape(height, width)
     found: list[np.ndarray] = []

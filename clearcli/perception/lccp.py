@@ -86,13 +86,13 @@ def lccp_segments(
     if n_sv == 0:
         return np.zeros(0, dtype=np.int64)
     size = size if size is not None else SegmentSize.of(settings)
-    keep = convex_edges(sv, settings, size)
-    e = sv.edges[keep]
+    convex = convex_edges(sv, settings, size)
+    e = sv.edges[convex]
     graph = coo_matrix((np.ones(e.shape[0], dtype=np.int8), (e[:, 0], e[:, 1])), shape=(n_sv, n_sv))
     seg = connected_components(graph, directed=False)[1].astype(np.int64)
     # "small" also by area: the connectivity step of the supervoxels can leave a small
     # patch in several pieces, which would count as several supervoxels
-    keep = None
+    keep: np.ndarray | None = None
     if sv_low_m is not None and sv_high_m is not None and up is not None and settings.keep_standing_small:
         n_seg = int(seg.max()) + 1
         top = np.abs(sv.normals @ (up / np.linalg.norm(up))) >= np.cos(np.radians(settings.step_max_tilt_deg))

@@ -65,6 +65,7 @@ def merge_occluded(seg_of_sv: np.ndarray, ctx: RefineContext) -> np.ndarray:
     voxel and smallest object are the settings' own.
     """
     sv, frame_points, shape = ctx.sv, ctx.frame.points, ctx.frame.shape
+    assert shape is not None  # a stage on the pixel grid: refine() runs it on organized frames only
     sv_centroids, sv_normals, sv_edges, sv_height = sv.centroids, sv.normals, sv.edges, ctx.sv_height
     max_gap_m, voxel_m = ctx.settings.occlusion_max_gap_m, ctx.size.voxel_m
     intr = estimate_intrinsics(frame_points, shape)

@@ -36,7 +36,7 @@ from clearcli.perception.edges import cut_depth_edges
 from clearcli.perception.filters import clean_mask
 from clearcli.perception.flat import flat_objects
 from clearcli.perception.lccp import lccp_segments
-from clearcli.perception.openings import Opening, rim_of, seen_edges
+from clearcli.perception.openings import Opening, TableEdge, rim_of, seen_edges
 from clearcli.perception.refine import STAGES, refine
 from clearcli.perception.size import SegmentSize
 from clearcli.perception.supervoxels import Supervoxels, VoxelCloud, compute_supervoxels, voxelize
@@ -142,11 +142,20 @@ def make_object(
     )
 
 
-def _without_what_lies_beyond(frame: Frame, idx: np.ndarray, pts: np.ndarray, fit, table_mask, prism_mask, settings):
+def _without_what_lies_beyond(
+    frame: Frame,
+    idx: np.ndarray,
+    pts: np.ndarray,
+    fit: TableFit,
+    table_mask: np.ndarray,
+    prism_mask: np.ndarray,
+    settings: SegmentSettings,
+) -> tuple[TableFit, np.ndarray, np.ndarray, float]:
     """The table without the pieces of its plane seen beyond its own edge (table.py,
     `beyond_the_edge`): its hull drawn again round the rest, and the prism with it, so
     that a chair's back standing over a seat in the table's plane is no object.
     Returns (fit, table mask, prism mask, area of the plane dropped in m^2)."""
+    assert frame.shape is not None  # an organized frame's only
     on_table = np.flatnonzero(table_mask)
     drop, solid = beyond_the_edge(frame.points, frame.shape, idx[on_table], fit.plane, settings)
     if not drop.any():
@@ -200,8 +209,17 @@ def color_state(frame: Frame, organized: bool, settings: SegmentSettings) -> tup
     return True, "read by: " + ", ".join(readers)
 
 
-def _flat_objects(frame: Frame, table_idx: np.ndarray, obj_idx: np.ndarray, objects: list, fit, settings, size):
+def _flat_objects(
+    frame: Frame,
+    table_idx: np.ndarray,
+    obj_idx: np.ndarray,
+    objects: list[SegmentedObject],
+    fit: TableFit,
+    settings: SegmentSettings,
+    size: SegmentSize,
+) -> tuple[np.ndarray, list[SegmentedObject]]:
     """(table indices without the flat objects' points, the flat objects): flat.py."""
+    assert frame.colors is not None and frame.shape is not None  # an organized frame's, with usable colour
     taken = np.concatenate([o.indices for o in objects]) if objects else np.zeros(0, dtype=np.int64)
     loose = np.setdiff1d(obj_idx, taken, assume_unique=True)
     cell = size.voxel_m
@@ -262,7 +280,7 @@ class _Work:
     objects: list[SegmentedObject] = field(default_factory=list)
     table_idx: np.ndarray = field(default_factory=_empty)
     openings: tuple[Opening, ...] = ()
-    table_edges: tuple = ()
+    table_edges: tuple[TableEdge, ...] = ()
 
 
 def _filter(w: _Work) -> None:
@@ -305,24 +323,29 @@ def _voxels(w: _Work) -> None:
 def _depth_edges(w: _Work) -> None:
     """3a'. the voxel adjacency cut at depth discontinuities (edges.py, organized)."""
     if w.organized and w.settings.depth_edges:
+        vox, shape, size = w.vox, w.frame.shape, w.size
+        assert vox is not None and shape is not None and size is not None  # above the table, organized, sized
         w.vox = cut_depth_edges(
-            w.vox, w.frame.points, w.frame.shape, w.obj_idx, w.settings.depth_edge_rel, w.size.min_edge_piece_voxels
+            vox, w.frame.points, shape, w.obj_idx, w.settings.depth_edge_rel, size.min_edge_piece_voxels
         )
 
 
 def _supervoxels(w: _Work) -> None:
     """3a. supervoxels (supervoxels.py), seen from the camera, or from above the table's
     middle for a cloud in the table's frame."""
-    fit = w.fit
+    fit, vox = w.fit, w.vox
+    assert fit is not None and vox is not None  # the table's and the voxels' steps ran
     viewpoint = np.zeros(3) if fit.camera_is_origin else fit.polygon.mean(axis=0) + 1.0 * fit.plane.normal
-    w.sv = compute_supervoxels(w.vox, viewpoint, w.settings, w.size)
+    w.sv = compute_supervoxels(vox, viewpoint, w.settings, w.size)
 
 
 def _lccp(w: _Work) -> None:
     """3b. LCCP (lccp.py): a small segment standing on the table with a top of its own
     is kept."""
-    plane, sv = w.fit.plane, w.sv
-    voxel_h = plane.height_of(w.vox.centroids)
+    fit, vox, sv = w.fit, w.vox, w.sv
+    assert fit is not None and vox is not None and sv is not None  # the steps before ran
+    plane = fit.plane
+    voxel_h = plane.height_of(vox.centroids)
     sv_low = np.full(sv.centroids.shape[0], np.inf)
     np.minimum.at(sv_low, sv.voxel_label, voxel_h)
     sv_high = np.full(sv.centroids.shape[0], -np.inf)
@@ -333,20 +356,23 @@ def _lccp(w: _Work) -> None:
 
 def _refine(w: _Work) -> None:
     """3c. the refinements after LCCP, each a stage of refine.STAGES timed by its name."""
-    ctx = RefineContext(w.frame, w.organized, w.vox, w.sv, w.fit.plane, w.settings, w.size, w.obj_idx, w.color_used)
+    fit, vox, sv, size = w.fit, w.vox, w.sv, w.size
+    assert fit is not None and vox is not None and sv is not None and size is not None  # the steps before ran
+    ctx = RefineContext(w.frame, w.organized, vox, sv, fit.plane, w.settings, size, w.obj_idx, w.color_used)
     w.seg_of_voxel = refine(w.seg_of_voxel, ctx, w.clock)
 
 
 def _objects(w: _Work) -> None:
     """4. the size filter (visible area in voxels, and a point count), largest first,
     and each object's box."""
-    settings, fit = w.settings, w.fit
+    settings, fit, vox, size = w.settings, w.fit, w.vox, w.size
+    assert fit is not None and vox is not None and size is not None  # the steps before ran
     seg_of_voxel = w.seg_of_voxel
-    seg_of_point = seg_of_voxel[w.vox.point_voxel]
+    seg_of_point = seg_of_voxel[vox.point_voxel]
     n_seg = int(seg_of_voxel.max()) + 1 if seg_of_voxel.size else 0
     seg_voxels = np.bincount(seg_of_voxel, minlength=n_seg)
     seg_points = np.bincount(seg_of_point, minlength=n_seg)
-    ok = w.size.holds_object_area(seg_voxels) & (seg_points >= settings.min_object_points)
+    ok = size.holds_object_area(seg_voxels) & (seg_points >= settings.min_object_points)
     kept = np.flatnonzero(ok)
     kept = kept[np.argsort(-seg_points[kept], kind="stable")]  # largest first
     order = np.argsort(seg_of_point, kind="stable")
@@ -366,6 +392,7 @@ def _flat(w: _Work) -> None:
     """4'. objects lying flat, found by colour (flat.py; organized frames)."""
     w.table_idx = w.idx[w.table_mask]
     if w.color_used and w.settings.flat_objects and w.organized:
+        assert w.fit is not None and w.size is not None  # the table's and the voxels' steps ran
         w.table_idx, found = _flat_objects(w.frame, w.table_idx, w.obj_idx, w.objects, w.fit, w.settings, w.size)
         w.objects.extend(found)
 
@@ -373,8 +400,10 @@ def _flat(w: _Work) -> None:
 def _openings(w: _Work) -> None:
     """What the grasps beyond the pinch need: rims of open containers, seen table edges
     (openings.py)."""
-    w.openings = tuple(rim_of(w.frame.points[o.indices], w.fit.plane) for o in w.objects)
-    w.table_edges = seen_edges(w.frame.points, w.frame.shape, w.fit.plane, w.fit.polygon)
+    fit = w.fit
+    assert fit is not None  # the table's step ran
+    w.openings = tuple(rim_of(w.frame.points[o.indices], fit.plane) for o in w.objects)
+    w.table_edges = seen_edges(w.frame.points, w.frame.shape, fit.plane, fit.polygon)
 
 
 @dataclass(frozen=True)
@@ -440,6 +469,7 @@ def segment(frame: Frame, settings: SegmentSettings) -> Segmentation:
     clock.total("merge", MERGED)
     clock.timings["total"] = clock.elapsed()
     fit = w.fit
+    assert fit is not None  # the table's step ran (or raised)
     return Segmentation(
         n_points=frame.n_points,
         table=fit.plane,

@@ -50,7 +50,9 @@ def voxelize(points: np.ndarray, voxel_m: float, colors: np.ndarray | None = Non
     uniq, inverse = np.unique(packed, return_inverse=True)
     n_vox = uniq.shape[0]
     counts = np.bincount(inverse, minlength=n_vox)
-    cent = np.stack([np.bincount(inverse, weights=points[:, k], minlength=n_vox) for k in range(3)], axis=1)
+    cent = np.stack(
+        [np.bincount(inverse, weights=points[:, k], minlength=n_vox) for k in range(3)], axis=1, dtype=np.float64
+    )
     cent /= counts[:, None]
     vcol = None
     if colors is not None:
@@ -190,7 +192,9 @@ def supervoxel_labels(
     _, cinv = np.unique(cpacked, return_inverse=True)
     n_cells = int(cinv.max()) + 1 if n_vox else 0
     ccount = np.bincount(cinv, minlength=n_cells)
-    cmean = np.stack([np.bincount(cinv, weights=cent[:, k], minlength=n_cells) for k in range(3)], axis=1)
+    cmean = np.stack(
+        [np.bincount(cinv, weights=cent[:, k], minlength=n_cells) for k in range(3)], axis=1, dtype=np.float64
+    )
     cmean /= ccount[:, None]
     dist_to_mean = np.linalg.norm(cent - cmean[cinv], axis=1)
     order = np.lexsort((dist_to_mean, cinv))
@@ -303,7 +307,9 @@ def supervoxel_stats(
             cov[:, a, b] = cov[:, b, a] = np.bincount(labels, weights=d[:, a] * d[:, b], minlength=n_sv)
     evals, evecs = np.linalg.eigh(cov)
     pca_n = evecs[:, :, 0]
-    mean_n = np.stack([np.bincount(labels, weights=voxel_normals_[:, k], minlength=n_sv) for k in range(3)], axis=1)
+    mean_n = np.stack(
+        [np.bincount(labels, weights=voxel_normals_[:, k], minlength=n_sv) for k in range(3)], axis=1, dtype=np.float64
+    )
     mean_n /= np.maximum(np.linalg.norm(mean_n, axis=1, keepdims=True), 1e-12)
     # PCA needs a patch that spans two directions
     good = (cnt >= 4) & (evals[:, 1] > 4.0 * np.maximum(evals[:, 0], 1e-12))

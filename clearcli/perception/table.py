@@ -10,6 +10,7 @@ itself a plane, and a book's hull holds little.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -479,7 +480,7 @@ def beyond_the_edge(
     # depth along the optical axis (NaN where none): a jump in it is a jump in range
     # to within the pixel's angle off the axis, and it costs no square roots
     rng = pts[..., 2]
-    is_table = np.zeros(height * width, dtype=bool)
+    is_table: np.ndarray = np.zeros(height * width, dtype=bool)  # flat, then (height, width)
     is_table[table_pixels] = True
     is_table = is_table.reshape(height, width)
     rel = settings.depth_edge_rel
@@ -547,7 +548,7 @@ def beyond_the_edge(
     return gone[table_pixels], solid[table_pixels]
 
 
-def _pinhole_of(pts: np.ndarray, finite: np.ndarray):
+def _pinhole_of(pts: np.ndarray, finite: np.ndarray) -> Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]] | None:
     """The pixel of a point, as a function of (N, 3) points -> (columns, rows), fitted to
     an organized cloud's own points (column = fx X/Z + cx, row = fy Y/Z + cy, least
     squares on a sample); None when the cloud is not a pinhole image (a fit off by more

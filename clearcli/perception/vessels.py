@@ -195,7 +195,9 @@ def rebuild_vessels(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
     # within the tolerance of the first one's, near it in the plane
     done: set[int] = set()
     next_label = n_seg
-    mid = np.stack([np.bincount(seg, weights=voxel_xy[:, k], minlength=n_seg) for k in range(2)], axis=1)
+    mid = np.stack(
+        [np.bincount(seg, weights=voxel_xy[:, k], minlength=n_seg) for k in range(2)], axis=1, dtype=np.float64
+    )
     mid /= np.maximum(sizes, 1)[:, None]
     band_of = {s: np.flatnonzero((seg == s) & in_band) for s in cand}
     for s in sorted(cand, key=lambda k: -top[k]):
