@@ -18,12 +18,12 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from clearcli.robot.placement import TableScene, resolve_T_base_camera
 from clearcli.robot.profiles import Kinematics, RobotProfile, profile_of
 from clearcli.settings.geometry import GripperSettings
 from clearcli.settings.robot import RobotSettings
 
 if TYPE_CHECKING:
-    from clearcli.predicates.state import SymbolicState
     from clearcli.settings import Settings
 
 
@@ -51,13 +51,11 @@ class Arm:
         return self.model.fresh()
 
     def place(
-        self, state: SymbolicState | None, camera_pose: Sequence[float] | str | None = None
+        self, state: TableScene | None, camera_pose: Sequence[float] | str | None = None
     ) -> tuple[np.ndarray, str]:
         """T_base_camera and where it came from: ``camera_pose`` (a command line's) over
         [robot] camera_pose, else placed from the table in ``state`` by the placement
         rule with this arm's distances and mount (clearcli/robot/placement.py)."""
-        from clearcli.robot.placement import resolve_T_base_camera
-
         pose = camera_pose if camera_pose is not None else (self.settings.camera_pose or None)
         return resolve_T_base_camera(pose, state, self.settings, self.profile)
 

@@ -9,6 +9,8 @@ from typing import Any
 
 import numpy as np
 
+from clearcli.settings.robot import RobotSettings
+
 
 def hull_planes(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     """(F,4) outward face planes (n, d) with n.x + d <= 0 inside the convex hull."""
@@ -103,8 +105,6 @@ def make_obstacles(state: Any, T_base_camera: np.ndarray, margin_m: float | None
     """Table and object hulls of a SymbolicState, moved into the base frame; the arm keeps
     ``margin_m`` from them (None: [robot] collision_margin_m)."""
     if margin_m is None:
-        from clearcli.settings.robot import RobotSettings
-
         margin_m = RobotSettings().collision_margin_m
     R, t = T_base_camera[:3, :3], T_base_camera[:3, 3]
     n_cam = np.asarray(state.table.normal, dtype=float)

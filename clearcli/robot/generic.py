@@ -18,7 +18,13 @@ from __future__ import annotations
 
 import contextlib
 import copy
+import logging
 import math
+import os
+import sys
+import tempfile
+import warnings
+import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -85,8 +91,6 @@ def _without_missing_meshes(urdf: Path) -> tuple[str | None, int]:
     """(the URDF's text without the <collision> elements whose mesh file is not found,
     how many were dropped); (None, 0) when it cannot be read. A ``package://PKG/path``
     mesh is looked for as ``path`` beside the URDF and in its parent folders."""
-    import xml.etree.ElementTree as ET
-
     try:
         root = ET.parse(urdf).getroot()
     except (ET.ParseError, OSError):
@@ -139,10 +143,6 @@ def _quiet_stderr():
     """File descriptor 2 to a temporary file while a C++ library (urdfdom) talks on it:
     the user gets our one line, not its dump. Yields a list that holds, once the block
     ends, what was said (the reason a file was refused is only there)."""
-    import os
-    import sys
-    import tempfile
-
     sys.stderr.flush()
     said: list[str] = []
     saved = os.dup(2)
@@ -537,9 +537,6 @@ class UrdfKinematics:
         from the flange and ``gripper_frames`` (what the gripper touches is what
         block_grasp/block_dir say; the base and the shoulder column stand still). A mesh
         whose file is missing is left out, the rest kept, with one warning."""
-        import logging
-        import warnings
-
         pin = self.pin
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")

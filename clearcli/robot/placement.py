@@ -25,23 +25,58 @@ The arm's resolved value calls this (clearcli/robot/arm.py `Arm.place`).
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 
 from clearcli import transforms
 from clearcli.errors import SettingsError
-
-if TYPE_CHECKING:
-    from clearcli.predicates.state import SymbolicState
-    from clearcli.robot.profiles.base import RobotProfile
-    from clearcli.settings.robot import RobotSettings
+from clearcli.robot.profiles import RobotProfile
+from clearcli.robot.profiles import profile as named
+from clearcli.settings.profiles import DEFAULT_PROFILE
+from clearcli.settings.robot import RobotSettings
 
 # Thesis extrinsic: estirabot_link_base -> camera_link (x y z, qx qy qz qw).
 THESIS_BASE_CAMERA_LINK = (0.9014760, -0.0594, 0.7251720, -0.641407, 0.032404, 0.772933, 0.011045)
 # Columns: the optical frame's axes in camera_link (x_opt = -y_link, y_opt = -z_link,
 # z_opt = x_link).
 R_CAMERA_LINK_OPTICAL = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
+
+
+class _Centred(Protocol):
+    @property
+    def centroid(self) -> np.ndarray:
+        """(3,) in the sensor frame."""
+        ...
+
+
+class _Plane(Protocol):
+    @property
+    def normal(self) -> np.ndarray:
+        """(3,) unit, pointing up from the table."""
+        ...
+
+    @property
+    def offset(self) -> float:
+        """d of n . p + d = 0."""
+        ...
+
+
+class TableScene(Protocol):
+    """What the default placement reads of a scene: the table (plane and outline) and the
+    objects' centroids, in the sensor frame. `clearcli.predicates.state.SymbolicState` is
+    one; the robot layer sits below predicates and names only what it uses."""
+
+    @property
+    def objects(self) -> Sequence[_Centred]: ...
+
+    @property
+    def table(self) -> _Plane: ...
+
+    @property
+    def table_polygon(self) -> np.ndarray:
+        """(K, 3) the table's outline."""
+        ...
 
 
 def pose_to_matrix(pose: Sequence[float]) -> np.ndarray:
@@ -151,7 +186,7 @@ def default_T_base_camera(
 
 def resolve_T_base_camera(
     camera_pose: Sequence[float] | str | None,
-    state: SymbolicState | None = None,
+    state: TableScene | None = None,
     robot: RobotSettings | None = None,
     profile: RobotProfile | None = None,
 ) -> tuple[np.ndarray, str]:
@@ -161,13 +196,8 @@ def resolve_T_base_camera(
     mount height, whether the thesis's camera pose is its; the default profile when
     None)."""
     if robot is None:
-        from clearcli.settings.robot import RobotSettings
-
         robot = RobotSettings()
     if profile is None:
-        from clearcli.robot.profiles import profile as named
-        from clearcli.settings.profiles import DEFAULT_PROFILE
-
         profile = named(DEFAULT_PROFILE)
     if isinstance(camera_pose, str):
         if camera_pose.strip().lower() == "thesis":

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import functools
 import math
+import xml.etree.ElementTree as ET
 from pathlib import Path
 
 from clearcli.errors import SettingsError
@@ -14,8 +15,6 @@ from clearcli.errors import SettingsError
 @functools.cache
 def joint_names(urdf: Path) -> tuple[str, ...]:
     """Names of the revolute/continuous/prismatic joints, from the root down the chain."""
-    import xml.etree.ElementTree as ET
-
     root = ET.parse(urdf).getroot()
     joints = [j for j in root.iter("joint") if j.get("type") in ("revolute", "continuous", "prismatic")]
     by_parent: dict[str | None, list[ET.Element]] = {}
@@ -65,8 +64,6 @@ def checked_urdf(urdf: Path) -> str:
     link (one line, exit 3, before any frame is read). Continuous joints come back as
     revolute ones over CONTINUOUS_RANGE_RAD (the generic IK needs bounds to draw its
     starts from and to clip to)."""
-    import xml.etree.ElementTree as ET
-
     if urdf.is_dir():
         raise SettingsError(f"{urdf}: a folder, not a URDF file ([robot] urdf)")
     if not urdf.is_file():

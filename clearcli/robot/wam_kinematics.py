@@ -15,14 +15,12 @@ import copy
 import math
 from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from clearcli.robot.kinematics import IKStats, cache_lookup, pose_error, se3, within_tolerance
-
-if TYPE_CHECKING:
-    from clearcli.settings.robot import RobotSettings
+from clearcli.settings.robot import RobotSettings
 
 URDF_PATH = Path(__file__).with_name("wam.urdf")
 TCP_FRAME = "wam_gripper_tcp"
@@ -140,8 +138,6 @@ class WamKinematics:
         """The IK search's bounds; None: [robot]'s (clearcli/settings/robot.py, their one
         home; a profile passes a user's: `kinematics_of_wam`)."""
         import pinocchio as pin
-
-        from clearcli.settings.robot import RobotSettings
 
         robot = RobotSettings()
         damping = robot.ik_damping if damping is None else damping

@@ -18,11 +18,15 @@ import functools
 import importlib
 from collections.abc import Iterator, Mapping
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from clearcli.errors import SettingsError
 from clearcli.robot.profiles.base import Kinematics, RobotProfile
 from clearcli.settings.profiles import PROFILE_NAMES, REGISTRY, ProfileEntry
 from clearcli.settings.robot import RobotSettings
+
+if TYPE_CHECKING:
+    from clearcli.robot.generic import UrdfKinematics
 
 __all__ = ["PROFILES", "Kinematics", "RobotProfile", "kinematics_from_settings", "profile", "profile_of"]
 
@@ -70,10 +74,10 @@ def profile_of(robot: RobotSettings) -> RobotProfile:
     return _user_profile(robot)
 
 
-def _urdf_kinematics(path: Path, s: RobotSettings) -> Kinematics:
+def _urdf_kinematics(path: Path, s: RobotSettings) -> UrdfKinematics:
     """The generic kinematics of a user's URDF with the frames, tool-centre offset and IK
     search of ``[robot]``."""
-    from clearcli.robot.generic import UrdfKinematics
+    from clearcli.robot.generic import UrdfKinematics  # noqa: PLC0415  (~20 ms measured; only an arm built from a URDF needs it, not the WAM or `clear robots`)
 
     return UrdfKinematics(
         path,
@@ -94,11 +98,8 @@ def _urdf_kinematics(path: Path, s: RobotSettings) -> Kinematics:
 def _user_profile(robot: RobotSettings) -> RobotProfile:
     """The user's own arm from ``[robot] urdf`` (frames and tool-centre offset from
     ``[robot]``, the generic IK); the file is read once per settings."""
-    from clearcli.robot.generic import UrdfKinematics
-
     path = Path(robot.urdf).expanduser().resolve()
     kin = _urdf_kinematics(path, robot)  # reads the file: a bad one is one line, before any frame
-    assert isinstance(kin, UrdfKinematics)
 
     def make(settings: RobotSettings) -> Kinematics:
         # the model read above, a new search on it; other settings read the file again

@@ -2,18 +2,16 @@
 
 from __future__ import annotations
 
+from functools import partial
 from pathlib import Path
 
 from clearcli.robot.profiles.base import generic_profile
+from clearcli.robot.ur_ik import UR5E, solutions
 
 
 def _closed_form():
     """The UR family's closed form (ur_ik.py) with the UR5e's DH table; the description's
     base_link_inertia is its base frame, wrist_3_link its frame 6."""
-    from functools import partial
-
-    from clearcli.robot.ur_ik import UR5E, solutions
-
     return partial(solutions, UR5E), "base_link_inertia", "wrist_3_link"
 
 
