@@ -8,6 +8,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from clearcli.io.formats import check_color, format_of
 from clearcli.io.formats.base import describe_frame
 
 __all__ = ["describe_file", "describe_frame", "log_part"]
@@ -21,8 +22,6 @@ def describe_file(
     A damaged MCAP log or bag is described (mcap/bag.complete false) without raising; the
     caller decides what exit code that deserves.
     """
-    from clearcli.io.formats import check_color, format_of
-
     path = Path(path)
     fmt = format_of(path)
     check_color(fmt, path, color)  # the reader checks --frame

@@ -13,6 +13,8 @@ from typing import Any
 import numpy as np
 
 from clearcli.errors import InputError
+from clearcli.io.images import _units_to_m
+from clearcli.io.intrinsics import from_camera_info
 from clearcli.io.messages import _as_bytes, _stamp_s, message_field
 
 IMAGE_SCHEMAS = frozenset(
@@ -80,8 +82,6 @@ def _pixels(msg: Any, where: str, itemsize: int, channels: int) -> np.ndarray:
 
 def depth_m(msg: Any, where: str, scale_m: float) -> np.ndarray:
     """(H, W) float32 depth in metres of a depth image message."""
-    from clearcli.io.images import _units_to_m
-
     encoding = str(message_field(msg, "encoding", default=""))
     if encoding not in DEPTH_ENCODINGS:
         raise InputError(
@@ -113,8 +113,6 @@ def _numbers(value: Any) -> list[float]:
 
 def camera_model(msg: Any, where: str) -> Any:
     """The `CameraModel` of a CameraInfo / CameraCalibration message."""
-    from clearcli.io.intrinsics import from_camera_info
-
     roi = message_field(msg, "roi")
     return from_camera_info(
         int(message_field(msg, "width", default=0)),

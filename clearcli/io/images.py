@@ -19,17 +19,17 @@ resolution, an all-zero depth image.
 from __future__ import annotations
 
 import logging
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from clearcli.errors import InputError
+from clearcli.files import require_regular
 from clearcli.io.frames import Frame
-
-if TYPE_CHECKING:
-    from clearcli.io.intrinsics import CameraModel
-    from clearcli.settings.images import ImageSettings
+from clearcli.io.intrinsics import CameraModel, back_project, read_intrinsics
+from clearcli.io.sniff import NPY_MAGIC
+from clearcli.settings.images import ImageSettings
 
 # File names an intrinsics file beside the images may have, in the order they are tried.
 INTRINSICS_NAMES = (
@@ -47,8 +47,6 @@ INTRINSICS_NAMES = (
 def or_defaults(images: ImageSettings | None) -> ImageSettings:
     """``images``, or the [images] defaults when a caller has none (a library call)."""
     if images is None:
-        from clearcli.settings.images import ImageSettings
-
         return ImageSettings()
     return images
 
@@ -78,8 +76,6 @@ def _open_image(path: Path, what: str):  # -> PIL.Image.Image
     # PIL's own bomb check (warn past 89 MP, raise past twice that) is replaced by ours,
     # which runs first and refuses with the reason: ours is the stricter of the two.
     Image.MAX_IMAGE_PIXELS = None
-    from clearcli.files import require_regular
-
     require_regular(path, what)
     try:
         image = Image.open(path)  # reads the header only
@@ -109,8 +105,6 @@ def _units_to_m(raw: np.ndarray, scale_m: float) -> np.ndarray:
 def read_depth_m(path: Path, scale_m: float) -> np.ndarray:
     """(H, W) float32 depth in metres of a depth image file; 0 or NaN = no reading."""
     path = Path(path)
-    from clearcli.io.sniff import NPY_MAGIC
-
     try:
         with open(path, "rb") as fp:
             is_npy = fp.read(len(NPY_MAGIC)) == NPY_MAGIC
@@ -188,8 +182,6 @@ def frame_name(path: Path, images: ImageSettings | None = None) -> str:
 def find_intrinsics(depth_path: Path, images: ImageSettings) -> CameraModel:
     """The intrinsics for ``depth_path``: [images] intrinsics when set, else the one
     intrinsics file beside it (several that disagree: an error asking which)."""
-    from clearcli.io.intrinsics import read_intrinsics
-
     if images.intrinsics:
         return read_intrinsics(images.intrinsics)
     found = [depth_path.parent / n for n in INTRINSICS_NAMES if (depth_path.parent / n).is_file()]
@@ -226,16 +218,12 @@ def _decoder():  # -> concurrent.futures.ThreadPoolExecutor
     """One helper thread for decoding colour images, made on first use."""
     global _executor
     if _executor is None:
-        from concurrent.futures import ThreadPoolExecutor
-
         _executor = ThreadPoolExecutor(max_workers=1, thread_name_prefix="clear-colour")
     return _executor
 
 
 def read_image_frame(path: Path, images: ImageSettings | None = None, color: Path | None = None) -> Frame:
     """The organized frame of the depth image at ``path`` (see the module)."""
-    from clearcli.io.intrinsics import back_project
-
     path = Path(path)
     images = or_defaults(images)
     color_path = Path(color) if color is not None else color_pair(path, images)

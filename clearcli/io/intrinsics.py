@@ -12,6 +12,7 @@ distortion accounted for. Bad input raises InputError (exit 3), never a tracebac
 from __future__ import annotations
 
 import functools
+import json
 import math
 import re
 from collections.abc import Sequence
@@ -22,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from clearcli.errors import InputError
+from clearcli.files import exists, require_regular
 
 # Distortion models whose inverse back_project computes -> their coefficient count (ROS order).
 _N_COEFFS = {"plumb_bob": 5, "rational_polynomial": 8}
@@ -95,8 +97,6 @@ def read_intrinsics(spec: str | Path) -> CameraModel:
     """The intrinsics in the file at `spec`, or in a string "fx fy cx cy" (commas or spaces)."""
     path = Path(spec)
     text = str(spec).strip()
-    from clearcli.files import exists, require_regular
-
     if isinstance(spec, str) and not (text and exists(path)):
         numbers = _four_numbers(text)
         if numbers is not None:
@@ -194,8 +194,6 @@ def back_project(depth_m: np.ndarray, model: CameraModel) -> np.ndarray:
 def _parse(raw: str, where: str) -> Any:
     """JSON when it looks like JSON, else YAML (the ROS files; a YAML flow mapping also starts with "{")."""
     if raw.lstrip().startswith("{"):
-        import json
-
         try:
             return json.loads(raw)
         except ValueError as e:

@@ -30,6 +30,7 @@ from typing import Any, BinaryIO, TypeVar
 from clearcli.errors import ClearError, InputError, PartialLogError
 from clearcli.io.frames import Frame
 from clearcli.io.image_messages import COMPRESSED_SCHEMAS, IMAGE_SCHEMAS
+from clearcli.io.mcap_images import depth_frame
 from clearcli.io.messages import (
     MessageDecoders,
     _as_bytes,
@@ -39,6 +40,7 @@ from clearcli.io.messages import (
     schema_name,
 )
 from clearcli.io.sniff import MCAP_MAGIC, open_input
+from clearcli.transforms import pose_to_matrix
 
 DEFAULT_TOPIC = "/camera/depth_registered/points"
 DEFAULT_FRAME_ID = "camera_rgb_optical_frame"
@@ -374,8 +376,6 @@ def _message_frame(
     decode = decoders.decoder(schema, channel)
     msg = decode_declared(schema_name(schema), lambda: decode(message.data))
     if schema_name(schema) in IMAGE_SCHEMAS:
-        from clearcli.io.mcap_images import depth_frame
-
         assert summary is not None
         return depth_frame(McapAccess(path, summary, decoders), channel.topic, msg, message.log_time, source, images)
     if schema_name(schema) in POINTCLOUD2_SCHEMAS:
@@ -543,8 +543,6 @@ TF_TOPICS = ("/tf_static", "/tf")
 
 
 def _tf_matrix(translation: Any, rotation: Any) -> Any:
-    from clearcli.transforms import pose_to_matrix
-
     q = [float(message_field(rotation, k) or 0.0) for k in ("x", "y", "z", "w")]
     return pose_to_matrix([float(message_field(translation, k) or 0.0) for k in ("x", "y", "z")], q)
 

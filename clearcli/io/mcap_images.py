@@ -22,10 +22,12 @@ from typing import Any
 
 import numpy as np
 
+from clearcli.console import stderr
 from clearcli.errors import InputError
 from clearcli.io.frames import Frame
 from clearcli.io.image_messages import (
     CAMERA_INFO_SCHEMAS,
+    COLOR_ENCODINGS,
     IMAGE_SCHEMAS,
     camera_model,
     color_rgb,
@@ -33,8 +35,12 @@ from clearcli.io.image_messages import (
     header_of,
     stamp_ns,
 )
+from clearcli.io.images import or_defaults
+from clearcli.io.intrinsics import back_project
 from clearcli.io.log_access import LogAccess, LogSummary
-from clearcli.io.messages import _stamp_s
+from clearcli.io.messages import _stamp_s, message_field
+from clearcli.io.register import CannotRegister, color_for_depth
+from clearcli.transforms import pose_to_matrix
 
 # Colour within this log time of its depth image is looked at for a stamp that matches
 # exactly (drivers publish the pair within milliseconds; a log's order may interleave).
@@ -57,8 +63,6 @@ def _note(path: Path, text: str) -> None:
     if (str(path), text) in _noted:
         return
     _noted.add((str(path), text))
-    from clearcli.console import stderr
-
     stderr.print(f"clear: note: {path.name}: {text}", markup=False, highlight=False)
 
 
@@ -201,9 +205,6 @@ def _rs_groups(log: LogAccess, stream: str) -> dict[int, str]:
 def _rs_transform(log: LogAccess, topic: str) -> np.ndarray | None:
     """The 4 x 4 of the geometry_msgs/Transform on ``topic`` (its first message); None when
     it holds no usable one."""
-    from clearcli.io.messages import message_field
-    from clearcli.transforms import pose_to_matrix
-
     for _, msg, _ in log.decoded(topic):
         t, r = message_field(msg, "translation"), message_field(msg, "rotation")
         try:
@@ -286,8 +287,6 @@ def _realsense_color(
     """(H*W, 3) uint8 colour of a RealSense SDK recording's depth frame, registered to it
     through the recorded extrinsics (clearcli/io/register.py); None, with a note naming
     what is missing, when the recording lacks what that needs."""
-    from clearcli.io.register import CannotRegister, color_for_depth
-
     path, summary = log.path, log.summary
     depth_stream = _rs_stream(depth_topic)
     device = depth_stream.split("/")[1]
@@ -331,9 +330,6 @@ def _realsense_color(
     msg, color_log_time = nearest
     rgb = color_rgb(msg, f"{path.name} {color_topic}")
     if rgb is None:
-        from clearcli.io.image_messages import COLOR_ENCODINGS
-        from clearcli.io.messages import message_field
-
         encoding = str(message_field(msg, "encoding", default=""))
         _note(
             path,
@@ -363,8 +359,6 @@ def _recorded_depth_units(log: LogAccess, depth_topic: str) -> float | None:
         return None
     key = _log_key(log.path, option)
     if key not in _units:
-        from clearcli.io.messages import message_field
-
         value = None
         for _, msg, _ in log.decoded(option):
             # a float32 in the bag: 0.001 arrives as 0.0010000000475; seven digits are what it holds
@@ -385,9 +379,6 @@ def depth_frame(
     images: Any = None,
 ) -> Frame:
     """The organized frame of one depth image message (see the module)."""
-    from clearcli.io.images import or_defaults
-    from clearcli.io.intrinsics import back_project
-
     images = or_defaults(images)
     depth = depth_m(msg, source, _recorded_depth_units(log, topic) or images.depth_scale_m)
     h, w = depth.shape

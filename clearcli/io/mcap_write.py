@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from clearcli.errors import OutputError
+from clearcli.files import atomic_output
 from clearcli.io.frames import Frame, labels_to_write
 from clearcli.io.mcap import DEFAULT_FRAME_ID, DEFAULT_TOPIC
 from clearcli.io.pointfields import pack_rgb_float
@@ -141,8 +142,6 @@ def write_pointcloud2_mcap(
     not at all; the caller decides about overwriting.
     """
     from mcap_ros2.writer import Writer
-
-    from clearcli.files import atomic_output
 
     path = Path(path)
     label_iter = iter(labels) if labels is not None else None

@@ -22,6 +22,7 @@ from typing import BinaryIO
 import numpy as np
 
 from clearcli.errors import InputError, OutputError
+from clearcli.files import atomic_path
 from clearcli.io.frames import Frame, labels_to_write
 from clearcli.io.pointfields import frame_from_records, pack_rgb_float
 from clearcli.io.sniff import PCD_HEADER_KEYS, open_input
@@ -230,8 +231,6 @@ def write_pcd(path: Path, frame: Frame, labels: np.ndarray | None = None) -> Non
     The caller decides about overwriting (see commands.common.check_output_path).
     """
     import pypcd4
-
-    from clearcli.files import atomic_path
 
     path = Path(path)
     n = frame.n_points

@@ -22,6 +22,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from clearcli.io.intrinsics import _N_COEFFS, _distort, _undistorted_rays
+
 # Points whose undistorted radius passes the image's own largest (its border pixels,
 # undistorted) by more than this share are outside the calibrated field, where the
 # distortion polynomial folds back and would put them inside the image again.
@@ -40,8 +42,6 @@ def project_to_pixels(points_m: np.ndarray, model) -> tuple[np.ndarray, np.ndarr
 
     Raises CannotRegister for a distortion model with non-zero coefficients other than
     plumb_bob / rational_polynomial (the models clearcli.io.intrinsics inverts)."""
-    from clearcli.io.intrinsics import _N_COEFFS, _distort, _undistorted_rays
-
     size = model._image_size()
     if size is None:
         raise CannotRegister(f"the colour intrinsics ({model.source or 'camera info'}) give no image size")

@@ -14,6 +14,8 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import BinaryIO
 
+from lz4.frame import decompress as lz4_decompress  # type: ignore[import-untyped]  # lz4 ships no type information
+
 from clearcli.io.mcap import error_reason
 
 # --- ROS 1: records in file order (bags without a usable index) ------------------------
@@ -205,8 +207,6 @@ class Ros1Stream:
                     if compression == "bz2":
                         raw = bz2.decompress(blob)
                     elif compression == "lz4":
-                        from lz4.frame import decompress as lz4_decompress
-
                         raw = lz4_decompress(blob)
                     else:
                         raise Damage(f"chunk compression {compression!r} is not supported")

@@ -31,6 +31,7 @@ cloud becomes. Only ClearError subclasses leave the public functions.
 from __future__ import annotations
 
 import contextlib
+import heapq
 import os
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -47,11 +48,13 @@ from clearcli.io.mcap import (
     ChannelInfo,
     DeclaredTypeError,
     McapSummary,
+    choose_topic,
     decode_declared,
     error_reason,
     require_frame_index,
     until_damage,
 )
+from clearcli.io.mcap_images import depth_frame
 from clearcli.io.messages import quat_matrix
 from clearcli.io.ros1 import Damage, Ros1Msg, Ros1Stream
 from clearcli.io.sniff import ROSBAG1_MAGIC, ROSBAG2_METADATA, open_input
@@ -301,8 +304,6 @@ def read_bag_summary(path: Path) -> BagSummary:
 
 def choose_bag_topic(summary: BagSummary, topic: str | None) -> str:
     """The point-cloud topic to read: the rules and messages of MCAP logs."""
-    from clearcli.io.mcap import choose_topic
-
     return choose_topic(summary, topic)
 
 
@@ -319,8 +320,6 @@ def _ros1_indexed(reader: Any, topic: str, skip_to: int = 0) -> Iterator[_Raw]:
     Skipping uses the index: chunks before message `skip_to` are neither read nor
     decompressed.
     """
-    import heapq
-
     conns = [c for c in reader.connections if c.topic == topic]
     start = None
     skip = 0
@@ -515,8 +514,6 @@ def _decode(decoders: BagDecoders, summary: BagSummary, topic: str, index: int, 
         raise DeclaredTypeError(declared, problem)
     msg = decode_declared(declared, lambda: decoders.decode(msgtype, msgdef, fmt, data))
     if msgtype in IMAGE_SCHEMAS:
-        from clearcli.io.mcap_images import depth_frame
-
         return depth_frame(BagAccess(summary, decoders), topic, _ZeroCopy(msg), int(time_ns), source, images)
     return bag_frame(msgtype, msg, time_ns, source)
 

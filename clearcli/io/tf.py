@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from clearcli.errors import ClearError
+from clearcli.io.formats import format_of
 
 # Names the robot base frame goes by in WAM setups (IRI's and the ROS WAM packages), and
 # the generic ROS one last; replay puts the robot profile's own base frame first
@@ -25,8 +26,6 @@ def read_transforms(path: Any, max_messages: int = 1000) -> dict[tuple[str, str]
     ``max_messages`` transform messages, so a long /tf costs little. A file that holds
     none (a PCD, a depth image), cannot be read, or whose transforms cannot be decoded
     gives {}. Each format reads its own (`transforms` of clearcli/io/formats/)."""
-    from clearcli.io.formats import format_of
-
     try:
         return format_of(Path(path)).transforms(Path(path), max_messages)
     except ClearError:

@@ -12,20 +12,20 @@ passed over, and only regular files and folders are taken.
 from __future__ import annotations
 
 import errno
+import re
 import stat
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from clearcli.io import formats
+from clearcli.io.sniff import SNIFF_BYTES
 
 if TYPE_CHECKING:
     from clearcli.settings.images import ImageSettings
 
 
-def natural_key(path: Path) -> tuple:
+def natural_key(path: Path) -> tuple[int | str, ...]:
     """learn2 before learn10: digit runs compare as numbers."""
-    import re
-
     return tuple(int(t) if t.isdigit() else t for t in re.split(r"(\d+)", path.name))
 
 
@@ -89,8 +89,6 @@ def files_in(
 def is_log(path: Path) -> bool:
     """A log (frames named with their index): told by content, as `formats.sniff` does,
     by its name when it cannot be read; never an error."""
-    from clearcli.io.sniff import SNIFF_BYTES
-
     if path.is_dir():
         fmt = formats.folder_format(path)
         return fmt is None or fmt.is_log

@@ -2,9 +2,12 @@
 `clearcli/io/formats/__init__.py` registers), `BaseFormat` and `SingleFrame`, defaults
 a format builds on, and `describe_frame`, the frame of every format's info payload.
 
-A format module imports its reader's libraries inside the functions that use them:
-the registry imports every format to tell a file apart, and `clear info scene.pcd`
-must not pay for the MCAP or rosbags libraries.
+A format module imports its reader inside the functions that use it: the registry
+imports every format to tell a file apart (~15 ms, `python -X importtime -c "import
+clearcli.io.formats"`), and `clear info scene.pcd` must not pay for the MCAP or rosbags
+libraries, nor for clear's other readers. Those readers (io.mcap, io.rosbag, io.images,
+io.pcd, io.messages) bring NumPy (~90 ms) and their own modules (io.mcap ~30 ms,
+io.rosbag ~30 ms more, io.images ~10 ms, io.pcd ~6 ms, measured with NumPy loaded).
 """
 
 from __future__ import annotations
@@ -169,7 +172,7 @@ class SingleFrame(BaseFormat):
 
 def describe_frame(frame: Frame, index: int = 0) -> dict[str, Any]:
     """The `frame` object of the info schema."""
-    import numpy as np
+    import numpy as np  # noqa: PLC0415  (NumPy, ~90 ms: see the module)
 
     finite = frame.finite_mask
     n_finite = int(finite.sum())

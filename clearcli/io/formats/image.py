@@ -41,7 +41,7 @@ class DepthImage(SingleFrame):
     def output_name(self, path: Path, images: ImageSettings) -> str | None:
         if not self.searched(path, images):
             return None
-        from clearcli.io.images import frame_name
+        from clearcli.io.images import frame_name  # noqa: PLC0415  (NumPy and io.images, ~100 ms: see formats/base.py)
 
         return frame_name(path, images)
 
@@ -50,7 +50,7 @@ class DepthImage(SingleFrame):
         intrinsics file ([images] intrinsics, or the ones beside the image)."""
         if path.suffix.lower() not in IMAGE_SUFFIXES:
             return None
-        from clearcli.io.images import INTRINSICS_NAMES, color_pair
+        from clearcli.io.images import INTRINSICS_NAMES, color_pair  # noqa: PLC0415  (NumPy and io.images, ~100 ms: see formats/base.py)
 
         found: list[Path] = []
         paired = Path(color) if color else color_pair(path, images)
@@ -63,7 +63,7 @@ class DepthImage(SingleFrame):
         return found
 
     def read(self, path: Path, images: ImageSettings | None, color: Path | None) -> Frame:
-        from clearcli.io.images import read_image_frame
+        from clearcli.io.images import read_image_frame  # noqa: PLC0415  (NumPy and io.images, ~100 ms: see formats/base.py)
 
         return read_image_frame(path, images, color)
 
@@ -76,7 +76,7 @@ class DepthImage(SingleFrame):
 def describe_image(frame: Frame, path: Path, images: Any = None, color: Path | None = None) -> dict[str, Any]:
     """The info payload of a depth image, from the frame it made: its size, depth range,
     the intrinsics found and the colour image paired with it."""
-    from clearcli.io.images import color_pair, find_intrinsics, or_defaults
+    from clearcli.io.images import color_pair, find_intrinsics, or_defaults  # noqa: PLC0415  (NumPy and io.images, ~100 ms: see formats/base.py)
 
     images = or_defaults(images)
     z = frame.points[:, 2]

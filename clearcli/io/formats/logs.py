@@ -8,6 +8,7 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
+from clearcli.errors import PartialLogError
 from clearcli.io.formats.base import describe_frame
 
 
@@ -67,7 +68,7 @@ def describe_log(
 def image_streams(access: Any) -> list[dict[str, Any]]:
     """Each image topic of a log or bag: its encoding and size (from its first message),
     and whether it is read as depth."""
-    from clearcli.io.messages import message_field
+    from clearcli.io.messages import message_field  # noqa: PLC0415  (NumPy and io.messages, ~100 ms: see formats/base.py)
 
     streams = []
     summary = access.summary
@@ -100,8 +101,6 @@ def count_log_frames(
     """Frames on a log's frame topic, and the PartialLogError that ended it early, if
     any. An intact log or bag is counted from its summary (index); a damaged one is
     read through to its break (``frames()``)."""
-    from clearcli.errors import PartialLogError
-
     if summary.damage is None:
         return summary.count(choose_topic(summary, topic)), None
     n = 0

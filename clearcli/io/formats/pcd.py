@@ -27,14 +27,14 @@ class Pcd(SingleFrame):
         return None
 
     def read(self, path: Path, images: ImageSettings | None, color: Path | None) -> Frame:
-        from clearcli.io.pcd import read_pcd
+        from clearcli.io.pcd import read_pcd  # noqa: PLC0415  (NumPy and io.pcd, ~95 ms: see formats/base.py)
 
         return read_pcd(path)
 
     def describe(
         self, path: Path, topic: str | None, index: int, images: ImageSettings | None, color: Path | None
     ) -> dict[str, Any]:
-        from clearcli.io.pcd import pcd_header_fields
+        from clearcli.io.pcd import pcd_header_fields  # noqa: PLC0415  (NumPy and io.pcd, ~95 ms: see formats/base.py)
 
         header = pcd_header_fields(path)
         frame = self.read_frame(path, topic, index, None, None)

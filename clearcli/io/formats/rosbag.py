@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from clearcli.io.formats.base import BaseFormat
+from clearcli.io.formats.logs import count_log_frames, describe_log
 from clearcli.io.sniff import ROSBAG1_MAGIC, ROSBAG2_METADATA, SQLITE_MAGIC
 
 if TYPE_CHECKING:
@@ -22,21 +23,20 @@ class _Bag(BaseFormat):
     def read_frame(
         self, path: Path, topic: str | None, index: int, images: ImageSettings | None, color: Path | None
     ) -> Frame:
-        from clearcli.io.rosbag import read_bag_frame
+        from clearcli.io.rosbag import read_bag_frame  # noqa: PLC0415  (NumPy, io.mcap and io.rosbag, ~150 ms: see formats/base.py)
 
         return read_bag_frame(path, topic, index, images)
 
     def iter_frames(self, path: Path, topic: str | None, images: ImageSettings | None) -> Iterator[Frame]:
-        from clearcli.io.rosbag import iter_bag_frames
+        from clearcli.io.rosbag import iter_bag_frames  # noqa: PLC0415  (NumPy, io.mcap and io.rosbag, ~150 ms: see formats/base.py)
 
         yield from iter_bag_frames(path, topic, images)
 
     def describe(
         self, path: Path, topic: str | None, index: int, images: ImageSettings | None, color: Path | None
     ) -> dict[str, Any]:
-        from clearcli.io.bag_messages import BagDecoders
-        from clearcli.io.formats.logs import describe_log
-        from clearcli.io.rosbag import BagAccess, choose_bag_topic, read_bag_frame, read_bag_summary
+        from clearcli.io.bag_messages import BagDecoders  # noqa: PLC0415  (NumPy, io.mcap and io.rosbag, ~150 ms: see formats/base.py)
+        from clearcli.io.rosbag import BagAccess, choose_bag_topic, read_bag_frame, read_bag_summary  # noqa: PLC0415  (NumPy, io.mcap and io.rosbag, ~150 ms: see formats/base.py)
 
         summary = read_bag_summary(path)
         access = BagAccess(summary, BagDecoders(ros1=summary.format == "rosbag1"))
@@ -45,15 +45,14 @@ class _Bag(BaseFormat):
         return {"file": str(path), "format": self.name, "bag": part["log"], "frame": part["frame"]}
 
     def count_frames(self, path: Path, topic: str | None) -> tuple[int, Exception | None]:
-        from clearcli.io.formats.logs import count_log_frames
-        from clearcli.io.rosbag import choose_bag_topic, read_bag_summary
+        from clearcli.io.rosbag import choose_bag_topic, read_bag_summary  # noqa: PLC0415  (NumPy, io.mcap and io.rosbag, ~150 ms: see formats/base.py)
 
         return count_log_frames(
             read_bag_summary(path), topic, choose_bag_topic, lambda: self.iter_frames(path, topic, None)
         )
 
     def transforms(self, path: Path, max_messages: int) -> dict[tuple[str, str], Any]:
-        from clearcli.io.rosbag import read_bag_transforms
+        from clearcli.io.rosbag import read_bag_transforms  # noqa: PLC0415  (NumPy, io.mcap and io.rosbag, ~150 ms: see formats/base.py)
 
         return read_bag_transforms(path, max_messages)
 
