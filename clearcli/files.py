@@ -17,7 +17,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-from clearcli.errors import OutputError
+from clearcli.errors import InputError, OutputError
 
 # Temporary files are named ".<target name>.<random>.part" (atomic_output) or
 # ".<target name>.<random><suffix>" (atomic_path) beside their target, <random> being
@@ -52,8 +52,6 @@ def exists(path: str | Path) -> bool:
 def require_regular(path: str | Path, what: str) -> None:
     """InputError unless ``path`` is a regular file (links followed): a FIFO or a device
     given as an input is refused, never opened (opening a FIFO waits for a writer)."""
-    from clearcli.errors import InputError
-
     try:
         mode = os.stat(path).st_mode
     except FileNotFoundError:

@@ -15,7 +15,10 @@ and the CLI maps it to exit 143.
 
 from __future__ import annotations
 
+import os
 import signal
+import sys
+import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import Any
@@ -73,9 +76,6 @@ def release() -> None:
 
 
 def _exit_now(signum: int, frame: Any) -> None:
-    import os
-    import sys
-
     # the command's output is out; flush what is left of it, then go without unwinding
     for stream in (sys.stdout, sys.stderr):
         try:
@@ -116,8 +116,6 @@ def deferred() -> Iterator[None]:
     half, such as starting a worker process) and raise one that came, after it. Blocking
     the signal with the OS mask does not do: with several threads (BLAS's), the signal
     goes to a thread that does not block it, and Python raises it in the main one."""
-    import threading
-
     if threading.current_thread() is not threading.main_thread():
         yield  # signals are only ever raised in the main thread
         return

@@ -17,7 +17,8 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from clearcli import __version__
+from clearcli import __version__, interrupts
+from clearcli.settings import READS, digest
 
 if TYPE_CHECKING:
     from clearcli.settings import Settings
@@ -65,8 +66,6 @@ def source_identity() -> str:
 
 def stamp(settings: Settings | None, command: str) -> dict[str, Any]:
     """The ``clear`` object of a document made by ``command`` with ``settings``."""
-    from clearcli.settings import READS, digest
-
     sections = READS.get(command, ())
     return {
         "version": __version__,
@@ -94,8 +93,6 @@ def print_line(text: str) -> None:
     """One line on stdout, whole: Ctrl-C or SIGTERM while it is written (a plan document
     is tens of kilobytes, written in several pieces into a pipe) is raised after its
     newline, so a script reading the lines never gets half of one."""
-    from clearcli import interrupts
-
     with interrupts.deferred():
         out = sys.stdout
         buf = getattr(out, "buffer", None)

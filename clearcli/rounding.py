@@ -11,6 +11,8 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
+import numpy as np
+
 DIGITS = 6
 TIMING_DIGITS = 4
 
@@ -18,8 +20,6 @@ TIMING_DIGITS = 4
 def rounded(a: Any, digits: int = DIGITS) -> Any:
     """A number, vector or matrix (anything NumPy reads as floats) as rounded plain
     Python floats in nested lists."""
-    import numpy as np
-
     return np.round(np.asarray(a, dtype=float), digits).tolist()
 
 

@@ -11,14 +11,19 @@ categories ships as `clearcli/data/mosd_groups.toml` (``--groups mosd``).
 
 from __future__ import annotations
 
+import csv
 import fnmatch
+import io
+import tomllib
 from collections.abc import Mapping, Sequence
+from importlib import resources
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from clearcli.errors import InputError
+from clearcli.files import atomic_output, atomic_path
 
 MOSD_GROUPS = "mosd"
 
@@ -27,11 +32,7 @@ def load_groups(spec: str | None) -> dict[str, list[str]]:
     """Group name -> file-name patterns, from a TOML file or "mosd" (the shipped one)."""
     if not spec:
         return {}
-    import tomllib
-
     if spec == MOSD_GROUPS:
-        from importlib import resources
-
         text = (resources.files("clearcli") / "data" / "mosd_groups.toml").read_text(encoding="utf-8")
         where = "clearcli/data/mosd_groups.toml"
     else:
@@ -112,11 +113,6 @@ def summarise(docs: Sequence[Mapping[str, Any]], groups: Mapping[str, Sequence[s
 
 
 def write_csv(path: Path, docs: Sequence[Mapping[str, Any]]) -> None:
-    import csv
-    import io
-
-    from clearcli.files import atomic_output
-
     cols = [
         "source",
         "group",
@@ -147,8 +143,6 @@ def write_png(path: Path, docs: Sequence[Mapping[str, Any]]) -> None:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-
-    from clearcli.files import atomic_path
 
     names = [Path(d["source"]).stem for d in docs]
     groups = [d.get("group") or "" for d in docs]

@@ -46,7 +46,9 @@ __all__ = [
 
 def __getattr__(name: str) -> Any:
     if name in __all__:
-        from clearcli.settings import tree
+        # imported when first asked for: `clear info --help` and `clear settings --help`
+        # read only profiles.py, and tree.py's section classes cost them ~50 ms (measured)
+        from clearcli.settings import tree  # noqa: PLC0415
 
         return getattr(tree, name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -11,15 +11,21 @@ sections or keys are an error: a typo must not be silently ignored.
 from __future__ import annotations
 
 import dataclasses
+import hashlib
+import os
+import stat
+import tomllib
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from clearcli.errors import SettingsError
+from clearcli.settings.fields import range_of
 from clearcli.settings.geometry import GripperSettings, PredicateSettings, PushSettings
 from clearcli.settings.images import ImageSettings
 from clearcli.settings.plan import PlanSettings
+from clearcli.settings.profiles import PROFILE_NAMES, profile_defaults
 from clearcli.settings.replay import MemoryParams, ReplaySettings, TrackingParams
 from clearcli.settings.robot import RobotSettings
 from clearcli.settings.segment import SegmentSettings
@@ -96,8 +102,6 @@ def settings_from_dict(data: Mapping[str, Any], base: Settings | None = None) ->
 
 def with_profile(settings: Settings, name: Any) -> Settings:
     """``settings`` with [robot] and [gripper] at the defaults of profile ``name``."""
-    from clearcli.settings.profiles import PROFILE_NAMES, profile_defaults
-
     if not isinstance(name, str) or name not in PROFILE_NAMES:
         raise SettingsError(
             f"settings: [robot] name = {name!r} is not a robot profile; known: {', '.join(PROFILE_NAMES)} "
@@ -119,8 +123,6 @@ def parse_set(text: str) -> tuple[str, str, Any]:
     section, dot, key = name.strip().partition(".")
     if not sep or not dot or not section or not key:
         raise SettingsError(f"--set {text!r}: expected SECTION.KEY=VALUE, e.g. --set segment.voxel_m=0.005")
-    import tomllib
-
     raw = raw.strip()
     try:
         value = tomllib.loads(f"v = {raw}")["v"]
@@ -143,10 +145,6 @@ def apply_sets(settings: Settings, sets: Iterable[str]) -> Settings:
 
 
 def read_settings_file(path: Path) -> dict[str, Any]:
-    import os
-    import stat
-    import tomllib
-
     try:
         if not stat.S_ISREG(os.stat(path).st_mode):  # a FIFO would be waited on for ever
             raise SettingsError(f"{path}: not a regular file; give a TOML settings file")
@@ -212,8 +210,6 @@ def _toml_value(value: Any) -> str:
 def settings_to_toml(settings: Settings, sections: Iterable[str] | None = None, ranges: bool = False) -> str:
     """The tree (or the named sections) as TOML that `--settings FILE` reads back; with
     ``ranges``, each key's accepted values as a comment."""
-    from clearcli.settings.fields import range_of
-
     lines = ["# clear settings; pass with --settings FILE. Lengths in metres, angles in degrees."]
     for name in SECTIONS if sections is None else sections:
         section = getattr(settings, name)
@@ -230,7 +226,5 @@ def settings_to_toml(settings: Settings, sections: Iterable[str] | None = None, 
 def digest(settings: Settings, sections: Iterable[str]) -> str:
     """A short hash of the named sections' resolved values: two results with the same
     digest were made with the same settings for what that command reads."""
-    import hashlib
-
     text = settings_to_toml(settings, tuple(sections))
     return "sha256:" + hashlib.sha256(text.encode("utf-8")).hexdigest()[:16]
