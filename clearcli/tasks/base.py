@@ -1,4 +1,5 @@
-"""What every task shares: where a frame comes from, what a task gives back.
+"""Not a task: what every task shares: where a frame comes from (`Source`), what a task
+gives back (`Outcome`), where its outputs go (`Outputs`, `OUTPUT_FILES`).
 
 A task is one command's work on one frame: ``run(request, source) -> Outcome``. The
 request is frozen and plain (picklable: a batch sends it to worker processes and Ray
@@ -29,7 +30,7 @@ class Source:
     the name its outputs take in a batch, and a depth image's colour image when named
     (--color; else the naming rule pairs one)."""
 
-    path: Path
+    path: str | Path  # as named (the commands and the batch pass it as text)
     index: int = 0
     topic: str | None = None
     name: str = ""

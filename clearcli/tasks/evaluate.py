@@ -1,5 +1,7 @@
 """`evaluate dataset`, per frame: a labelled frame segmented (or its labels read from a
-folder of predictions) and scored against its own labels."""
+folder of predictions) and scored against its own labels (``run``). Also `evaluate
+segmentation`'s one comparison of two files (``score_files``), and the dataset-level
+helpers the command uses (re-exported from clearcli/evaluate/dataset.py)."""
 
 from __future__ import annotations
 
@@ -9,7 +11,20 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from clearcli.evaluate.dataset import load_groups, summarise, write_csv, write_png  # noqa: F401  (the command's)
+import numpy as np
+
+from clearcli import pipeline
+from clearcli.errors import InputError
+from clearcli.evaluate.dataset import group_of
+from clearcli.evaluate.dataset import load_groups as load_groups  # the command's
+from clearcli.evaluate.dataset import summarise as summarise
+from clearcli.evaluate.dataset import write_csv as write_csv
+from clearcli.evaluate.dataset import write_png as write_png
+from clearcli.evaluate.exact import exact_report
+from clearcli.evaluate.osd import osd_metrics
+from clearcli.evaluate.segmentation import score
+from clearcli.io.frames import Frame
+from clearcli.io.pcd import write_pcd
 from clearcli.settings import Settings
 from clearcli.tasks.base import NO_OUTPUTS, OUTPUT_FILES, Outcome, Outputs, Source
 
@@ -25,22 +40,13 @@ class Request:
     outputs: Outputs = NO_OUTPUTS
 
 
-def _labels(frame: Any, path: Any, what: str) -> Any:
-    import numpy as np
-
-    from clearcli.errors import InputError
-
+def _labels(frame: Frame, path: str | Path, what: str) -> np.ndarray[Any, Any]:
     if "label" not in frame.fields:
         raise InputError(f"{path}: the {what} has no `label` field (fields: {', '.join(frame.fields) or 'none'})")
     return np.asarray(frame.fields["label"]).ravel()
 
 
 def run(request: Request, source: Source) -> Outcome:
-    from clearcli import pipeline
-    from clearcli.errors import InputError
-    from clearcli.evaluate.dataset import group_of
-    from clearcli.evaluate.segmentation import score
-
     name = source.name or Path(source.path).stem
     frame = pipeline.read(source.path, source.topic, source.index, request.settings, source.color)
     truth = _labels(frame, source.path, "ground truth")
@@ -57,15 +63,10 @@ def run(request: Request, source: Source) -> Outcome:
         pred = seg.labels()
         out = request.outputs.get("labels")
         if out is not None:
-            from clearcli.io.pcd import write_pcd
-
             write_pcd(out, frame, pred)
     if pred.shape != truth.shape:
         raise InputError(f"{source.path}: {pred.size} predicted labels for {truth.size} points; not the same frame")
     result = score(pred, truth)
-    from clearcli.evaluate.exact import exact_report
-    from clearcli.evaluate.osd import osd_metrics
-
     payload = {
         "source": str(source.path),
         "name": name,
@@ -81,11 +82,6 @@ def run(request: Request, source: Source) -> Outcome:
 def score_files(pred: Path, truth: Path) -> dict[str, Any]:
     """`evaluate segmentation`: a labels PCD scored against a labelled frame (payload of
     schema ``clear.evaluate.segmentation``)."""
-    from clearcli import pipeline
-    from clearcli.errors import InputError
-    from clearcli.evaluate.osd import osd_metrics
-    from clearcli.evaluate.segmentation import score
-
     p = _labels(pipeline.read(pred), pred, "prediction")
     truth_frame = pipeline.read(truth)
     t = _labels(truth_frame, truth, "ground truth")

@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
+from clearcli.errors import EXIT_PARTIAL
+from clearcli.io.describe import describe_file, log_part
 from clearcli.settings import Settings
 from clearcli.tasks.base import NO_OUTPUTS, Outcome, Outputs, Source
 
@@ -18,10 +21,8 @@ class Request:
 
 
 def run(request: Request, source: Source) -> Outcome:
-    from clearcli.errors import EXIT_PARTIAL
-    from clearcli.io.describe import describe_file, log_part
-
     images = request.settings.images if request.settings is not None else None
-    info = describe_file(source.path, source.topic, source.index, images, source.color)
+    color = Path(source.color) if source.color is not None else None
+    info = describe_file(Path(source.path), source.topic, source.index, images, color)
     log = log_part(info)
     return Outcome(SCHEMA, VERSION, info, 0 if log is None or log["complete"] else EXIT_PARTIAL)

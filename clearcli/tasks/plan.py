@@ -4,12 +4,24 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
-from clearcli.planning.versions import PLAN_SCHEMA, PLAN_VERSION
+from clearcli import pipeline
+from clearcli.errors import EXIT_NO_PLAN, EXIT_OK, EXIT_PARTIAL_PLAN
+from clearcli.files import atomic_output, atomic_path
+from clearcli.planning.backtrack import with_grasp_kinds
+from clearcli.planning.payload import plan_payload
+from clearcli.planning.pddl import domain_for, unit_cost, write_plan, write_problem
+from clearcli.planning.types import Plan
+from clearcli.planning.versions import PLAN_SCHEMA as PLAN_SCHEMA  # the commands read it here
+from clearcli.planning.versions import PLAN_VERSION as PLAN_VERSION
+from clearcli.predicates.grasps import parse_kinds
+from clearcli.predicates.state import SymbolicState
+from clearcli.render.plan_png import render_plan
+from clearcli.robot.arm import resolve_arm
 from clearcli.settings import Settings
 from clearcli.tasks.base import NO_OUTPUTS, Outcome, Outputs, Source
 
+SCHEMA, VERSION = PLAN_SCHEMA, PLAN_VERSION  # the planner's (clearcli/planning/versions.py)
 OUTPUTS = ("problem", "domain", "plan", "png")
 
 
@@ -24,19 +36,10 @@ class Request:
 def run(request: Request, source: Source) -> Outcome:
     """The clear.plan payload and exit code (0 complete, 10 partial, 5 nothing can be
     done), the output files written. Errors raise ClearError."""
-    from clearcli import pipeline
-    from clearcli.errors import EXIT_NO_PLAN, EXIT_OK, EXIT_PARTIAL_PLAN
-    from clearcli.planning.payload import plan_payload
-    from clearcli.robot.arm import resolve_arm
-
     # the robot, resolved once: placement, planning, the payload's block and the picture
     robot = resolve_arm(request.settings)
     frame = pipeline.read(source.path, source.topic, source.index, request.settings, source.color)
     seg = pipeline.segmented(frame, request.settings)
-    from clearcli.planning.backtrack import with_grasp_kinds
-    from clearcli.planning.pddl import unit_cost
-    from clearcli.predicates.grasps import parse_kinds
-
     state = pipeline.stated(frame, seg, request.settings)
     done = pipeline.planned(
         state, request.settings, robot, request.camera_pose, "first" if request.first_only else None
@@ -50,9 +53,6 @@ def run(request: Request, source: Source) -> Outcome:
     write_plan_files(state, plan, problem=out.get("problem"), domain=out.get("domain"), output=out.get("plan"))
     png = out.get("png")
     if png is not None:
-        from clearcli.files import atomic_path
-        from clearcli.render.plan_png import render_plan
-
         with atomic_path(png) as tmp:
             render_plan(tmp, frame, state, plan, seg, robot)
     if done.no_plan is not None:
@@ -60,15 +60,14 @@ def run(request: Request, source: Source) -> Outcome:
         code = EXIT_NO_PLAN
     else:
         code = EXIT_PARTIAL_PLAN if plan.status == "partial" else EXIT_OK
-    return Outcome(PLAN_SCHEMA, PLAN_VERSION, payload, code, out.all())
+    return Outcome(SCHEMA, VERSION, payload, code, out.all())
 
 
-def write_plan_files(state: Any, plan: Any, *, problem: Path | None, domain: Path | None, output: Path | None) -> None:
+def write_plan_files(
+    state: SymbolicState, plan: Plan, *, problem: Path | None, domain: Path | None, output: Path | None
+) -> None:
     """The problem (and domain) first, the plan file last, each written whole or not at
     all: a plan file on disk means its problem is complete."""
-    from clearcli.files import atomic_output
-    from clearcli.planning.pddl import domain_for, unit_cost, write_plan, write_problem
-
     if problem is not None:
         text = write_problem(state, goal_objects=plan.goal, extra_facts=plan.ik_facts)
         with atomic_output(problem, "w") as handle:

@@ -4,9 +4,16 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from clearcli import pipeline
+from clearcli.files import atomic_output, atomic_path
+from clearcli.planning.payload import predicates_payload
+from clearcli.planning.pddl import write_problem
+from clearcli.planning.versions import PREDICATES_SCHEMA, PREDICATES_VERSION
+from clearcli.render.predicates_png import render_predicates_png
 from clearcli.settings import Settings
 from clearcli.tasks.base import NO_OUTPUTS, Outcome, Outputs, Source
 
+SCHEMA, VERSION = PREDICATES_SCHEMA, PREDICATES_VERSION  # the planner's (clearcli/planning/versions.py)
 OUTPUTS = ("problem", "png")
 
 
@@ -18,9 +25,6 @@ class Request:
 
 
 def run(request: Request, source: Source) -> Outcome:
-    from clearcli import pipeline
-    from clearcli.planning.payload import PREDICATES_SCHEMA, PREDICATES_VERSION, predicates_payload
-
     frame = pipeline.read(source.path, source.topic, source.index, request.settings, source.color)
     if request.ground_truth:
         seg = pipeline.truth_segmentation(frame, source.path)
@@ -29,18 +33,12 @@ def run(request: Request, source: Source) -> Outcome:
     state = pipeline.stated(frame, seg, request.settings)
     problem = request.outputs.get("problem")
     if problem is not None:
-        from clearcli.files import atomic_output
-        from clearcli.planning.pddl import write_problem
-
         text = write_problem(state)
         with atomic_output(problem, "w") as handle:
             handle.write(text)
     png = request.outputs.get("png")
     if png is not None:
-        from clearcli.files import atomic_path
-        from clearcli.render.predicates_png import render_predicates_png
-
         with atomic_path(png) as tmp:
             render_predicates_png(state, tmp, title=str(source.path))
     payload = predicates_payload(state)
-    return Outcome(PREDICATES_SCHEMA, PREDICATES_VERSION, payload, 0, request.outputs.all())
+    return Outcome(SCHEMA, VERSION, payload, 0, request.outputs.all())

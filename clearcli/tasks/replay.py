@@ -1,19 +1,31 @@
 """`replay`: the whole pipeline over a recorded session, frame by frame, with stable
-object ids, execution monitoring and push memory; optionally an annotated log."""
+object ids, execution monitoring and push memory; optionally an annotated log.
+
+A task, but of a session, not of one frame: ``run(request, log, topic, on_report, note)``
+replays a whole log, reports each frame as it is done (``on_report``: the command prints
+a JSON line or moves its progress bar) and gives back the session's `Summary` and the
+error that ended a damaged log early. It is never batched: no `Source`, no `Outcome`.
+What the log says of itself before its frames (its frame topic, start, frame count,
+transforms, whether an annotated log copies it) is the input format's to say
+(clearcli/io/inputs.py `log_index`).
+"""
 
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
 
+from clearcli.errors import InputError, PartialLogError
+from clearcli.io import read as io_read  # through the module: tests replace io_read.iter_frames
+from clearcli.io.frames import Frame
+from clearcli.io.inputs import log_index
+from clearcli.io.tf import BASE_FRAMES, base_camera_from_log
+from clearcli.pipeline import Pipeline
+from clearcli.replay.annotate import AnnotatedLog
+from clearcli.replay.report import FrameReport, Summary
+from clearcli.replay.session import ReplayOptions, Session, replay
 from clearcli.settings import Settings
-
-if TYPE_CHECKING:
-    from clearcli.errors import PartialLogError
-    from clearcli.io.frames import Frame
-    from clearcli.replay.report import FrameReport, Summary
 
 SCHEMA, VERSION = "replay", 1
 
@@ -40,31 +52,9 @@ def run(
     and the topic's frame count when known), ``note`` gets remarks for people. Returns
     the summary, and the error that ended a damaged log early (the caller raises it
     after printing)."""
-    from clearcli.errors import PartialLogError
-    from clearcli.io.read import iter_frames, sniff
-    from clearcli.io.tf import BASE_FRAMES, base_camera_from_log
-    from clearcli.pipeline import Pipeline
-    from clearcli.replay.session import ReplayOptions, Session, replay
-
     config = request.settings
-    kind = sniff(log)
-    log_start_s: float | None = None
-    total: int | None = None
-    if kind == "mcap":
-        from clearcli.io.mcap import choose_topic, read_summary
-
-        summary = read_summary(log)
-        topic = choose_topic(summary, topic)
-        if summary.start_ns is not None:
-            log_start_s = summary.start_ns / 1e9
-        total = summary.count(topic) or None
-    elif kind in ("rosbag1", "rosbag2"):
-        from clearcli.io.rosbag import choose_bag_topic, read_bag_summary
-
-        bag = read_bag_summary(log)
-        total = bag.count(choose_bag_topic(bag, topic)) or None
-    else:
-        total = 1
+    facts = log_index(log, topic)
+    topic, total = facts.topic, facts.total
 
     pipeline = Pipeline(config)
     options = ReplayOptions(
@@ -85,8 +75,8 @@ def run(
 
     def frames() -> Iterator[Frame]:
         first = True
-        for frame in iter_frames(log, topic, config.images):
-            if first and kind == "mcap" and not config.robot.camera_pose:
+        for frame in io_read.iter_frames(log, topic, config.images):
+            if first and facts.transforms and not config.robot.camera_pose:
                 T, base = base_camera_from_log(log, frame.frame_id, bases)
                 if T is not None:
                     pipeline.T_base_camera = T
@@ -101,18 +91,17 @@ def run(
 
     partial: PartialLogError | None = None
 
-    def go(sink: Any) -> None:
+    def go(sink: AnnotatedLog | None) -> None:
         nonlocal partial
         try:
-            for report in replay(frames(), session, log_start_s):
+            for report in replay(frames(), session, facts.start_s):
                 on_report(report, session.summary.frames_read, total)
                 if sink is not None:
+                    assert report.frame is not None  # a session's reports carry their frame
                     sink.write(report, report.frame)
         except PartialLogError as exc:
             partial = exc
         if session.summary.frames_read == 0 and partial is None and total:
-            from clearcli.errors import InputError
-
             # A log whose index counts frames gave none, without a word from its reader:
             # never a replay of nothing that exits 0 (raised here, inside the annotated
             # log's block, which then leaves no output).
@@ -122,16 +111,12 @@ def run(
             )
 
     if request.out is not None:
-        from clearcli.replay.annotate import AnnotatedLog
-
-        with AnnotatedLog(request.out, log if kind == "mcap" else None, topic, config) as annotated:
+        with AnnotatedLog(request.out, log if facts.copied else None, topic, config) as annotated:
             go(annotated)
     else:
         go(None)
     summary = session.summary
     if summary.frames == 0 and summary.frames_read > 0 and partial is None:
-        from clearcli.errors import InputError
-
         # --from/--to (or --every past the end) that select nothing: a mistake, not a
         # replay of no frames
         raise InputError(

@@ -1,11 +1,13 @@
-"""`robots`: the robot profiles, or one profile's facts (schema ``clear.robots``)."""
+"""Not a task: `robots` reads no frame. The robot profiles, or one profile's facts (the
+payload of schema ``clear.robots``), and the early check of a user's URDF that every
+command's settings go through (clearcli/commands/options.py)."""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
-if TYPE_CHECKING:
-    from clearcli.settings.robot import RobotSettings
+from clearcli.settings.profiles import DEFAULT_PROFILE
+from clearcli.settings.robot import RobotSettings
 
 SCHEMA, VERSION = "robots", 1
 
@@ -13,8 +15,9 @@ SCHEMA, VERSION = "robots", 1
 def robots_payload(name: str | None = None) -> dict[str, Any]:
     """{profiles: [{name, summary, default}]} or, for ``name``, {profile: facts} with the
     joints and their limits read from the shipped description."""
-    from clearcli.robot.profiles import PROFILES, profile
-    from clearcli.settings.profiles import DEFAULT_PROFILE
+    # the profiles load the robot layer: NumPy and 10 modules, ~280 ms cold, which `clear
+    # settings` (the same command module) and every command's options (check_robot) need not pay
+    from clearcli.robot.profiles import PROFILES, profile  # noqa: PLC0415
 
     if name is None:
         return {
@@ -41,6 +44,7 @@ def check_robot(robot: RobotSettings) -> None:
     chain of fewer than six revolute joints is one line, exit 3, before any frame is read
     (clearcli/robot/urdf_joints.py `checked_urdf`, clearcli/robot/generic.py)."""
     if robot.urdf:
-        from clearcli.robot.profiles import profile_of
+        # the robot layer only for a user's URDF (see robots_payload: ~280 ms every command would pay)
+        from clearcli.robot.profiles import profile_of  # noqa: PLC0415
 
         profile_of(robot)  # kept (lru_cache): the arm resolved later reads the file no more

@@ -4,7 +4,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from clearcli.perception.payload import SCHEMA, VERSION  # the schema's one home
+from clearcli import pipeline
+from clearcli.files import atomic_path
+from clearcli.io.pcd import write_pcd
+from clearcli.perception.payload import SCHEMA as SCHEMA  # the schema's one home
+from clearcli.perception.payload import VERSION as VERSION
+from clearcli.perception.payload import segmentation_payload
+from clearcli.render.segment_png import render_segmentation
 from clearcli.settings import Settings
 from clearcli.tasks.base import NO_OUTPUTS, Outcome, Outputs, Source
 
@@ -18,21 +24,13 @@ class Request:
 
 
 def run(request: Request, source: Source) -> Outcome:
-    from clearcli import pipeline
-    from clearcli.perception.payload import segmentation_payload
-
     frame = pipeline.read(source.path, source.topic, source.index, request.settings, source.color)
     seg = pipeline.segmented(frame, request.settings)
     labels = request.outputs.get("labels")
     if labels is not None:
-        from clearcli.io.pcd import write_pcd
-
         write_pcd(labels, frame, seg.labels())
     png = request.outputs.get("png")
     if png is not None:
-        from clearcli.files import atomic_path
-        from clearcli.render.segment_png import render_segmentation
-
         with atomic_path(png) as tmp:
             render_segmentation(tmp, frame, seg)
     return Outcome(SCHEMA, VERSION, segmentation_payload(seg), 0, request.outputs.all())

@@ -1,5 +1,11 @@
 """`simulate`: a self-made clearing session (plan, act in a noisy world, render again),
-written as an MCAP log; its summary as the payload of schema ``clear.simulate``."""
+written as an MCAP log; its summary as the payload of schema ``clear.simulate``.
+
+A task, but of a session that makes its own frames, not of one frame: ``run(request,
+out)`` writes the log to ``out`` and gives back the summary payload. There is no input,
+so no `Source`, and it is never batched; ``check`` refuses a bad request before
+anything is written.
+"""
 
 from __future__ import annotations
 
@@ -7,7 +13,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from clearcli.errors import SettingsError
 from clearcli.settings import Settings
+from clearcli.sim import scene as scenes
+from clearcli.sim.record import record_session
 
 SCHEMA, VERSION = "simulate", 1
 SCENES = ("clutter", "dense", "isolated_box", "two_touching_boxes", "box_on_box", "deadlock_row")
@@ -25,18 +34,12 @@ class Request:
 
 
 def check(request: Request) -> None:
-    from clearcli.errors import SettingsError
-
     if request.scene not in SCENES:
         raise SettingsError(f"--scene {request.scene!r}: unknown; choose one of {', '.join(SCENES)}")
 
 
 def run(request: Request, out: Path) -> dict[str, Any]:
     """Simulate and write the log to ``out``; the summary payload."""
-    from clearcli.errors import SettingsError
-    from clearcli.sim import scene as scenes
-    from clearcli.sim.record import record_session
-
     check(request)
     try:
         if request.scene in ("clutter", "dense"):

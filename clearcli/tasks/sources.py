@@ -9,9 +9,12 @@ holding `metadata.yaml` is one rosbag2 bag. A log contributes frame 0, or
 outputs carry in ``--out-dir``: the input's stem (a depth image's without the depth
 suffix: `uois_0003_depth.png` -> `uois_0003`), plus ``_f<index>`` for a log.
 
-What a file is, what a folder search takes and what a frame is read with is each
-input format's to say (clearcli/io/walk.py, clearcli/io/formats/); this module makes the
-batch's items of them.
+Not a task: the batch's inputs, orchestrated. What a file is, what a folder search takes
+and what a frame is read with is each input format's to say (clearcli/io/walk.py,
+clearcli/io/formats/); how many frames a log holds and which files a run reads,
+clearcli/io/inputs.py (`count_frames`, `files_read` and `run_files` are re-exported
+here, where the commands and the batch have always found them). This module makes the
+batch's items of them and checks them before any work.
 
 What cannot be expanded (a missing file, a folder with no frames, a log that cannot be
 read) becomes a `BadInput`: the batch reports it in its own line and goes on.
@@ -22,12 +25,12 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
 
-from clearcli.io.walk import natural_key
-
-if TYPE_CHECKING:
-    from clearcli.settings.images import ImageSettings
+from clearcli.errors import EXIT_INPUT, ClearError, InputError
+from clearcli.io.inputs import count_frames, files_read, run_files
+from clearcli.io.intrinsics import read_intrinsics
+from clearcli.io.walk import files_in, is_input_folder, is_log, natural_key, output_name, special, taken_before
+from clearcli.settings.images import ImageSettings
 
 __all__ = [
     "BadInput",
@@ -77,15 +80,6 @@ class Skipped:
 Item = FrameRef | BadInput | Skipped
 
 
-def count_frames(path: Path, topic: str | None) -> tuple[int, Exception | None]:
-    """Point-cloud frames in a log, and the PartialLogError that ended it early, if any.
-    An intact log or bag is counted from its summary (index); a damaged one is read
-    through to its break (its format's `count_frames`)."""
-    from clearcli.io.formats import format_of
-
-    return format_of(Path(path)).count_frames(Path(path), topic)
-
-
 def expand(
     inputs: Sequence[Path],
     *,
@@ -96,11 +90,7 @@ def expand(
 ) -> list[Item]:
     """The frames of ``inputs`` in order (folders expanded), and the inputs that fail.
     ``images``: the naming rule of depth images ([images]; defaults when None)."""
-    from clearcli.errors import EXIT_INPUT, ClearError
-    from clearcli.io.images import or_defaults
-    from clearcli.io.walk import files_in, is_input_folder, is_log, output_name, special, taken_before
-
-    images = or_defaults(images)
+    images = images if images is not None else ImageSettings()
 
     items: list[Item] = []
     # Real folders searched and real files taken, over all the inputs: a folder reached
@@ -171,22 +161,18 @@ def expand(
                 continue
             items.extend(FrameRef(str(p), k, True, f"{stem}_f{k}") for k in range(start, n, every))
             if broken is not None:  # every complete frame is in; the break is reported
-                items.append(BadInput(str(p), str(broken), broken.exit_code, n, f"{stem}_f{n}"))  # type: ignore[attr-defined]
+                items.append(BadInput(str(p), str(broken), broken.exit_code, n, f"{stem}_f{n}"))
     return items
 
 
 def check_intrinsics(spec: str) -> None:
     """Read the intrinsics ``spec`` (a file or "fx fy cx cy") once, before any frame: a bad
     one is one InputError (exit 3), not one per frame."""
-    from clearcli.io.intrinsics import read_intrinsics
-
     read_intrinsics(spec)
 
 
 def check_unique_names(items: Sequence[Item]) -> None:
     """Two frames whose outputs would share a name: a usage error before any work."""
-    from clearcli.errors import InputError
-
     seen: dict[str, str] = {}
     for it in items:
         if isinstance(it, FrameRef):
@@ -197,51 +183,3 @@ def check_unique_names(items: Sequence[Item]) -> None:
                     "run them in separate batches or rename one"
                 )
             seen[it.name] = it.source
-
-
-def files_read(
-    source: str | Path,
-    settings: Any = None,
-    color: str | Path | None = None,
-    also: Sequence[str | Path | None] = (),
-) -> tuple[Path, ...]:
-    """Every file a run on ``source`` reads, so that no output may name one (even with
-    --force): the frame's file (a rosbag2 folder's files), the colour image --color or
-    the naming rule pairs with a depth image, the intrinsics file ([images] intrinsics,
-    or the ones found beside the image), the robot's URDF ([robot] urdf) and the meshes
-    it names, and ``also`` (the --settings file, a groups file). Files that do not
-    exist are left out: they cannot be overwritten, and their absence is another error."""
-    from clearcli.io.images import or_defaults
-    from clearcli.io.walk import frame_files
-
-    images = or_defaults(getattr(settings, "images", None))
-    return frame_files(source, images, color) + run_files(settings, also)
-
-
-def run_files(settings: Any = None, also: Sequence[str | Path | None] = ()) -> tuple[Path, ...]:
-    """The files a run reads whatever its frames: the robot's URDF ([robot] urdf) and
-    the meshes it names, and ``also`` (the --settings file, a groups file)."""
-    found: list[Path] = []
-    urdf = getattr(getattr(settings, "robot", None), "urdf", "")
-    if urdf:
-        found.extend(_urdf_files(Path(urdf)))
-    found.extend(Path(p) for p in also if p)
-    return tuple(p for p in dict.fromkeys(found) if p.exists())
-
-
-def _urdf_files(urdf: Path) -> list[Path]:
-    """A URDF and the mesh files it names by a path (relative to it, absolute or
-    file://; package:// needs a ROS workspace and is not followed)."""
-    import re
-
-    try:
-        text = urdf.read_text(encoding="utf-8", errors="replace")
-    except OSError:
-        return [urdf]
-    meshes = []
-    for name in re.findall(r'filename\s*=\s*["\']([^"\']+)["\']', text):
-        if name.startswith("package://"):
-            continue
-        name = name[len("file://") :] if name.startswith("file://") else name
-        meshes.append(urdf.parent / name)
-    return [urdf, *meshes]
