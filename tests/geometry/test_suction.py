@@ -1,0 +1,227 @@
+"""Tests of clearcli/geometry/suction.py: the seal and the load, against surfaces and
+figures worked out by hand."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from clearcli.geometry.suction import (
+    UP,
+    CupSpec,
+    disc_samples,
+    fit_quadric,
+    hull_volume_and_centroid,
+    judge_disc,
+    judge_object,
+    load_margin,
+    sag_over_disc,
+)
+
+# a 30 mm cup, 5 mm of bellows, 40 N, factor 2, lip friction 0.5, 20 deg, 4 mm gaps
+SPEC = CupSpec(0.03, 0.005, 40.0, 2.0, 0.5, 20.0, 0.004)
+STEP = 0.002  # a Kinect's point spacing at ~1 m
+NONE = np.zeros((0, 3))
+
+
+def _grid(half: float = 0.05) -> tuple[np.ndarray, np.ndarray]:
+    g = np.arange(-half, half + 1e-9, STEP)
+    u, v = np.meshgrid(g, g)
+    return u.ravel(), v.ravel()
+
+
+def _flat(z: float = 0.1, half: float = 0.05) -> np.ndarray:
+    u, v = _grid(half)
+    return np.stack([u, v, np.full_like(u, z)], axis=1)
+
+
+def _judge(points: np.ndarray, centre: tuple[float, float, float] = (0.0, 0.0, 0.1), others: np.ndarray = NONE):
+    c = judge_disc(points, others, np.asarray(centre, dtype=float), UP, UP, "top", SPEC)
+    assert c is not None
+    return c
+
+
+def test_a_flat_face_seals_with_nothing_bent_or_spread() -> None:
+    c = _judge(_flat())
+    assert c.why == "" and c.seal_margin > 0.5
+    assert c.sag_m == pytest.approx(0.0, abs=1e-9) and c.spread_m == pytest.approx(0.0, abs=1e-9)
+    assert c.covered == 1.0 and c.point == pytest.approx([0.0, 0.0, 0.1])
+
+
+def test_a_flat_face_seen_with_kinect_noise_still_seals() -> None:
+    # 1.5 mm of depth noise: the quadric's bending averages it out, the spread stays
+    # under 0.6 x 5 mm
+    pts = _flat()
+    pts[:, 2] += np.random.default_rng(0).normal(0.0, 0.0015, len(pts))
+    c = _judge(pts)
+    assert c.why == "", c.why
+    assert c.sag_m < 0.001
+
+
+def test_a_cylinder_of_radius_2_cm_is_curved_beyond_the_bellows() -> None:
+    # its side under a 30 mm cup bends r^2 / (2 R) ~ 15^2 / 40 = 5.6 mm (the circle's
+    # exact sag 20 - sqrt(20^2 - 15^2) = 6.8 mm): more than the 5 mm of bellows
+    R = 0.02
+    u = np.arange(-0.05, 0.05 + 1e-9, STEP)
+    a = np.arange(-math.pi / 2, math.pi / 2, STEP / R)
+    uu, aa = np.meshgrid(u, a)
+    pts = np.stack([uu.ravel(), R * np.sin(aa.ravel()), 0.08 + R * np.cos(aa.ravel())], axis=1)
+    c = _judge(pts)
+    assert c.seal_margin < 0 and "curved" in c.why
+    assert 0.005 < c.sag_m < 0.0075
+
+
+def test_a_sphere_of_radius_2_cm_is_curved_and_one_of_10_cm_seals() -> None:
+    def sphere(R: float) -> np.ndarray:
+        u, v = _grid()
+        keep = u * u + v * v < R * R
+        return np.stack([u[keep], v[keep], 0.1 - R + np.sqrt(R * R - u[keep] ** 2 - v[keep] ** 2)], axis=1)
+
+    small = _judge(sphere(0.02))
+    assert small.seal_margin < 0 and "curved" in small.why
+    large = _judge(sphere(0.10))
+    # bending 15^2 / (2 * 100) = 1.1 mm: within the bellows
+    assert large.why == "" and large.sag_m == pytest.approx(0.015**2 / 0.2, rel=0.15)
+
+
+def test_a_ribbed_top_is_rough() -> None:
+    # ribs 8 mm apart, 3 mm up and down: the lip cannot follow 6 mm grooves with 5 mm of
+    # bellows; the spread about the fitted face is 3 mm > 0.6 x 5 mm
+    pts = _flat()
+    pts[:, 2] += 0.003 * np.sign(np.sin(2 * math.pi * pts[:, 0] / 0.008))
+    c = _judge(pts)
+    assert c.seal_margin < 0 and "rough" in c.why
+    assert c.spread_m == pytest.approx(0.003, abs=0.0003)
+
+
+def test_at_an_edge_the_disc_is_not_covered() -> None:
+    pts = _flat()
+    pts = pts[pts[:, 0] <= 0.005]  # the face ends 5 mm past the cup's centre
+    c = _judge(pts)
+    assert c.seal_margin < 0 and "edge" in c.why
+    # the samples past 5 + 4 mm have no point: the rings at 10 and 14.25 mm, partly
+    assert 0.5 < c.covered < 0.95
+    # 20 mm in from the end it seals
+    assert _judge(pts, (-0.02, 0.0, 0.1)).why == ""
+
+
+def test_a_hole_under_the_cup_is_not_covered() -> None:
+    pts = _flat()
+    pts = pts[np.hypot(pts[:, 0] - 0.008, pts[:, 1]) > 0.006]  # a 12 mm hole
+    c = _judge(pts)
+    assert c.seal_margin < 0 and "hole" in c.why
+
+
+def test_another_object_under_the_cup_spoils_the_seal_but_one_above_it_does_not() -> None:
+    other_in_seal = np.array([[0.005, 0.0, 0.101]])
+    assert "another object" in _judge(_flat(), others=other_in_seal).why
+    far_above = np.array([[0.005, 0.0, 0.2]])
+    assert _judge(_flat(), others=far_above).why == ""
+
+
+def test_a_tilted_face_beyond_the_limit_is_refused() -> None:
+    pts = _flat()
+    for deg, ok in ((10.0, True), (30.0, False)):
+        t = math.radians(deg)
+        tilted = pts.copy()
+        tilted[:, 2] = 0.1 + math.tan(t) * pts[:, 0]
+        c = _judge(tilted)
+        assert c.tilt_deg == pytest.approx(deg, abs=0.01)
+        assert (c.why == "") is ok, c.why
+
+
+def test_the_quadric_bending_is_the_largest_curvature_times_r_squared() -> None:
+    # w = 2 u^2 - 3 v^2: Hessian/2 eigenvalues 2 and -3: the sag over r = 0.01 is 3e-4
+    u, v = _grid(0.01)
+    coef, resid = fit_quadric(np.stack([u, v, 2 * u * u - 3 * v * v], axis=1))
+    assert np.abs(resid).max() < 1e-12
+    assert sag_over_disc(coef, 0.01) == pytest.approx(3e-4)
+
+
+def test_disc_samples_lie_within_the_cup() -> None:
+    s = disc_samples(0.015, 0.002)
+    r = np.hypot(s[:, 0], s[:, 1])
+    assert r.max() == pytest.approx(0.95 * 0.015)
+    # the grid: (2 * 7 + 1)^2 nodes, those within 14.25 mm (about pi 7.1^2 ~ 160), and a ring
+    # of ceil(2 pi 14.25 / 2) = 45
+    assert 150 < len(s) - 45 < 170 and np.sum(np.isclose(r, 0.95 * 0.015)) >= 45
+
+
+# The load, by hand: 40 N, factor 2: a pull alone holds up to 20 N (2.04 kg).
+
+
+def _top_contact(x: float = 0.0):
+    return _judge(_flat(half=0.12), (x, 0.0, 0.1))
+
+
+def test_a_pull_alone_uses_the_force_over_the_safety_factor() -> None:
+    c = _top_contact()
+    margin, why = load_margin(c, 1.0, np.array([0.0, 0.0, 0.05]), SPEC)
+    # 9.81 N x 2 / 40 N = 0.4905 used
+    assert margin == pytest.approx(1 - 2 * 9.81 / 40) and why == ""
+    margin, why = load_margin(c, 2.2, np.array([0.0, 0.0, 0.05]), SPEC)
+    assert margin < 0 and "too heavy" in why and "pull 21.6 N" in why
+
+
+def test_a_heavy_box_holds_from_its_centre_but_not_from_its_end() -> None:
+    # a 1.5 kg box, 0.2 m long: from the centre 2 x 14.7 / 40 = 0.74 used; from 8 cm off
+    # the centre the moment 14.7 N x 0.08 m = 1.18 N m against 40 N x 0.015 m adds 3.9
+    com = np.array([0.0, 0.0, 0.05])
+    centre, _ = load_margin(_top_contact(0.0), 1.5, com, SPEC)
+    assert centre == pytest.approx(1 - 2 * 1.5 * 9.81 / 40)
+    end, why = load_margin(_top_contact(0.08), 1.5, com, SPEC)
+    expected = 1 - 2 * (1.5 * 9.81 / 40 + 1.5 * 9.81 * 0.08 / (40 * 0.015))
+    assert end == pytest.approx(expected) and end < 0
+    assert "moment 1.18 N m" in why
+
+
+def test_a_side_face_holds_by_friction() -> None:
+    # a vertical face: the weight slides along the lip: shear 0.5 kg x 9.81 = 4.9 N
+    # against 0.5 x 40 N, factor 2; the centre of mass 3 cm behind the face adds a moment
+    u, v = _grid()
+    pts = np.stack([np.full_like(u, 0.1), u, 0.1 + v], axis=1)
+    x = np.array([1.0, 0.0, 0.0])
+    c = judge_disc(pts, NONE, np.array([0.1, 0.0, 0.1]), x, x, "side", SPEC)
+    assert c is not None and c.why == ""
+    margin, _ = load_margin(c, 0.5, np.array([0.07, 0.0, 0.1]), SPEC)
+    w = 0.5 * 9.81
+    assert margin == pytest.approx(1 - 2 * (w / 20 + w * 0.03 / (40 * 0.015)))
+
+
+def test_hull_volume_and_centroid_of_a_box() -> None:
+    # a 0.1 x 0.2 x 0.3 box from (1, 2, 3): 0.006 m^3, centre (1.05, 2.1, 3.15)
+    lo, size = np.array([1.0, 2.0, 3.0]), np.array([0.1, 0.2, 0.3])
+    corners = np.array([[i, j, k] for i in (0, 1) for j in (0, 1) for k in (0, 1)], dtype=float) * size + lo
+    from scipy.spatial import ConvexHull
+
+    hull = ConvexHull(corners)
+    faces = hull.simplices.copy()
+    centre = corners.mean(axis=0)
+    for f in faces:  # outward
+        n = np.cross(corners[f[1]] - corners[f[0]], corners[f[2]] - corners[f[0]])
+        if n @ (corners[f[0]] - centre) < 0:
+            f[[1, 2]] = f[[2, 1]]
+    vol, com = hull_volume_and_centroid(corners, faces)
+    assert vol == pytest.approx(0.006) and com == pytest.approx([1.05, 2.1, 3.15])
+
+
+def test_a_box_lying_flat_wider_than_any_opening_is_taken_from_the_top() -> None:
+    # a cereal box lying flat, 0.3 x 0.2 x 0.06 m, its top and two sides seen
+    u = np.arange(-0.15, 0.15 + 1e-9, STEP)
+    v = np.arange(-0.10, 0.10 + 1e-9, STEP)
+    uu, vv = np.meshgrid(u, v)
+    top = np.stack([uu.ravel(), vv.ravel(), np.full(uu.size, 0.06)], axis=1)
+    z = np.arange(0.0, 0.06, STEP)
+    zz, uu2 = np.meshgrid(z, u)
+    side = np.stack([uu2.ravel(), np.full(uu2.size, -0.10), zz.ravel()], axis=1)
+    pts = np.concatenate([top, side])
+    axes2d = np.array([[1.0, 0.0], [0.0, 1.0]])
+    judged = judge_object(pts, NONE, axes2d, 0.06, 0.4, np.array([0.0, 0.0, 0.03]), SPEC, 0.045)
+    assert judged.best is not None and judged.best.face == "top"
+    # the best is the place nearest the centre of mass (the smallest moment)
+    assert np.hypot(*judged.best.point[:2]) <= 0.015 + 1e-9
+    # a side's cup stays 0.045 m up (the tool clears the table) and a radius below the top
+    sides = [c for c in judged.contacts if c.face == "side"]
+    assert sides and all(c.point[2] == pytest.approx(0.045) for c in sides)
