@@ -49,6 +49,7 @@ but can still be pushed out of the way.
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from collections.abc import Callable, Mapping, Sequence
 from typing import TYPE_CHECKING
@@ -62,12 +63,14 @@ from clearcli.planning.solve import Solved, action_cost, action_space, deadline_
 from clearcli.planning.types import Action, BacktrackStep, CheckedAction, LeftObject, Plan
 from clearcli.predicates.grasps import kind as grasp_kind
 from clearcli.predicates.grasps import kinds as grasp_kinds
+from clearcli.predicates.grasps import parse_kinds
 from clearcli.predicates.state import Fact, SymbolicState
+from clearcli.robot.arm import Arm, resolve_arm
+from clearcli.robot.collision import make_obstacles
+from clearcli.settings.plan import PlanSettings
 
 if TYPE_CHECKING:
-    from clearcli.robot.arm import Arm
     from clearcli.settings import Settings
-from clearcli.settings.plan import PlanSettings
 
 # check(action, context) -> CheckedAction, or Infeasible with the reason
 Checker = Callable[[Action, SceneContext], "CheckedAction | Infeasible"]
@@ -84,8 +87,6 @@ def _label(action: Action) -> str:
 def with_grasp_kinds(state: SymbolicState, kinds: Sequence[str]) -> SymbolicState:
     """``state`` with the facts of the grasp kinds not in ``kinds`` left out (``[plan]
     grasps``): with "pinch" alone, exactly the thesis's facts, so exactly its plans."""
-    import dataclasses
-
     drop = {n for k in grasp_kinds() if k.name not in kinds for n in (k.facts.offered, k.facts.block) if n}
     if not drop or not any(f[0] in drop for f in state.facts):
         return state
@@ -485,10 +486,6 @@ def make_plan(
     clearcli/robot/arm.py; else the one ``settings`` describe) at ``T_base_camera`` (else
     from ``[robot] camera_pose`` or derived from the table, see clearcli/robot/placement.py).
     ``check``: "whole" or "first" (default ``[plan] check``)."""
-    from clearcli.predicates.grasps import parse_kinds
-    from clearcli.robot.arm import resolve_arm
-    from clearcli.robot.collision import make_obstacles
-
     arm = robot if robot is not None else resolve_arm(settings)
     plan_s = settings.plan
     gripper = settings.gripper
@@ -532,6 +529,4 @@ def make_plan(
 
 
 def _with_pose(plan: Plan, T_base_camera: np.ndarray) -> Plan:
-    import dataclasses
-
     return dataclasses.replace(plan, T_base_camera=T_base_camera)

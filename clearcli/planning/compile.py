@@ -28,6 +28,8 @@ import re
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
+import numpy as np
+
 from clearcli.planning.types import Action
 from clearcli.predicates.grasps import kinds as grasp_kinds
 from clearcli.predicates.state import DIRECTIONS, Fact
@@ -256,8 +258,6 @@ def random_facts(n_objects: int, seed: int = 0, density: float = 1.0) -> frozens
     grasps, an object in the swept strip of a push blocks it, a few close pairs stack.
     ``density`` scales the interaction distances.
     """
-    import numpy as np
-
     rng = np.random.default_rng(seed)
     pos = rng.uniform(0.0, 0.6, size=(n_objects, 2))
     names = [f"o{i}" for i in range(n_objects)]

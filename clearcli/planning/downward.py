@@ -14,6 +14,7 @@ search stopped by the limit returns the best plan it has written (``timed_out=Tr
 
 from __future__ import annotations
 
+import importlib.util
 import math
 import os
 import re
@@ -26,6 +27,13 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from clearcli.errors import PlannerError
+
+try:
+    import resource
+except ImportError:  # not on every system (Windows): a search there has no CPU backstop
+    _HAS_RESOURCE = False
+else:
+    _HAS_RESOURCE = True
 
 # Search configurations (Fast Downward option strings), chosen by benchmarks/plan.py.
 OPTIMAL = "astar(lmcut())"  # admissible: the plan is proven optimal
@@ -64,8 +72,6 @@ class DownwardResult:
 def _downward_root() -> Path:
     """The wheel's ``downward`` directory (driver and binaries), or PlannerError."""
     try:
-        import importlib.util
-
         spec = importlib.util.find_spec("up_fast_downward")
     except (ImportError, ValueError):
         spec = None
@@ -122,12 +128,12 @@ def _backstop_cpu_s(time_limit_s: float) -> int:
 
 def _cpu_backstop(pid: int, time_limit_s: float) -> None:
     """`_backstop_cpu_s` as RLIMIT_CPU of a directly started search."""
+    if not _HAS_RESOURCE:
+        return  # not a POSIX system
     try:
-        import resource
-
         soft = _backstop_cpu_s(time_limit_s)
         resource.prlimit(pid, resource.RLIMIT_CPU, (soft, soft + 5))
-    except (ImportError, AttributeError, OSError, ValueError):
+    except (AttributeError, OSError, ValueError):
         pass  # not Linux, or the process is gone already
 
 

@@ -34,6 +34,8 @@ import numpy as np
 from clearcli.planning.types import Action, CheckedAction
 from clearcli.predicates.grasps import kind as grasp_kind
 from clearcli.predicates.state import Fact, SymbolicState
+from clearcli.robot.collision import Obstacles, capsule_spheres
+from clearcli.robot.kinematics import half_turn
 
 # Failure kinds whose fact is an ik_unfeasible_* fact (the action itself is impossible
 # where the object stands, whatever else moves).
@@ -99,8 +101,6 @@ def context_obstacles(base: Any, ctx: SceneContext, T_base_camera: np.ndarray) -
     n.s, its box by s)."""
     if not ctx.removed and not ctx.shifts:
         return base
-    from clearcli.robot.collision import Obstacles
-
     R = np.asarray(T_base_camera, dtype=float)[:3, :3]
     shifts = {n: R @ np.asarray(s, dtype=float) for n, s in ctx.shifts}
     names, planes, boxes = [], [], []
@@ -137,8 +137,6 @@ def check_sequence(
     a later pose has no solution at all. ``spheres`` keeps the arm's covering spheres per
     joint vector: backtracking re-checks the same poses (the IK is cached, so the same
     joint vectors) against each context's obstacles."""
-    from clearcli.robot.collision import capsule_spheres
-
     n = len(poses_base)
     for i, T in enumerate(poses_base):
         if not kin.reachable(T):
@@ -199,8 +197,6 @@ class IKActionChecker:
     def poses(self, action: Action, ctx: SceneContext = EMPTY) -> tuple[tuple[np.ndarray, ...], ...]:
         """Candidate pose sequences (robot base frame), the object moved as in ``ctx``
         (kept per action and shift: backtracking asks for them round after round)."""
-        from clearcli.robot.kinematics import half_turn
-
         shift = ctx.shift_of(action.obj)
         key = (action, np.asarray(shift, dtype=float).tobytes())
         got = self._poses.get(key)

@@ -17,8 +17,11 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
 from functools import lru_cache
+from importlib import resources
 
 from clearcli.errors import InputError
+from clearcli.predicates.grasps import kind as grasp_kind
+from clearcli.predicates.grasps import kinds as grasp_kinds
 from clearcli.predicates.state import DIRECTIONS, Fact, SymbolicState
 
 DOMAIN_NAME = "table-clearing"
@@ -41,10 +44,8 @@ FACT_ARITY: dict[str, int] = {
 def fact_arity() -> dict[str, int]:
     """`FACT_ARITY` and, per grasp kind beyond the thesis's (clearcli/predicates/grasps),
     in preference order, its offered, blocking and IK facts (the problem file's order)."""
-    from clearcli.predicates.grasps import kinds
-
     out = dict(FACT_ARITY)
-    for k in kinds():
+    for k in grasp_kinds():
         if not k.thesis:
             out.update({k.facts.offered: 1, k.facts.block: 2, k.facts.ik: 1})
     return out
@@ -58,8 +59,6 @@ _PUSH_COST_VAR = "      (not (ik_unfeasible_grasp ?o))\n      (increase (total-c
 
 @lru_cache(maxsize=1)
 def _domain_file() -> str:
-    from importlib import resources
-
     try:
         return (resources.files("clearcli") / DOMAIN_RESOURCE).read_text(encoding="utf-8")
     except (FileNotFoundError, OSError) as exc:  # a broken installation
@@ -73,14 +72,12 @@ def domain_text(clearance_costs: bool = False, kinds: Sequence[str] = ("pinch",)
     the actions of those grasp kinds (`with_grasp_kinds`). The unit-cost file uses only
     standard :action-costs (every PDDL parser takes it); the variant's static cost
     function is accepted by Fast Downward and unified-planning."""
-    from clearcli.predicates.grasps import kind
-
     text = _domain_file()
     if clearance_costs:  # first: the grasp kinds add effects between the anchors
         if _FUNCTIONS_UNIT not in text or _PUSH_COST_UNIT not in text:
             raise InputError(f"clearcli/{DOMAIN_RESOURCE}: edited so that the push cost cannot be swapped in")
         text = text.replace(_FUNCTIONS_UNIT, _FUNCTIONS_COST).replace(_PUSH_COST_UNIT, _PUSH_COST_VAR)
-    extra = [k for k in kinds if not kind(k).thesis]
+    extra = [k for k in kinds if not grasp_kind(k).thesis]
     return with_grasp_kinds(text, extra) if extra else text
 
 
@@ -99,12 +96,10 @@ def with_grasp_kinds(text: str, kinds: Sequence[str]) -> str:
     the others' grasps always (it moves out of their way), what blocks its own grasp of
     that kind and its IK fact when the kind's poses move with it (``push_clears_blocks``,
     ``push_clears_ik``; a slide's do not: it is made for where the object stands)."""
-    from clearcli.predicates.grasps import kind
-
     for piece in (_PREDICATES_END, _GRASP_EFFECT_END, _PUSH_EFFECT_END):
         if piece not in text:
             raise InputError(f"clearcli/{DOMAIN_RESOURCE}: edited so that the grasp kinds cannot be added")
-    chosen = [kind(k) for k in kinds]
+    chosen = [grasp_kind(k) for k in kinds]
     blocks = [k.facts.block for k in chosen]
     preds, grasp_dels, push_dels, push_ik, actions = [], [], [], [], []
     for k in chosen:
@@ -138,19 +133,15 @@ def with_grasp_kinds(text: str, kinds: Sequence[str]) -> str:
 def domain_for(state: SymbolicState) -> str:
     """The domain that goes with `write_problem(state)`: with clearance costs when the
     state carries push costs, with the actions of the grasp kinds its facts offer."""
-    from clearcli.predicates.grasps import kinds
-
     offered = {f[0] for f in state.facts}
-    chosen = [k.name for k in kinds() if k.thesis or k.facts.offered in offered]
+    chosen = [k.name for k in grasp_kinds() if k.thesis or k.facts.offered in offered]
     return domain_text(clearance_costs=bool(state.push_costs), kinds=chosen)
 
 
 def unit_cost(state: SymbolicState) -> bool:
     """Every action of `domain_for(state)` costs 1: no push costs, no grasp kind that
     costs more offered (a rim grasp costs 2, a slide 3)."""
-    from clearcli.predicates.grasps import kinds
-
-    offered = {f for k in kinds() if k.facts.cost != 1 for f in k.facts.static()}
+    offered = {f for k in grasp_kinds() if k.facts.cost != 1 for f in k.facts.static()}
     return not state.push_costs and not any(f[0] in offered for f in state.facts)
 
 

@@ -22,16 +22,16 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Collection, Mapping
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from clearcli.geometry.gripper import push_contact_halves
+from clearcli.planning.feasibility import IKActionChecker
 from clearcli.planning.types import Action, CheckedAction, Plan
 from clearcli.predicates.state import DIRECTIONS, SymbolicState
-
-if TYPE_CHECKING:
-    from clearcli.robot.arm import Arm
+from clearcli.robot.arm import Arm, resolve_arm
+from clearcli.robot.collision import make_obstacles
 
 
 def probe_candidates(
@@ -145,10 +145,6 @@ def probe_push(
     the seam of two merged objects drives the nearer into the other (they stay together),
     one along the seam slides it past. ``robot``: the command's resolved arm (else the
     one ``settings`` describe)."""
-    from clearcli.planning.feasibility import IKActionChecker
-    from clearcli.robot.arm import resolve_arm
-    from clearcli.robot.collision import make_obstacles
-
     tried = tried or {}
     names = [
         n

@@ -11,6 +11,8 @@ from dataclasses import dataclass
 
 from clearcli.errors import PlannerError, SettingsError
 from clearcli.planning import downward
+from clearcli.planning.compile import compile_strips
+from clearcli.planning.sas import compile_sas
 from clearcli.planning.types import Action
 from clearcli.predicates.grasps import kind as grasp_kind
 from clearcli.predicates.grasps import kinds as grasp_kinds
@@ -116,12 +118,8 @@ def _task(objects: Sequence[str], facts: Iterable[Fact], goal: Sequence[str], pu
     again what is grounded already); the negative one, which needs the translator to
     compile its negative preconditions away, as PDDL through the driver."""
     if formulation == "positive":
-        from clearcli.planning.sas import compile_sas
-
         sas = compile_sas(objects, facts, goal, push_costs)
         return functools.partial(downward.run_sas, sas.text), sas
-    from clearcli.planning.compile import compile_strips
-
     task = compile_strips(objects, facts, goal, push_costs, positive=False)
     return functools.partial(downward.run_downward, task.domain, task.problem), task
 

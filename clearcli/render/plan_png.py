@@ -8,12 +8,14 @@ them; pushes are arrows; the robot's shoulder is at the origin, its reach circle
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
-if TYPE_CHECKING:
-    from clearcli.robot.arm import Arm
+from clearcli.predicates.grasps import kind as grasp_kind
+from clearcli.render.camera import draw_camera_view, has_camera_picture
+from clearcli.robot.arm import Arm, resolve_arm
+from clearcli.settings import Settings
 
 
 def render_plan(path: Path, frame: Any, state: Any, plan: Any, seg: Any = None, robot: Arm | None = None) -> None:
@@ -28,16 +30,11 @@ def render_plan(path: Path, frame: Any, state: Any, plan: Any, seg: Any = None, 
     from scipy.spatial import ConvexHull
 
     if robot is None:  # the default settings' arm
-        from clearcli.robot.arm import resolve_arm
-        from clearcli.settings import Settings
-
         robot = resolve_arm(Settings())
     arm = robot.profile
 
     T = plan.T_base_camera if plan.T_base_camera is not None else np.eye(4)
     R, t = T[:3, :3], T[:3, 3]
-    from clearcli.render.camera import has_camera_picture
-
     with_camera = seg is not None and has_camera_picture(frame)
     if with_camera:
         fig, (ax_cam, ax) = plt.subplots(1, 2, figsize=(14, 7), dpi=110)
@@ -77,8 +74,6 @@ def render_plan(path: Path, frame: Any, state: Any, plan: Any, seg: Any = None, 
     if with_camera:
         from matplotlib.colors import to_rgb
 
-        from clearcli.render.camera import draw_camera_view
-
         objs = [o for o in state.objects if 0 <= o.segment_index < len(seg.objects)]
         draw_camera_view(
             ax_cam,
@@ -92,8 +87,6 @@ def render_plan(path: Path, frame: Any, state: Any, plan: Any, seg: Any = None, 
         if a.kind == "grasp":
             # a grasp that first moves the object (a slide to the table's edge): a dashed
             # arrow to where it is grasped (its kind says, clearcli/predicates/grasps)
-            from clearcli.predicates.grasps import kind as grasp_kind
-
             obj = state.by_name(a.obj)
             moved = grasp_kind(a.grasp_kind).moved_before(obj)
             if moved is not None:

@@ -11,6 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
+from clearcli.geometry.gripper import gripper_model
+from clearcli.geometry.models import TableFrame
 from clearcli.predicates.state import SymbolicState
 
 _DIR_COLOURS = {"dir1": "tab:red", "dir2": "tab:orange", "dir3": "tab:blue", "dir4": "tab:cyan"}
@@ -23,9 +25,6 @@ def render_predicates_png(state: SymbolicState, path: Path, title: str = "") -> 
     import matplotlib.pyplot as plt
     from matplotlib.patches import FancyArrowPatch, Polygon
     from scipy.spatial import ConvexHull
-
-    from clearcli.geometry.gripper import gripper_model
-    from clearcli.geometry.models import TableFrame
 
     tf = TableFrame.from_plane(state.table)
     gripper = gripper_model()

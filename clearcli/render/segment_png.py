@@ -9,6 +9,7 @@ import numpy as np
 
 from clearcli.io.frames import LABEL_TABLE, Frame, object_ids
 from clearcli.perception.types import Segmentation
+from clearcli.render.camera import draw_camera_view, has_camera_picture
 
 _TABLE_RGB = (0.78, 0.78, 0.78)
 _NONE_RGB = (0.93, 0.93, 0.93)
@@ -47,8 +48,6 @@ def render_segmentation(path: Path, frame: Frame, seg: Segmentation, title: str 
     fig, (ax_cam, ax_top) = plt.subplots(1, 2, figsize=(13, 5.2), dpi=100)
 
     # camera view: the colour image with the segments outlined, when the frame has one
-    from clearcli.render.camera import draw_camera_view, has_camera_picture
-
     palette = _object_colors(n_obj)
     if has_camera_picture(frame):
         draw_camera_view(
