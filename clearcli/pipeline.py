@@ -5,37 +5,41 @@ profile and kinematics model, clearcli/robot/arm.py -- and its placement, the st
 functions, resolved once) and runs the stages one by one, timing each, so that a replay
 can step in between them (tracking needs the segmentation before the state is planned
 on, push memory changes the state's costs). `Pipeline.run` chains them for one frame.
-The stages themselves are the stage modules' pure functions; they are looked up when
-first used, so importing this module stays cheap. What the stages build per call is
-cheap once their libraries are imported (an IK search on the arm's model, the gripper
-boxes: microseconds), so nothing else is cached: the first frame pays the imports (about
-2 s), later frames only their own work.
+The stages themselves are the stage modules' pure functions, imported with this module;
+their heavy libraries (SciPy, Pinocchio, FCL) are imported by the stages when first
+used. What the stages build per call is cheap once those libraries are imported (an IK
+search on the arm's model, the gripper boxes: microseconds), so nothing else is cached:
+the first frame pays the imports (about 2 s), later frames only their own work.
 """
 
 from __future__ import annotations
 
+import functools
 import os
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
-from clearcli.errors import ClearError, NoPlanError, SceneError
+from clearcli.errors import ClearError, InputError, NoPlanError, SceneError
+from clearcli.io.frames import Frame
+from clearcli.io.read import read_frame
+from clearcli.perception.segment import segment
+from clearcli.perception.types import Segmentation
+from clearcli.planning.backtrack import make_plan
+from clearcli.planning.types import Plan
+from clearcli.predicates.state import SymbolicState
+from clearcli.predicates.state_builder import compute_state
+from clearcli.predicates.synthetic import segmentation_from_labels
+from clearcli.robot.arm import Arm, resolve_arm
+from clearcli.settings import Settings
 from clearcli.status import FrameStatus
 
-if TYPE_CHECKING:
-    from clearcli.io.frames import Frame
-    from clearcli.perception.types import Segmentation
-    from clearcli.planning.types import Plan
-    from clearcli.predicates.state import SymbolicState
-    from clearcli.robot.arm import Arm
-    from clearcli.settings import Settings
-
-SegmentFn = Callable[["Frame", Any], "Segmentation"]
-StateFn = Callable[["Frame", "Segmentation", "Settings"], "SymbolicState"]
-PlanFn = Callable[..., "Plan"]
+SegmentFn = Callable[[Frame, Any], Segmentation]
+StateFn = Callable[[Frame, Segmentation, Settings], SymbolicState]
+PlanFn = Callable[..., Plan]
 
 # Statuses of one frame (clearcli/status.py), by their short names.
 OK, CLEARED, NO_TABLE = FrameStatus.OK, FrameStatus.CLEARED, FrameStatus.NO_TABLE
@@ -57,22 +61,14 @@ class FrameResult:
 
 
 def _default_segment() -> SegmentFn:
-    from clearcli.perception.segment import segment
-
     return segment
 
 
 def _default_state() -> StateFn:
-    from clearcli.predicates.state_builder import compute_state
-
     return compute_state
 
 
 def _default_plan(robot: Arm) -> PlanFn:
-    import functools
-
-    from clearcli.planning.backtrack import make_plan
-
     return functools.partial(make_plan, robot=robot)
 
 
@@ -106,8 +102,6 @@ class Pipeline:
     def robot(self) -> Arm:
         """The arm every stage and the simulated world use, resolved once."""
         if self._robot is None:
-            from clearcli.robot.arm import resolve_arm
-
             self._robot = resolve_arm(self.settings)
         return self._robot
 
@@ -158,8 +152,9 @@ class Pipeline:
                 if isinstance(exc, NoPlanError):
                     status = NO_PLAN
                     # the plan stage attaches what it found (unreachable, stuck objects)
-                    if kw.get("plan") is None and getattr(exc, "plan", None) is not None:
-                        kw["plan"] = exc.plan  # type: ignore[attr-defined]
+                    attached = getattr(exc, "plan", None)
+                    if kw.get("plan") is None and attached is not None:
+                        kw["plan"] = attached
                 return done(status, error=str(exc), stage=stage, exception=exc, **kw)
             message = f"internal error in {stage}: {type(exc).__name__}: {exc}"
             return done(FAILED, error=message, stage=stage, exception=exc, **kw)
@@ -216,30 +211,21 @@ def read(
     path: Any, topic: str | None = None, index: int = 0, settings: Settings | None = None, color: Any = None
 ) -> Frame:
     """Frame ``index`` of ``path``; ``settings`` ([images]) and ``color`` serve depth images."""
-    from clearcli.io.read import read_frame
-
     return read_frame(path, topic, index, settings.images if settings is not None else None, color)
 
 
 def segmented(frame: Frame, settings: Settings) -> Segmentation:
-    from clearcli.perception.segment import segment
-
     return segment(frame, settings.segment)
 
 
 def truth_segmentation(frame: Frame, path: Any) -> Segmentation:
     """The segmentation the frame's own 'label' field gives (mOSD ground truth)."""
-    from clearcli.errors import InputError
-    from clearcli.predicates.synthetic import segmentation_from_labels
-
     if "label" not in frame.fields:
         raise InputError(f"{path}: --ground-truth needs a 'label' field, and this frame has none")
     return segmentation_from_labels(frame)
 
 
 def stated(frame: Frame, segmentation: Segmentation, settings: Settings) -> SymbolicState:
-    from clearcli.predicates.state_builder import compute_state
-
     return compute_state(frame, segmentation, settings)
 
 
@@ -260,13 +246,12 @@ def planned(
     """Place ``robot`` (``camera_pose`` as given on the command line, else [robot]'s
     rules), then plan with every action IK-checked against it (``check``: None for
     [plan] check)."""
-    from clearcli.planning.backtrack import make_plan
-
     T_base_camera, pose_source = robot.place(state, camera_pose)
     try:
         plan = make_plan(state, settings, T_base_camera, check=check, robot=robot)
     except NoPlanError as err:
-        if getattr(err, "plan", None) is None:
+        attached = getattr(err, "plan", None)  # the plan stage attaches what it found
+        if attached is None:
             raise
-        return Planned(err.plan, T_base_camera, pose_source, err)  # type: ignore[attr-defined]
+        return Planned(attached, T_base_camera, pose_source, err)
     return Planned(plan, T_base_camera, pose_source)

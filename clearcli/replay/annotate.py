@@ -17,11 +17,13 @@ to a temporary file beside the output and moved into place only when complete.
 from __future__ import annotations
 
 import contextlib
-from collections.abc import Iterator
+from collections.abc import Generator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from clearcli.errors import OutputError
+from clearcli.files import atomic_output
+from clearcli.io.mcap import raw_messages, read_summary
 from clearcli.replay.foxglove import (
     PLAN_JSONSCHEMA,
     PLAN_TOPIC,
@@ -64,7 +66,7 @@ class AnnotatedLog:
         self.settings = settings
         self._stack = contextlib.ExitStack()
         self._writer: Any = None
-        self._raw: Iterator[tuple[Any, Any, Any]] | None = None
+        self._raw: Generator[tuple[Any, Any, Any], None, None] | None = None
         self._raw_channel: int | None = None
         self._raw_next = 0  # position on the topic of the next raw message
         self._json_cloud_channel: int | None = None
@@ -74,8 +76,6 @@ class AnnotatedLog:
 
     def __enter__(self) -> AnnotatedLog:
         from mcap.writer import CompressionType, Writer
-
-        from clearcli.files import atomic_output
 
         try:
             handle = self._stack.enter_context(atomic_output(self.out_path))
@@ -178,11 +178,9 @@ class AnnotatedLog:
         self.frames_written += 1
 
 
-def _raw_iter(path: Path, topic: str) -> Iterator[tuple[Any, Any, Any]]:
+def _raw_iter(path: Path, topic: str) -> Generator[tuple[Any, Any, Any], None, None]:
     """(schema, channel, message) of ``topic`` in the input log, in the reader's order;
     ends quietly where the log is damaged (the replay reports that itself)."""
-    from clearcli.io.mcap import raw_messages, read_summary
-
     summary = read_summary(path)
     iterator = raw_messages(path, summary, topic)
     try:
@@ -195,4 +193,6 @@ def _raw_iter(path: Path, topic: str) -> Iterator[tuple[Any, Any, Any]]:
                 return
             yield item
     finally:
-        iterator.close()
+        close = getattr(iterator, "close", None)  # a generator: its file is closed now
+        if close is not None:
+            close()

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from clearcli.geometry.gripper import gripper_model
 from clearcli.transforms import matrix_to_quat
 
 if TYPE_CHECKING:
@@ -227,7 +228,9 @@ def _pose(T: np.ndarray) -> dict[str, Any]:
 IDENTITY_POSE = {"position": {"x": 0.0, "y": 0.0, "z": 0.0}, "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}}
 
 
-def _arrow(start: np.ndarray, direction: np.ndarray, up: np.ndarray, length: float, color: dict, thick: bool) -> dict:
+def _arrow(
+    start: np.ndarray, direction: np.ndarray, up: np.ndarray, length: float, color: dict[str, float], thick: bool
+) -> dict[str, Any]:
     """An arrow from ``start`` along ``direction`` (an ArrowPrimitive points along its
     pose's +x)."""
     x = np.asarray(direction, dtype=float)
@@ -348,8 +351,6 @@ def scene_update(report: FrameReport, frame_id: str, settings: Settings | None =
         )
     gripper_pose = next_action_pose(report)
     if gripper_pose is not None:
-        from clearcli.geometry.gripper import gripper_model
-
         model_g = gripper_model(settings.gripper if settings is not None else None)
         closed = first is not None and first.kind == "push"
         boxes = model_g.boxes(closed=closed)

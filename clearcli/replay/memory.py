@@ -20,8 +20,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from clearcli.predicates.state import SymbolicState
-from clearcli.replay.tracking import Vec3
-from clearcli.settings.replay import MemoryParams  # noqa: F401  ([memory]: defaults and ranges)
+from clearcli.replay.tracking import Vec3, vec3
+from clearcli.settings.replay import MemoryParams  # [memory]: defaults and ranges
 
 
 @dataclass(frozen=True)
@@ -48,7 +48,7 @@ def remember(memory: PushMemory, record: PushRecord, params: MemoryParams = Memo
     u = np.asarray(record.unit_vector, dtype=float)
     norm = float(np.linalg.norm(u))
     if norm > 0:
-        record = dataclasses.replace(record, unit_vector=tuple(float(v) for v in u / norm))  # type: ignore[arg-type]
+        record = dataclasses.replace(record, unit_vector=vec3(u / norm))
     records = memory.records + (record,)
     own = [r for r in records if r.track_id == record.track_id]
     if len(own) > params.per_object:

@@ -18,23 +18,24 @@ from typing import TYPE_CHECKING, Any
 
 from clearcli.errors import ClearError, PartialLogError
 from clearcli.pipeline import CLEARED, FAILED, NO_PLAN, NO_TABLE, OK, FrameResult, Pipeline
+from clearcli.planning.probe import AXES, off_centre_first, off_seam, probe_push
 from clearcli.predicates.grasps import kind as grasp_kind
 from clearcli.predicates.grasps import kinds as grasp_kinds
 from clearcli.predicates.state import DIRECTIONS
 from clearcli.replay import memory as push_memory
-from clearcli.replay.memory import MemoryParams, PushMemory, PushRecord
+from clearcli.replay.memory import PushMemory, PushRecord
 from clearcli.replay.report import FrameReport, ObjectReport, Summary
 from clearcli.replay.tracking import (
     Assignment,
     ExpectedEffect,
     Observation,
     TrackerState,
-    TrackingParams,
     check_execution,
     shape_signature,
     update,
     vec3,
 )
+from clearcli.settings.replay import MemoryParams, TrackingParams
 
 if TYPE_CHECKING:
     from clearcli.io.frames import Frame
@@ -120,20 +121,27 @@ class Session:
         # track id -> push axes tried on it to see whether it comes apart (probe.py)
         self.probed: dict[int, frozenset[str]] = {}
 
+    def _params(self) -> tuple[TrackingParams, MemoryParams]:
+        """The session's [tracking] and [memory]: the options', filled in by __init__."""
+        tracking, memory = self.options.tracking, self.options.memory
+        assert tracking is not None and memory is not None  # __init__ put the settings' in
+        return tracking, memory
+
     def step(self, frame: Frame, index: int, time_s: float = 0.0, read_s: float = 0.0) -> FrameReport:
         clock = self.frame_count
         self.frame_count += 1
         options = self.options
-        self.memory = push_memory.expire(self.memory, clock, options.memory)
+        tracking_params, memory_params = self._params()
+        self.memory = push_memory.expire(self.memory, clock, memory_params)
         found: dict[str, Any] = {}
 
         def on_segmentation(segmentation: Segmentation) -> None:
             observations = observations_of(segmentation)
-            self.tracker, assignment = update(self.tracker, observations, clock, self.effect, options.tracking)
+            self.tracker, assignment = update(self.tracker, observations, clock, self.effect, tracking_params)
             found["observations"] = observations
             found["assignment"] = assignment
             if self.effect is not None:
-                execution = check_execution(self.effect, observations, assignment, options.tracking)
+                execution = check_execution(self.effect, observations, assignment, tracking_params)
                 found["execution"] = execution
                 # what the last action did changes what this frame may plan
                 if execution.outcome == "done" and self.effect.kind == "grasp":
@@ -171,8 +179,6 @@ class Session:
                 for k in sorted(self.failed_kinds.get(tid, {thesis}))
             }
             if failed - state.facts:
-                from clearcli.planning.probe import off_seam
-
                 state = dataclasses.replace(state, facts=state.facts | failed)
                 # a grasp that keeps taking nothing may be closing on two objects the
                 # segmentation merged: push such an object with the fingers off the
@@ -181,15 +187,13 @@ class Session:
                     for d in DIRECTIONS:
                         state = off_seam(state, name, d, self.pipeline.settings.gripper)
             if self.pipeline.settings.plan.regrasp_off_centre:
-                from clearcli.planning.probe import off_centre_first
-
                 for name, tid in sorted(ids.items()):
                     failures = self.failed_grasps.get(tid, 0)
                     if 0 < failures and ("ik_unfeasible_grasp", name) not in state.facts:
                         state = off_centre_first(state, name, failures)
             if not options.push_memory:
                 return state
-            return push_memory.apply_memory(state, ids, self.memory, options.memory)
+            return push_memory.apply_memory(state, ids, self.memory, memory_params)
 
         result = self.pipeline.run(
             frame, adjust=adjust, on_segmentation=on_segmentation, catch_internal=not options.fail_fast
@@ -216,8 +220,6 @@ class Session:
         T_base_camera = plan.T_base_camera if plan.T_base_camera is not None else self.pipeline.T_base_camera
         if T_base_camera is None:
             return result
-        from clearcli.planning.probe import probe_push
-
         t0 = time.perf_counter()
         tried = {name: self.probed[tid] for name, tid in ids.items() if tid in self.probed}
         limit = settings.plan.max_failed_grasps
@@ -228,8 +230,6 @@ class Session:
         if probe is None:
             return dataclasses.replace(result, timings_s=timings)
         if probe.probe in ids:
-            from clearcli.planning.probe import AXES
-
             tid = ids[probe.probe]
             self.probed[tid] = self.probed.get(tid, frozenset()) | {AXES[str(probe.actions[0].direction)]}
         return dataclasses.replace(result, status=OK, plan=probe, error="", stage="", exception=None, timings_s=timings)
@@ -271,7 +271,7 @@ class Session:
             ids = found.get("ids_by_name", {})
             if first.kind == "push" and first.direction is not None and first.obj in ids:
                 u = result.state.by_name(first.obj).pushes[first.direction].unit_vector
-                undoes = push_memory.reverses_last(self.memory, ids[first.obj], u, self.options.memory)
+                undoes = push_memory.reverses_last(self.memory, ids[first.obj], u, self._params()[1])
         return FrameReport(
             index=index,
             stamp_s=frame.stamp_s,
@@ -331,7 +331,7 @@ class Session:
             self.memory = push_memory.remember(
                 self.memory,
                 PushRecord(self.effect.track_id, self.effect.unit_vector, self.frame_count - 1),
-                self.options.memory,
+                self._params()[1],
             )
 
 
@@ -381,13 +381,13 @@ def replay(
             summary.wall_s = time.perf_counter() - started
             yield report
             if report.status == FAILED and options.fail_fast:
-                exc = report.result.exception
+                error = report.result.exception
                 message = (
                     f"{frame.source or 'frame'}: {report.result.stage} failed on frame {index}: "
                     f"{report.result.error} (stopped by --fail-fast)"
                 )
-                if isinstance(exc, ClearError):
-                    raise type(exc)(message) from None
+                if isinstance(error, ClearError):
+                    raise type(error)(message) from None
                 raise ClearError(message)
             if report.status == CLEARED and options.stop_when_cleared:
                 break

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from clearcli.settings.replay import TrackingParams  # noqa: F401  ([tracking]: defaults and ranges)
+from clearcli.settings.replay import TrackingParams  # [tracking]: defaults and ranges
 
 Vec3 = tuple[float, float, float]
 
@@ -196,16 +196,18 @@ def update(
     _rematch(tracks, observations, ids, costs, params)
     next_id = state.next_id
     new: list[int] = []
-    for i, given in enumerate(ids):
+    assigned: list[int] = []  # ids, a new one for each observation no track took
+    for given in ids:
         if given is None:
-            ids[i] = next_id
+            given = next_id
             new.append(next_id)
             next_id += 1
-    seen = {int(i) for i in ids if i is not None}
+        assigned.append(given)
+    seen = {int(i) for i in assigned}
     by_id = {t.track_id: t for t in tracks}
     kept: list[Track] = []
     for i, obs in enumerate(observations):
-        tid = int(ids[i])  # type: ignore[arg-type]
+        tid = int(assigned[i])
         old = by_id.get(tid)
         kept.append(
             Track(
@@ -223,7 +225,7 @@ def update(
             kept.append(t)
     kept.sort(key=lambda t: t.track_id)
     assignment = Assignment(
-        ids=tuple(int(i) for i in ids),  # type: ignore[arg-type]
+        ids=tuple(int(i) for i in assigned),
         new=tuple(new),
         gone=gone,
         costs=tuple(costs),

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from clearcli.io.frames import LABEL_NONE, LABEL_TABLE, Frame, object_label
-from clearcli.settings.sim import DepthNoise, PinholeCamera  # noqa: F401  ([camera], [depth_noise])
+from clearcli.settings.sim import DepthNoise, PinholeCamera  # [camera], [depth_noise]
 from clearcli.sim.scene import Box, Cylinder, Scene, SceneObject, invert_transform
 
 FRAME_ID = "camera_rgb_optical_frame"

@@ -32,13 +32,17 @@ import math
 from collections import Counter
 from collections.abc import Iterator
 from dataclasses import dataclass, field
+from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from clearcli.geometry.gripper import push_contact_halves
 from clearcli.predicates.grasps import kind as grasp_kind
 from clearcli.settings.sim import WorldParams
+from clearcli.sim import camera, physics
 from clearcli.sim.physics import push_contacts, truly_ungraspable_by, world_push
+from clearcli.sim.reach import T_base_table_of, WorldReach
 from clearcli.sim.scene import Scene, without_object
 from clearcli.sim.truth import world_object_of
 
@@ -159,11 +163,9 @@ class Episode:
         self.reports: list[dict[str, Any]] = []  # the JSON of every frame, for callers
 
     def render(self, index: int) -> Frame:
-        from clearcli.sim.camera import render
-
         # the camera and its noise as the settings say ([camera], [depth_noise])
         settings = self.session.pipeline.settings
-        frame = render(
+        frame = camera.render(
             self.scene,
             seed=self.seed * 1000 + index,
             stamp_s=self.start_s + index * self.params.frame_interval_s,
@@ -274,8 +276,6 @@ class Episode:
         T_base_camera = self.session.pipeline.T_base_camera
         if not left or T_base_camera is None:
             return ()
-        from clearcli.sim.reach import T_base_table_of, WorldReach
-
         settings = self.session.pipeline.settings
         reach = WorldReach(
             T_base_table_of(T_base_camera, self.scene),
@@ -291,8 +291,6 @@ class Episode:
         self, report: FrameReport, push: Any, direction_table: np.ndarray, T_table_camera: np.ndarray
     ) -> list[int] | None:
         """The objects the fingers meet (`push_contacts`), None when the push has no pose."""
-        from clearcli.geometry.gripper import push_contact_halves
-
         T_camera_start = _chosen_pose_camera(report, push.candidates)
         if T_camera_start is None:
             return None
@@ -395,8 +393,6 @@ class _Hand:
     first action's object and how the arm went there."""
 
     def __init__(self, episode: Episode, report: FrameReport, model: Any, k: int) -> None:
-        from clearcli.sim import physics
-
         settings = episode.session.pipeline.settings
         self.scene = episode.scene
         self.k = k
@@ -406,7 +402,7 @@ class _Hand:
         self.gripper = settings.gripper
         self.rng = episode.rng
         self.params = episode.params
-        self.rules = physics
+        self.rules: ModuleType = physics
         self.T_table_camera = np.linalg.inv(episode.scene.T_camera_table)
         self._report = report
 

@@ -161,15 +161,17 @@ def dense_mix(seed: int) -> Scene:
     n_large = 1 + int(rng.random() < 0.5)
     n_total = int(rng.integers(6, 11))
     for object_id in range(n_total):
+        obj: SceneObject
         if object_id < n_large:
-            obj: SceneObject = _flat_box(rng, object_id)
+            box = _flat_box(rng, object_id)
             if rng.random() < 0.4:  # a tall one instead (a cereal box)
-                obj = replace(
-                    obj,
-                    size_x_m=round(obj.size_x_m * 0.6, 4),
+                box = replace(
+                    box,
+                    size_x_m=round(box.size_x_m * 0.6, 4),
                     size_y_m=0.07,
                     size_z_m=round(float(rng.uniform(0.15, 0.25)), 4),
                 )
+            obj = box
         else:
             obj = _small(rng, object_id)
         for _attempt in range(300):

@@ -5,11 +5,14 @@ model of it (see `clearcli.sim.episode`)."""
 from __future__ import annotations
 
 import math
+import sys
 from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
+from clearcli.predicates.grasps import kind
+from clearcli.predicates.grasps import kinds as registered
 from clearcli.settings.sim import WorldParams
 from clearcli.sim.scene import (
     Cylinder,
@@ -79,11 +82,6 @@ def truly_ungraspable_by(obj: SceneObject, gripper: Any, kinds: tuple[str, ...] 
     this module as its rules): the pinch when it is not `truly_ungraspable`, a rim grasp
     an open cylinder whose wall the fingers close on, a slide a box or a closed cylinder
     the gripper pinches at an edge."""
-    import sys
-
-    from clearcli.predicates.grasps import kind
-    from clearcli.predicates.grasps import kinds as registered
-
     rules = sys.modules[__name__]
     chosen = [kind(k) for k in kinds] if kinds is not None else [k for k in registered() if k.thesis]
     return not any(k.world_holds(obj, gripper, rules) for k in chosen)
@@ -135,8 +133,6 @@ def grasp_contacts(
     opening and both fingers' thickness along the closing direction, a finger's width
     across), among objects taller than the fingertips. More than one: the fingers come
     down on a neighbour, or close on it with the target."""
-    from clearcli.sim.scene import polygons_overlap
-
     x = np.asarray(closing_table[:2], dtype=float)
     x /= max(float(np.linalg.norm(x)), 1e-12)
     y = np.array([-x[1], x[0]])

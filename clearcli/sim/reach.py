@@ -29,8 +29,11 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from clearcli.robot.arm import resolve_arm
 from clearcli.robot.collision import capsule_spheres
-from clearcli.settings.sim import WorldReachParams  # noqa: F401  ([world_reach])
+from clearcli.settings import Settings
+from clearcli.settings.sim import WorldReachParams  # [world_reach]
+from clearcli.sim.physics import truly_ungraspable
 from clearcli.sim.scene import Box, Cylinder, Table
 
 if TYPE_CHECKING:
@@ -88,9 +91,6 @@ class WorldReach:
         settings' when None). Its model gives FK, limits and capsules; the solving is the
         world's own (``world_solver``)."""
         if robot is None:
-            from clearcli.robot.arm import resolve_arm
-            from clearcli.settings import Settings
-
             robot = resolve_arm(Settings())
         self.T_base_table = np.asarray(T_base_table, dtype=float)
         self.T_table_base = np.linalg.inv(self.T_base_table)
@@ -157,8 +157,6 @@ class WorldReach:
     def why_not(self, obj: SceneObject) -> str:
         """Empty when the gripper can hold ``obj`` and some top-down grasp of it has an
         arm motion; else why not."""
-        from clearcli.sim.physics import truly_ungraspable
-
         if truly_ungraspable(obj, self.gripper.opening_width_m, self.gripper.closing_width_m):
             return "the gripper cannot hold it (narrowest width beyond the opening or under the closing width)"
         if self.grasp_motion(obj) is None:

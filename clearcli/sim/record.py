@@ -7,6 +7,11 @@ from typing import Any
 
 import numpy as np
 
+from clearcli.io.mcap_write import StaticTransform, write_pointcloud2_mcap
+from clearcli.pipeline import Pipeline
+from clearcli.replay.session import ReplayOptions, Session
+from clearcli.robot.arm import resolve_arm
+from clearcli.settings import Settings
 from clearcli.sim.episode import Episode, EpisodeResult
 from clearcli.sim.scene import Scene
 from clearcli.sim.truth import truth_segment
@@ -15,12 +20,7 @@ from clearcli.sim.truth import truth_segment
 def static_transforms(T_base_camera: np.ndarray, frame_id: str, base_frame: str | None = None) -> list[Any]:
     """/tf_static's one transform: the points' frame in the robot's base, named
     ``base_frame`` (None: as the default profile's logs name it, the WAM's "wam_base")."""
-    from clearcli.io.mcap_write import StaticTransform
-
     if base_frame is None:
-        from clearcli.robot.arm import resolve_arm
-        from clearcli.settings import Settings
-
         base_frame = resolve_arm(Settings()).profile.tf_base_frame
     return [StaticTransform(parent_frame=base_frame, child_frame=frame_id, T_parent_child=np.asarray(T_base_camera))]
 
@@ -37,10 +37,6 @@ def record_session(
 ) -> tuple[int, EpisodeResult]:
     """Run a closed-loop episode on ``world`` and write its frames, with the robot base
     on /tf_static, to the MCAP at ``path``; returns (frames written, the episode's result)."""
-    from clearcli.io.mcap_write import write_pointcloud2_mcap
-    from clearcli.pipeline import Pipeline
-    from clearcli.replay.session import ReplayOptions, Session
-
     pipeline = Pipeline(settings, segment_fn=truth_segment if truth_segmentation else None)
     options = ReplayOptions(
         push_memory=push_memory, stop_when_cleared=True, tracking=settings.tracking, memory=settings.memory

@@ -4,25 +4,20 @@ and which world object a segment stands for."""
 from __future__ import annotations
 
 from collections import Counter
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
-from clearcli.io.frames import object_ids, table_mask
-
-if TYPE_CHECKING:
-    from clearcli.io.frames import Frame
-    from clearcli.perception.types import Segmentation
+from clearcli.errors import SceneError
+from clearcli.io.frames import Frame, object_ids, table_mask
+from clearcli.perception.segment import make_object
+from clearcli.perception.types import Segmentation, TablePlane
 
 
 def truth_segment(frame: Frame, settings: Any = None) -> Segmentation:
     """A perfect segmentation from the camera's labels (for fast tests and as an oracle
     that separates the planner's behaviour from the segmenter's errors)."""
     from scipy.spatial import ConvexHull
-
-    from clearcli.errors import SceneError
-    from clearcli.perception.segment import make_object
-    from clearcli.perception.types import Segmentation, TablePlane
 
     labels = np.asarray(frame.fields.get("label", np.zeros(frame.n_points)), dtype=np.int64)
     finite = frame.finite_mask
