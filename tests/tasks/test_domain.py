@@ -75,9 +75,12 @@ def test_the_kinds_are_a_set_in_any_order() -> None:
 
 
 def test_each_kind_costs_what_its_action_says(tmp_path: Path) -> None:
-    problem = _up_problem(tmp_path, domain_text(grasps="pinch,rim,slide"))
-    (metric,) = problem.quality_metrics
-    costs = {a.name: str(c) for a, c in metric.costs.items()}
+    dom = _parsed(tmp_path, domain_text(grasps="pinch,rim,slide"))
+    costs = {}
+    for action in dom.actions:
+        increases = [str(e) for e in action.effect.operands if type(e).__name__ == "Increase"]
+        assert len(increases) == 1, action.name
+        costs[action.name] = re.fullmatch(r"\(increase \(total-cost\) (\d+)\)", increases[0]).group(1)  # type: ignore[union-attr]
     assert costs == {**COSTS, "push": "1"}
 
 
