@@ -112,7 +112,8 @@ def log_index(path: Path, topic: str | None) -> LogIndex:
 
 
 def _mcap_index(path: Path, topic: str | None) -> LogIndex:
-    # a reader: numpy and io.mcap's decoders, ~270 ms cold; tasks/sources.py (listing a folder) needs none
+    # the MCAP reader, ~110 ms: listing a batch's inputs (tasks/sources.py imports this
+    # module) loads no reader (tests/io/test_io_layout.py)
     from clearcli.io.mcap import choose_topic, read_summary  # noqa: PLC0415
 
     summary = read_summary(path)
@@ -122,7 +123,7 @@ def _mcap_index(path: Path, topic: str | None) -> LogIndex:
 
 
 def _bag_index(path: Path, topic: str | None) -> LogIndex:
-    # a reader: numpy and io.rosbag's decoders, ~280 ms cold; tasks/sources.py (listing a folder) needs none
+    # the bag reader, ~90 ms: as for the MCAP one above
     from clearcli.io.rosbag import choose_bag_topic, read_bag_summary  # noqa: PLC0415
 
     bag = read_bag_summary(path)

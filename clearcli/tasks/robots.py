@@ -15,8 +15,9 @@ SCHEMA, VERSION = "robots", 1
 def robots_payload(name: str | None = None) -> dict[str, Any]:
     """{profiles: [{name, summary, default}]} or, for ``name``, {profile: facts} with the
     joints and their limits read from the shipped description."""
-    # the profiles load the robot layer: NumPy and 10 modules, ~280 ms cold, which `clear
-    # settings` (the same command module) and every command's options (check_robot) need not pay
+    # the robot layer pulls NumPy, ~280 ms cold: the commands import this module for
+    # check_robot (their options) and beside `clear settings` (commands/basic.py); only
+    # the profiles' facts and a user's URDF need it
     from clearcli.robot.profiles import PROFILES, profile  # noqa: PLC0415
 
     if name is None:
@@ -44,7 +45,7 @@ def check_robot(robot: RobotSettings) -> None:
     chain of fewer than six revolute joints is one line, exit 3, before any frame is read
     (clearcli/robot/urdf_joints.py `checked_urdf`, clearcli/robot/generic.py)."""
     if robot.urdf:
-        # the robot layer only for a user's URDF (see robots_payload: ~280 ms every command would pay)
+        # the robot layer for a user's URDF alone (~280 ms: see robots_payload)
         from clearcli.robot.profiles import profile_of  # noqa: PLC0415
 
         profile_of(robot)  # kept (lru_cache): the arm resolved later reads the file no more

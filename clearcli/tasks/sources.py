@@ -28,7 +28,6 @@ from pathlib import Path
 
 from clearcli.errors import EXIT_INPUT, ClearError, InputError
 from clearcli.io.inputs import count_frames, files_read, run_files
-from clearcli.io.intrinsics import read_intrinsics
 from clearcli.io.walk import files_in, is_input_folder, is_log, natural_key, output_name, special, taken_before
 from clearcli.settings.images import ImageSettings
 
@@ -168,6 +167,10 @@ def expand(
 def check_intrinsics(spec: str) -> None:
     """Read the intrinsics ``spec`` (a file or "fx fy cx cy") once, before any frame: a bad
     one is one InputError (exit 3), not one per frame."""
+    # the reader pulls NumPy, ~260 ms cold, for --intrinsics alone: the commands and the
+    # batch import this module to list inputs and the files a run reads, which need none
+    from clearcli.io.intrinsics import read_intrinsics  # noqa: PLC0415
+
     read_intrinsics(spec)
 
 
