@@ -3,17 +3,23 @@
 Subcommands live in `clearcli/commands/<name>.py`, each a plain function registered here
 (clearcli/commands/registry.py lists them; `main` imports and registers only the one it
 runs); heavy libraries are imported inside those functions so that `clear --help` is fast.
+
+This module's top-level imports run before `main` holds Ctrl-C/SIGTERM
+(clearcli/interrupts.py), so they are kept to a few light ones: typer and the command
+modules (which import typer) are imported after the hold, inside the functions below.
 """
 
 from __future__ import annotations
 
+import functools
 import os
 import shutil
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 from clearcli import __version__, interrupts
+from clearcli.commands import registry
 from clearcli.errors import (
     EXIT_BROKEN_PIPE,
     EXIT_CODES,
@@ -38,12 +44,9 @@ def make_app(only: str | None = None) -> typer.Typer:
     and building their click commands is start-up time spent on nothing. `app` (this
     module's attribute, built on first use) has them all, for tests and embedding.
     """
-    # typer is imported here, not at the top: `main` holds Ctrl-C/SIGTERM first (clearcli/interrupts.py)
-    from typing import Annotated
-
-    import typer
-
-    from clearcli.commands import registry
+    # typer is imported here, not at the top: `main` holds Ctrl-C/SIGTERM first
+    # (clearcli/interrupts.py), so a signal during its ~85 ms of imports is held
+    import typer  # noqa: PLC0415  (~85 ms, after interrupts.hold())
 
     def _version(value: bool) -> None:
         if value:
@@ -92,8 +95,6 @@ def _releasing(fn: Any) -> Any:
     """``fn``, releasing held signals on entry (clearcli/interrupts.py), unless it does so
     itself at a better point (a command with batch options: inside the batch's run, so a
     signal at start-up still gets a batch's summary)."""
-    import functools
-
     if fn is None or getattr(fn, "releases_interrupts", False) or getattr(fn, "_clear_releasing", False):
         return fn
 
@@ -102,7 +103,7 @@ def _releasing(fn: Any) -> Any:
         interrupts.release()
         return fn(*args, **kwargs)
 
-    command._clear_releasing = True  # type: ignore[attr-defined]
+    command._clear_releasing = True  # type: ignore[attr-defined]  # a function attribute: mypy does not model them
     return command
 
 
@@ -122,9 +123,7 @@ def _command_named(args: list[str]) -> str | None:
     """The subcommand ``args`` (argv without the program) runs when it is the first word,
     else None: every command is registered then, for `--help`'s listing or click's error.
     (The root's only options, --help and --version, print and exit.)"""
-    from clearcli.commands.registry import NAMES
-
-    return args[0] if args and args[0] in NAMES else None
+    return args[0] if args and args[0] in registry.NAMES else None
 
 
 def _run_terminal_clear() -> None:
@@ -170,7 +169,8 @@ def _main() -> None:
     try:
         try:
             if "--ray" in sys.argv:
-                from clearcli.commands.options import ray_argv
+                # imports typer (~85 ms): after interrupts.hold(), as in make_app
+                from clearcli.commands.options import ray_argv  # noqa: PLC0415  (typer, after hold())
 
                 sys.argv = ray_argv(sys.argv)
             app = make_app(_command_named(sys.argv[1:]))
@@ -203,7 +203,9 @@ def _main() -> None:
         _quiet_stdout()
         sys.exit(EXIT_BROKEN_PIPE)
     except OSError as exc:
-        from clearcli.files import WRITE_ERRNOS
+        # loaded by every command by now; at the top it would add ~10 ms (tempfile, random)
+        # before interrupts.hold()
+        from clearcli.files import WRITE_ERRNOS  # noqa: PLC0415  (~10 ms before hold())
 
         if exc.errno not in WRITE_ERRNOS:
             _internal(exc)

@@ -8,6 +8,8 @@ is not retried (the frame may be what kills it): its frame gets an internal-erro
 
 from __future__ import annotations
 
+import socket
+import time
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
@@ -20,8 +22,6 @@ LOCAL = "local"
 def connect(address: str) -> float:
     """ray.init on ``address`` ("local": a cluster of this machine alone); the seconds it
     took. An address that cannot be reached is a one-line error before any work."""
-    import time
-
     try:
         import ray
     except ImportError:
@@ -50,8 +50,6 @@ def connect(address: str) -> float:
 def _probe(address: str, timeout_s: float = 5.0) -> None:
     """A TCP connection to the address's host and port, so that an address nobody
     answers at is reported at once (ray.init would retry for minutes)."""
-    import socket
-
     hostport = address.split("://", 1)[-1].rstrip("/")
     host, sep, port = hostport.rpartition(":")
     if not sep or not port.isdigit():
@@ -76,7 +74,8 @@ def run(jobs: Sequence[Job], stop: Callable[[], bool] = lambda: False) -> Iterat
     task = _remote()
     # Enough tasks in flight to keep every CPU busy, no more: stopping (fail-fast,
     # Ctrl-C) then leaves little running.
-    width = max(1, int(ray.cluster_resources().get("CPU", 1)) * 2)
+    resources = ray.cluster_resources()  # type: ignore[no-untyped-call]  # Ray ships py.typed, this one unannotated
+    width = max(1, int(resources.get("CPU", 1)) * 2)
     pending = list(range(len(jobs)))[::-1]
     running: dict[Any, int] = {}
     try:

@@ -11,6 +11,7 @@ writers' clean-up, so no half-written file is left.
 
 from __future__ import annotations
 
+import ctypes
 import multiprocessing as mp
 import os
 import signal
@@ -33,8 +34,6 @@ def _die_with(parent_pid: int) -> None:
     thread that watches the parent. Nothing a killed batch started outlives it long
     enough to race a --resume."""
     try:
-        import ctypes
-
         libc = ctypes.CDLL(None, use_errno=True)
         PR_SET_PDEATHSIG = 1
         libc.prctl(PR_SET_PDEATHSIG, int(signal.SIGTERM), 0, 0, 0)

@@ -20,6 +20,7 @@ without redoing or losing a frame.
 
 from __future__ import annotations
 
+import fcntl
 import json
 import os
 import time
@@ -28,12 +29,37 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from clearcli import interrupts
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+from rich.table import Table
+
+from clearcli import interrupts, tasks
+from clearcli.batch import cluster
+from clearcli.batch.pool import WorkerPool
 from clearcli.batch.work import MARK, RESULT_CODES, Job, run_job
-from clearcli.errors import EXIT_BATCH_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_TERMINATED, InputError, Terminated
-from clearcli.files import stream_kind
+from clearcli.console import stderr, stdout
+from clearcli.errors import (
+    EXIT_BATCH_FAILED,
+    EXIT_INTERRUPTED,
+    EXIT_OK,
+    EXIT_OUTPUT,
+    EXIT_TERMINATED,
+    InputError,
+    OutputError,
+    Terminated,
+)
+from clearcli.files import atomic_output, stream_kind, temporary_target
+from clearcli.provenance import envelope, print_line, stamp
+from clearcli.settings import READS, settings_to_toml
 from clearcli.tasks.base import OUTPUT_FILES
-from clearcli.tasks.sources import BadInput, FrameRef, Skipped, check_unique_names, expand
+from clearcli.tasks.sources import (
+    BadInput,
+    FrameRef,
+    Skipped,
+    check_unique_names,
+    expand,
+    files_read,
+    run_files,
+)
 
 BATCH_SCHEMA_VERSION = 1
 
@@ -63,8 +89,6 @@ class BatchRequest:
 
 
 def parse_outputs(command: str, text: str | None) -> tuple[str, ...]:
-    from clearcli import tasks
-
     allowed = tasks.load(command).OUTPUTS
     if not text:
         return ()
@@ -78,8 +102,6 @@ def parse_outputs(command: str, text: str | None) -> tuple[str, ...]:
 
 
 def default_jobs() -> int:
-    import os
-
     try:
         return max(1, len(os.sched_getaffinity(0)))
     except AttributeError:  # not Linux
@@ -95,8 +117,6 @@ def frame_files(name: str) -> frozenset[str]:
 def _temporaries(out_dir: Path) -> dict[str, list[Path]]:
     """Our temporaries in ``out_dir`` (what killed writes left), by the file each was to
     become: listed once per batch, not once per frame."""
-    from clearcli.files import temporary_target
-
     found: dict[str, list[Path]] = {}
     try:
         entries = list(os.scandir(out_dir))
@@ -151,8 +171,6 @@ def _resolved(paths: Any) -> set[Path]:
 def _inputs_of_run(req: BatchRequest, items: Sequence[Any]) -> set[Path]:
     """The real paths of every file the batch reads: its frames, and what each frame's
     run reads beside it (paired colour, intrinsics, a URDF, --settings)."""
-    from clearcli.tasks.sources import files_read, run_files
-
     settings = getattr(req.request, "settings", None)
     found: set[str | Path] = set(run_files(settings, req.reads))
     for it in items:
@@ -187,16 +205,12 @@ def _line_for_bad(item: BadInput) -> dict[str, Any]:
 
 
 def _public(line: Mapping[str, Any], made_by: Mapping[str, Any]) -> dict[str, Any]:
-    from clearcli.provenance import envelope
-
     return envelope("batch", BATCH_SCHEMA_VERSION, {k: v for k, v in line.items() if not k.startswith("_")}, made_by)
 
 
 def settings_record(req: BatchRequest) -> str:
     """What ``settings.toml`` in --out-dir holds: who made the results, for which command,
     and the resolved settings that command reads (TOML that --settings reads back)."""
-    from clearcli.settings import READS, settings_to_toml
-
     m = req.made_by
     head = (
         f"# results of `clear {req.command}` made by clear {m.get('version')} ({m.get('source')}); "
@@ -224,10 +238,6 @@ def lock_out_dir(out_dir: Path, command: str, wait: bool) -> Any:
     the OS drops when the process ends however it ends (a SIGKILLed batch never blocks a
     resume). A second batch refuses with one line naming the running one (exit 8), or
     with ``wait`` waits for it. Returns the open lock file (keep it open)."""
-    import fcntl
-
-    from clearcli.errors import OutputError
-
     path = out_dir / LOCK_FILE
     try:
         fp = open(path, "a+", encoding="utf-8")
@@ -243,8 +253,6 @@ def lock_out_dir(out_dir: Path, command: str, wait: bool) -> Any:
             raise OutputError(
                 f"--out-dir {out_dir}: {holder} is writing there; wait for it to end, or pass --wait"
             ) from None
-        from clearcli.console import stderr
-
         stderr.print(f"clear: waiting for {holder} to end (--out-dir {out_dir})", markup=False, highlight=False)
         fcntl.flock(fp.fileno(), fcntl.LOCK_EX)
     fp.seek(0)
@@ -260,8 +268,6 @@ def claim_out_dir(req: BatchRequest) -> None:
     settings), else one line, exit 3, before any work. ``--force`` takes the folder over:
     with ``--resume`` it redoes only the frames made otherwise (`_clean_stale`), and keeps
     the rest. A folder with results but no record is treated as made otherwise."""
-    from clearcli.files import atomic_output
-
     assert req.out_dir is not None
     record = settings_record(req)
     path = req.out_dir / SETTINGS_FILE
@@ -319,9 +325,6 @@ def run_batch(
     """Run the batch; print lines (or the progress bar and table); the exit code.
     ``extra_summary`` adds keys to the summary from every frame's line; ``render``
     replaces the summary table for people."""
-    from clearcli.console import stderr, stdout
-    from clearcli.provenance import print_line
-
     t0 = time.perf_counter()
     lock = None  # the --out-dir lock, held until the batch ends
     # What the summary reports, however early a signal stops the batch.
@@ -358,8 +361,6 @@ def run_batch(
             else:
                 rows.append(line)
 
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
-
     backend = "in-process"
     interrupted = terminated = False
     progress = Progress(
@@ -388,8 +389,6 @@ def run_batch(
             try:
                 req.out_dir.mkdir(parents=True, exist_ok=True)
             except OSError as exc:
-                from clearcli.errors import OutputError
-
                 raise OutputError(f"--out-dir {req.out_dir}: cannot make the folder ({exc.strerror})") from None
             lock = lock_out_dir(req.out_dir, req.command, req.wait)
             claim_out_dir(req)
@@ -432,8 +431,6 @@ def run_batch(
             # batch reads that one of the frame's outputs would name is never touched
             clash = _input_among_outputs(job, inputs_of_run)
             if clash is not None:
-                from clearcli.errors import EXIT_OUTPUT
-
                 lines[k] = _line_for_bad(
                     BadInput(
                         it.source,
@@ -460,14 +457,10 @@ def run_batch(
             emit_ready()
             if jobs:
                 if req.ray is not None:
-                    from clearcli.batch import cluster
-
                     ray_init_s = cluster.connect(req.ray)
                     backend = f"ray ({req.ray})"
                     results = cluster.run(jobs, stop=lambda: stopped)
                 elif req.jobs > 1 and len(jobs) > 1:
-                    from clearcli.batch.pool import WorkerPool
-
                     backend = f"{min(req.jobs, len(jobs))} worker processes"
                     results = WorkerPool(req.jobs).run(jobs, stop=lambda: stopped)
                 else:
@@ -540,8 +533,6 @@ def run_command_batch(
 ) -> int:
     """A subcommand's batch from its flags: ``outputs`` as given to --outputs, ``jobs``
     None for every core; the other `BatchRequest` fields by name."""
-    from clearcli.provenance import stamp
-
     made_by = stamp(getattr(request, "settings", None), command)
     req = BatchRequest(
         command,
@@ -556,8 +547,6 @@ def run_command_batch(
 
 
 def _print_table(rows: Sequence[Mapping[str, Any]], summary: Mapping[str, Any], out: Any) -> None:
-    from rich.table import Table
-
     table = Table("source", "frame", "exit", "result")
     for line in rows:
         table.add_row(str(line["source"]), str(line["frame"]), str(line["exit_code"]), _short(line))

@@ -19,7 +19,12 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from clearcli import tasks
+from clearcli.errors import EXIT_INTERNAL, ClearError, OutputError
+from clearcli.files import atomic_output, check_output_path
+from clearcli.provenance import envelope
 from clearcli.tasks.base import OUTPUT_FILES, Outcome, Outputs, Source
+from clearcli.tasks.sources import files_read
 
 MARK = "{name}.json"
 # Exit codes that are results, not failures: complete (0), nothing can be done (5),
@@ -53,15 +58,11 @@ class Job:
 def job_inputs(job: Job) -> tuple[Path, ...]:
     """Every file ``job``'s run reads (clearcli/tasks/sources.files_read): no output of
     it may be one of them, even with --force."""
-    from clearcli.tasks.sources import files_read
-
     return files_read(job.source, getattr(job.request, "settings", None), also=job.reads)
 
 
 def _check_outputs(job: Job) -> None:
     """Refuse to overwrite a frame's outputs or its mark (without --force): exit 8."""
-    from clearcli.files import check_output_path
-
     paths = [job.output_path(kind) for kind in job.outputs] + [job.mark_path()]
     for p in paths:
         if p is not None:
@@ -69,8 +70,6 @@ def _check_outputs(job: Job) -> None:
 
 
 def _run(job: Job) -> Outcome:
-    from clearcli import tasks
-
     outputs = Outputs.of(**{kind: job.output_path(kind) for kind in job.outputs})
     request = dataclasses.replace(job.request, outputs=outputs)
     return tasks.load(job.command).run(request, Source(job.source, job.index, job.topic, job.name))
@@ -78,8 +77,6 @@ def _run(job: Job) -> Outcome:
 
 def frame_line(job: Job, outcome: Outcome | None, error: tuple[str, int] | None) -> dict[str, Any]:
     """The frame's JSON line: where it came from and its document, or its error."""
-    from clearcli.provenance import envelope
-
     line: dict[str, Any] = {
         "type": "frame",
         "source": job.source,
@@ -99,8 +96,6 @@ def frame_line(job: Job, outcome: Outcome | None, error: tuple[str, int] | None)
 
 def run_job(job: Job) -> dict[str, Any]:
     """One frame, start to end; the line it reports (see `frame_line`)."""
-    from clearcli.errors import EXIT_INTERNAL, ClearError, OutputError
-
     try:
         _check_outputs(job)
     except OutputError as exc:  # what the user has stays as it is, its mark included
@@ -129,7 +124,5 @@ def run_job(job: Job) -> dict[str, Any]:
 def write_mark(mark: Path, line: Mapping[str, Any]) -> None:
     """The frame's line as ``<name>.json``, whole or not at all: written last, it says
     that every output of the frame is complete."""
-    from clearcli.files import atomic_output
-
     with atomic_output(mark, "w") as handle:
         handle.write(json.dumps(line, separators=(",", ":"), allow_nan=False) + "\n")

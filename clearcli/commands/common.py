@@ -8,12 +8,15 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from clearcli.console import stderr, stdout  # noqa: F401  (re-exported)
-from clearcli.files import atomic_output, atomic_path, check_output_path  # noqa: F401  (re-exported)
+from clearcli.console import stderr, stdout
+from clearcli.files import atomic_output, atomic_path, check_output_path
+
+__all__ = ["atomic_output", "atomic_path", "check_output_path", "print_json", "stderr", "stdout"]
 
 
 def print_json(schema: str, version: int, payload: Mapping[str, Any], settings: Any, command: str) -> None:
     """One JSON document on stdout in the shared envelope, with its provenance."""
-    from clearcli.provenance import envelope, print_document, stamp
+    # provenance loads the settings tree (~50 ms), which `clear --help` never needs
+    from clearcli.provenance import envelope, print_document, stamp  # noqa: PLC0415  (~50 ms: --json only)
 
     print_document(envelope(schema, version, payload, stamp(settings, command)))

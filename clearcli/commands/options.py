@@ -14,6 +14,9 @@ from typing import Annotated, Any
 import typer
 
 from clearcli import interrupts
+from clearcli import settings as clear_settings
+from clearcli.errors import InputError
+from clearcli.files import exists
 from clearcli.settings import kinds as grasp_kinds
 from clearcli.settings.profiles import names_text as profile_names_text
 
@@ -125,18 +128,16 @@ def resolve_settings(
     each --set, then the command's own flags (aliases of --set in ``section``). ``robot``
     (--robot) is --set robot.name=ROBOT given first: the profile's defaults, then the
     file's and the other --set values over them."""
-    from clearcli.settings import load_settings, override
-
     sets = ([f"robot.name={robot}"] if robot is not None else []) + list(sets or ())
-    settings = load_settings(path, sets)
+    settings = clear_settings.load_settings(path, sets)
     if grasps is not None:  # a flag over the file and --set, checked by [plan] grasps's own rule
-        settings = override(settings, "plan", grasps=grasps)
+        settings = clear_settings.override(settings, "plan", grasps=grasps)
     if settings.robot.urdf:
-        from clearcli.tasks.robots import check_robot
+        from clearcli.tasks.robots import check_robot  # noqa: PLC0415  (~7 ms for `clear --help`; a URDF only)
 
         check_robot(settings.robot)
     if section is not None:
-        settings = override(settings, section, **flags)
+        settings = clear_settings.override(settings, section, **flags)
     return settings
 
 
@@ -144,22 +145,17 @@ def with_images(settings: Any, intrinsics: str | None, depth_scale: float | None
     """``settings`` with the depth-image flags applied ([images]: --intrinsics, --depth-scale).
     An intrinsics file is recorded by its absolute path, so that batch workers (and the
     results' settings.toml) find the same file wherever they run."""
-    from clearcli.files import exists
-    from clearcli.settings import override
-
     if intrinsics is not None and intrinsics.strip() and exists(intrinsics):
         intrinsics = str(Path(intrinsics).resolve())
     if intrinsics:
-        from clearcli.tasks.sources import check_intrinsics
+        from clearcli.tasks.sources import check_intrinsics  # noqa: PLC0415  (~170 ms for `clear --help`)
 
         check_intrinsics(intrinsics)  # a bad file or string: one line, exit 3, before any frame
-    return override(settings, "images", intrinsics=intrinsics, depth_scale_m=depth_scale)
+    return clear_settings.override(settings, "images", intrinsics=intrinsics, depth_scale_m=depth_scale)
 
 
 def no_color_in_batch(color: Path | None) -> None:
     """--color names one file: a batch pairs images by the naming rule instead."""
-    from clearcli.errors import InputError
-
     if color is not None:
         raise InputError(
             "--color names the colour image of one depth image; with several frames each depth image "
@@ -186,8 +182,6 @@ def outputs_option(kinds: tuple[str, ...]) -> Any:
 
 def single_only(**given: Any) -> None:
     """Options that name one file cannot serve a batch."""
-    from clearcli.errors import InputError
-
     named = [flag for flag, value in given.items() if value is not None]
     if named:
         raise InputError(
@@ -199,8 +193,6 @@ def ray_argv(argv: list[str]) -> list[str]:
     """``--ray`` may stand alone (a local cluster): give it the value "local" when the
     next word is missing, an option, or an input that exists (a file or folder), since
     an address is none of those."""
-    from pathlib import Path
-
     out: list[str] = []
     for k, word in enumerate(argv):
         out.append(word)
@@ -238,13 +230,13 @@ class Batch:
         topic: str | None,
         force: bool,
         json_out: bool,
-        reads: tuple[Path | None, ...] = (),
+        reads: tuple[str | Path | None, ...] = (),
         **more: Any,
     ) -> int:
         """The batch's exit code (clearcli/batch/run.py); ``reads``: files the run reads
         besides its frames (--settings), which no output may name; ``more``: its
         on_line, extra_summary and render hooks."""
-        from clearcli.batch.run import run_command_batch
+        from clearcli.batch.run import run_command_batch  # noqa: PLC0415  (~0.3 s: batches only)
 
         return run_command_batch(
             command,
@@ -298,6 +290,8 @@ def batch_options(outputs: tuple[str, ...]) -> Callable[[Callable[..., Any]], Ca
                 interrupts.release()  # one frame: Ctrl-C from here on; a batch releases in its run
             return fn(*args, batch=batch, **kwargs)
 
+        # attributes set on a function: valid Python (inspect.signature reads __signature__),
+        # which mypy does not model
         command.__signature__ = own.replace(parameters=params)  # type: ignore[attr-defined]
         command.releases_interrupts = True  # type: ignore[attr-defined]
         return command

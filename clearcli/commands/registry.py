@@ -2,8 +2,9 @@
 
 Each entry names its function as "module:attribute", imported only when the command is
 registered: `clear plan ...` imports and registers `plan` alone (clearcli/cli.py), while
-`clear --help` and anything not naming a known command register them all. A
-subcommand's module imports only typer/rich at top level.
+`clear --help` and anything not naming a known command register them all. So a
+subcommand's module imports at its top only what costs `--help` next to nothing, and its
+task inside its function (clearcli/commands/__init__.py).
 
 COMMANDS: (name, "module:function", typer.command kwargs).
 GROUPS: (name, "module:typer.Typer").

@@ -25,15 +25,44 @@ no frame replayed held a usable table.
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sized
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import Annotated, Any, Protocol
 
 import typer
 
 from clearcli.commands import options as bo
+from clearcli.commands.common import check_output_path, print_json, stderr, stdout
+from clearcli.errors import SceneError, SettingsError
 
-if TYPE_CHECKING:
-    from clearcli.replay.report import FrameReport, Summary
+
+# What this command reads of the replay's reports (clearcli/replay/report.py FrameReport
+# and Summary, which task.run hands over): commands reach the stages only through
+# clearcli.tasks, so the types are named by what is used of them.
+class _Action(Protocol):
+    @property
+    def kind(self) -> str: ...
+    @property
+    def obj(self) -> str: ...
+    @property
+    def direction(self) -> str | None: ...
+
+
+class _FrameReport(Protocol):
+    @property
+    def index(self) -> int: ...
+    @property
+    def status(self) -> str: ...
+    @property
+    def objects(self) -> Sized: ...
+    @property
+    def ids_by_name(self) -> Mapping[str, int]: ...
+    def first_action(self) -> _Action | None: ...
+    def to_json(self) -> dict[str, Any]: ...
+
+
+class _Summary(Protocol):
+    def to_json(self) -> dict[str, Any]: ...
 
 
 def replay_cmd(
@@ -78,9 +107,7 @@ def replay_cmd(
     """Replay a recorded clearing session: segment, predicates and plan on every frame,
     with object ids stable across frames, a check of whether each planned action
     happened, and no pushing back and forth. Progress on stderr; a summary at the end."""
-    from clearcli.commands.common import check_output_path, print_json, stderr, stdout
-    from clearcli.errors import SettingsError
-    from clearcli.tasks import replay as task
+    from clearcli.tasks import replay as task  # noqa: PLC0415  (the task, ~0.5 s: not for `clear --help`)
 
     config = bo.resolve_settings(
         settings, sets, "replay", robot=robot, grasps=grasps, push_memory=False if no_push_memory else None
@@ -88,13 +115,19 @@ def replay_cmd(
     if from_s is not None and to_s is not None and to_s < from_s:
         raise SettingsError(f"--to {to_s} is before --from {from_s}")
     if out is not None:
-        from clearcli.tasks.sources import files_read
+        from clearcli.tasks import sources  # noqa: PLC0415  (~170 ms: not for `clear --help`)
 
-        check_output_path(out, force, files_read(log, config, also=(settings,)))
+        check_output_path(out, force, sources.files_read(log, config, also=(settings,)))
     request = task.Request(
         config, every=every, from_s=from_s, to_s=to_s, fail_fast=fail_fast, base_frame=base_frame, out=out
     )
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+    from rich.progress import (  # noqa: PLC0415  (~12 ms: not for `clear --help`)
+        BarColumn,
+        MofNCompleteColumn,
+        Progress,
+        TextColumn,
+        TimeElapsedColumn,
+    )
 
     progress = Progress(
         TextColumn("replay"),
@@ -109,7 +142,7 @@ def replay_cmd(
     with progress:
         bar = progress.add_task("", total=None)
 
-        def on_report(report: FrameReport, frames_read: int, total: int | None) -> None:
+        def on_report(report: _FrameReport, frames_read: int, total: int | None) -> None:
             if json_out:
                 print_json(task.SCHEMA, task.VERSION, report.to_json(), config, "replay")
             progress.update(bar, total=total, completed=frames_read, description=_brief(report))
@@ -125,15 +158,13 @@ def replay_cmd(
         raise partial
     if result.frames > 0 and result.no_table + result.failed == result.frames:
         # every frame was skipped: a script must not mistake this for a replayed session
-        from clearcli.errors import SceneError
-
         raise SceneError(
             f"{log}: none of the {result.frames} frame(s) replayed held a usable table "
             f"({result.no_table} without a table, {result.failed} failed)"
         )
 
 
-def _brief(report: FrameReport) -> str:
+def _brief(report: _FrameReport) -> str:
     first = report.first_action()
     action = ""
     if first is not None:
@@ -144,8 +175,8 @@ def _brief(report: FrameReport) -> str:
     return f"frame {report.index}: {report.status}, {len(report.objects)} objects{action}"
 
 
-def _print_summary(summary: Summary, console: Any, out: Path | None) -> None:
-    from rich.table import Table
+def _print_summary(summary: _Summary, console: Any, out: Path | None) -> None:
+    from rich.table import Table  # noqa: PLC0415  (~6 ms: not for `clear --help`)
 
     data = summary.to_json()
     table = Table(title="replay", show_header=False, title_justify="left")

@@ -8,6 +8,7 @@ from typing import Annotated, Any
 import typer
 
 from clearcli.commands import options as bo
+from clearcli.commands.common import check_output_path, print_json, stderr, stdout
 
 SCENES = ("clutter", "dense", "isolated_box", "two_touching_boxes", "box_on_box", "deadlock_row")  # tasks/simulate.py
 
@@ -37,8 +38,7 @@ def simulate_cmd(
     """Simulate a clearing session: plan on a rendered frame, carry out the first action
     in a world that slides, turns and slips, render again, until the table is clear, no
     plan exists or the budget runs out. The frames go to OUT for `clear replay`."""
-    from clearcli.commands.common import check_output_path, print_json, stderr, stdout
-    from clearcli.tasks import simulate as task
+    from clearcli.tasks import simulate as task  # noqa: PLC0415  (the task, ~1.3 s: not for `clear --help`)
 
     config = bo.resolve_settings(
         settings, sets, "replay", robot=robot, grasps=grasps, push_memory=False if no_push_memory else None
@@ -53,9 +53,9 @@ def simulate_cmd(
         truth_segmentation=truth_segmentation,
     )
     task.check(request)
-    from clearcli.tasks.sources import run_files
+    from clearcli.tasks import sources  # noqa: PLC0415  (~170 ms: not for `clear --help`)
 
-    check_output_path(out, force, run_files(config, also=(settings,)))
+    check_output_path(out, force, sources.run_files(config, also=(settings,)))
     with stderr.status("simulating", spinner="dots") if not json_out else _nothing():
         payload = task.run(request, out)
     if json_out:
