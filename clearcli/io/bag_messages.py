@@ -115,7 +115,7 @@ class _ZeroCopy:
     def __init__(self, msg: Any) -> None:
         self._msg = msg
         data = getattr(msg, "data", b"")
-        self.data = memoryview(data) if isinstance(data, np.ndarray) and data.flags.c_contiguous else data
+        self.data = data.data if isinstance(data, np.ndarray) and data.flags.c_contiguous else data  # its memoryview
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self._msg, name)

@@ -21,6 +21,7 @@ from __future__ import annotations
 import logging
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -30,6 +31,9 @@ from clearcli.io.frames import Frame
 from clearcli.io.intrinsics import CameraModel, back_project, read_intrinsics
 from clearcli.io.sniff import NPY_MAGIC
 from clearcli.settings.images import ImageSettings
+
+if TYPE_CHECKING:
+    import PIL.Image
 
 # File names an intrinsics file beside the images may have, in the order they are tried.
 INTRINSICS_NAMES = (
@@ -70,7 +74,7 @@ def check_image_size(width: int, height: int, where: str) -> None:
         )
 
 
-def _open_image(path: Path, what: str):  # -> PIL.Image.Image
+def _open_image(path: Path, what: str) -> PIL.Image.Image:
     from PIL import Image, UnidentifiedImageError
 
     # PIL's own bomb check (warn past 89 MP, raise past twice that) is replaced by ours,
@@ -211,10 +215,10 @@ def find_intrinsics(depth_path: Path, images: ImageSettings) -> CameraModel:
     return first
 
 
-_executor = None
+_executor: ThreadPoolExecutor | None = None
 
 
-def _decoder():  # -> concurrent.futures.ThreadPoolExecutor
+def _decoder() -> ThreadPoolExecutor:
     """One helper thread for decoding colour images, made on first use."""
     global _executor
     if _executor is None:

@@ -209,7 +209,7 @@ def _parse(raw: str, where: str) -> Any:
         raise InputError(f"{where}: not valid YAML ({first}); fix the file") from None
 
 
-def _from_mapping(data: dict, where: str) -> CameraModel:
+def _from_mapping(data: dict[str, Any], where: str) -> CameraModel:
     """Decide the layout by its keys, then read it."""
     layout = "intrinsics"
     try:
@@ -299,9 +299,10 @@ def _four_numbers(text: str) -> tuple[float, float, float, float] | None:
     if len(parts) != 4:
         return None
     try:
-        return tuple(float(p) for p in parts)  # type: ignore[return-value]
+        fx, fy, cx, cy = (float(p) for p in parts)
     except ValueError:
         return None
+    return fx, fy, cx, cy
 
 
 def _k_entries(k: Any, name: str, where: str, row_major: bool) -> tuple[Any, Any, Any, Any]:

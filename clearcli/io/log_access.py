@@ -36,9 +36,16 @@ class LogSummary(Protocol):
 class LogAccess(Protocol):
     """A log's decoded messages by topic."""
 
-    path: Path
-    summary: LogSummary
-    can_seek: bool  # whether `window` may be used (the log is indexed)
+    @property
+    def path(self) -> Path: ...
+
+    @property
+    def summary(self) -> LogSummary: ...
+
+    @property
+    def can_seek(self) -> bool:
+        """Whether `window` may be used (the log is indexed)."""
+        ...
 
     def decoded(self, topic: str) -> Generator[Decoded, None, None]:
         """(schema name, message, log time ns) of every message of ``topic`` in log

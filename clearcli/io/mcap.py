@@ -22,7 +22,7 @@ and a batch reach this module): `clearcli.io.formats.mcap`.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Generator, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, BinaryIO, TypeVar
@@ -30,6 +30,7 @@ from typing import Any, BinaryIO, TypeVar
 from clearcli.errors import ClearError, InputError, PartialLogError
 from clearcli.io.frames import Frame
 from clearcli.io.image_messages import COMPRESSED_SCHEMAS, IMAGE_SCHEMAS
+from clearcli.io.log_access import Decoded
 from clearcli.io.mcap_images import depth_frame
 from clearcli.io.messages import (
     MessageDecoders,
@@ -436,12 +437,12 @@ class McapAccess:
         self.decoders = decoders or MessageDecoders()
         self.can_seek = summary.indexed
 
-    def decoded(self, topic: str) -> Iterator[tuple[str, Any, int]]:
+    def decoded(self, topic: str) -> Generator[Decoded, None, None]:
         """(schema name, message, log time ns) of ``topic``, up to any damage."""
         for schema, channel, message in until_damage(raw_messages(self.path, self.summary, topic)):
             yield schema_name(schema), self.decoders.decode(schema, channel, message.data), int(message.log_time)
 
-    def window(self, topic: str, start_ns: int, end_ns: int) -> Iterator[tuple[str, Any, int]]:
+    def window(self, topic: str, start_ns: int, end_ns: int) -> Generator[Decoded, None, None]:
         """The same for messages logged in [start_ns, end_ns] (seeks: the log is indexed),
         up to any damage (a corrupt chunk near a whole frame costs it its colour, not the frame)."""
         from mcap.reader import SeekingReader

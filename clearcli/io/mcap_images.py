@@ -136,10 +136,11 @@ def _registered_color(
     if not log.can_seek:
         _note(path, "the log has no index: colour is left out (depth only)")
         return None
-    if _rs_stream(depth_topic) is not None:
+    depth_stream = _rs_stream(depth_topic)
+    if depth_stream is not None:
         # A RealSense SDK recording keeps each sensor's raw stream: colour from another
         # sensor, in its own optics, never aligned to depth (the SDK aligns at run time).
-        return _realsense_color(log, depth_topic, log_time_ns, points_depth_m)
+        return _realsense_color(log, depth_stream, log_time_ns, points_depth_m)
     for topic in topics:
         with closing(
             log.window(topic, max(0, log_time_ns - _COLOR_WINDOW_NS), log_time_ns + _COLOR_WINDOW_NS)
@@ -276,23 +277,23 @@ def _rs_color_from_depth(log: LogAccess, depth_stream: str, color_stream: str) -
         if bad:
             result = f"a RealSense SDK recording whose extrinsics on {', '.join(bad)} are no transform: colour left out"
         else:
+            assert T_color_ref is not None and T_depth_ref is not None  # neither is in `bad`
             result = T_color_ref @ np.linalg.inv(T_depth_ref)
     _rs_extrinsics[key] = result
     return result
 
 
 def _realsense_color(
-    log: LogAccess, depth_topic: str, log_time_ns: int, points_depth_m: np.ndarray
+    log: LogAccess, depth_stream: str, log_time_ns: int, points_depth_m: np.ndarray
 ) -> np.ndarray | None:
     """(H*W, 3) uint8 colour of a RealSense SDK recording's depth frame, registered to it
     through the recorded extrinsics (clearcli/io/register.py); None, with a note naming
     what is missing, when the recording lacks what that needs."""
     path, summary = log.path, log.summary
-    depth_stream = _rs_stream(depth_topic)
     device = depth_stream.split("/")[1]
     types = dict(summary.topics())
     color_topics = sorted(
-        t
+        (t, s)
         for t in summary.image_topics()
         if (s := _rs_stream(t)) is not None
         and s.split("/")[1] == device
@@ -301,8 +302,7 @@ def _realsense_color(
     )
     if not color_topics:
         return None  # no colour stream recorded
-    color_topic = color_topics[0]
-    color_stream = _rs_stream(color_topic)
+    color_topic, color_stream = color_topics[0]  # the stream of its topic
     info_topic = f"{color_stream}/info/camera_info"
     if types.get(info_topic) not in CAMERA_INFO_SCHEMAS or not summary.count(info_topic):
         _note(path, f"a RealSense SDK recording without Color intrinsics ({info_topic}): colour left out")

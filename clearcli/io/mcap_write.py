@@ -90,8 +90,10 @@ def _pointcloud2_dict(frame: Frame, labels: np.ndarray | None) -> dict[str, Any]
         blob[name] = values
     height, width = frame.shape if frame.shape is not None else (1, n)
     datatype = {"f4": 7, "u4": 6}
+    offsets = record.fields
+    assert offsets is not None  # a structured dtype has fields
     fields = [
-        {"name": name, "offset": int(record.fields[name][1]), "datatype": datatype[dt.str[1:]], "count": 1}
+        {"name": name, "offset": int(offsets[name][1]), "datatype": datatype[dt.str[1:]], "count": 1}
         for name, dt, _ in cols
     ]
     return {
@@ -166,7 +168,7 @@ def write_pointcloud2_mcap(
                     sequence=count,
                 )
                 count += 1
-            writer.finish()
+            writer.finish()  # type: ignore[no-untyped-call]  # mcap_ros2's Writer.finish() is not annotated
     except OSError as exc:
         raise OutputError(f"{path}: cannot write ({exc.strerror or exc})") from None
     return count

@@ -60,15 +60,21 @@ class MessageDecoders:
 
     @staticmethod
     def _make(schema: Any, encoding: str) -> Callable[[bytes], Any]:
+        decoder: Callable[[bytes], Any] | None
         if encoding == "cdr":
-            from mcap_ros2.decoder import DecoderFactory
+            from mcap_ros2.decoder import DecoderFactory as Ros2Decoders
+
+            decoder = Ros2Decoders().decoder_for(encoding, schema)
         elif encoding == "ros1":
-            from mcap_ros1.decoder import DecoderFactory  # type: ignore[no-redef]
+            from mcap_ros1.decoder import DecoderFactory as Ros1Decoders
+
+            decoder = Ros1Decoders().decoder_for(encoding, schema)
         elif encoding == "protobuf":
-            from mcap_protobuf.decoder import DecoderFactory  # type: ignore[no-redef]
+            from mcap_protobuf.decoder import DecoderFactory as ProtobufDecoders
+
+            decoder = ProtobufDecoders().decoder_for(encoding, schema)
         else:
             raise ValueError(f"unsupported message encoding {encoding!r}")
-        decoder = DecoderFactory().decoder_for(encoding, schema)
         if decoder is None:
             raise ValueError(f"no decoder for {encoding} schema {schema_name(schema)!r}")
         return decoder
@@ -99,7 +105,7 @@ def _stamp_s(stamp: Any, log_time_ns: int) -> float:
     return log_time_ns * 1e-9
 
 
-def _as_bytes(data: Any) -> bytes | memoryview:
+def _as_bytes(data: Any) -> bytes | bytearray | memoryview:
     if isinstance(data, (bytes, bytearray, memoryview)):
         return data
     if isinstance(data, str):  # json: base64

@@ -17,7 +17,7 @@ from __future__ import annotations
 import os
 import struct
 from pathlib import Path
-from typing import BinaryIO
+from typing import TYPE_CHECKING, BinaryIO
 
 import numpy as np
 
@@ -26,6 +26,9 @@ from clearcli.files import atomic_path
 from clearcli.io.frames import Frame, labels_to_write
 from clearcli.io.pointfields import frame_from_records, pack_rgb_float
 from clearcli.io.sniff import PCD_HEADER_KEYS, open_input
+
+if TYPE_CHECKING:
+    from pypcd4.pypcd4 import MetaData
 
 # A PCD header is ten short lines; anything without DATA in the first 64 KiB is not a PCD.
 _MAX_HEADER_BYTES = 1 << 16
@@ -76,8 +79,8 @@ def _read_header_lines(fp: BinaryIO, path: Path) -> tuple[list[str], int]:
             return lines, offset
 
 
-def _parse_metadata(lines: list[str], path: Path):  # -> pypcd4.MetaData
-    import pypcd4
+def _parse_metadata(lines: list[str], path: Path) -> MetaData:
+    from pypcd4.pypcd4 import MetaData
 
     keys = {line.split(None, 1)[0].upper() for line in lines}
     missing = [k for k in ("FIELDS", "SIZE", "TYPE", "WIDTH") if k not in keys]
@@ -96,12 +99,12 @@ def _parse_metadata(lines: list[str], path: Path):  # -> pypcd4.MetaData
             width = int(next(line for line in lines if line.upper().startswith("WIDTH")).split()[1])
             height = int(next(line for line in lines if line.upper().startswith("HEIGHT")).split()[1])
             lines = lines[:-1] + [f"POINTS {width * height}"] + lines[-1:]
-        meta = pypcd4.MetaData.parse_header(lines)
+        meta = MetaData.parse_header(lines)
     except Exception as exc:  # pydantic.ValidationError, ValueError, IndexError
         reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         if hasattr(exc, "errors"):
             try:
-                first = exc.errors()[0]  # type: ignore[attr-defined]
+                first = exc.errors()[0]
                 reason = f"{'.'.join(str(p) for p in first['loc'])}: {first['msg']}"
             except Exception:
                 pass
@@ -123,7 +126,7 @@ def _parse_metadata(lines: list[str], path: Path):  # -> pypcd4.MetaData
     return meta
 
 
-def _record_dtype(meta) -> np.dtype:
+def _record_dtype(meta: MetaData) -> np.dtype:
     """Packed little-endian record dtype; COUNT>1 fields become sub-arrays, `_` padding `_pad<i>`."""
     names, formats = [], []
     for i, (name, typ, size, count) in enumerate(zip(meta.fields, meta.type, meta.size, meta.count)):
@@ -135,7 +138,7 @@ def _record_dtype(meta) -> np.dtype:
     return np.dtype({"names": names, "formats": formats})
 
 
-def _decode_data(fp: BinaryIO, path: Path, meta, dtype: np.dtype, data_bytes: int) -> np.ndarray:
+def _decode_data(fp: BinaryIO, path: Path, meta: MetaData, dtype: np.dtype, data_bytes: int) -> np.ndarray:
     import lzf
 
     n = int(meta.points)
@@ -182,8 +185,10 @@ def _decode_data(fp: BinaryIO, path: Path, meta, dtype: np.dtype, data_bytes: in
         raise InputError(f"{path}: corrupt PCD: the compressed data unpacks to the wrong size")
     records = np.empty(n, dtype=dtype)
     offset = 0
+    fields = dtype.fields
     for name in dtype.names or ():
-        field = dtype.fields[name][0]  # type: ignore[index]
+        assert fields is not None  # a structured dtype: a field per name
+        field = fields[name][0]
         block = field.itemsize * n
         base = field.base if field.shape else field
         column = np.frombuffer(raw, dtype=base, count=block // base.itemsize, offset=offset)
@@ -230,7 +235,7 @@ def write_pcd(path: Path, frame: Frame, labels: np.ndarray | None = None) -> Non
     (uint32) holds `labels` when given, else the frame's own "label" field when it has one.
     The caller decides about overwriting (see commands.common.check_output_path).
     """
-    import pypcd4
+    from pypcd4.pypcd4 import Encoding, PointCloud
 
     path = Path(path)
     n = frame.n_points
@@ -250,11 +255,11 @@ def write_pcd(path: Path, frame: Frame, labels: np.ndarray | None = None) -> Non
     height, width = frame.shape if frame.shape is not None else (1, n)
     if height * width != n:
         raise ValueError(f"frame.shape {frame.shape} does not hold {n} points")
-    cloud = pypcd4.PointCloud.from_points(arrays, names, types)
+    cloud = PointCloud.from_points(arrays, names, types)
     cloud.metadata = cloud.metadata.derive(width=width, height=height)
     try:
         with atomic_path(path) as tmp:
-            cloud.save(tmp, encoding=pypcd4.Encoding.BINARY_COMPRESSED)
+            cloud.save(tmp, encoding=Encoding.BINARY_COMPRESSED)
     except OSError as exc:
         raise OutputError(f"{path}: cannot write ({exc.strerror or exc})") from None
 

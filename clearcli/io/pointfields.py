@@ -113,7 +113,7 @@ def check_specs(specs: list[FieldSpec], point_step: int) -> str | None:
 
 
 def records_from_blob(
-    data: bytes | memoryview,
+    data: bytes | bytearray | memoryview,
     specs: list[FieldSpec],
     point_step: int,
     width: int,

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from clearcli.io.intrinsics import _N_COEFFS, _distort, _undistorted_rays
+from clearcli.io.intrinsics import _N_COEFFS, CameraModel, _distort, _undistorted_rays
 
 # Points whose undistorted radius passes the image's own largest (its border pixels,
 # undistorted) by more than this share are outside the calibrated field, where the
@@ -35,7 +35,7 @@ class CannotRegister(Exception):
     message names what, for the note that says colour is left out."""
 
 
-def project_to_pixels(points_m: np.ndarray, model) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def project_to_pixels(points_m: np.ndarray, model: CameraModel) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(col, row, ok): integer nearest pixel of each (N, 3) point (camera optical frame,
     metres) in the image ``model`` describes (after its ROI and binning), and whether it
     lies in front of the camera, in the image and in its calibrated field.
@@ -85,7 +85,9 @@ def project_to_pixels(points_m: np.ndarray, model) -> tuple[np.ndarray, np.ndarr
     return col, row, ok
 
 
-def color_for_depth(points_depth_m: np.ndarray, T_color_depth: np.ndarray, color_model, rgb: np.ndarray) -> np.ndarray:
+def color_for_depth(
+    points_depth_m: np.ndarray, T_color_depth: np.ndarray, color_model: CameraModel, rgb: np.ndarray
+) -> np.ndarray:
     """(N, 3) uint8 RGB for the (N, 3) depth points (NaN rows: no depth): the nearest pixel
     of the colour image ``rgb`` (H, W, 3) each projects to; (0, 0, 0) where none (module doc)."""
     T = np.asarray(T_color_depth, dtype=np.float64)

@@ -33,7 +33,7 @@ from __future__ import annotations
 import contextlib
 import heapq
 import os
-from collections.abc import Iterator
+from collections.abc import Generator, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, BinaryIO, Literal
@@ -44,6 +44,7 @@ from clearcli.errors import InputError, PartialLogError
 from clearcli.io.bag_messages import BagDecoders, _ZeroCopy, bag_frame
 from clearcli.io.frames import Frame
 from clearcli.io.image_messages import IMAGE_SCHEMAS
+from clearcli.io.log_access import Decoded
 from clearcli.io.mcap import (
     ChannelInfo,
     DeclaredTypeError,
@@ -407,7 +408,7 @@ def _seeks(summary: BagSummary) -> bool:
     return summary.format == "rosbag1" and summary.indexed
 
 
-def _raw_messages(summary: BagSummary, topic: str, skip_to: int = 0) -> Iterator[tuple[int, _Raw]]:
+def _raw_messages(summary: BagSummary, topic: str, skip_to: int = 0) -> Generator[tuple[int, _Raw], None, None]:
     """(index, raw message) of `topic`: from message `skip_to` on when the bag seeks
     (`_seeks`), else from message 0 (the caller passes over the first ones)."""
     path = summary.path
@@ -479,12 +480,12 @@ class BagAccess:
     def _decoded(self, msgtype: str, msgdef: str, fmt: str, data: Any, time_ns: int) -> tuple[str, Any, int]:
         return msgtype, _ZeroCopy(self.decoders.decode(msgtype, msgdef, fmt, data)), int(time_ns)
 
-    def decoded(self, topic: str) -> Iterator[tuple[str, Any, int]]:
+    def decoded(self, topic: str) -> Generator[Decoded, None, None]:
         """(type, message, log time ns) of ``topic``, up to any damage."""
         for _, (msgtype, msgdef, fmt, data, time_ns, _md5) in until_damage(_raw_messages(self.summary, topic)):
             yield self._decoded(msgtype, msgdef, fmt, data, time_ns)
 
-    def window(self, topic: str, start_ns: int, end_ns: int) -> Iterator[tuple[str, Any, int]]:
+    def window(self, topic: str, start_ns: int, end_ns: int) -> Generator[Decoded, None, None]:
         """Messages of ``topic`` logged in [start_ns, end_ns], through the bag's index."""
         reader = _rosbag2_reader(self.path) if self.summary.format == "rosbag2" else _ros1_reader(self.path)
         if reader is None:
