@@ -14,7 +14,7 @@ import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, ClassVar, get_type_hints
+from typing import TYPE_CHECKING, Any, ClassVar, get_type_hints
 
 from clearcli.errors import SettingsError
 
@@ -154,10 +154,12 @@ class Section:
     (e.g. the closing width below the opening), raising SettingsError."""
 
     NAME: ClassVar[str] = ""
+    if TYPE_CHECKING:  # every section class is a dataclass (its own decorator makes it one)
+        __dataclass_fields__: ClassVar[dict[str, dataclasses.Field[Any]]]
 
     def __post_init__(self) -> None:
         hints = _hints(type(self))
-        for f in dataclasses.fields(self):  # type: ignore[arg-type]
+        for f in dataclasses.fields(self):
             value = getattr(self, f.name)
             checked = check_value(self.NAME, f.name, hints[f.name], f.metadata.get("range", Range()), value)
             if checked is not value:

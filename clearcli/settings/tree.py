@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from clearcli.errors import SettingsError
-from clearcli.settings.fields import range_of
+from clearcli.settings.fields import Section, range_of
 from clearcli.settings.geometry import GripperSettings, PredicateSettings, PushSettings
 from clearcli.settings.images import ImageSettings
 from clearcli.settings.plan import PlanSettings
@@ -50,9 +50,18 @@ class Settings:
     images: ImageSettings = field(default_factory=ImageSettings)
 
 
+def _registry() -> dict[str, type[Section]]:
+    registry: dict[str, type[Section]] = {}
+    for f in dataclasses.fields(Settings):
+        cls = f.default_factory  # each field of `Settings` is built by its section's class
+        assert isinstance(cls, type) and issubclass(cls, Section)
+        registry[f.name] = cls
+    return registry
+
+
 # The registry: section name -> its class, in the order of `Settings`' fields.
-SECTIONS: dict[str, type] = {f.name: f.default_factory for f in dataclasses.fields(Settings)}  # type: ignore[misc]
-assert all(cls.NAME == name for name, cls in SECTIONS.items())  # type: ignore[attr-defined]
+SECTIONS = _registry()
+assert all(cls.NAME == name for name, cls in SECTIONS.items())
 
 # The sections each command reads: what its provenance digest covers.
 READS: dict[str, tuple[str, ...]] = {
