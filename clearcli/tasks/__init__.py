@@ -9,7 +9,7 @@ outcome; `clearcli/batch/` runs the same ``run`` per frame in workers.
 A session task (replay, simulate) has a frozen ``Request`` and its own ``run``: a whole
 log, never batched. The other modules are no task, each says what it is: `base` (what
 the tasks share), `sources` (a batch's frames), `domain` and `robots` (commands that
-read no frame).
+read no frame), `versions` (the schema versions the commands' help names).
 """
 
 from __future__ import annotations
