@@ -1,34 +1,37 @@
 """A suction cup's contact on an object, judged from the object's own points (table frame).
 
-Where a cup can seal (`contacts`): candidate centres on the faces the camera saw, from
-above (the top) and from the side (the faces across the object's footprint axes). Each
-is judged on the points within the cup's disc, in the frame of the face:
+Where a cup can seal (`judge_object`): every place on the faces the camera saw, from
+above (the top) and from the side (the faces across the object's footprint axes). A face
+is a height map: the object's points binned in cells ``gap_m`` across, in the face's own
+frame (two directions along it, one out of it), each cell the mean of its points.
+The cup's disc over a cell is judged on the cells under it, for every cell of the face at
+once (one matrix product: the disc's cells sit at the same offsets everywhere):
 
-* **covered**: every sample of the disc (a grid half ``gap_m`` apart, and a ring near the
-  rim) has a point of the object within ``gap_m`` of it, seen from along the normal: no hole, no edge inside the cup;
-* **alone**: no other object's point within the disc and within the bellows' stroke of
-  the face (the cup would seal on two objects, or on none);
-* **flat**: a quadric z = f(u, v) fitted to the points; its bending over the disc (the
-  largest sag of its second-order part below the tangent plane) and the points' spread
-  about it (the 90th percentile of |residual|) must both be within the bellows'
-  compliance. A quadric, not a plane: its bending is what a curved face has and sensor
-  noise has not (noise averages out of a least-squares fit over ~100 points), so a
-  cylinder of radius 2 cm under a 30 mm cup (sag 6.8 mm) is told from a flat face seen
-  by a Kinect (noise ~1.5 mm); the spread catches ribs and grooves deeper than the lip
-  can follow;
-* **facing**: the fitted normal within ``max_tilt_deg`` of the approach (straight down
-  for the top, horizontal for a side).
+* **covered**: every cell under the disc (within 95 % of its radius: the lip may overhang
+  an edge by its own width) holds a point: no hole and no edge wider than a cell;
+* **alone**: no cell under the disc holds another object's outermost point within the
+  bellows' stroke of the face (the cup would seal on two objects, or on none; farther
+  out, the other object is in the approach's way: a blocker, not a leak);
+* **flat**: a quadric w = f(u, v) fitted to the cells; its bending over the disc (the
+  largest sag of its second-order part below the tangent plane) and the cells' spread
+  about it (the 90th percentile of |residual|) within the bellows' compliance and 0.6 of
+  it. A quadric, not a plane: its bending is what a curved face has and sensor noise has
+  not (noise averages out of a least-squares fit over ~50 cells), so a cylinder of radius
+  2 cm under a 30 mm cup (sag 6.8 mm) is told from a flat face seen by a Kinect (noise
+  ~1.5 mm); the spread catches ribs and grooves deeper than the lip can follow;
+* **facing**: the fitted normal within ``max_tilt_deg`` of the face's direction (straight
+  up for the top, horizontal for a side).
 
-The load (`load_margin`): the object's weight from its modelled volume and a density,
+The load (`load_margins`): the object's weight from its modelled volume and a density,
 held against the cup's force with a safety factor: the pull along the cup's axis against
 the holding force, the pull across it against the friction of the lip, and the moment of
 the weight about the contact (the centre of mass off the cup's axis peels the lip)
 against the holding force at the cup's radius. One utilisation, summed linearly (each
 term uses up a share of the same seal): 1 - utilisation is the load's margin.
 
-A candidate's margin is the smallest of its seal margins and its load margin; the best
-candidate is kept. Margins, not booleans: a candidate within rounding of a limit is
-never preferred to one well inside it.
+A place's margin is the smallest of its seal margins and its load margin; the best place
+is kept, the first in the face's cell order on a tie. Margins, not booleans: a place
+within rounding of a limit is never preferred to one well inside it.
 """
 
 from __future__ import annotations
@@ -53,7 +56,7 @@ class CupSpec:
     safety_factor: float
     lip_friction: float  # shear the lip holds, as a share of the holding force
     max_tilt_deg: float  # the fitted normal's largest angle from the approach
-    gap_m: float = 0.004  # a disc sample farther than this from every point is a hole
+    gap_m: float = 0.004  # the height maps' cell: an empty cell under the cup is a hole
 
     @property
     def radius_m(self) -> float:
@@ -82,134 +85,238 @@ class Contact:
         return min(self.seal_margin, self.load_margin) if not math.isnan(self.load_margin) else self.seal_margin
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Judged:
-    """Every candidate of one object, and the best (None: none seals and holds)."""
+    """One object's places: the best (None: none seals and holds), the closest to it
+    (the best, or the one that came nearest: its reason), and up to 8 kept places, best
+    first (the kind picks the least blocked of them)."""
 
-    contacts: tuple[Contact, ...] = field(default_factory=tuple)
+    closest: Contact | None = None
     best: Contact | None = None
+    n_places: int = 0
+    n_sealed: int = 0
+    n_kept: int = 0
+    margins: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    ranked: tuple[Contact, ...] = ()
 
     def why_not(self, spec: CupSpec) -> str:
-        """Why no candidate is kept, from the one that came closest."""
+        """Why no place is kept, from the one that came closest."""
         if self.best is not None:
             return ""
-        if not self.contacts:
+        if self.closest is None:
             return f"no face of {1000 * spec.diameter_m:.0f} mm seen (the object is smaller than the cup)"
-        closest = max(self.contacts, key=lambda c: c.margin)
-        if closest.seal_margin <= 0:
-            return f"no flat patch of {1000 * spec.diameter_m:.0f} mm: {closest.why}"
-        return closest.load_why
+        if self.closest.seal_margin <= 0:
+            return f"no flat patch of {1000 * spec.diameter_m:.0f} mm: {self.closest.why}"
+        return self.closest.load_why
 
 
-def disc_samples(radius_m: float, spacing_m: float) -> np.ndarray:
-    """(K, 2) points of the disc in its own plane: a square grid ``spacing_m`` apart
-    within 95 % of the radius, and a ring of them there (a sample on the rim itself
-    would test the lip's outside, which may overhang an edge by the lip's own width)."""
-    r = 0.95 * radius_m
-    n = int(math.floor(r / spacing_m))
-    g = spacing_m * np.arange(-n, n + 1)
-    u, v = np.meshgrid(g, g)
-    inside = u * u + v * v <= r * r
-    k = max(int(math.ceil(2.0 * math.pi * r / spacing_m)), 6)
-    a = 2.0 * math.pi * np.arange(k) / k
-    ring = np.stack([r * np.cos(a), r * np.sin(a)], axis=1)
-    return np.concatenate([np.stack([u[inside], v[inside]], axis=1), ring])
+PLACE_STRIDE = 2
 
 
-def _frame(normal: np.ndarray) -> np.ndarray:
-    """(3, 3) rows: two unit vectors across ``normal``, then ``normal``."""
-    n = normal / np.linalg.norm(normal)
-    helper = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    a = np.cross(n, helper)
-    a /= np.linalg.norm(a)
-    return np.stack([a, np.cross(n, a), n])
+def disc_cells(radius_m: float, cell_m: float) -> np.ndarray:
+    """(K, 2) integer offsets of the cells whose centres lie within 95 % of the disc's
+    radius, the centre cell first."""
+    n = int(math.floor(0.95 * radius_m / cell_m))
+    g = np.arange(-n, n + 1)
+    di, dj = np.meshgrid(g, g, indexing="ij")
+    inside = (di * di + dj * dj) * cell_m * cell_m <= (0.95 * radius_m) ** 2
+    offsets = np.stack([di[inside], dj[inside]], axis=1)
+    order = np.lexsort((offsets[:, 1], offsets[:, 0], (offsets**2).sum(axis=1)))
+    return offsets[order]
 
 
-def fit_quadric(uvw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Least squares w = c0 + c1 u + c2 v + c3 u^2 + c4 u v + c5 v^2 over (N, 3) points;
-    the coefficients and the residuals."""
-    u, v, w = uvw[:, 0], uvw[:, 1], uvw[:, 2]
-    A = np.stack([np.ones_like(u), u, v, u * u, u * v, v * v], axis=1)
-    coef, *_ = np.linalg.lstsq(A, w, rcond=None)
-    return coef, w - A @ coef
+def quadric_design(uv: np.ndarray) -> np.ndarray:
+    """(K, 6) rows 1, u, v, u^2, u v, v^2."""
+    u, v = uv[:, 0], uv[:, 1]
+    return np.stack([np.ones_like(u), u, v, u * u, u * v, v * v], axis=1)
 
 
-def sag_over_disc(coef: np.ndarray, radius_m: float) -> float:
-    """The bending of the fitted quadric over a disc of ``radius_m``: the largest
-    distance of its second-order part from its tangent plane at the centre, on the rim
-    (|largest principal curvature term| r^2, from the 2x2 Hessian's eigenvalues)."""
-    H = np.array([[coef[3], coef[4] / 2.0], [coef[4] / 2.0, coef[5]]])
-    return float(np.max(np.abs(np.linalg.eigvalsh(H)))) * radius_m**2
+def sags(coef: np.ndarray, radius_m: float) -> np.ndarray:
+    """(N,) the bending of each fitted quadric (rows of ``coef``) over a disc of
+    ``radius_m``: its second-order part's largest |eigenvalue| times r^2."""
+    a, b, c = coef[:, 3], coef[:, 4] / 2.0, coef[:, 5]
+    mid, half = (a + c) / 2.0, np.sqrt(((a - c) / 2.0) ** 2 + b * b)
+    return np.maximum(np.abs(mid + half), np.abs(mid - half)) * radius_m**2
 
 
-def judge_disc(
+@dataclass(frozen=True)
+class FaceFrame:
+    """A face's frame in the table frame: ``e1``, ``e2`` along it, ``n`` out of it."""
+
+    name: str  # "top" or "side"
+    e1: np.ndarray
+    e2: np.ndarray
+    n: np.ndarray
+
+
+def _outermost(keys: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The unique keys and, per key, the largest of its values."""
+    order = np.lexsort((values, keys))
+    k, v = keys[order], values[order]
+    last = np.r_[k[1:] != k[:-1], True]
+    return k[last], v[last]
+
+
+def _mean_per_key(keys: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The unique keys and, per key, the mean of its values."""
+    k, inverse = np.unique(keys, return_inverse=True)
+    return k, np.bincount(inverse, weights=values) / np.bincount(inverse)
+
+
+def judge_face(
     own: np.ndarray,
     others: np.ndarray,
-    centre: np.ndarray,
-    normal: np.ndarray,
-    nominal: np.ndarray,
-    face: str,
+    frame: FaceFrame,
     spec: CupSpec,
-) -> Contact | None:
-    """The cup at ``centre`` facing ``normal`` (outward), judged on the object's points
-    ``own`` and the other objects' ``others`` (all table frame, (N, 3)). ``nominal``: the
-    approach's outward direction (up for the top, the face's axis for a side). None when
-    too few points lie under the disc to judge it (no face there)."""
-    R = _frame(normal)
-    rel = (own - centre) @ R.T
-    r = spec.radius_m
-    # the points under the disc, within a slab deep enough for a bent face (at most
-    # twice the cup's radius in front of or behind the centre)
-    near = (rel[:, 0] ** 2 + rel[:, 1] ** 2 <= r * r) & (np.abs(rel[:, 2]) <= 2.0 * r)
-    pts = rel[near]
-    if len(pts) < 12:
+    e2_range: tuple[float, float] = (-math.inf, math.inf),
+) -> FacePlaces | None:
+    """Every place of one face: the cup centred on each cell of the object's height map
+    in ``frame`` (``own``, ``others``: table-frame points), the cells whose centre's e2
+    lies in ``e2_range`` (a side's heights the tool may take). Judged as the module
+    says; the load is not judged here."""
+    if len(own) < 3:
         return None
-    coef, resid = fit_quadric(pts)
-    # the fitted surface's own normal at the centre (gradient of w at u = v = 0)
-    n_local = np.array([-coef[1], -coef[2], 1.0])
-    n_local /= np.linalg.norm(n_local)
-    n_table = n_local @ R
-    point = centre + float(coef[0]) * R[2]
-    tilt = math.degrees(math.acos(float(np.clip(n_table @ nominal, -1.0, 1.0))))
-    sag = sag_over_disc(coef, r)
-    spread = float(np.percentile(np.abs(resid), 90))
-    # coverage: each disc sample's nearest point of the object, across the normal
-    samples = disc_samples(r, spec.gap_m / 2.0)
-    d2 = ((samples[:, None, :] - pts[None, :, :2]) ** 2).sum(axis=2)
-    nearest = np.sqrt(d2.min(axis=1))
-    covered = float(np.mean(nearest <= spec.gap_m))
-    worst_gap = float(nearest.max())
-    # other objects inside the disc, within the bellows' stroke of the surface (farther in
-    # front of it they are in the way of the approach, not in the seal: blockers)
-    n_others = 0
+    cell = spec.gap_m
+    r = spec.radius_m
+    basis = np.stack([frame.e1, frame.e2])
+    uv = own @ basis.T
+    w = own @ frame.n
+    ij = np.floor(uv / cell).astype(np.int64)
+    offsets = disc_cells(r, cell)
+    pad = int(np.abs(offsets).max()) + 1
+    lo = ij.min(axis=0) - pad
+    shape = ij.max(axis=0) - lo + pad + 1
+    keys = (ij[:, 0] - lo[0]) * shape[1] + (ij[:, 1] - lo[1])
+    # a cell's value: the mean of its points (the face at the cell's centre, the sensor's
+    # noise averaged; the outermost point would flatten a curved face by a cell's slope)
+    cells, tops = _mean_per_key(keys, w)
+    height = np.full(int(shape[0] * shape[1]), np.nan)
+    height[cells] = tops
+    # the others' outermost point per cell of the same grid (those within it)
+    theirs = np.full(height.shape, -np.inf)
     if len(others):
-        orel = (others - point) @ R.T
-        inside = (orel[:, 0] ** 2 + orel[:, 1] ** 2 <= r * r) & (np.abs(orel[:, 2]) <= spec.compliance_m)
-        n_others = int(inside.sum())
-    tests = (
-        (1.0 - worst_gap / spec.gap_m, f"a hole or an edge under the cup (a gap of {1000 * worst_gap:.1f} mm)"),
-        (1.0 - sag / spec.compliance_m, f"the {face} is curved (it bends {1000 * sag:.1f} mm under the cup)"),
-        (
-            1.0 - spread / (0.6 * spec.compliance_m),
-            f"the {face} is rough (points spread {1000 * spread:.1f} mm about it)",
-        ),
-        (1.0 - tilt / spec.max_tilt_deg, f"the {face} is tilted {tilt:.0f} deg from the approach"),
-        (-1.0 if n_others else 1.0, f"another object lies under the cup ({n_others} points)"),
-    )
-    margin = min(m for m, _ in tests)
-    why = next((w for m, w in tests if m <= 0), "")
-    return Contact(
-        face=face,
-        point=point,
-        normal=n_table,
-        covered=covered,
+        oij = np.floor((others @ basis.T) / cell).astype(np.int64) - lo
+        inside = (oij[:, 0] >= 0) & (oij[:, 1] >= 0) & (oij[:, 0] < shape[0]) & (oij[:, 1] < shape[1])
+        if inside.any():
+            ok, ov = _outermost(oij[inside, 0] * shape[1] + oij[inside, 1], (others @ frame.n)[inside])
+            theirs[ok] = ov
+    ci, cj = np.divmod(cells, shape[1])
+    centre_uv = (np.stack([ci, cj], axis=1) + lo + 0.5) * cell
+    # places every other cell (8 mm apart, on the grid of the face's frame itself, so a
+    # shifted object does not shift its places): a quarter of the work, and a cup of
+    # 30 mm loses nothing between them
+    on_grid = ((ci + lo[0]) % PLACE_STRIDE == 0) & ((cj + lo[1]) % PLACE_STRIDE == 0)
+    keep = on_grid & (centre_uv[:, 1] >= e2_range[0]) & (centre_uv[:, 1] <= e2_range[1])
+    if not keep.any():
+        return None
+    ci, cj, centre_uv = ci[keep], cj[keep], centre_uv[keep]
+    window = (ci[:, None] + offsets[None, :, 0]) * shape[1] + (cj[:, None] + offsets[None, :, 1])
+    H = height[window]  # (N, K)
+    covered = np.isfinite(H)
+    share = covered.mean(axis=1)
+    full = covered.all(axis=1)
+    rel_uv = offsets * cell  # cell centres relative to the centre cell's
+    A = quadric_design(rel_uv.astype(float))
+    pinv = np.linalg.pinv(A)  # (6, K): the same least squares for every full window
+    Hf = np.where(covered, H, 0.0)
+    coef = Hf @ pinv.T
+    resid = np.where(covered, Hf - coef @ A.T, 0.0)
+    # the 90th percentile by nearest rank (a partition, not a sort)
+    rank = int(math.ceil(0.9 * resid.shape[1])) - 1
+    spread = np.partition(np.abs(resid), rank, axis=1)[:, rank]
+    sag = sags(coef, r)
+    grad = coef[:, 1:3]
+    normal = frame.n[None, :] - grad[:, :1] * frame.e1[None, :] - grad[:, 1:2] * frame.e2[None, :]
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    tilt = np.degrees(np.arccos(np.clip(normal @ frame.n, -1.0, 1.0)))
+    # another object under the disc: its outermost point within the bellows' stroke of
+    # the fitted face (farther out it is in the way of the approach: a blocker)
+    surface = coef[:, :1] + (A[None, :, 1:3] * grad[:, None, :]).sum(axis=2)
+    intruders = (np.abs(theirs[window] - surface) <= spec.compliance_m).sum(axis=1)
+    gaps = (~covered).sum(axis=1)
+    m_cover = np.where(full, 1.0, -gaps / covered.shape[1])
+    m_sag = 1.0 - sag / spec.compliance_m
+    m_spread = 1.0 - spread / (0.6 * spec.compliance_m)
+    m_tilt = 1.0 - tilt / spec.max_tilt_deg
+    m_alone = np.where(intruders > 0, -1.0, 1.0)
+    margins = np.stack([m_cover, m_sag, m_spread, m_tilt, m_alone], axis=1)
+    points = centre_uv[:, :1] * frame.e1 + centre_uv[:, 1:2] * frame.e2 + coef[:, :1] * frame.n
+    return FacePlaces(
+        frame=frame,
+        points=points,
+        normals=normal,
+        covered=share,
+        empty=gaps,
+        full=full,
         sag_m=sag,
         spread_m=spread,
         tilt_deg=tilt,
-        others=n_others,
-        seal_margin=float(margin),
-        why=why,
+        intruders=intruders,
+        margins=margins,
+        cell_m=cell,
     )
+
+
+@dataclass(frozen=True, eq=False)
+class FacePlaces:
+    """Every place of one face, judged (arrays, one row a place)."""
+
+    frame: FaceFrame
+    points: np.ndarray  # (N, 3) the disc's centre on the fitted face
+    normals: np.ndarray  # (N, 3)
+    covered: np.ndarray  # (N,) share of the disc's cells holding a point
+    empty: np.ndarray  # (N,) how many are empty
+    full: np.ndarray  # (N,) bool: none is
+    sag_m: np.ndarray
+    spread_m: np.ndarray
+    tilt_deg: np.ndarray
+    intruders: np.ndarray  # (N,) cells of another object within the stroke
+    margins: np.ndarray  # (N, 5) cover, sag, spread, tilt, alone
+    cell_m: float
+
+    def __len__(self) -> int:
+        return len(self.points)
+
+    @property
+    def seal(self) -> np.ndarray:
+        return self.margins.min(axis=1)
+
+    def contact(self, k: int) -> Contact:
+        """Place ``k`` as a `Contact`, with why it does not seal."""
+        face, m = self.frame.name, self.margins[k]
+        whys = (
+            f"a hole or an edge under the cup ({self.empty[k]} of its cells of {1000 * self.cell_m:.0f} mm "
+            "hold no point)",
+            f"the {face} is curved (it bends {1000 * self.sag_m[k]:.1f} mm under the cup)",
+            f"the {face} is rough (points spread {1000 * self.spread_m[k]:.1f} mm about it)",
+            f"the {face} is tilted {self.tilt_deg[k]:.0f} deg from the approach",
+            f"another object lies under the cup ({self.intruders[k]} cells)",
+        )
+        full = bool(self.full[k])
+        return Contact(
+            face=face,
+            point=self.points[k],
+            normal=self.normals[k],
+            covered=float(self.covered[k]),
+            sag_m=float(self.sag_m[k]) if full else math.nan,
+            spread_m=float(self.spread_m[k]) if full else math.nan,
+            tilt_deg=float(self.tilt_deg[k]) if full else math.nan,
+            others=int(self.intruders[k]),
+            seal_margin=float(m.min()),
+            why=next((w for mk, w in zip(m, whys) if mk <= 0), ""),
+        )
+
+
+def load_margins(places: FacePlaces, mass_kg: float, com_table: np.ndarray, spec: CupSpec) -> np.ndarray:
+    """(N,) `load_margin` of every place at once."""
+    W = mass_kg * GRAVITY_M_S2
+    up = np.clip(places.normals @ UP, -1.0, 1.0)
+    tension = W * np.maximum(up, 0.0)
+    shear = W * np.sqrt(np.maximum(1.0 - up * up, 0.0))
+    arm = com_table[None, :] - places.points
+    moment = W * np.hypot(arm[:, 0], arm[:, 1])
+    F = spec.holding_force_n
+    return 1.0 - spec.safety_factor * (tension / F + shear / (spec.lip_friction * F) + moment / (F * spec.radius_m))
 
 
 def load_margin(contact: Contact, mass_kg: float, com_table: np.ndarray, spec: CupSpec) -> tuple[float, str]:
@@ -249,53 +356,13 @@ def hull_volume_and_centroid(vertices: np.ndarray, faces: np.ndarray) -> tuple[f
     return vol6 / 6.0, centroid
 
 
-def _grid(lo: np.ndarray, hi: np.ndarray, step: float) -> np.ndarray:
-    """(K, 2) centres of a grid over the box lo..hi, centred so it is symmetric in it."""
-    axes = []
-    for a, b in zip(lo, hi):
-        n = max(int(math.floor((b - a) / step)) + 1, 1)
-        start = (a + b) / 2.0 - (n - 1) * step / 2.0
-        axes.append(start + step * np.arange(n))
-    gu, gv = np.meshgrid(*axes, indexing="ij")
-    return np.stack([gu.ravel(), gv.ravel()], axis=1)
-
-
-def candidate_faces(
-    points: np.ndarray, axes2d: np.ndarray, top_height_m: float, spec: CupSpec, min_height_m: float
-) -> list[tuple[str, np.ndarray, np.ndarray, np.ndarray]]:
-    """(face, centre, normal guess, nominal direction) for each candidate: a grid of
-    centres a cup's radius apart over the top, seen from above, and over each seen side
-    across the footprint's axes (centres at least ``min_height_m`` above the table: the
-    cup's rim must clear it)."""
-    r = spec.radius_m
-    step = r
-    out: list[tuple[str, np.ndarray, np.ndarray, np.ndarray]] = []
-    band = max(spec.compliance_m, 0.01)
-    top = points[points[:, 2] >= top_height_m - band]
-    if len(top):
-        lo, hi = top[:, :2].min(axis=0) + r * 0.5, top[:, :2].max(axis=0) - r * 0.5
-        if np.all(hi >= lo):
-            for uv in _grid(lo, hi, step):
-                centre = np.array([uv[0], uv[1], top_height_m])
-                out.append(("top", centre, UP.copy(), UP.copy()))
+def face_frames(axes2d: np.ndarray) -> list[FaceFrame]:
+    """The top, then the four sides across the footprint's axes (outward)."""
+    out = [FaceFrame("top", np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]), UP.copy())]
     for axis in (axes2d[0], axes2d[1], -axes2d[0], -axes2d[1]):
         u = np.array([axis[0], axis[1], 0.0])
         u /= np.linalg.norm(u)
-        depth = points @ u
-        face = points[depth >= depth.max() - band]
-        if len(face) < 12:
-            continue
-        across = np.array([-u[1], u[0], 0.0])
-        s = face @ across
-        z = face[:, 2]
-        lo = np.array([s.min() + r * 0.5, max(z.min(), min_height_m)])
-        hi = np.array([s.max() - r * 0.5, min(z.max(), top_height_m - r)])
-        if np.any(hi < lo):
-            continue
-        d = float(np.median(depth[depth >= depth.max() - band]))
-        for sv in _grid(lo, hi, step):
-            centre = d * u + sv[0] * across + np.array([0.0, 0.0, sv[1]])
-            out.append(("side", centre, u.copy(), u.copy()))
+        out.append(FaceFrame("side", np.array([-u[1], u[0], 0.0]), UP.copy(), u))
     return out
 
 
@@ -309,17 +376,56 @@ def judge_object(
     spec: CupSpec,
     min_height_m: float,
 ) -> Judged:
-    """Every candidate contact of one object, judged; the best by its margin (seal and
-    load), the first in grid order on a tie."""
-    contacts = []
-    for face, centre, guess, nominal in candidate_faces(own, axes2d, top_height_m, spec, min_height_m):
-        c = judge_disc(own, others, centre, guess, nominal, face, spec)
-        if c is None:
-            continue
-        if c.seal_margin > 0:
+    """Every place on the object's top, and on its sides where no place on the top seals,
+    judged; the best by its margin (seal and load). A side's places keep the cup's centre ``min_height_m`` above the table
+    (the tool clears it) and a cup's radius below the top. Each side is judged on the
+    points facing its way (those within 1 cm of its outermost), the top on all."""
+    faces: list[FacePlaces] = []
+    band = max(spec.compliance_m, 0.01)
+    if len(own) and len(others):
+        # only the others near the object can be under a cup on it
+        reach = spec.radius_m + spec.compliance_m + band
+        lo, hi = own.min(axis=0) - reach, own.max(axis=0) + reach
+        others = others[np.all((others >= lo) & (others <= hi), axis=1)]
+    for frame in face_frames(axes2d):
+        if frame.name == "side" and faces and bool((faces[0].seal > 0).any()):
+            # the top seals somewhere: it is the surer grasp (the weight pulls along the
+            # cup's axis, not across its lip), and the sides are not searched
+            break
+        if frame.name == "top":
+            mine, e2_range = own, (-math.inf, math.inf)
+        else:
+            depth = own @ frame.n
+            mine = own[depth >= depth.max() - band] if len(own) else own
+            e2_range = (min_height_m, top_height_m - spec.radius_m)
+            if e2_range[1] < e2_range[0]:
+                continue
+        places = judge_face(mine, others, frame, spec, e2_range)
+        if places is not None and len(places):
+            faces.append(places)
+    if not faces:
+        return Judged()
+    seal = np.concatenate([f.seal for f in faces])
+    load = np.concatenate([load_margins(f, mass_kg, com_table, spec) for f in faces])
+    margin = np.where(seal > 0, np.minimum(seal, load), seal)
+    which = np.concatenate([np.full(len(f), i) for i, f in enumerate(faces)])
+    index = np.concatenate([np.arange(len(f)) for f in faces])
+
+    def contact(k: int) -> Contact:
+        c = faces[int(which[k])].contact(int(index[k]))
+        if seal[k] > 0:
             lm, why = load_margin(c, mass_kg, com_table, spec)
             c = dataclasses.replace(c, load_margin=lm, load_why=why)
-        contacts.append(c)
-    kept = [c for c in contacts if c.margin > 0]
-    best = max(kept, key=lambda c: c.margin) if kept else None
-    return Judged(tuple(contacts), best)
+        return c
+
+    k_best = int(np.argmax(margin))  # the first of the best on a tie
+    best = contact(k_best) if margin[k_best] > 0 else None
+    return Judged(
+        closest=contact(k_best),
+        best=best,
+        n_places=len(margin),
+        n_sealed=int((seal > 0).sum()),
+        n_kept=int((margin > 0).sum()),
+        margins=margin,
+        ranked=tuple(contact(int(k)) for k in np.argsort(-margin, kind="stable")[:8] if margin[k] > 0),
+    )
