@@ -7,6 +7,8 @@ the codes are documented in ``clear --help`` and the README. Messages say what w
 
 from __future__ import annotations
 
+from typing import Any
+
 # Exit codes, documented in the README and in `clear --help`.
 EXIT_OK = 0  # for `plan`: the plan removes every object (an empty table included)
 EXIT_INTERNAL = 1  # a bug in clear: please report it
@@ -76,6 +78,9 @@ class NoPlanError(ClearError):
     """Planning finished and proved the table cannot be cleared."""
 
     exit_code = EXIT_NO_PLAN
+    # the plan stage attaches what it found (a `clearcli.planning.types.Plan`, which this
+    # bottom layer does not import); None when nothing is attached
+    plan: Any = None
 
 
 class PlannerError(ClearError):

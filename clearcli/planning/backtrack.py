@@ -235,7 +235,7 @@ class Search:
             if not self.names or plan.actions:
                 return plan  # an empty table is clear already; a fixed prefix is a plan
             err = NoPlanError(f"no plan: {_no_plan_reason(plan)}")
-            err.plan = plan  # type: ignore[attr-defined]
+            err.plan = plan
             raise err
         if len(self.steps) >= s.max_backtracks:
             raise PlannerError(f"backtracking gave up after {len(self.steps)} replans; raise [plan] max_backtracks")
@@ -523,7 +523,7 @@ def make_plan(
         )
     except NoPlanError as err:
         if getattr(err, "plan", None) is not None:
-            err.plan = _with_pose(err.plan, T_base_camera)  # type: ignore[attr-defined]
+            err.plan = _with_pose(err.plan, T_base_camera)
         raise
     return _with_pose(plan, T_base_camera)
 

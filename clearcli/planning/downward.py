@@ -137,7 +137,7 @@ def _cpu_backstop(pid: int, time_limit_s: float) -> None:
         pass  # not Linux, or the process is gone already
 
 
-def _kill_group(proc: subprocess.Popen) -> None:
+def _kill_group(proc: subprocess.Popen[bytes]) -> None:
     try:
         os.killpg(proc.pid, signal.SIGKILL)
     except ProcessLookupError:

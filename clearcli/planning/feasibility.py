@@ -88,7 +88,8 @@ class SceneContext:
         if push is not None and push.object_path:
             total = total + np.asarray(push.object_path[-1], dtype=float)
         rest = [s for s in self.shifts if s[0] != action.obj]
-        rest.append((action.obj, tuple(round(float(v), 9) for v in total)))
+        x, y, z = (round(float(v), 9) for v in total)  # a translation: (3,)
+        rest.append((action.obj, (x, y, z)))
         return SceneContext(self.removed, tuple(sorted(rest)))
 
 

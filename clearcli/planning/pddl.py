@@ -20,6 +20,7 @@ from functools import lru_cache
 from importlib import resources
 
 from clearcli.errors import InputError
+from clearcli.planning.types import Action
 from clearcli.predicates.grasps import kind as grasp_kind
 from clearcli.predicates.grasps import kinds as grasp_kinds
 from clearcli.predicates.state import DIRECTIONS, Fact, SymbolicState
@@ -188,7 +189,7 @@ def write_problem(
     lines.append("  (:init")
     order = {k: i for i, k in enumerate(fact_arity())}
 
-    def sort_key(f: Fact) -> tuple:
+    def sort_key(f: Fact) -> tuple[int | tuple[int, str], ...]:
         return (order[f[0]], *(_name_key(a) for a in f[1:]))
 
     for f in sorted(facts, key=sort_key):
@@ -216,10 +217,9 @@ def _name_key(name: str) -> tuple[int, str]:
     return (1 << 30, name)
 
 
-def write_plan(actions: Sequence[object], cost: int, unit_cost: bool) -> str:
+def write_plan(actions: Sequence[Action], cost: int, unit_cost: bool) -> str:
     """A plan in Fast Downward's plan-file format, in the lifted domain's terms: one
-    ``(action args)`` per line, then ``; cost = N (unit cost)`` or ``(general cost)``.
-    ``actions`` are `clearcli.planning.types.Action` values."""
-    lines = [a.pddl() for a in actions]  # type: ignore[attr-defined]
+    ``(action args)`` per line, then ``; cost = N (unit cost)`` or ``(general cost)``."""
+    lines = [a.pddl() for a in actions]
     lines.append(f"; cost = {int(cost)} ({'unit' if unit_cost else 'general'} cost)")
     return "\n".join(lines) + "\n"

@@ -8,11 +8,12 @@ import functools
 import time
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import Protocol
 
 from clearcli.errors import PlannerError, SettingsError
 from clearcli.planning import downward
-from clearcli.planning.compile import compile_strips
-from clearcli.planning.sas import compile_sas
+from clearcli.planning.compile import CompiledTask, compile_strips
+from clearcli.planning.sas import SasTask, compile_sas
 from clearcli.planning.types import Action
 from clearcli.predicates.grasps import kind as grasp_kind
 from clearcli.predicates.grasps import kinds as grasp_kinds
@@ -112,7 +113,26 @@ def solve(
     return Solved(tuple(actions), cost, result.optimal and not deadline, result.config, result.time_s, deadline)
 
 
-def _task(objects: Sequence[str], facts: Iterable[Fact], goal: Sequence[str], push_costs, formulation: str):  # type: ignore[no-untyped-def]
+class _Run(Protocol):
+    """`downward.run_sas` or `downward.run_downward` with its task given."""
+
+    def __call__(
+        self,
+        *,
+        search: str | None = ...,
+        alias: str | None = ...,
+        time_limit_s: float = ...,
+        optimal: bool | None = ...,
+    ) -> downward.DownwardResult: ...
+
+
+def _task(
+    objects: Sequence[str],
+    facts: Iterable[Fact],
+    goal: Sequence[str],
+    push_costs: Mapping[tuple[str, str], int] | None,
+    formulation: str,
+) -> tuple[_Run, SasTask | CompiledTask]:
     """The grounded task and a function running Fast Downward on it. The positive form
     goes as SAS+ straight into the search component (the translator would only ground
     again what is grounded already); the negative one, which needs the translator to

@@ -46,9 +46,9 @@ def outlined(
     h, w = shape
     image = np.array(np.asarray(rgb, dtype=np.uint8).reshape(h, w, 3), copy=True)
     for indices, color in zip(segments, colors):
-        mask = np.zeros(h * w, dtype=bool)
-        mask[np.asarray(indices, dtype=np.int64)] = True
-        mask = mask.reshape(h, w)
+        flat = np.zeros(h * w, dtype=bool)
+        flat[np.asarray(indices, dtype=np.int64)] = True
+        mask = flat.reshape(h, w)
         line = _thicken(mask_edge(mask), mask, width_px)
         image[line] = np.round(np.clip(np.asarray(color[:3], dtype=float), 0, 1) * 255).astype(np.uint8)
     return image

@@ -27,6 +27,7 @@ def render_plan(path: Path, frame: Any, state: Any, plan: Any, seg: Any = None, 
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.patches import Circle
     from scipy.spatial import ConvexHull
 
     if robot is None:  # the default settings' arm
@@ -118,7 +119,7 @@ def render_plan(path: Path, frame: Any, state: Any, plan: Any, seg: Any = None, 
     # the gripper's closing point at full stretch, round the shoulder's vertical axis
     reach = robot.reach_of_tcp_m
     sx, sy = arm.shoulder_base[0], arm.shoulder_base[1]
-    ax.add_patch(plt.Circle((sx, sy), reach, fill=False, ls="--", color="#555555", zorder=1))
+    ax.add_patch(Circle((sx, sy), reach, fill=False, ls="--", color="#555555", zorder=1))
     ax.plot([0], [0], marker="o", color="k", zorder=5)
     ax.text(0, -0.04, arm.picture_label, ha="center", va="top", fontsize=8)
     ax.set_aspect("equal")

@@ -25,7 +25,7 @@ import sys
 import tempfile
 import warnings
 import xml.etree.ElementTree as ET
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -139,7 +139,7 @@ def _without_covered(
 
 
 @contextlib.contextmanager
-def _quiet_stderr():
+def _quiet_stderr() -> Iterator[list[str]]:
     """File descriptor 2 to a temporary file while a C++ library (urdfdom) talks on it:
     the user gets our one line, not its dump. Yields a list that holds, once the block
     ends, what was said (the reason a file was refused is only there)."""

@@ -12,6 +12,13 @@ from pathlib import Path
 from clearcli.errors import SettingsError
 
 
+def _end_link(joint: ET.Element, end: str) -> str | None:
+    """The link a joint's <parent> or <child> names (a URDF joint has both)."""
+    element = joint.find(end)
+    assert element is not None, f"joint {joint.get('name')!r} has no <{end}>"
+    return element.get("link")
+
+
 @functools.cache
 def joint_names(urdf: Path) -> tuple[str, ...]:
     """Names of the revolute/continuous/prismatic joints, from the root down the chain."""
@@ -19,8 +26,8 @@ def joint_names(urdf: Path) -> tuple[str, ...]:
     joints = [j for j in root.iter("joint") if j.get("type") in ("revolute", "continuous", "prismatic")]
     by_parent: dict[str | None, list[ET.Element]] = {}
     for j in root.iter("joint"):
-        by_parent.setdefault(j.find("parent").get("link"), []).append(j)  # type: ignore[union-attr]
-    children = {j.find("child").get("link") for j in root.iter("joint")}  # type: ignore[union-attr]
+        by_parent.setdefault(_end_link(j, "parent"), []).append(j)
+    children = {_end_link(j, "child") for j in root.iter("joint")}
     roots = [link.get("name") for link in root.iter("link") if link.get("name") not in children]
     order: list[str] = []
     stack = list(roots)
@@ -29,7 +36,7 @@ def joint_names(urdf: Path) -> tuple[str, ...]:
         for j in by_parent.get(link, []):
             if j in joints:
                 order.append(str(j.get("name")))
-            stack.append(j.find("child").get("link"))  # type: ignore[union-attr]
+            stack.append(_end_link(j, "child"))
     return tuple(order)
 
 
@@ -109,8 +116,9 @@ def checked_urdf(urdf: Path) -> str:
         axis = owner.find("axis")
         xyz = numbers(owner, axis, "xyz", 3) if axis is not None else None
         if kind in ("revolute", "continuous", "prismatic") and xyz is not None and math.hypot(*xyz) < _MIN_AXIS_LENGTH:
+            assert axis is not None  # xyz was read from it
             raise SettingsError(
-                f'{urdf}: joint {name!r}: <axis xyz="{axis.get("xyz")}"> has no direction; give the joint\'s axis'  # type: ignore[union-attr]
+                f'{urdf}: joint {name!r}: <axis xyz="{axis.get("xyz")}"> has no direction; give the joint\'s axis'
             )
         limit = owner.find("limit")
         if kind in ("revolute", "prismatic"):

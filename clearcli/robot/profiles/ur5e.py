@@ -2,14 +2,17 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from functools import partial
 from pathlib import Path
+
+import numpy as np
 
 from clearcli.robot.profiles.base import generic_profile
 from clearcli.robot.ur_ik import UR5E, solutions
 
 
-def _closed_form():
+def _closed_form() -> tuple[Callable[[np.ndarray], list[np.ndarray]], str, str]:
     """The UR family's closed form (ur_ik.py) with the UR5e's DH table; the description's
     base_link_inertia is its base frame, wrist_3_link its frame 6."""
     return partial(solutions, UR5E), "base_link_inertia", "wrist_3_link"
