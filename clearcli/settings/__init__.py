@@ -46,8 +46,8 @@ __all__ = [
 
 def __getattr__(name: str) -> Any:
     if name in __all__:
-        # imported when first asked for: `clear info --help` and `clear settings --help`
-        # read only profiles.py, and tree.py's section classes cost them ~50 ms (measured)
+        # imported when first asked for: every `--help` reads only profiles.py and
+        # kinds.py, and tree.py's section classes would cost it ~50 ms (measured)
         from clearcli.settings import tree  # noqa: PLC0415
 
         return getattr(tree, name)

@@ -65,7 +65,7 @@ class PinholeCamera(Section):
     def ray_directions(self) -> Any:
         """(H*W, 3) per-pixel ray directions scaled to z = 1, row-major (v, then u):
         a point at depth z on pixel (u, v) is z * ray."""
-        import numpy as np  # noqa: PLC0415  (NumPy ~90 ms; `clear --help` loads this module, not NumPy)
+        import numpy as np  # noqa: PLC0415  (NumPy ~90 ms: `clear settings` loads this module, not NumPy)
 
         u = np.arange(self.width, dtype=np.float64)
         v = np.arange(self.height, dtype=np.float64)
@@ -78,7 +78,7 @@ class PinholeCamera(Section):
 
     def project(self, points_camera: Any) -> Any:
         """(N, 3) camera-frame points -> (N, 2) pixel coordinates (u, v), not rounded."""
-        import numpy as np  # noqa: PLC0415  (NumPy ~90 ms; `clear --help` loads this module, not NumPy)
+        import numpy as np  # noqa: PLC0415  (NumPy ~90 ms: `clear settings` loads this module, not NumPy)
 
         p = np.asarray(points_camera, dtype=np.float64)
         return np.stack([self.fx * p[:, 0] / p[:, 2] + self.cx, self.fy * p[:, 1] / p[:, 2] + self.cy], axis=1)
