@@ -132,6 +132,7 @@ def resolve_settings(
     settings = clear_settings.load_settings(path, sets)
     if grasps is not None:  # a flag over the file and --set, checked by [plan] grasps's own rule
         settings = clear_settings.override(settings, "plan", grasps=grasps)
+    clear_settings.check_tools(settings)  # the kinds asked for and the robot's tool agree
     if settings.robot.urdf:
         from clearcli.tasks.robots import check_robot  # noqa: PLC0415  (~7 ms for `clear --help`; a URDF only)
 

@@ -68,6 +68,7 @@ from clearcli.predicates.state import Fact, SymbolicState
 from clearcli.robot.arm import Arm, resolve_arm
 from clearcli.robot.collision import make_obstacles
 from clearcli.settings.plan import PlanSettings
+from clearcli.settings.profiles import tools_of
 
 if TYPE_CHECKING:
     from clearcli.settings import Settings
@@ -498,14 +499,19 @@ def make_plan(
     obstacles = make_obstacles(state, T_base_camera, arm.settings.collision_margin_m)
     checker = IKActionChecker(state, T_base_camera, kin, obstacles, push_lookahead=plan_s.push_lookahead)
 
+    has_fingers = "fingers" in tools_of(settings.robot.name)
+
     def describe_width(name: str) -> tuple[str, float | None]:
         obj = state.by_name(name)
         width = float(obj.grasp_width_m)
-        text = (
-            "too wide or narrow for the gripper"
-            if width <= 0
-            else gripper_opening_text(width, gripper.opening_width_m, gripper.closing_width_m)
-        )
+        if not has_fingers:
+            text = "pinch: the robot's tool has no fingers"
+        else:
+            text = (
+                "too wide or narrow for the gripper"
+                if width <= 0
+                else gripper_opening_text(width, gripper.opening_width_m, gripper.closing_width_m)
+            )
         # the other kinds tried, and why each is not offered
         tried = [f"{grasp_kind(k).label}: {obj.kind_refusals[k]}" for k in kinds_on if k in obj.kind_refusals]
         if tried:

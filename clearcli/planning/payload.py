@@ -4,13 +4,16 @@ both, so that `clear predicates`, `clear plan` and a batch's lines serialise ali
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
+
+import numpy as np
 
 from clearcli.planning.pddl import fact_to_pddl
 from clearcli.rounding import rounded, timings
 
 if TYPE_CHECKING:
-    from clearcli.planning.types import Plan
+    from clearcli.planning.types import Action, Plan
     from clearcli.predicates.state import SymbolicState
 
 from clearcli.planning.versions import PLAN_SCHEMA, PLAN_VERSION, PREDICATES_SCHEMA, PREDICATES_VERSION  # noqa: F401
@@ -82,8 +85,17 @@ def _grasp_pose(seq: Any) -> Any:
     return seq[-2]
 
 
-def plan_payload(plan: Plan, source: str, frame_id: str, pose_source: str, unit_cost: bool) -> dict[str, Any]:
-    """The payload of schema ``clear.plan`` (documented in `clearcli/commands/plan.py`)."""
+def plan_payload(
+    plan: Plan,
+    source: str,
+    frame_id: str,
+    pose_source: str,
+    unit_cost: bool,
+    details: Mapping[str, Mapping[str, Mapping[str, Any]]] | None = None,
+) -> dict[str, Any]:
+    """The payload of schema ``clear.plan`` (documented in `clearcli/commands/plan.py`).
+    ``details``: object -> grasp kind -> what the predicates stage tells of it (sensor
+    frame): a suction step's contact comes from there."""
     first = None
     if plan.first is not None:
         first = {
@@ -93,7 +105,7 @@ def plan_payload(plan: Plan, source: str, frame_id: str, pose_source: str, unit_
             "joints_rad": [rounded(q) for q in plan.first.joint_solutions],
         }
     checked = list(plan.checked) + [None] * (len(plan.actions) - len(plan.checked))
-    steps = []
+    steps: list[dict[str, Any]] = []
     for a, c in zip(plan.actions, checked):
         steps.append(
             {
@@ -109,6 +121,9 @@ def plan_payload(plan: Plan, source: str, frame_id: str, pose_source: str, unit_
                 "T_base_gripper": None if c is None else [rounded(T) for T in c.T_base_gripper],
             }
         )
+        contact = _contact(a, details, plan.T_base_camera)
+        if contact is not None:
+            steps[-1]["contact"] = contact
     left = [
         {
             "object": x.name,
@@ -158,4 +173,26 @@ def plan_payload(plan: Plan, source: str, frame_id: str, pose_source: str, unit_
         "T_base_camera": None if plan.T_base_camera is None else rounded(plan.T_base_camera),
         "camera_pose_source": pose_source,
         "timings_s": timings(plan.timings_s),
+    }
+
+
+def _contact(
+    action: Action, details: Mapping[str, Mapping[str, Mapping[str, Any]]] | None, T_base_camera: np.ndarray | None
+) -> dict[str, Any] | None:
+    """A grasp's contact, where its kind has one (a suction cup's: the point on the face,
+    its outward normal, the cup), in the robot base frame; None for the others."""
+    if action.kind != "grasp" or not details or T_base_camera is None:
+        return None
+    d = details.get(action.obj, {}).get(str(action.grasp_kind), {})
+    if "point" not in d or "normal" not in d:
+        return None
+    T = np.asarray(T_base_camera, dtype=float)
+    point = T[:3, :3] @ np.asarray(d["point"], dtype=float) + T[:3, 3]
+    normal = T[:3, :3] @ np.asarray(d["normal"], dtype=float)
+    return {
+        "face": d.get("face"),
+        "point_base_m": rounded(point),
+        "normal_base": rounded(normal),
+        "cup_diameter_m": d.get("cup_diameter_m"),
+        "margin": d.get("margin"),
     }

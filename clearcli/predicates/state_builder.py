@@ -29,6 +29,8 @@ from clearcli.predicates.grasps import kinds as grasp_kinds
 from clearcli.predicates.grasps.base import Offer
 from clearcli.predicates.state import DIRECTIONS, Fact, ObjectModel, PushModel, SymbolicState
 from clearcli.settings import Settings
+from clearcli.settings.kinds import tool_of as kind_tool
+from clearcli.settings.profiles import tools_of
 
 log = logging.getLogger("clearcli.predicates")
 
@@ -109,7 +111,14 @@ def compute_state(frame: Frame, seg: Segmentation, settings: Settings | None = N
     # every grasp kind, in preference order (the thesis's pinch first: block_grasp,
     # ungraspable), each offered where it takes the object, with its blockers
     t0 = time.perf_counter()
-    kinds = _grasp_offers(geoms, openings, edges, tf, gripper, s, exclude, touching)
+    tools = tools_of(s.robot.name)
+    # a cup judges its seal on the objects' own points (table frame); fingers need none
+    points_table = (
+        [_finite(tf.to_table(frame.points[seg.objects[g.segment_index].indices])) for g in geoms]
+        if "cup" in tools
+        else []
+    )
+    kinds = _grasp_offers(geoms, openings, edges, tf, gripper, s, exclude, touching, tools, points_table)
 
     for name, offers in kinds.items():
         f = grasp_kind(name).facts
@@ -169,13 +178,17 @@ def _grasp_offers(
     settings: Settings,
     exclude: set[tuple[int, int]],
     touching: set[tuple[int, int]],
+    tools: Sequence[str] = ("fingers",),
+    points_table: Sequence[np.ndarray] = (),
 ) -> dict[str, list[Offer]]:
-    """kind name -> one `Offer` per object (table frame), every registered kind in
-    preference order, each seeing which objects the kinds before it are offered for."""
+    """kind name -> one `Offer` per object (table frame), every registered kind the
+    robot's tool takes (``tools``: clearcli/settings/profiles.py) in preference order,
+    each seeing which objects the kinds before it are offered for. The thesis's pinch is
+    always there (the domain's own grasp): a tool without fingers offers it nothing."""
     edges_table = [(*tf.to_table(np.stack([e.start, e.end])), e.seen, e.why) for e in edges]
     scene = GraspScene(
         objects=geoms,
-        points_table=(),
+        points_table=points_table,
         openings=[openings[g.segment_index] for g in geoms],
         edges_table=edges_table,
         exclude=exclude,
@@ -184,7 +197,14 @@ def _grasp_offers(
     )
     out: dict[str, list[Offer]] = {}
     for kind in grasp_kinds():
+        part = kind_tool(kind.name)
+        if part not in tools and not kind.thesis:
+            continue
         offers = kind.offers(scene, gripper, settings)
+        if part not in tools:
+            # the domain's own grasp, with no fingers to make it: its model (poses, width)
+            # stays, offered to nothing
+            offers = [dataclasses.replace(o, why_not=f"the robot's tool has no {part}") for o in offers]
         out[kind.name] = offers
         offered = frozenset(i for i, o in enumerate(offers) if not o.why_not)
         scene = dataclasses.replace(scene, offered_before=scene.offered_before + ((kind, offered),))
@@ -254,9 +274,17 @@ def _object_model(
     )
 
 
+def _finite(points: np.ndarray) -> np.ndarray:
+    return points[np.isfinite(points).all(axis=1)]
+
+
 def _detail_to_camera(detail: Any, tf: TableFrame) -> dict[str, Any]:
     # the JSON's points and directions in the sensor frame, as every other pose there
     out = dict(detail)
+    if "point" in out:  # a suction cup's contact and the face's normal there
+        out["point"] = tf.to_camera(np.asarray(out["point"], dtype=float)[None])[0].tolist()
+    if "normal" in out:
+        out["normal"] = tf.vector_to_camera(np.asarray(out["normal"], dtype=float)[None])[0].tolist()
     if "center" in out:
         out["center"] = tf.to_camera(np.asarray(out["center"], dtype=float)[None])[0].tolist()
     if "direction" in out:

@@ -1,7 +1,8 @@
 """The grasp kinds' registry: one entry per kind, in preference order (the cheapest and
 surest first: the thesis's pinch, which the shipped PDDL domain holds, comes first).
 
-This is the one list a grasp kind is named in. The settings' allowed `[plan] grasps`
+This is the one list a grasp kind is named in, with the tool part it takes (fingers or
+a cup: a profile's tool offers only the kinds it has the part for). The settings' allowed `[plan] grasps`
 (its members and default), the `--grasps` help and, through
 `clearcli.predicates.grasps.registry`, the facts, the domain text, the SAS+ compiler,
 backtracking, pictures, replay and the simulated world are made from it. It lives in
@@ -28,6 +29,12 @@ class KindEntry:
     help: str
     module: str = ""  # "" = clearcli.predicates.grasps.<name>
     required: bool = False
+    # the part of the robot profile's tool it takes (clearcli/settings/profiles.py
+    # ``tools``): "fingers" or "cup"; a profile's tool without it is not offered the kind
+    tool: str = "fingers"
+    # in [plan] grasps by default; a kind that is not is turned on by the profiles whose
+    # tool takes it (their [plan] grasps default), or by --grasps
+    default: bool = True
 
     @property
     def module_name(self) -> str:
@@ -39,6 +46,8 @@ GRASP_KINDS: tuple[KindEntry, ...] = (
     KindEntry("pinch", "the thesis's, from above", required=True),
     KindEntry("rim", "an open container's wall"),
     KindEntry("slide", "a flat object slid to a seen table edge"),
+    # a vacuum cup: only profiles whose tool has one (panda-hybrid, panda-suction, ...)
+    KindEntry("suction", "a cup on a flat face, from above or the side", tool="cup", default=False),
 )
 
 
@@ -78,8 +87,24 @@ def entries() -> tuple[KindEntry, ...]:
 
 
 def default_kinds() -> str:
-    """ "pinch,rim,slide": every registered kind (the default of [plan] grasps)."""
-    return ",".join(KIND_NAMES)
+    """ "pinch,rim,slide": the registered kinds on by default (the default of [plan]
+    grasps; the fingers' kinds, which every profile's default tool takes)."""
+    return ",".join(e.name for e in GRASP_KINDS if e.default)
+
+
+def kinds_of_tool(tools: Sequence[str]) -> str:
+    """ "pinch,rim,slide,suction": the registered kinds a tool with ``tools`` takes (a
+    profile's [plan] grasps default when its tool is not the fingers alone). The pinch is
+    always named (the domain's own grasp): with no fingers it is offered to nothing."""
+    return ",".join(e.name for e in GRASP_KINDS if e.required or e.tool in tools)
+
+
+def tool_of(name: str) -> str:
+    """The tool part kind ``name`` takes (KeyError when none is registered)."""
+    for e in GRASP_KINDS:
+        if e.name == name:
+            return e.tool
+    raise KeyError(name)
 
 
 def help_text() -> str:

@@ -1,5 +1,6 @@
 """The robot profiles' registry: their names, in order (the default first), and per
-profile the robot layer's module that holds it and the [robot] and [gripper] values it
+profile the robot layer's module that holds it, the parts its tool has (fingers, a
+suction cup, or both) and the [robot], [gripper], [suction] and [plan] grasps values it
 supplies as defaults (a user's values override them).
 
 This is the one place a profile is named: the settings' allowed `[robot] name`s, the
@@ -22,11 +23,15 @@ from typing import Any
 class ProfileEntry:
     """One registered profile: ``module`` (dotted, importable) holds its ``PROFILE``
     (clearcli/robot/profiles/base.py `RobotProfile`); ``defaults`` is section -> key ->
-    value for [robot] and [gripper]. (Compared and hashed by identity: the robot layer
+    value for [robot], [gripper], [suction] and [plan] (grasps). (Compared and hashed by identity: the robot layer
     keeps what it loaded per entry.)"""
 
     module: str
     defaults: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
+    # what its tool has: "fingers" (a parallel gripper) and/or "cup" (a vacuum cup); the
+    # grasp kinds each take one (clearcli/settings/kinds.py ``tool``)
+    tools: tuple[str, ...] = ("fingers",)
+    tool: str = ""  # its tool, named for `clear robots` and the --robot help ("" = its gripper)
 
 
 # Sources: the makers' published figures (README of ../shared/data/robots) for the openings
@@ -82,11 +87,57 @@ UR5E_DEFAULTS: Mapping[str, Mapping[str, Any]] = {
     },
 }
 
+# Suction tools. The cup and its vacuum are the [suction] section's own defaults (a
+# Robotiq EPick with one 30 mm bellows cup: clearcli/settings/suction.py); these say where
+# the lip is and what the tool's body sweeps, in the frame of each arm's TCP.
+# The Panda's hand replaced by an EPick: the lip 0.13 m past the flange (the EPick's body
+# ~0.09 m, its cup ~0.04 m), the description's TCP 0.1034 m past it: 0.027 m on.
+PANDA_SUCTION_DEFAULTS: Mapping[str, Mapping[str, Any]] = {
+    **PANDA_DEFAULTS,
+    "suction": {"lip_past_tcp_m": 0.027, "stem_length_m": 0.04, "body_radius_m": 0.04, "body_length_m": 0.09},
+    "plan": {"grasps": "pinch,suction"},
+}
+# The Franka Hand with a cup on a stem between its fingers, the lip 2 cm past the closed
+# fingertips (the fingertips 0.02 m past the TCP: the closing region's half height), as
+# the Amazon Robotics Challenge grippers carried one beside their fingers. The body the
+# approach sweeps: the closed fingers and the hand, as wide as the hand (0.21 m) over
+# the fingers' and the hand's length, erring on the safe side.
+PANDA_HYBRID_DEFAULTS: Mapping[str, Mapping[str, Any]] = {
+    **PANDA_DEFAULTS,
+    "suction": {"lip_past_tcp_m": 0.04, "stem_length_m": 0.02, "body_radius_m": 0.105, "body_length_m": 0.16},
+    "plan": {"grasps": "pinch,rim,slide,suction"},
+}
+# The UR5e with an EPick on its flange (tool0): the lip 0.13 m past it, the description's
+# TCP (the 2F-85's) 0.1443 m past it: the lip 0.0143 m short of that TCP.
+UR5E_EPICK_DEFAULTS: Mapping[str, Mapping[str, Any]] = {
+    **UR5E_DEFAULTS,
+    "suction": {"lip_past_tcp_m": -0.0143, "stem_length_m": 0.04, "body_radius_m": 0.04, "body_length_m": 0.09},
+    "plan": {"grasps": "pinch,suction"},
+}
+
 # name -> its entry, the default profile first.
 REGISTRY: dict[str, ProfileEntry] = {
     "wam": ProfileEntry("clearcli.robot.profiles.wam"),
     "panda": ProfileEntry("clearcli.robot.profiles.panda", PANDA_DEFAULTS),
     "ur5e": ProfileEntry("clearcli.robot.profiles.ur5e", UR5E_DEFAULTS),
+    "panda-hybrid": ProfileEntry(
+        "clearcli.robot.profiles.panda_hybrid",
+        PANDA_HYBRID_DEFAULTS,
+        tools=("fingers", "cup"),
+        tool="Franka Hand with a 30 mm suction cup between its fingers",
+    ),
+    "panda-suction": ProfileEntry(
+        "clearcli.robot.profiles.panda_suction",
+        PANDA_SUCTION_DEFAULTS,
+        tools=("cup",),
+        tool="Robotiq EPick, one 30 mm bellows cup",
+    ),
+    "ur5e-epick": ProfileEntry(
+        "clearcli.robot.profiles.ur5e_epick",
+        UR5E_EPICK_DEFAULTS,
+        tools=("cup",),
+        tool="Robotiq EPick, one 30 mm bellows cup",
+    ),
 }
 DEFAULT_PROFILE: str = next(iter(REGISTRY))
 
@@ -115,8 +166,21 @@ PROFILE_NAMES: Sequence[str] = _Names()
 
 
 def profile_defaults(name: str) -> Mapping[str, Mapping[str, Any]]:
-    """The [robot] and [gripper] defaults of profile ``name`` (KeyError if unknown)."""
+    """The [robot], [gripper], [suction] and [plan] defaults of profile ``name`` (KeyError
+    if unknown)."""
     return REGISTRY[name].defaults
+
+
+def tools_of(name: str) -> tuple[str, ...]:
+    """What profile ``name``'s tool has ("fingers", "cup"); a user's own URDF keeps its
+    profile's."""
+    entry = REGISTRY.get(name)
+    return entry.tools if entry is not None else ("fingers",)
+
+
+def profiles_with(tool: str) -> tuple[str, ...]:
+    """The profiles whose tool has ``tool`` ("cup": the suction profiles)."""
+    return tuple(n for n, e in REGISTRY.items() if tool in e.tools)
 
 
 def names_text() -> str:

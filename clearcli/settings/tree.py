@@ -24,18 +24,21 @@ from clearcli.errors import SettingsError
 from clearcli.settings.fields import Section, range_of
 from clearcli.settings.geometry import GripperSettings, PredicateSettings, PushSettings
 from clearcli.settings.images import ImageSettings
+from clearcli.settings.kinds import KIND_NAMES, REQUIRED_KINDS, default_kinds, tool_of
 from clearcli.settings.plan import PlanSettings
-from clearcli.settings.profiles import PROFILE_NAMES, profile_defaults
+from clearcli.settings.profiles import PROFILE_NAMES, profile_defaults, profiles_with, tools_of
 from clearcli.settings.replay import MemoryParams, ReplaySettings, TrackingParams
 from clearcli.settings.robot import RobotSettings
 from clearcli.settings.segment import SegmentSettings
 from clearcli.settings.sim import DepthNoise, PinholeCamera, WorldParams, WorldReachParams
+from clearcli.settings.suction import SuctionSettings
 
 
 @dataclass(frozen=True)
 class Settings:
     segment: SegmentSettings = field(default_factory=SegmentSettings)
     gripper: GripperSettings = field(default_factory=GripperSettings)
+    suction: SuctionSettings = field(default_factory=SuctionSettings)
     push: PushSettings = field(default_factory=PushSettings)
     predicates: PredicateSettings = field(default_factory=PredicateSettings)
     plan: PlanSettings = field(default_factory=PlanSettings)
@@ -68,9 +71,21 @@ READS: dict[str, tuple[str, ...]] = {
     "info": ("images",),
     "segment": ("images", "segment"),
     "evaluate": ("images", "segment"),
-    "predicates": ("images", "segment", "gripper", "push", "predicates"),
-    "plan": ("images", "segment", "gripper", "push", "predicates", "plan", "robot"),
-    "replay": ("images", "segment", "gripper", "push", "predicates", "plan", "robot", "replay", "tracking", "memory"),
+    "predicates": ("images", "segment", "gripper", "suction", "push", "predicates"),
+    "plan": ("images", "segment", "gripper", "suction", "push", "predicates", "plan", "robot"),
+    "replay": (
+        "images",
+        "segment",
+        "gripper",
+        "suction",
+        "push",
+        "predicates",
+        "plan",
+        "robot",
+        "replay",
+        "tracking",
+        "memory",
+    ),
     "simulate": tuple(SECTIONS),
 }
 
@@ -89,8 +104,8 @@ def _section(name: str, base: Any, values: Mapping[str, Any]) -> Any:
 def settings_from_dict(data: Mapping[str, Any], base: Settings | None = None) -> Settings:
     """``base`` (defaults when None) with the sections and keys of ``data`` replaced.
 
-    A ``[robot] name`` that changes the profile first resets [robot] and [gripper] to
-    that profile's defaults (clearcli/settings/profiles.py); the other keys of ``data``
+    A ``[robot] name`` that changes the profile first resets [robot], [gripper],
+    [suction] and [plan] grasps to that profile's defaults (clearcli/settings/profiles.py); the other keys of ``data``
     then override them. Within one call, then, a user's values always win; across calls
     (a file, then --set robot.name=...), give the profile no later than its overrides."""
     base = base or Settings()
@@ -110,7 +125,8 @@ def settings_from_dict(data: Mapping[str, Any], base: Settings | None = None) ->
 
 
 def with_profile(settings: Settings, name: Any) -> Settings:
-    """``settings`` with [robot] and [gripper] at the defaults of profile ``name``."""
+    """``settings`` with [robot], [gripper] and [suction] at the defaults of profile
+    ``name``, and [plan] grasps at its default (the kinds its tool takes)."""
     if not isinstance(name, str) or name not in PROFILE_NAMES:
         raise SettingsError(
             f"settings: [robot] name = {name!r} is not a robot profile; known: {', '.join(PROFILE_NAMES)} "
@@ -121,6 +137,8 @@ def with_profile(settings: Settings, name: Any) -> Settings:
         settings,
         robot=_section("robot", RobotSettings(), {**defaults.get("robot", {}), "name": name}),
         gripper=_section("gripper", GripperSettings(), dict(defaults.get("gripper", {}))),
+        suction=_section("suction", SuctionSettings(), dict(defaults.get("suction", {}))),
+        plan=_section("plan", settings.plan, {"grasps": defaults.get("plan", {}).get("grasps", default_kinds())}),
     )
 
 
@@ -185,12 +203,16 @@ def load_settings(path: Path | None = None, sets: Iterable[str] = ()) -> Setting
     sets = list(sets)
     names = [value for section, key, value in map(parse_set, sets) if (section, key) == ("robot", "name")]
     if names:
-        # a profile given by --set: the file's [robot] and [gripper] values still win
+        # a profile given by --set: the file's [robot], [gripper], [suction] and [plan]
+        # grasps values still win
         # over the profile's defaults, as a file's values win over the tree's
         name = names[-1]
+        plan_grasps = dict(data.get("plan", {}))
         own = {
             "robot": {k: v for k, v in dict(data.get("robot", {})).items() if k != "name"},
             "gripper": data.get("gripper", {}),
+            "suction": data.get("suction", {}),
+            "plan": {"grasps": plan_grasps["grasps"]} if "grasps" in plan_grasps else {},
         }
         settings = settings_from_dict(own, base=with_profile(settings, name))
     return apply_sets(settings, sets)
@@ -237,3 +259,18 @@ def digest(settings: Settings, sections: Iterable[str]) -> str:
     digest were made with the same settings for what that command reads."""
     text = settings_to_toml(settings, tuple(sections))
     return "sha256:" + hashlib.sha256(text.encode("utf-8")).hexdigest()[:16]
+
+
+def check_tools(settings: Settings) -> None:
+    """One line (SettingsError) when [plan] grasps names a kind the robot's tool cannot
+    take (a suction grasp asked of fingers alone), naming the profiles whose tool can."""
+    tools = tools_of(settings.robot.name)
+    for name in str(settings.plan.grasps).split(","):
+        name = name.strip()
+        part = tool_of(name) if name in KIND_NAMES else "fingers"
+        if part not in tools and name not in REQUIRED_KINDS:
+            raise SettingsError(
+                f"settings: [plan] grasps = {settings.plan.grasps!r}: {name} needs a {part}, and the "
+                f"{settings.robot.name} profile's tool has none; profiles with one: {', '.join(profiles_with(part))} "
+                "(--robot NAME; `clear robots`)"
+            )

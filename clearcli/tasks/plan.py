@@ -47,7 +47,14 @@ def run(request: Request, source: Source) -> Outcome:
     plan = done.plan
     # the model the plan was made in: the facts of the grasp kinds [plan] grasps allows
     state = with_grasp_kinds(state, parse_kinds(request.settings.plan.grasps))
-    payload = plan_payload(plan, str(source.path), getattr(frame, "frame_id", ""), done.pose_source, unit_cost(state))
+    payload = plan_payload(
+        plan,
+        str(source.path),
+        getattr(frame, "frame_id", ""),
+        done.pose_source,
+        unit_cost(state),
+        {o.name: o.kind_details for o in state.objects},
+    )
     payload["robot"] = robot.block()
     out = request.outputs
     write_plan_files(state, plan, problem=out.get("problem"), domain=out.get("domain"), output=out.get("plan"))

@@ -34,7 +34,7 @@ def test_which_actions_are_checked_is_whole_or_first(key: str) -> None:
 
 def test_the_allowed_grasps_are_the_registered_kinds() -> None:
     rng = range_of(PlanSettings, "grasps")
-    assert tuple(rng.members) == tuple(e.name for e in kinds.entries()) == ("pinch", "rim", "slide")
+    assert tuple(rng.members) == tuple(e.name for e in kinds.entries()) == ("pinch", "rim", "slide", "suction")
     assert tuple(rng.required) == ("pinch",)
     assert PlanSettings().grasps == kinds.default_kinds() == "pinch,rim,slide"
 

@@ -18,14 +18,24 @@ from clearcli.settings.robot import RobotSettings
 SECTION = {"robot": RobotSettings, "gripper": GripperSettings}
 
 
-def test_the_registered_profiles_are_wam_panda_ur5e_with_the_wam_first() -> None:
-    assert list(profiles.REGISTRY) == ["wam", "panda", "ur5e"]
+def test_the_registered_profiles_with_the_wam_first() -> None:
+    assert list(profiles.REGISTRY) == ["wam", "panda", "ur5e", "panda-hybrid", "panda-suction", "ur5e-epick"]
     assert profiles.DEFAULT_PROFILE == "wam"
-    assert list(profiles.PROFILE_NAMES) == ["wam", "panda", "ur5e"] and len(profiles.PROFILE_NAMES) == 3
+    assert list(profiles.PROFILE_NAMES) == list(profiles.REGISTRY) and len(profiles.PROFILE_NAMES) == 6
     assert (
         profiles.PROFILE_NAMES[0] == "wam" and "ur5e" in profiles.PROFILE_NAMES and "kuka" not in profiles.PROFILE_NAMES
     )
-    assert profiles.names_text() == "wam (default), panda, ur5e"
+    assert profiles.names_text() == "wam (default), panda, ur5e, panda-hybrid, panda-suction, ur5e-epick"
+    # the tools: fingers alone, a cup alone, or both
+    assert [profiles.tools_of(n) for n in profiles.REGISTRY] == [
+        ("fingers",),
+        ("fingers",),
+        ("fingers",),
+        ("fingers", "cup"),
+        ("cup",),
+        ("cup",),
+    ]
+    assert profiles.profiles_with("cup") == ("panda-hybrid", "panda-suction", "ur5e-epick")
 
 
 def test_each_profile_names_a_module_holding_its_profile() -> None:
@@ -66,13 +76,15 @@ def test_the_grippers_are_the_makers_figures() -> None:
 
 
 def test_a_profile_added_to_the_registry_is_a_robot_name_at_once(monkeypatch: pytest.MonkeyPatch) -> None:
-    with pytest.raises(SettingsError, match=r"\[robot\] name = 'toy': must be one of 'wam', 'panda', 'ur5e'"):
+    with pytest.raises(
+        SettingsError, match=r"\[robot\] name = 'toy': must be one of 'wam', 'panda', 'ur5e', 'panda-hybrid'"
+    ):
         RobotSettings(name="toy")
     registry = {**profiles.REGISTRY, "toy": profiles.ProfileEntry("tests.helpers.robot")}
     monkeypatch.setattr(profiles, "REGISTRY", registry)
     assert "toy" in profiles.PROFILE_NAMES and list(profiles.PROFILE_NAMES)[-1] == "toy"
     assert RobotSettings(name="toy").name == "toy"
-    assert profiles.names_text() == "wam (default), panda, ur5e, toy"
+    assert profiles.names_text().endswith(", ur5e-epick, toy")
 
 
 def test_entries_compare_by_identity() -> None:

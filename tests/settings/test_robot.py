@@ -23,7 +23,11 @@ def test_every_number_is_refused_past_its_bounds() -> None:
 
 
 def test_the_names_are_the_registered_profiles() -> None:
-    assert tuple(range_of(RobotSettings, "name").choices) == tuple(PROFILE_NAMES) == ("wam", "panda", "ur5e")
+    assert (
+        tuple(range_of(RobotSettings, "name").choices)
+        == tuple(PROFILE_NAMES)
+        == ("wam", "panda", "ur5e", "panda-hybrid", "panda-suction", "ur5e-epick")
+    )
     for name in PROFILE_NAMES:
         assert RobotSettings(name=name).name == name
     error = refused(RobotSettings, "name", "kuka")

@@ -31,11 +31,15 @@ def _urdf_joints(path: Path) -> dict[str, tuple[float, float]]:
     return found
 
 
-def test_the_list_names_wam_panda_ur5e_with_wam_the_default() -> None:
+def test_the_list_names_every_profile_with_wam_the_default() -> None:
     payload = task.robots_payload()
     profiles = payload["profiles"]
-    assert [p["name"] for p in profiles] == ["wam", "panda", "ur5e"] == list(REGISTRY)
-    assert [p["default"] for p in profiles] == [True, False, False]
+    assert (
+        [p["name"] for p in profiles]
+        == ["wam", "panda", "ur5e", "panda-hybrid", "panda-suction", "ur5e-epick"]
+        == list(REGISTRY)
+    )
+    assert [p["default"] for p in profiles] == [True] + [False] * 5
     assert all(isinstance(p["summary"], str) and p["summary"] for p in profiles)
     assert (task.SCHEMA, task.VERSION) == ("robots", 1)
 

@@ -1,0 +1,182 @@
+"""The suction grasp: a vacuum cup on a flat patch of the object, from above or the side.
+
+Offered where the robot profile's tool has a cup (clearcli/settings/profiles.py
+``tools``). Each object's seen faces are searched for a place where the cup seals and
+holds (`clearcli.geometry.suction`: covered, alone, flat within the bellows' compliance,
+facing the approach; the weight from the modelled volume and ``[suction]
+density_kg_m3``, its pull and moment within the holding force over the safety factor).
+Of the places that seal and hold, the planner gets the one the tool's swept volume
+meets fewest other objects at, then the one with the best margin; what it meets are its
+``block_suction`` facts. The tool's volume: the stem carrying the cup (the cup's radius
+and 3 mm, ``stem_length_m`` long) and the tool's body behind it (``body_radius_m``,
+``body_length_m``), swept along the approach from ``[push] approach_m`` out.
+
+Its poses put the cup's lip on the contact, its axis along the face's normal (z of the
+pose into the face), at four turns about that axis (the IK check takes the first the arm
+reaches); the profile's tool centre point, where the IK aims, is ``lip_past_tcp_m``
+behind the lip. A push moves the object and its poses with it (its IK fact and blocks
+cleared, as for the rim).
+
+Not offered, with the reason of the candidate that came closest: no face the size of the
+cup seen; a curved, rough or tilted face; a hole or an edge under the cup; another object
+under it; too heavy for the cup (pull, shear and moment against the holding force).
+
+Preference: its action costs 1, as the thesis's pinch does (one motion, nothing moved
+first); the rim (2) and the slide (3) stay dearer. Where both the pinch and suction take
+an object the plan may use either; the IK check and backtracking then fall back to the
+other (each has its own ``ik_unfeasible_*`` fact).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from clearcli.geometry.poses import _pose
+from clearcli.geometry.suction import CupSpec, Judged, hull_volume_and_centroid, judge_object
+from clearcli.predicates.grasps.base import KindFacts, KindModule, Offer, Scene, SimWorld
+
+if TYPE_CHECKING:
+    from clearcli.geometry.gripper import GripperModel
+    from clearcli.settings import Settings
+    from clearcli.settings.suction import SuctionSettings
+
+UP = np.array([0.0, 0.0, 1.0])
+STEM_CLEARANCE_M = 0.003  # the stem's radius beyond the cup's
+TURNS_DEG = (0.0, 180.0, 90.0, 270.0)  # half turns first, as the pinch's candidates
+
+
+def cup_spec(s: SuctionSettings) -> CupSpec:
+    return CupSpec(
+        diameter_m=s.cup_diameter_m,
+        compliance_m=s.bellows_compliance_m,
+        holding_force_n=s.holding_force_n,
+        safety_factor=s.safety_factor,
+        lip_friction=s.lip_friction,
+        max_tilt_deg=s.max_tilt_deg,
+        gap_m=s.hole_gap_m,
+    )
+
+
+def swept_hits(
+    points: np.ndarray, point: np.ndarray, normal: np.ndarray, s: SuctionSettings, approach_m: float
+) -> bool:
+    """Whether any of ``points`` (table frame) lies in the volume the tool sweeps coming
+    to the contact (``point``, outward ``normal``) from ``approach_m`` out: the stem, then
+    the body. Points within the bellows' stroke of the face belong to the seal test."""
+    if not len(points):
+        return False
+    rel = points - point
+    w = rel @ normal
+    radial2 = np.einsum("ij,ij->i", rel, rel) - w * w
+    r_stem = s.cup_diameter_m / 2.0 + STEM_CLEARANCE_M
+    stem = (w > s.bellows_compliance_m) & (w <= s.stem_length_m + approach_m) & (radial2 <= r_stem**2)
+    body = (
+        (w > s.stem_length_m) & (w <= s.stem_length_m + s.body_length_m + approach_m) & (radial2 <= s.body_radius_m**2)
+    )
+    return bool(np.any(stem | body))
+
+
+def contact_poses(
+    point: np.ndarray, normal: np.ndarray, across: np.ndarray, s: SuctionSettings, approach_m: float
+) -> tuple[tuple[np.ndarray, ...], ...]:
+    """Pose sequences T_table_tcp (pre, contact, lift) at each of `TURNS_DEG` about the
+    cup's axis: the lip on ``point``, z into the face."""
+    z = -normal
+    x0 = across - (across @ z) * z
+    if np.linalg.norm(x0) < 1e-6:
+        x0 = np.cross(z, np.array([1.0, 0.0, 0.0]))
+    x0 = x0 / np.linalg.norm(x0)
+    y0 = np.cross(z, x0)
+    out = []
+    for turn in TURNS_DEG:
+        a = math.radians(turn)
+        x = math.cos(a) * x0 + math.sin(a) * y0
+        tcp = point - s.lip_past_tcp_m * z  # the TCP behind the lip, on the cup's axis
+        T = _pose(x, z, tcp)
+        pre, lift = T.copy(), T.copy()
+        pre[:3, 3] += approach_m * normal
+        lift[:3, 3] += approach_m * UP
+        out.append((pre, T, lift))
+    return tuple(out)
+
+
+class SuctionGrasp(KindModule):
+    name = "suction"
+    label = "suction grasp"
+    facts = KindFacts("grasp_suction", "suctionable", "block_suction", "ik_unfeasible_suction", 1)
+    instead = "it is taken by suction instead"
+
+    def offers(self, scene: Scene, gripper: GripperModel, settings: Settings) -> list[Offer]:
+        s = settings.suction
+        spec = cup_spec(s)
+        approach_m = settings.push.approach_m
+        n = len(scene.objects)
+        pts = [np.asarray(p, dtype=float).reshape(-1, 3) for p in scene.points_table]
+        out: list[Offer] = []
+        for i, g in enumerate(scene.objects):
+            own = pts[i] if i < len(pts) else np.zeros((0, 3))
+            # objects related by `on` never block each other (as for every kind): what
+            # stands on this one goes first, what it stands on is under it
+            near = [j for j in range(n) if j != i and (i, j) not in scene.exclude and (j, i) not in scene.exclude]
+            others = np.concatenate([pts[j] for j in near]) if near else np.zeros((0, 3))
+            volume, com = hull_volume_and_centroid(np.asarray(g.hull_vertices), np.asarray(g.hull_faces))
+            mass = volume * s.density_kg_m3
+            min_side = max(spec.radius_m, s.body_radius_m) + 0.005  # the tool clears the table
+            judged: Judged = judge_object(own, others, g.axes2d, g.top_height_m, mass, com, spec, min_side)
+            kept = list(judged.ranked)  # up to 8 places that seal and hold, best first
+            if not kept:
+                out.append(Offer(why_not=judged.why_not(spec)))
+                continue
+            blockers_of = []
+            for c in kept:
+                hit = frozenset(j for j in near if swept_hits(pts[j], c.point, c.normal, s, approach_m))
+                blockers_of.append(hit)
+            order = sorted(range(len(kept)), key=lambda k: (len(blockers_of[k]), -kept[k].margin))
+            best, blockers = kept[order[0]], blockers_of[order[0]]
+            across = np.array([g.axes2d[0][0], g.axes2d[0][1], 0.0]) if best.face == "top" else UP
+            out.append(
+                Offer(
+                    candidates=contact_poses(best.point, best.normal, across, s, approach_m),
+                    blockers=blockers,
+                    detail={
+                        "face": best.face,
+                        "point": best.point.tolist(),
+                        "normal": best.normal.tolist(),
+                        "cup_diameter_m": s.cup_diameter_m,
+                        "sag_m": round(best.sag_m, 6),
+                        "spread_m": round(best.spread_m, 6),
+                        "tilt_deg": round(best.tilt_deg, 3),
+                        "mass_kg": round(mass, 4),
+                        "margin": round(best.margin, 4),
+                    },
+                )
+            )
+        return out
+
+    def world_holds(self, obj: Any, gripper: Any, rules: Any) -> bool:
+        """The world's rule (`physics.world_suction_holds`): some true face of the object
+        seals under the cup and holds its true mass."""
+        return bool(rules.world_suction_holds(obj))
+
+    def simulate(self, world: SimWorld) -> str:
+        """The world's cup at the pose the arm went to (`physics.world_suction`)."""
+        T_camera_tcp = world.chosen_pose(world.model.kind_candidates.get(self.name, ()))
+        if T_camera_tcp is None:
+            return "missed: no suction pose"
+        s = world.settings.suction
+        T_table_tcp = world.T_table_camera @ T_camera_tcp
+        axis = T_table_tcp[:3, 2]
+        lip = T_table_tcp[:3, 3] + s.lip_past_tcp_m * axis
+        ok, why, k = world.rules.world_suction(world.scene, lip, -axis, s)
+        if k is not None and k != world.k:
+            world.aim(k)
+        if not ok:
+            return f"suction failed: {why}"
+        world.take()
+        return "removed"
+
+
+KIND = SUCTION = SuctionGrasp()
