@@ -7,8 +7,10 @@ frame (two directions along it, one out of it), each cell the mean of its points
 The cup's disc over a cell is judged on the cells under it, for every cell of the face at
 once (one matrix product: the disc's cells sit at the same offsets everywhere):
 
-* **covered**: every cell under the disc (within 95 % of its radius: the lip may overhang
-  an edge by its own width) holds a point: no hole and no edge wider than a cell;
+* **covered**: no two neighbouring cells under the disc (within 95 % of its radius: the
+  lip may overhang an edge by its own width) without a point: no hole and no edge wider
+  than a cell (a lone empty cell is a pixel the sensor missed: filled from its
+  neighbours);
 * **alone**: no cell under the disc holds another object's outermost point within the
   bellows' stroke of the face (the cup would seal on two objects, or on none; farther
   out, the other object is in the approach's way: a blocker, not a leak);
@@ -111,6 +113,7 @@ class Judged:
 
 
 PLACE_STRIDE = 2
+MAX_POINTS = 8000
 
 
 def disc_cells(radius_m: float, cell_m: float) -> np.ndarray:
@@ -123,6 +126,14 @@ def disc_cells(radius_m: float, cell_m: float) -> np.ndarray:
     offsets = np.stack([di[inside], dj[inside]], axis=1)
     order = np.lexsort((offsets[:, 1], offsets[:, 0], (offsets**2).sum(axis=1)))
     return offsets[order]
+
+
+def disc_neighbours(offsets: np.ndarray) -> np.ndarray:
+    """(K, 4) for each of the disc's cells the indices of its four neighbours among them
+    (-1 where a neighbour lies outside the disc)."""
+    where = {(int(a), int(b)): k for k, (a, b) in enumerate(offsets)}
+    steps = ((1, 0), (-1, 0), (0, 1), (0, -1))
+    return np.array([[where.get((int(a) + da, int(b) + db), -1) for da, db in steps] for a, b in offsets])
 
 
 def quadric_design(uv: np.ndarray) -> np.ndarray:
@@ -214,11 +225,25 @@ def judge_face(
     H = height[window]  # (N, K)
     covered = np.isfinite(H)
     share = covered.mean(axis=1)
-    full = covered.all(axis=1)
+    # a hole: an empty cell beside another empty one under the disc (a gap of two cells,
+    # 8 mm: hole_gap_m's "twice this"); a lone empty cell is a pixel the sensor missed,
+    # filled with the mean of its neighbours for the fit
+    nb = disc_neighbours(offsets)  # (K, 4) indices into the disc's cells, -1 outside it
+    valid = nb >= 0
+    nb_safe = np.where(valid, nb, 0)
+    empty = ~covered
+    nb_empty = empty[:, nb_safe] & valid[None]  # (N, K, 4)
+    hole_cells = empty & nb_empty.any(axis=2)
+    full = ~hole_cells.any(axis=1)
+    nb_cov = covered[:, nb_safe] & valid[None]
+    nb_sum = np.where(nb_cov, np.nan_to_num(H[:, nb_safe]), 0.0).sum(axis=2)
+    nb_n = nb_cov.sum(axis=2)
+    filled = np.where(empty & (nb_n > 0), nb_sum / np.maximum(nb_n, 1), H)
+    covered_or_filled = np.isfinite(filled)
     rel_uv = offsets * cell  # cell centres relative to the centre cell's
     A = quadric_design(rel_uv.astype(float))
     pinv = np.linalg.pinv(A)  # (6, K): the same least squares for every full window
-    Hf = np.where(covered, H, 0.0)
+    Hf = np.where(covered_or_filled, filled, 0.0)
     coef = Hf @ pinv.T
     resid = np.where(covered, Hf - coef @ A.T, 0.0)
     # the 90th percentile by nearest rank (a partition, not a sort)
@@ -233,8 +258,8 @@ def judge_face(
     # the fitted face (farther out it is in the way of the approach: a blocker)
     surface = coef[:, :1] + (A[None, :, 1:3] * grad[:, None, :]).sum(axis=2)
     intruders = (np.abs(theirs[window] - surface) <= spec.compliance_m).sum(axis=1)
-    gaps = (~covered).sum(axis=1)
-    m_cover = np.where(full, 1.0, -gaps / covered.shape[1])
+    gaps = empty.sum(axis=1)
+    m_cover = np.where(full, 1.0, -np.maximum(hole_cells.sum(axis=1), 1) / covered.shape[1])
     m_sag = 1.0 - sag / spec.compliance_m
     m_spread = 1.0 - spread / (0.6 * spec.compliance_m)
     m_tilt = 1.0 - tilt / spec.max_tilt_deg
@@ -382,6 +407,9 @@ def judge_object(
     points facing its way (those within 1 cm of its outermost), the top on all."""
     faces: list[FacePlaces] = []
     band = max(spec.compliance_m, 0.01)
+    # at most MAX_POINTS of the object's points, every k-th (by index: a stride moves
+    # with no rounding): ~2 a cell on a 0.3 x 0.2 m top, which a Kinect at 1 m sees with 5
+    own = own[:: max(1, math.ceil(len(own) / MAX_POINTS))]
     if len(own) and len(others):
         # only the others near the object can be under a cup on it
         reach = spec.radius_m + spec.compliance_m + band

@@ -89,6 +89,22 @@ def render_plan(path: Path, frame: Any, state: Any, plan: Any, seg: Any = None, 
             # a grasp that first moves the object (a slide to the table's edge): a dashed
             # arrow to where it is grasped (its kind says, clearcli/predicates/grasps)
             obj = state.by_name(a.obj)
+            contact = obj.kind_details.get(str(a.grasp_kind), {})
+            if "point" in contact and "normal" in contact:
+                # a suction cup's contact: the cup's disc and the face's normal
+                p = R @ np.asarray(contact["point"], dtype=float) + t
+                n = R @ np.asarray(contact["normal"], dtype=float)
+                r = float(contact.get("cup_diameter_m", 0.03)) / 2.0
+                ax.add_patch(Circle((p[0], p[1]), r, fill=False, color="k", lw=1.2, zorder=6))
+                ax.plot([p[0]], [p[1]], marker="+", color="k", ms=5, zorder=6)
+                if float(np.hypot(n[0], n[1])) > 0.3:  # a side's normal shows in the plan view
+                    ax.annotate(
+                        "",
+                        xy=(p[0] + 0.05 * n[0], p[1] + 0.05 * n[1]),
+                        xytext=(p[0], p[1]),
+                        arrowprops=dict(arrowstyle="->", color="k", lw=1.0),
+                        zorder=6,
+                    )
             moved = grasp_kind(a.grasp_kind).moved_before(obj)
             if moved is not None:
                 c = R @ np.asarray(obj.centroid, dtype=float) + t

@@ -124,6 +124,15 @@ def test_a_hole_under_the_cup_is_not_covered() -> None:
     assert c.seal_margin < 0 and "hole" in c.why
 
 
+def test_a_lone_missed_pixel_is_no_hole() -> None:
+    # one 4 mm cell with no point (the sensor missed it) under the cup: filled from its
+    # neighbours, the face seals and stays flat
+    pts = _flat()
+    pts = pts[~((pts[:, 0] >= 0.004) & (pts[:, 0] < 0.008) & (pts[:, 1] >= 0.004) & (pts[:, 1] < 0.008))]
+    c = _judge(pts)
+    assert c.why == "" and c.covered < 1.0 and c.sag_m == pytest.approx(0.0, abs=1e-9)
+
+
 def test_another_object_under_the_cup_spoils_the_seal_but_one_above_it_does_not() -> None:
     other_in_seal = np.array([[0.005, 0.0, 0.101]])
     assert "another object" in _judge(_flat(), others=other_in_seal).why
