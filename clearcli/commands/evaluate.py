@@ -107,9 +107,12 @@ def dataset_cmd(
 
     cfg = bo.resolve_settings(settings, sets)
 
+    # --groups stays the text given (the refusal names an input as given); check_output_path
+    # reads any path (Path() and str() of each), though its annotation says Path
+    read = (*inputs, *(p for p in (settings, groups) if p and Path(str(p)).is_file()))
     for out in (csv_out, png):
         if out is not None:
-            check_output_path(out, force, (*inputs, *(p for p in (settings, groups) if p and Path(str(p)).is_file())))
+            check_output_path(out, force, read)  # type: ignore[arg-type]  # files.py's annotation: Path only
     group_map = {name: tuple(patterns) for name, patterns in task.load_groups(groups).items()}
     if pred is not None and not pred.is_dir():
         raise InputError(f"--pred {pred}: not a folder")
