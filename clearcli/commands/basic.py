@@ -38,8 +38,9 @@ def robots_cmd(
         print_json(task.SCHEMA, task.VERSION, payload, bo.resolve_settings(None, None), "robots")
         return
     if name is None:
+        width = max(len(p["name"]) for p in payload["profiles"])
         for p in payload["profiles"]:
-            typer.echo(f"{p['name']:8s} {p['summary']}" + ("  (default)" if p["default"] else ""))
+            typer.echo(f"{p['name']:{width}s}  {p['summary']}" + ("  (default)" if p["default"] else ""))
         return
     facts = payload["profile"]
     for key in (
@@ -53,6 +54,7 @@ def robots_cmd(
         "shoulder_base_m",
         "base_above_footprint_m",
         "gripper",
+        "tools",
     ):
         typer.echo(f"{key:24s} {facts[key]}")
     typer.echo("joints (rad)")

@@ -87,6 +87,8 @@ class RobotProfile:
             "shoulder_base_m": list(self.shoulder_base),
             "base_above_footprint_m": self.base_above_footprint_m,
             "gripper": self.gripper,
+            # what its tool has: "fingers", "cup" (the grasp kinds each take one)
+            "tools": list(entry.tools if entry is not None else ("fingers",)),
             "defaults": {k: dict(v) for k, v in (entry.defaults if entry is not None else {}).items()},
         }
 
