@@ -1,4 +1,4 @@
-"""A toy grasp kind for tests/predicates/test_toy_kind.py: a suction cup set straight
+"""A toy grasp kind for tests/predicates/test_toy_kind.py: a magnet set straight
 down on the middle of an object's top, for what no kind before it takes.
 
 It is all a new kind needs: one object implementing
@@ -20,9 +20,9 @@ SUCTION_COLUMN_M = 0.03  # what stands within this of the cup's axis, above the 
 
 
 class SuctionGrasp(KindModule):
-    name = "suction"
-    label = "suction grasp"
-    facts = KindFacts("suction_grasp", "suction_graspable", "block_suction", "ik_unfeasible_suction", 4)
+    name = "magnet"
+    label = "magnet grasp"
+    facts = KindFacts("magnet_grasp", "magnet_graspable", "block_magnet", "ik_unfeasible_magnet", 4)
     instead = "it is sucked up instead"
 
     def offers(self, scene: Scene, gripper: Any, settings: Any) -> list[Offer]:
@@ -68,7 +68,7 @@ class SuctionGrasp(KindModule):
         obj = world.scene.objects[world.k]
         T_camera = world.chosen_pose(world.model.kind_candidates.get(self.name, ()))
         if T_camera is None:
-            return "missed: no suction pose"
+            return "missed: no magnet pose"
         xy = (world.T_table_camera @ T_camera)[:2, 3]
         if not self.world_holds(obj, world.gripper, world.rules):
             return "the cup found no flat top"

@@ -1,4 +1,4 @@
-"""A new grasp kind costs its module and one registry line: the toy suction kind
+"""A new grasp kind costs its module and one registry line: the toy magnet kind
 (tests/helpers/toy_kind.py), registered here by one monkeypatched entry of
 clearcli/settings/kinds.py and nothing else, is a setting, offered by the predicates,
 planned by Fast Downward through the SAS+ compiler, IK-checked, accepted by two
@@ -13,8 +13,8 @@ import pytest
 from clearcli.settings import kinds
 from clearcli.sim import scene as S
 
-TOY = kinds.KindEntry("suction", "a suction cup on a flat top", module="helpers.toy_kind")
-ALL = "pinch,rim,slide,suction"
+TOY = kinds.KindEntry("magnet", "a magnet on a flat top", module="helpers.toy_kind")
+ALL = "pinch,rim,slide,magnet"
 # 12 cm square: too wide for the Panda's 8 cm pinch, closed (no rim), 8 cm thick (no
 # slide: the jaws span at most 7 cm x cos 20 deg = 6.6 cm at an edge); its top is flat
 WIDE = S.Box(0, 0.12, 0.12, 0.08, -0.10, -0.05)
@@ -52,8 +52,8 @@ def test_unregistered_it_is_no_setting() -> None:
     from clearcli.errors import SettingsError
     from clearcli.predicates.grasps import kind_names
 
-    assert "suction" not in kind_names()
-    with pytest.raises(SettingsError, match="comma-separated list of pinch, rim, slide "):
+    assert "magnet" not in kind_names()
+    with pytest.raises(SettingsError, match="comma-separated list of pinch, rim, slide, suction "):
         _settings()
 
 
@@ -63,16 +63,16 @@ def test_registered_it_is_a_setting_in_the_help_and_the_domain(toy) -> None:  # 
     from clearcli.settings.fields import range_of
     from clearcli.settings.plan import PlanSettings
 
-    assert kind_names() == ("pinch", "rim", "slide", "suction")
-    assert parse_kinds("suction, pinch") == ("pinch", "suction")
-    assert "pinch, rim, slide, suction" in range_of(PlanSettings, "grasps").describe()
-    assert "suction (a suction cup on a flat top)" in kinds.help_text()
-    assert _settings("suction,pinch").plan.grasps == "pinch,suction"
-    text = domain_text(kinds=parse_kinds("pinch,suction"))
+    assert kind_names() == ("pinch", "rim", "slide", "suction", "magnet")
+    assert parse_kinds("magnet, pinch") == ("pinch", "magnet")
+    assert "pinch, rim, slide, suction, magnet" in range_of(PlanSettings, "grasps").describe()
+    assert "magnet (a magnet on a flat top)" in kinds.help_text()
+    assert _settings("magnet,pinch").plan.grasps == "pinch,magnet"
+    text = domain_text(kinds=parse_kinds("pinch,magnet"))
     # its action, made from its facts and flags; the push deletes its blocks and IK fact
-    assert "(:action suction_grasp" in text and "(increase (total-cost) 4)" in text
-    assert "(not (block_suction ?x ?o))" in text and "(not (ik_unfeasible_suction ?o))" in text
-    assert "suction_grasp" not in domain_text(kinds=("pinch",))
+    assert "(:action magnet_grasp" in text and "(increase (total-cost) 4)" in text
+    assert "(not (block_magnet ?x ?o))" in text and "(not (ik_unfeasible_magnet ?o))" in text
+    assert "magnet_grasp" not in domain_text(kinds=("pinch",))
 
 
 def test_offered_planned_checked_and_validated(toy, tmp_path) -> None:  # type: ignore[no-untyped-def]
@@ -93,18 +93,18 @@ def test_offered_planned_checked_and_validated(toy, tmp_path) -> None:  # type: 
     wide, small = _named(state, scene, WIDE), _named(state, scene, SMALL)
     assert wide != small
     # offered: for the wide box, which no kind before it takes; not for the small one
-    assert {("ungraspable", wide), ("suction_graspable", wide)} <= state.facts
-    assert ("suction_graspable", small) not in state.facts
-    assert state.by_name(small).kind_refusals["suction"] == "the pinch from above fits it"
-    assert len(state.by_name(wide).kind_candidates["suction"]) == 1
-    assert "suction" in next(o for o in predicates_payload(state)["objects"] if o["name"] == wide)["grasp_kinds"]
+    assert {("ungraspable", wide), ("magnet_graspable", wide)} <= state.facts
+    assert ("magnet_graspable", small) not in state.facts
+    assert state.by_name(small).kind_refusals["magnet"] == "the pinch from above fits it"
+    assert len(state.by_name(wide).kind_candidates["magnet"]) == 1
+    assert "magnet" in next(o for o in predicates_payload(state)["objects"] if o["name"] == wide)["grasp_kinds"]
     # grounded by the compiler, planned by Fast Downward, every action IK-checked
-    assert f"suction_grasp_{wide}" in {a.name for a in ground_actions(state.names(), state.facts)}
+    assert f"magnet_grasp_{wide}" in {a.name for a in ground_actions(state.names(), state.facts)}
     plan = make_plan(state, settings)
-    assert sorted(a.pddl() for a in plan.actions) == sorted([f"(suction_grasp {wide})", f"(grasp {small})"])
+    assert sorted(a.pddl() for a in plan.actions) == sorted([f"(magnet_grasp {wide})", f"(grasp {small})"])
     assert plan.status == "complete" and plan.cost == 1 + 4
     kin = kinematics_from_settings(settings.robot)
-    (checked,) = [c for c in plan.checked if c is not None and c.action.grasp_kind == "suction"]
+    (checked,) = [c for c in plan.checked if c is not None and c.action.grasp_kind == "magnet"]
     for q, T in zip(checked.joint_solutions, checked.T_base_gripper):
         assert np.linalg.norm(kin.fk(q)[:3, 3] - T[:3, 3]) < 1e-3
     # two independent validators accept the plan on the lifted domain the kind wrote
@@ -112,11 +112,11 @@ def test_offered_planned_checked_and_validated(toy, tmp_path) -> None:  # type: 
     files[0].write_text(domain_for(state))
     files[1].write_text(write_problem(state, plan.goal, plan.ik_facts))
     files[2].write_text(write_plan(plan.actions, plan.cost, unit_cost=False))
-    assert "suction_graspable" in files[1].read_text()
+    assert "magnet_graspable" in files[1].read_text()
     assert validate_files(*files)
     assert validate_files_second(*files), second_verdict(*files).reason
     # and both refuse it without the fact that offers the kind
-    stripped = dataclasses.replace(state, facts=frozenset(f for f in state.facts if f[0] != "suction_graspable"))
+    stripped = dataclasses.replace(state, facts=frozenset(f for f in state.facts if f[0] != "magnet_graspable"))
     files[1].write_text(write_problem(stripped, plan.goal, plan.ik_facts))
     assert not validate_files(*files) and not validate_files_second(*files)
     # drawn (its label is its name)
@@ -133,7 +133,7 @@ def test_left_out_of_plan_grasps_the_thesis_model_stands(toy) -> None:  # type: 
     with pytest.raises(NoPlanError) as err:
         make_plan(state, settings)
     (left,) = err.value.plan.left  # type: ignore[attr-defined]
-    assert left.reason == "ungraspable" and "suction" not in left.detail
+    assert left.reason == "ungraspable" and "magnet" not in left.detail
 
 
 def test_carried_out_in_the_simulated_world(toy) -> None:  # type: ignore[no-untyped-def]
@@ -149,7 +149,7 @@ def test_carried_out_in_the_simulated_world(toy) -> None:  # type: ignore[no-unt
     settings = dataclasses.replace(settings, plan=dataclasses.replace(settings.plan, probe_max_width_m=0.0))
     # the world's verdict reads the kinds the planner is given
     assert truly_ungraspable_by(WIDE, settings.gripper, ("pinch", "rim", "slide"))
-    assert not truly_ungraspable_by(WIDE, settings.gripper, ("pinch", "rim", "slide", "suction"))
+    assert not truly_ungraspable_by(WIDE, settings.gripper, ("pinch", "rim", "slide", "magnet"))
     episode = Episode(
         S.make_scene("toy", [WIDE, SMALL]),
         Session(Pipeline(settings, segment_fn=truth_segment), ReplayOptions()),
@@ -161,8 +161,8 @@ def test_carried_out_in_the_simulated_world(toy) -> None:  # type: ignore[no-unt
     result = episode.result
     assert result is not None
     done = [(s.action, s.outcome) for s in result.steps if s.action]
-    assert ("(suction_grasp 0)", "removed") in done and ("(grasp 1)", "removed") in done, done
+    assert ("(magnet_grasp 0)", "removed") in done and ("(grasp 1)", "removed") in done, done
     assert result.end == "cleared" and result.cleared_truly
     # the replay's report names the kind
     kinds_seen = {a.get("grasp_kind") for r in episode.reports if r["plan"] for a in r["plan"]["actions"]}
-    assert "suction" in kinds_seen
+    assert "magnet" in kinds_seen

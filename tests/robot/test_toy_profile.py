@@ -62,8 +62,19 @@ def test_the_toy_profile_is_listed_by_clear_robots(toy: Path, capsys: pytest.Cap
 
     robots_cmd(None, False)
     lines = capsys.readouterr().out.splitlines()
-    assert [line.split()[0] for line in lines] == ["wam", "panda", "ur5e", "toy"]
-    assert lines[-1].startswith("toy      Toy arm") and "(default)" not in lines[-1]
+    assert [line.split()[0] for line in lines] == [
+        "wam",
+        "panda",
+        "ur5e",
+        "panda-hybrid",
+        "panda-suction",
+        "ur5e-epick",
+        "toy",
+    ]
+    assert (
+        lines[-1].split(maxsplit=1) == ["toy", "Toy arm: the Panda's description under another name"]
+        and "(default)" not in lines[-1]
+    )
     facts = robots_payload("toy")["profile"]
     assert facts["name"] == "toy" and facts["urdf"] == str(toy / "toy.urdf")
     assert facts["base_frame"] == "panda_link0" and len(facts["joints"]) == 7
@@ -82,7 +93,7 @@ def test_the_toy_profile_is_selectable(toy: Path) -> None:
     assert load_settings(sets=["robot.name=toy"]).robot.base_max_object_distance_m == 0.75
     (toy / "lab.toml").write_text('[robot]\nname = "toy"\n[gripper]\nopening_width_m = 0.07\n')
     assert load_settings(toy / "lab.toml").gripper.opening_width_m == 0.07
-    with pytest.raises(SettingsError, match="known: wam, panda, ur5e, toy"):
+    with pytest.raises(SettingsError, match="known: wam, panda, ur5e, panda-hybrid, panda-suction, ur5e-epick, toy"):
         load_settings(sets=["robot.name=kuka"])
     arm = resolve_arm(settings)
     assert arm.name == "toy" and arm.profile.urdf == toy / "toy.urdf"
@@ -121,5 +132,5 @@ def test_without_its_registry_line_there_is_no_toy() -> None:
     from clearcli.settings import load_settings
 
     assert "toy" not in PROFILES
-    with pytest.raises(SettingsError, match="known: wam, panda, ur5e \\("):
+    with pytest.raises(SettingsError, match="known: wam, panda, ur5e, panda-hybrid, panda-suction, ur5e-epick \\("):
         load_settings(sets=["robot.name=toy"])

@@ -101,4 +101,4 @@ def test_a_bad_list_of_kinds_is_a_settings_error(bad: str) -> None:
     with pytest.raises(SettingsError) as info:
         domain_text(grasps=bad)
     assert "[plan] grasps" in str(info.value) and info.value.exit_code == 3
-    assert "pinch, rim, slide" in str(info.value)
+    assert "pinch, rim, slide, suction" in str(info.value)
