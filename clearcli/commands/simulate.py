@@ -10,7 +10,15 @@ import typer
 from clearcli.commands import options as bo
 from clearcli.commands.common import check_output_path, print_json, stderr, stdout
 
-SCENES = ("clutter", "dense", "isolated_box", "two_touching_boxes", "box_on_box", "deadlock_row")  # tasks/simulate.py
+SCENES = (
+    "clutter",
+    "dense",
+    "isolated_box",
+    "two_touching_boxes",
+    "box_on_box",
+    "deadlock_row",
+    "suction_mix",
+)  # tasks/simulate.py
 
 
 def simulate_cmd(
@@ -18,7 +26,10 @@ def simulate_cmd(
     seed: Annotated[int, typer.Option("--seed", help="Seeds the scene, the world's noise and the camera.")] = 0,
     objects: Annotated[int, typer.Option("--objects", min=1, max=20, help="Objects of a clutter scene.")] = 6,
     scene: Annotated[
-        str, typer.Option("--scene", help=f"Scene: {', '.join(SCENES)} (clutter and dense use --objects, --seed).")
+        str,
+        typer.Option(
+            "--scene", help=f"Scene: {', '.join(SCENES)} (clutter and dense use --objects, --seed; suction_mix --seed)."
+        ),
     ] = "clutter",
     max_actions: Annotated[int, typer.Option("--max-actions", min=1, help="Action budget.")] = 40,
     no_push_memory: Annotated[

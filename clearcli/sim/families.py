@@ -326,6 +326,83 @@ def wide_objects(seed: int) -> Scene:
     return make_scene(f"wide_objects({seed})", placed)
 
 
+# suction_mix (issue 36): the share of its wide objects whose top is porous, and ribbed
+# (no cup seals there), the share that are heavy, and the true masses drawn (kg).
+SUCTION_POROUS_SHARE = 0.12
+SUCTION_RIBBED_SHARE = 0.12
+SUCTION_HEAVY_SHARE = 0.15
+SUCTION_MASS_KG = (0.1, 1.5)
+SUCTION_HEAVY_KG = (3.0, 5.0)
+SUCTION_SMALL_KG = (0.05, 0.4)
+
+
+def _suction_wide(rng: np.random.Generator, object_id: int) -> SceneObject:
+    """An object a cup takes and no parallel gripper closes across: a box lying flat, each
+    side 10-30 cm (wider than every profile's opening), 3-8 cm tall, or a lidded
+    container (a closed cylinder 6-10 cm in radius, 4-14 cm tall); its top porous, ribbed
+    or smooth, its true mass 0.1-1.5 kg or, for a few, 3-5 kg."""
+    yaw = round(float(rng.uniform(-math.pi / 2, math.pi / 2)), 4)
+    obj: SceneObject
+    if rng.random() < 0.35:
+        obj = Cylinder(
+            object_id,
+            round(float(rng.uniform(0.06, 0.10)), 4),
+            round(float(rng.uniform(0.04, 0.14)), 4),
+            0.0,
+            0.0,
+            yaw,
+        )
+    else:
+        sx, sy = rng.uniform(0.10, 0.30, size=2)
+        obj = Box(
+            object_id, round(float(sx), 4), round(float(sy), 4), round(float(rng.uniform(0.03, 0.08)), 4), 0.0, 0.0, yaw
+        )
+    roll = rng.random()
+    surface = (
+        "porous"
+        if roll < SUCTION_POROUS_SHARE
+        else "ribbed"
+        if roll < SUCTION_POROUS_SHARE + SUCTION_RIBBED_SHARE
+        else "smooth"
+    )
+    heavy = rng.random() < SUCTION_HEAVY_SHARE
+    mass = float(rng.uniform(*(SUCTION_HEAVY_KG if heavy else SUCTION_MASS_KG)))
+    return replace(obj, mass_kg=round(mass, 3), surface=surface)
+
+
+def suction_mix(seed: int) -> Scene:
+    """2-4 wide objects a cup may take (`_suction_wide`: flat boxes and lidded containers,
+    some tops porous or ribbed, some heavy) and 1-2 small graspable ones (`_small`, their
+    true mass 0.05-0.4 kg), anywhere on the table ``WIDE_TABLE_MARGIN_M`` in from its
+    border and ``WIDE_MIN_GAP_M`` apart; one that finds no room after 300 tries is left
+    out (its id unused). Every true mass is drawn here (`Box.mass_kg`): the planner sees
+    none of them, nor the surfaces."""
+    rng = np.random.default_rng(seed)
+    table = Table()
+    n_wide = int(rng.integers(2, 5))
+    n_small = int(rng.integers(1, 3))
+    objs: list[SceneObject] = [_suction_wide(rng, i) for i in range(n_wide)]
+    for i in range(n_small):
+        small = _small(rng, n_wide + i)
+        objs.append(replace(small, mass_kg=round(float(rng.uniform(*SUCTION_SMALL_KG)), 3)))
+    lim_x = table.size_x_m / 2 - WIDE_TABLE_MARGIN_M
+    lim_y = table.size_y_m / 2 - WIDE_TABLE_MARGIN_M
+    placed: list[SceneObject] = []
+    for obj in objs:
+        for _attempt in range(300):
+            cand = replace(
+                obj, x_m=round(float(rng.uniform(-lim_x, lim_x)), 4), y_m=round(float(rng.uniform(-lim_y, lim_y)), 4)
+            )
+            poly = cand.footprint()
+            if (np.abs(poly[:, 0]) > lim_x).any() or (np.abs(poly[:, 1]) > lim_y).any():
+                continue
+            if any(objects_overlap(cand, p, WIDE_MIN_GAP_M) for p in placed):
+                continue
+            placed.append(cand)
+            break
+    return make_scene(f"suction_mix({seed})", placed)
+
+
 FAMILIES: dict[str, Callable[[int], Scene]] = {
     "small_on_large": small_on_large,
     "small_against_tall": small_against_tall,
@@ -337,4 +414,5 @@ FAMILIES: dict[str, Callable[[int], Scene]] = {
     "dense_mix": dense_mix,
     "open_container": open_container,
     "wide_objects": wide_objects,
+    "suction_mix": suction_mix,
 }

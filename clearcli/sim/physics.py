@@ -1,6 +1,6 @@
 """The simulated world's own physics of a grasp and a push: what the fingers meet, what
-a push moves and shoves, what slips; judged on the scene itself, never on the planner's
-model of it (see `clearcli.sim.episode`)."""
+a push moves and shoves, what slips, where a suction cup seals and what it holds; judged
+on the scene itself, never on the planner's model of it (see `clearcli.sim.episode`)."""
 
 from __future__ import annotations
 
@@ -14,11 +14,14 @@ import numpy as np
 from clearcli.predicates.grasps import kind
 from clearcli.predicates.grasps import kinds as registered
 from clearcli.settings.sim import WorldParams
+from clearcli.settings.suction import SuctionSettings
 from clearcli.sim.scene import (
+    Box,
     Cylinder,
     Scene,
     SceneObject,
     convex_hull,
+    make_scene,
     objects_overlap,
     polygons_overlap,
     with_object_pose,
@@ -81,7 +84,8 @@ def truly_ungraspable_by(obj: SceneObject, gripper: Any, kinds: tuple[str, ...] 
     alone) can take the object by the world's own rules, each kind's `world_holds` (with
     this module as its rules): the pinch when it is not `truly_ungraspable`, a rim grasp
     an open cylinder whose wall the fingers close on, a slide a box or a closed cylinder
-    the gripper pinches at an edge."""
+    the gripper pinches at an edge, suction an object with a face the cup seals on and
+    holds it by (`world_suction_holds`)."""
     rules = sys.modules[__name__]
     chosen = [kind(k) for k in kinds] if kinds is not None else [k for k in registered() if k.thesis]
     return not any(k.world_holds(obj, gripper, rules) for k in chosen)
@@ -558,6 +562,271 @@ def world_edge_pinch(
     if height < closing_m:
         return False, f"too thin to pinch: {height * 1000:.1f} mm, the jaws close to {closing_m * 1000:.1f} mm"
     return True, f"pinched: overhang {overhang * 1000:.1f} mm, {height * 1000:.1f} mm thick"
+
+
+# --- suction: a vacuum cup on a face (issue 36). Written from the scene alone, as the
+# rules above: what the cup meets along its axis, whether its lip seals on that true
+# face, and whether the seal holds the object's true weight (`Box.true_mass_kg`), with
+# no safety factor: the world lifts whatever the cup truly holds.
+
+# The cup meets a surface that lies within this of its lip along its axis (the arm's
+# pose and the planner's estimate of the face are each a few mm off): beyond, the cup
+# stops short of it; before, it struck the surface on its way.
+SUCTION_TOUCH_M = 0.005
+# A bellows lip follows a face tilted this far off the cup's axis (makers quote 15-20 deg
+# for a 1.5-fold bellows); farther, it peels at its high side.
+SUCTION_MAX_TILT_DEG = 15.0
+# The approach: the world follows the cup's axis from this far back from the lip.
+SUCTION_APPROACH_M = 0.15
+GRAVITY_M_S2 = 9.81
+# The cup's disc as the world samples it for other objects under it: its centre and
+# rings at these shares of the lip's radius, 16 samples each.
+_DISC_RINGS = (0.5, 1.0)
+_DISC_SAMPLES = 16
+_BOX_FACES = ("side", "side", "side", "side", "top", "bottom")  # +x, -x, +y, -y, +z, -z
+
+
+def _slab(o: np.ndarray, d: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(N,) entry and exit parameters of rays o + t d (o (N, k), d (k,)) into the box
+    lo <= p <= hi, and which axis the entry crosses; entry > exit: no hit."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t1, t2 = (lo - o) / d, (hi - o) / d
+    tmin, tmax = np.minimum(t1, t2), np.maximum(t1, t2)
+    flat = np.abs(d) < 1e-12
+    if flat.any():
+        inside = (o >= lo) & (o <= hi)
+        tmin = np.where(flat, np.where(inside, -np.inf, np.inf), tmin)
+        tmax = np.where(flat, np.where(inside, np.inf, -np.inf), tmax)
+    return tmin.max(axis=1), tmax.min(axis=1), tmin.argmax(axis=1)
+
+
+def _box_entry(box: Box, origins: np.ndarray, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(N,) where rays ``origins`` + t ``d`` (table frame) enter the box (inf: they miss
+    it), and the face each enters (an index into `_BOX_FACES`)."""
+    c, s = math.cos(box.yaw_rad), math.sin(box.yaw_rad)
+    R = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    centre = np.array([box.x_m, box.y_m, box.base_z_m + box.size_z_m / 2])
+    half = np.array([box.size_x_m, box.size_y_m, box.size_z_m]) / 2
+    o, dl = (origins - centre) @ R, R.T @ d
+    enter, leave, axis = _slab(o, dl, -half, half)
+    hit = (enter <= leave) & (leave >= 0)
+    face = 2 * axis + (dl[axis] > 0)  # entered on the side the ray comes from: -x when it runs along +x
+    return np.where(hit, enter, np.inf), face
+
+
+def _cylinder_entry(cyl: Cylinder, origins: np.ndarray, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """As `_box_entry` for the solid upright cylinder the object's outside bounds (an
+    open container's opening counts as its top): faces 0 side, 4 top, 5 bottom."""
+    o = origins - np.array([cyl.x_m, cyl.y_m, cyl.base_z_m])
+    a = d[0] ** 2 + d[1] ** 2
+    b = 2.0 * (o[:, 0] * d[0] + o[:, 1] * d[1])
+    c = o[:, 0] ** 2 + o[:, 1] ** 2 - cyl.radius_m**2
+    if a < 1e-18:
+        t0 = np.where(c <= 0, -np.inf, np.inf)
+        t1 = np.where(c <= 0, np.inf, -np.inf)
+    else:
+        disc = b * b - 4 * a * c
+        root = np.sqrt(np.maximum(disc, 0.0))
+        t0 = np.where(disc >= 0, (-b - root) / (2 * a), np.inf)
+        t1 = np.where(disc >= 0, (-b + root) / (2 * a), -np.inf)
+    z0, z1, _ = _slab(o[:, 2:], d[2:], np.zeros(1), np.array([cyl.height_m]))
+    enter, leave = np.maximum(t0, z0), np.minimum(t1, z1)
+    hit = (enter <= leave) & (leave >= 0)
+    face = np.where(t0 >= z0, 0, np.where(d[2] > 0, 5, 4))
+    return np.where(hit, enter, np.inf), face
+
+
+def _parts(scene: Scene) -> list[tuple[int, str, SceneObject]]:
+    """What a cup may meet: each object (its index), and a mug's handle as its own part."""
+    out: list[tuple[int, str, SceneObject]] = []
+    for i, obj in enumerate(scene.objects):
+        out.append((i, "body", obj))
+        handle = obj.handle_box() if isinstance(obj, Cylinder) else None
+        if handle is not None:
+            out.append((i, "handle", handle))
+    return out
+
+
+def _entries(
+    parts: list[tuple[int, str, SceneObject]], origins: np.ndarray, d: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """(parts, N) entry parameters and faces of every part along every ray."""
+    ts, faces = [], []
+    for _, _, obj in parts:
+        t, f = _box_entry(obj, origins, d) if isinstance(obj, Box) else _cylinder_entry(obj, origins, d)
+        ts.append(t)
+        faces.append(f)
+    return np.array(ts).reshape(len(parts), -1), np.array(faces).reshape(len(parts), -1)
+
+
+def centre_of_mass(obj: SceneObject) -> np.ndarray:
+    """(3,) the object's centre of mass, table frame: a box's or a closed cylinder's
+    middle; an open container's from its wall and floor (its handle left out)."""
+    x, y, z0 = obj.x_m, obj.y_m, obj.base_z_m
+    if isinstance(obj, Cylinder) and obj.is_open:
+        floor = math.pi * obj.radius_m**2 * obj.floor_m
+        wall = obj.volume_m3 - floor
+        z = (floor * obj.floor_m / 2 + wall * (obj.floor_m + obj.height_m) / 2) / obj.volume_m3
+        return np.array([x, y, z0 + z])
+    return np.array([x, y, z0 + obj.height_m / 2])
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    v = np.asarray(v, dtype=float).reshape(3)
+    return v / max(float(np.linalg.norm(v)), 1e-12)
+
+
+def _face_seal(obj: SceneObject, face: int, p: np.ndarray, a: np.ndarray, s: SuctionSettings) -> str:
+    """Why the lip does not seal on face ``face`` of ``obj`` met at ``p`` along ``a``
+    ("" when it seals)."""
+    r = s.cup_diameter_m / 2.0
+    if isinstance(obj, Box):
+        c, sn = math.cos(obj.yaw_rad), math.sin(obj.yaw_rad)
+        R = np.array([[c, -sn, 0.0], [sn, c, 0.0], [0.0, 0.0, 1.0]])
+        axis, sign = face // 2, (-1.0 if face % 2 else 1.0)
+        normal = R[:, axis] * sign
+        name = _BOX_FACES[face]
+        half = np.array([obj.size_x_m, obj.size_y_m, obj.size_z_m]) / 2
+        local = R.T @ (p - np.array([obj.x_m, obj.y_m, obj.base_z_m + half[2]]))
+        across = [j for j in range(3) if j != axis]
+        over = max(float(abs(local[j]) + r - half[j]) for j in across)
+    else:
+        rel = p - np.array([obj.x_m, obj.y_m, obj.base_z_m])
+        rho = float(np.hypot(rel[0], rel[1]))
+        if face == 0:
+            name = "side"
+            normal = np.array([rel[0] / max(rho, 1e-12), rel[1] / max(rho, 1e-12), 0.0])
+            over = max(float(r - rel[2]), float(rel[2] + r - obj.height_m))
+        else:
+            name = "top" if face == 4 else "bottom"
+            normal = np.array([0.0, 0.0, 1.0 if face == 4 else -1.0])
+            over = rho + r - obj.radius_m
+    if name == "bottom":
+        return "no seal: the cup came from under the object"
+    if isinstance(obj, Cylinder) and obj.is_open and name == "top":
+        return "no seal: an open container's top (its rim is no face)"
+    if name == "top" and obj.surface != "smooth":
+        return f"no seal: the top is {obj.surface}"
+    tilt = math.degrees(math.acos(float(np.clip(-(a @ normal), -1.0, 1.0))))
+    if tilt > SUCTION_MAX_TILT_DEG:
+        return f"no seal: the cup meets the {name} {tilt:.0f} deg askew (the lip follows {SUCTION_MAX_TILT_DEG:g})"
+    if isinstance(obj, Cylinder) and name == "side":
+        R_c = obj.radius_m
+        sag = R_c - math.sqrt(R_c**2 - r**2) if R_c > r else math.inf
+        if sag > s.bellows_compliance_m:
+            return (
+                f"no seal: the side curves {sag * 1000:.1f} mm under the cup (the bellows follow "
+                f"{s.bellows_compliance_m * 1000:.1f})"
+            )
+    if over > 0:
+        return f"no seal: the lip overhangs the {name}'s edge by {over * 1000:.1f} mm"
+    return ""
+
+
+def _load(obj: SceneObject, p: np.ndarray, a: np.ndarray, s: SuctionSettings) -> tuple[float, str]:
+    """The share of the cup's hold the object's true weight takes (lifted when <= 1), and
+    its terms. The weight pulls the face off the lip along the axis (against the holding
+    force), slides it across (against the lip's friction), bends the lip about the
+    contact (its moment across the axis, against the force at the cup's radius) and
+    twists it (its moment along the axis, against the friction at the radius)."""
+    m = obj.true_mass_kg
+    weight = np.array([0.0, 0.0, -m * GRAVITY_M_S2])
+    F, mu, r = s.holding_force_n, s.lip_friction, s.cup_diameter_m / 2.0
+    pull = max(float(weight @ a), 0.0)
+    shear = float(np.linalg.norm(weight - (weight @ a) * a))
+    M = np.cross(centre_of_mass(obj) - p, weight)
+    twist = abs(float(M @ a))
+    bend = float(np.linalg.norm(M - (M @ a) * a))
+    use = pull / F + shear / (mu * F) + bend / (F * r) + twist / (mu * F * r)
+    terms = f"pull {pull:.1f} N, shear {shear:.1f} N, moment {bend:.2f} N m"
+    if twist >= 0.005:
+        terms += f", twist {twist:.2f} N m"
+    return use, f"{m:.2f} kg, {use:.2f} of the cup's hold ({terms}; {F:g} N)"
+
+
+def world_suction(
+    scene: Scene, lip_table: np.ndarray, axis_table: np.ndarray, s: SuctionSettings
+) -> tuple[bool, str, int | None]:
+    """The cup at ``lip_table`` (its lip's centre, table frame), its axis ``axis_table``
+    pointing into the surface, with the tool ``s`` ([suction]): (lifted?, what happened,
+    index in ``scene.objects`` of the object the cup met, or None).
+
+    What it meets: following the axis from `SUCTION_APPROACH_M` back, the first true
+    surface; met when it lies within `SUCTION_TOUCH_M` of the lip ("missed: the cup met
+    nothing" beyond; "missed: the cup struck ..." when it lies farther before the lip).
+    The seal: on a true face flat within the bellows' compliance under the whole lip (a
+    box's face, the lip's disc within its rectangle; a closed cylinder's top, the disc
+    within it, or its side where its sag R - sqrt(R^2 - r^2) under the cup is within the
+    compliance and the disc within its height); never on an open container's top, a
+    mug's handle or a top marked porous or ribbed (`Box.surface`); the face within
+    `SUCTION_MAX_TILT_DEG` of the axis; no other object under the disc. The load
+    (`_load`): the true mass, no safety factor; lifted when it takes at most the whole
+    hold, else dropped where it stood. The causes start "missed: ", "no seal: ",
+    "dropped: too heavy" (a benchmark counts them)."""
+    a = _unit(axis_table)
+    lip = np.asarray(lip_table, dtype=float).reshape(3)
+    parts = _parts(scene)
+    if not parts:
+        return False, "missed: the cup met nothing", None
+    origin = lip - SUCTION_APPROACH_M * a
+    t, faces = _entries(parts, origin[None, :], a)
+    first = int(np.argmin(t[:, 0]))
+    at = float(t[first, 0]) - SUCTION_APPROACH_M  # > 0: the surface lies beyond the lip
+    if not math.isfinite(at) or at > SUCTION_TOUCH_M:
+        return False, "missed: the cup met nothing", None
+    k, part, obj = parts[first]
+    wid = scene.objects[k].object_id
+    if at < -SUCTION_TOUCH_M:
+        return False, f"missed: the cup struck object {wid} {-at * 1000:.0f} mm short of its contact", k
+    if part == "handle":
+        return False, "no seal: on the mug's handle", k
+    p = origin + float(t[first, 0]) * a
+    why = _face_seal(obj, int(faces[first, 0]), p, a, s)
+    if why:
+        return False, why, k
+    # every other part under the lip's disc, met before this face along the axis
+    e1 = np.cross(a, np.array([1.0, 0.0, 0.0]) if abs(a[0]) < 0.9 else np.array([0.0, 1.0, 0.0]))
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(a, e1)
+    ang = np.arange(_DISC_SAMPLES) * (2 * math.pi / _DISC_SAMPLES)
+    ring = np.cos(ang)[:, None] * e1 + np.sin(ang)[:, None] * e2
+    r = s.cup_diameter_m / 2.0
+    disc = np.concatenate([share * r * ring for share in _DISC_RINGS])
+    t_disc, _ = _entries(parts, origin + disc, a)
+    own = t_disc[first]
+    under = [j for j in range(len(parts)) if j != first and bool((t_disc[j] < own + s.bellows_compliance_m).any())]
+    if under:
+        j = under[0]
+        what = "its handle" if parts[j][0] == k else f"object {scene.objects[parts[j][0]].object_id}"
+        return False, f"no seal: {what} under the cup", k
+    use, load = _load(scene.objects[k], p, a, s)
+    if use > 1.0:
+        return False, f"dropped: too heavy: {load}", k
+    return True, f"lifted: {load}", k
+
+
+def world_suction_holds(obj: SceneObject, s: SuctionSettings | None = None) -> bool:
+    """By `world_suction`'s rules: does some face of ``obj``, alone on the table, seal
+    under the cup (``s``, default the [suction] defaults: a 30 mm cup) and hold its true
+    mass? Each face is tried where its load is least: at its middle (a top straight
+    down, a side level at its middle height; a cylinder's side from four directions
+    clear of its handle)."""
+    s = SuctionSettings() if s is None else s
+    alone = make_scene("alone", [obj])
+    mid = np.array([obj.x_m, obj.y_m, obj.base_z_m + obj.height_m / 2])
+    tries: list[tuple[np.ndarray, np.ndarray]] = [
+        (np.array([obj.x_m, obj.y_m, obj.top_z_m]), np.array([0.0, 0.0, -1.0]))
+    ]
+    if isinstance(obj, Box):
+        for j, half in ((0, obj.size_x_m / 2), (1, obj.size_y_m / 2)):
+            out = np.array([*rot2(obj.yaw_rad)[:, j], 0.0])
+            tries += [(mid + sign * half * out, -sign * out) for sign in (1.0, -1.0)]
+    else:
+        for q in range(4):
+            yaw = obj.yaw_rad + math.pi / 4 + q * math.pi / 2
+            out = np.array([math.cos(yaw), math.sin(yaw), 0.0])
+            tries.append((mid + obj.radius_m * out, -out))
+    return any(world_suction(alone, lip, axis, s)[0] for lip, axis in tries)
 
 
 # --- perception of the simulated world ------------------------------------------------------

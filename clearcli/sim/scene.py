@@ -44,6 +44,17 @@ MAX_WIDTH_M = 0.07
 HANDLE_THICKNESS_M = 0.012
 HANDLE_SPAN = 0.6
 
+# What the camera does not see of an object (issue 36, the suction cup's concern): its
+# true mass and the surface of its top.
+# An object built without a mass weighs its volume at this density: 500 kg/m^3, within
+# household goods' 170 (a cracker box) to 1000 (a full can), stated by the world alone
+# (the planner estimates with its own [suction] density_kg_m3).
+WORLD_DENSITY_KG_M3 = 500.0
+# smooth: a cup seals on it; porous: perforated or open-weave (air holes, a mesh or a
+# fabric lid); ribbed: ridges and grooves deeper than a bellows follows (a ribbed lid).
+# Only the top is marked: an object's sides are smooth.
+SURFACES = ("smooth", "porous", "ribbed")
+
 
 def camera_pose_T_camera_table(height_m: float = CAMERA_HEIGHT_M, pitch_deg: float = CAMERA_PITCH_DEG) -> np.ndarray:
     """T_camera_table (4x4) of a camera ``height_m`` above the table plane, in the plane
@@ -116,10 +127,24 @@ class Box:
     y_m: float
     yaw_rad: float = 0.0
     base_z_m: float = 0.0
+    # what no camera sees (issue 36): the true mass (0: its volume at
+    # `WORLD_DENSITY_KG_M3`) and its top's surface (`SURFACES`); last, with defaults that
+    # leave every scene built before them as it was
+    mass_kg: float = 0.0
+    surface: str = "smooth"
 
     @property
     def height_m(self) -> float:
         return self.size_z_m
+
+    @property
+    def volume_m3(self) -> float:
+        return self.size_x_m * self.size_y_m * self.size_z_m
+
+    @property
+    def true_mass_kg(self) -> float:
+        """Its mass: ``mass_kg``, or its volume at `WORLD_DENSITY_KG_M3`."""
+        return self.mass_kg if self.mass_kg > 0.0 else self.volume_m3 * WORLD_DENSITY_KG_M3
 
     @property
     def top_z_m(self) -> float:
@@ -154,11 +179,30 @@ class Cylinder:
     base_z_m: float = 0.0
     wall_m: float = 0.0
     floor_m: float = 0.005
-    handle_m: float = 0.0  # last, so positional construction elsewhere stays valid
+    handle_m: float = 0.0  # after the others, so positional construction elsewhere stays valid
+    # as for `Box`: the true mass (0: its volume at `WORLD_DENSITY_KG_M3`) and its top's
+    # surface (`SURFACES`; an open container has no top)
+    mass_kg: float = 0.0
+    surface: str = "smooth"
 
     @property
     def is_open(self) -> bool:
         return self.wall_m > 0.0
+
+    @property
+    def volume_m3(self) -> float:
+        """What it is made of: a closed cylinder's whole volume, an open one's wall and
+        floor (its handle left out)."""
+        outer = math.pi * self.radius_m**2
+        if not self.is_open:
+            return outer * self.height_m
+        inner = math.pi * (self.radius_m - self.wall_m) ** 2
+        return (outer - inner) * (self.height_m - self.floor_m) + outer * self.floor_m
+
+    @property
+    def true_mass_kg(self) -> float:
+        """Its mass: ``mass_kg``, or its volume at `WORLD_DENSITY_KG_M3`."""
+        return self.mass_kg if self.mass_kg > 0.0 else self.volume_m3 * WORLD_DENSITY_KG_M3
 
     @property
     def has_handle(self) -> bool:

@@ -16,10 +16,11 @@ from typing import Any
 from clearcli.errors import SettingsError
 from clearcli.settings import Settings
 from clearcli.sim import scene as scenes
+from clearcli.sim.families import FAMILIES
 from clearcli.sim.record import record_session
 
 SCHEMA, VERSION = "simulate", 1
-SCENES = ("clutter", "dense", "isolated_box", "two_touching_boxes", "box_on_box", "deadlock_row")
+SCENES = ("clutter", "dense", "isolated_box", "two_touching_boxes", "box_on_box", "deadlock_row", "suction_mix")
 
 
 @dataclass(frozen=True)
@@ -44,6 +45,8 @@ def run(request: Request, out: Path) -> dict[str, Any]:
     try:
         if request.scene in ("clutter", "dense"):
             world = getattr(scenes, request.scene)(request.objects, request.seed)
+        elif request.scene in FAMILIES:  # a family of clearcli/sim/families.py, from --seed
+            world = FAMILIES[request.scene](request.seed)
         else:
             world = getattr(scenes, request.scene)()
     except ValueError as exc:

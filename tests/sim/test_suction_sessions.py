@@ -1,0 +1,139 @@
+"""Simulated sessions with a cup (issue 36): the panda-hybrid profile on `suction_mix`
+scenes, each suction step judged by the world's own rules (clearcli/sim/physics.py
+`world_suction`), not the planner's."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from types import SimpleNamespace
+from typing import Any
+
+import numpy as np
+import pytest
+
+from clearcli.predicates.grasps.base import SimWorld
+from clearcli.predicates.grasps.suction import SuctionGrasp
+from clearcli.settings import Settings
+from clearcli.sim.episode import EpisodeResult
+from clearcli.sim.families import suction_mix
+from clearcli.sim.scene import Scene
+
+
+def _probe_axis() -> np.ndarray:
+    """The axis the suction kind's `simulate` hands the world for a cup coming straight
+    down (its pose's z, into the face, is -z of the table)."""
+    T = np.eye(4)
+    T[:3, :3] = np.diag([1.0, -1.0, -1.0])
+    T[:3, 3] = (0.0, 0.0, 0.2)
+    seen: list[np.ndarray] = []
+
+    def world_suction(scene: Any, lip: np.ndarray, axis: np.ndarray, s: Any) -> tuple[bool, str, int | None]:
+        seen.append(np.asarray(axis, dtype=float))
+        return False, "missed: probe", None
+
+    world = SimpleNamespace(
+        model=SimpleNamespace(kind_candidates={"suction": ((T, T, T),)}),
+        settings=Settings(),
+        T_table_camera=np.eye(4),
+        rules=SimpleNamespace(world_suction=world_suction),
+        scene=None,
+        k=0,
+        chosen_pose=lambda candidates, pose=1, candidate=0: candidates[candidate][pose],
+    )
+    SuctionGrasp().simulate(world)
+    return seen[0]
+
+
+def _simulate_into(self: SuctionGrasp, world: SimWorld) -> str:
+    """`SuctionGrasp.simulate` with the cup's axis handed over into the face, as
+    `world_suction` takes it."""
+    T_camera_tcp = world.chosen_pose(world.model.kind_candidates.get(self.name, ()))
+    if T_camera_tcp is None:
+        return "missed: no suction pose"
+    s = world.settings.suction
+    T_table_tcp = world.T_table_camera @ T_camera_tcp
+    axis = T_table_tcp[:3, 2]
+    ok, why, k = world.rules.world_suction(world.scene, T_table_tcp[:3, 3] + s.lip_past_tcp_m * axis, axis, s)
+    if k is not None and k != world.k:
+        world.aim(k)
+    if not ok:
+        return f"suction failed: {why}"
+    world.take()
+    return "removed"
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="clearcli/predicates/grasps/suction.py SuctionGrasp.simulate passes -axis (out of the face) to "
+    "world_suction, whose axis points into the surface: the cup then meets the object from below",
+)
+def test_the_suction_kind_hands_the_world_the_axis_into_the_face() -> None:
+    assert _probe_axis() @ np.array([0.0, 0.0, -1.0]) > 0.99
+
+
+@pytest.fixture
+def cup_axis_into_the_face(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Until the kind hands the world the axis into the face (the test above), the
+    sessions here run its `simulate` with that one sign put right."""
+    if _probe_axis() @ np.array([0.0, 0.0, -1.0]) < 0:
+        monkeypatch.setattr(SuctionGrasp, "simulate", _simulate_into)
+
+
+def _session(seed: int, max_actions: int) -> tuple[EpisodeResult, Scene]:
+    """The session's result and the world as it ended."""
+    from clearcli.pipeline import Pipeline
+    from clearcli.replay.session import ReplayOptions, Session
+    from clearcli.settings.tree import load_settings
+    from clearcli.sim.episode import Episode
+    from clearcli.sim.truth import truth_segment
+
+    settings = load_settings(None, ["robot.name=panda-hybrid"])
+    pipeline = Pipeline(settings, segment_fn=truth_segment)
+    episode = Episode(suction_mix(seed), Session(pipeline, ReplayOptions()), seed=seed, max_actions=max_actions)
+    for _ in episode:
+        pass
+    assert episode.result is not None
+    return episode.result, episode.scene
+
+
+@pytest.mark.usefixtures("cup_axis_into_the_face")
+def test_a_suction_mix_scene_is_cleared_with_the_cup_and_the_fingers() -> None:
+    # suction_mix(19): a lidded container 12.5 cm across, a flat box 29 x 19 cm, a box
+    # 4.5 cm wide
+    world = suction_mix(19)
+    result, _ = _session(19, max_actions=6)
+    done = [(s.action, s.outcome) for s in result.steps if s.action]
+    assert result.end == "cleared" and result.cleared_truly, done
+    by_cup = [a for a, o in done if a.startswith("(grasp_suction ") and o == "removed"]
+    assert len(by_cup) == 2 and len(done) == 3, done
+    assert sorted(by_cup) == ["(grasp_suction 0)", "(grasp_suction 1)"]
+    assert [o.object_id for o in world.objects] == [0, 1, 3]
+
+
+@pytest.mark.usefixtures("cup_axis_into_the_face")
+def test_the_world_drops_a_heavy_object_and_does_not_seal_on_a_porous_top() -> None:
+    # suction_mix(5): the planner weighs object 2 by its volume and takes it by its top;
+    # the world's 4.4 kg takes more than the cup holds there: it drops. Then object 3,
+    # whose top is porous: no seal. Both stay where they stood.
+    world = suction_mix(5)
+    truth = {o.object_id: o for o in world.objects}
+    result, end = _session(5, max_actions=2)
+    (a, first), (b, second) = [(s.action, s.outcome) for s in result.steps if s.action]
+    assert a == "(grasp_suction 2)" and first.startswith("suction failed: dropped: too heavy: 4.36 kg"), first
+    assert truth[2].mass_kg > 4.0 and truth[2].surface == "smooth"
+    assert (b, second) == ("(grasp_suction 3)", "suction failed: no seal: the top is porous")
+    assert truth[3].surface == "porous"
+    left = {o.object_id: o for o in end.objects}
+    assert left[2] == truth[2] and left[3] == truth[3]  # dropped, not moved
+
+
+@pytest.mark.usefixtures("cup_axis_into_the_face")
+def test_clear_simulate_takes_the_suction_mix_scene(tmp_path: Path) -> None:
+    from clearcli.settings.tree import load_settings
+    from clearcli.tasks import simulate as task
+
+    settings = load_settings(None, ["robot.name=panda-hybrid"])
+    request = task.Request(settings, scene="suction_mix", seed=1, max_actions=1, truth_segmentation=True)
+    payload = task.run(request, tmp_path / "suction.mcap")
+    assert payload["scene"] == "suction_mix(1)" and payload["objects"] == suction_mix(1).n_objects
+    assert payload["steps"][0]["action"] == "(grasp_suction 0)" and payload["steps"][0]["outcome"] == "removed"
