@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 
 from clearcli.errors import SettingsError
-from clearcli.robot.kinematics import IKStats, cache_lookup, pose_error, se3, within_tolerance
+from clearcli.robot.kinematics import IKStats, SolverAccess, cache_lookup, se3, within_tolerance
 from clearcli.robot.urdf_joints import checked_urdf
 
 # a step of damped least squares moves no joint more than this (rad): the linearisation
@@ -386,7 +386,7 @@ def _check_revolute(model: Any, urdf: Path) -> None:
         )
 
 
-class UrdfKinematics:
+class UrdfKinematics(SolverAccess):
     """A serial arm of six or more revolute joints read from a URDF.
 
     Built in named steps (`__init__`): the description read and checked, the arm's
@@ -657,7 +657,8 @@ class UrdfKinematics:
         return [q, *self._random_seeds]
 
     def _solve_from(self, target: Any, q0: np.ndarray, iterations: int | None = None) -> np.ndarray | None:
-        """Damped least squares from q0 (clipped to the limits at every step)."""
+        """Damped least squares from q0 (clipped to the limits at every step); a start
+        that stops improving is given up."""
         pin = self.pin
         model, data, fid, local = self.model, self.data, self.tcp_id, pin.LOCAL
         lo, hi = self.lower, self.upper
@@ -694,25 +695,6 @@ class UrdfKinematics:
             q = np.minimum(np.maximum(q + dq, lo), hi)
         self.stats.iterations += n_it
         return None
-
-    # -- what a solver of its own uses (the simulated world's) ------------------------
-    def target(self, T_base_tcp: np.ndarray) -> Any:
-        """``T_base_tcp`` as the solvers' target: Pinocchio's SE3 in the model's root."""
-        return self.M_root_base * se3(T_base_tcp)
-
-    def solve_from(self, target: Any, q0: np.ndarray, iterations: int | None = None) -> np.ndarray | None:
-        """Damped least squares from q0 towards ``target`` (`target`), within the joint
-        limits, for ``iterations`` (default ``max_iterations``; a start that stops
-        improving is given up); None if it does not converge within the tolerances."""
-        return self._solve_from(target, q0, iterations)
-
-    def within_tolerance(self, target: Any, q: np.ndarray) -> bool:
-        """q within the joint limits puts the TCP on ``target`` within the tolerances."""
-        return within_tolerance(self, target, q)
-
-    def pose_error(self, target: Any, q: np.ndarray) -> np.ndarray:
-        """The TCP's pose error at q (log6, in the TCP frame)."""
-        return pose_error(self, target, q)
 
     def ik(self, T_base_tcp: np.ndarray, warm: np.ndarray | None = None) -> np.ndarray | None:
         """Joint angles putting the TCP at ``T_base_tcp`` within the tolerances and the

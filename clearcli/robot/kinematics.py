@@ -2,9 +2,10 @@
 
 `Kinematics` is the interface the planner (`ik`, `reachable`, `capsules`, `fk`) and the
 simulated world (`target`, `solve_from`, `within_tolerance`, `pose_error`: the world runs
-a solver of its own on the arm's model) use; `fresh` gives a new IK search (its cache,
-warm starts and statistics empty) on the same model, read once per command. The WAM's
-analytic solver is `wam_kinematics.py`, every other arm's `generic.py`.
+a solver of its own on the arm's model; every arm has them from `SolverAccess`) use;
+`fresh` gives a new IK search (its cache, warm starts and statistics empty) on the same
+model, read once per command. The WAM's analytic solver is `wam_kinematics.py`, every
+other arm's `generic.py`.
 
 Frames: poses are ``T_base_tcp`` in the arm's base frame; the TCP is the gripper's
 closing point (z = approach, x = closing direction). Pinocchio is imported inside
@@ -105,3 +106,34 @@ def pose_error(kin: Any, target: Any, q: np.ndarray) -> np.ndarray:
     pin = kin.pin
     pin.framesForwardKinematics(kin.model, kin.data, q)
     return np.asarray(pin.log6(kin.data.oMf[kin.tcp_id].actInv(target)).vector)
+
+
+class SolverAccess:
+    """The part of `Kinematics` a solver of its own uses (the simulated world's), the
+    same on every arm's Pinocchio model: the pose as the solvers' target, the arm's
+    damped least squares from a start, the tolerance check and the pose error. An arm's
+    class provides the model (``pin``, ``model``, ``data``, ``tcp_id``, ``M_root_base``,
+    its limits and tolerances) and its damped least squares (``_solve_from``)."""
+
+    M_root_base: Any
+
+    def _solve_from(self, target: Any, q0: np.ndarray, iterations: int | None = None) -> np.ndarray | None:
+        raise NotImplementedError
+
+    def target(self, T_base_tcp: np.ndarray) -> Any:
+        """``T_base_tcp`` as the solvers' target: Pinocchio's SE3 in the model's root."""
+        return self.M_root_base * se3(T_base_tcp)
+
+    def solve_from(self, target: Any, q0: np.ndarray, iterations: int | None = None) -> np.ndarray | None:
+        """Damped least squares from q0 towards ``target`` (`target`), within the joint
+        limits, for ``iterations`` (default ``max_iterations``); None if it does not
+        converge within the tolerances."""
+        return self._solve_from(target, q0, iterations)
+
+    def within_tolerance(self, target: Any, q: np.ndarray) -> bool:
+        """q within the joint limits puts the TCP on ``target`` within the tolerances."""
+        return within_tolerance(self, target, q)
+
+    def pose_error(self, target: Any, q: np.ndarray) -> np.ndarray:
+        """The TCP's pose error at q (log6, in the TCP frame)."""
+        return pose_error(self, target, q)

@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from clearcli.robot.kinematics import IKStats, cache_lookup, pose_error, se3, within_tolerance
+from clearcli.robot.kinematics import IKStats, SolverAccess, cache_lookup, se3
 from clearcli.settings.robot import RobotSettings
 
 URDF_PATH = Path(__file__).with_name("wam.urdf")
@@ -124,7 +124,7 @@ def dh_fk(q: np.ndarray) -> np.ndarray:
     return T
 
 
-class WamKinematics:
+class WamKinematics(SolverAccess):
     """The WAM model loaded from ``wam.urdf`` with joint limits from the manual."""
 
     def __init__(
@@ -268,25 +268,6 @@ class WamKinematics:
             q = np.minimum(np.maximum(q + dq, lo), hi)
         self.stats.iterations += n_it
         return None
-
-    # -- what a solver of its own uses (the simulated world's) ------------------------
-    def target(self, T_base_tcp: np.ndarray) -> Any:
-        """``T_base_tcp`` as the solvers' target: Pinocchio's SE3 in the model's root."""
-        return self.M_root_base * se3(T_base_tcp)
-
-    def solve_from(self, target: Any, q0: np.ndarray, iterations: int | None = None) -> np.ndarray | None:
-        """Damped least squares from q0 towards ``target`` (`target`), within the joint
-        limits, for ``iterations`` (default ``max_iterations``); None if it does not
-        converge within the tolerances."""
-        return self._solve_from(target, q0, iterations)
-
-    def within_tolerance(self, target: Any, q: np.ndarray) -> bool:
-        """q within the joint limits puts the TCP on ``target`` within the tolerances."""
-        return within_tolerance(self, target, q)
-
-    def pose_error(self, target: Any, q: np.ndarray) -> np.ndarray:
-        """The TCP's pose error at q (log6, in the TCP frame)."""
-        return pose_error(self, target, q)
 
     def fresh(self) -> WamKinematics:
         """A new IK search on this model: the same arm and settings, an empty cache and

@@ -10,13 +10,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 from helpers import shared_path
+from helpers.robot import solved_on_their_poses
 
 from clearcli.errors import SettingsError
 from clearcli.robot.generic import UrdfKinematics
-
-
-def _angle(Ra: np.ndarray, Rb: np.ndarray) -> float:
-    return float(np.arccos(np.clip((np.trace(Ra.T @ Rb) - 1.0) / 2.0, -1.0, 1.0)))
 
 
 def _round_trips(kin: UrdfKinematics, n: int, seed: int) -> int:
@@ -24,18 +21,8 @@ def _round_trips(kin: UrdfKinematics, n: int, seed: int) -> int:
     warm start; every solution within the limits and landing on its pose within the
     IK's tolerances. Returns how many were solved."""
     rng = np.random.default_rng(seed)
-    solved = 0
-    for q in rng.uniform(kin.lower, kin.upper, size=(n, kin.lower.size)):
-        T = kin.fk(q)
-        got = kin.ik(T)
-        if got is None:
-            continue
-        solved += 1
-        assert np.all(got >= kin.lower - 1e-12) and np.all(got <= kin.upper + 1e-12)
-        T2 = kin.fk(got)
-        assert np.linalg.norm(T2[:3, 3] - T[:3, 3]) < kin.tolerance_m + 1e-9
-        assert _angle(T2[:3, :3], T[:3, :3]) < kin.tolerance_rad + 1e-9
-    return solved
+    poses = [kin.fk(q) for q in rng.uniform(kin.lower, kin.upper, size=(n, kin.lower.size))]
+    return solved_on_their_poses(kin, poses, kin.tolerance_m + 1e-9, kin.tolerance_rad + 1e-9, slack=1e-12)
 
 
 def _profile_kinematics(name: str) -> UrdfKinematics:
