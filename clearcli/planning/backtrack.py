@@ -51,7 +51,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -92,27 +92,6 @@ def with_grasp_kinds(state: SymbolicState, kinds: Sequence[str]) -> SymbolicStat
     if not drop or not any(f[0] in drop for f in state.facts):
         return state
     return dataclasses.replace(state, facts=frozenset(f for f in state.facts if f[0] not in drop))
-
-
-def backtrack(
-    state: SymbolicState,
-    check: Checker,
-    settings: PlanSettings,
-    *,
-    goal_objects: Sequence[str] | None = None,
-    precheck: Callable[[Action], str] | None = None,
-    mode: str | None = None,
-    describe_width: Callable[[str], tuple[str, float | None]] | None = None,
-) -> Plan:
-    """Backtracking with ``check`` as HASIKSOLUTION, on every action (``mode="whole"``) or
-    the first (``"first"``; default ``settings.check``), its bounds those of ``settings``
-    (the [plan] section of the settings tree the caller resolved). Raises NoPlanError
-    when nothing can be removed (the reason in the message, the result in
-    ``error.plan``), PlannerError when the search fails or ``settings.time_limit_s`` (the
-    whole planning) ends without a checked plan. See `Search`."""
-    return Search(
-        state, check, settings, goal_objects=goal_objects, precheck=precheck, mode=mode, describe_width=describe_width
-    ).run()
 
 
 class Search:
@@ -207,6 +186,12 @@ class Search:
 
     # -- the search ----------------------------------------------------------------------
     def run(self) -> Plan:
+        """Backtracking with ``check`` as HASIKSOLUTION, on every action (``mode="whole"``)
+        or the first (``"first"``; default ``settings.check``), its bounds those of
+        ``settings`` (the [plan] section of the settings tree the caller resolved). Raises
+        NoPlanError when nothing can be removed (the reason in the message, the result in
+        ``error.plan``), PlannerError when the search fails or ``settings.time_limit_s``
+        (the whole planning) ends without a checked plan."""
         if self.precheck is not None:
             self.run_precheck()
         self.refresh_goal()
@@ -291,6 +276,21 @@ class Search:
     ) -> None:
         """What the failure of the plan's ``i``-th action teaches, where it holds (the
         module's docstring): facts of the base, or a fixed prefix and a new base."""
+
+        def failed_round(learnt: Iterable[Fact]) -> BacktrackStep:
+            """This round: its plan, failing at action ``i`` (after the prefix fixed so
+            far), and the facts it taught."""
+            return BacktrackStep(
+                solved.actions,
+                solved.cost,
+                solved.optimal,
+                False,
+                fail.reason,
+                i,
+                tuple(sorted(learnt)),
+                len(self.prefix),
+            )
+
         new: set[Fact] = set()
         if i == 0:
             new = set(fail.facts(action)) - self.known()
@@ -320,18 +320,7 @@ class Search:
             (self.learnt0 if not self.prefix else self.learnt_here).update(new)
             if self.prefix:
                 self.learnt_later.extend((len(self.prefix), f) for f in sorted(new))
-            self.steps.append(
-                BacktrackStep(
-                    solved.actions,
-                    solved.cost,
-                    solved.optimal,
-                    False,
-                    fail.reason,
-                    i,
-                    tuple(sorted(new)),
-                    len(self.prefix),
-                )
-            )
+            self.steps.append(failed_round(new))
         elif i == 0:
             # A failure in the base whose facts are known already: the planner would not
             # have planned the action. A bug, not a scene: say so rather than loop.
@@ -339,18 +328,7 @@ class Search:
         else:
             # Nothing to say of the base: fix the checked actions before the failure and
             # plan the rest from the state they leave, where the failure is learnt.
-            self.steps.append(
-                BacktrackStep(
-                    solved.actions,
-                    solved.cost,
-                    solved.optimal,
-                    False,
-                    fail.reason,
-                    i,
-                    tuple(sorted(fail.facts(action))),
-                    len(self.prefix),
-                )
-            )
+            self.steps.append(failed_round(fail.facts(action)))
             # The facts known in the base, carried through the fixed actions by the
             # domain's effects, are the new base's facts.
             facts_now = self.known()
@@ -519,14 +497,14 @@ def make_plan(
         return text, (width if width > 0 else None)
 
     try:
-        plan = backtrack(
+        plan = Search(
             state,
             checker,
             plan_s,
             precheck=checker.beyond_reach if plan_s.reach_precheck else None,
             mode=check or plan_s.check,
             describe_width=describe_width,
-        )
+        ).run()
     except NoPlanError as err:
         if getattr(err, "plan", None) is not None:
             err.plan = _with_pose(err.plan, T_base_camera)

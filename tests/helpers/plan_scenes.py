@@ -276,23 +276,28 @@ def own_lifted_pddl(
     return domain, problem
 
 
+def bare_object(
+    name: str, centroid: np.ndarray, extents_m: np.ndarray, pushes: dict[str, PushModel], segment_index: int = 0
+) -> ObjectModel:
+    """An ObjectModel of placeholder geometry (axes the camera's, no hull, no grasp
+    candidates) with these pushes: what symbolic tests need of an object."""
+    return ObjectModel(
+        name=name,
+        segment_index=segment_index,
+        centroid=centroid,
+        principal_axes=np.eye(3),
+        extents_m=extents_m,
+        hull_vertices=np.zeros((0, 3)),
+        hull_faces=np.zeros((0, 3), dtype=np.int64),
+        grasp_candidates=(),
+        pushes=pushes,
+    )
+
+
 def dummy_state(names: list[str], facts: frozenset[Fact], push_costs: dict | None = None) -> SymbolicState:
     """A SymbolicState with the given facts and placeholder geometry (symbolic tests)."""
     table, polygon = table_camera()
-    objs = tuple(
-        ObjectModel(
-            name=n,
-            segment_index=i,
-            centroid=np.zeros(3),
-            principal_axes=np.eye(3),
-            extents_m=np.zeros(3),
-            hull_vertices=np.zeros((0, 3)),
-            hull_faces=np.zeros((0, 3), dtype=np.int64),
-            grasp_candidates=(),
-            pushes={},
-        )
-        for i, n in enumerate(names)
-    )
+    objs = tuple(bare_object(n, np.zeros(3), np.zeros(3), {}, segment_index=i) for i, n in enumerate(names))
     return SymbolicState(objs, table, polygon, frozenset(facts), dict(push_costs or {}))
 
 

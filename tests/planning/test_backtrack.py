@@ -12,10 +12,11 @@ import pytest
 from helpers import plan_scenes as ps
 from helpers.clearing import _settings as _world_settings
 from helpers.clearing import _state
+from helpers.planning import FakeIK
 
 from clearcli.errors import NoPlanError
-from clearcli.planning.backtrack import backtrack, make_plan
-from clearcli.planning.feasibility import IKActionChecker, Infeasible, SceneContext
+from clearcli.planning.backtrack import Search, make_plan
+from clearcli.planning.feasibility import IKActionChecker, Infeasible
 from clearcli.planning.types import Action, CheckedAction, Plan
 from clearcli.predicates.state import DIRECTIONS, Fact
 from clearcli.settings import Settings
@@ -134,26 +135,11 @@ def test_empty_table_is_an_empty_plan() -> None:
     assert plan.actions == () and plan.cost == 0 and plan.first is None
 
 
-class FakeIK:
-    """IK oracle from a set of actions infeasible where their object stands as recorded
-    (once it was pushed, everything about it is feasible: the thesis's assumption)."""
-
-    def __init__(self, infeasible: set[Action]) -> None:
-        self.infeasible = infeasible
-        self.calls: list[Action] = []
-
-    def __call__(self, action: Action, ctx: SceneContext = SceneContext()) -> CheckedAction | Infeasible:
-        self.calls.append(action)
-        if action in self.infeasible and not ctx.moved(action.obj):
-            return Infeasible("no IK solution", "ik")
-        return CheckedAction(action, (), ())
-
-
 def test_grasp_infeasible_push_then_grasp() -> None:
     # The thesis: a push makes an IK-infeasible grasp possible again.
     state = ps.dummy_state(["o0", "o1"], frozenset())
     ik = FakeIK({Action("grasp", "o0"), Action("grasp", "o1")})
-    plan = backtrack(state, ik, _settings().plan)
+    plan = Search(state, ik, _settings().plan).run()
     assert plan.cost == 4 and plan.actions[0].kind == "push"
     assert ("ik_unfeasible_grasp", "o0") in plan.ik_facts or ("ik_unfeasible_grasp", "o1") in plan.ik_facts
     check_plan(state, plan)
@@ -166,7 +152,7 @@ def test_unreachable_blocker_leaves_others_stuck_but_plans_the_rest() -> None:
     )
     state = ps.dummy_state(["o0", "o1", "o2"], facts)
     everything_o0 = {Action("grasp", "o0")} | {Action("push", "o0", d) for d in DIRECTIONS}
-    plan = backtrack(state, FakeIK(everything_o0), _settings().plan)
+    plan = Search(state, FakeIK(everything_o0), _settings().plan).run()
     assert plan.unreachable == ("o0",) and plan.stuck == ("o1",)
     assert plan.goal == ("o2",) and plan.cost == 2 and plan.replans == 6
     assert plan.actions[0].pddl().startswith("(push o2") and plan.actions[1].pddl() == "(grasp o2)"
@@ -176,7 +162,7 @@ def test_unreachable_blocker_leaves_others_stuck_but_plans_the_rest() -> None:
 def test_ungraspable_not_in_goal_but_pushed_out_of_the_way() -> None:
     facts = frozenset({("ungraspable", "o0"), ("block_grasp", "o0", "o1")})
     state = ps.dummy_state(["o0", "o1"], facts)
-    plan = backtrack(state, FakeIK(set()), _settings().plan)
+    plan = Search(state, FakeIK(set()), _settings().plan).run()
     assert plan.ungraspable == ("o0",) and plan.goal == ("o1",)
     assert plan.cost == 2 and plan.actions[0].kind == "push"
     check_plan(state, plan)
@@ -194,7 +180,7 @@ def test_random_states_with_random_ik_failures(seed: int) -> None:
     infeasible = {a for a in all_actions if rng.random() < 0.3}
     ik = FakeIK(infeasible)
     try:
-        plan = backtrack(state, ik, _settings().plan, mode="first")
+        plan = Search(state, ik, _settings().plan, mode="first").run()
     except NoPlanError:
         return
     assert plan.actions[0] not in infeasible
@@ -202,7 +188,7 @@ def test_random_states_with_random_ik_failures(seed: int) -> None:
     assert len(ik.calls) == plan.replans
     check_plan(state, plan)
     # the whole-plan check: no action of the plan is infeasible
-    whole = backtrack(state, FakeIK(infeasible), _settings().plan)
+    whole = Search(state, FakeIK(infeasible), _settings().plan).run()
     for k, a in enumerate(whole.actions):  # infeasible as recorded: only after a push of it
         assert a not in infeasible or any(p.obj == a.obj for p in whole.actions[:k]), (k, a)
     assert all(c is not None for c in whole.checked) and len(whole.checked) == len(whole.actions)
@@ -390,7 +376,7 @@ def test_deadline_returns_the_checked_plan_found_so_far() -> None:
     whole planning's time limit ends it, and its best plan, every action checked, is the
     answer, marked deadline and not optimal."""
     state = _many_objects(80)
-    plan = backtrack(state, FakeIK(set()), _settings(time_limit_s=1.5, anytime_time_s=30.0).plan)
+    plan = Search(state, FakeIK(set()), _settings(time_limit_s=1.5, anytime_time_s=30.0).plan).run()
     assert plan.deadline and not plan.optimal and plan.search == "seq-sat-lama-2011"
     assert plan.goal and all(c is not None for c in plan.checked)
     assert plan.timings_s["total_s"] < 1.5 + 1.0  # the limit bounds the whole planning
@@ -403,7 +389,7 @@ def test_deadline_without_a_checked_plan_is_a_planner_error() -> None:
 
     # (the least [plan] time_limit_s allows)
     with pytest.raises(PlannerError, match="time limit of 0.1 s"):
-        backtrack(_many_objects(120), FakeIK(set()), _settings(time_limit_s=0.1).plan)
+        Search(_many_objects(120), FakeIK(set()), _settings(time_limit_s=0.1).plan).run()
 
 
 @pytest.mark.parametrize("replay_check", ["first", "whole"])

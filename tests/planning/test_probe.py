@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 from helpers.clearing import _settings, _state
 
+from clearcli.planning.types import Plan
 from clearcli.settings.geometry import GripperSettings
 from clearcli.sim import scene as S
 
@@ -18,6 +19,20 @@ def _merged_pair() -> S.Scene:
     a = S.Box(0, 0.12, 0.045, 0.065, x_m=0.0, y_m=0.05, yaw_rad=yaw)
     b = S.Box(1, 0.12, 0.05, 0.065, x_m=-math.sin(yaw) * 0.0476, y_m=0.05 + math.cos(yaw) * 0.0476, yaw_rad=yaw)
     return S.make_scene("merged_pair", [a, b])
+
+
+def _empty_plan(unreachable: tuple[str, ...] = (), ungraspable: tuple[str, ...] = ()) -> Plan:
+    """A plan of no action that leaves out these objects (what the probe is asked about)."""
+    return Plan(
+        actions=(),
+        cost=0,
+        optimal=True,
+        first=None,
+        ik_facts=frozenset(),
+        unreachable=unreachable,
+        replans=0,
+        ungraspable=ungraspable,
+    )
 
 
 @pytest.mark.parametrize("seed", [0, 1])
@@ -46,7 +61,6 @@ def test_probe_push_separates_a_merged_pair_and_the_session_clears(seed: int) ->
 
 def test_probe_candidates_exclude_what_fits_and_what_is_far_too_wide() -> None:
     from clearcli.planning.probe import probe_candidates
-    from clearcli.planning.types import Plan
 
     _, state = _state(
         S.make_scene(
@@ -60,22 +74,12 @@ def test_probe_candidates_exclude_what_fits_and_what_is_far_too_wide() -> None:
         _settings(),
     )
     by_width = sorted(state.objects, key=lambda o: o.grasp_width_m)
-    plan = Plan(
-        actions=(),
-        cost=0,
-        optimal=True,
-        first=None,
-        ik_facts=frozenset(),
-        unreachable=(),
-        replans=0,
-        ungraspable=tuple(o.name for o in by_width),
-    )
+    plan = _empty_plan(ungraspable=tuple(o.name for o in by_width))
     assert probe_candidates(state, plan, 0.07, 0.14) == [by_width[1].name]
 
 
 def test_a_wide_object_whose_slide_failed_is_probed_too() -> None:
     from clearcli.planning.probe import probe_candidates
-    from clearcli.planning.types import Plan
 
     # the 10 cm box is too wide for the pinch; left "unreachable" because its other
     # grasps (a slide) kept failing when carried out, it may still be two merged objects:
@@ -93,16 +97,7 @@ def test_a_wide_object_whose_slide_failed_is_probed_too() -> None:
     )
     narrow, wide = sorted(state.objects, key=lambda o: o.grasp_width_m)
     assert ("ungraspable", wide.name) in state.facts and ("ungraspable", narrow.name) not in state.facts
-    plan = Plan(
-        actions=(),
-        cost=0,
-        optimal=True,
-        first=None,
-        ik_facts=frozenset(),
-        unreachable=(narrow.name, wide.name),
-        replans=0,
-        ungraspable=(),
-    )
+    plan = _empty_plan(unreachable=(narrow.name, wide.name))
     assert probe_candidates(state, plan, 0.07, 0.14) == []
     assert probe_candidates(state, plan, 0.07, 0.14, failed={wide.name, narrow.name}) == [wide.name]
 

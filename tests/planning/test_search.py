@@ -8,26 +8,12 @@ import dataclasses
 
 import pytest
 from helpers import plan_scenes as ps
+from helpers.planning import FakeIK
 
 from clearcli.errors import PlannerError
-from clearcli.planning.backtrack import Search, backtrack
-from clearcli.planning.feasibility import Infeasible, SceneContext
-from clearcli.planning.types import Action, CheckedAction
+from clearcli.planning.backtrack import Search
+from clearcli.planning.types import Action
 from clearcli.settings.plan import PlanSettings
-
-
-class FakeIK:
-    """Infeasible: the given actions where their object stands as recorded."""
-
-    def __init__(self, infeasible: set[Action]) -> None:
-        self.infeasible = infeasible
-        self.calls: list[Action] = []
-
-    def __call__(self, action: Action, ctx: SceneContext = SceneContext()) -> CheckedAction | Infeasible:
-        self.calls.append(action)
-        if action in self.infeasible and not ctx.moved(action.obj):
-            return Infeasible("no IK solution", "ik")
-        return CheckedAction(action, (), ())
 
 
 def _given(**values: object) -> PlanSettings:
@@ -48,10 +34,10 @@ def test_the_search_reads_the_settings_it_is_given(monkeypatch) -> None:  # type
     state = ps.dummy_state(["o0", "o1"], frozenset())
     first = _given(check="first", max_backtracks=7)
     _no_defaults(monkeypatch)
-    plan = backtrack(state, FakeIK(set()), first)
+    plan = Search(state, FakeIK(set()), first).run()
     assert plan.check == "first" and plan.max_backtracks == 7
     assert plan.checked[0] is not None and all(c is None for c in plan.checked[1:])
-    assert backtrack(state, FakeIK(set()), first, mode="whole").check == "whole"
+    assert Search(state, FakeIK(set()), first, mode="whole").run().check == "whole"
 
 
 def test_max_backtracks_is_the_given_one(monkeypatch) -> None:  # type: ignore[no-untyped-def]
@@ -63,8 +49,8 @@ def test_max_backtracks_is_the_given_one(monkeypatch) -> None:  # type: ignore[n
     _no_defaults(monkeypatch)
     for bound in (1, 2):
         with pytest.raises(PlannerError, match=f"gave up after {bound} replans"):
-            backtrack(state, FakeIK(ik), bounds[bound])
-    plan = backtrack(state, FakeIK(ik), bounds[3])
+            Search(state, FakeIK(ik), bounds[bound]).run()
+    plan = Search(state, FakeIK(ik), bounds[3]).run()
     assert plan.replans == 3 and plan.max_backtracks == 3 and plan.cost == 4
 
 
@@ -99,7 +85,7 @@ def test_an_object_whose_only_grasp_is_a_slide_without_an_arm_motion_is_unreacha
     facts = frozenset({("ungraspable", "o0"), ("slidable", "o0"), ("ungraspable", "o1"), ("rim_graspable", "o1")})
     state = ps.dummy_state(["o0", "o1"], facts)
     slide, rim = Action("grasp", "o0", None, "slide"), Action("grasp", "o1", None, "rim")
-    plan = backtrack(state, FakeIK({slide, rim}), _given())
+    plan = Search(state, FakeIK({slide, rim}), _given()).run()
     assert plan.unreachable == ("o0",) and plan.goal == ("o1",)
     assert [a.pddl() for a in plan.actions][-1] == "(grasp_rim o1)" and plan.actions[0].kind == "push"
     left = {x.name: x for x in plan.left}

@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import pytest
+from helpers.plan_scenes import bare_object
 
 from clearcli.perception.types import TablePlane
 from clearcli.predicates.state import ObjectModel, PushModel, SymbolicState
@@ -43,17 +44,7 @@ def make_object(name: str, centroid: np.ndarray, first_axis_deg: float) -> Objec
         d: PushModel(direction=d, unit_vector=unit(a), push_length_m=0.1, object_path=(), candidates=())
         for d, a in axes.items()
     }
-    return ObjectModel(
-        name=name,
-        segment_index=0,
-        centroid=np.asarray(centroid, dtype=float),
-        principal_axes=np.eye(3),
-        extents_m=np.array([0.1, 0.08, 0.06]),
-        hull_vertices=np.zeros((0, 3)),
-        hull_faces=np.zeros((0, 3), dtype=int),
-        grasp_candidates=(),
-        pushes=pushes,
-    )
+    return bare_object(name, np.asarray(centroid, dtype=float), np.array([0.1, 0.08, 0.06]), pushes)
 
 
 def make_state(objects: list[ObjectModel], costs: dict | None = None) -> SymbolicState:

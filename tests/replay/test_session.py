@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 import pytest
 from helpers.clearing import _settings, _state
+from helpers.plan_scenes import bare_object
 from helpers.replay_session import sim_log  # noqa: F401  (fixtures)
 
 from clearcli.errors import InputError
@@ -15,7 +16,7 @@ from clearcli.io.frames import Frame
 from clearcli.perception.types import Segmentation, SegmentedObject, TablePlane
 from clearcli.pipeline import Pipeline
 from clearcli.planning.types import Action, Plan
-from clearcli.predicates.state import ObjectModel, PushModel, SymbolicState
+from clearcli.predicates.state import PushModel, SymbolicState
 from clearcli.replay.session import ReplayOptions, Session, replay
 from clearcli.settings import Settings
 from clearcli.sim import scene as S
@@ -232,17 +233,7 @@ def _toy_state(frame: Frame, seg: Segmentation, settings: Any) -> SymbolicState:
         "dir1": PushModel("dir1", axis, 0.1, (), ()),
         "dir2": PushModel("dir2", -axis, 0.1, (), ()),
     }
-    model = ObjectModel(
-        name="o0",
-        segment_index=0,
-        centroid=seg.objects[0].centroid,
-        principal_axes=np.eye(3),
-        extents_m=np.array([0.1, 0.06, 0.08]),
-        hull_vertices=np.zeros((0, 3)),
-        hull_faces=np.zeros((0, 3), dtype=int),
-        grasp_candidates=(),
-        pushes=pushes,
-    )
+    model = bare_object("o0", seg.objects[0].centroid, np.array([0.1, 0.06, 0.08]), pushes)
     free = abs(float(seg.objects[0].centroid[0])) >= 0.2 - 1e-9
     facts = frozenset() if free else frozenset({("block_grasp", "clutter", "o0")})
     return SymbolicState(objects=(model,), table=TABLE, table_polygon=np.zeros((0, 3)), facts=facts)
