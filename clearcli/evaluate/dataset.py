@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from clearcli.errors import InputError
+from clearcli.evaluate.osd import OSD_KEYS  # the OSD/OCID metrics; Boundary over organized frames only
 from clearcli.files import atomic_output, atomic_path
 
 MOSD_GROUPS = "mosd"
@@ -68,16 +69,6 @@ def _labels(frame: Any, path: str, what: str) -> np.ndarray:
 
 
 SUMMARY_KEYS = ("precision", "recall", "f1", "mean_best_iou")
-# The OSD/OCID metrics (clearcli/evaluate/osd.py); Boundary over organized frames only.
-OSD_KEYS = (
-    "overlap_precision",
-    "overlap_recall",
-    "overlap_f",
-    "boundary_precision",
-    "boundary_recall",
-    "boundary_f",
-    "objects_f75",
-)
 
 
 def summarise(docs: Sequence[Mapping[str, Any]], groups: Mapping[str, Sequence[str]]) -> dict[str, Any]:

@@ -28,7 +28,7 @@ Both sides without objects: every value 1; one side without: 0.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -53,18 +53,11 @@ class OsdScore:
         def r(v: float | None) -> float | None:
             return None if v is None else round(float(v), 6)
 
-        return {
-            k: r(getattr(self, k))
-            for k in (
-                "overlap_precision",
-                "overlap_recall",
-                "overlap_f",
-                "boundary_precision",
-                "boundary_recall",
-                "boundary_f",
-                "objects_f75",
-            )
-        }
+        return {k: r(getattr(self, k)) for k in OSD_KEYS}
+
+
+# The metrics' names, in the order of the JSON documents and the CSV columns.
+OSD_KEYS = tuple(f.name for f in fields(OsdScore))
 
 
 def _f(p: float, r: float) -> float:

@@ -103,21 +103,16 @@ def test_dataset_reports_the_osd_metrics_per_frame_and_in_the_means() -> None:
 
     from helpers import run_clear, shared_path
 
+    from clearcli.evaluate.osd import OSD_KEYS
+
     frames = [shared_path("mosd/test/test57.pcd"), shared_path("mosd/learn/learn0.pcd")]
     res = run_clear("evaluate", "dataset", *frames, "--json", "--jobs", "1")
     assert res.returncode == 0, res.stderr
     lines = [json.loads(x) for x in res.stdout.splitlines()]
     docs, summary = [ln["document"] for ln in lines[:-1]], lines[-1]["evaluation"]["all"]
+    assert len(OSD_KEYS) == 7  # Overlap's and Boundary's precision, recall and F; objects_f75
     for d in docs:
-        for k in (
-            "overlap_precision",
-            "overlap_recall",
-            "overlap_f",
-            "boundary_precision",
-            "boundary_recall",
-            "boundary_f",
-            "objects_f75",
-        ):
+        for k in OSD_KEYS:
             assert 0.0 <= d[k] <= 1.0, (k, d[k])  # organized mOSD frames: Boundary too
     assert summary["mean_boundary_f"] == round(sum(d["boundary_f"] for d in docs) / 2, 4)
     assert summary["mean_overlap_f"] == round(sum(d["overlap_f"] for d in docs) / 2, 4)
