@@ -23,6 +23,7 @@ and a batch reach this module): `clearcli.io.formats.mcap`.
 from __future__ import annotations
 
 from collections.abc import Callable, Generator, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, BinaryIO, TypeVar
@@ -514,6 +515,21 @@ def require_frame_index(path: Path, summary: McapSummary, topic: str, index: int
         )
 
 
+@contextmanager
+def decoding_frame(path: Path, topic: str, index: int, remedy: Callable[[], str]) -> Iterator[None]:
+    """What goes wrong decoding frame ``index`` of ``topic`` (--frame) as one InputError
+    naming it: a message that is not its declared type with ``remedy()`` (what to do
+    about it), anything else as "cannot be decoded"; an InputError as it is."""
+    try:
+        yield
+    except InputError:
+        raise
+    except DeclaredTypeError as exc:
+        raise InputError(f"{path}: frame {index} of {topic} {exc}; {remedy()}") from None
+    except Exception as exc:
+        raise InputError(f"{path}: frame {index} of {topic} cannot be decoded ({error_reason(exc)})") from None
+
+
 def read_mcap_frame(path: Path, topic: str | None = None, index: int = 0, images: Any = None) -> Frame:
     """Frame `index` (from 0) of the point-cloud topic; only that message is decoded."""
     path = Path(path)
@@ -525,14 +541,8 @@ def read_mcap_frame(path: Path, topic: str | None = None, index: int = 0, images
     for i, schema, channel, message in _guarded(path, summary, topic):
         seen = i + 1
         if i == index:
-            try:
+            with decoding_frame(path, topic, index, lambda: _TYPE_REMEDY):
                 return _message_frame(decoders, schema, channel, message, index, path, images, summary)
-            except InputError:
-                raise
-            except DeclaredTypeError as exc:
-                raise InputError(f"{path}: frame {index} of {topic} {exc}; {_TYPE_REMEDY}") from None
-            except Exception as exc:
-                raise InputError(f"{path}: frame {index} of {topic} cannot be decoded ({error_reason(exc)})") from None
     if summary.damage is not None:
         _raise_damage(path, topic, seen, f"frame {index} is past the damage; the log is {summary.damage}")
     raise InputError(f"{path}: --frame {index} does not exist: {topic} has {seen} frames")

@@ -18,18 +18,18 @@ from clearcli.io.mcap import DEFAULT_FRAME_ID, DEFAULT_TOPIC
 from clearcli.io.pointfields import pack_rgb_float
 from clearcli.transforms import matrix_to_quat
 
-_TIME_DEF = "int32 sec\nuint32 nanosec\n"
-_HEADER_DEF = "builtin_interfaces/Time stamp\nstring frame_id\n"
 _SEP = "=" * 80 + "\n"
+# std_msgs/Header and the type it uses, as a message definition that uses it lists them
+_HEADER_DEFS = (
+    _SEP
+    + "MSG: std_msgs/Header\nbuiltin_interfaces/Time stamp\nstring frame_id\n"
+    + _SEP
+    + "MSG: builtin_interfaces/Time\nint32 sec\nuint32 nanosec\n"
+)
 POINTCLOUD2_MSGDEF = (
     "std_msgs/Header header\nuint32 height\nuint32 width\nPointField[] fields\n"
     "bool is_bigendian\nuint32 point_step\nuint32 row_step\nuint8[] data\nbool is_dense\n"
-    + _SEP
-    + "MSG: std_msgs/Header\n"
-    + _HEADER_DEF
-    + _SEP
-    + "MSG: builtin_interfaces/Time\n"
-    + _TIME_DEF
+    + _HEADER_DEFS
     + _SEP
     + "MSG: sensor_msgs/PointField\n"
     "uint8 INT8 = 1\nuint8 UINT8 = 2\nuint8 INT16 = 3\nuint8 UINT16 = 4\n"
@@ -41,12 +41,7 @@ TFMESSAGE_MSGDEF = (
     + _SEP
     + "MSG: geometry_msgs/TransformStamped\nstd_msgs/Header header\nstring child_frame_id\n"
     "Transform transform\n"
-    + _SEP
-    + "MSG: std_msgs/Header\n"
-    + _HEADER_DEF
-    + _SEP
-    + "MSG: builtin_interfaces/Time\n"
-    + _TIME_DEF
+    + _HEADER_DEFS
     + _SEP
     + "MSG: geometry_msgs/Transform\nVector3 translation\nQuaternion rotation\n"
     + _SEP

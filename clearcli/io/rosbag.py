@@ -51,6 +51,7 @@ from clearcli.io.mcap import (
     McapSummary,
     choose_topic,
     decode_declared,
+    decoding_frame,
     error_reason,
     require_frame_index,
     until_damage,
@@ -128,6 +129,35 @@ def _ros1_channels(conns: list[tuple[int, str, str, str, int]]) -> tuple[Channel
     )
 
 
+def _ros1_bag(
+    path: Path,
+    channels: tuple[ChannelInfo, ...],
+    n: int,
+    start: int | None,
+    end: int | None,
+    *,
+    indexed: bool,
+    chunk_count: int,
+    damage: str | None = None,
+) -> BagSummary:
+    """The summary of a ROS 1 bag (format V2.0, the only one read) of ``n`` messages
+    stamped ``start`` to ``end`` (ns; None without messages)."""
+    return BagSummary(
+        path=path,
+        format="rosbag1",
+        storage="rosbag1",
+        profile="ros1",
+        library="ROS 1 bag V2.0",
+        channels=channels,
+        message_count=n,
+        start_ns=start,
+        end_ns=end,
+        indexed=indexed,
+        chunk_count=chunk_count,
+        damage=damage,
+    )
+
+
 def _ros1_scan(path: Path) -> BagSummary:
     """Connections, counts and span from the records themselves (no usable index)."""
     counts: dict[int, int] = {}
@@ -150,20 +180,7 @@ def _ros1_scan(path: Path) -> BagSummary:
     channels = _ros1_channels(
         [(c.id, c.topic, c.msgtype, c.msgdef, counts.get(c.id, 0)) for c in stream.conns.values()]
     )
-    return BagSummary(
-        path=path,
-        format="rosbag1",
-        storage="rosbag1",
-        profile="ros1",
-        library="ROS 1 bag V2.0",
-        channels=channels,
-        message_count=n,
-        start_ns=start,
-        end_ns=end,
-        indexed=False,
-        chunk_count=stream.chunks,
-        damage=damage,
-    )
+    return _ros1_bag(path, channels, n, start, end, indexed=False, chunk_count=stream.chunks, damage=damage)
 
 
 def _ros1_reader(path: Path) -> Any | None:
@@ -191,19 +208,9 @@ def _ros1_summary(path: Path) -> BagSummary:
         conns = sorted(reader.connections, key=lambda c: c.id)
         channels = _ros1_channels([(c.id, c.topic, _ros1_name(c.msgtype), c.msgdef.data, c.msgcount) for c in conns])
         n = sum(c.msgcount for c in conns)
-        return BagSummary(
-            path=path,
-            format="rosbag1",
-            storage="rosbag1",
-            profile="ros1",
-            library="ROS 1 bag V2.0",
-            channels=channels,
-            message_count=n,
-            start_ns=int(reader.start_time) if n else None,
-            end_ns=int(reader.end_time) - 1 if n else None,  # rosbags' end_time is exclusive
-            indexed=True,
-            chunk_count=len(reader.chunk_infos),
-        )
+        start = int(reader.start_time) if n else None
+        end = int(reader.end_time) - 1 if n else None  # rosbags' end_time is exclusive
+        return _ros1_bag(path, channels, n, start, end, indexed=True, chunk_count=len(reader.chunk_infos))
     finally:
         reader.close()
 
@@ -544,14 +551,8 @@ def read_bag_frame(path: Path, topic: str | None = None, index: int = 0, images:
     decoders = BagDecoders(ros1=summary.format == "rosbag1")
     for i, raw in _guarded(summary, topic, skip_to=index):
         if i == index:
-            try:
+            with decoding_frame(path, topic, index, lambda: _type_remedy(summary, topic)):
                 return _decode(decoders, summary, topic, index, raw, images)
-            except InputError:
-                raise
-            except DeclaredTypeError as exc:
-                raise InputError(f"{path}: frame {index} of {topic} {exc}; {_type_remedy(summary, topic)}") from None
-            except Exception as exc:
-                raise InputError(f"{path}: frame {index} of {topic} cannot be decoded ({error_reason(exc)})") from None
     total = summary.count(topic)
     if summary.damage is not None:
         _raise_damage(summary, topic, total, f"frame {index} is past the damage; the bag breaks {summary.damage}")

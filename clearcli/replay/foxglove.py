@@ -29,170 +29,98 @@ POINTCLOUD_SCHEMA = "foxglove.PointCloud"
 
 # Compact JSON schemas, written for this project from the field lists Foxglove documents
 # for its message types; the viewer picks its panels by the schema name.
-_TIME = {"type": "object", "properties": {"sec": {"type": "integer"}, "nsec": {"type": "integer"}}}
-_VEC3 = {"type": "object", "properties": {k: {"type": "number"} for k in ("x", "y", "z")}}
-_QUAT = {"type": "object", "properties": {k: {"type": "number"} for k in ("x", "y", "z", "w")}}
-_POSE = {"type": "object", "properties": {"position": _VEC3, "orientation": _QUAT}}
-_COLOR = {"type": "object", "properties": {k: {"type": "number"} for k in ("r", "g", "b", "a")}}
+_NUMBER = {"type": "number"}
+_INT = {"type": "integer"}
+_STRING = {"type": "string"}
+_BOOL = {"type": "boolean"}
+
+
+def _object(**properties: Any) -> dict[str, Any]:
+    return {"type": "object", "properties": properties}
 
 
 def _array(items: dict[str, Any]) -> dict[str, Any]:
     return {"type": "array", "items": items}
 
 
+def _objects(**properties: Any) -> dict[str, Any]:
+    """An array of objects of these properties."""
+    return _array(_object(**properties))
+
+
+_TIME = _object(sec=_INT, nsec=_INT)
+_VEC3 = _object(x=_NUMBER, y=_NUMBER, z=_NUMBER)
+_QUAT = _object(x=_NUMBER, y=_NUMBER, z=_NUMBER, w=_NUMBER)
+_POSE = _object(position=_VEC3, orientation=_QUAT)
+_COLOR = _object(r=_NUMBER, g=_NUMBER, b=_NUMBER, a=_NUMBER)
+
+# what lines and triangles share: their points, one colour or a colour each, the indices
+_POINTS = {"points": _array(_VEC3), "color": _COLOR, "colors": _array(_COLOR), "indices": _array(_INT)}
 _PRIMITIVES = {
-    "arrows": _array(
-        {
-            "type": "object",
-            "properties": {
-                "pose": _POSE,
-                "shaft_length": {"type": "number"},
-                "shaft_diameter": {"type": "number"},
-                "head_length": {"type": "number"},
-                "head_diameter": {"type": "number"},
-                "color": _COLOR,
-            },
-        }
+    "arrows": _objects(
+        pose=_POSE,
+        shaft_length=_NUMBER,
+        shaft_diameter=_NUMBER,
+        head_length=_NUMBER,
+        head_diameter=_NUMBER,
+        color=_COLOR,
     ),
-    "cubes": _array({"type": "object", "properties": {"pose": _POSE, "size": _VEC3, "color": _COLOR}}),
-    "spheres": _array({"type": "object", "properties": {"pose": _POSE, "size": _VEC3, "color": _COLOR}}),
-    "cylinders": _array(
-        {
-            "type": "object",
-            "properties": {
-                "pose": _POSE,
-                "size": _VEC3,
-                "bottom_scale": {"type": "number"},
-                "top_scale": {"type": "number"},
-                "color": _COLOR,
-            },
-        }
-    ),
-    "lines": _array(
-        {
-            "type": "object",
-            "properties": {
-                "type": {"type": "integer"},
-                "pose": _POSE,
-                "thickness": {"type": "number"},
-                "scale_invariant": {"type": "boolean"},
-                "points": _array(_VEC3),
-                "color": _COLOR,
-                "colors": _array(_COLOR),
-                "indices": _array({"type": "integer"}),
-            },
-        }
-    ),
-    "triangles": _array(
-        {
-            "type": "object",
-            "properties": {
-                "pose": _POSE,
-                "points": _array(_VEC3),
-                "color": _COLOR,
-                "colors": _array(_COLOR),
-                "indices": _array({"type": "integer"}),
-            },
-        }
-    ),
-    "texts": _array(
-        {
-            "type": "object",
-            "properties": {
-                "pose": _POSE,
-                "billboard": {"type": "boolean"},
-                "font_size": {"type": "number"},
-                "scale_invariant": {"type": "boolean"},
-                "color": _COLOR,
-                "text": {"type": "string"},
-            },
-        }
+    "cubes": _objects(pose=_POSE, size=_VEC3, color=_COLOR),
+    "spheres": _objects(pose=_POSE, size=_VEC3, color=_COLOR),
+    "cylinders": _objects(pose=_POSE, size=_VEC3, bottom_scale=_NUMBER, top_scale=_NUMBER, color=_COLOR),
+    "lines": _objects(type=_INT, pose=_POSE, thickness=_NUMBER, scale_invariant=_BOOL, **_POINTS),
+    "triangles": _objects(pose=_POSE, **_POINTS),
+    "texts": _objects(
+        pose=_POSE, billboard=_BOOL, font_size=_NUMBER, scale_invariant=_BOOL, color=_COLOR, text=_STRING
     ),
     "models": _array({"type": "object"}),
 }
 
+_METADATA = _objects(key=_STRING, value=_STRING)
+_ENTITY = _object(
+    timestamp=_TIME, frame_id=_STRING, id=_STRING, lifetime=_TIME, frame_locked=_BOOL, metadata=_METADATA, **_PRIMITIVES
+)
+
 SCENE_UPDATE_JSONSCHEMA: dict[str, Any] = {
     "title": SCENE_SCHEMA,
     "description": "An update to the entities of a 3D scene",
-    "type": "object",
-    "properties": {
-        "deletions": _array(
-            {
-                "type": "object",
-                "properties": {"timestamp": _TIME, "type": {"type": "integer"}, "id": {"type": "string"}},
-            }
-        ),
-        "entities": _array(
-            {
-                "type": "object",
-                "properties": {
-                    "timestamp": _TIME,
-                    "frame_id": {"type": "string"},
-                    "id": {"type": "string"},
-                    "lifetime": _TIME,
-                    "frame_locked": {"type": "boolean"},
-                    "metadata": _array(
-                        {"type": "object", "properties": {"key": {"type": "string"}, "value": {"type": "string"}}}
-                    ),
-                    **_PRIMITIVES,
-                },
-            }
-        ),
-    },
+    **_object(deletions=_objects(timestamp=_TIME, type=_INT, id=_STRING), entities=_array(_ENTITY)),
 }
 
 POINTCLOUD_JSONSCHEMA: dict[str, Any] = {
     "title": POINTCLOUD_SCHEMA,
-    "type": "object",
-    "properties": {
-        "timestamp": _TIME,
-        "frame_id": {"type": "string"},
-        "pose": _POSE,
-        "point_stride": {"type": "integer"},
-        "fields": _array(
-            {
-                "type": "object",
-                "properties": {"name": {"type": "string"}, "offset": {"type": "integer"}, "type": {"type": "integer"}},
-            }
-        ),
-        "data": {"type": "string", "contentEncoding": "base64"},
-    },
+    **_object(
+        timestamp=_TIME,
+        frame_id=_STRING,
+        pose=_POSE,
+        point_stride=_INT,
+        fields=_objects(name=_STRING, offset=_INT, type=_INT),
+        data={"type": "string", "contentEncoding": "base64"},
+    ),
 }
 
 PLAN_JSONSCHEMA: dict[str, Any] = {
     "title": "clear.Plan",
-    "type": "object",
-    "properties": {
-        "frame": {"type": "integer"},
-        "actions": _array(
-            {
-                "type": "object",
-                "properties": {
-                    "kind": {"type": "string"},
-                    "id": {"type": ["integer", "null"]},
-                    "name": {"type": "string"},
-                    "direction": {"type": "string"},
-                },
-            }
-        ),
-        "cost": {"type": "integer"},
-        "optimal": {"type": "boolean"},
-        "replans": {"type": "integer"},
-        "unreachable": _array({}),
-        "ungraspable": _array({}),
-        "stuck": _array({}),
-    },
+    **_object(
+        frame=_INT,
+        actions=_objects(kind=_STRING, id={"type": ["integer", "null"]}, name=_STRING, direction=_STRING),
+        cost=_INT,
+        optimal=_BOOL,
+        replans=_INT,
+        unreachable=_array({}),
+        ungraspable=_array({}),
+        stuck=_array({}),
+    ),
 }
 
 PREDICATES_JSONSCHEMA: dict[str, Any] = {
     "title": "clear.Predicates",
-    "type": "object",
-    "properties": {
-        "frame": {"type": "integer"},
-        "objects": _array({"type": "object"}),
-        "facts": _array(_array({"type": "string"})),
-        "push_costs": _array({"type": "object"}),
-    },
+    **_object(
+        frame=_INT,
+        objects=_array({"type": "object"}),
+        facts=_array(_array(_STRING)),
+        push_costs=_array({"type": "object"}),
+    ),
 }
 
 

@@ -120,13 +120,16 @@ def _bag_header(store: Any, ros1: bool, t_ns: int, frame_id: str) -> Any:
     return header(seq=0, stamp=time, frame_id=frame_id) if ros1 else header(stamp=time, frame_id=frame_id)
 
 
+def _stamped_size(store: Any, ros1: bool, t_ns: int, frame_id: str, w: int, h: int) -> dict[str, Any]:
+    """What an Image and its CameraInfo share: the stamped header, the image's size."""
+    return {"header": _bag_header(store, ros1, t_ns, frame_id), "height": h, "width": w}
+
+
 def bag_image(store: Any, ros1: bool, pixels: np.ndarray, encoding: str, t_ns: int, frame_id: str) -> Any:
     h, w = pixels.shape[:2]
     raw = np.frombuffer(np.ascontiguousarray(pixels).tobytes(), dtype=np.uint8)
     return store.types["sensor_msgs/msg/Image"](
-        header=_bag_header(store, ros1, t_ns, frame_id),
-        height=h,
-        width=w,
+        **_stamped_size(store, ros1, t_ns, frame_id, w, h),
         encoding=encoding,
         is_bigendian=0,
         step=len(raw) // h,
@@ -156,9 +159,7 @@ def bag_info(
     if ros1:
         mats = {key.upper(): v for key, v in mats.items()}
     return store.types["sensor_msgs/msg/CameraInfo"](
-        header=_bag_header(store, ros1, t_ns, frame_id),
-        height=h,
-        width=w,
+        **_stamped_size(store, ros1, t_ns, frame_id, w, h),
         distortion_model=model,
         binning_x=0,
         binning_y=0,

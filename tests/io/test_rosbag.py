@@ -164,6 +164,35 @@ def _ros1_store() -> Any:
     return store
 
 
+def _write_messages(
+    writer: Any,
+    store: Any,
+    ros1: bool,
+    clouds: dict[str, list[Frame]],
+    strings: dict[str, int] | None,
+    tf: tuple[str, str, list[float], list[float]] | None,
+    times: list[float] | None = None,
+) -> None:
+    """What both bag writers write (ROS 1 or cdr messages): a /tf_static (latched
+    in ROS 1), ``strings`` String messages on each of their topics, the frames of
+    ``clouds`` as PointCloud2 stamped by ``times`` or their own stamps."""
+    serialize = store.serialize_ros1 if ros1 else store.serialize_cdr
+    if tf is not None:
+        latched = {"latching": 1} if ros1 else {}
+        conn = writer.add_connection("/tf_static", "tf2_msgs/msg/TFMessage", typestore=store, **latched)
+        writer.write(conn, 99_000_000_000, serialize(_tf_msg(store, *tf, ros1=ros1), "tf2_msgs/msg/TFMessage"))
+    for topic, count in (strings or {}).items():
+        conn = writer.add_connection(topic, "std_msgs/msg/String", typestore=store)
+        for i in range(count):
+            writer.write(conn, 100_000_000_000 + i, serialize(_string(store, f"hello {i}"), "std_msgs/msg/String"))
+    for topic, frames in clouds.items():
+        conn = writer.add_connection(topic, "sensor_msgs/msg/PointCloud2", typestore=store)
+        for i, frame in enumerate(frames):
+            t = times[i] if times is not None else frame.stamp_s
+            data = serialize(_cloud_msg(store, frame, ros1=ros1), "sensor_msgs/msg/PointCloud2")
+            writer.write(conn, int(round(t * 1e9)), data)
+
+
 def write_ros1(
     path: Path,
     clouds: dict[str, list[Frame]],
@@ -179,21 +208,7 @@ def write_ros1(
     if compression:
         writer.set_compression(getattr(Writer1.CompressionFormat, compression.upper()))
     with writer:
-        if tf is not None:
-            conn = writer.add_connection("/tf_static", "tf2_msgs/msg/TFMessage", typestore=store, latching=1)
-            tf_msg = _tf_msg(store, *tf, ros1=True)
-            writer.write(conn, 99_000_000_000, store.serialize_ros1(tf_msg, "tf2_msgs/msg/TFMessage"))
-        for topic, count in (strings or {}).items():
-            conn = writer.add_connection(topic, "std_msgs/msg/String", typestore=store)
-            for i in range(count):
-                text = store.serialize_ros1(_string(store, f"hello {i}"), "std_msgs/msg/String")
-                writer.write(conn, 100_000_000_000 + i, text)
-        for topic, frames in clouds.items():
-            conn = writer.add_connection(topic, "sensor_msgs/msg/PointCloud2", typestore=store)
-            for i, frame in enumerate(frames):
-                t = times[i] if times is not None else frame.stamp_s
-                data = store.serialize_ros1(_cloud_msg(store, frame, ros1=True), "sensor_msgs/msg/PointCloud2")
-                writer.write(conn, int(round(t * 1e9)), data)
+        _write_messages(writer, store, True, clouds, strings, tf, times)
     return path
 
 
@@ -209,20 +224,7 @@ def write_rosbag2(
     store = get_typestore(Stores.LATEST)
     plugin = {"sqlite3": StoragePlugin.SQLITE3, "mcap": StoragePlugin.MCAP}[storage]
     with Writer2(path, version=Writer2.VERSION_LATEST, storage_plugin=plugin) as writer:
-        if tf is not None:
-            conn = writer.add_connection("/tf_static", "tf2_msgs/msg/TFMessage", typestore=store)
-            tf_msg = _tf_msg(store, *tf, ros1=False)
-            writer.write(conn, 99_000_000_000, store.serialize_cdr(tf_msg, "tf2_msgs/msg/TFMessage"))
-        for topic, count in (strings or {}).items():
-            conn = writer.add_connection(topic, "std_msgs/msg/String", typestore=store)
-            for i in range(count):
-                text = store.serialize_cdr(_string(store, f"hello {i}"), "std_msgs/msg/String")
-                writer.write(conn, 100_000_000_000 + i, text)
-        for topic, frames in clouds.items():
-            conn = writer.add_connection(topic, "sensor_msgs/msg/PointCloud2", typestore=store)
-            for frame in frames:
-                data = store.serialize_cdr(_cloud_msg(store, frame, ros1=False), "sensor_msgs/msg/PointCloud2")
-                writer.write(conn, int(round(frame.stamp_s * 1e9)), data)
+        _write_messages(writer, store, False, clouds, strings, tf)
     return path
 
 
