@@ -2,11 +2,10 @@
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 from helpers import FIXTURES
-from helpers.batch import FRAMES, clear, lines_of
+from helpers.batch import FRAMES, clear, hooked_env, lines_of
 
 KILL_ONE = """
 import os, signal
@@ -23,10 +22,7 @@ pool.run_job = run_job
 
 
 def test_a_worker_killed_mid_batch_fails_its_frame_only(tmp_path: Path) -> None:
-    hook = tmp_path / "hook"
-    hook.mkdir()
-    (hook / "sitecustomize.py").write_text(KILL_ONE)
-    env = dict(os.environ, PYTHONPATH=str(hook))
+    env = hooked_env(tmp_path, KILL_ONE)
     res = clear("segment", *FRAMES, FIXTURES / "isolated_box.pcd", "--json", "--jobs", "2", env=env)
     assert res.returncode == 11, res.stderr
     rows, summary = lines_of(res.stdout)

@@ -6,12 +6,11 @@ import json
 import os
 import signal
 import subprocess
-import sys
 import time
 from pathlib import Path
 
-from helpers import FIXTURES
-from helpers.batch import FRAMES, clear, comparable, lines_of
+from helpers import FIXTURES, start_clear
+from helpers.batch import FRAMES, clear, comparable, hooked_env, lines_of
 
 
 def _temporaries(out: Path) -> list[Path]:
@@ -98,26 +97,10 @@ files.atomic_output = slow
 
 
 def test_sigkill_during_a_write_then_resume(tmp_path: Path) -> None:
-    hook = tmp_path / "hook"
-    hook.mkdir()
-    (hook / "sitecustomize.py").write_text(SLOW_WRITES)
-    env = dict(os.environ, PYTHONPATH=str(hook))
+    env = hooked_env(tmp_path, SLOW_WRITES)
     out = tmp_path / "out"
-    args = [
-        sys.executable,
-        "-m",
-        "clearcli.cli",
-        "plan",
-        *map(str, FRAMES),
-        "--json",
-        "--out-dir",
-        str(out),
-        "--outputs",
-        "plan,problem",
-        "--jobs",
-        "1",
-    ]
-    proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env, start_new_session=True)
+    args = ["plan", *FRAMES, "--json", "--out-dir", out, "--outputs", "plan,problem", "--jobs", "1"]
+    proc = start_clear(*args, env=env, start_new_session=True)
     deadline = time.time() + 300
     killed_during_write = False
     while time.time() < deadline and proc.poll() is None:
@@ -167,27 +150,12 @@ def test_ctrl_c_stops_cleanly(tmp_path: Path) -> None:
     frames = [tmp_path / f"f{k}.pcd" for k in range(len(FRAMES) * 10)]
     for f, src in zip(frames, FRAMES * 10):
         f.write_bytes(src.read_bytes())
-    args = [
-        sys.executable,
-        "-m",
-        "clearcli.cli",
-        "plan",
-        *map(str, frames),
-        "--json",
-        "--jobs",
-        "2",
-        "--out-dir",
-        str(out),
-        "--outputs",
-        "plan,problem,png",
-    ]
+    args = ["plan", *frames, "--json", "--jobs", "2", "--out-dir", out, "--outputs", "plan,problem,png"]
     # SIGINT back to its default in the child: a test run started in the background of
     # a non-interactive shell (`cmd &`) inherits SIGINT ignored, and Python then keeps
     # ignoring it, as a shell's background job should (the batch ran to the end: exit 0)
-    proc = subprocess.Popen(
-        args,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
+    proc = start_clear(
+        *args,
         text=True,
         start_new_session=True,
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
@@ -303,22 +271,7 @@ def test_a_second_batch_on_the_folder_refuses_or_waits(tmp_path: Path) -> None:
         line = res.stderr.strip().splitlines()
         assert len(line) == 1 and f"pid {os.getpid()}" in line[0] and "--wait" in line[0]
         assert not list(out.glob("*.json"))  # nothing written
-        waiting = subprocess.Popen(
-            [
-                sys.executable,
-                "-m",
-                "clearcli.cli",
-                "segment",
-                str(FIXTURES / "isolated_box.pcd"),
-                "--out-dir",
-                str(out),
-                "--json",
-                "--wait",
-            ],
-            stdout=subprocess.PIPE,
-            stderr=subprocess.PIPE,
-            text=True,
-        )
+        waiting = start_clear("segment", FIXTURES / "isolated_box.pcd", "--out-dir", out, "--json", "--wait", text=True)
         time.sleep(1.5)
         assert waiting.poll() is None  # still waiting for the lock
     finally:
@@ -394,13 +347,7 @@ def _many_frames() -> list[str]:
 
 def test_sigterm_stops_a_batch_with_its_summary_and_exit_143(tmp_path: Path) -> None:
     frames = _many_frames()
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "clearcli.cli", "plan", *frames, "--json", "--jobs", "2"],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        start_new_session=True,
-    )
+    proc = start_clear("plan", *frames, "--json", "--jobs", "2", text=True, start_new_session=True)
     time.sleep(4.0)
     proc.send_signal(signal.SIGTERM)
     stdout, stderr = proc.communicate(timeout=60)
@@ -419,12 +366,8 @@ def _alive_in_group(pgid: int) -> list[str]:
 
 def test_workers_die_with_a_killed_batch(tmp_path: Path) -> None:
     frames = _many_frames()
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "clearcli.cli", "plan", *frames, "--json", "--jobs", "2"],
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL,
-        start_new_session=True,
-    )
+    quiet = {"stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL}
+    proc = start_clear("plan", *frames, "--json", "--jobs", "2", **quiet, start_new_session=True)
     time.sleep(3.0)
     assert len(_alive_in_group(proc.pid)) >= 3  # the batch and its two workers (and a tracker)
     os.kill(proc.pid, signal.SIGKILL)
@@ -481,12 +424,7 @@ def test_a_signal_during_start_up_still_gives_the_summary_and_its_exit_code(tmp_
         pytest.skip("needs Linux's /proc to see when start-up begins")
     for signum, code, word in ((signal.SIGTERM, 143, "terminated"), (signal.SIGINT, 130, "interrupted")):
         out = tmp_path / f"out-{code}"
-        proc = subprocess.Popen(
-            [sys.executable, "-m", "clearcli.cli", "plan", str(FIXTURES), "--json", "--out-dir", str(out)],
-            stdout=subprocess.PIPE,
-            stderr=subprocess.PIPE,
-            text=True,
-        )
+        proc = start_clear("plan", FIXTURES, "--json", "--out-dir", out, text=True)
         deadline = time.time() + 10
         # SIGTERM's handler, not SIGINT's: Python catches SIGINT from its own start
         while not _catches(proc.pid, signal.SIGTERM) and time.time() < deadline:

@@ -31,7 +31,7 @@ def test_pinch_only_names_every_grasp_a_pinch() -> None:
 
 
 def test_plan_files_with_a_rim_grasp_validate_and_pinch_only_files_are_the_thesis_model(tmp_path) -> None:  # type: ignore[no-untyped-def]
-    from helpers.validate import validate_files, validate_files_second
+    from helpers.validate import plan_files, validate_files, validate_files_second
 
     from clearcli.io.pcd import write_pcd
     from clearcli.sim import scene as S
@@ -44,22 +44,7 @@ def test_plan_files_with_a_rim_grasp_validate_and_pinch_only_files_are_the_thesi
     for grasps, rim in (("pinch,rim,slide", True), ("pinch", False)):
         out = tmp_path / grasps.replace(",", "_")
         out.mkdir()
-        files = [out / "domain.pddl", out / "problem.pddl", out / "plan.txt"]
-        res = clear(
-            "plan",
-            str(pcd),
-            "--robot",
-            "panda",
-            "--grasps",
-            grasps,
-            "--json",
-            "--domain",
-            str(files[0]),
-            "--problem",
-            str(files[1]),
-            "-o",
-            str(files[2]),
-        )
+        res, files = plan_files(pcd, out, "--robot", "panda", "--grasps", grasps)
         doc = json.loads(res.stdout)
         assert ("(grasp_rim o0)" in doc["actions"] or "(grasp_rim o1)" in doc["actions"]) == rim, doc["actions"]
         assert ("grasp_rim" in files[0].read_text()) == rim

@@ -6,7 +6,7 @@ import shutil
 from pathlib import Path
 
 import pytest
-from helpers import FIXTURES, REPO
+from helpers import FIXTURES, REPO, start_clear
 from helpers import run_clear as clear
 
 
@@ -64,29 +64,10 @@ def test_an_output_naming_a_folder_is_exit_8(tmp_path: Path) -> None:
 
 def test_sigterm_stops_a_single_call_with_143(tmp_path: Path) -> None:
     import signal
-    import subprocess
-    import sys
     import time
 
     out = tmp_path / "sim.mcap"
-    proc = subprocess.Popen(
-        [
-            sys.executable,
-            "-m",
-            "clearcli.cli",
-            "simulate",
-            str(out),
-            "--scene",
-            "dense",
-            "--objects",
-            "16",
-            "--max-actions",
-            "40",
-        ],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-    )
+    proc = start_clear("simulate", out, "--scene", "dense", "--objects", "16", "--max-actions", "40", text=True)
     time.sleep(2.5)
     proc.send_signal(signal.SIGTERM)
     _, err = proc.communicate(timeout=60)

@@ -6,6 +6,7 @@ import os
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -31,3 +32,11 @@ def run_clear(*args: object, timeout: float = 600, cwd: Path | None = None) -> s
     exe = Path(sys.executable).with_name("clear")
     cmd = [str(exe)] if exe.exists() else [sys.executable, "-m", "clearcli.cli"]
     return subprocess.run([*cmd, *map(str, args)], capture_output=True, text=True, timeout=timeout, cwd=cwd or REPO)
+
+
+def start_clear(*args: object, **popen: Any) -> subprocess.Popen[Any]:
+    """`python -m clearcli.cli ARGS` started and not waited for (to signal or kill it on
+    the way): stdout and stderr piped unless ``popen`` (`subprocess.Popen`'s own keywords)
+    says otherwise."""
+    streams = {"stdout": subprocess.PIPE, "stderr": subprocess.PIPE}
+    return subprocess.Popen([sys.executable, "-m", "clearcli.cli", *map(str, args)], **{**streams, **popen})

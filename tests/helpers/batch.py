@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
+from pathlib import Path
 from typing import Any
 
 from helpers import FIXTURES
@@ -20,6 +22,15 @@ def clear(*args: Any, env: dict[str, str] | None = None, timeout: float = 600) -
         timeout=timeout,
         env=env,
     )
+
+
+def hooked_env(folder: Path, code: str) -> dict[str, str]:
+    """The environment of a `clear` whose Python runs ``code`` first (a sitecustomize.py
+    in ``folder``/hook, on PYTHONPATH): a test's way into the child's modules."""
+    hook = folder / "hook"
+    hook.mkdir()
+    (hook / "sitecustomize.py").write_text(code)
+    return dict(os.environ, PYTHONPATH=str(hook))
 
 
 def lines_of(out: str) -> tuple[list[dict[str, Any]], dict[str, Any]]:

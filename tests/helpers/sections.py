@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable
 from typing import Any
 
 import pytest
@@ -109,3 +110,24 @@ def assert_numeric_bounds(cls: type) -> None:
             refused(cls, key, getattr(default, key) + 0.5)  # not an integer
         refused(cls, key, True)  # a bool is no number here
         refused(cls, key, "1")  # nor is text
+
+
+def range_tests(*sections: type) -> tuple[Callable[[type], None], Callable[[type], None]]:
+    """The two tests every module of sections runs on each of ``sections`` (a test id
+    each by its section's name): its defaults within their ranges, and every number
+    refused past its bounds naming its key. A module binds them to its own test names:
+
+        test_defaults_lie_within_their_ranges, test_every_number_is_refused_past_its_bounds_naming_its_key = (
+            range_tests(A, B)
+        )
+    """
+
+    @pytest.mark.parametrize("cls", sections, ids=lambda c: c.NAME)
+    def defaults_in_range(cls: type) -> None:
+        assert_defaults_in_range(cls)
+
+    @pytest.mark.parametrize("cls", sections, ids=lambda c: c.NAME)
+    def numbers_refused_past_bounds(cls: type) -> None:
+        assert_numeric_bounds(cls)
+
+    return defaults_in_range, numbers_refused_past_bounds

@@ -7,6 +7,7 @@ own C++ parser for the domain, the problem and the plan, its own state semantics
 also checks the plan's cost: the ``; cost = N`` line Fast Downward's plan format ends
 with (clearcli.planning.pddl.write_plan) must equal VAL's value of the plan under the
 problem's metric. `second_verdict` gives the reason when VAL rejects a plan.
+`plan_files`: the files a `clear plan` run writes, for them.
 """
 
 from __future__ import annotations
@@ -15,6 +16,8 @@ import re
 import subprocess
 from dataclasses import dataclass
 from pathlib import Path
+
+from helpers import run_clear
 
 
 def validate_files(domain: Path, problem: Path, plan: Path) -> bool:
@@ -106,3 +109,12 @@ def second_verdict(domain: Path, problem: Path, plan: Path) -> SecondVerdict:
 def validate_files_second(domain: Path, problem: Path, plan: Path) -> bool:
     """VAL's verdict on the written files (see `second_verdict` for the reason)."""
     return second_verdict(domain, problem, plan).valid
+
+
+def plan_files(pcd: Path, folder: Path, *options: object) -> tuple[subprocess.CompletedProcess[str], list[Path]]:
+    """`clear plan PCD OPTIONS --json` writing its domain, problem and plan into
+    ``folder`` (domain.pddl, problem.pddl, plan.txt): the run, and the three files in
+    the order the validators take them."""
+    files = [folder / "domain.pddl", folder / "problem.pddl", folder / "plan.txt"]
+    res = run_clear("plan", pcd, *options, "--json", "--domain", files[0], "--problem", files[1], "-o", files[2])
+    return res, files

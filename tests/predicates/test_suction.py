@@ -123,26 +123,13 @@ def test_bad_suction_settings_are_one_line_and_exit_3(setting: str) -> None:
 
 
 def test_a_plan_with_suction_validates_and_its_joints_land_on_its_poses(tmp_path: Path) -> None:
-    from helpers.validate import validate_files, validate_files_second
+    from helpers.validate import plan_files, validate_files, validate_files_second
 
     from clearcli.robot.profiles import profile
     from clearcli.settings.tree import load_settings
 
     pcd = _pcd(tmp_path, [FLAT, CAN, SMALL])
-    files = [tmp_path / "domain.pddl", tmp_path / "problem.pddl", tmp_path / "plan.txt"]
-    res = clear(
-        "plan",
-        str(pcd),
-        "--robot",
-        "panda-hybrid",
-        "--json",
-        "--domain",
-        str(files[0]),
-        "--problem",
-        str(files[1]),
-        "-o",
-        str(files[2]),
-    )
+    res, files = plan_files(pcd, tmp_path, "--robot", "panda-hybrid")
     assert res.returncode == 0, res.stderr
     doc = json.loads(res.stdout)
     suction = [s for s in doc["steps"] if s["grasp_kind"] == "suction"]

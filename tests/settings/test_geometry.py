@@ -5,21 +5,13 @@ from __future__ import annotations
 import math
 
 import pytest
-from helpers.sections import assert_defaults_in_range, assert_numeric_bounds, refused
+from helpers.sections import range_tests, refused
 
 from clearcli.settings.geometry import GripperSettings, PredicateSettings, PushSettings
 
-SECTIONS = (GripperSettings, PushSettings, PredicateSettings)
-
-
-@pytest.mark.parametrize("cls", SECTIONS, ids=lambda c: c.NAME)
-def test_defaults_lie_within_their_ranges(cls: type) -> None:
-    assert_defaults_in_range(cls)
-
-
-@pytest.mark.parametrize("cls", SECTIONS, ids=lambda c: c.NAME)
-def test_every_number_is_refused_past_its_bounds_naming_its_key(cls: type) -> None:
-    assert_numeric_bounds(cls)
+test_defaults_lie_within_their_ranges, test_every_number_is_refused_past_its_bounds_naming_its_key = range_tests(
+    GripperSettings, PushSettings, PredicateSettings
+)
 
 
 def test_the_gripper_defaults_are_the_iri_grippers() -> None:

@@ -2,22 +2,13 @@
 
 from __future__ import annotations
 
-import pytest
-from helpers.sections import assert_defaults_in_range, assert_numeric_bounds, refused
+from helpers.sections import range_tests, refused
 
 from clearcli.settings.replay import MemoryParams, ReplaySettings, TrackingParams
 
-SECTIONS = (ReplaySettings, TrackingParams, MemoryParams)
-
-
-@pytest.mark.parametrize("cls", SECTIONS, ids=lambda c: c.NAME)
-def test_defaults_lie_within_their_ranges(cls: type) -> None:
-    assert_defaults_in_range(cls)
-
-
-@pytest.mark.parametrize("cls", SECTIONS, ids=lambda c: c.NAME)
-def test_every_number_is_refused_past_its_bounds_naming_its_key(cls: type) -> None:
-    assert_numeric_bounds(cls)
+test_defaults_lie_within_their_ranges, test_every_number_is_refused_past_its_bounds_naming_its_key = range_tests(
+    ReplaySettings, TrackingParams, MemoryParams
+)
 
 
 def test_the_closed_loop_switches_are_booleans_on_by_default() -> None:

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from helpers import FIXTURES
+from helpers.tasks import truth_centroids
 
 from clearcli.errors import ClearError, SettingsError
 from clearcli.settings import Settings, settings_from_dict
@@ -21,17 +22,6 @@ from clearcli.tasks import plan as task
 from clearcli.tasks.base import Outputs, Source
 
 ACTION = re.compile(r"^\((grasp|push|[a-z_]+) (o\d+)(?: (dir\d+))?\)$")
-
-
-def _truth_centroids(pcd: Path) -> dict[int, np.ndarray]:
-    """Centroid (camera frame) of each true object (label >= 10) of a fixture."""
-    from pypcd4 import PointCloud
-
-    cloud = PointCloud.from_path(pcd)
-    labels = cloud.numpy(("label",)).ravel().astype(np.int64)
-    xyz = cloud.numpy(("x", "y", "z")).astype(np.float64)
-    ok = np.isfinite(xyz).all(axis=1)
-    return {int(k): xyz[ok & (labels == k)].mean(axis=0) for k in np.unique(labels[ok]) if k >= 10}
 
 
 def _noted_centroids(problem_text: str) -> dict[str, np.ndarray]:
@@ -64,7 +54,7 @@ def test_box_on_box_plan_takes_the_upper_box_first_and_removes_both(box_on_box: 
     assert len(names) == 2  # fixtures/README.md: a small box lying on a larger one
     assert sorted(payload["goal"]) == sorted(names)
     # the names' centroids against the fixture's own labels: 10 the lower box, 20 the upper
-    truth = _truth_centroids(FIXTURES / "box_on_box.pcd")
+    truth = truth_centroids(FIXTURES / "box_on_box.pcd")
     noted = _noted_centroids(problem)
     which = {}
     for name in names:
@@ -117,7 +107,7 @@ def test_clutter10_plan_removes_all_ten_objects() -> None:
     outcome = task.run(task.Request(Settings()), Source(FIXTURES / "clutter10.pcd"))
     payload = outcome.payload
     assert outcome.exit_code == 0 and payload["status"] == "complete"
-    assert len(_truth_centroids(FIXTURES / "clutter10.pcd")) == 10
+    assert len(truth_centroids(FIXTURES / "clutter10.pcd")) == 10
     assert sorted(payload["goal"]) == sorted(f"o{k}" for k in range(10))
     grasped = [ACTION.match(a).group(2) for a in payload["actions"] if a.startswith("(grasp")]  # type: ignore[union-attr]
     assert sorted(grasped) == sorted(payload["goal"])  # each removed exactly once

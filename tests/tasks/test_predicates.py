@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from helpers import FIXTURES
+from helpers.tasks import truth_centroids
 
 from clearcli.errors import InputError
 from clearcli.settings import Settings
@@ -23,19 +24,9 @@ from clearcli.tasks.base import Outputs, Source
 TABLE_X = np.array([1.0, 0.0, 0.0])
 
 
-def _truth_centroids(pcd: Path) -> dict[int, np.ndarray]:
-    from pypcd4 import PointCloud
-
-    cloud = PointCloud.from_path(pcd)
-    labels = cloud.numpy(("label",)).ravel().astype(np.int64)
-    xyz = cloud.numpy(("x", "y", "z")).astype(np.float64)
-    ok = np.isfinite(xyz).all(axis=1)
-    return {int(k): xyz[ok & (labels == k)].mean(axis=0) for k in np.unique(labels[ok]) if k >= 10}
-
-
 def _by_label(payload: dict, pcd: Path) -> dict[int, dict]:
     """The payload's objects by the true label of the nearest true object."""
-    truth = _truth_centroids(pcd)
+    truth = truth_centroids(pcd)
     found = {}
     for obj in payload["objects"]:
         c = np.asarray(obj["centroid"])
