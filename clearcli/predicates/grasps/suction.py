@@ -109,6 +109,9 @@ class SuctionGrasp(KindModule):
     label = "suction grasp"
     facts = KindFacts("grasp_suction", "suctionable", "block_suction", "ik_unfeasible_suction", 1)
     instead = "it is taken by suction instead"
+    # a cup that did not seal or hold left its object where it stood: the same face
+    # meets the same again (a porous top stays porous), so the closed loop gives it up
+    give_up_unmoved = True
 
     def offers(self, scene: Scene, gripper: GripperModel, settings: Settings) -> list[Offer]:
         s = settings.suction
@@ -190,7 +193,7 @@ class SuctionGrasp(KindModule):
         T_table_tcp = world.T_table_camera @ T_camera_tcp
         axis = T_table_tcp[:3, 2]
         lip = T_table_tcp[:3, 3] + s.lip_past_tcp_m * axis
-        ok, why, k = world.rules.world_suction(world.scene, lip, -axis, s)
+        ok, why, k = world.rules.world_suction(world.scene, lip, axis, s)  # the pose's z: into the face
         if k is not None and k != world.k:
             world.aim(k)
         if not ok:
