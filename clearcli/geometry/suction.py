@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -95,10 +95,7 @@ class Judged:
 
     closest: Contact | None = None
     best: Contact | None = None
-    n_places: int = 0
-    n_sealed: int = 0
-    n_kept: int = 0
-    margins: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    n_kept: int = 0  # places that seal and hold
     ranked: tuple[Contact, ...] = ()
 
     def why_not(self, spec: CupSpec) -> str:
@@ -332,29 +329,34 @@ class FacePlaces:
         )
 
 
+def _load(
+    normals: np.ndarray, points: np.ndarray, mass_kg: float, com_table: np.ndarray, spec: CupSpec
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Per place ((N, 3) outward normals and contact points): the weight's pull along
+    the cup's axis, its shear along the lip, its moment about the contact, and the
+    margin 1 - the cup's utilisation."""
+    W = mass_kg * GRAVITY_M_S2
+    up = np.clip(normals @ UP, -1.0, 1.0)
+    tension = W * np.maximum(up, 0.0)  # the weight pulls the face off the cup
+    shear = W * np.sqrt(np.maximum(1.0 - up * up, 0.0))  # ...or slides it along the lip
+    arm = com_table[None, :] - points
+    moment = W * np.hypot(arm[:, 0], arm[:, 1])  # |arm x gravity| / |gravity| * W
+    F = spec.holding_force_n
+    use = spec.safety_factor * (tension / F + shear / (spec.lip_friction * F) + moment / (F * spec.radius_m))
+    return tension, shear, moment, 1.0 - use
+
+
 def load_margins(places: FacePlaces, mass_kg: float, com_table: np.ndarray, spec: CupSpec) -> np.ndarray:
     """(N,) `load_margin` of every place at once."""
-    W = mass_kg * GRAVITY_M_S2
-    up = np.clip(places.normals @ UP, -1.0, 1.0)
-    tension = W * np.maximum(up, 0.0)
-    shear = W * np.sqrt(np.maximum(1.0 - up * up, 0.0))
-    arm = com_table[None, :] - places.points
-    moment = W * np.hypot(arm[:, 0], arm[:, 1])
-    F = spec.holding_force_n
-    return 1.0 - spec.safety_factor * (tension / F + shear / (spec.lip_friction * F) + moment / (F * spec.radius_m))
+    return _load(places.normals, places.points, mass_kg, com_table, spec)[3]
 
 
 def load_margin(contact: Contact, mass_kg: float, com_table: np.ndarray, spec: CupSpec) -> tuple[float, str]:
     """1 - the load's utilisation of the cup, and why it fails ("" when it holds)."""
     W = mass_kg * GRAVITY_M_S2
-    up = float(np.clip(contact.normal @ UP, -1.0, 1.0))
-    tension = W * max(up, 0.0)  # the weight pulls the face off the cup
-    shear = W * math.sqrt(max(1.0 - up * up, 0.0))  # ...or slides it along the lip
-    arm = com_table - contact.point
-    moment = W * float(np.hypot(arm[0], arm[1]))  # |arm x gravity| / |gravity| * W
     F = spec.holding_force_n
-    use = spec.safety_factor * (tension / F + shear / (spec.lip_friction * F) + moment / (F * spec.radius_m))
-    margin = 1.0 - use
+    t, sh, mo, m = _load(contact.normal[None, :], contact.point[None, :], mass_kg, com_table, spec)
+    tension, shear, moment, margin = float(t[0]), float(sh[0]), float(mo[0]), float(m[0])
     if margin > 0:
         return margin, ""
     parts = []
@@ -451,9 +453,6 @@ def judge_object(
     return Judged(
         closest=contact(k_best),
         best=best,
-        n_places=len(margin),
-        n_sealed=int((seal > 0).sum()),
         n_kept=int((margin > 0).sum()),
-        margins=margin,
         ranked=tuple(contact(int(k)) for k in np.argsort(-margin, kind="stable")[:8] if margin[k] > 0),
     )
