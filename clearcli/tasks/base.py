@@ -10,7 +10,7 @@ single call and a batch worker call the same ``run``.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -47,6 +47,10 @@ class Outcome:
     payload: Mapping[str, Any]
     exit_code: int = 0
     written: tuple[Path, ...] = ()
+    # what the work made beyond the document (the frame, the segmentation, the state), for
+    # the Python API's arrays (clearcli/api.py); only when the request asks (``keep``), so
+    # a batch never sends it between processes
+    kept: Mapping[str, Any] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)

@@ -31,6 +31,7 @@ class Request:
     camera_pose: str | None = None  # --camera-pose: 'x y z qx qy qz qw' or 'thesis'
     first_only: bool = False  # check the first action only (the thesis's Algorithm 1)
     outputs: Outputs = NO_OUTPUTS
+    keep: bool = False  # the outcome keeps the frame, the segmentation and the state (the Python API)
 
 
 def run(request: Request, source: Source) -> Outcome:
@@ -67,7 +68,8 @@ def run(request: Request, source: Source) -> Outcome:
         code = EXIT_NO_PLAN
     else:
         code = EXIT_PARTIAL_PLAN if plan.status == "partial" else EXIT_OK
-    return Outcome(SCHEMA, VERSION, payload, code, out.all())
+    kept = {"frame": frame, "segmentation": seg, "state": state} if request.keep else {}
+    return Outcome(SCHEMA, VERSION, payload, code, out.all(), kept)
 
 
 def write_plan_files(

@@ -22,6 +22,7 @@ class Request:
     settings: Settings
     ground_truth: bool = False  # the frame's own 'label' field instead of segmentation
     outputs: Outputs = NO_OUTPUTS
+    keep: bool = False  # the outcome keeps the frame, the segmentation and the state (the Python API)
 
 
 def run(request: Request, source: Source) -> Outcome:
@@ -41,4 +42,5 @@ def run(request: Request, source: Source) -> Outcome:
         with atomic_path(png) as tmp:
             render_predicates_png(state, tmp, title=str(source.path))
     payload = predicates_payload(state)
-    return Outcome(SCHEMA, VERSION, payload, 0, request.outputs.all())
+    kept = {"frame": frame, "segmentation": seg, "state": state} if request.keep else {}
+    return Outcome(SCHEMA, VERSION, payload, 0, request.outputs.all(), kept)

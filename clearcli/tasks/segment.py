@@ -21,6 +21,7 @@ OUTPUTS = ("labels", "png")
 class Request:
     settings: Settings
     outputs: Outputs = NO_OUTPUTS
+    keep: bool = False  # the outcome keeps the frame and the segmentation (the Python API)
 
 
 def run(request: Request, source: Source) -> Outcome:
@@ -33,4 +34,5 @@ def run(request: Request, source: Source) -> Outcome:
     if png is not None:
         with atomic_path(png) as tmp:
             render_segmentation(tmp, frame, seg)
-    return Outcome(SCHEMA, VERSION, segmentation_payload(seg), 0, request.outputs.all())
+    kept = {"frame": frame, "segmentation": seg} if request.keep else {}
+    return Outcome(SCHEMA, VERSION, segmentation_payload(seg), 0, request.outputs.all(), kept)
