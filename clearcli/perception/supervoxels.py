@@ -24,6 +24,20 @@ _HALF_OFFSETS = np.array(
     [(dx, dy, dz) for dx in (-1, 0, 1) for dy in (-1, 0, 1) for dz in (-1, 0, 1) if (dx, dy, dz) > (0, 0, 0)],
     dtype=np.int64,
 )
+# The grids over camera-frame coordinates (voxels, seed cells) have their cell boundaries
+# shifted off the whole millimetre: depth images store whole millimetres (RealSense,
+# Kinect, mOSD), so a fifth of a real frame's points have a depth exactly on a multiple
+# of 5 mm, a voxel boundary, and floor() put each on whichever side float rounding
+# chose: moving every point by a micrometre moved thousands between voxels. Shifted by
+# 0.35 mm, a boundary lies 0.35 mm from any whole millimetre (0.15 from a half, 0.05
+# from a tenth), and a micrometre moves only the few points that are truly that close.
+GRID_SHIFT_M = 0.00035
+
+
+def grid_cells(points: np.ndarray, cell_m: float) -> np.ndarray:
+    """(N, 3) int64 cell of each point on the grid of ``cell_m`` (boundaries shifted off
+    the millimetre: GRID_SHIFT_M)."""
+    return np.floor((points + GRID_SHIFT_M) / cell_m).astype(np.int64)
 
 
 @dataclass(frozen=True, eq=False)
@@ -42,7 +56,7 @@ class VoxelCloud:
 
 def voxelize(points: np.ndarray, voxel_m: float, colors: np.ndarray | None = None) -> VoxelCloud:
     """Voxel grid of ``points`` (M, 3) and the voxel adjacency graph."""
-    keys3 = np.floor(points / voxel_m).astype(np.int64)
+    keys3 = grid_cells(points, voxel_m)
     lo = keys3.min(axis=0) - 1  # one empty layer around so offsets never wrap
     keys3 -= lo
     dims = keys3.max(axis=0) + 2
@@ -185,7 +199,7 @@ def supervoxel_labels(
     seed_m = size.seed_m
     # seeds: in every occupied seed cell holding enough voxels (a speck is no seed), the
     # voxel nearest to the mean of that cell's voxels
-    cell = np.floor(cent / seed_m).astype(np.int64)
+    cell = grid_cells(cent, seed_m)
     cell -= cell.min(axis=0)
     cdims = cell.max(axis=0) + 1
     cpacked = (cell[:, 0] * cdims[1] + cell[:, 1]) * cdims[2] + cell[:, 2]

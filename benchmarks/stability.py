@@ -1,0 +1,287 @@
+"""Segmentation under rounding-sized changes: which frames flip, and where the flip starts.
+
+    .venv/bin/python benchmarks/stability.py [--sets mosd,uois,fixtures] [--amplitude-um 1]
+        [--seeds 1] [--noise-seeds 3] [--no-noise] [--frames NAME,...]
+
+Every frame is segmented as read and again with every coordinate moved by a uniform
+random amount in [-a, +a] (``--amplitude-um``, 1 micrometre by default: far below any
+sensor's noise; float32 rounding of millimetre depth is about 0.1 micrometre), the
+perturbation drawn from a fixed seed. Both runs go through `segment`'s steps one at a
+time (clearcli.perception.segment.STEPS, the refinements of refine.STAGES one by one), and
+after each step the state is compared as partitions of the frame's points:
+
+    filter       the points kept                  table      table / above it / neither
+    supervoxels  the voxel of each point above the table (the voxel grid)
+    edges        the pieces of the voxel graph after the depth-edge cuts
+    supervoxels  the supervoxel of each point     lccp, stacks ... fragments  its segment
+    objects      its object                       flat / openings  the objects again
+
+A step "differs" when some group of points (a voxel, a supervoxel, a segment) in one
+run has no group in the other at IoU >= 0.95 (groups under 30 points are too small to
+judge and are not counted). Per frame it prints whether the objects are the same
+(count equal, every object matched at IoU >= 0.95), the first step whose groups
+differ, and the points that changed group at each step where any did.
+
+After that, sensor-level noise: depth-proportional Gaussian noise along each pixel's ray
+with sigma = 1 mm at 1 m, growing with the square of the depth (sigma(z) = 1 mm (z / 1 m)^2,
+as a structured-light or stereo sensor's depth error grows), ``--noise-seeds`` draws per
+frame; the share of the objects of the unperturbed frame kept at IoU >= 0.9.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import sys
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(REPO))
+
+from clearcli.io.frames import Frame  # noqa: E402
+from clearcli.io.read import read_frame  # noqa: E402
+from clearcli.perception import segment as seg_mod  # noqa: E402
+from clearcli.perception.clock import Clock  # noqa: E402
+from clearcli.perception.context import RefineContext  # noqa: E402
+from clearcli.perception.refine import STAGES, refine  # noqa: E402
+from clearcli.perception.types import Segmentation  # noqa: E402
+from clearcli.settings.segment import SegmentSettings  # noqa: E402
+
+SHARED = REPO.parent / "shared" / "data"
+MATCH_IOU = 0.95  # "the same object"
+KEPT_IOU = 0.9  # under sensor noise: "the object is kept"
+MIN_GROUP = 30  # points: smaller groups are not judged (a voxel, a speck)
+
+
+def frame_sets(root: Path = SHARED) -> dict[str, list[Path]]:
+    """The frames the stability target names: the 50 mOSD frames, the nine uois RealSense
+    frames and the fixtures' PCDs."""
+    mosd = sorted((root / "mosd/learn").glob("*.pcd")) + sorted((root / "mosd/test").glob("*.pcd"))
+    return {
+        "mosd": mosd,
+        "uois": sorted((root / "scenes/uois_realsense").glob("*.pcd")),
+        "fixtures": sorted((REPO / "fixtures").glob("*.pcd")),
+    }
+
+
+def perturbed(frame: Frame, amplitude_m: float = 1e-6, seed: int = 0) -> Frame:
+    """``frame`` with every coordinate moved by uniform noise in [-amplitude, +amplitude]
+    (fixed seed), stored in the frame's own dtype."""
+    rng = np.random.default_rng(seed)
+    pts = frame.points.astype(np.float64)
+    pts = pts + rng.uniform(-amplitude_m, amplitude_m, size=pts.shape)
+    return dataclasses.replace(frame, points=pts.astype(frame.points.dtype))
+
+
+def sensor_noise(frame: Frame, sigma_at_1m: float = 1e-3, seed: int = 0) -> Frame:
+    """``frame`` with Gaussian noise along each point's ray: sigma = sigma_at_1m (z / 1 m)^2
+    (z the depth along the optical axis), each point scaled along its ray by (1 + e / r)."""
+    rng = np.random.default_rng(seed)
+    pts = frame.points.astype(np.float64)
+    z = np.abs(pts[:, 2])
+    sigma = sigma_at_1m * z * z
+    r = np.linalg.norm(pts, axis=1)
+    e = rng.standard_normal(pts.shape[0]) * sigma
+    with np.errstate(invalid="ignore", divide="ignore"):
+        scale = np.where(r > 0, 1.0 + e / r, 1.0)
+    return dataclasses.replace(frame, points=(pts * scale[:, None]).astype(frame.points.dtype))
+
+
+def object_matches(a: Segmentation, b: Segmentation) -> np.ndarray:
+    """(len(a.objects),) each object of ``a``: its best IoU with an object of ``b``."""
+    lab_b = np.full(b.n_points, -1, dtype=np.int64)
+    for k, o in enumerate(b.objects):
+        lab_b[o.indices] = k
+    best = np.zeros(len(a.objects))
+    sizes_b = np.array([o.indices.size for o in b.objects])
+    for i, o in enumerate(a.objects):
+        hit = lab_b[o.indices]
+        hit = hit[hit >= 0]
+        if hit.size == 0:
+            continue
+        inter = np.bincount(hit, minlength=len(b.objects))
+        union = o.indices.size + sizes_b - inter
+        best[i] = float((inter / union).max())
+    return best
+
+
+def same_objects(a: Segmentation, b: Segmentation, iou: float = MATCH_IOU) -> bool:
+    """Same object count, every object of ``a`` matched in ``b`` at ``iou`` or more (above
+    0.5 a match is one to one)."""
+    return len(a.objects) == len(b.objects) and bool((object_matches(a, b) >= iou).all())
+
+
+def _partition_diff(a: np.ndarray, b: np.ndarray) -> tuple[int, int]:
+    """Two labellings of the same points (-1: in no group): (groups of at least MIN_GROUP
+    points, in either, without a partner at IoU >= MATCH_IOU; points whose group changed,
+    counted as those outside the best partner of their group in ``a``)."""
+    if a.shape != b.shape:
+        return -1, -1
+    ua, ia = np.unique(a, return_inverse=True)
+    ub, ib = np.unique(b, return_inverse=True)
+    na, nb = ua.size, ub.size
+    pair = ia.astype(np.int64) * nb + ib
+    pu, pc = np.unique(pair, return_counts=True)
+    pa, pb = pu // nb, pu % nb
+    size_a = np.bincount(ia, minlength=na)
+    size_b = np.bincount(ib, minlength=nb)
+    iou = pc / (size_a[pa] + size_b[pb] - pc)
+    best_a = np.zeros(na)
+    np.maximum.at(best_a, pa, iou)
+    best_b = np.zeros(nb)
+    np.maximum.at(best_b, pb, iou)
+    judged_a = (size_a >= MIN_GROUP) & (ua >= 0)
+    judged_b = (size_b >= MIN_GROUP) & (ub >= 0)
+    unmatched = int(((best_a < MATCH_IOU) & judged_a).sum() + ((best_b < MATCH_IOU) & judged_b).sum())
+    keep_a = np.zeros(na)
+    np.maximum.at(keep_a, pa, pc)
+    moved = int(a.size - keep_a.sum())
+    return unmatched, moved
+
+
+def trace(frame: Frame, settings: SegmentSettings) -> Iterator[tuple[str, np.ndarray]]:
+    """`segment`'s steps one at a time; after each, (its name, a labelling of the frame's
+    points: the groups that step leaves, -1 outside them)."""
+    organized = frame.is_organized and frame.shape is not None and frame.shape[0] * frame.shape[1] == frame.n_points
+    w = seg_mod._Work(frame, settings, organized, Clock())
+    n = frame.n_points
+
+    def over_frame(idx: np.ndarray, labels: np.ndarray) -> np.ndarray:
+        out = np.full(n, -1, dtype=np.int64)
+        out[idx] = labels
+        return out
+
+    def objects() -> np.ndarray:
+        out = np.full(n, -1, dtype=np.int64)
+        for k, o in enumerate(w.objects):
+            out[o.indices] = k
+        return out
+
+    def components() -> np.ndarray:
+        from clearcli.perception.supervoxels import _components
+
+        assert w.vox is not None
+        return over_frame(w.obj_idx, _components(w.vox.n_voxels, w.vox.edges)[w.vox.point_voxel])
+
+    views: dict[str, Callable[[], np.ndarray]] = {
+        "filter": lambda: over_frame(w.idx, np.zeros(w.idx.size, dtype=np.int64)),
+        "table": lambda: over_frame(w.idx, np.where(w.table_mask, 0, np.where(w.prism_mask, 1, -1))),
+        "voxels": lambda: over_frame(w.obj_idx, w.vox.point_voxel) if w.vox is not None else np.full(n, -1),
+        "edges": components,
+        "supervoxels": lambda: (
+            over_frame(w.obj_idx, w.sv.voxel_label[w.vox.point_voxel])  # type: ignore[union-attr]
+            if w.sv is not None
+            else np.full(n, -1)
+        ),
+        "segments": lambda: over_frame(w.obj_idx, w.seg_of_voxel[w.vox.point_voxel]),  # type: ignore[union-attr]
+        "objects": objects,
+    }
+    for step in seg_mod.STEPS:
+        if step.above_table and w.vox is None:
+            continue
+        if step.run is seg_mod._refine:
+            fit, vox, sv, size = w.fit, w.vox, w.sv, w.size
+            assert fit is not None and vox is not None and sv is not None and size is not None
+            ctx = RefineContext(w.frame, w.organized, vox, sv, fit.plane, settings, size, w.obj_idx, w.color_used)
+            for stage in STAGES:
+                w.seg_of_voxel = refine(w.seg_of_voxel, ctx, None, (stage,))
+                yield stage.name, views["segments"]()
+            continue
+        step.run(w)
+        name = {
+            seg_mod._voxels: "voxels",
+            seg_mod._supervoxels: "supervoxels",
+            seg_mod._lccp: "lccp",
+        }.get(step.run, step.name or "?")
+        view = views.get(name, views["segments"] if name == "lccp" else objects)
+        yield name, view()
+
+
+def first_difference(frame: Frame, other: Frame, settings: SegmentSettings) -> list[tuple[str, int, int]]:
+    """Per step: (name, groups without a partner, points that changed group)."""
+    out = []
+    for (name, a), (_, b) in zip(trace(frame, settings), trace(other, settings)):
+        unmatched, moved = _partition_diff(a, b)
+        out.append((name, unmatched, moved))
+    return out
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--sets", default="mosd,uois,fixtures")
+    parser.add_argument("--amplitude-um", type=float, default=1.0)
+    parser.add_argument("--seeds", type=int, default=1, help="perturbations per frame")
+    parser.add_argument("--noise-seeds", type=int, default=3, help="sensor-noise draws per frame")
+    parser.add_argument("--no-noise", action="store_true")
+    parser.add_argument("--frames", default="", help="only frames whose file name is in this list")
+    parser.add_argument("--quiet", action="store_true", help="print only the frames that differ")
+    args = parser.parse_args()
+    settings = SegmentSettings()
+    sets = frame_sets()
+    wanted = {s for s in args.frames.split(",") if s}
+    amp = args.amplitude_um * 1e-6
+    totals: dict[str, tuple[int, int]] = {}
+    kept_share: dict[str, list[float]] = {}
+    first_steps: dict[str, int] = {}
+    times: list[float] = []
+    for set_name in args.sets.split(","):
+        paths = [p for p in sets[set_name] if not wanted or p.name in wanted or p.stem in wanted]
+        if not paths:
+            print(f"{set_name}: no frames here")
+            continue
+        flipped = 0
+        print(f"{set_name} ({len(paths)} frames), +-{args.amplitude_um:g} um:")
+        for path in paths:
+            frame = read_frame(path)
+            t0 = time.perf_counter()
+            base = seg_mod.segment(frame, settings)
+            times.append(time.perf_counter() - t0)
+            bad_seeds = []
+            for s in range(args.seeds):
+                moved = seg_mod.segment(perturbed(frame, amp, seed=s), settings)
+                if not (same_objects(base, moved) and same_objects(moved, base)):
+                    bad_seeds.append(s)
+            if not bad_seeds:
+                if not args.quiet:
+                    print(f"  {path.name:24s} same      ({len(base.objects)} objects)")
+            else:
+                flipped += 1
+                other = perturbed(frame, amp, seed=bad_seeds[0])
+                changed = seg_mod.segment(other, settings)
+                steps = first_difference(frame, other, settings)
+                first = next((name for name, unmatched, _ in steps if unmatched > 0), "objects")
+                first_steps[first] = first_steps.get(first, 0) + 1
+                chain = ", ".join(f"{name} {unmatched}/{moved}" for name, unmatched, moved in steps if moved)
+                print(
+                    f"  {path.name:24s} DIFFERENT ({len(base.objects)} vs {len(changed.objects)} objects, "
+                    f"seeds {bad_seeds}); first differing step: {first}"
+                )
+                print(f"      groups unmatched/points moved: {chain}")
+            if not args.no_noise:
+                for s in range(args.noise_seeds):
+                    noisy = seg_mod.segment(sensor_noise(frame, 1e-3, seed=100 + s), settings)
+                    m = object_matches(base, noisy)
+                    kept_share.setdefault(set_name, []).extend((m >= KEPT_IOU).astype(float).tolist())
+        totals[set_name] = (flipped, len(paths))
+    print()
+    for set_name, (flipped, n) in totals.items():
+        print(f"{set_name:9s} frames with other objects under +-{args.amplitude_um:g} um: {flipped} of {n}")
+    if first_steps:
+        print("first differing step:", ", ".join(f"{k} {v}" for k, v in sorted(first_steps.items())))
+    if kept_share:
+        print(
+            f"sensor noise (Gaussian along the ray, sigma 1 mm at 1 m growing with depth^2), "
+            f"{args.noise_seeds} draws a frame: objects kept at IoU >= {KEPT_IOU}:"
+        )
+        for set_name, kept in kept_share.items():
+            print(f"  {set_name:9s} {100 * np.mean(kept):5.1f} % of {len(kept)}")
+    if times:
+        print(f"segment time (unperturbed, first frame cold): median {np.median(times) * 1000:.0f} ms")
+
+
+if __name__ == "__main__":
+    main()
