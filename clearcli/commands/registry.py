@@ -25,6 +25,7 @@ COMMANDS: list[tuple[str, str, dict[str, Any]]] = [
     ("simulate", "clearcli.commands.simulate:simulate_cmd", {}),
     ("settings", "clearcli.commands.basic:settings_cmd", {}),
     ("robots", "clearcli.commands.basic:robots_cmd", {}),
+    ("schema", "clearcli.commands.schema:schema_cmd", {}),
 ]
 
 GROUPS: list[tuple[str, str]] = [
