@@ -48,6 +48,7 @@ from clearcli.perception.table import (
     polygon_area,
     project,
     table_and_prism,
+    unique_cells,
 )
 from clearcli.perception.types import Segmentation, SegmentedObject, TablePlane
 from clearcli.settings.segment import SegmentSettings
@@ -226,7 +227,7 @@ def _flat_objects(
 
     def area(pixels: np.ndarray) -> float:
         xy = project(frame.points[pixels].astype(np.float64), fit.basis)
-        return float(np.unique(np.floor(xy / cell).astype(np.int64), axis=0).shape[0]) * cell * cell
+        return float(unique_cells(np.floor(xy / cell).astype(np.int64)).shape[0]) * cell * cell
 
     found = flat_objects(
         frame.points,

@@ -51,6 +51,7 @@ from clearcli.perception.supervoxels import _components
 _MIN_RADIUS_M = 0.02
 _RANSAC_ROUNDS = 200
 _SCORE_SAMPLES = 500
+_REFITS = 20  # at most this many least-squares refits of the circle (they settle in a few)
 # a rim point within this share of the radius (or _INLIER_M) of the circle is on it
 _INLIER = 0.06
 _INLIER_M = 0.004
@@ -135,13 +136,20 @@ def find_rim(
     inl = np.abs(np.linalg.norm(band_xy - centre, axis=1) - radius) <= max(_INLIER * radius, _INLIER_M)
     if inl.sum() < 10:
         return None
-    for _ in range(2):
+    # least squares on the inliers until they no longer change: the circle is then a
+    # fixed point of the refit, not of the draws (which voxel the random indices pick
+    # changes with the band's size: one voxel more, other draws, another first circle)
+    for _ in range(_REFITS):
         centre, radius = fit_circle(band_xy[inl])
         if not (_MIN_RADIUS_M <= radius <= max_radius_m):
             return None
-        inl = np.abs(np.linalg.norm(band_xy - centre, axis=1) - radius) <= max(_INLIER * radius, _INLIER_M)
-        if inl.sum() < 10:
+        again = np.abs(np.linalg.norm(band_xy - centre, axis=1) - radius) <= max(_INLIER * radius, _INLIER_M)
+        if again.sum() < 10:
             return None
+        settled = bool((again == inl).all())
+        inl = again
+        if settled:
+            break
     if cover_deg(band_xy[inl], centre) < _MIN_COVER_DEG:
         return None
     return centre, radius, inl

@@ -1,0 +1,104 @@
+"""Segmentation is stable under rounding-sized changes (issue 37): every frame of the
+shared mOSD set (50), the nine uois RealSense frames and the fixtures, moved by a
+uniform +-1 micrometre per coordinate (fixed seed), gives the same objects: as many,
+each matched at IoU >= 0.95. Without ../shared/data the shared sets skip (and fail
+under CLEAR_REQUIRE_SHARED=1). benchmarks/stability.py finds the step a flip starts in.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from helpers import FIXTURES, shared_path
+
+
+def _changed(paths: list[Path]) -> list[str]:
+    """The frames of ``paths`` whose objects change under +-1 um, each with how."""
+    from clearcli.io.read import read_frame
+    from clearcli.perception.segment import segment
+    from clearcli.perception.stability import object_matches, perturbed, same_objects
+    from clearcli.settings.segment import SegmentSettings
+
+    settings = SegmentSettings()
+    out = []
+    for path in paths:
+        frame = read_frame(path)
+        before = segment(frame, settings)
+        after = segment(perturbed(frame, 1e-6, seed=0), settings)
+        if not same_objects(before, after):
+            worst = min([1.0, *object_matches(before, after), *object_matches(after, before)])
+            out.append(f"{path.name}: {len(before.objects)} -> {len(after.objects)} objects, worst IoU {worst:.3f}")
+    return out
+
+
+@pytest.mark.parametrize(
+    ("where", "pattern", "count"),
+    [("mosd", "*/*.pcd", 50), ("scenes/uois_realsense", "*.pcd", 9)],
+    ids=["mosd", "uois"],
+)
+def test_shared_frames_keep_their_objects_under_a_micrometre(where: str, pattern: str, count: int) -> None:
+    paths = sorted(shared_path(where).glob(pattern))
+    assert len(paths) == count, f"{where}: {len(paths)} frames, expected {count}"
+    assert _changed(paths) == []
+
+
+def test_fixtures_keep_their_objects_under_a_micrometre() -> None:
+    paths = sorted(FIXTURES.glob("*.pcd"))
+    assert len(paths) >= 4
+    assert _changed(paths) == []
+
+
+def test_the_perturbation_moves_every_coordinate_by_at_most_a_micrometre() -> None:
+    from clearcli.io.frames import Frame
+    from clearcli.perception.stability import perturbed
+
+    pts = np.random.default_rng(3).uniform(0.2, 2.0, size=(5000, 3)).astype(np.float32)
+    moved = perturbed(Frame(points=pts), 1e-6, seed=0).points
+    step = moved.astype(np.float64) - pts.astype(np.float64)
+    assert moved.dtype == np.float32
+    assert np.abs(step).max() <= 1e-6 + 2e-7  # float32 rounding at 2 m is 1.2e-7
+    assert (step != 0).mean() > 0.9  # a move under half a float32 step (6e-8 at 1-2 m) rounds away
+    assert np.array_equal(moved, perturbed(Frame(points=pts), 1e-6, seed=0).points)  # fixed seed
+
+
+def test_same_objects_sees_a_changed_object() -> None:
+    from clearcli.perception.stability import same_objects
+    from clearcli.perception.types import Segmentation, SegmentedObject, TablePlane
+
+    def seg(*groups: range) -> Segmentation:
+        objs = tuple(
+            SegmentedObject(np.array(g), np.zeros(3), np.zeros(3), np.eye(3), np.ones(3), np.eye(3)) for g in groups
+        )
+        return Segmentation(1000, TablePlane(np.array([0.0, 0.0, 1.0]), 0.0), np.zeros((0, 3)), np.zeros(0, int), objs)
+
+    base = seg(range(0, 100), range(100, 400))
+    assert same_objects(base, seg(range(0, 100), range(100, 400)))
+    assert same_objects(base, seg(range(0, 98), range(98, 400)))  # 2 of 100 points: IoU 0.98
+    assert not same_objects(base, seg(range(0, 90), range(90, 400)))  # IoU 0.90
+    assert not same_objects(base, seg(range(0, 400)))  # merged
+    assert not same_objects(base, seg(range(0, 100), range(100, 250), range(250, 400)))  # split
+
+
+def test_depth_in_whole_millimetres_stays_in_its_voxel() -> None:
+    """Real depth is stored in whole millimetres: a fifth of the points lie on a multiple
+    of the 5 mm voxel. The grid's boundaries lie off the millimetre, so a micrometre moves
+    none of them (floor(z / 5 mm) put each on either side by float rounding)."""
+    from clearcli.io.frames import Frame
+    from clearcli.perception.stability import perturbed
+    from clearcli.perception.supervoxels import grid_cells
+
+    rng = np.random.default_rng(5)
+    z = rng.integers(500, 1500, size=20000) / 1000.0  # whole millimetres
+    xy = rng.uniform(-0.3, 0.3, size=(20000, 2)) * z[:, None]
+    pts = np.column_stack([xy, z]).astype(np.float32)
+    moved = perturbed(Frame(points=pts), 1e-6, seed=1).points
+    a = grid_cells(pts.astype(np.float64), 0.005)
+    b = grid_cells(moved.astype(np.float64), 0.005)
+    on_boundary = np.abs(z * 1000 / 5 - np.round(z * 1000 / 5)) < 1e-9
+    assert on_boundary.mean() > 0.15  # a fifth of the depths are multiples of 5 mm
+    # x and y are on no lattice: a point within a micrometre of a boundary may move
+    # (about 2e-4 of them); none moves along z
+    assert (a[:, 2] == b[:, 2]).all()
+    assert (a != b).any(axis=1).mean() < 1e-3
