@@ -1,0 +1,83 @@
+"""A single `clear` call runs NumPy's BLAS on one thread (clearcli/cli.py main), unless the
+user chose otherwise."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from helpers import FIXTURES, REPO
+from helpers.batch import hooked_env
+
+from clearcli.cli import SINGLE_THREADED
+
+# Runs in the child before clear's main (a sitecustomize), without importing NumPy: at
+# exit it reports the variables and the thread count OpenBLAS itself says it uses, read
+# from the library NumPy loaded (its symbols carry a prefix and suffix in NumPy's wheels).
+_HOOK = """
+import atexit, ctypes, json, os, sys
+
+def _report():
+    threads = None
+    if "numpy" in sys.modules:
+        libs = set()
+        with open("/proc/self/maps") as maps:
+            for line in maps:
+                path = line.split()[-1]
+                if "openblas" in os.path.basename(path).lower() and ".so" in path:
+                    libs.add(path)
+        for path in libs:
+            lib = ctypes.CDLL(path)
+            for name in ("scipy_openblas_get_num_threads64_", "openblas_get_num_threads64_",
+                         "openblas_get_num_threads"):
+                fn = getattr(lib, name, None)
+                if fn is not None:
+                    threads = fn()
+                    break
+    env = {k: os.environ.get(k) for k in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")}
+    with open(os.environ["CLEAR_TEST_REPORT"], "w") as out:
+        json.dump({"env": env, "openblas_threads": threads, "numpy": "numpy" in sys.modules}, out)
+
+atexit.register(_report)
+"""
+
+
+def _clear_reporting(tmp_path: Path, **env: str) -> dict:
+    report = tmp_path / "report.json"
+    child_env = hooked_env(tmp_path, _HOOK)
+    for var in SINGLE_THREADED:
+        child_env.pop(var, None)
+    child_env.update(env, CLEAR_TEST_REPORT=str(report))
+    exe = Path(sys.executable).with_name("clear")
+    cmd = [str(exe)] if exe.exists() else [sys.executable, "-m", "clearcli.cli"]
+    res = subprocess.run(
+        [*cmd, "segment", str(FIXTURES / "isolated_box.pcd"), "--json"],
+        capture_output=True,
+        text=True,
+        env=child_env,
+        cwd=REPO,
+        timeout=120,
+    )
+    assert res.returncode == 0, res.stderr
+    doc = json.loads(report.read_text())
+    assert doc["numpy"], "the command did not load NumPy: nothing was checked"
+    return doc
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc/self/maps")
+def test_single_call_runs_blas_on_one_thread(tmp_path: Path) -> None:
+    doc = _clear_reporting(tmp_path)
+    assert doc["env"] == dict.fromkeys(SINGLE_THREADED, "1")
+    assert doc["openblas_threads"] == 1
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc/self/maps")
+@pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="OpenBLAS caps its threads at the cores")
+def test_a_thread_count_the_user_set_is_kept(tmp_path: Path) -> None:
+    doc = _clear_reporting(tmp_path, OPENBLAS_NUM_THREADS="2")
+    assert doc["env"] == {"OPENBLAS_NUM_THREADS": "2", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+    assert doc["openblas_threads"] == 2
