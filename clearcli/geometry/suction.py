@@ -171,17 +171,105 @@ def _mean_per_key(keys: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, np.
     return k, np.bincount(inverse, weights=values) / np.bincount(inverse)
 
 
+def _face_plane(height: np.ndarray, ij: np.ndarray, cell: float) -> np.ndarray:
+    """(3,) w = a + b u + c v fitted to the height map's cells (``ij`` their indices),
+    refitted on those within 5 mm of the first fit (the object's sides, seen edge-on,
+    fall in the top's border cells lower than its face)."""
+    A = np.column_stack([np.ones(len(ij)), (ij + 0.5) * cell])
+    keep = np.ones(len(ij), dtype=bool)
+    coef = np.zeros(3)
+    for _ in range(2):
+        if keep.sum() < 3:
+            break
+        coef = np.linalg.lstsq(A[keep], height[keep], rcond=None)[0]
+        keep = np.abs(A @ coef - height) <= 0.005
+    return coef
+
+
+def hidden_cells(
+    height: np.ndarray,
+    shape: np.ndarray,
+    lo: np.ndarray,
+    cell: float,
+    frame: FaceFrame,
+    hidden_by: np.ndarray,
+    T_camera_table: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The empty cells of a face's height map (flat, ``shape``) that the camera cannot
+    see because ``hidden_by`` (table-frame points of what stands on the object) lies in
+    front of them, within the face's outline (covered cells on both sides along its row
+    or its column); and every cell's height on the face's plane, to fill them with.
+
+    Seen from the camera: each candidate cell's point on the plane and the points in
+    front are binned by direction (x/z, y/z of the camera frame) at 1.5 cells over the
+    face's median range, the occluder's bins grown by one; a cell is hidden where an
+    occluder's bin holds a point nearer the camera than the cell."""
+    rows, cols = int(shape[0]), int(shape[1])
+    grid = np.isfinite(height).reshape(rows, cols)
+    r_idx, c_idx = np.arange(rows), np.arange(cols)
+    big = rows + cols + 1
+    row_lo = np.where(grid, c_idx[None, :], big).min(axis=1)
+    row_hi = np.where(grid, c_idx[None, :], -1).max(axis=1)
+    col_lo = np.where(grid, r_idx[:, None], big).min(axis=0)
+    col_hi = np.where(grid, r_idx[:, None], -1).max(axis=0)
+    # between covered cells along its row or along its column (what stands on the
+    # object may hide the face from itself to the face's far edge: one way is bounded)
+    inside = (
+        ~grid
+        & (
+            ((c_idx[None, :] >= row_lo[:, None]) & (c_idx[None, :] <= row_hi[:, None]))
+            | ((r_idx[:, None] >= col_lo[None, :]) & (r_idx[:, None] <= col_hi[None, :]))
+        )
+    ).ravel()
+    seen = np.flatnonzero(grid.ravel())
+    seen_ij = np.stack(np.divmod(seen, cols), axis=1) + lo
+    coef = _face_plane(height[seen], seen_ij, cell)
+    all_ij = np.stack(np.divmod(np.arange(rows * cols), cols), axis=1) + lo
+    plane = coef[0] + ((all_ij + 0.5) * cell) @ coef[1:]
+    hidden = np.zeros(rows * cols, dtype=bool)
+    cand = np.flatnonzero(inside)
+    if not len(cand) or not len(hidden_by):
+        return hidden, plane
+    uv = (all_ij[cand] + 0.5) * cell
+    P = uv[:, :1] * frame.e1 + uv[:, 1:2] * frame.e2 + plane[cand, None] * frame.n
+    R, t = T_camera_table[:3, :3], T_camera_table[:3, 3]
+    Pc = P @ R.T + t
+    Qc = hidden_by @ R.T + t
+    Qc = Qc[Qc[:, 2] > 1e-6]
+    if not len(Qc) or not (Pc[:, 2] > 1e-6).all():
+        return hidden, plane
+    step = 1.5 * cell / float(np.median(Pc[:, 2]))
+    qb = np.floor(Qc[:, :2] / Qc[:, 2:3] / step).astype(np.int64)
+    pb = np.floor(Pc[:, :2] / Pc[:, 2:3] / step).astype(np.int64)
+    base = np.minimum(qb.min(axis=0), pb.min(axis=0)) - 1
+    width = int(max(qb[:, 1].max(), pb[:, 1].max()) - base[1] + 2)
+    keys = (qb[:, 0] - base[0]) * width + (qb[:, 1] - base[1])
+    grow = np.array([dr * width + dc for dr in (-1, 0, 1) for dc in (-1, 0, 1)])
+    bins, inverse = np.unique((keys[:, None] + grow[None, :]).ravel(), return_inverse=True)
+    nearest = np.full(len(bins), np.inf)
+    np.minimum.at(nearest, inverse, np.repeat(Qc[:, 2], len(grow)))
+    pk = (pb[:, 0] - base[0]) * width + (pb[:, 1] - base[1])
+    at = np.minimum(np.searchsorted(bins, pk), len(bins) - 1)
+    front = np.where(bins[at] == pk, nearest[at], np.inf)
+    hidden[cand[front < Pc[:, 2]]] = True
+    return hidden, plane
+
+
 def judge_face(
     own: np.ndarray,
     others: np.ndarray,
     frame: FaceFrame,
     spec: CupSpec,
     e2_range: tuple[float, float] = (-math.inf, math.inf),
+    hidden_by: np.ndarray | None = None,
+    T_camera_table: np.ndarray | None = None,
 ) -> FacePlaces | None:
     """Every place of one face: the cup centred on each cell of the object's height map
     in ``frame`` (``own``, ``others``: table-frame points), the cells whose centre's e2
     lies in ``e2_range`` (a side's heights the tool may take). Judged as the module
-    says; the load is not judged here."""
+    says; the load is not judged here. Where ``hidden_by`` (what stands on the object,
+    taken first) hides the face from the camera (``T_camera_table``), the face is taken
+    to go on as its plane: those cells are neither holes nor edges (`hidden_cells`)."""
     if len(own) < 3:
         return None
     cell = spec.gap_m
@@ -200,6 +288,14 @@ def judge_face(
     cells, tops = _mean_per_key(keys, w)
     height = np.full(int(shape[0] * shape[1]), np.nan)
     height[cells] = tops
+    if hidden_by is not None and T_camera_table is not None and len(hidden_by):
+        hidden, plane = hidden_cells(height, shape, lo, cell, frame, hidden_by, T_camera_table)
+        height[hidden] = plane[hidden]
+        seen = np.zeros(height.shape, dtype=bool)
+        seen[cells] = True
+        cells = np.flatnonzero(np.isfinite(height))  # a hidden cell is a place too
+    else:
+        seen = None
     # the others' outermost point per cell of the same grid (those within it)
     theirs = np.full(height.shape, -np.inf)
     if len(others):
@@ -220,7 +316,7 @@ def judge_face(
     ci, cj, centre_uv = ci[keep], cj[keep], centre_uv[keep]
     window = (ci[:, None] + offsets[None, :, 0]) * shape[1] + (cj[:, None] + offsets[None, :, 1])
     H = height[window]  # (N, K)
-    covered = np.isfinite(H)
+    covered = np.isfinite(H)  # a point there, or hidden by what stands on the object
     share = covered.mean(axis=1)
     # a hole: an empty cell beside another empty one under the disc (a gap of two cells,
     # 8 mm: hole_gap_m's "twice this"); a lone empty cell is a pixel the sensor missed,
@@ -242,7 +338,9 @@ def judge_face(
     pinv = np.linalg.pinv(A)  # (6, K): the same least squares for every full window
     Hf = np.where(covered_or_filled, filled, 0.0)
     coef = Hf @ pinv.T
-    resid = np.where(covered, Hf - coef @ A.T, 0.0)
+    # the spread only over what the camera saw (a hidden cell sits on the plane)
+    measured = covered if seen is None else seen[window]
+    resid = np.where(measured, Hf - coef @ A.T, 0.0)
     # the 90th percentile by nearest rank (a partition, not a sort)
     rank = int(math.ceil(0.9 * resid.shape[1])) - 1
     spread = np.partition(np.abs(resid), rank, axis=1)[:, rank]
@@ -383,6 +481,33 @@ def hull_volume_and_centroid(vertices: np.ndarray, faces: np.ndarray) -> tuple[f
     return vol6 / 6.0, centroid
 
 
+def volume_above(
+    vertices: np.ndarray, faces: np.ndarray, footprint: np.ndarray, bottom_m: float
+) -> tuple[float, np.ndarray]:
+    """The volume and centre of an object's modelled solid above ``bottom_m``: the solid
+    stands on the table (its footprint extruded down to z = 0), so for an object that
+    stands on another the prism of its footprint below its bottom is the other's, not
+    its own (a box's weight is not a stack's). Where the solid is narrower than its
+    footprint low down (nothing would be left), the prism of its footprint from its
+    bottom to its top stands for it."""
+    volume, centre = hull_volume_and_centroid(vertices, faces)
+    if bottom_m <= 0 or len(footprint) < 3 or volume <= 0:
+        return volume, centre
+    x, y = footprint[:, 0], footprint[:, 1]
+    xn, yn = np.roll(x, -1), np.roll(y, -1)
+    cross = x * yn - xn * y
+    area = float(cross.sum()) / 2.0
+    if area <= 0:
+        return volume, centre
+    c_xy = np.array([((x + xn) * cross).sum(), ((y + yn) * cross).sum()]) / (6.0 * area)
+    below = area * bottom_m
+    if volume - below <= 0:
+        top_m = float(vertices[:, 2].max())
+        return area * max(top_m - bottom_m, 0.0), np.array([c_xy[0], c_xy[1], (top_m + bottom_m) / 2.0])
+    c_below = np.array([c_xy[0], c_xy[1], bottom_m / 2.0])
+    return volume - below, (centre * volume - c_below * below) / (volume - below)
+
+
 def face_frames(axes2d: np.ndarray) -> list[FaceFrame]:
     """The top, then the four sides across the footprint's axes (outward)."""
     out = [FaceFrame("top", np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]), UP.copy())]
@@ -402,11 +527,14 @@ def judge_object(
     com_table: np.ndarray,
     spec: CupSpec,
     min_height_m: float,
+    hidden_by: np.ndarray | None = None,
+    T_camera_table: np.ndarray | None = None,
 ) -> Judged:
     """Every place on the object's top, and on its sides where no place on the top seals,
     judged; the best by its margin (seal and load). A side's places keep the cup's centre ``min_height_m`` above the table
     (the tool clears it) and a cup's radius below the top. Each side is judged on the
-    points facing its way (those within 1 cm of its outermost), the top on all."""
+    points facing its way (those within 1 cm of its outermost), the top on all, where
+    ``hidden_by`` (what stands on the object) hides it taken as its plane (`judge_face`)."""
     faces: list[FacePlaces] = []
     band = max(spec.compliance_m, 0.01)
     # at most MAX_POINTS of the object's points, every k-th (by index: a stride moves
@@ -430,7 +558,10 @@ def judge_object(
             e2_range = (min_height_m, top_height_m - spec.radius_m)
             if e2_range[1] < e2_range[0]:
                 continue
-        places = judge_face(mine, others, frame, spec, e2_range)
+        if frame.name == "top":
+            places = judge_face(mine, others, frame, spec, e2_range, hidden_by, T_camera_table)
+        else:
+            places = judge_face(mine, others, frame, spec, e2_range)
         if places is not None and len(places):
             faces.append(places)
     if not faces:
@@ -450,8 +581,11 @@ def judge_object(
 
     k_best = int(np.argmax(margin))  # the first of the best on a tie
     best = contact(k_best) if margin[k_best] > 0 else None
+    # none kept, but some seal: the closest is the sealing place the load comes nearest
+    # at, so the reason is the weight, not a hole elsewhere whose margin ran smaller
+    k_close = k_best if best is not None or not (seal > 0).any() else int(np.argmax(np.where(seal > 0, load, -np.inf)))
     return Judged(
-        closest=contact(k_best),
+        closest=contact(k_close),
         best=best,
         n_kept=int((margin > 0).sum()),
         ranked=tuple(contact(int(k)) for k in np.argsort(-margin, kind="stable")[:8] if margin[k] > 0),

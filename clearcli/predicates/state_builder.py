@@ -11,7 +11,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import time
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from typing import Any
 
 import numpy as np
@@ -118,7 +118,7 @@ def compute_state(frame: Frame, seg: Segmentation, settings: Settings | None = N
         if "cup" in tools
         else []
     )
-    kinds = _grasp_offers(geoms, openings, edges, tf, gripper, s, exclude, touching, tools, points_table)
+    kinds = _grasp_offers(geoms, openings, edges, tf, gripper, s, exclude, touching, tools, points_table, on)
 
     for name, offers in kinds.items():
         f = grasp_kind(name).facts
@@ -180,6 +180,7 @@ def _grasp_offers(
     touching: set[tuple[int, int]],
     tools: Sequence[str] = ("fingers",),
     points_table: Sequence[np.ndarray] = (),
+    on: Iterable[tuple[int, int]] = (),
 ) -> dict[str, list[Offer]]:
     """kind name -> one `Offer` per object (table frame), every registered kind the
     robot's tool takes (``tools``: clearcli/settings/profiles.py) in preference order,
@@ -194,6 +195,7 @@ def _grasp_offers(
         exclude=exclude,
         touching=touching,
         tf=tf,
+        on=frozenset(on),
     )
     out: dict[str, list[Offer]] = {}
     for kind in grasp_kinds():

@@ -20,6 +20,7 @@ from clearcli.geometry.suction import (
     load_margin,
     quadric_design,
     sags,
+    volume_above,
 )
 
 # a 30 mm cup, 5 mm of bellows, 40 N, factor 2, lip friction 0.5, 20 deg, 4 mm gaps
@@ -249,3 +250,104 @@ def test_a_box_lying_flat_wider_than_any_opening_is_taken_from_the_top() -> None
     sides = [c for c in judged.ranked if c.face == "side"]
     assert all(0.045 <= c.point[2] <= 0.065 for c in sides)
     assert judged.n_kept > 100 and judged.why_not(SPEC) == ""
+
+
+# ---------------------------------------------------------------- what stands on it
+# a camera 1 m above the table and 0.6 m back (table frame: x away from it), looking at
+# the table's origin: T_camera_table maps table points into its frame (z forward)
+def _camera(eye: tuple[float, float, float] = (-0.6, 0.0, 1.0)) -> np.ndarray:
+    eye_a = np.asarray(eye)
+    z = -eye_a / np.linalg.norm(eye_a)
+    x = np.cross(z, UP)
+    x /= np.linalg.norm(x)
+    y = np.cross(z, x)
+    R_table_camera = np.column_stack([x, y, z])
+    T = np.eye(4)
+    T[:3, :3] = R_table_camera.T
+    T[:3, 3] = -R_table_camera.T @ eye_a
+    return T
+
+
+def _box_top_with_a_can_on_it() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A box lying flat (0.3 x 0.2, top at 0.08 m) and a can (radius 4 cm, 0.15 m tall)
+    standing on its middle: the box's top as the camera sees it (the can's footprint and
+    the shadow behind it removed, by casting each top point's ray at the can), and the
+    can's points (its top and the side facing the camera)."""
+    T = _camera()
+    eye = -T[:3, :3].T @ T[:3, 3]
+    u = np.arange(-0.15, 0.15 + 1e-9, STEP)
+    v = np.arange(-0.10, 0.10 + 1e-9, STEP)
+    uu, vv = np.meshgrid(u, v)
+    top = np.stack([uu.ravel(), vv.ravel(), np.full(uu.size, 0.08)], axis=1)
+    r, z0, z1 = 0.04, 0.08, 0.23
+    # a top point is hidden where its ray from the eye passes within the can
+    s = np.linspace(0.0, 1.0, 200)[None, :, None]
+    ray = eye + s * (top[:, None, :] - eye)
+    inside = (np.hypot(ray[..., 0], ray[..., 1]) < r) & (ray[..., 2] > z0) & (ray[..., 2] < z1)
+    seen = top[~inside[:, :-1].any(axis=1) & (np.hypot(top[:, 0], top[:, 1]) >= r)]
+    a = np.arange(0.0, 2 * np.pi, STEP / r)
+    h = np.arange(z0, z1, STEP)
+    aa, hh = np.meshgrid(a, h)
+    side = np.stack([r * np.cos(aa.ravel()), r * np.sin(aa.ravel()), hh.ravel()], axis=1)
+    side = side[side[:, 0] < 0]  # the half facing the camera (it stands at -x)
+    g = np.arange(-r, r + 1e-9, STEP)
+    gx, gy = np.meshgrid(g, g)
+    lid = np.stack([gx.ravel(), gy.ravel(), np.full(gx.size, z1)], axis=1)
+    can = np.concatenate([side, lid[np.hypot(lid[:, 0], lid[:, 1]) <= r]])
+    return seen, can, T
+
+
+def test_where_what_stands_on_it_hides_the_top_the_top_goes_on() -> None:
+    seen, can, T = _box_top_with_a_can_on_it()
+    axes2d = np.array([[1.0, 0.0], [0.0, 1.0]])
+    com = np.array([0.0, 0.0, 0.04])
+    # a heavy box (1.5 kg: only a place within ~6 mm of its centre holds it): without the
+    # can the hole it leaves is a hole; with it, the top goes on under the can
+    blind = judge_object(seen, NONE, axes2d, 0.08, 1.5, com, SPEC, 0.045)
+    told = judge_object(seen, NONE, axes2d, 0.08, 1.5, com, SPEC, 0.045, can, T)
+    assert blind.best is None
+    assert told.best is not None and np.hypot(*told.best.point[:2]) <= 0.01
+    assert told.best.point[2] == pytest.approx(0.08, abs=1e-6)
+    # the hidden cells are the can's footprint and its shadow on the far side, not the
+    # near side the camera sees: the box's near half keeps its own points
+    places = judge_face(seen, NONE, TOP, SPEC, hidden_by=can, T_camera_table=T)
+    assert places is not None
+    assert len(places) > len(judge_face(seen, NONE, TOP, SPEC))
+    # the world's edge stays an edge: no place beyond the box's outline
+    assert np.all(np.abs(places.points[:, 0]) <= 0.152) and np.all(np.abs(places.points[:, 1]) <= 0.102)
+
+
+def test_the_reason_when_places_seal_but_none_holds_is_the_weight() -> None:
+    # a flat top with a hole in one corner: the nearest miss by margin is a hole, but
+    # the top seals elsewhere: what stops the cup is the 10 kg
+    pts = _flat(half=0.08)
+    pts = pts[~((pts[:, 0] > 0.05) & (pts[:, 1] > 0.05) & (pts[:, 0] < 0.07) & (pts[:, 1] < 0.07))]
+    judged = judge_object(pts, NONE, np.eye(2), 0.1, 10.0, np.array([0.0, 0.0, 0.05]), SPEC, 0.045)
+    assert judged.best is None
+    assert judged.why_not(SPEC).startswith("too heavy for the cup: ~10.00 kg")
+
+
+def test_an_object_standing_on_another_weighs_what_lies_above_its_bottom() -> None:
+    # a 0.2 x 0.1 footprint; its solid modelled down to the table from a top at 0.3 m;
+    # it stands on something 0.25 m high: its own volume is 0.2 x 0.1 x 0.05 = 1 L
+    lo, size = np.array([0.0, 0.0, 0.0]), np.array([0.2, 0.1, 0.3])
+    corners = np.array([[i, j, k] for i in (0, 1) for j in (0, 1) for k in (0, 1)], dtype=float) * size + lo
+    from scipy.spatial import ConvexHull
+
+    hull = ConvexHull(corners)
+    faces = hull.simplices.copy()
+    centre = corners.mean(axis=0)
+    for f in faces:
+        n = np.cross(corners[f[1]] - corners[f[0]], corners[f[2]] - corners[f[0]])
+        if n @ (corners[f[0]] - centre) < 0:
+            f[[1, 2]] = f[[2, 1]]
+    footprint = np.array([[0.0, 0.0], [0.2, 0.0], [0.2, 0.1], [0.0, 0.1]])
+    vol, com = volume_above(corners, faces, footprint, 0.25)
+    assert vol == pytest.approx(0.001) and com == pytest.approx([0.1, 0.05, 0.275])
+    # on the table: the whole solid
+    vol0, com0 = volume_above(corners, faces, footprint, 0.0)
+    assert vol0 == pytest.approx(0.006) and com0 == pytest.approx([0.1, 0.05, 0.15])
+    # a solid narrower low down than its footprint says (nothing left above): the prism
+    # of the footprint from the bottom to the top stands for it
+    vol1, com1 = volume_above(corners, faces, footprint * 2.0, 0.25)
+    assert vol1 == pytest.approx(0.08 * 0.05) and com1 == pytest.approx([0.2, 0.1, 0.275])

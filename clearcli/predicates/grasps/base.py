@@ -85,6 +85,9 @@ class Scene:
     # the kinds before this one in preference order, each with the objects it is offered
     # for: a kind may leave to them what they take (the slide does)
     offered_before: tuple[tuple[GraspKind, frozenset[int]], ...] = ()
+    # (a, b): a stands on (or inside) b, so b is taken after a: what b's top shows where
+    # a stands is a's, not a hole in b
+    on: frozenset[tuple[int, int]] = frozenset()
 
 
 class SimWorld(Protocol):

@@ -35,7 +35,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from clearcli.geometry.poses import _pose
-from clearcli.geometry.suction import CupSpec, Judged, hull_volume_and_centroid, judge_object
+from clearcli.geometry.suction import CupSpec, Judged, judge_object, volume_above
 from clearcli.predicates.grasps.base import KindFacts, KindModule, Offer, Scene, SimWorld
 
 if TYPE_CHECKING:
@@ -139,10 +139,22 @@ class SuctionGrasp(KindModule):
                 and bool(np.all(bounds[j][1] >= lo) and np.all(bounds[j][0] <= hi))
             ]
             others = np.concatenate([pts[j] for j in near]) if near else empty
-            volume, com = hull_volume_and_centroid(np.asarray(g.hull_vertices), np.asarray(g.hull_faces))
+            # an object standing on another weighs what lies above its bottom
+            stands_on = any(a == i for a, _b in scene.on)
+            volume, com = volume_above(
+                np.asarray(g.hull_vertices),
+                np.asarray(g.hull_faces),
+                np.asarray(g.footprint),
+                g.bottom_height_m if stands_on else 0.0,
+            )
             mass = volume * s.density_kg_m3
             min_side = max(spec.radius_m, s.body_radius_m) + 0.005  # the tool clears the table
-            judged: Judged = judge_object(own, others, g.axes2d, g.top_height_m, mass, com, spec, min_side)
+            # what stands on it is taken first: where it hides the top, the top goes on
+            above = [pts[a] for a, b in scene.on if b == i and a != i and a < len(pts)]
+            hidden_by = np.concatenate(above) if above else None
+            judged: Judged = judge_object(
+                own, others, g.axes2d, g.top_height_m, mass, com, spec, min_side, hidden_by, scene.tf.T_camera_table
+            )
             kept = list(judged.ranked)  # up to 8 places that seal and hold, best first
             if not kept:
                 out.append(Offer(why_not=judged.why_not(spec)))
