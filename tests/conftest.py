@@ -5,6 +5,9 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+# every JSON document clear writes in a test is validated against its schema (and counted)
+from helpers.schemas import _documents_match_their_schemas, pytest_terminal_summary  # noqa: E402, F401
+
 
 @pytest.fixture(autouse=True)
 def _signal_handlers_restored():  # type: ignore[no-untyped-def]
