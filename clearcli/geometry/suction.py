@@ -39,6 +39,7 @@ within rounding of a limit is never preferred to one well inside it.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from dataclasses import dataclass
 
@@ -133,6 +134,26 @@ def disc_neighbours(offsets: np.ndarray) -> np.ndarray:
     return np.array([[where.get((int(a) + da, int(b) + db), -1) for da, db in steps] for a, b in offsets])
 
 
+@dataclass(frozen=True, eq=False)
+class Disc:
+    """The cup's disc on a grid of cells: its cells' offsets, their neighbours among
+    them, and the least squares of a quadric over them (the same for every place)."""
+
+    offsets: np.ndarray  # (K, 2)
+    neighbours: np.ndarray  # (K, 4)
+    design: np.ndarray  # (K, 6)
+    pinv: np.ndarray  # (6, K)
+
+
+@functools.lru_cache(maxsize=16)
+def disc(radius_m: float, cell_m: float) -> Disc:
+    """The disc of a cup of ``radius_m`` on cells of ``cell_m``, built once per pair
+    (every face of every object uses the same)."""
+    offsets = disc_cells(radius_m, cell_m)
+    A = quadric_design((offsets * cell_m).astype(float))
+    return Disc(offsets, disc_neighbours(offsets), A, np.linalg.pinv(A))
+
+
 def quadric_design(uv: np.ndarray) -> np.ndarray:
     """(K, 6) rows 1, u, v, u^2, u v, v^2."""
     u, v = uv[:, 0], uv[:, 1]
@@ -165,10 +186,13 @@ def _outermost(keys: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, np.nda
     return k[last], v[last]
 
 
-def _mean_per_key(keys: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The unique keys and, per key, the mean of its values."""
-    k, inverse = np.unique(keys, return_inverse=True)
-    return k, np.bincount(inverse, weights=values) / np.bincount(inverse)
+def _mean_per_key(keys: np.ndarray, values: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray]:
+    """The keys present (of ``0..size-1``, ascending) and, per key, the mean of its
+    values (counted on the dense grid: no sort)."""
+    n = np.bincount(keys, minlength=size)
+    total = np.bincount(keys, weights=values, minlength=size)
+    k = np.flatnonzero(n)
+    return k, total[k] / n[k]
 
 
 def _face_plane(height: np.ndarray, ij: np.ndarray, cell: float) -> np.ndarray:
@@ -244,10 +268,14 @@ def hidden_cells(
     base = np.minimum(qb.min(axis=0), pb.min(axis=0)) - 1
     width = int(max(qb[:, 1].max(), pb[:, 1].max()) - base[1] + 2)
     keys = (qb[:, 0] - base[0]) * width + (qb[:, 1] - base[1])
+    # the nearest point of each bin, then each bin grown by one: the grown bins' nearest
+    order = np.lexsort((Qc[:, 2], keys))
+    first = np.r_[True, keys[order][1:] != keys[order][:-1]]
+    k1, z1 = keys[order][first], Qc[order, 2][first]
     grow = np.array([dr * width + dc for dr in (-1, 0, 1) for dc in (-1, 0, 1)])
-    bins, inverse = np.unique((keys[:, None] + grow[None, :]).ravel(), return_inverse=True)
+    bins, inverse = np.unique((k1[:, None] + grow[None, :]).ravel(), return_inverse=True)
     nearest = np.full(len(bins), np.inf)
-    np.minimum.at(nearest, inverse, np.repeat(Qc[:, 2], len(grow)))
+    np.minimum.at(nearest, inverse, np.repeat(z1, len(grow)))
     pk = (pb[:, 0] - base[0]) * width + (pb[:, 1] - base[1])
     at = np.minimum(np.searchsorted(bins, pk), len(bins) - 1)
     front = np.where(bins[at] == pk, nearest[at], np.inf)
@@ -278,14 +306,15 @@ def judge_face(
     uv = own @ basis.T
     w = own @ frame.n
     ij = np.floor(uv / cell).astype(np.int64)
-    offsets = disc_cells(r, cell)
+    d = disc(r, cell)
+    offsets = d.offsets
     pad = int(np.abs(offsets).max()) + 1
     lo = ij.min(axis=0) - pad
     shape = ij.max(axis=0) - lo + pad + 1
     keys = (ij[:, 0] - lo[0]) * shape[1] + (ij[:, 1] - lo[1])
     # a cell's value: the mean of its points (the face at the cell's centre, the sensor's
     # noise averaged; the outermost point would flatten a curved face by a cell's slope)
-    cells, tops = _mean_per_key(keys, w)
+    cells, tops = _mean_per_key(keys, w, int(shape[0] * shape[1]))
     height = np.full(int(shape[0] * shape[1]), np.nan)
     height[cells] = tops
     if hidden_by is not None and T_camera_table is not None and len(hidden_by):
@@ -321,7 +350,7 @@ def judge_face(
     # a hole: an empty cell beside another empty one under the disc (a gap of two cells,
     # 8 mm: hole_gap_m's "twice this"); a lone empty cell is a pixel the sensor missed,
     # filled with the mean of its neighbours for the fit
-    nb = disc_neighbours(offsets)  # (K, 4) indices into the disc's cells, -1 outside it
+    nb = d.neighbours  # (K, 4) indices into the disc's cells, -1 outside it
     valid = nb >= 0
     nb_safe = np.where(valid, nb, 0)
     empty = ~covered
@@ -333,9 +362,8 @@ def judge_face(
     nb_n = nb_cov.sum(axis=2)
     filled = np.where(empty & (nb_n > 0), nb_sum / np.maximum(nb_n, 1), H)
     covered_or_filled = np.isfinite(filled)
-    rel_uv = offsets * cell  # cell centres relative to the centre cell's
-    A = quadric_design(rel_uv.astype(float))
-    pinv = np.linalg.pinv(A)  # (6, K): the same least squares for every full window
+    A = d.design  # cell centres relative to the centre cell's
+    pinv = d.pinv  # (6, K): the same least squares for every full window
     Hf = np.where(covered_or_filled, filled, 0.0)
     coef = Hf @ pinv.T
     # the spread only over what the camera saw (a hidden cell sits on the plane)

@@ -120,25 +120,47 @@ class SuctionGrasp(KindModule):
         n = len(scene.objects)
         pts = [np.asarray(p, dtype=float).reshape(-1, 3) for p in scene.points_table]
         empty = np.zeros((0, 3))
-        bounds = [(p.min(axis=0), p.max(axis=0)) if len(p) else (np.full(3, np.inf), np.full(3, -np.inf)) for p in pts]
+        m = min(n, len(pts))
+        b_lo = np.array([p.min(axis=0) if len(p) else np.full(3, np.inf) for p in pts[:m]]).reshape(-1, 3)
+        b_hi = np.array([p.max(axis=0) if len(p) else np.full(3, -np.inf) for p in pts[:m]]).reshape(-1, 3)
         # how far from an object another can be under the cup or in the tool's way: the
         # body's radius across, the tool's length and the approach along the normal
         reach = max(s.body_radius_m, s.cup_diameter_m) + s.stem_length_m + s.body_length_m + approach_m
+        # ... and how far under its cup (the seal test's box)
+        seal_reach = spec.radius_m + spec.compliance_m + max(spec.compliance_m, 0.01)
+
+        def overlaps(r: float) -> np.ndarray:
+            """(m, m) object j's box meets object i's grown by ``r``."""
+            return np.all(
+                (b_hi[None, :, :] >= b_lo[:, None, :] - r) & (b_lo[None, :, :] <= b_hi[:, None, :] + r), axis=2
+            )
+
+        # objects related by `on` never block each other (as for every kind): what
+        # stands on one goes first, what it stands on is under it
+        related = np.zeros((m, m), dtype=bool)
+        for a, b in scene.exclude:
+            if a < m and b < m:
+                related[a, b] = related[b, a] = True
+        np.fill_diagonal(related, True)
+        near_all = overlaps(reach) & ~related
+        close_all = overlaps(seal_reach) & ~related
+        # the neighbours' points every BLOCK_STRIDE-th, once (an object in the tool's way
+        # shows with hundreds of points; a stride by index moves with no rounding)
+        sample = [p[::BLOCK_STRIDE] for p in pts[:m]]
+        cloud_all = np.concatenate(sample) if sample else empty
+        labels_all = np.concatenate([np.full(len(p), j) for j, p in enumerate(sample)]) if sample else np.zeros(0, int)
         out: list[Offer] = []
         for i, g in enumerate(scene.objects):
             own = pts[i] if i < len(pts) else empty
-            lo, hi = bounds[i][0] - reach, bounds[i][1] + reach
-            # objects related by `on` never block each other (as for every kind): what
-            # stands on this one goes first, what it stands on is under it
-            near = [
-                j
-                for j in range(min(n, len(pts)))
-                if j != i
-                and (i, j) not in scene.exclude
-                and (j, i) not in scene.exclude
-                and bool(np.all(bounds[j][1] >= lo) and np.all(bounds[j][0] <= hi))
-            ]
-            others = np.concatenate([pts[j] for j in near]) if near else empty
+            close = (
+                [
+                    pts[j][np.all((pts[j] >= b_lo[i] - seal_reach) & (pts[j] <= b_hi[i] + seal_reach), axis=1)]
+                    for j in np.flatnonzero(close_all[i])
+                ]
+                if i < m
+                else []
+            )
+            others = np.concatenate(close) if close else empty
             # an object standing on another weighs what lies above its bottom
             stands_on = any(a == i for a, _b in scene.on)
             volume, com = volume_above(
@@ -159,11 +181,14 @@ class SuctionGrasp(KindModule):
             if not kept:
                 out.append(Offer(why_not=judged.why_not(spec)))
                 continue
-            # the neighbours' points once, every BLOCK_STRIDE-th (an object in the tool's
-            # way shows with hundreds of points; a stride by index moves with no rounding)
-            sample = [pts[j][::BLOCK_STRIDE] for j in near]
-            labels = np.concatenate([np.full(len(p), j) for j, p in zip(near, sample)]) if near else np.zeros(0, int)
-            cloud = np.concatenate(sample) if near else empty
+            # the neighbours' sampled points within the tool's reach of this object
+            if i < m and len(cloud_all):
+                near = near_all[i][labels_all] & np.all(
+                    (cloud_all >= b_lo[i] - reach) & (cloud_all <= b_hi[i] + reach), axis=1
+                )
+                cloud, labels = cloud_all[near], labels_all[near]
+            else:
+                cloud, labels = empty, np.zeros(0, int)
             best, blockers = kept[0], frozenset[int]()
             for rank, c in enumerate(kept):  # best first: the first that nothing blocks ends the search
                 hit = frozenset(int(j) for j in np.unique(labels[swept_mask(cloud, c.point, c.normal, s, approach_m)]))
