@@ -12,6 +12,9 @@ modules (which import typer) are imported after the hold, inside the functions b
 from __future__ import annotations
 
 import functools
+import importlib.abc
+import importlib.machinery
+import importlib.util
 import os
 import shutil
 import sys
@@ -168,9 +171,41 @@ def _single_threaded_numerics() -> None:
         os.environ.setdefault(var, "1")
 
 
+# NumPy subpackages clear never uses: its test and build tooling, and polynomials.
+# SciPy's array-API layer (scipy._lib.array_api_compat.numpy, imported by every SciPy
+# subpackage through scipy._lib._util) copies NumPy's namespace with `from numpy import *`
+# and a getattr of every name, and NumPy's lazy attributes then import them all:
+# numpy.f2py (the Fortran wrapper generator) and numpy.testing (unittest, difflib) were
+# 57 ms of a cold `clear plan` on a quiet machine (issue 39), numpy.polynomial some 6 ms
+# more (numpy.ma is left alone: SciPy's functions touch it on their first call). Here
+# importing one of them only creates the module; its code runs at the first use of one
+# of its attributes (the standard library's importlib.util.LazyLoader), so code that does
+# use them gets them whole.
+DEFERRED_MODULES = frozenset({"numpy.f2py", "numpy.testing", "numpy.polynomial"})
+
+
+class _DeferredTooling(importlib.abc.MetaPathFinder):
+    """Finds `DEFERRED_MODULES` as the path finder does, with a lazy loader around its own."""
+
+    def find_spec(self, fullname: str, path: Any = None, target: Any = None) -> importlib.machinery.ModuleSpec | None:
+        if fullname not in DEFERRED_MODULES:
+            return None
+        spec = importlib.machinery.PathFinder.find_spec(fullname, path)
+        if spec is None or spec.loader is None or not hasattr(spec.loader, "exec_module"):
+            return spec
+        spec.loader = importlib.util.LazyLoader(spec.loader)
+        return spec
+
+
+def _defer_numpy_tooling() -> None:
+    if not any(isinstance(finder, _DeferredTooling) for finder in sys.meta_path):
+        sys.meta_path.insert(0, _DeferredTooling())
+
+
 def main() -> None:
     """Entry point of `clear` and `clearcli`: maps ClearError to its exit code."""
     _single_threaded_numerics()  # first: before any import of NumPy
+    _defer_numpy_tooling()
     if len(sys.argv) == 1 and Path(sys.argv[0]).name == "clear" and sys.stdout.isatty() and sys.stdin.isatty():
         _run_terminal_clear()
         return
