@@ -35,7 +35,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from clearcli.geometry.poses import _pose
-from clearcli.geometry.suction import CupSpec, Judged, judge_object, volume_above
+from clearcli.geometry.suction import MAX_POINTS, CupSpec, Judged, judge_object, volume_above
 from clearcli.predicates.grasps.base import KindFacts, KindModule, Offer, Scene, SimWorld
 
 if TYPE_CHECKING:
@@ -118,7 +118,11 @@ class SuctionGrasp(KindModule):
         spec = cup_spec(s)
         approach_m = settings.push.approach_m
         n = len(scene.objects)
-        pts = [np.asarray(p, dtype=float).reshape(-1, 3) for p in scene.points_table]
+        full = [np.asarray(p, dtype=float).reshape(-1, 3) for p in scene.points_table]
+        # each object's points at most MAX_POINTS, every k-th (as `judge_object` takes its
+        # own): the seal tests' cells of 4 mm need no more, and a RealSense close up gives
+        # 50,000 an object
+        pts = [p[:: max(1, math.ceil(len(p) / MAX_POINTS))] for p in full]
         empty = np.zeros((0, 3))
         m = min(n, len(pts))
         b_lo = np.array([p.min(axis=0) if len(p) else np.full(3, np.inf) for p in pts[:m]]).reshape(-1, 3)
@@ -146,7 +150,7 @@ class SuctionGrasp(KindModule):
         close_all = overlaps(seal_reach) & ~related
         # the neighbours' points every BLOCK_STRIDE-th, once (an object in the tool's way
         # shows with hundreds of points; a stride by index moves with no rounding)
-        sample = [p[::BLOCK_STRIDE] for p in pts[:m]]
+        sample = [p[::BLOCK_STRIDE] for p in full[:m]]
         cloud_all = np.concatenate(sample) if sample else empty
         labels_all = np.concatenate([np.full(len(p), j) for j, p in enumerate(sample)]) if sample else np.zeros(0, int)
         out: list[Offer] = []
