@@ -18,12 +18,14 @@ def test_a_bad_grasps_list_is_one_line_and_exit_3() -> None:
 
 def test_kinds_in_any_order() -> None:
     res = clear("plan", "fixtures/clutter10.pcd", "--grasps", "slide, pinch", "--json")
-    assert res.returncode == 0, res.stderr
+    # 10: a partial plan (clutter10's touching pair is one segment, too wide to grasp)
+    assert res.returncode in (0, 10), res.stderr
+    assert json.loads(res.stdout)["steps"]
 
 
 def test_pinch_only_names_every_grasp_a_pinch() -> None:
     res = clear("plan", "fixtures/clutter10.pcd", "--grasps", "pinch", "--json")
-    assert res.returncode == 0, res.stderr
+    assert res.returncode in (0, 10), res.stderr
     doc = json.loads(res.stdout)
     grasps = [s for s in doc["steps"] if s["kind"] == "grasp"]
     assert grasps and all(s["grasp_kind"] == "pinch" for s in grasps)

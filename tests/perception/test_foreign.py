@@ -14,12 +14,30 @@ from helpers.foreign import judged
     [("table_scene_mug_stereo_textured", "mug"), ("uois_image_0000", "blue cup")],
 )
 def test_a_mug_with_its_handle_is_one_object(frame: str, cup: str) -> None:
+    verdicts, _, _ = judged(frame)
+    assert verdicts[cup] == "right"
+
+
+@pytest.mark.parametrize(
+    "frame, cup",
+    [
+        ("table_scene_mug_stereo_textured", "mug"),
+        pytest.param(
+            "uois_image_0000",
+            "blue cup",
+            marks=pytest.mark.xfail(
+                strict=True,
+                reason="since the voxel grid's boundaries left the whole millimetre (issue 37, 6a58839) the blue "
+                "cup's walls join without the rim stages too: this frame no longer shows what they do",
+            ),
+        ),
+    ],
+)
+def test_without_the_rim_stages_the_mug_splits(frame: str, cup: str) -> None:
     # rings.fit_rim: the rim circle fitted without the band points far off it (the
     # handle); with none allowed off the circle, and without the vessels stage (which
     # rebuilds the cup from its rim as well, its handle going with it), the walls stay
     # two segments
-    verdicts, _, _ = judged(frame)
-    assert verdicts[cup] == "right"
     verdicts, _, _ = judged(frame, ring_max_off_share=0.0, vessel_rebuild=False)
     assert verdicts[cup] == "split"
 

