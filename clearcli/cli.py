@@ -20,7 +20,7 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
-from clearcli import __version__, interrupts
+from clearcli import interrupts
 from clearcli.commands import registry
 from clearcli.errors import (
     EXIT_BROKEN_PIPE,
@@ -52,7 +52,9 @@ def make_app(only: str | None = None) -> typer.Typer:
 
     def _version(value: bool) -> None:
         if value:
-            typer.echo(f"clear {__version__}")
+            from clearcli.provenance import version_line  # noqa: PLC0415  (--version only)
+
+            typer.echo(version_line())
             raise typer.Exit(0)
 
     def _root(version: bool | None = None) -> None:

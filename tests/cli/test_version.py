@@ -144,11 +144,6 @@ def test_the_line_is_cheap() -> None:
     assert time.perf_counter() - t0 < 0.5
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="clearcli/cli.py (not this change's file) still echoes the bare version: its "
-    "`_version` must print `provenance.version_line()`; drop this mark when it does",
-)
 def test_clear_version_names_the_commit() -> None:
     done = run_clear("--version", timeout=60)
     assert done.returncode == 0
