@@ -213,19 +213,23 @@ def test_a_side_face_seals_and_holds_by_friction() -> None:
     assert margin == pytest.approx(1 - 2 * (w / 20 + w * 0.03 / (40 * 0.015)))
 
 
-def test_hull_volume_and_centroid_of_a_box() -> None:
-    # a 0.1 x 0.2 x 0.3 box from (1, 2, 3): 0.006 m^3, centre (1.05, 2.1, 3.15)
-    lo, size = np.array([1.0, 2.0, 3.0]), np.array([0.1, 0.2, 0.3])
-    corners = np.array([[i, j, k] for i in (0, 1) for j in (0, 1) for k in (0, 1)], dtype=float) * size + lo
+def _box_mesh(lo: np.ndarray, size: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A box's 8 corners and its 12 triangles, outward."""
     from scipy.spatial import ConvexHull
 
-    hull = ConvexHull(corners)
-    faces = hull.simplices.copy()
+    corners = np.array([[i, j, k] for i in (0, 1) for j in (0, 1) for k in (0, 1)], dtype=float) * size + lo
+    faces = ConvexHull(corners).simplices.copy()
     centre = corners.mean(axis=0)
     for f in faces:  # outward
         n = np.cross(corners[f[1]] - corners[f[0]], corners[f[2]] - corners[f[0]])
         if n @ (corners[f[0]] - centre) < 0:
             f[[1, 2]] = f[[2, 1]]
+    return corners, faces
+
+
+def test_hull_volume_and_centroid_of_a_box() -> None:
+    # a 0.1 x 0.2 x 0.3 box from (1, 2, 3): 0.006 m^3, centre (1.05, 2.1, 3.15)
+    corners, faces = _box_mesh(np.array([1.0, 2.0, 3.0]), np.array([0.1, 0.2, 0.3]))
     vol, com = hull_volume_and_centroid(corners, faces)
     assert vol == pytest.approx(0.006) and com == pytest.approx([1.05, 2.1, 3.15])
 
@@ -330,17 +334,7 @@ def test_the_reason_when_places_seal_but_none_holds_is_the_weight() -> None:
 def test_an_object_standing_on_another_weighs_what_lies_above_its_bottom() -> None:
     # a 0.2 x 0.1 footprint; its solid modelled down to the table from a top at 0.3 m;
     # it stands on something 0.25 m high: its own volume is 0.2 x 0.1 x 0.05 = 1 L
-    lo, size = np.array([0.0, 0.0, 0.0]), np.array([0.2, 0.1, 0.3])
-    corners = np.array([[i, j, k] for i in (0, 1) for j in (0, 1) for k in (0, 1)], dtype=float) * size + lo
-    from scipy.spatial import ConvexHull
-
-    hull = ConvexHull(corners)
-    faces = hull.simplices.copy()
-    centre = corners.mean(axis=0)
-    for f in faces:
-        n = np.cross(corners[f[1]] - corners[f[0]], corners[f[2]] - corners[f[0]])
-        if n @ (corners[f[0]] - centre) < 0:
-            f[[1, 2]] = f[[2, 1]]
+    corners, faces = _box_mesh(np.zeros(3), np.array([0.2, 0.1, 0.3]))
     footprint = np.array([[0.0, 0.0], [0.2, 0.0], [0.2, 0.1], [0.0, 0.1]])
     vol, com = volume_above(corners, faces, footprint, 0.25)
     assert vol == pytest.approx(0.001) and com == pytest.approx([0.1, 0.05, 0.275])
