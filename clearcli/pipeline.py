@@ -112,7 +112,11 @@ class Pipeline:
             self._segment_fn = _default_segment()
         return self._segment_fn(frame, self.settings.segment)
 
-    def state(self, frame: Frame, segmentation: Segmentation) -> SymbolicState:
+    def state(
+        self, frame: Frame, segmentation: Segmentation, avoid_faces: Mapping[int, frozenset[str]] | None = None
+    ) -> SymbolicState:
+        if avoid_faces:  # a closed loop's memory: the default stage's own parameter
+            return compute_state(frame, segmentation, self.settings, avoid_faces)
         if self._state_fn is None:
             self._state_fn = _default_state()
         return self._state_fn(frame, segmentation, self.settings)
@@ -132,12 +136,14 @@ class Pipeline:
         adjust: Callable[[Segmentation, SymbolicState], SymbolicState] | None = None,
         on_segmentation: Callable[[Segmentation], None] | None = None,
         catch_internal: bool = False,
+        avoid_faces: Callable[[Segmentation], Mapping[int, frozenset[str]]] | None = None,
     ) -> FrameResult:
         """All stages on one frame. ``on_segmentation`` sees the segmentation as soon as
         it exists (tracking); ``adjust`` may change the state before planning (push
         memory). Errors a user's data can cause become the result's status; other
         exceptions (bugs) raise, unless ``catch_internal`` (a replay goes on past them;
-        CLEAR_DEBUG=1 still raises)."""
+        CLEAR_DEBUG=1 still raises). ``avoid_faces`` gives, once the segmentation exists,
+        the faces per segment a kind with faces must not use (a replay's memory)."""
         timings: dict[str, float] = {}
         t_start = time.perf_counter()
         catch = catch_internal and not os.environ.get("CLEAR_DEBUG")
@@ -175,7 +181,7 @@ class Pipeline:
 
         t0 = time.perf_counter()
         try:
-            state = self.state(frame, segmentation)
+            state = self.state(frame, segmentation, avoid_faces(segmentation) if avoid_faces is not None else None)
         except caught as exc:
             timings["predicates"] = time.perf_counter() - t0
             return failed("predicates", exc, segmentation=segmentation)

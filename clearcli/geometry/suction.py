@@ -557,12 +557,14 @@ def judge_object(
     min_height_m: float,
     hidden_by: np.ndarray | None = None,
     T_camera_table: np.ndarray | None = None,
+    skip: frozenset[str] = frozenset(),
 ) -> Judged:
     """Every place on the object's top, and on its sides where no place on the top seals,
     judged; the best by its margin (seal and load). A side's places keep the cup's centre ``min_height_m`` above the table
     (the tool clears it) and a cup's radius below the top. Each side is judged on the
     points facing its way (those within 1 cm of its outermost), the top on all, where
-    ``hidden_by`` (what stands on the object) hides it taken as its plane (`judge_face`)."""
+    ``hidden_by`` (what stands on the object) hides it taken as its plane (`judge_face`);
+    the faces named in ``skip`` ("top", "side") are not judged."""
     faces: list[FacePlaces] = []
     band = max(spec.compliance_m, 0.01)
     # at most MAX_POINTS of the object's points, every k-th (by index: a stride moves
@@ -574,7 +576,9 @@ def judge_object(
         lo, hi = own.min(axis=0) - reach, own.max(axis=0) + reach
         others = others[np.all((others >= lo) & (others <= hi), axis=1)]
     for frame in face_frames(axes2d):
-        if frame.name == "side" and faces and bool((faces[0].seal > 0).any()):
+        if frame.name in skip:  # tried, and the cup did not seal there
+            continue
+        if frame.name == "side" and faces and faces[0].frame.name == "top" and bool((faces[0].seal > 0).any()):
             # the top seals somewhere: it is the surer grasp (the weight pulls along the
             # cup's axis, not across its lip), and the sides are not searched
             break

@@ -11,7 +11,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import time
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -35,8 +35,15 @@ from clearcli.settings.profiles import tools_of
 log = logging.getLogger("clearcli.predicates")
 
 
-def compute_state(frame: Frame, seg: Segmentation, settings: Settings | None = None) -> SymbolicState:
-    """Model the segmented objects and compute every fact the planner needs (no IK)."""
+def compute_state(
+    frame: Frame,
+    seg: Segmentation,
+    settings: Settings | None = None,
+    avoid_faces: Mapping[int, frozenset[str]] | None = None,
+) -> SymbolicState:
+    """Model the segmented objects and compute every fact the planner needs (no IK).
+    ``avoid_faces``: segment index -> the faces a kind with faces must not use there (a
+    closed loop's memory of a cup that did not seal)."""
     s = settings if settings is not None else Settings()
     ps = s.predicates
     timings: dict[str, float] = {}
@@ -118,7 +125,9 @@ def compute_state(frame: Frame, seg: Segmentation, settings: Settings | None = N
         if "cup" in tools
         else []
     )
-    kinds = _grasp_offers(geoms, openings, edges, tf, gripper, s, exclude, touching, tools, points_table, on)
+    by_index = {g.segment_index: i for i, g in enumerate(geoms)}
+    avoid = {by_index[k]: v for k, v in (avoid_faces or {}).items() if k in by_index and v}
+    kinds = _grasp_offers(geoms, openings, edges, tf, gripper, s, exclude, touching, tools, points_table, on, avoid)
 
     for name, offers in kinds.items():
         f = grasp_kind(name).facts
@@ -181,6 +190,7 @@ def _grasp_offers(
     tools: Sequence[str] = ("fingers",),
     points_table: Sequence[np.ndarray] = (),
     on: Iterable[tuple[int, int]] = (),
+    avoid_faces: Mapping[int, frozenset[str]] | None = None,
 ) -> dict[str, list[Offer]]:
     """kind name -> one `Offer` per object (table frame), every registered kind the
     robot's tool takes (``tools``: clearcli/settings/profiles.py) in preference order,
@@ -196,6 +206,7 @@ def _grasp_offers(
         touching=touching,
         tf=tf,
         on=frozenset(on),
+        avoid_faces=dict(avoid_faces or {}),
     )
     out: dict[str, list[Offer]] = {}
     for kind in grasp_kinds():

@@ -96,6 +96,7 @@ def expected_effect(
         action=label,
         extents_m=extents,
         grasp_kind=action.grasp_kind,
+        grasp_face=str(obj.kind_details.get(action.grasp_kind or "", {}).get("face", "")),
     )
 
 
@@ -118,6 +119,9 @@ class Session:
         # track id -> grasps in a row that did not take it
         self.failed_grasps: dict[int, int] = {}
         self.failed_kinds: dict[int, set[str]] = {}  # per track: the grasp kinds that failed
+        # per track: (kind, face) tries of a kind with faces that failed; kept across a
+        # push (a porous top is porous wherever the object stands)
+        self.failed_faces: dict[int, set[tuple[str, str]]] = {}
         # track id -> push axes tried on it to see whether it comes apart (probe.py)
         self.probed: dict[int, frozenset[str]] = {}
 
@@ -146,7 +150,19 @@ class Session:
                 # what the last action did changes what this frame may plan
                 if execution.outcome == "done" and self.effect.kind == "grasp":
                     self.memory = push_memory.forget(self.memory, {self.effect.track_id})
-                if self.effect.kind == "grasp" and execution.outcome != "done":
+                kind = grasp_kind(self.effect.grasp_kind) if self.effect.kind == "grasp" else None
+                other_faces = (
+                    set(kind.faces)
+                    - {f for k, f in self.failed_faces.get(self.effect.track_id, set()) if k == kind.name}
+                    if kind is not None and self.effect.grasp_face in kind.faces
+                    else set()
+                )
+                if kind is not None and execution.outcome != "done" and other_faces - {self.effect.grasp_face}:
+                    # a kind with faces that failed on one: the next plan tries another
+                    # face (the predicates leave this one out), the kind is not given up
+                    tid = self.effect.track_id
+                    self.failed_faces.setdefault(tid, set()).add((kind.name, self.effect.grasp_face))
+                elif self.effect.kind == "grasp" and execution.outcome != "done":
                     tid = self.effect.track_id
                     self.failed_grasps[tid] = self.failed_grasps.get(tid, 0) + 1
                     self.failed_kinds.setdefault(tid, set()).add(self.effect.grasp_kind)
@@ -195,8 +211,21 @@ class Session:
                 return state
             return push_memory.apply_memory(state, ids, self.memory, memory_params)
 
+        def avoid_faces(segmentation: Segmentation) -> dict[int, frozenset[str]]:
+            """Segment index -> the faces that failed on its track (kinds with faces)."""
+            ids = found["assignment"].ids if "assignment" in found else ()
+            return {
+                index: frozenset(f for _k, f in self.failed_faces[tid])
+                for index, tid in enumerate(ids)
+                if tid in self.failed_faces
+            }
+
         result = self.pipeline.run(
-            frame, adjust=adjust, on_segmentation=on_segmentation, catch_internal=not options.fail_fast
+            frame,
+            adjust=adjust,
+            on_segmentation=on_segmentation,
+            catch_internal=not options.fail_fast,
+            avoid_faces=avoid_faces,
         )
         if result.status == NO_PLAN:
             result = self._probe(result, found)

@@ -70,6 +70,7 @@ class ExpectedEffect:
     push_length_m: float = 0.0
     extents_m: Vec3 = (0.0, 0.0, 0.0)  # the pushed object's box, for its swept path
     grasp_kind: str = "pinch"  # a grasp's kind (clearcli/predicates/grasps)
+    grasp_face: str = ""  # the face it took the object by, for a kind with faces ("top", "side")
 
 
 @dataclass(frozen=True)

@@ -24,8 +24,8 @@ A kind that is not offered for an object says why (the object's reason).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
@@ -88,6 +88,9 @@ class Scene:
     # (a, b): a stands on (or inside) b, so b is taken after a: what b's top shows where
     # a stands is a's, not a hole in b
     on: frozenset[tuple[int, int]] = frozenset()
+    # object index -> the faces a kind with faces must not use (a closed loop's memory:
+    # a cup that did not seal on that face)
+    avoid_faces: Mapping[int, frozenset[str]] = field(default_factory=dict)
 
 
 class SimWorld(Protocol):
@@ -146,6 +149,11 @@ class GraspKind(Protocol):
     # a try that failed and left the object where it stood meets the same again: the
     # closed loop gives the kind up on that object at once (a slide that moved nothing)
     give_up_unmoved: bool
+    # the faces of an object it may take it by (its Offer's detail names the one
+    # chosen); a try that failed on one face is tried again on the others before the
+    # kind is given up, and what failed stays with the object when it is pushed (a
+    # porous top is porous wherever it stands). () : one way only
+    faces: tuple[str, ...]
 
     def offers(self, scene: Scene, gripper: GripperModel, settings: Settings) -> list[Offer]:
         """One Offer per object of ``scene`` (the kind's poses, its blockers, or why not)."""
@@ -195,6 +203,7 @@ class KindModule:
     after_push = ""
     on_table = False
     give_up_unmoved = False
+    faces: tuple[str, ...] = ()
 
     def candidates(self, obj: ObjectModel) -> tuple[tuple[np.ndarray, ...], ...]:
         return tuple(obj.kind_candidates.get(self.name, ()))

@@ -112,6 +112,8 @@ class SuctionGrasp(KindModule):
     # a cup that did not seal or hold left its object where it stood: the same face
     # meets the same again (a porous top stays porous), so the closed loop gives it up
     give_up_unmoved = True
+    # a top that did not seal (porous, ribbed) may leave a side that does
+    faces = ("top", "side")
 
     def offers(self, scene: Scene, gripper: GripperModel, settings: Settings) -> list[Offer]:
         s = settings.suction
@@ -178,8 +180,22 @@ class SuctionGrasp(KindModule):
             # what stands on it is taken first: where it hides the top, the top goes on
             above = [pts[a] for a, b in scene.on if b == i and a != i and a < len(pts)]
             hidden_by = np.concatenate(above) if above else None
+            skip = scene.avoid_faces.get(i, frozenset())
+            if skip >= frozenset(self.faces):
+                out.append(Offer(why_not="the cup did not seal on any of its faces (top, sides) when tried"))
+                continue
             judged: Judged = judge_object(
-                own, others, g.axes2d, g.top_height_m, mass, com, spec, min_side, hidden_by, scene.tf.T_camera_table
+                own,
+                others,
+                g.axes2d,
+                g.top_height_m,
+                mass,
+                com,
+                spec,
+                min_side,
+                hidden_by,
+                scene.tf.T_camera_table,
+                skip,
             )
             kept = list(judged.ranked)  # up to 8 places that seal and hold, best first
             if not kept:
