@@ -78,7 +78,7 @@ def make_app(only: str | None = None) -> typer.Typer:
             "to stderr.\n\nExit codes:\n\n" + _EXIT_HELP
         ),
         no_args_is_help=True,
-        add_completion=False,
+        add_completion=True,  # --install-completion, --show-completion (bash, zsh, fish, PowerShell)
         pretty_exceptions_enable=False,
         rich_markup_mode=None,
     )
