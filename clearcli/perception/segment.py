@@ -38,6 +38,7 @@ from clearcli.perception.flat import flat_objects
 from clearcli.perception.lccp import lccp_segments
 from clearcli.perception.openings import Opening, TableEdge, rim_of, seen_edges
 from clearcli.perception.refine import STAGES, refine
+from clearcli.perception.resolution import WorkingGrid
 from clearcli.perception.size import SegmentSize
 from clearcli.perception.supervoxels import Supervoxels, VoxelCloud, compute_supervoxels, voxelize
 from clearcli.perception.table import (
@@ -445,13 +446,23 @@ TIMINGS = (
 )
 
 
-def segment(frame: Frame, settings: SegmentSettings) -> Segmentation:
+def segment(frame: Frame, settings: SegmentSettings, stride: int | None = None) -> Segmentation:
     """Segment the objects on the table of ``frame``: the steps of `STEPS` in order,
     each timed by its name (`Segmentation.timings_s`, keys `TIMINGS`).
+
+    An organized frame far denser than the voxel grid (a RealSense at 1280x720) is
+    segmented on its every k-th row and column and the labels carried back to every
+    pixel (resolution.py; ``stride`` forces k, 1 every pixel); 640x480 frames keep k = 1.
 
     Raises SceneError when there is no usable table (no finite points, no plane, a table
     seen from below). A table with nothing on it is a result with zero objects.
     """
+    grid = WorkingGrid.of(frame, settings, stride)
+    return grid.to_full(_segment(grid.frame, settings), settings.voxel_m)
+
+
+def _segment(frame: Frame, settings: SegmentSettings) -> Segmentation:
+    """`segment` on the frame as given (the working grid)."""
     clock = Clock(TIMINGS[:-1])
     points = frame.points
     if points.ndim != 2 or points.shape[1] != 3 or points.shape[0] == 0:
