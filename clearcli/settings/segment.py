@@ -54,6 +54,17 @@ class SegmentSettings(Section):
     # neighbours on or below the plane, not objects above it) are not table, and the
     # hull is drawn without them (table.beyond_the_edge)
     beyond_edge_check: bool = param(True)
+    # the support is the surface the objects stand on (perception/support.py): planes
+    # within a centimetre of each other are one support, what stands on a candidate is
+    # counted without the furniture holding another candidate (a stool under its top),
+    # and a surface walled in on every side (a bowl's inside) is never the support.
+    # Off: the plane with the most points above it, as before issue 37
+    support_by_standing: bool = param(True)
+    # after segmentation, what does not stand on the support is no object, and is listed
+    # as excluded with the reason (perception/exclude.py): what reaches in from beyond the
+    # support's outline (an arm, a cable), what hangs above it with the support seen
+    # beneath, and what stands on such a thing (a shelf's load)
+    exclude_not_standing: bool = param(True)
     # polygonal prism: heights above the table kept as object points. The lower bound
     # grows with the squared range (depth noise does: ~3 sigma of a Kinect's), so a
     # rough or far table surface does not turn into a carpet of small "objects".
