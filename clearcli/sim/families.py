@@ -21,6 +21,8 @@ from functools import partial
 
 import numpy as np
 
+from clearcli.io.frames import LABEL_NONE, LABEL_TABLE, Frame, object_label
+from clearcli.sim.camera import FLOOR_BELOW_TABLE_M, render
 from clearcli.sim.scene import (
     MAX_WIDTH_M,
     MIN_WIDTH_M,
@@ -31,6 +33,7 @@ from clearcli.sim.scene import (
     Table,
     _in_region,
     _place_touching,
+    camera_pose_T_camera_table,
     make_scene,
     objects_overlap,
 )
@@ -416,3 +419,208 @@ FAMILIES: dict[str, Callable[[int], Scene]] = {
     "wide_objects": wide_objects,
     "suction_mix": suction_mix,
 }
+
+
+# --- support families (issue 37) -------------------------------------------------------
+# Scenes where the support is not simply the largest plane, or where things that are no
+# objects stand in the prism above it: a mat on the table, a robot arm reaching in from
+# an edge, a second desk behind, objects on a small raised surface above a floor, a large
+# bowl. What is no object ("furniture": the mat, the arm, the desk, the raised top's body,
+# what stands on the floor or the desk) takes ids from FURNITURE_ID up; `support_frame`
+# renders a scene and relabels it: the mat as table, the rest of the furniture as none.
+# They are not in `FAMILIES` (the simulator would clear the furniture as objects).
+FURNITURE_ID = 100
+
+
+def _spread(
+    rng: np.random.Generator,
+    objs: list[SceneObject],
+    half_x: float,
+    half_y: float,
+    base_z: float,
+    cx: float = 0.0,
+    cy: float = 0.0,
+) -> list[SceneObject]:
+    """``objs`` placed apart (1.5 cm) within +-half_x, +-half_y of (cx, cy), standing at base_z;
+    one that finds no room after 300 tries is left out."""
+    placed: list[SceneObject] = []
+    for obj in objs:
+        for _attempt in range(300):
+            cand = replace(
+                obj,
+                x_m=round(float(cx + rng.uniform(-half_x, half_x)), 4),
+                y_m=round(float(cy + rng.uniform(-half_y, half_y)), 4),
+                base_z_m=base_z,
+            )
+            poly = cand.footprint()
+            if (np.abs(poly[:, 0] - cx) > half_x).any() or (np.abs(poly[:, 1] - cy) > half_y).any():
+                continue
+            if any(objects_overlap(cand, p, 0.015) for p in placed):
+                continue
+            placed.append(cand)
+            break
+    return placed
+
+
+def mat_on_table(seed: int) -> Scene:
+    """3-5 graspable objects on a mat 4-10 mm thick (35-50 x 25-35 cm) lying on the table."""
+    rng = np.random.default_rng(seed)
+    thick = round(float(rng.uniform(0.004, 0.010)), 4)
+    sx, sy = round(float(rng.uniform(0.35, 0.50)), 4), round(float(rng.uniform(0.25, 0.35)), 4)
+    mat = Box(FURNITURE_ID, sx, sy, thick, 0.0, 0.0)
+    objs = [_small(rng, i) for i in range(int(rng.integers(3, 6)))]
+    return make_scene(f"mat_on_table({seed})", [mat, *_spread(rng, objs, sx / 2 - 0.02, sy / 2 - 0.02, thick)])
+
+
+def arm_entering(seed: int) -> Scene:
+    """3-5 objects on the table and a robot arm reaching in over its left or right edge: an
+    upper arm 15-25 cm above the table from beyond the edge, a forearm down to 3-8 cm above
+    the table (boxes 6-9 cm thick)."""
+    rng = np.random.default_rng(seed)
+    side = 1.0 if rng.random() < 0.5 else -1.0
+    height = float(rng.uniform(0.15, 0.25))
+    reach_to = float(rng.uniform(0.0, 0.15))  # where the forearm comes down (|x|)
+    thick = float(rng.uniform(0.06, 0.09))
+    y = float(rng.uniform(-0.12, 0.12))
+    x_out = 0.75
+    upper = Box(
+        FURNITURE_ID,
+        round(x_out - reach_to, 4),
+        round(thick, 4),
+        round(thick, 4),
+        round(side * (x_out + reach_to) / 2, 4),
+        round(y, 4),
+        0.0,
+        round(height, 4),
+    )
+    low = float(rng.uniform(0.03, 0.08))
+    fore = Box(
+        FURNITURE_ID + 1,
+        round(thick, 4),
+        round(thick, 4),
+        round(height - low, 4),
+        round(side * reach_to, 4),
+        round(y, 4),
+        0.0,
+        round(low, 4),
+    )
+    objs = [_small(rng, i, max_height_m=0.08) for i in range(int(rng.integers(3, 6)))]
+    placed: list[SceneObject] = []
+    for obj in _spread(rng, objs * 3, 0.35, 0.25, 0.0):  # tries: keep the first that miss the arm
+        if len(placed) < len(objs) and not any(p.object_id == obj.object_id for p in placed):
+            if not objects_overlap(replace(obj, base_z_m=0.0), replace(fore, base_z_m=0.0), 0.02):
+                placed.append(obj)
+    return make_scene(f"arm_entering({seed})", [*placed, upper, fore])
+
+
+def desk_behind(seed: int) -> Scene:
+    """3-5 objects on the table and, beyond its far edge (1-5 cm gap), a second desk 8-20 cm
+    higher with 2-3 things on it."""
+    rng = np.random.default_rng(seed)
+    table = Table()
+    gap = float(rng.uniform(0.01, 0.05))
+    rise = float(rng.uniform(0.08, 0.20))
+    depth = 0.40
+    y0 = table.size_y_m / 2 + gap + depth / 2
+    desk = Box(FURNITURE_ID, 1.0, depth, round(rise + 0.7, 4), 0.0, round(y0, 4), 0.0, -0.7)
+    on_desk = [
+        replace(_small(rng, FURNITURE_ID + 1 + i), object_id=FURNITURE_ID + 1 + i)
+        for i in range(int(rng.integers(2, 4)))
+    ]
+    objs = [_small(rng, i) for i in range(int(rng.integers(3, 6)))]
+    return make_scene(
+        f"desk_behind({seed})",
+        [*_spread(rng, objs, 0.33, 0.24, 0.0), desk, *_spread(rng, on_desk, 0.45, 0.15, round(rise, 4), 0.0, y0)],
+    )
+
+
+def raised_surface(seed: int) -> Scene:
+    """2-4 objects on a small raised top (a stool, a chair's writing arm: 40-50 x 30-40 cm),
+    the table of the scene, seen from 0.8-1 m above it; the floor 75 cm below (rendered by
+    `support_frame`) holds the top's body and 2-3 boxes (a bag, a footrest: 15-35 cm tall)."""
+    rng = np.random.default_rng(seed)
+    top = Table(round(float(rng.uniform(0.40, 0.50)), 4), round(float(rng.uniform(0.30, 0.40)), 4))
+    floor = -FLOOR_BELOW_TABLE_M
+    body = Box(
+        FURNITURE_ID,
+        round(top.size_x_m - 0.1, 4),
+        round(top.size_y_m - 0.1, 4),
+        round(FLOOR_BELOW_TABLE_M - 0.02, 4),
+        0.0,
+        0.0,
+        0.0,
+        floor,
+    )
+    things: list[SceneObject] = [body]
+    for k in range(int(rng.integers(2, 4))):
+        ang = float(rng.uniform(-math.pi, math.pi))
+        dist = float(rng.uniform(0.45, 0.7))
+        things.append(
+            Box(
+                FURNITURE_ID + 1 + k,
+                round(float(rng.uniform(0.2, 0.4)), 4),
+                round(float(rng.uniform(0.2, 0.35)), 4),
+                round(float(rng.uniform(0.15, 0.35)), 4),
+                round(dist * math.cos(ang), 4),
+                round(dist * math.sin(ang) * 0.8, 4),
+                round(float(rng.uniform(-0.5, 0.5)), 4),
+                floor,
+            )
+        )
+    objs = [_small(rng, i, max_height_m=0.10) for i in range(int(rng.integers(2, 5)))]
+    placed = _spread(rng, objs, top.size_x_m / 2 - 0.03, top.size_y_m / 2 - 0.03, 0.0)
+    T = camera_pose_T_camera_table(float(rng.uniform(0.8, 1.0)), float(rng.uniform(50.0, 60.0)))
+    return make_scene(f"raised_surface({seed})", [*placed, *things], top, T)
+
+
+def large_bowl(seed: int) -> Scene:
+    """A large open bowl (36-42 cm across, 6-9 cm tall, its floor 1.5-2.5 cm thick) with 2-3
+    objects in it, and 1-2 objects on the table beside it."""
+    rng = np.random.default_rng(seed)
+    radius = float(rng.uniform(0.18, 0.21))
+    bowl = Cylinder(
+        0,
+        round(radius, 4),
+        round(float(rng.uniform(0.06, 0.09)), 4),
+        round(float(rng.uniform(-0.05, 0.05)), 4),
+        round(float(rng.uniform(-0.02, 0.04)), 4),
+        wall_m=0.006,
+        floor_m=round(float(rng.uniform(0.015, 0.025)), 4),
+    )
+    inside = [_small(rng, 1 + i, max_height_m=0.06) for i in range(int(rng.integers(2, 4)))]
+    half = (radius - 0.02) / math.sqrt(2)
+    placed = _spread(rng, inside, half, half, bowl.floor_m, bowl.x_m, bowl.y_m)
+    beside: list[SceneObject] = []
+    for k in range(int(rng.integers(1, 3))):
+        obj = _small(rng, 10 + k)
+        for _attempt in range(300):
+            cand = replace(
+                obj, x_m=round(float(rng.uniform(-0.35, 0.35)), 4), y_m=round(float(rng.uniform(-0.25, 0.25)), 4)
+            )
+            if not objects_overlap(cand, bowl, 0.02) and not any(objects_overlap(cand, p, 0.02) for p in beside):
+                poly = cand.footprint()
+                if (np.abs(poly[:, 0]) < 0.37).all() and (np.abs(poly[:, 1]) < 0.27).all():
+                    beside.append(cand)
+                    break
+    return make_scene(f"large_bowl({seed})", [bowl, *placed, *beside])
+
+
+SUPPORT_FAMILIES: dict[str, Callable[[int], Scene]] = {
+    "mat_on_table": mat_on_table,
+    "arm_entering": arm_entering,
+    "desk_behind": desk_behind,
+    "raised_surface": raised_surface,
+    "large_bowl": large_bowl,
+}
+_WITH_FLOOR = ("raised_surface",)
+
+
+def support_frame(name: str, seed: int) -> Frame:
+    """The render of ``SUPPORT_FAMILIES[name](seed)`` (noise drawn from ``seed``), its labels
+    those of the truth: the mat is table; the rest of the furniture, and what stands on
+    it, is none."""
+    frame = render(SUPPORT_FAMILIES[name](seed), seed=seed, floor=name in _WITH_FLOOR)
+    labels = np.asarray(frame.fields["label"]).copy()
+    furniture = labels >= object_label(FURNITURE_ID)
+    labels[furniture] = LABEL_TABLE if name == "mat_on_table" else LABEL_NONE
+    return replace(frame, fields={**frame.fields, "label": labels})
