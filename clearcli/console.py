@@ -56,6 +56,14 @@ class _OnFirstUse:
     def __setattr__(self, name: str, value: Any) -> None:
         setattr(self._console(), name, value)
 
+    # Python looks dunders up on the type, not through __getattr__: rich's Live and
+    # Progress hold their console with `with console:` (its render lock and buffer)
+    def __enter__(self) -> Console:
+        return self._console().__enter__()
+
+    def __exit__(self, *exc: Any) -> None:
+        self._console().__exit__(*exc)
+
 
 # Results go to stdout; logs, tables meant for people and progress go to stderr when
 # stdout carries machine output.

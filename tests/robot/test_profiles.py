@@ -208,7 +208,8 @@ def test_a_users_urdf_plans_as_the_profile_of_that_arm() -> None:
     urdf = shared_path("robots/panda/panda_collision.urdf")
     user = clear("plan", "fixtures/clutter10.pcd", "--robot", "panda", "--json", *_panda_of_a_user(urdf))
     ours = clear("plan", "fixtures/clutter10.pcd", "--robot", "panda", "--json")
-    assert user.returncode == ours.returncode == 0, user.stderr
+    # 10: clutter10's partial plan (two touching boxes one segment since issue 37's grid)
+    assert user.returncode == ours.returncode and ours.returncode in (0, 10), user.stderr
     a, b = json.loads(user.stdout), json.loads(ours.stdout)
     assert a["actions"] == b["actions"] and a["status"] == b["status"]
     assert a["robot"]["name"] == "urdf" and a["robot"]["joint_names"] == b["robot"]["joint_names"]
@@ -390,5 +391,5 @@ def test_a_plan_resolves_its_robot_once(monkeypatch: pytest.MonkeyPatch, tmp_pat
     monkeypatch.setattr(profiles, "profile", lambda name: looked_up.append(name) or real(name))
     png = tmp_path / "plan.png"
     outcome = task.run(task.Request(load_settings(), outputs=Outputs.of(png=png)), Source(FIXTURES / "clutter10.pcd"))
-    assert outcome.exit_code == 0 and outcome.payload["robot"]["name"] == "wam" and png.stat().st_size > 0
+    assert outcome.exit_code in (0, 10) and outcome.payload["robot"]["name"] == "wam" and png.stat().st_size > 0
     assert looked_up == ["wam"]
