@@ -1,7 +1,8 @@
 """`clear segment`: the table and the objects on it.
 
-JSON (`--json`), envelope {"schema": "clear.segmentation", "version": 2, ...} (version 1
-had no ``rim``/``rim_why`` per object and no ``table.edges``):
+JSON (`--json`), envelope {"schema": "clear.segmentation", "version": 3, ...} (version 1
+had no ``rim``/``rim_why`` per object and no ``table.edges``; version 2 no ``support``
+and no ``excluded``):
 
     source        str     the file (and frame/topic) read
     frame_id      str     sensor frame name ("" when unknown)
@@ -24,6 +25,17 @@ had no ``rim``/``rim_why`` per object and no ``table.edges``):
                              ("the view ends there", "the table goes on beyond it",
                              "something stands beyond it", ...): a flat object is slid
                              only to a seen side (clearcli/perception/openings.py)}
+    support       {chosen: null | {normal: [3], offset: float, area_m2: float,
+                   standing_points: int}, why: str (why the objects stand on it: the
+                   most points standing on it, a mat just above the table, a raised
+                   surface held up from the floor), rejected: [{normal, offset, area_m2,
+                   standing_points, why}] every other candidate plane and why not}
+                   (clearcli/perception/support.py)
+    excluded      [{points: int, centroid: [3], reason: str}] segments above the
+                   support that are no objects: they reach in from beyond its outline
+                   (an arm, a hand, a cable), hang above it, or stand on such a thing
+                   (clearcli/perception/exclude.py); an empty object list with these
+                   is still exit 0
     objects       [{id: int (k, from 0), label: int (10 (k + 1), as in -o),
                     n_points: int, centroid: [3],
                     obb: {center: [3], axes: [[3] x 3] rows, the third the table normal,
@@ -152,8 +164,10 @@ def segment_cmd(
     stdout.print(
         f"[bold]{doc['source']}[/bold]: table normal ({n[0]:.3f}, {n[1]:.3f}, {n[2]:.3f}), "
         f"camera {doc['table']['offset']:.3f} m above it, {doc['table']['n_points']} table points, "
-        f"{len(doc['objects'])} object(s)"
+        f"{len(doc['objects'])} object(s)" + (f", {len(doc['excluded'])} thing(s) excluded" if doc["excluded"] else "")
     )
+    for thing in doc["excluded"]:
+        stdout.print(f"  excluded ({thing['points']} points): {thing['reason']}")
     if doc["objects"]:
         table = Table("id", "label", "points", "centroid (m)", "box extents (m)")
         for obj in doc["objects"]:

@@ -14,8 +14,27 @@ if TYPE_CHECKING:
     from clearcli.perception.types import Segmentation
 
 SCHEMA = "segmentation"
-# version 1 had no rims of open containers and no table edges
-VERSION = 2
+# version 1 had no rims of open containers and no table edges; version 2 no `support`
+# (which surface the objects stand on, and why) and no `excluded` (issue 37)
+VERSION = 3
+
+
+def _surface(v: Any) -> dict[str, Any]:
+    return {
+        "normal": rounded(np.asarray(v.normal)),
+        "offset": rounded(v.offset_m),
+        "area_m2": rounded(v.area_m2),
+        "standing_points": int(v.standing_points),
+    }
+
+
+def _support(seg: Segmentation) -> dict[str, Any]:
+    chosen = [v for v in seg.support if v.chosen]
+    return {
+        "chosen": _surface(chosen[0]) if chosen else None,
+        "why": chosen[0].why if chosen else "the segmentation came from elsewhere (labels)",
+        "rejected": [{**_surface(v), "why": v.why} for v in seg.support if not v.chosen],
+    }
 
 
 def _rim(opening: Any) -> dict[str, Any] | None:
@@ -63,6 +82,11 @@ def segmentation_payload(seg: Segmentation) -> dict[str, Any]:
                 for e in seg.table_edges
             ],
         },
+        "support": _support(seg),
+        "excluded": [
+            {"points": int(e.indices.shape[0]), "centroid": rounded(e.centroid), "reason": e.reason}
+            for e in seg.excluded
+        ],
         "objects": [
             {
                 "id": k,

@@ -33,6 +33,7 @@ from clearcli.io.frames import Frame
 from clearcli.perception.clock import Clock
 from clearcli.perception.context import RefineContext
 from clearcli.perception.edges import cut_depth_edges
+from clearcli.perception.exclude import not_standing
 from clearcli.perception.filters import clean_mask
 from clearcli.perception.flat import flat_objects
 from clearcli.perception.lccp import lccp_segments
@@ -51,7 +52,7 @@ from clearcli.perception.table import (
     table_and_prism,
     unique_cells,
 )
-from clearcli.perception.types import Segmentation, SegmentedObject, TablePlane
+from clearcli.perception.types import Excluded, Segmentation, SegmentedObject, TablePlane
 from clearcli.settings.segment import SegmentSettings
 
 # colour_state(): a frame is "all black" or "all saturated" when this share of its points
@@ -283,6 +284,7 @@ class _Work:
     table_idx: np.ndarray = field(default_factory=_empty)
     openings: tuple[Opening, ...] = ()
     table_edges: tuple[TableEdge, ...] = ()
+    excluded: list[Excluded] = field(default_factory=list)
 
 
 def _filter(w: _Work) -> None:
@@ -399,6 +401,43 @@ def _flat(w: _Work) -> None:
         w.objects.extend(found)
 
 
+def _exclude(w: _Work) -> None:
+    """4''. only what stands on the support is an object (exclude.py): what reaches in
+    from beyond its outline, hangs above it, or stands on such a thing is set aside."""
+    fit, settings = w.fit, w.settings
+    assert fit is not None  # the table's step ran
+    if not settings.exclude_not_standing or not w.objects:
+        return
+    pts = w.pts
+    h = fit.plane.height_of(pts)
+    rng2 = np.einsum("ij,ij->i", pts, pts) if fit.camera_is_origin else np.zeros(pts.shape[0])
+    low = settings.prism_min_height_m + settings.prism_noise_per_m2 * rng2
+    above = np.flatnonzero(~w.prism_mask & ~w.table_mask & (h > low) & (h <= settings.prism_max_height_m))
+    outside = pts[above[~fit.inside(pts[above], settings.hull_margin_m)]]
+    support = pts[w.table_mask][:: max(1, int(w.table_mask.sum()) // 50000)]
+    rests = settings.prism_min_height_m + settings.plane_distance_m
+
+    def rests_m(p: np.ndarray) -> float:
+        if not fit.camera_is_origin:
+            return rests
+        return rests + settings.prism_noise_per_m2 * float(np.min(np.einsum("ij,ij->i", p, p)))
+
+    verdicts = not_standing(
+        [w.frame.points[o.indices].astype(np.float64) for o in w.objects],
+        outside,
+        support,
+        fit.plane.height_of,
+        fit.to_2d,
+        lambda p: fit.inside(p, settings.hull_margin_m - 0.02),
+        rests_m,
+    )
+    if not verdicts:
+        return
+    gone = {v.index: v.reason for v in verdicts}
+    w.excluded = [Excluded(o.indices, o.centroid, gone[k]) for k, o in enumerate(w.objects) if k in gone]
+    w.objects = [o for k, o in enumerate(w.objects) if k not in gone]
+
+
 def _openings(w: _Work) -> None:
     """What the grasps beyond the pinch need: rims of open containers, seen table edges
     (openings.py)."""
@@ -425,6 +464,7 @@ STEPS: tuple[Step, ...] = (
     Step(None, _refine, above_table=True),  # each stage of refine.STAGES by its name
     Step("objects", _objects, above_table=True),
     Step("flat", _flat),
+    Step("exclude", _exclude),
     Step("openings", _openings),
 )
 STAGE_NAMES = tuple(st.name for st in STAGES)
@@ -441,6 +481,7 @@ TIMINGS = (
     *STAGE_NAMES,
     "flat",
     "objects",
+    "exclude",
     "openings",
     "total",
 )
@@ -495,6 +536,7 @@ def _segment(frame: Frame, settings: SegmentSettings) -> Segmentation:
         color_note=w.color_note,
         openings=w.openings,
         table_edges=w.table_edges,
+        excluded=tuple(w.excluded),
         source=frame.source,
         frame_id=frame.frame_id,
         stamp_s=frame.stamp_s,

@@ -16,6 +16,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from clearcli.errors import SceneError
+from clearcli.perception.support import Surface, choose, standing_on
 from clearcli.perception.types import PlaneVerdict, TablePlane
 from clearcli.settings.segment import SegmentSettings
 
@@ -404,6 +405,21 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
         )
     _, fit, above, below = best
     chosen_standing = abs(above - below)
+    min_obj = max(20, int(0.001 * sample.shape[0]))
+    chosen_why = "the most points standing on it"
+    turned: dict[int, str] = {}
+    if settings.support_by_standing and len(scored) > 1:
+        surfaces = [Surface(f.plane.normal, f.plane.offset, f.basis, f.origin, f.polygon_2d) for f, _, _ in scored]
+        best_k = next(k for k, (f, _, _) in enumerate(scored) if f is fit)
+        band_m = settings.prism_min_height_m + _NOISE_PER_M2 * loose_range2
+        every_band_m = settings.prism_min_height_m + _NOISE_PER_M2 * np.einsum("ij,ij->i", sample, sample)
+        choice = choose(surfaces, best_k, loose, band_m, sample, every_band_m, min_obj)
+        if choice is not None:
+            fit = scored[choice.index][0]
+            chosen_why, turned = choice.why, choice.rejected_why
+            on = standing_on(surfaces[choice.index], loose, band_m)
+            above, below = int(on.sum()), 0
+            chosen_standing = scored[choice.index][1]
     verdicts = [
         PlaneVerdict(
             _tuple(f.plane.normal),
@@ -411,11 +427,11 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
             area,
             standing,
             f is fit,
-            "the most points standing on it"
+            chosen_why
             if f is fit
-            else f"fewer points standing on it ({standing} against {chosen_standing})",
+            else turned.get(k, f"fewer points standing on it ({standing} against {chosen_standing})"),
         )
-        for f, standing, area in scored
+        for k, (f, standing, area) in enumerate(scored)
     ]
     verdicts.sort(key=lambda v: not v.chosen)
     fit = replace(fit, planes=tuple(verdicts + far + small))
@@ -423,7 +439,6 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
     # Seen from below: what stands on the table is on the far side from the camera (the
     # camera side of a table's underside holds nothing inside its hull), or, for a camera
     # image, "up" (the table normal towards the camera) points down the image.
-    min_obj = max(20, int(0.001 * sample.shape[0]))
     if fit.camera_is_origin and below > max(above, min_obj):
         raise SceneError(
             f"{where}no usable table: the best support plane ({fit.plane.offset:.2f} m from the "

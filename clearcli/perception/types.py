@@ -64,6 +64,17 @@ class SegmentedObject:
 
 
 @dataclass(frozen=True, eq=False)
+class Excluded:
+    """A segment above the support that is no object (perception/exclude.py): its points
+    are ``frame.points[indices]``; ``reason`` says why (it reaches in from beyond the
+    support's outline, hangs above it, stands on something excluded)."""
+
+    indices: np.ndarray  # (M,) int64 into the frame's points
+    centroid: np.ndarray  # (3,)
+    reason: str
+
+
+@dataclass(frozen=True, eq=False)
 class Segmentation:
     """Result of `segment`: everything later stages need, and the frame it came from.
 
@@ -90,6 +101,8 @@ class Segmentation:
     # the segmentation came from elsewhere (labels): the predicates stage works them out.
     openings: tuple[Any, ...] = ()
     table_edges: tuple[Any, ...] = ()
+    # segments above the support that are no objects, each with its reason (issue 37)
+    excluded: tuple[Excluded, ...] = ()
     source: str = ""
     frame_id: str = ""
     stamp_s: float = 0.0

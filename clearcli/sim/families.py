@@ -463,9 +463,9 @@ def _spread(
 
 
 def mat_on_table(seed: int) -> Scene:
-    """3-5 graspable objects on a mat 4-10 mm thick (35-50 x 25-35 cm) lying on the table."""
+    """3-5 graspable objects on a mat or board 10-16 mm thick (35-50 x 25-35 cm) lying on the table."""
     rng = np.random.default_rng(seed)
-    thick = round(float(rng.uniform(0.004, 0.010)), 4)
+    thick = round(float(rng.uniform(0.010, 0.016)), 4)
     sx, sy = round(float(rng.uniform(0.35, 0.50)), 4), round(float(rng.uniform(0.25, 0.35)), 4)
     mat = Box(FURNITURE_ID, sx, sy, thick, 0.0, 0.0)
     objs = [_small(rng, i) for i in range(int(rng.integers(3, 6)))]
@@ -543,8 +543,8 @@ def raised_surface(seed: int) -> Scene:
     floor = -FLOOR_BELOW_TABLE_M
     body = Box(
         FURNITURE_ID,
-        round(top.size_x_m - 0.1, 4),
-        round(top.size_y_m - 0.1, 4),
+        round(top.size_x_m - 0.02, 4),
+        round(top.size_y_m - 0.02, 4),
         round(FLOOR_BELOW_TABLE_M - 0.02, 4),
         0.0,
         0.0,

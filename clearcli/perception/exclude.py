@@ -1,0 +1,115 @@
+"""Only what stands on the support is an object (issue 37): the segments that do not are
+set aside with the reason, for --json to list as ``excluded``.
+
+- reaches in from beyond the support's outline: a robot arm, a hand, a cable. The prism
+  ends at the support's hull (grown by ``hull_margin_m``); a segment that touches that
+  side of the prism and goes on beyond it, above the support's plane, is part of
+  something standing elsewhere. An object cut by the image's border does not go on.
+- hangs above the support: its lowest point well above it (more than `_HANG_M` plus the
+  range's noise) and the support seen beneath it (in at least `_SEEN_UNDER_SHARE` of the
+  cells it covers, the camera sees the support's own points), so nothing it could stand
+  on is hidden there: a shelf board, a lamp, the arm's gripper seen apart.
+- stands on something excluded: its bottom within `_TOUCH_M` of an excluded segment's
+  points, and above the support (a box on the shelf board, on the arm).
+
+A stacked object is not excluded: it stands on an object, and the support under it is
+hidden by that object, not seen. Every threshold keeps a margin of millimetres or tens
+of points, far from what rounding-sized changes of the points can move.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+_BORDER_M = 0.02  # a segment's points this near the prism's side touch it
+_GOES_ON_M = 0.02  # points beyond the side within this of those continue the segment
+_GOES_ON_MIN = 15  # at least this many such points
+_HANG_M = 0.03
+_SEEN_UNDER_SHARE = 0.3
+_CELL_M = 0.01
+_TOUCH_M = 0.015
+
+
+@dataclass(frozen=True)
+class Verdict:
+    index: int  # into the objects
+    reason: str
+
+
+def _cells(xy: np.ndarray) -> set[tuple[int, int]]:
+    c = np.floor(xy / _CELL_M).astype(np.int64)
+    return set(map(tuple, np.unique(c, axis=0).tolist()))
+
+
+def not_standing(
+    objects: list[np.ndarray],
+    outside: np.ndarray,
+    support_pts: np.ndarray,
+    height: Callable[[np.ndarray], np.ndarray],
+    to_2d: Callable[[np.ndarray], np.ndarray],
+    inside_side: Callable[[np.ndarray], np.ndarray],
+    rests_m: Callable[[np.ndarray], float],
+) -> list[Verdict]:
+    """Which of ``objects`` (each an (M, 3) array of its points) do not stand on the
+    support, and why.
+
+    ``outside``: points above the support's plane beyond the prism's side; ``support_pts``:
+    the support's own points; ``height``: height above its plane; ``to_2d``: in-plane
+    coordinates; ``inside_side``: (N,) bool, the points farther than `_BORDER_M` inside
+    the prism's side; ``rests_m``: for an object's points, the height below which it
+    rests on the support (grows with range).
+    """
+    from scipy.spatial import cKDTree
+
+    out_tree = cKDTree(outside) if outside.shape[0] else None
+    support_cells = _cells(to_2d(support_pts)) if support_pts.shape[0] else set()
+    verdicts: dict[int, str] = {}
+    lows = []
+    for k, p in enumerate(objects):
+        h = height(p)
+        low = float(h.min())
+        lows.append(low)
+        if out_tree is not None:
+            edge = p[~inside_side(p)]
+            if edge.shape[0]:
+                near = out_tree.query_ball_point(edge, _GOES_ON_M, return_length=True)
+                goes_on = int((np.asarray(near) > 0).sum())
+                if goes_on >= _GOES_ON_MIN:
+                    verdicts[k] = (
+                        f"reaches in from beyond the support's outline ({goes_on} of its points "
+                        "touch points above the support outside it): an arm, a hand, a cable"
+                    )
+                    continue
+        if low > rests_m(p) + _HANG_M and support_cells:
+            own = _cells(to_2d(p))
+            seen = len(own & support_cells) / max(1, len(own))
+            if seen >= _SEEN_UNDER_SHARE:
+                verdicts[k] = (
+                    f"hangs above the support: its lowest point {low:.3f} m above it, the support seen "
+                    f"beneath {100 * seen:.0f} % of it"
+                )
+    # what stands on an excluded thing, until nothing more is found
+    changed = True
+    while changed:
+        changed = False
+        gone = [k for k in verdicts]
+        if not gone:
+            break
+        tree = cKDTree(np.vstack([objects[k] for k in gone]))
+        owner = np.concatenate([np.full(objects[k].shape[0], k) for k in gone])
+        for k, p in enumerate(objects):
+            if k in verdicts or lows[k] <= rests_m(p) + _HANG_M:
+                continue
+            h = height(p)
+            bottom = p[h <= lows[k] + _TOUCH_M]
+            d, j = tree.query(bottom, distance_upper_bound=_TOUCH_M)
+            hit = np.isfinite(d)
+            if hit.sum() >= 5:
+                under = int(np.bincount(owner[j[hit]]).argmax())
+                what = verdicts[under].split(":")[0].split(" (")[0]
+                verdicts[k] = f"stands on something excluded (what {what}), {lows[k]:.3f} m above the support"
+                changed = True
+    return [Verdict(k, why) for k, why in sorted(verdicts.items())]

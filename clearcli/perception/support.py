@@ -1,0 +1,156 @@
+"""Which candidate plane is the support: the surface the objects stand on (issue 37).
+
+table.find_table scores each candidate plane by the points standing on it (above it,
+inside its hull, minus those below it) and takes the best. That is the largest surface
+holding things, which is wrong in two ways this module corrects:
+
+- a raised surface (a stool, a chair's writing arm, a board on a box) over a floor: the
+  floor holds the raised surface's body and whatever else stands on the floor (bags,
+  chair legs), often more points than the few objects on the raised top. A candidate
+  that lies over the best one (its outline inside the best one's), is held up from it
+  (its body seen between them) and holds objects itself is where the objects are.
+- a mat or a board a centimetre or so above the table: the table's plane leaves the mat
+  in the prism (a flat "object" under the real ones, which lose their bottoms). A
+  parallel candidate just above the best one, over it and holding objects, is the
+  support; the two are one support surface and the objects stand on the upper one.
+
+Each decision has a margin: a surface is "over" another when four fifths of its outline
+is inside the other's (grown 5 cm), "parallel" within 15 degrees, "holds objects" with
+at least ``min_points`` points standing on it, and a body is seen with as many points;
+every threshold is far from where rounding-sized changes of the points could move it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+_PARALLEL_COS = float(np.cos(np.radians(15.0)))
+_OVER_SHARE = 0.8  # of the upper surface's outline within the lower one's (grown)
+_OVER_GROW_M = 0.05
+_MAT_MAX_M = 0.03  # a mat, a board, a cloth: at most this far above the table
+_MAT_MIN_M = 0.004  # nearer than this, RANSAC has one plane for both
+_RAISED_MIN_M = 0.05  # a raised surface: at least this far above the floor
+_STAND_MAX_M = 0.4  # objects standing on a surface are at most this tall
+_BODY_OUT_M = 0.01  # a body flush with its top's edge is seen just inside or outside it
+_EDGE_IN_M = 0.02  # the band inside a surface's outline that shows its edge, not its load
+
+
+@dataclass(frozen=True)
+class Surface:
+    """One candidate plane, oriented (``normal`` towards the camera side), its outline."""
+
+    normal: np.ndarray  # (3,)
+    offset: float
+    basis: np.ndarray  # (2, 3) in-plane axes
+    origin: np.ndarray  # (3,)
+    polygon_2d: np.ndarray  # (K, 2) counter-clockwise
+
+    def height(self, points: np.ndarray) -> np.ndarray:
+        return points @ self.normal + self.offset
+
+    def inside(self, points: np.ndarray, margin_m: float) -> np.ndarray:
+        xy = np.stack([points @ a for a in self.basis], axis=1) - self.origin @ self.basis.T
+        return _inside_convex(xy, self.polygon_2d, margin_m)
+
+
+def _inside_convex(xy: np.ndarray, poly: np.ndarray, margin_m: float) -> np.ndarray:
+    edges = np.roll(poly, -1, axis=0) - poly
+    out = np.stack([edges[:, 1], -edges[:, 0]], axis=1)
+    out /= np.maximum(np.linalg.norm(out, axis=1, keepdims=True), 1e-12)
+    limits = np.einsum("ij,ij->i", out, poly) + margin_m
+    ok = np.ones(xy.shape[0], dtype=bool)
+    for k in range(poly.shape[0]):
+        ok &= xy @ out[k] <= limits[k]
+    return ok
+
+
+@dataclass(frozen=True)
+class Choice:
+    index: int  # the surface chosen
+    why: str
+    rejected_why: dict[int, str]  # index -> why it is not the support (only those this module turned down)
+
+
+def _outline_3d(s: Surface) -> np.ndarray:
+    return s.origin + s.polygon_2d @ s.basis
+
+
+def standing_on(s: Surface, loose: np.ndarray, band_m: np.ndarray) -> np.ndarray:
+    """(N,) bool: ``loose`` points standing on ``s``: above it by more than ``band_m``
+    (per point: the noise grows with range), at most `_STAND_MAX_M`, inside its outline
+    off its edge band."""
+    h = s.height(loose)
+    cand = (h > band_m) & (h <= _STAND_MAX_M)
+    out = np.zeros(loose.shape[0], dtype=bool)
+    idx = np.flatnonzero(cand)
+    out[idx] = s.inside(loose[idx], -_EDGE_IN_M)
+    return out
+
+
+def choose(
+    surfaces: list[Surface],
+    best: int,
+    loose: np.ndarray,
+    band_m: np.ndarray,
+    every: np.ndarray,
+    every_band_m: np.ndarray,
+    min_points: int,
+) -> Choice | None:
+    """The surface the objects stand on instead of ``surfaces[best]`` (the one with the
+    most points above it), or None when that one stays: see the module's docstring.
+    ``loose``: the points on no candidate plane (what stands on them), ``every``: all
+    points (a raised surface's body is often a candidate plane itself, its front face);
+    ``*band_m``: per point, the height above a surface that is off it (noise grows with
+    range)."""
+    lower = surfaces[best]
+    low_h = lower.height(every)
+    picks: list[tuple[float, int, str, str]] = []
+    for k, s in enumerate(surfaces):
+        if k == best or abs(float(s.normal @ lower.normal)) < _PARALLEL_COS:
+            continue
+        outline = _outline_3d(s)
+        rise = float(np.median(lower.height(outline)))
+        if rise <= _MAT_MIN_M:
+            continue
+        if lower.inside(outline, _OVER_GROW_M).mean() < _OVER_SHARE:
+            continue
+        on = standing_on(s, loose, band_m)
+        n_on = int(on.sum())
+        if n_on < min_points:
+            continue
+        if rise <= _MAT_MAX_M:
+            picks.append(
+                (
+                    rise,
+                    k,
+                    f"a mat or board {rise * 1000:.0f} mm above the plane below it, holding {n_on} "
+                    "points: one support with it, and the objects stand on this one",
+                    f"one support with the mat or board {rise * 1000:.0f} mm above it, on which the objects stand",
+                )
+            )
+            continue
+        if rise < _RAISED_MIN_M:
+            continue
+        # held up from the lower surface: its body seen between the two, inside its outline
+        between = (s.height(every) < -every_band_m) & (low_h > every_band_m)
+        idx = np.flatnonzero(between)
+        body = int(s.inside(every[idx], _BODY_OUT_M).sum()) if idx.size else 0
+        if body < min_points:
+            continue
+        picks.append(
+            (
+                rise,
+                k,
+                f"a raised surface {rise:.2f} m above the plane below it, held up from it ({body} points of "
+                f"its body seen) and holding {n_on} points: the objects stand on it",
+                f"the floor around a raised surface {rise:.2f} m above it that holds the objects",
+            )
+        )
+    if not picks:
+        return None
+    # the highest such surface (a raised one over a mat on the floor is still raised)
+    picks.sort(key=lambda p: (-p[0], p[1]))
+    _, k, why, lower_why = picks[0]
+    return Choice(k, why, {best: lower_why})
