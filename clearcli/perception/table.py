@@ -345,8 +345,10 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
             continue
         candidates.append(_Candidate(n, d, inl[comp], area, on_plane))
     if not candidates:
+        considered = ", ".join(f"{v.area_m2:.3f} m^2 at {abs(v.offset_m):.2f} m" for v in small) or "none"
         raise SceneError(
-            f"{where}no table: no plane of at least {settings.table_min_area_m2} m^2 in the frame; is a table in view?"
+            f"{where}no table: no plane of at least {settings.table_min_area_m2} m^2 in the frame (surfaces "
+            f"considered: {considered}); is a table in view?"
         )
 
     any_plane = np.zeros(sample.shape[0], dtype=bool)
@@ -399,9 +401,11 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
         if best is None or key > best[0]:
             best = (key, fit, above, below)
     if best is None:
+        considered = ", ".join(f"{v.area_m2:.3f} m^2 at {abs(v.offset_m):.2f} m" for v in far)
         raise SceneError(
             f"{where}no table: every plane of table size is more than "
-            f"{settings.table_max_distance_m} m from the camera; is a table in reach?"
+            f"{settings.table_max_distance_m} m from the camera (surfaces considered: {considered}); "
+            "is a table in reach?"
         )
     _, fit, above, below = best
     chosen_standing = abs(above - below)
