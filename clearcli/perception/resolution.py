@@ -41,6 +41,7 @@ from __future__ import annotations
 import dataclasses
 import time
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -168,9 +169,16 @@ class WorkingGrid:
         k = self.stride
         h, w = self.full.shape
         hw, ww = self.frame.shape
-        full_pts = self.full.points.reshape(h, w, 3)
-        work_pts = self.frame.points.reshape(hw, ww, 3)
+        # one contiguous (h, w) plane per coordinate: the strided views below then read
+        # single floats, not (3,) rows
+        full_xyz = np.ascontiguousarray(self.full.points.reshape(h, w, 3).transpose(2, 0, 1), dtype=np.float32)
         lab_w = np.asarray(working_labels).reshape(hw, ww)
+        # the working grid padded by one row and column past its last: no pixel there
+        # (label -1, NaN point: never the nearer), so every block has its four corners
+        lab_p = np.full((hw + 1, ww + 1), -1, dtype=lab_w.dtype)
+        lab_p[:hw, :ww] = lab_w
+        xyz_p = np.full((3, hw + 1, ww + 1), np.nan, dtype=np.float32)
+        xyz_p[:, :hw, :ww] = full_xyz[:, ::k, ::k]
         out = np.zeros((h, w), dtype=lab_w.dtype)
         out[::k, ::k] = lab_w
         far = np.float32(voxel_m) ** 2
@@ -178,45 +186,67 @@ class WorkingGrid:
             for c in range(k):
                 if r == 0 and c == 0:
                     continue
-                target = full_pts[r::k, c::k]  # (nr, nc, 3): this offset in every block
-                nr, nc = target.shape[:2]
+                target = full_xyz[:, r::k, c::k]  # (3, nr, nc): this offset in every block
+                nr, nc = target.shape[1:]
                 # the block's corners: its own working pixel, the next row's and column's
                 corners = [(0, 0)] + ([(1, 0)] if r else []) + ([(0, 1)] if c else []) + ([(1, 1)] if r and c else [])
-                best_d2 = np.full((nr, nc), np.inf, dtype=np.float32)
-                best_lab = np.zeros((nr, nc), dtype=lab_w.dtype)
+                labs = [lab_p[dr : dr + nr, dc : dc + nc] for dr, dc in corners]
+                own = labs[0]
+                agree = np.logical_and.reduce([lab == own for lab in labs])
+                d2 = np.zeros((nr, nc), dtype=np.float32)
+                for axis in range(3):
+                    diff = target[axis] - xyz_p[axis, :nr, :nc]
+                    d2 += diff * diff  # NaN where either is not finite
+                # corners of one label, the own within a voxel: the nearest is of that
+                # label and within a voxel too; corners all none: none whichever is nearest
+                settled = agree & ((d2 <= far) | (own == 0))
+                res = np.where(settled, own, 0)
+                # the rest (corners of several labels, or the own beyond a voxel): the
+                # nearest corner, the first of equals, within a voxel
+                ri, ci = np.nonzero(~settled)
+                best_d2 = np.full(ri.shape[0], np.inf, dtype=np.float32)
+                best_lab = np.zeros(ri.shape[0], dtype=lab_w.dtype)
                 for dr, dc in corners:
-                    # working pixel (i + dr, j + dc) for the block (i, j); past the last
-                    # row or column there is none
-                    rr = min(nr, hw - dr)
-                    cc = min(nc, ww - dc)
-                    if rr <= 0 or cc <= 0:
-                        continue
-                    diff = target[:rr, :cc] - work_pts[dr : dr + rr, dc : dc + cc]
-                    d2 = np.einsum("ijk,ijk->ij", diff, diff)  # NaN where either is not finite
-                    nearer = d2 < best_d2[:rr, :cc]  # NaN compares False
-                    best_d2[:rr, :cc] = np.where(nearer, d2, best_d2[:rr, :cc])
-                    best_lab[:rr, :cc] = np.where(nearer, lab_w[dr : dr + rr, dc : dc + cc], best_lab[:rr, :cc])
-                out[r::k, c::k] = np.where(best_d2 <= far, best_lab, 0)
+                    d2c = np.zeros(ri.shape[0], dtype=np.float32)
+                    for axis in range(3):
+                        diff = target[axis, ri, ci] - xyz_p[axis, ri + dr, ci + dc]
+                        d2c += diff * diff
+                    nearer = d2c < best_d2  # NaN compares False
+                    best_d2[nearer] = d2c[nearer]
+                    best_lab[nearer] = lab_p[ri[nearer] + dr, ci[nearer] + dc]
+                res[ri, ci] = np.where(best_d2 <= far, best_lab, 0)
+                out[r::k, c::k] = res
         return out.reshape(-1)
 
     def to_full(self, seg: Segmentation, voxel_m: float) -> Segmentation:
-        """``seg`` (of the working grid) with its indices on the full frame: the table's
-        and every object's pixels by `full_labels`; boxes, planes and edges as they were.
+        """``seg`` (of the working grid) with its indices on the full frame: the table's,
+        every object's and every excluded segment's pixels by `full_labels`; boxes,
+        planes and edges as they were.
         The time it took (and the grid's making) is added to the timings: making to
         "filter", carrying back to "objects", both to "total"."""
         if self.stride == 1:
             return seg
         start = time.perf_counter()
         n_work = self.frame.n_points
-        lab = np.zeros(n_work, dtype=np.int32)  # 0 none, 1 table, 2 + j object j
+        # what else carries frame indices: the segments set aside as no objects (issue
+        # 37's exclusion step), where the Segmentation has them
+        excluded = tuple(getattr(seg, "excluded", ()))
+        parts = [*seg.objects, *excluded]
+        lab = np.zeros(n_work, dtype=np.int32)  # 0 none, 1 table, 2 + j part j
         lab[seg.table_indices] = 1
-        for j, obj in enumerate(seg.objects):
-            lab[obj.indices] = 2 + j
+        for j, part in enumerate(parts):
+            lab[part.indices] = 2 + j
         full = self.full_labels(lab, voxel_m)
-        order = np.argsort(full, kind="stable")
-        bounds = np.searchsorted(full[order], np.arange(len(seg.objects) + 3))
-        members = [order[bounds[v] : bounds[v + 1]].astype(np.int64) for v in range(len(seg.objects) + 2)]
-        objects = tuple(dataclasses.replace(o, indices=members[2 + j]) for j, o in enumerate(seg.objects))
+        table = np.flatnonzero(full == 1)
+        labelled = np.flatnonzero(full >= 2)  # the parts' pixels: a small share of the frame
+        order = labelled[np.argsort(full[labelled], kind="stable")]
+        bounds = np.searchsorted(full[order], np.arange(2, len(parts) + 3))
+        members = [order[bounds[j] : bounds[j + 1]].astype(np.int64) for j in range(len(parts))]
+        objects = tuple(dataclasses.replace(o, indices=members[j]) for j, o in enumerate(seg.objects))
+        more: dict[str, Any] = {}
+        if excluded:
+            n_obj = len(seg.objects)
+            more["excluded"] = tuple(dataclasses.replace(e, indices=members[n_obj + j]) for j, e in enumerate(excluded))
         timings = dict(seg.timings_s)
         mapped = time.perf_counter() - start
         if "filter" in timings:
@@ -226,5 +256,5 @@ class WorkingGrid:
         if "total" in timings:
             timings["total"] += self.made_s + mapped
         return dataclasses.replace(
-            seg, n_points=self.full.n_points, table_indices=members[1], objects=objects, timings_s=timings
+            seg, n_points=self.full.n_points, table_indices=table, objects=objects, timings_s=timings, **more
         )
