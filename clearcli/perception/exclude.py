@@ -28,6 +28,9 @@ _BORDER_M = 0.02  # a segment's points this near the prism's side touch it
 _GOES_ON_M = 0.02  # points beyond the side within this of those continue the segment
 _GOES_ON_MIN = 15  # at least this many such points
 _HANG_M = 0.03
+# an arm crosses the outline at least this high above the support (an object standing
+# at a side the hull cuts reaches the side lower down)
+_REACH_ABOVE_M = 0.10
 _SEEN_UNDER_SHARE = 0.3
 _CELL_M = 0.01
 _TOUCH_M = 0.015
@@ -47,6 +50,7 @@ def _cells(xy: np.ndarray) -> set[tuple[int, int]]:
 def not_standing(
     objects: list[np.ndarray],
     outside: np.ndarray,
+    outside_below: np.ndarray,
     support_pts: np.ndarray,
     height: Callable[[np.ndarray], np.ndarray],
     to_2d: Callable[[np.ndarray], np.ndarray],
@@ -56,7 +60,8 @@ def not_standing(
     """Which of ``objects`` (each an (M, 3) array of its points) do not stand on the
     support, and why.
 
-    ``outside``: points above the support's plane beyond the prism's side; ``support_pts``:
+    ``outside``: points above the support's plane beyond the prism's side,
+    ``outside_below``: those below it; ``support_pts``:
     the support's own points; ``height``: height above its plane; ``to_2d``: in-plane
     coordinates; ``inside_side``: (N,) bool, the points farther than `_BORDER_M` inside
     the prism's side; ``rests_m``: for an object's points, the height below which it
@@ -65,6 +70,7 @@ def not_standing(
     from scipy.spatial import cKDTree
 
     out_tree = cKDTree(outside) if outside.shape[0] else None
+    low_tree = cKDTree(outside_below) if outside_below.shape[0] else None
     support_cells = _cells(to_2d(support_pts)) if support_pts.shape[0] else set()
     verdicts: dict[int, str] = {}
     lows = []
@@ -72,17 +78,26 @@ def not_standing(
         h = height(p)
         low = float(h.min())
         lows.append(low)
-        if out_tree is not None:
-            edge = p[~inside_side(p)]
-            if edge.shape[0]:
-                near = out_tree.query_ball_point(edge, _GOES_ON_M, return_length=True)
-                goes_on = int((np.asarray(near) > 0).sum())
-                if goes_on >= _GOES_ON_MIN:
-                    verdicts[k] = (
-                        f"reaches in from beyond the support's outline ({goes_on} of its points "
-                        "touch points above the support outside it): an arm, a hand, a cable"
-                    )
-                    continue
+        edge = p[~inside_side(p)]
+        if out_tree is not None and edge.shape[0]:
+            near = np.asarray(out_tree.query_ball_point(edge, _GOES_ON_M, return_length=True)) > 0
+            goes_on = int(near.sum())
+            # it crosses the side above the support: an object standing at the side (cut
+            # by the hull where the table behind it is hidden) crosses it from the bottom
+            if goes_on >= _GOES_ON_MIN and float(height(edge[near]).min()) > rests_m(p) + _REACH_ABOVE_M:
+                verdicts[k] = (
+                    f"reaches in from beyond the support's outline ({goes_on} of its points "
+                    "touch points above the support outside it): an arm, a hand, a cable"
+                )
+                continue
+        if low_tree is not None and edge.shape[0]:
+            down = int((np.asarray(low_tree.query_ball_point(edge, _GOES_ON_M, return_length=True)) > 0).sum())
+            if down >= _GOES_ON_MIN:
+                verdicts[k] = (
+                    f"stands beyond the support's edge: it goes on below the support's level outside its "
+                    f"outline ({down} of its points touch such points): a desk, a shelf, furniture behind"
+                )
+                continue
         if low > rests_m(p) + _HANG_M and support_cells:
             own = _cells(to_2d(p))
             seen = len(own & support_cells) / max(1, len(own))

@@ -414,6 +414,8 @@ def _exclude(w: _Work) -> None:
     low = settings.prism_min_height_m + settings.prism_noise_per_m2 * rng2
     above = np.flatnonzero(~w.prism_mask & ~w.table_mask & (h > low) & (h <= settings.prism_max_height_m))
     outside = pts[above[~fit.inside(pts[above], settings.hull_margin_m)]]
+    below = np.flatnonzero(~w.table_mask & (h < -low))
+    outside_below = pts[below[~fit.inside(pts[below], settings.hull_margin_m)]]
     support = pts[w.table_mask][:: max(1, int(w.table_mask.sum()) // 50000)]
     rests = settings.prism_min_height_m + settings.plane_distance_m
 
@@ -425,6 +427,7 @@ def _exclude(w: _Work) -> None:
     verdicts = not_standing(
         [w.frame.points[o.indices].astype(np.float64) for o in w.objects],
         outside,
+        outside_below,
         support,
         fit.plane.height_of,
         fit.to_2d,
