@@ -36,6 +36,20 @@ _CELL_M = 0.01
 _TOUCH_M = 0.015
 
 
+def _rests_on_another(
+    k: int, p: np.ndarray, height: Callable[[np.ndarray], np.ndarray], low: float, objects: list[np.ndarray]
+) -> bool:
+    """Does the bottom of object ``k`` touch another object (it leans on it, stands on it)?"""
+    from scipy.spatial import cKDTree
+
+    bottom = p[height(p) <= low + _TOUCH_M]
+    others = [o for j, o in enumerate(objects) if j != k]
+    if not others or not bottom.shape[0]:
+        return False
+    d, _ = cKDTree(np.vstack(others)).query(bottom, distance_upper_bound=_TOUCH_M)
+    return bool(np.isfinite(d).sum() >= 5)
+
+
 @dataclass(frozen=True)
 class Verdict:
     index: int  # into the objects
@@ -98,7 +112,7 @@ def not_standing(
                     f"outline ({down} of its points touch such points): a desk, a shelf, furniture behind"
                 )
                 continue
-        if low > rests_m(p) + _HANG_M and support_cells:
+        if low > rests_m(p) + _HANG_M and support_cells and not _rests_on_another(k, p, height, low, objects):
             own = _cells(to_2d(p))
             seen = len(own & support_cells) / max(1, len(own))
             if seen >= _SEEN_UNDER_SHARE:
