@@ -41,6 +41,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -97,7 +98,20 @@ class Judged:
     closest: Contact | None = None
     best: Contact | None = None
     n_kept: int = 0  # places that seal and hold
-    ranked: tuple[Contact, ...] = ()
+    # the kept places' order (best first, at most 8) and how to make one a Contact: built
+    # when asked for (the kind usually needs the first only)
+    order: tuple[int, ...] = ()
+    make: Callable[[int], Contact] | None = None
+
+    def iter_ranked(self) -> Iterator[Contact]:
+        """The kept places, best first, each built as it is reached."""
+        for k in self.order:
+            assert self.make is not None
+            yield self.make(k)
+
+    @property
+    def ranked(self) -> tuple[Contact, ...]:
+        return tuple(self.iter_ranked())
 
     def why_not(self, spec: CupSpec) -> str:
         """Why no place is kept, from the one that came closest."""
@@ -222,7 +236,8 @@ def hidden_cells(
     """The empty cells of a face's height map (flat, ``shape``) that the camera cannot
     see because ``hidden_by`` (table-frame points of what stands on the object) lies in
     front of them, within the face's outline (covered cells on both sides along its row
-    or its column); and every cell's height on the face's plane, to fill them with.
+    or its column); and the candidate cells' heights on the face's plane, to fill them
+    with (NaN elsewhere).
 
     Seen from the camera: each candidate cell's point on the plane and the points in
     front are binned by direction (x/z, y/z of the camera frame) at 1.5 cells over the
@@ -245,16 +260,15 @@ def hidden_cells(
             | ((r_idx[:, None] >= col_lo[None, :]) & (r_idx[:, None] <= col_hi[None, :]))
         )
     ).ravel()
-    seen = np.flatnonzero(grid.ravel())
-    seen_ij = np.stack(np.divmod(seen, cols), axis=1) + lo
-    coef = _face_plane(height[seen], seen_ij, cell)
-    all_ij = np.stack(np.divmod(np.arange(rows * cols), cols), axis=1) + lo
-    plane = coef[0] + ((all_ij + 0.5) * cell) @ coef[1:]
+    plane = np.full(rows * cols, np.nan)  # filled where a cell is a candidate
     hidden = np.zeros(rows * cols, dtype=bool)
     cand = np.flatnonzero(inside)
     if not len(cand) or not len(hidden_by):
         return hidden, plane
-    uv = (all_ij[cand] + 0.5) * cell
+    seen = np.flatnonzero(grid.ravel())
+    coef = _face_plane(height[seen], np.stack(np.divmod(seen, cols), axis=1) + lo, cell)
+    uv = (np.stack(np.divmod(cand, cols), axis=1) + lo + 0.5) * cell
+    plane[cand] = coef[0] + uv @ coef[1:]
     P = uv[:, :1] * frame.e1 + uv[:, 1:2] * frame.e2 + plane[cand, None] * frame.n
     R, t = T_camera_table[:3, :3], T_camera_table[:3, 3]
     Pc = P @ R.T + t
@@ -611,14 +625,22 @@ def judge_object(
             c = dataclasses.replace(c, load_margin=lm, load_why=why)
         return c
 
+    built: dict[int, Contact] = {}
+
+    def once(k: int) -> Contact:
+        if k not in built:
+            built[k] = contact(k)
+        return built[k]
+
     k_best = int(np.argmax(margin))  # the first of the best on a tie
-    best = contact(k_best) if margin[k_best] > 0 else None
+    best = once(k_best) if margin[k_best] > 0 else None
     # none kept, but some seal: the closest is the sealing place the load comes nearest
     # at, so the reason is the weight, not a hole elsewhere whose margin ran smaller
     k_close = k_best if best is not None or not (seal > 0).any() else int(np.argmax(np.where(seal > 0, load, -np.inf)))
     return Judged(
-        closest=contact(k_close),
+        closest=once(k_close),
         best=best,
         n_kept=int((margin > 0).sum()),
-        ranked=tuple(contact(int(k)) for k in np.argsort(-margin, kind="stable")[:8] if margin[k] > 0),
+        order=tuple(int(k) for k in np.argsort(-margin, kind="stable")[:8] if margin[k] > 0),
+        make=once,
     )

@@ -197,8 +197,7 @@ class SuctionGrasp(KindModule):
                 scene.tf.T_camera_table,
                 skip,
             )
-            kept = list(judged.ranked)  # up to 8 places that seal and hold, best first
-            if not kept:
+            if judged.best is None:
                 out.append(Offer(why_not=judged.why_not(spec)))
                 continue
             # the neighbours' sampled points within the tool's reach of this object
@@ -209,8 +208,10 @@ class SuctionGrasp(KindModule):
                 cloud, labels = cloud_all[near], labels_all[near]
             else:
                 cloud, labels = empty, np.zeros(0, int)
-            best, blockers = kept[0], frozenset[int]()
-            for rank, c in enumerate(kept):  # best first: the first that nothing blocks ends the search
+            best, blockers = judged.best, frozenset[int]()
+            # up to 8 places that seal and hold, best first: the first that nothing
+            # blocks ends the search
+            for rank, c in enumerate(judged.iter_ranked()):
                 hit = frozenset(int(j) for j in np.unique(labels[swept_mask(cloud, c.point, c.normal, s, approach_m)]))
                 if rank == 0 or len(hit) < len(blockers):
                     best, blockers = c, hit
