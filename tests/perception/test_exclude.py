@@ -16,7 +16,8 @@ from clearcli.sim.camera import render
 from clearcli.sim.families import FURNITURE_ID, SUPPORT_FAMILIES, support_frame
 from clearcli.sim.scene import make_scene
 
-ON = SegmentSettings()
+# the step is off by default (clearcli/settings/segment.py says why): on here
+ON = dataclasses.replace(SegmentSettings(), exclude_not_standing=True)
 OFF = dataclasses.replace(ON, exclude_not_standing=False)
 
 
