@@ -8,7 +8,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from helpers import FIXTURES, REPO
+from helpers import FIXTURES, REPO, run_clear
 from helpers.batch import hooked_env
 
 from clearcli.cli import DEFERRED_MODULES
@@ -35,16 +35,7 @@ def test_segment_leaves_numpy_tooling_unrun(tmp_path: Path) -> None:
     report = tmp_path / "report.json"
     env = hooked_env(tmp_path, _HOOK)
     env["CLEAR_TEST_REPORT"] = str(report)
-    exe = Path(sys.executable).with_name("clear")
-    cmd = [str(exe)] if exe.exists() else [sys.executable, "-m", "clearcli.cli"]
-    res = subprocess.run(
-        [*cmd, "segment", str(FIXTURES / "isolated_box.pcd"), "--json"],
-        capture_output=True,
-        text=True,
-        env=env,
-        cwd=REPO,
-        timeout=120,
-    )
+    res = run_clear("segment", FIXTURES / "isolated_box.pcd", "--json", timeout=120, env=env)
     assert res.returncode == 0, res.stderr
     assert json.loads(res.stdout)["schema"] == "clear.segmentation"
     state = json.loads(report.read_text())

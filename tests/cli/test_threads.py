@@ -5,12 +5,11 @@ from __future__ import annotations
 
 import json
 import os
-import subprocess
 import sys
 from pathlib import Path
 
 import pytest
-from helpers import FIXTURES, REPO
+from helpers import FIXTURES, run_clear
 from helpers.batch import hooked_env
 
 from clearcli.cli import SINGLE_THREADED
@@ -52,16 +51,7 @@ def _clear_reporting(tmp_path: Path, **env: str) -> dict:
     for var in SINGLE_THREADED:
         child_env.pop(var, None)
     child_env.update(env, CLEAR_TEST_REPORT=str(report))
-    exe = Path(sys.executable).with_name("clear")
-    cmd = [str(exe)] if exe.exists() else [sys.executable, "-m", "clearcli.cli"]
-    res = subprocess.run(
-        [*cmd, "segment", str(FIXTURES / "isolated_box.pcd"), "--json"],
-        capture_output=True,
-        text=True,
-        env=child_env,
-        cwd=REPO,
-        timeout=120,
-    )
+    res = run_clear("segment", FIXTURES / "isolated_box.pcd", "--json", timeout=120, env=child_env)
     assert res.returncode == 0, res.stderr
     doc = json.loads(report.read_text())
     assert doc["numpy"], "the command did not load NumPy: nothing was checked"

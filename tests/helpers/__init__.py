@@ -27,11 +27,16 @@ def shared_path(relative: str) -> Path:
     return path
 
 
-def run_clear(*args: object, timeout: float = 600, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
-    """The installed `clear`, as a user or a script runs it (its own process)."""
+def run_clear(
+    *args: object, timeout: float = 600, cwd: Path | None = None, env: dict[str, str] | None = None
+) -> subprocess.CompletedProcess[str]:
+    """The installed `clear`, as a user or a script runs it (its own process; ``env``
+    its whole environment, when given)."""
     exe = Path(sys.executable).with_name("clear")
     cmd = [str(exe)] if exe.exists() else [sys.executable, "-m", "clearcli.cli"]
-    return subprocess.run([*cmd, *map(str, args)], capture_output=True, text=True, timeout=timeout, cwd=cwd or REPO)
+    return subprocess.run(
+        [*cmd, *map(str, args)], capture_output=True, text=True, timeout=timeout, cwd=cwd or REPO, env=env
+    )
 
 
 def start_clear(*args: object, **popen: Any) -> subprocess.Popen[Any]:
