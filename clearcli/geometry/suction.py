@@ -371,10 +371,14 @@ def judge_face(
     nb_empty = empty[:, nb_safe] & valid[None]  # (N, K, 4)
     hole_cells = empty & nb_empty.any(axis=2)
     full = ~hole_cells.any(axis=1)
-    nb_cov = covered[:, nb_safe] & valid[None]
-    nb_sum = np.where(nb_cov, np.nan_to_num(H[:, nb_safe]), 0.0).sum(axis=2)
-    nb_n = nb_cov.sum(axis=2)
-    filled = np.where(empty & (nb_n > 0), nb_sum / np.maximum(nb_n, 1), H)
+    filled = H.copy()
+    gappy = np.flatnonzero(empty.any(axis=1))  # most places have no empty cell: only these
+    if len(gappy):
+        Hg, eg = H[gappy], empty[gappy]
+        nb_cov = ~eg[:, nb_safe] & valid[None]
+        nb_sum = np.where(nb_cov, np.nan_to_num(Hg[:, nb_safe]), 0.0).sum(axis=2)
+        nb_n = nb_cov.sum(axis=2)
+        filled[gappy] = np.where(eg & (nb_n > 0), nb_sum / np.maximum(nb_n, 1), Hg)
     covered_or_filled = np.isfinite(filled)
     A = d.design  # cell centres relative to the centre cell's
     pinv = d.pinv  # (6, K): the same least squares for every full window
@@ -393,7 +397,7 @@ def judge_face(
     tilt = np.degrees(np.arccos(np.clip(normal @ frame.n, -1.0, 1.0)))
     # another object under the disc: its outermost point within the bellows' stroke of
     # the fitted face (farther out it is in the way of the approach: a blocker)
-    surface = coef[:, :1] + (A[None, :, 1:3] * grad[:, None, :]).sum(axis=2)
+    surface = coef[:, :1] + grad @ A[:, 1:3].T
     intruders = (np.abs(theirs[window] - surface) <= spec.compliance_m).sum(axis=1)
     gaps = empty.sum(axis=1)
     m_cover = np.where(full, 1.0, -np.maximum(hole_cells.sum(axis=1), 1) / covered.shape[1])
