@@ -323,8 +323,9 @@ def judge_face(
     d = disc(r, cell)
     offsets = d.offsets
     pad = int(np.abs(offsets).max()) + 1
-    lo = ij.min(axis=0) - pad
-    shape = ij.max(axis=0) - lo + pad + 1
+    # per column: a reduction along axis 0 of an (n, 2) array is several times slower
+    lo = np.array([ij[:, 0].min(), ij[:, 1].min()]) - pad
+    shape = np.array([ij[:, 0].max(), ij[:, 1].max()]) - lo + pad + 1
     keys = (ij[:, 0] - lo[0]) * shape[1] + (ij[:, 1] - lo[1])
     # a cell's value: the mean of its points (the face at the cell's centre, the sensor's
     # noise averaged; the outermost point would flatten a curved face by a cell's slope)
@@ -375,9 +376,9 @@ def judge_face(
     gappy = np.flatnonzero(empty.any(axis=1))  # most places have no empty cell: only these
     if len(gappy):
         Hg, eg = H[gappy], empty[gappy]
-        nb_cov = ~eg[:, nb_safe] & valid[None]
-        nb_sum = np.where(nb_cov, np.nan_to_num(Hg[:, nb_safe]), 0.0).sum(axis=2)
-        nb_n = nb_cov.sum(axis=2)
+        weight = valid.astype(float)  # (K, 4): a neighbour inside the disc
+        nb_sum = np.einsum("gkj,kj->gk", np.nan_to_num(Hg)[:, nb_safe], weight)  # empty cells add 0
+        nb_n = np.einsum("gkj,kj->gk", (~eg)[:, nb_safe].astype(float), weight)
         filled[gappy] = np.where(eg & (nb_n > 0), nb_sum / np.maximum(nb_n, 1), Hg)
     covered_or_filled = np.isfinite(filled)
     A = d.design  # cell centres relative to the centre cell's
