@@ -8,7 +8,9 @@ set aside with the reason, for --json to list as ``excluded``.
 - hangs above the support: its lowest point well above it (more than `_HANG_M` plus the
   range's noise) and the support seen beneath it (in at least `_SEEN_UNDER_SHARE` of the
   cells it covers, the camera sees the support's own points), so nothing it could stand
-  on is hidden there: a shelf board, a lamp, the arm's gripper seen apart.
+  on is hidden there: a shelf board, a lamp, the arm's gripper seen apart. Unless an
+  object lies beneath its outline, reaching up to within `_HANG_M` of its bottom: it
+  stands on that object where the contact is hidden (a box laid across two others).
 - stands on something excluded: its bottom within `_TOUCH_M` of an excluded segment's
   points, and above the support (a box on the shelf board, on the arm).
 
@@ -50,6 +52,31 @@ def _rests_on_another(
     return bool(np.isfinite(d).sum() >= 5)
 
 
+def _on_what_is_beneath(
+    p: np.ndarray,
+    low: float,
+    others: list[np.ndarray],
+    height: Callable[[np.ndarray], np.ndarray],
+    to_2d: Callable[[np.ndarray], np.ndarray],
+) -> bool:
+    """Does another object lie beneath the outline of the object ``p`` (in-plane, within `_CELL_M`
+    of its points), reaching up to within `_HANG_M` of its lowest point? Then it stands on
+    that object where the camera cannot see the contact: a box laid across two others
+    (mOSD test47: its bottom 1 to 1.5 cm above their tops, their tops hidden under it),
+    though the support is seen between them. The same `_HANG_M` that tells hanging from
+    resting on the support tells it from resting on an object."""
+    from scipy.spatial import cKDTree
+
+    if not others:
+        return False
+    q = np.vstack(others)
+    q = q[height(q) >= low - _HANG_M]
+    if not q.shape[0]:
+        return False
+    d, _ = cKDTree(to_2d(p)).query(to_2d(q), distance_upper_bound=_CELL_M)
+    return bool(np.isfinite(d).sum() >= _GOES_ON_MIN)
+
+
 @dataclass(frozen=True)
 class Verdict:
     index: int  # into the objects
@@ -89,9 +116,7 @@ def not_standing(
     verdicts: dict[int, str] = {}
     lows = []
     for k, p in enumerate(objects):
-        h = height(p)
-        low = float(h.min())
-        lows.append(low)
+        lows.append(float(height(p).min()))
         edge = p[~inside_side(p)]
         if out_tree is not None and edge.shape[0]:
             near = np.asarray(out_tree.query_ball_point(edge, _GOES_ON_M, return_length=True)) > 0
@@ -111,15 +136,22 @@ def not_standing(
                     f"stands beyond the support's edge: it goes on below the support's level outside its "
                     f"outline ({down} of its points touch such points): a desk, a shelf, furniture behind"
                 )
-                continue
-        if low > rests_m(p) + _HANG_M and support_cells and not _rests_on_another(k, p, height, low, objects):
-            own = _cells(to_2d(p))
-            seen = len(own & support_cells) / max(1, len(own))
-            if seen >= _SEEN_UNDER_SHARE:
-                verdicts[k] = (
-                    f"hangs above the support: its lowest point {low:.3f} m above it, the support seen "
-                    f"beneath {100 * seen:.0f} % of it"
-                )
+    # hangs: decided after the two rules above, so what lies beneath counts only when it
+    # is itself an object (not an arm's or a shelf's part), whatever the objects' order
+    standing = [k for k in range(len(objects)) if k not in verdicts]
+    for k in standing:
+        p, low = objects[k], lows[k]
+        if low <= rests_m(p) + _HANG_M or not support_cells or _rests_on_another(k, p, height, low, objects):
+            continue
+        if _on_what_is_beneath(p, low, [objects[j] for j in standing if j != k], height, to_2d):
+            continue
+        own = _cells(to_2d(p))
+        seen = len(own & support_cells) / max(1, len(own))
+        if seen >= _SEEN_UNDER_SHARE:
+            verdicts[k] = (
+                f"hangs above the support: its lowest point {low:.3f} m above it, the support seen "
+                f"beneath {100 * seen:.0f} % of it"
+            )
     # what stands on an excluded thing, until nothing more is found
     changed = True
     while changed:

@@ -6,9 +6,11 @@ from __future__ import annotations
 
 import dataclasses
 
+import numpy as np
 import pytest
 
 from clearcli.evaluate.segmentation import score
+from clearcli.perception.exclude import not_standing
 from clearcli.perception.payload import segmentation_payload
 from clearcli.perception.segment import segment
 from clearcli.settings.segment import SegmentSettings
@@ -16,7 +18,7 @@ from clearcli.sim.camera import render
 from clearcli.sim.families import FURNITURE_ID, SUPPORT_FAMILIES, support_frame
 from clearcli.sim.scene import make_scene
 
-# the step is off by default (clearcli/settings/segment.py says why): on here
+# the step is on by default; spelt out so these tests do not depend on it
 ON = dataclasses.replace(SegmentSettings(), exclude_not_standing=True)
 OFF = dataclasses.replace(ON, exclude_not_standing=False)
 
@@ -45,3 +47,54 @@ def test_the_arm_filling_the_view_leaves_an_empty_object_list_with_the_reason() 
     assert seg.excluded and all(e.reason for e in seg.excluded)
     doc = segmentation_payload(seg)
     assert doc["objects"] == [] and doc["excluded"]
+
+
+def _box(x0: float, x1: float, y0: float, y1: float, z0: float, z1: float, step: float = 0.004) -> np.ndarray:
+    """The points of a box's top and sides, on a grid of ``step`` (m)."""
+    xs, ys, zs = (np.arange(a, b + 1e-9, step) for a, b in ((x0, x1), (y0, y1), (z0, z1)))
+    top = np.stack(np.meshgrid(xs, ys, [z1]), -1).reshape(-1, 3)
+    front = np.stack(np.meshgrid(xs, [y0], zs), -1).reshape(-1, 3)
+    return np.vstack([top, front])
+
+
+def _verdicts(objects: list[np.ndarray]) -> list[str]:
+    """`not_standing` over a support z = 0 seen everywhere in a 40 cm square (no outline
+    crossed: every point lies well inside)."""
+    g = np.arange(-0.2, 0.2, 0.005)
+    support = np.stack(np.meshgrid(g, g, [0.0]), -1).reshape(-1, 3)
+    none = np.zeros((0, 3))
+    found = not_standing(
+        objects,
+        none,
+        none,
+        support,
+        lambda p: p[:, 2],
+        lambda p: p[:, :2],
+        lambda p: np.ones(p.shape[0], dtype=bool),
+        lambda p: 0.013,
+    )
+    return [f"{v.index}: {v.reason}" for v in found]
+
+
+@pytest.mark.parametrize("gap_m, hangs", [(0.009, False), (0.015, False), (0.05, True)])
+def test_a_box_laid_across_two_others_stands_on_them_though_the_support_is_seen_between(
+    gap_m: float, hangs: bool
+) -> None:
+    # mOSD test47: a box across two others, its bottom about 1 cm above their tops as the
+    # camera sees them, and no point of it within 1.5 cm of theirs (the contact, under
+    # it, is hidden: so are their tops near it); it overhangs their fronts, and the
+    # table is seen between them
+    hidden = 0.075
+    left = _box(-0.10, -0.04, -0.05, 0.05, 0.0, 0.08)
+    right = _box(0.04, 0.10, -0.05, 0.05, 0.0, 0.08)
+    left = left[(left[:, 2] < 0.08) | (left[:, 0] < -hidden)]
+    right = right[(right[:, 2] < 0.08) | (right[:, 0] > hidden)]
+    across = _box(-0.06, 0.06, -0.07, 0.03, 0.08 + gap_m, 0.13 + gap_m)
+    verdicts = _verdicts([left, right, across])
+    if hangs:
+        assert len(verdicts) == 1 and verdicts[0].startswith("2: hangs above the support"), verdicts
+    else:
+        assert verdicts == []
+    # without the two boxes beneath it the same box hangs
+    alone = _verdicts([across])
+    assert len(alone) == 1 and alone[0].startswith("0: hangs above the support"), alone
