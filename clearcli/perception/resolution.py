@@ -218,6 +218,10 @@ class WorkingGrid:
                 out[r::k, c::k] = res
         return out.reshape(-1)
 
+    def to_full_nominal(self, seg: Segmentation, settings: SegmentSettings) -> Segmentation:
+        """`to_full` within the nominal voxel (the grid was chosen from it)."""
+        return self.to_full(seg, settings.voxel_m)
+
     def to_full(self, seg: Segmentation, voxel_m: float) -> Segmentation:
         """``seg`` (of the working grid) with its indices on the full frame: the table's,
         every object's and every excluded segment's pixels by `full_labels`; boxes,

@@ -502,7 +502,7 @@ def segment(frame: Frame, settings: SegmentSettings, stride: int | None = None) 
     seen from below). A table with nothing on it is a result with zero objects.
     """
     grid = WorkingGrid.of(frame, settings, stride)
-    return grid.to_full(_segment(grid.frame, settings), settings.voxel_m)
+    return grid.to_full_nominal(_segment(grid.frame, settings), settings)
 
 
 def _segment(frame: Frame, settings: SegmentSettings) -> Segmentation:

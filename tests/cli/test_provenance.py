@@ -23,7 +23,7 @@ def test_single_document_says_which_clear_and_settings_made_it() -> None:
     a = json.loads(clear("segment", FRAMES[0], "--json").stdout)
     b = json.loads(clear("segment", FRAMES[0], "--json", "--set", "segment.voxel_m=0.006").stdout)
     c = json.loads(clear("segment", FRAMES[0], "--json", "--set", "plan.time_limit_s=5").stdout)
-    assert a["schema"] == "clear.segmentation" and a["version"] == 2
+    assert a["schema"] == "clear.segmentation" and a["version"] == 3
     assert _made_by(a)["settings_digest"] != _made_by(b)["settings_digest"]
     # segment reads [segment] only: a [plan] change leaves its digest alone
     assert _made_by(a)["settings_digest"] == _made_by(c)["settings_digest"]

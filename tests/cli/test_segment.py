@@ -45,7 +45,7 @@ def test_cli_segment_json_labels_png_and_evaluate(tmp_path, box_frame: Frame) ->
     res = runner.invoke(app, ["segment", str(src), "--json", "-o", str(out), "--png", str(png)])
     assert res.exit_code == 0, res.output
     doc = json.loads(res.stdout.strip().splitlines()[-1])
-    assert doc["schema"] == "clear.segmentation" and doc["version"] == 2
+    assert doc["schema"] == "clear.segmentation" and doc["version"] == 3
     assert len(doc["objects"]) == 1
     o = doc["objects"][0]
     assert (o["id"], o["label"]) == (0, 10)

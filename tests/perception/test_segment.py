@@ -65,11 +65,29 @@ def test_timings_keep_their_names_order_and_sums(box_frame: Frame) -> None:
     # order they run, the steps after them, the total
     n = len(stages)
     assert TIMINGS[:6] == ("filter", "table", "supervoxels", "lccp", "merge", "edges")
-    assert TIMINGS[6 : 6 + n] == tuple(stages) and TIMINGS[6 + n :] == ("flat", "objects", "openings", "total")
+    assert TIMINGS[6 : 6 + n] == tuple(stages) and TIMINGS[6 + n :] == (
+        "flat",
+        "objects",
+        "exclude",
+        "openings",
+        "total",
+    )
     t = segment(box_frame, S).timings_s
     assert list(t) == list(TIMINGS)
     assert t["merge"] == sum(t[k] for k in stages if k != "cuts")
-    steps = ("filter", "table", "supervoxels", "edges", "lccp", "cuts", "merge", "objects", "flat", "openings")
+    steps = (
+        "filter",
+        "table",
+        "supervoxels",
+        "edges",
+        "lccp",
+        "cuts",
+        "merge",
+        "objects",
+        "flat",
+        "exclude",
+        "openings",
+    )
     assert min(t.values()) >= 0.0 and sum(t[k] for k in steps) <= t["total"]
 
 

@@ -78,7 +78,9 @@ def test_no_stage_reads_the_density_fitted_lengths_from_the_settings() -> None:
     offenders = [
         f"{path.name}:{n}"
         for path in sorted(Path(perception.__file__).parent.glob("*.py"))
-        if path.name != "size.py"
+        # size.py fits them; resolution.py picks the working grid from the nominal voxel
+        # before the frame's SegmentSize exists (that grid is what it is fitted on)
+        if path.name not in ("size.py", "resolution.py")
         for n, line in enumerate(path.read_text().splitlines(), 1)
         if pattern.search(line)
     ]

@@ -116,7 +116,7 @@ def test_the_isolated_box_measures_as_built() -> None:
 def test_outcome_schema_and_a_json_payload(tmp_path: Path) -> None:
     png = tmp_path / "seg.png"
     outcome = task.run(task.Request(Settings(), Outputs.of(png=png)), Source(FIXTURES / "two_touching_boxes.pcd"))
-    assert (outcome.schema, outcome.version) == (task.SCHEMA, task.VERSION) == ("segmentation", 2)
+    assert (outcome.schema, outcome.version) == (task.SCHEMA, task.VERSION) == ("segmentation", 3)
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and outcome.written == (png,)
     assert json.loads(json.dumps(outcome.payload, allow_nan=False))["source"].endswith("two_touching_boxes.pcd")
     assert task.OUTPUTS == ("labels", "png")
