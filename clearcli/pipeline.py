@@ -19,7 +19,7 @@ import os
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -38,7 +38,24 @@ from clearcli.settings import Settings
 from clearcli.status import FrameStatus
 
 SegmentFn = Callable[[Frame, Any], Segmentation]
-StateFn = Callable[[Frame, Segmentation, Settings], SymbolicState]
+
+
+class StateFn(Protocol):
+    """The predicates stage: (frame, segmentation, settings, avoid_faces) -> state.
+    ``avoid_faces`` (segment index -> faces a kind with faces must not use there: a
+    closed loop's memory of a cup that did not seal) is part of the stage's contract, so
+    that a replaced stage receives it too instead of being bypassed."""
+
+    def __call__(
+        self,
+        frame: Frame,
+        segmentation: Segmentation,
+        settings: Settings,
+        avoid_faces: Mapping[int, frozenset[str]] | None = None,
+        /,
+    ) -> SymbolicState: ...
+
+
 PlanFn = Callable[..., Plan]
 
 # Statuses of one frame (clearcli/status.py), by their short names.
@@ -115,11 +132,11 @@ class Pipeline:
     def state(
         self, frame: Frame, segmentation: Segmentation, avoid_faces: Mapping[int, frozenset[str]] | None = None
     ) -> SymbolicState:
-        if avoid_faces:  # a closed loop's memory: the default stage's own parameter
-            return compute_state(frame, segmentation, self.settings, avoid_faces)
         if self._state_fn is None:
             self._state_fn = _default_state()
-        return self._state_fn(frame, segmentation, self.settings)
+        # the closed loop's memory goes to whichever stage is in place (a replaced stage
+        # is never bypassed); None when there is none
+        return self._state_fn(frame, segmentation, self.settings, avoid_faces or None)
 
     def plan(self, state: SymbolicState) -> Plan:
         if self._plan_fn is None:
@@ -231,8 +248,13 @@ def truth_segmentation(frame: Frame, path: Any) -> Segmentation:
     return segmentation_from_labels(frame)
 
 
-def stated(frame: Frame, segmentation: Segmentation, settings: Settings) -> SymbolicState:
-    return compute_state(frame, segmentation, settings)
+def stated(
+    frame: Frame,
+    segmentation: Segmentation,
+    settings: Settings,
+    avoid_faces: Mapping[int, frozenset[str]] | None = None,
+) -> SymbolicState:
+    return compute_state(frame, segmentation, settings, avoid_faces)
 
 
 @dataclass(frozen=True, eq=False)

@@ -172,3 +172,23 @@ def test_truth_segmentation_needs_a_label_field(frames: dict[str, Any]) -> None:
     bare = dataclasses.replace(frame, fields={k: v for k, v in frame.fields.items() if k != "label"})
     with pytest.raises(InputError, match="'label' field"):
         pipeline.truth_segmentation(bare, "bare.pcd")
+
+
+def test_a_replaced_predicates_stage_receives_the_faces_to_avoid() -> None:
+    # the closed loop's memory of a cup that did not seal reached only the default
+    # stage: a replaced stage was bypassed whenever there was something to avoid
+    calls: list[Any] = []
+    sentinel: Any = object()
+
+    def state_fn(frame: Any, seg: Any, settings: Any, avoid_faces: Any = None, /) -> Any:
+        calls.append(avoid_faces)
+        return sentinel
+
+    p = Pipeline(Settings(), state_fn=state_fn)
+    frame: Any = object()
+    seg: Any = object()
+    avoid = {0: frozenset({"top"})}
+    assert p.state(frame, seg, avoid) is sentinel
+    assert p.state(frame, seg) is sentinel
+    assert p.state(frame, seg, {}) is sentinel
+    assert calls == [avoid, None, None]

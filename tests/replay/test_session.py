@@ -169,10 +169,10 @@ def test_no_table_and_failed_frames_are_reported_and_skipped() -> None:
     nan = dataclasses.replace(good[0], points=np.full_like(good[0].points, np.nan), stamp_s=1.5, source="nan")
     bad = dataclasses.replace(good[1], stamp_s=1.7, source="bad")
 
-    def state_fn(frame: Frame, seg: Segmentation, settings: Settings) -> SymbolicState:
+    def state_fn(frame: Frame, seg: Segmentation, settings: Settings, avoid_faces: Any = None, /) -> SymbolicState:
         if frame.source == "bad":
             raise InputError("bad: the predicates cannot use this frame")
-        return compute_state(frame, seg, settings)
+        return compute_state(frame, seg, settings, avoid_faces)
 
     def segment_fn(frame: Frame, settings: Any) -> Segmentation:
         from clearcli.errors import SceneError
@@ -226,7 +226,7 @@ def _toy_segment(frame: Frame, settings: Any) -> Segmentation:
     )
 
 
-def _toy_state(frame: Frame, seg: Segmentation, settings: Any) -> SymbolicState:
+def _toy_state(frame: Frame, seg: Segmentation, settings: Any, avoid_faces: Any = None, /) -> SymbolicState:
     sign = 1.0 if frame.stamp_s % 2 == 0 else -1.0
     axis = np.array([sign, 0.0, 0.0])
     pushes = {
