@@ -11,6 +11,12 @@ opening width (open) or the closing width (closed). The base is ``base_width_m``
 ``base_depth_m`` (y) by ``base_height_m`` (z) behind the fingers. The model is symmetric
 under a half-turn about z, so both half-turn grasp/push candidates occupy the same volume.
 
+A tool with no fingers (a suction cup alone: clearcli/settings/profiles.py ``tools``)
+pushes with the cup and its body: `push_tool_model` gives the model a push uses, the
+fingers' for a tool that has them (the same object `gripper_model` gives), else the cup
+tool's (`cup_pusher_model`: the cup with its stem, then the body, each a box round its
+cylinder), and `GripperModel.push_contact` says which part meets the object.
+
 Another gripper is a TOML file with a [gripper] table (the keys of `GripperSettings`):
 pass it with ``--settings FILE`` or load it with `load_gripper_settings`.
 """
@@ -29,6 +35,7 @@ import numpy as np
 from clearcli.errors import SettingsError
 from clearcli.settings import settings_from_dict
 from clearcli.settings.geometry import GripperSettings
+from clearcli.settings.suction import SuctionSettings
 
 
 @dataclass(frozen=True, eq=False)
@@ -49,6 +56,18 @@ class GripperBoxes:
         return c @ T_to_gripper[:3, :3].T + T_to_gripper[:3, 3]
 
 
+@dataclass(frozen=True)
+class PushContact:
+    """The part of a tool that meets an object in a push, in the gripper frame (approach
+    +z): its lowest point ``tip_z_m`` past the TCP, its half sizes along x and y, and the
+    height of the band it meets a face with (m)."""
+
+    tip_z_m: float
+    half_x_m: float
+    half_y_m: float
+    band_m: float
+
+
 @dataclass(frozen=True, eq=False)
 class GripperModel:
     settings: GripperSettings
@@ -59,6 +78,23 @@ class GripperModel:
     # height along z). Another object in there is squeezed with the target when the
     # fingers close: it blocks the grasp as surely as one the fingers hit on the way down.
     open_collision_boxes: GripperBoxes | None = None
+    # What meets the object in a push; None: the closed finger pair (`push_contact`).
+    push_part: PushContact | None = None
+
+    @property
+    def push_contact(self) -> PushContact:
+        """The part that meets the object in a push: the closed finger pair (its
+        fingertips, the pair's width along x, a finger's width along y, the closing
+        region's height), unless the model says otherwise (a cup tool's cup)."""
+        if self.push_part is not None:
+            return self.push_part
+        s = self.settings
+        return PushContact(
+            tip_z_m=s.closing_region_height_m / 2.0,
+            half_x_m=self.finger_half_extent_along_x(closed=True),
+            half_y_m=s.finger_width_m / 2.0,
+            band_m=s.closing_region_height_m,
+        )
 
     def collision_boxes(self, closed: bool) -> GripperBoxes:
         """What the collision checks use: the closed gripper, or the open one with its
@@ -145,17 +181,25 @@ def check_gripper_settings(s: GripperSettings, where: str = "[gripper]") -> None
         )
 
 
-def push_contact_halves(s: GripperSettings, closing_dir: np.ndarray, push_dir: np.ndarray) -> tuple[float, float]:
-    """(half size along the push, half size across it) of the closed finger pair whose
-    closing direction is ``closing_dir``: the pair (closing width and both fingers'
-    thickness) along the closing direction, a finger's width across it."""
+def push_contact_halves(
+    s: GripperSettings | GripperModel, closing_dir: np.ndarray, push_dir: np.ndarray
+) -> tuple[float, float]:
+    """(half size along the push, half size across it) of what meets the object, the
+    gripper's x axis being ``closing_dir``: for fingers (``s`` the settings, or a model
+    of them) the closed pair (closing width and both fingers' thickness) along the
+    closing direction, a finger's width across it; for a model with its own push part
+    (`cup_pusher_model`), that part's half sizes."""
     x = np.asarray(closing_dir, dtype=float)
     d = np.asarray(push_dir, dtype=float)
     cos = abs(float(x @ d)) / max(float(np.linalg.norm(x) * np.linalg.norm(d)), 1e-12)
-    pair_half = s.closing_width_m / 2.0 + s.finger_thickness_m
+    if isinstance(s, GripperModel):
+        part = s.push_contact
+        along_x, along_y = part.half_x_m, part.half_y_m
+    else:
+        along_x, along_y = s.closing_width_m / 2.0 + s.finger_thickness_m, s.finger_width_m / 2.0
     if cos >= np.sqrt(0.5):  # closing along the push
-        return pair_half, s.finger_width_m / 2.0
-    return s.finger_width_m / 2.0, pair_half
+        return along_x, along_y
+    return along_y, along_x
 
 
 def gripper_model(s: GripperSettings | None = None) -> GripperModel:
@@ -184,6 +228,42 @@ def _gripper_model(s: GripperSettings) -> GripperModel:
         b.centers.setflags(write=False)
         b.half_extents.setflags(write=False)
     return model
+
+
+def push_tool_model(g: GripperSettings, suction: SuctionSettings, tools: tuple[str, ...]) -> GripperModel:
+    """The model a push uses: the fingers' (`gripper_model`, the very same object) when
+    the tool has fingers, else the cup tool's (`cup_pusher_model`)."""
+    if "fingers" in tools or "cup" not in tools:
+        return gripper_model(g)
+    return cup_pusher_model(g, suction)
+
+
+@lru_cache(maxsize=16)
+def cup_pusher_model(g: GripperSettings, s: SuctionSettings) -> GripperModel:
+    """A tool with a cup and no fingers (an EPick) as it pushes: pointing down, the lip
+    ``[push] fingertips_above_table_m`` above the table like fingertips, the cup and its
+    stem (the cup's diameter, ``stem_length_m`` long, from the lip ``lip_past_tcp_m`` past
+    the TCP) meeting the object's face, the body behind (``body_radius_m``,
+    ``body_length_m``) meeting what is taller. Each cylinder is the box round it, so that
+    the collision checks err on the safe side as the fingers' boxes do; open and closed
+    are one shape. ``g`` (the profile's [gripper], whose fingers the tool does not have)
+    only rides along for what reads a model's settings."""
+    check_gripper_settings(g)
+    r_cup = s.cup_diameter_m / 2.0
+    stem = max(s.stem_length_m, 1e-3)  # a cup right on its body still has its lip
+    lip = s.lip_past_tcp_m
+    centres = np.array([[0.0, 0.0, lip - stem / 2.0], [0.0, 0.0, lip - stem - s.body_length_m / 2.0]])
+    half = np.array([[r_cup, r_cup, stem / 2.0], [s.body_radius_m, s.body_radius_m, s.body_length_m / 2.0]])
+    boxes = GripperBoxes(centers=centres, half_extents=half)
+    boxes.centers.setflags(write=False)
+    boxes.half_extents.setflags(write=False)
+    return GripperModel(
+        settings=g,
+        open_boxes=boxes,
+        closed_boxes=boxes,
+        open_collision_boxes=boxes,
+        push_part=PushContact(tip_z_m=lip, half_x_m=r_cup, half_y_m=r_cup, band_m=stem),
+    )
 
 
 def load_gripper_settings(path: Path) -> GripperSettings:

@@ -185,17 +185,20 @@ def direction_vectors(obj: ObjectGeometry) -> dict[str, np.ndarray]:
 
 
 def push_geometry(obj: ObjectGeometry, gripper: GripperModel, push: PushSettings) -> dict[str, PushGeometry]:
-    g = gripper.settings
     out: dict[str, PushGeometry] = {}
-    height = push.fingertips_above_table_m + g.closing_region_height_m / 2.0
+    # what meets the object: the closed finger pair, or a cup tool's cup
+    # (`GripperModel.push_contact`), its lowest point ``fingertips_above_table_m`` up
+    part = gripper.push_contact
+    height = push.fingertips_above_table_m + part.tip_z_m
     hull_xy = obj.hull_vertices[:, :2]
     c = obj.center.copy()
     c[2] = 0.0
     up_approach = push.approach_m * UP
     # half size of the closed finger pair along the push: its width across the fingers
-    # (dir1/dir2, closing direction along the push) or a finger's width (dir3/dir4)
-    half_parallel = gripper.finger_half_extent_along_x(closed=True)
-    half_across = g.finger_width_m / 2.0
+    # (dir1/dir2, closing direction along the push) or a finger's width (dir3/dir4); a
+    # cup's radius both ways
+    half_parallel = part.half_x_m
+    half_across = part.half_y_m
     for name, d in direction_vectors(obj).items():
         parallel = name in ("dir1", "dir2")
         rear = float((hull_xy @ d[:2]).min())
@@ -213,7 +216,7 @@ def push_geometry(obj: ObjectGeometry, gripper: GripperModel, push: PushSettings
         yaws: list[PushGeometry] = []
         shifted: list[PushGeometry] = []
         raised: list[PushGeometry] = []
-        lifts = raised_contact_lifts(push, g.closing_region_height_m, extent, obj.top_height_m)
+        lifts = raised_contact_lifts(push, part.band_m, extent, obj.top_height_m)
         for along in (parallel, not parallel):  # the documented yaw first, then the other
             x = d if along else _cross(UP, d)
             half_along = half_parallel if along else half_across

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from clearcli.geometry.gripper import GripperModel, gripper_model
+from clearcli.geometry.gripper import GripperModel, gripper_model, push_tool_model
 from clearcli.geometry.models import DegenerateObject, ObjectGeometry, TableFrame, build_from_columns, object_columns
 from clearcli.geometry.poses import PushGeometry, push_geometry
 from clearcli.io.frames import Frame
@@ -52,6 +52,9 @@ def compute_state(
     t0 = time.perf_counter()
     tf = TableFrame.from_plane(seg.table)
     gripper = gripper_model(s.gripper)
+    # what pushes: the fingers, or a tool with a cup alone its cup (the same model as
+    # ``gripper`` for a tool with fingers)
+    pusher = push_tool_model(s.gripper, s.suction, tools_of(s.robot.name))
     geoms = []
     skipped: list[tuple[int, str]] = []
     columns = object_columns(frame.points, [o.indices for o in seg.objects], tf, ps.model_cell_m)
@@ -71,7 +74,7 @@ def compute_state(
     timings["models"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    pushes = [push_geometry(g, gripper, s.push) for g in geoms]
+    pushes = [push_geometry(g, pusher, s.push) for g in geoms]
     timings["poses"] = time.perf_counter() - t0
 
     names = [f"o{i}" for i in range(len(geoms))]
@@ -102,11 +105,11 @@ def compute_state(
     timings["on"] = time.perf_counter() - t0
     exclude = rel.related(on)
     # the gripper yaw of each push that the neighbours block least
-    pushes = rel.least_blocked_pushes(geoms, pushes, gripper, exclude)
+    pushes = rel.least_blocked_pushes(geoms, pushes, pusher, exclude)
 
     t0 = time.perf_counter()
     touching = rel.start_overlaps(geoms)
-    triples = rel.block_dir_triples(geoms, pushes, gripper, exclude, touching, ps.touching_block_angle_deg)
+    triples = rel.block_dir_triples(geoms, pushes, pusher, exclude, touching, ps.touching_block_angle_deg)
     facts.update(("block_dir", names[a], names[b], d) for a, b, d in triples)
     timings["block_dir"] = time.perf_counter() - t0
 
@@ -141,7 +144,7 @@ def compute_state(
     costs: dict[tuple[str, str], int] = {}
     if ps.clearance_cost:
         t0 = time.perf_counter()
-        dist = rel.clearance_distances(geoms, pushes, gripper, exclude, ps.clearance_cost_distance_m)
+        dist = rel.clearance_distances(geoms, pushes, pusher, exclude, ps.clearance_cost_distance_m)
         costs = {
             (names[i], d): rel.clearance_cost(v, ps.clearance_cost_distance_m, ps.clearance_cost_gain_per_m)
             for (i, d), v in dist.items()
