@@ -88,6 +88,20 @@ def left_reason(r: Any, o: int) -> str:
     return f"other ({r.end})"
 
 
+def planner_cause(why: str) -> str:
+    """The plan's reason for an object left, short: its class and, for an object no kind
+    was offered, what suction said (the kind the scenes are made for)."""
+    if not why:
+        return "no plan reason (the session ended first)"
+    head = why.split(":", 1)[0]
+    if "suction grasp: " in why:
+        said = why.split("suction grasp: ", 1)[1].split(";")[0]
+        return f"{head}; suction: {said.split(':')[0].split(' ~')[0]}"
+    if "suction" not in why and head == "ungraspable":
+        return f"{head}; suction not tried"
+    return f"{head}: {why.split(':', 1)[1].strip()[:50]}" if ":" in why else head
+
+
 def run_session(seed: int, mode: str, robot: str) -> dict[str, Any]:
     from clearcli.pipeline import Pipeline
     from clearcli.replay.session import ReplayOptions, Session
@@ -130,6 +144,11 @@ def run_session(seed: int, mode: str, robot: str) -> dict[str, Any]:
             else left_reason(r, o)
             for o in r.remaining
         ],
+        # per object left: the plan's reason and the world's verdict ("" = it could)
+        "left_why": [
+            (o, planner_cause(r.planner_why.get(o, "")), r.planner_why.get(o, ""), r.world_why.get(o, ""))
+            for o in r.remaining
+        ],
         "wall_s": time.perf_counter() - t0,
         "steps": [f"{s.action} -> {s.outcome}" if s.action else s.status for s in r.steps],
     }
@@ -149,6 +168,11 @@ def report(label: str, rows: list[dict[str, Any]], verbose: bool) -> None:
     steps = sum(r["suction_steps"] for r in rows)
     failed = Counter(c for r in rows for c in r["suction_failed"])
     left = Counter(x.split(" [")[0] for r in rows for x in r["left"])
+    causes = Counter(
+        (cause, "the world's robot could take it" if not world else f"the world: {world}")
+        for r in rows
+        for _o, cause, _why, world in r["left_why"]
+    )
     print(
         f"{label}: objects cleared {removed}/{objects} = {100 * removed / max(objects, 1):.1f} %; "
         f"sessions cleared (the world's verdict) {cleared}/{len(rows)}; "
@@ -160,9 +184,15 @@ def report(label: str, rows: list[dict[str, Any]], verbose: bool) -> None:
         + "".join(f"\n        {c}: {n}" for c, n in failed.most_common())
     )
     print("    objects left: " + ("; ".join(f"{k}: {v}" for k, v in sorted(left.items())) or "none"))
+    print(
+        "    objects left by the plan's reason, and the world's verdict:"
+        + "".join(f"\n        {n} x {c} -- {w}" for (c, w), n in causes.most_common())
+    )
     for r in rows:
-        if verbose or not r["cleared"]:
+        if verbose or r["left"]:
             print(f"    seed {r['seed']}: end {r['end']}, removed {r['removed']}/{r['objects']}, left {r['left']}")
+            for o, _cause, why, world in r["left_why"]:
+                print(f"        object {o}: plan: {why or '-'} | world: {world or 'its robot could take it'}")
             if verbose:
                 for s in r["steps"]:
                     print(f"        {s}")

@@ -37,8 +37,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from clearcli.geometry.gripper import push_contact_halves
+from clearcli.geometry.gripper import push_contact_halves, push_tool_model
 from clearcli.predicates.grasps import kind as grasp_kind
+from clearcli.settings.profiles import tools_of
 from clearcli.settings.sim import WorldParams
 from clearcli.sim import camera, physics
 from clearcli.sim.physics import push_contacts, truly_ungraspable_by, world_push
@@ -71,6 +72,9 @@ class StepRecord:
     ungraspable: tuple[int, ...] = ()
     stuck: tuple[int, ...] = ()  # world ids the planner found blocked by objects it cannot move
     seen: tuple[int, ...] = ()  # world ids that are the bulk of some segment (the rest: merged or missed)
+    # (world id, why) of every object the frame's plan left: the plan's reason and its
+    # detail (per kind tried, why it failed)
+    left_why: tuple[tuple[int, str], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -96,6 +100,11 @@ class EpisodeResult:
     # Of those, the ones the world's own arm cannot reach on their true pose
     # (`clearcli.sim.reach`), whatever the planner said of them.
     world_unreachable: tuple[int, ...] = ()
+    # Per object left, why: the last plan's reason (``planner_why``: "ungraspable: ...
+    # suction grasp: too heavy for the cup ...") and the world's verdict (``world_why``:
+    # "" when the world's robot could take it where it stands).
+    planner_why: dict[int, str] = field(default_factory=dict)
+    world_why: dict[int, str] = field(default_factory=dict)
 
     @property
     def actions(self) -> int:
@@ -199,6 +208,7 @@ class Episode:
         last_ungraspable: tuple[int, ...] = ()
         last_stuck: tuple[int, ...] = ()
         last_seen: tuple[int, ...] = ()
+        last_left_why: tuple[tuple[int, str], ...] = ()
         reason = ""
         per_object: Counter[int] = Counter()
         index = 0
@@ -214,6 +224,7 @@ class Episode:
             last_ungraspable = record.ungraspable
             last_stuck = record.stuck
             last_seen = record.seen
+            last_left_why = record.left_why
             reason = report.result.error
             self.steps.append(record)
             if record.object_id is not None and record.action:
@@ -245,6 +256,7 @@ class Episode:
         too_wide_or_narrow = tuple(
             sorted(o.object_id for o in self.scene.objects if truly_ungraspable_by(o, gripper, kinds))
         )
+        world_why = self._world_verdicts(too_wide_or_narrow)
         self.result = EpisodeResult(
             scene=self.scene.name.split(".")[0],
             seed=self.seed,
@@ -266,16 +278,21 @@ class Episode:
                     if math.dist((o.x_m, o.y_m), start_xy[o.object_id]) > MOVED_M
                 )
             ),
-            world_unreachable=self._world_unreachable(too_wide_or_narrow),
+            world_unreachable=tuple(sorted(k for k, why in world_why.items() if why and k not in too_wide_or_narrow)),
+            planner_why={k: why for k, why in last_left_why if k in remaining},
+            world_why=world_why,
         )
 
-    def _world_unreachable(self, ungraspable: tuple[int, ...]) -> tuple[int, ...]:
-        """The objects left that the world's own arm cannot reach (the gripper can hold
-        them: those are ``truly_ungraspable``)."""
+    def _world_verdicts(self, ungraspable: tuple[int, ...]) -> dict[int, str]:
+        """Per object left, the world's verdict: why its robot cannot take it ("" when it
+        can): no grasp kind the robot was given holds it (``ungraspable``), or its own arm
+        reaches no pose to take it (`WorldReach.why_not`; a kind other than the pinch
+        taking what the fingers cannot close across, the arm's pose over it)."""
+        out = {k: "no grasp kind the robot has takes it (the world's rules)" for k in ungraspable}
         left = [o for o in self.scene.objects if o.object_id not in ungraspable]
         T_base_camera = self.session.pipeline.T_base_camera
         if not left or T_base_camera is None:
-            return ()
+            return out
         settings = self.session.pipeline.settings
         reach = WorldReach(
             T_base_table_of(T_base_camera, self.scene),
@@ -285,7 +302,10 @@ class Episode:
             table=self.scene.table,
             robot=self.session.pipeline.robot,
         )
-        return tuple(sorted(o.object_id for o in left if reach.why_not(o)))
+        # ``left`` holds only what some kind the robot has takes: the fingers not closing
+        # across it is then no excuse (the cup's or the slide's, not the pinch's, object)
+        out.update((o.object_id, reach.why_not(o, other_kind=True)) for o in left)
+        return out
 
     def _push_contacts(
         self, report: FrameReport, push: Any, direction_table: np.ndarray, T_table_camera: np.ndarray
@@ -297,7 +317,10 @@ class Episode:
         T_table_start = T_table_camera @ T_camera_start
         d = np.asarray(direction_table[:2], dtype=float)
         d /= max(float(np.linalg.norm(d)), 1e-12)
-        front, half_width = push_contact_halves(self.session.pipeline.settings.gripper, T_table_start[:2, 0], d)
+        # what the robot pushes with: its fingers, or a tool with a cup alone its cup
+        settings = self.session.pipeline.settings
+        pusher = push_tool_model(settings.gripper, settings.suction, tools_of(settings.robot.name))
+        front, half_width = push_contact_halves(pusher, T_table_start[:2, 0], d)
         start = T_table_start[:2, 3] + front * d
         reach = float(push.push_length_m) + 0.1
         return push_contacts(self.scene, start, d, half_width, reach)
@@ -310,6 +333,7 @@ class Episode:
         stuck: tuple[int, ...] = ()
         seg, state, plan = result.segmentation, result.state, result.plan
         seen: tuple[int, ...] = ()
+        left_why: list[tuple[int, str]] = []
         if seg is not None:
             seen = tuple(
                 sorted({w for k in range(len(seg.objects)) if (w := world_object_of(frame, seg, k)) is not None})
@@ -327,13 +351,24 @@ class Episode:
                         out.append(wid)
                 return tuple(sorted(set(out)))
 
+            for left in getattr(plan, "left", ()):
+                ids = world_ids((left.name,))
+                if ids:
+                    left_why.append((ids[0], f"{left.reason}: {left.detail}"))
             ungraspable = world_ids(getattr(plan, "ungraspable", ()))
             unreachable = tuple(sorted(set(world_ids(plan.unreachable)) | set(ungraspable)))
             stuck = world_ids(getattr(plan, "stuck", ()))
         first = report.first_action()
         if first is None or seg is None or state is None:
             record = StepRecord(
-                index, report.status, n, unreachable=unreachable, ungraspable=ungraspable, stuck=stuck, seen=seen
+                index,
+                report.status,
+                n,
+                unreachable=unreachable,
+                ungraspable=ungraspable,
+                stuck=stuck,
+                seen=seen,
+                left_why=tuple(left_why),
             )
             return record, unreachable
         model = state.by_name(first.obj)
@@ -383,6 +418,7 @@ class Episode:
             ungraspable=ungraspable,
             stuck=stuck,
             seen=seen,
+            left_why=tuple(left_why),
         )
         return record, unreachable
 

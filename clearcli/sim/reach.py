@@ -43,12 +43,14 @@ if TYPE_CHECKING:
 
 
 def grasp_poses_T_table_tcp(
-    obj: SceneObject, gripper: GripperSettings, push: PushSettings, n_yaws: int = 8
+    obj: SceneObject, gripper: GripperSettings, push: PushSettings, n_yaws: int = 8, any_yaw: bool = False
 ) -> list[tuple[np.ndarray, np.ndarray]]:
-    """(pre-grasp, grasp) pose pairs of a top-down grasp of ``obj``, in the table frame."""
+    """(pre-grasp, grasp) pose pairs of a top-down grasp of ``obj``, in the table frame.
+    ``any_yaw``: at ``n_yaws`` yaws whatever the object's widths (the pose over an object
+    another kind takes: a cup on its top, the fingers on its edge)."""
     half = gripper.closing_region_height_m / 2.0
     z = max(obj.top_z_m - half, push.fingertips_above_table_m + half)
-    if isinstance(obj, Cylinder):
+    if isinstance(obj, Cylinder) or any_yaw:
         yaws = [math.pi * k / n_yaws for k in range(n_yaws)]
     else:
         assert isinstance(obj, Box)
@@ -140,10 +142,11 @@ class WorldReach:
         over = (np.abs(c_table[:, 0]) <= half_x + radii) & (np.abs(c_table[:, 1]) <= half_y + radii)
         return not bool(np.any(over & (c_table[:, 2] < radii + self.params.table_margin_m)))
 
-    def grasp_motion(self, obj: SceneObject) -> tuple[np.ndarray, np.ndarray] | None:
+    def grasp_motion(self, obj: SceneObject, any_yaw: bool = False) -> tuple[np.ndarray, np.ndarray] | None:
         """(T_base_tcp, joint angles) of the first top-down grasp of ``obj`` whose
-        pre-grasp and grasp poses both have arm configurations; None when none has."""
-        pairs = grasp_poses_T_table_tcp(obj, self.gripper, self.push, self.params.n_yaws)
+        pre-grasp and grasp poses both have arm configurations; None when none has.
+        ``any_yaw``: `grasp_poses_T_table_tcp`'s."""
+        pairs = grasp_poses_T_table_tcp(obj, self.gripper, self.push, self.params.n_yaws, any_yaw)
         for pre, T in pairs:
             q_pre = self._solve(self.T_base_table @ pre, None)
             if q_pre is None:
@@ -154,11 +157,21 @@ class WorldReach:
                 return T_base_tcp, q
         return None
 
-    def why_not(self, obj: SceneObject) -> str:
+    def why_not(self, obj: SceneObject, other_kind: bool = False) -> str:
         """Empty when the gripper can hold ``obj`` and some top-down grasp of it has an
-        arm motion; else why not."""
-        if truly_ungraspable(obj, self.gripper.opening_width_m, self.gripper.closing_width_m):
+        arm motion; else why not. ``other_kind``: another grasp kind the robot has takes
+        it by the world's rules (`physics.truly_ungraspable_by`: a cup on its top, a
+        slide, a rim grasp), so that the fingers cannot close across it excuses nothing;
+        then only an arm that reaches no top-down pose over it at any yaw does (the
+        pose's height is the pinch's: a cup's lip or a slide's fingers come within a few
+        cm of it)."""
+        wide = truly_ungraspable(obj, self.gripper.opening_width_m, self.gripper.closing_width_m)
+        if wide and not other_kind:
             return "the gripper cannot hold it (narrowest width beyond the opening or under the closing width)"
+        if wide:
+            if self.grasp_motion(obj, any_yaw=True) is None:
+                return "no arm motion reaches a top-down pose over it"
+            return ""
         if self.grasp_motion(obj) is None:
             return "no arm motion reaches a top-down grasp of it"
         return ""
