@@ -33,7 +33,7 @@ from clearcli.io.frames import Frame
 from clearcli.perception.clock import Clock
 from clearcli.perception.context import RefineContext
 from clearcli.perception.edges import cut_depth_edges
-from clearcli.perception.exclude import not_standing
+from clearcli.perception.exclude import beyond_outline, not_standing, reach_beyond
 from clearcli.perception.filters import clean_mask
 from clearcli.perception.flat import flat_objects
 from clearcli.perception.lccp import lccp_segments
@@ -413,7 +413,15 @@ def _exclude(w: _Work) -> None:
     rng2 = np.einsum("ij,ij->i", pts, pts) if fit.camera_is_origin else np.zeros(pts.shape[0])
     low = settings.prism_min_height_m + settings.prism_noise_per_m2 * rng2
     above = np.flatnonzero(~w.prism_mask & ~w.table_mask & (h > low) & (h <= settings.prism_max_height_m))
-    outside = pts[above[~fit.inside(pts[above], settings.hull_margin_m)]]
+    out_sel = above[~fit.inside(pts[above], settings.hull_margin_m)]
+    outside = pts[out_sel]
+    # how far what lies outside reaches beyond the outline, along the pixel grid
+    reach = reach_beyond(
+        outside,
+        w.idx[out_sel] if w.organized else None,
+        w.frame.shape[1] if w.organized and w.frame.shape is not None else 0,
+        beyond_outline(fit.to_2d(outside), fit.polygon_2d),
+    )
     below = np.flatnonzero(~w.table_mask & (h < -low))
     outside_below = pts[below[~fit.inside(pts[below], settings.hull_margin_m)]]
     support = pts[w.table_mask][:: max(1, int(w.table_mask.sum()) // 50000)]
@@ -433,6 +441,7 @@ def _exclude(w: _Work) -> None:
         fit.to_2d,
         lambda p: fit.inside(p, settings.hull_margin_m - 0.02),
         rests_m,
+        reach,
     )
     if not verdicts:
         return

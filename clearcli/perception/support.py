@@ -35,6 +35,18 @@ _RAISED_MIN_M = 0.25  # a raised surface (a stool, furniture): this far above th
 _STAND_MAX_M = 0.4  # objects standing on a surface are at most this tall
 _BODY_OUT_M = 0.01  # a body flush with its top's edge is seen just inside or outside it
 _EDGE_IN_M = 0.02  # the band inside a surface's outline that shows its edge, not its load
+# concave: a wall rises around the surface (a bowl's inside, a tray). Looked for in the
+# band from `_WALL_IN_M` inside its outline to `_WALL_OUT_M` beyond it (its outline
+# takes in the wall's foot), in `_SECTORS` sectors around its middle: a sector is walled
+# when `_WALL_SHARE` of its band's points stand `_WALL_M` or more above the surface; a
+# surface walled in `_WALLED_MIN` sectors is concave. A bowl's band is 18-64 % such
+# points in every sector, a mat's 0-2 % (an object at its edge walls a sector or two).
+_WALL_IN_M = 0.03
+_WALL_OUT_M = 0.01
+_WALL_M = 0.02
+_WALL_SHARE = 0.1
+_SECTORS = 8
+_WALLED_MIN = 6
 
 
 @dataclass(frozen=True)
@@ -89,6 +101,22 @@ def standing_on(s: Surface, loose: np.ndarray, band_m: np.ndarray) -> np.ndarray
     return out
 
 
+def walled_sectors(s: Surface, every: np.ndarray) -> int:
+    """In how many of `_SECTORS` sectors around the middle of ``s``'s outline a wall rises
+    at its edge: see `_WALL_IN_M`."""
+    band = s.inside(every, _WALL_OUT_M) & ~s.inside(every, -_WALL_IN_M)
+    pts = every[band]
+    if not pts.shape[0]:
+        return 0
+    xy = np.stack([pts @ a for a in s.basis], axis=1) - s.origin @ s.basis.T
+    mid = s.polygon_2d.mean(axis=0)
+    ang = np.arctan2(xy[:, 1] - mid[1], xy[:, 0] - mid[0])
+    sector = np.minimum((ang + np.pi) * (_SECTORS / (2 * np.pi)), _SECTORS - 1).astype(np.int64)
+    n = np.bincount(sector, minlength=_SECTORS)
+    up = np.bincount(sector, weights=(s.height(pts) >= _WALL_M).astype(np.float64), minlength=_SECTORS)
+    return int(((n > 0) & (up >= _WALL_SHARE * n)).sum())
+
+
 def choose(
     surfaces: list[Surface],
     best: int,
@@ -107,6 +135,7 @@ def choose(
     lower = surfaces[best]
     low_h = lower.height(every)
     picks: list[tuple[float, int, str, str]] = []
+    concave: dict[int, str] = {}
     for k, s in enumerate(surfaces):
         if k == best or abs(float(s.normal @ lower.normal)) < _PARALLEL_COS:
             continue
@@ -119,6 +148,15 @@ def choose(
         on = standing_on(s, loose, band_m)
         n_on = int(on.sum())
         if n_on < min_points:
+            continue
+        walled = walled_sectors(s, every)
+        if walled >= _WALLED_MIN:
+            # a bowl's inside holds what is in the bowl, which stands on the bowl, and the
+            # bowl on the surface below
+            concave[k] = (
+                f"concave: a wall rises around it ({walled} of {_SECTORS} sides), the inside of a bowl or a "
+                "tray; what is in it stands in a container"
+            )
             continue
         if rise <= _MAT_MAX_M:
             picks.append(
@@ -153,4 +191,4 @@ def choose(
     # the highest such surface (a raised one over a mat on the floor is still raised)
     picks.sort(key=lambda p: (-p[0], p[1]))
     _, k, why, lower_why = picks[0]
-    return Choice(k, why, {best: lower_why})
+    return Choice(k, why, {**concave, best: lower_why})
