@@ -5,14 +5,6 @@ set aside with the reason, for --json to list as ``excluded``.
   ends at the support's hull (grown by ``hull_margin_m``); a segment that touches that
   side of the prism and goes on beyond it, above the support's plane, is part of
   something standing elsewhere. An object cut by the image's border does not go on.
-- stands beyond the support's edge, on or as part of furniture: it touches a thing
-  outside the support's outline (above its plane) that goes on `_FAR_BEYOND_M` or more
-  beyond the outline, farther than any object the hull cuts can reach (a second desk
-  behind the table, its face rising at the table's far edge and its top going back; a
-  shelf). Or it goes on below the support's level beyond its outline (a desk's face).
-  The thing's extent is taken along the frame's pixel grid (neighbouring pixels within
-  `_LINK_M` of each other are one surface), not as the crow flies, so a wall or a
-  cupboard behind an object at the edge is not the object's own.
 - hangs above the support: its lowest point well above it (more than `_HANG_M` plus the
   range's noise) and the support seen beneath it (in at least `_SEEN_UNDER_SHARE` of the
   cells it covers, the camera sees the support's own points), so nothing it could stand
@@ -44,58 +36,13 @@ _REACH_ABOVE_M = 0.10
 _SEEN_UNDER_SHARE = 0.3
 _CELL_M = 0.01
 _TOUCH_M = 0.015
-# a thing outside the outline reaching this far beyond it is furniture (a desk 40 cm
-# deep); an object the hull cuts (the table behind it hidden) reaches its own depth
-# beyond the outline, at most about the 30 cm of the widest objects cleared
-_FAR_BEYOND_M = 0.25
-_LINK_M = 0.02  # neighbouring pixels this near in space are one surface
 
 
-def beyond_outline(xy: np.ndarray, polygon_2d: np.ndarray) -> np.ndarray:
-    """(N,) how far each in-plane point ``xy`` lies beyond the convex counter-clockwise
-    ``polygon_2d`` (m; negative inside): its farthest distance outside an edge's line
-    (the distance itself off the corners, a little less beyond them)."""
-    edges = np.roll(polygon_2d, -1, axis=0) - polygon_2d
-    out = np.stack([edges[:, 1], -edges[:, 0]], axis=1)
-    out /= np.maximum(np.linalg.norm(out, axis=1, keepdims=True), 1e-12)
-    limits = np.einsum("ij,ij->i", out, polygon_2d)
-    far = np.full(xy.shape[0], -np.inf)
-    for k in range(polygon_2d.shape[0]):  # hull edges: tens
-        far = np.maximum(far, xy @ out[k] - limits[k])
-    return far
-
-
-def reach_beyond(points: np.ndarray, pixel: np.ndarray | None, width: int, beyond: np.ndarray) -> np.ndarray:
-    """(N,) for each of ``points`` (outside the support's outline), the farthest its part
-    reaches beyond the outline: the largest ``beyond`` over the points joined to it
-    through neighbouring pixels (``pixel``: each point's index in a frame ``width``
-    pixels wide) within `_LINK_M` of each other. Without a pixel grid, each point's own."""
-    if pixel is None or points.shape[0] < 2:
-        return beyond.copy()
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
-    order = np.argsort(pixel, kind="stable")
-    pix = pixel[order]
-    rows: list[np.ndarray] = []
-    cols: list[np.ndarray] = []
-    for step in (1, width):  # the pixel to the right, the one below
-        j = np.searchsorted(pix, pix + step)
-        j_ok = np.minimum(j, pix.size - 1)
-        hit = (j < pix.size) & (pix[j_ok] == pix + step)
-        if step == 1:
-            hit &= (pix % width) != width - 1
-        a, b = order[hit], order[j_ok[hit]]
-        near = np.einsum("ij,ij->i", points[a] - points[b], points[a] - points[b]) < _LINK_M**2
-        rows.append(a[near])
-        cols.append(b[near])
-    r, c = np.concatenate(rows), np.concatenate(cols)
-    n = points.shape[0]
-    graph = coo_matrix((np.ones(r.size, dtype=np.int8), (r, c)), shape=(n, n))
-    _, part = connected_components(graph, directed=False)
-    far = np.full(int(part.max()) + 1, -np.inf)
-    np.maximum.at(far, part, beyond)
-    return far[part]
+def _near_box(points: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """The rows of ``points`` inside the box [lo, hi] (as many columns as ``lo``): only they
+    can be within the box's margin of what it was grown around, so a nearest-neighbour
+    search against them alone gives the same answer as against all the points."""
+    return points[((points[:, : lo.size] >= lo) & (points[:, : lo.size] <= hi)).all(axis=1)]
 
 
 def _rests_on_another(
@@ -105,10 +52,14 @@ def _rests_on_another(
     from scipy.spatial import cKDTree
 
     bottom = p[height(p) <= low + _TOUCH_M]
-    others = [o for j, o in enumerate(objects) if j != k]
-    if not others or not bottom.shape[0]:
+    if not bottom.shape[0]:
         return False
-    d, _ = cKDTree(np.vstack(others)).query(bottom, distance_upper_bound=_TOUCH_M)
+    lo, hi = bottom.min(axis=0) - _TOUCH_M, bottom.max(axis=0) + _TOUCH_M
+    others = [_near_box(o, lo, hi) for j, o in enumerate(objects) if j != k]
+    near = np.vstack(others) if others else np.zeros((0, 3))
+    if not near.shape[0]:
+        return False
+    d, _ = cKDTree(near).query(bottom, distance_upper_bound=_TOUCH_M)
     return bool(np.isfinite(d).sum() >= 5)
 
 
@@ -133,22 +84,12 @@ def _on_what_is_beneath(
     q = q[height(q) >= low - _HANG_M]
     if not q.shape[0]:
         return False
-    d, _ = cKDTree(to_2d(p)).query(to_2d(q), distance_upper_bound=_CELL_M)
+    p2 = to_2d(p)
+    q2 = _near_box(to_2d(q), p2.min(axis=0) - _CELL_M, p2.max(axis=0) + _CELL_M)
+    if not q2.shape[0]:
+        return False
+    d, _ = cKDTree(p2).query(q2, distance_upper_bound=_CELL_M)
     return bool(np.isfinite(d).sum() >= _GOES_ON_MIN)
-
-
-def _far_touched(touching: np.ndarray, out_tree: object, outside_reach: np.ndarray) -> float:
-    """How far beyond the outline the part outside it that the points ``touching`` touch
-    reaches: each touching point counts the part of its nearest outside point, and the
-    reach is the one `_GOES_ON_MIN` of them attain."""
-    from scipy.spatial import cKDTree
-
-    assert isinstance(out_tree, cKDTree)
-    d, j = out_tree.query(touching, distance_upper_bound=_GOES_ON_M)
-    ok = np.isfinite(d)
-    if int(ok.sum()) < _GOES_ON_MIN:
-        return float("-inf")
-    return float(np.sort(outside_reach[j[ok]])[-_GOES_ON_MIN])
 
 
 @dataclass(frozen=True)
@@ -157,9 +98,11 @@ class Verdict:
     reason: str
 
 
-def _cells(xy: np.ndarray) -> set[tuple[int, int]]:
+def _cells(xy: np.ndarray) -> np.ndarray:
+    """The `_CELL_M` cells ``xy`` falls in, as sorted unique packed keys: column and row in
+    one int64 (a 1-D unique sorts several times faster than rows of two)."""
     c = np.floor(xy / _CELL_M).astype(np.int64)
-    return set(map(tuple, np.unique(c, axis=0).tolist()))
+    return np.unique(c[:, 0] * (1 << 32) + (c[:, 1] + (1 << 31)))
 
 
 def not_standing(
@@ -171,7 +114,6 @@ def not_standing(
     to_2d: Callable[[np.ndarray], np.ndarray],
     inside_side: Callable[[np.ndarray], np.ndarray],
     rests_m: Callable[[np.ndarray], float],
-    outside_reach: np.ndarray | None = None,
 ) -> list[Verdict]:
     """Which of ``objects`` (each an (M, 3) array of its points) do not stand on the
     support, and why.
@@ -181,19 +123,21 @@ def not_standing(
     the support's own points; ``height``: height above its plane; ``to_2d``: in-plane
     coordinates; ``inside_side``: (N,) bool, the points farther than `_BORDER_M` inside
     the prism's side; ``rests_m``: for an object's points, the height below which it
-    rests on the support (grows with range); ``outside_reach``: for each of ``outside``,
-    how far its part reaches beyond the outline (`reach_beyond`; None: not known).
+    rests on the support (grows with range).
     """
     from scipy.spatial import cKDTree
 
     out_tree = cKDTree(outside) if outside.shape[0] else None
     low_tree = cKDTree(outside_below) if outside_below.shape[0] else None
-    support_cells = _cells(to_2d(support_pts)) if support_pts.shape[0] else set()
+    support_cells = _cells(to_2d(support_pts)) if support_pts.shape[0] else np.zeros(0, dtype=np.int64)
     verdicts: dict[int, str] = {}
     lows = []
+    # the side test once for all objects' points (it is per point), split back per object
+    inside_all = inside_side(np.vstack(objects)) if objects else np.zeros(0, dtype=bool)
+    inside_each = np.split(inside_all, np.cumsum([p.shape[0] for p in objects])[:-1])
     for k, p in enumerate(objects):
         lows.append(float(height(p).min()))
-        edge = p[~inside_side(p)]
+        edge = p[~inside_each[k]]
         if out_tree is not None and edge.shape[0]:
             near = np.asarray(out_tree.query_ball_point(edge, _GOES_ON_M, return_length=True)) > 0
             goes_on = int(near.sum())
@@ -205,14 +149,6 @@ def not_standing(
                     "touch points above the support outside it): an arm, a hand, a cable"
                 )
                 continue
-            if goes_on >= _GOES_ON_MIN and outside_reach is not None:
-                far = _far_touched(edge[near], out_tree, outside_reach)
-                if far >= _FAR_BEYOND_M:
-                    verdicts[k] = (
-                        f"stands beyond the support's edge: it is one with something outside the support's "
-                        f"outline that goes on {far:.2f} m beyond it: a desk, a shelf, furniture behind"
-                    )
-                    continue
         if low_tree is not None and edge.shape[0]:
             down = int((np.asarray(low_tree.query_ball_point(edge, _GOES_ON_M, return_length=True)) > 0).sum())
             if down >= _GOES_ON_MIN:
@@ -225,12 +161,12 @@ def not_standing(
     standing = [k for k in range(len(objects)) if k not in verdicts]
     for k in standing:
         p, low = objects[k], lows[k]
-        if low <= rests_m(p) + _HANG_M or not support_cells or _rests_on_another(k, p, height, low, objects):
+        if low <= rests_m(p) + _HANG_M or not support_cells.size or _rests_on_another(k, p, height, low, objects):
             continue
         if _on_what_is_beneath(p, low, [objects[j] for j in standing if j != k], height, to_2d):
             continue
         own = _cells(to_2d(p))
-        seen = len(own & support_cells) / max(1, len(own))
+        seen = int(np.isin(own, support_cells, assume_unique=True).sum()) / max(1, own.size)
         if seen >= _SEEN_UNDER_SHARE:
             verdicts[k] = (
                 f"hangs above the support: its lowest point {low:.3f} m above it, the support seen "
