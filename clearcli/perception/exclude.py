@@ -5,6 +5,14 @@ set aside with the reason, for --json to list as ``excluded``.
   ends at the support's hull (grown by ``hull_margin_m``); a segment that touches that
   side of the prism and goes on beyond it, above the support's plane, is part of
   something standing elsewhere. An object cut by the image's border does not go on.
+- stands beyond the support's edge, on or as part of furniture: it touches a thing
+  outside the support's outline (above its plane) that goes on `_FAR_BEYOND_M` or more
+  beyond the outline, farther than any object the hull cuts can reach (a second desk
+  behind the table, its face rising at the table's far edge and its top going back; a
+  shelf). Or it goes on below the support's level beyond its outline (a desk's face).
+  The thing's extent is taken along the frame's pixel grid (neighbouring pixels within
+  `_LINK_M` of each other are one surface), not as the crow flies, so a wall or a
+  cupboard behind an object at the edge is not the object's own.
 - hangs above the support: its lowest point well above it (more than `_HANG_M` plus the
   range's noise) and the support seen beneath it (in at least `_SEEN_UNDER_SHARE` of the
   cells it covers, the camera sees the support's own points), so nothing it could stand
@@ -36,6 +44,58 @@ _REACH_ABOVE_M = 0.10
 _SEEN_UNDER_SHARE = 0.3
 _CELL_M = 0.01
 _TOUCH_M = 0.015
+# a thing outside the outline reaching this far beyond it is furniture (a desk 40 cm
+# deep); an object the hull cuts (the table behind it hidden) reaches its own depth
+# beyond the outline, at most about the 30 cm of the widest objects cleared
+_FAR_BEYOND_M = 0.25
+_LINK_M = 0.02  # neighbouring pixels this near in space are one surface
+
+
+def beyond_outline(xy: np.ndarray, polygon_2d: np.ndarray) -> np.ndarray:
+    """(N,) how far each in-plane point ``xy`` lies beyond the convex counter-clockwise
+    ``polygon_2d`` (m; negative inside): its farthest distance outside an edge's line
+    (the distance itself off the corners, a little less beyond them)."""
+    edges = np.roll(polygon_2d, -1, axis=0) - polygon_2d
+    out = np.stack([edges[:, 1], -edges[:, 0]], axis=1)
+    out /= np.maximum(np.linalg.norm(out, axis=1, keepdims=True), 1e-12)
+    limits = np.einsum("ij,ij->i", out, polygon_2d)
+    far = np.full(xy.shape[0], -np.inf)
+    for k in range(polygon_2d.shape[0]):  # hull edges: tens
+        far = np.maximum(far, xy @ out[k] - limits[k])
+    return far
+
+
+def reach_beyond(points: np.ndarray, pixel: np.ndarray | None, width: int, beyond: np.ndarray) -> np.ndarray:
+    """(N,) for each of ``points`` (outside the support's outline), the farthest its part
+    reaches beyond the outline: the largest ``beyond`` over the points joined to it
+    through neighbouring pixels (``pixel``: each point's index in a frame ``width``
+    pixels wide) within `_LINK_M` of each other. Without a pixel grid, each point's own."""
+    if pixel is None or points.shape[0] < 2:
+        return beyond.copy()
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    order = np.argsort(pixel, kind="stable")
+    pix = pixel[order]
+    rows: list[np.ndarray] = []
+    cols: list[np.ndarray] = []
+    for step in (1, width):  # the pixel to the right, the one below
+        j = np.searchsorted(pix, pix + step)
+        j_ok = np.minimum(j, pix.size - 1)
+        hit = (j < pix.size) & (pix[j_ok] == pix + step)
+        if step == 1:
+            hit &= (pix % width) != width - 1
+        a, b = order[hit], order[j_ok[hit]]
+        near = np.einsum("ij,ij->i", points[a] - points[b], points[a] - points[b]) < _LINK_M**2
+        rows.append(a[near])
+        cols.append(b[near])
+    r, c = np.concatenate(rows), np.concatenate(cols)
+    n = points.shape[0]
+    graph = coo_matrix((np.ones(r.size, dtype=np.int8), (r, c)), shape=(n, n))
+    _, part = connected_components(graph, directed=False)
+    far = np.full(int(part.max()) + 1, -np.inf)
+    np.maximum.at(far, part, beyond)
+    return far[part]
 
 
 def _near_box(points: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
@@ -92,6 +152,20 @@ def _on_what_is_beneath(
     return bool(np.isfinite(d).sum() >= _GOES_ON_MIN)
 
 
+def _far_touched(touching: np.ndarray, out_tree: object, outside_reach: np.ndarray) -> float:
+    """How far beyond the outline the part outside it that the points ``touching`` touch
+    reaches: each touching point counts the part of its nearest outside point, and the
+    reach is the one `_GOES_ON_MIN` of them attain."""
+    from scipy.spatial import cKDTree
+
+    assert isinstance(out_tree, cKDTree)
+    d, j = out_tree.query(touching, distance_upper_bound=_GOES_ON_M)
+    ok = np.isfinite(d)
+    if int(ok.sum()) < _GOES_ON_MIN:
+        return float("-inf")
+    return float(np.sort(outside_reach[j[ok]])[-_GOES_ON_MIN])
+
+
 @dataclass(frozen=True)
 class Verdict:
     index: int  # into the objects
@@ -114,6 +188,7 @@ def not_standing(
     to_2d: Callable[[np.ndarray], np.ndarray],
     inside_side: Callable[[np.ndarray], np.ndarray],
     rests_m: Callable[[np.ndarray], float],
+    outside_reach: np.ndarray | None = None,
 ) -> list[Verdict]:
     """Which of ``objects`` (each an (M, 3) array of its points) do not stand on the
     support, and why.
@@ -123,7 +198,8 @@ def not_standing(
     the support's own points; ``height``: height above its plane; ``to_2d``: in-plane
     coordinates; ``inside_side``: (N,) bool, the points farther than `_BORDER_M` inside
     the prism's side; ``rests_m``: for an object's points, the height below which it
-    rests on the support (grows with range).
+    rests on the support (grows with range); ``outside_reach``: for each of ``outside``,
+    how far its part reaches beyond the outline (`reach_beyond`; None: not known).
     """
     from scipy.spatial import cKDTree
 
@@ -149,6 +225,14 @@ def not_standing(
                     "touch points above the support outside it): an arm, a hand, a cable"
                 )
                 continue
+            if goes_on >= _GOES_ON_MIN and outside_reach is not None:
+                far = _far_touched(edge[near], out_tree, outside_reach)
+                if far >= _FAR_BEYOND_M:
+                    verdicts[k] = (
+                        f"stands beyond the support's edge: it is one with something outside the support's "
+                        f"outline that goes on {far:.2f} m beyond it: a desk, a shelf, furniture behind"
+                    )
+                    continue
         if low_tree is not None and edge.shape[0]:
             down = int((np.asarray(low_tree.query_ball_point(edge, _GOES_ON_M, return_length=True)) > 0).sum())
             if down >= _GOES_ON_MIN:
