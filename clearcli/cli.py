@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
 from clearcli import interrupts
-from clearcli.commands import registry
+from clearcli.commands import registry, root_help
 from clearcli.errors import (
     EXIT_BROKEN_PIPE,
     EXIT_CODES,
@@ -121,6 +121,33 @@ def __getattr__(name: str) -> typer.Typer:
             _full_app = make_app()
         return _full_app
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def render_root_help(prog_name: str = root_help.PROG_NAME) -> str:
+    """What the app prints for `clear --help` on a terminal of 80 columns or more (click
+    makes its help 78 columns wide there): the text clearcli/commands/root_help.py
+    records (tests/cli/record_root_help.py)."""
+    import typer.main  # noqa: PLC0415  (~85 ms; recording and its test only)
+
+    command = typer.main.get_command(make_app())
+    with command.make_context(prog_name, [], resilient_parsing=True) as ctx:
+        ctx.terminal_width = root_help.MIN_COLUMNS - 2
+        return command.get_help(ctx) + "\n"  # click's echo adds the newline
+
+
+def _recorded_root_help(args: list[str], prog_name: str) -> str | None:
+    """`clear --help`'s text as recorded (clearcli/commands/root_help.py) where click would
+    print exactly that, else None (the app prints it): the root's --help alone, under the
+    name it was recorded with, no shell completion asked (click's check, on the same name),
+    and a terminal as wide as click's help at its widest (shutil's size, as click takes it:
+    a pipe counts as 80 columns unless $COLUMNS says otherwise)."""
+    if args != ["--help"] or prog_name != root_help.PROG_NAME:
+        return None
+    if f"_{prog_name}_COMPLETE".replace("-", "_").upper() in os.environ:
+        return None
+    if shutil.get_terminal_size().columns < root_help.MIN_COLUMNS:
+        return None
+    return root_help.TEXT
 
 
 def _command_named(args: list[str]) -> str | None:
@@ -226,8 +253,15 @@ def _main() -> None:
                 from clearcli.commands.options import ray_argv  # noqa: PLC0415  (typer, after hold())
 
                 sys.argv = ray_argv(sys.argv)
-            app = make_app(_command_named(sys.argv[1:]))
-            app(prog_name=Path(sys.argv[0]).name or "clear")
+            prog_name = Path(sys.argv[0]).name or "clear"
+            recorded = _recorded_root_help(sys.argv[1:], prog_name)
+            if recorded is not None:
+                # as click's echo: written and flushed (a closed stdout shows here)
+                sys.stdout.write(recorded)
+                sys.stdout.flush()
+            else:
+                app = make_app(_command_named(sys.argv[1:]))
+                app(prog_name=prog_name)
         finally:
             if not _stdout_pacified():
                 sys.stdout.flush()  # a full disk shows here, not at the interpreter's exit

@@ -1,17 +1,21 @@
-"""`clear` does not run NumPy's test and build tooling that SciPy's array-API layer imports
-(clearcli/cli.py DEFERRED_MODULES), and code that uses them still gets them."""
+"""Start-up: `clear` does not run NumPy's test and build tooling that SciPy's array-API
+layer imports (clearcli/cli.py DEFERRED_MODULES), and code that uses them still gets them;
+`clear --help` is printed from its recording, identical to the app's."""
 
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
 
+import pytest
 from helpers import FIXTURES, REPO, run_clear
 from helpers.batch import hooked_env
 
-from clearcli.cli import DEFERRED_MODULES
+from clearcli.cli import DEFERRED_MODULES, render_root_help
+from clearcli.commands import registry, root_help
 
 # In the child before clear's main: at exit, which deferred modules ran their code.
 _HOOK = """
@@ -60,3 +64,74 @@ print("ok")
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO, timeout=120)
     assert res.returncode == 0, res.stderr
     assert res.stdout.strip() == "ok"
+
+
+# `clear --help` printed from its recording (clearcli/commands/root_help.py) without
+# importing typer or any command module: identical to what the app prints, wherever used.
+
+_APP_HELP = """
+import sys
+from clearcli.cli import make_app
+make_app()(prog_name=sys.argv[1], args=["--help"])
+"""
+
+
+def _app_help(prog_name: str, columns: int) -> str:
+    """What the app itself prints for --help (the recording bypassed), in a child."""
+    env = dict(os.environ, COLUMNS=str(columns))
+    res = subprocess.run(
+        [sys.executable, "-c", _APP_HELP, prog_name], capture_output=True, text=True, cwd=REPO, env=env, timeout=120
+    )
+    assert res.returncode == 0, res.stderr
+    return res.stdout
+
+
+def test_the_recorded_help_is_what_the_app_prints() -> None:
+    assert root_help.TEXT == _app_help("clear", 80) == _app_help("clear", 200), (
+        "the root help changed: re-record it with `python tests/cli/record_root_help.py`"
+    )
+    assert render_root_help() == root_help.TEXT
+    assert "Commands:" in root_help.TEXT and all(name in root_help.TEXT for name in registry.NAMES)
+
+
+def _help_hooked(tmp_path: Path, *args: str, **env: str) -> tuple[subprocess.CompletedProcess[str], dict]:
+    report = tmp_path / "report.json"
+    child_env = hooked_env(tmp_path, _MODULES_HOOK)
+    child_env.pop("COLUMNS", None)
+    child_env.update(env, CLEAR_TEST_REPORT=str(report))
+    res = run_clear(*args, timeout=120, env=child_env)
+    return res, json.loads(report.read_text())
+
+
+_MODULES_HOOK = """
+import atexit, json, os, sys
+atexit.register(lambda: json.dump(
+    {"typer": "typer" in sys.modules, "commands": sorted(m for m in sys.modules if m.startswith("clearcli.commands."))},
+    open(os.environ["CLEAR_TEST_REPORT"], "w")))
+"""
+
+
+@pytest.mark.parametrize("columns", [None, "80", "200"])
+def test_help_is_printed_from_the_recording(tmp_path: Path, columns: str | None) -> None:
+    res, loaded = _help_hooked(tmp_path, "--help", **({"COLUMNS": columns} if columns else {}))
+    assert (res.returncode, res.stdout, res.stderr) == (0, root_help.TEXT, "")
+    assert loaded == {"typer": False, "commands": ["clearcli.commands.registry", "clearcli.commands.root_help"]}
+
+
+def test_a_narrow_terminal_gets_the_apps_own_help(tmp_path: Path) -> None:
+    res, loaded = _help_hooked(tmp_path, "--help", COLUMNS="60")
+    assert res.returncode == 0 and res.stdout == _app_help("clear", 60) != root_help.TEXT
+    assert max(len(line) for line in res.stdout.splitlines()) <= 58  # click's width there: 60 - 2
+    assert loaded["typer"] is True
+
+
+def test_help_of_a_command_or_a_completion_request_goes_through_the_app(tmp_path: Path) -> None:
+    res, loaded = _help_hooked(tmp_path, "plan", "--help")
+    assert res.returncode == 0 and res.stdout.startswith("Usage: clear plan [OPTIONS]")
+    assert loaded["typer"] is True and "clearcli.commands.plan" in loaded["commands"]
+    (tmp_path / "completion").mkdir()
+    res, loaded = _help_hooked(
+        tmp_path / "completion", "--help", _CLEAR_COMPLETE="complete_bash", COMP_WORDS="clear pl", COMP_CWORD="1"
+    )
+    assert res.returncode == 0 and res.stdout.split() == ["plan"]
+    assert loaded["typer"] is True
