@@ -1,0 +1,79 @@
+"""Issue 37's bad input on the command line, as a user runs `clear`: a frame with no
+support surface holding anything (exit 4, one line naming the surfaces considered), and
+a frame where everything above the support is excluded (an arm filling the view:
+`segment` gives an empty object list with the reasons, exit 0; `plan` its documented
+code for an empty table, 0, "nothing to do")."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from clearcli.errors import EXIT_CODES, EXIT_OK, EXIT_SCENE
+from clearcli.io.pcd import write_pcd
+from clearcli.sim.camera import render
+from clearcli.sim.families import FURNITURE_ID, SUPPORT_FAMILIES, support_frame
+from clearcli.sim.scene import make_scene
+
+
+def _clear(*args: str) -> subprocess.CompletedProcess[str]:
+    """The installed entry point, without CLEAR_DEBUG (under which an internal error
+    prints its traceback on purpose)."""
+    exe = Path(sys.executable).parent / "clear"
+    cmd = [str(exe)] if exe.exists() else [sys.executable, "-m", "clearcli.cli"]
+    env = {k: v for k, v in os.environ.items() if k != "CLEAR_DEBUG"}
+    res = subprocess.run([*cmd, *args], capture_output=True, text=True, timeout=300, env=env)
+    assert "Traceback" not in res.stderr, res.stderr
+    assert res.returncode in EXIT_CODES, (res.returncode, res.stderr)
+    return res
+
+
+def _json(res: subprocess.CompletedProcess[str]) -> dict[str, Any]:
+    return json.loads(res.stdout.strip().splitlines()[-1])
+
+
+def test_no_support_surface_is_exit_4_in_one_line_naming_the_surfaces_considered(tmp_path: Path) -> None:
+    # a strip of table 15 pixels tall (a few cm): planes, none of table size
+    frame = support_frame("mat_on_table", 2)
+    keep = np.zeros(frame.shape, dtype=bool)
+    keep[300:315, :] = True
+    pts = frame.points.copy()
+    pts[~keep.ravel()] = np.nan
+    src = tmp_path / "strip.pcd"
+    write_pcd(src, dataclasses.replace(frame, points=pts))
+    for command in ("segment", "plan"):
+        res = _clear(command, str(src))
+        assert res.returncode == EXIT_SCENE, (command, res.returncode, res.stderr)
+        lines = res.stderr.strip().splitlines()
+        assert len(lines) == 1, res.stderr
+        assert "surfaces considered:" in lines[0] and "m^2 at" in lines[0], lines[0]
+
+
+def test_everything_excluded_is_an_empty_object_list_with_the_reasons(tmp_path: Path) -> None:
+    # only the arm of arm_entering(0), reaching in over the table's edge, and nothing else
+    scene = SUPPORT_FAMILIES["arm_entering"](0)
+    arm_only = make_scene("arm only", [o for o in scene.objects if o.object_id >= FURNITURE_ID])
+    src = tmp_path / "arm.pcd"
+    write_pcd(src, render(arm_only, seed=0))
+    res = _clear("segment", str(src), "--json")
+    assert res.returncode == EXIT_OK, res.stderr
+    doc = _json(res)
+    assert doc["objects"] == []
+    assert doc["excluded"] and all(e["reason"] and e["points"] > 0 for e in doc["excluded"])
+    assert any("reaches in from beyond the support's outline" in e["reason"] for e in doc["excluded"])
+    # the text output says so too
+    res = _clear("segment", str(src))
+    assert res.returncode == EXIT_OK, res.stderr
+    assert "0 object(s)" in res.stdout and "excluded" in res.stdout and "an arm" in res.stdout
+    # plan: nothing on the table to clear, exit 0 (documented: "an empty table included")
+    res = _clear("plan", str(src), "--json")
+    assert res.returncode == EXIT_OK, res.stderr
+    plan = _json(res)
+    assert plan["status"] == "complete" and plan["actions"] == [] and plan["left"] == []
