@@ -35,7 +35,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from clearcli.geometry.poses import _pose
-from clearcli.geometry.suction import MAX_POINTS, CupSpec, Judged, judge_object, volume_above
+from clearcli.geometry.suction import MAX_POINTS, CupSpec, Judged, bounds, in_box, judge_object, volume_above
 from clearcli.predicates.grasps.base import KindFacts, KindModule, Offer, Scene, SimWorld
 
 if TYPE_CHECKING:
@@ -78,6 +78,15 @@ def swept_mask(
         (w > s.stem_length_m) & (w <= s.stem_length_m + s.body_length_m + approach_m) & (radial2 <= s.body_radius_m**2)
     )
     return stem | body
+
+
+def swept_radius_m(s: SuctionSettings, approach_m: float) -> float:
+    """How far from the contact a point of the tool's swept volume can lie (its farthest
+    corner, and a micrometre for rounding): a box this far around the contacts holds
+    every point `swept_mask` can find."""
+    length = max(s.stem_length_m + approach_m, s.stem_length_m + s.body_length_m + approach_m)
+    across = max(s.cup_diameter_m / 2.0 + STEM_CLEARANCE_M, s.body_radius_m)
+    return math.hypot(length, across) + 1e-6
 
 
 def contact_poses(
@@ -127,8 +136,9 @@ class SuctionGrasp(KindModule):
         pts = [p[:: max(1, math.ceil(len(p) / MAX_POINTS))] for p in full]
         empty = np.zeros((0, 3))
         m = min(n, len(pts))
-        b_lo = np.array([p.min(axis=0) if len(p) else np.full(3, np.inf) for p in pts[:m]]).reshape(-1, 3)
-        b_hi = np.array([p.max(axis=0) if len(p) else np.full(3, -np.inf) for p in pts[:m]]).reshape(-1, 3)
+        box = [bounds(p) if len(p) else (np.full(3, np.inf), np.full(3, -np.inf)) for p in pts[:m]]
+        b_lo = np.array([b[0] for b in box]).reshape(-1, 3)
+        b_hi = np.array([b[1] for b in box]).reshape(-1, 3)
         # how far from an object another can be under the cup or in the tool's way: the
         # body's radius across, the tool's length and the approach along the normal
         reach = max(s.body_radius_m, s.cup_diameter_m) + s.stem_length_m + s.body_length_m + approach_m
@@ -153,14 +163,14 @@ class SuctionGrasp(KindModule):
         # the neighbours' points every BLOCK_STRIDE-th, once (an object in the tool's way
         # shows with hundreds of points; a stride by index moves with no rounding)
         sample = [p[::BLOCK_STRIDE] for p in full[:m]]
-        cloud_all = np.concatenate(sample) if sample else empty
-        labels_all = np.concatenate([np.full(len(p), j) for j, p in enumerate(sample)]) if sample else np.zeros(0, int)
+        s_box = [bounds(p) if len(p) else (np.full(3, np.inf), np.full(3, -np.inf)) for p in sample]
+        swept_r = swept_radius_m(s, approach_m)
         out: list[Offer] = []
         for i, g in enumerate(scene.objects):
             own = pts[i] if i < len(pts) else empty
             close = (
                 [
-                    pts[j][np.all((pts[j] >= b_lo[i] - seal_reach) & (pts[j] <= b_hi[i] + seal_reach), axis=1)]
+                    pts[j][in_box(pts[j], b_lo[i] - seal_reach, b_hi[i] + seal_reach)]
                     for j in np.flatnonzero(close_all[i])
                 ]
                 if i < m
@@ -200,23 +210,31 @@ class SuctionGrasp(KindModule):
             if judged.best is None:
                 out.append(Offer(why_not=judged.why_not(spec)))
                 continue
-            # the neighbours' sampled points within the tool's reach of this object
-            if i < m and len(cloud_all):
-                near = near_all[i][labels_all] & np.all(
-                    (cloud_all >= b_lo[i] - reach) & (cloud_all <= b_hi[i] + reach), axis=1
-                )
-                cloud, labels = cloud_all[near], labels_all[near]
-            else:
-                cloud, labels = empty, np.zeros(0, int)
-            best, blockers = judged.best, frozenset[int]()
+            # the neighbours' sampled points within the tool's reach of this object and
+            # near enough the kept places to be in the tool's volume at one of them
+            pieces: list[np.ndarray] = []
+            owners: list[np.ndarray] = []
+            if i < m and len(judged.points):
+                a_lo, a_hi = bounds(judged.points)
+                lo = np.maximum(b_lo[i] - reach, a_lo - swept_r)
+                hi = np.minimum(b_hi[i] + reach, a_hi + swept_r)
+                for j in np.flatnonzero(near_all[i]):
+                    if np.all(s_box[j][0] <= hi) and np.all(s_box[j][1] >= lo):
+                        pieces.append(sample[j][in_box(sample[j], lo, hi)])
+                        owners.append(np.full(len(pieces[-1]), j))
+            cloud = np.concatenate(pieces) if pieces else empty
+            labels = np.concatenate(owners) if owners else np.zeros(0, int)
             # up to 8 places that seal and hold, best first: the first that nothing
-            # blocks ends the search
-            for rank, c in enumerate(judged.iter_ranked()):
-                hit = frozenset(int(j) for j in np.unique(labels[swept_mask(cloud, c.point, c.normal, s, approach_m)]))
+            # blocks ends the search, else the one fewest do
+            pick, blockers = 0, frozenset[int]()
+            for rank in range(len(judged.order)):
+                inside = swept_mask(cloud, judged.points[rank], judged.normals[rank], s, approach_m)
+                hit = frozenset(int(j) for j in np.unique(labels[inside]))
                 if rank == 0 or len(hit) < len(blockers):
-                    best, blockers = c, hit
+                    pick, blockers = rank, hit
                 if not blockers:
                     break
+            best = judged.best if pick == 0 or judged.make is None else judged.make(judged.order[pick])
             across = np.array([g.axes2d[0][0], g.axes2d[0][1], 0.0]) if best.face == "top" else UP
             out.append(
                 Offer(
