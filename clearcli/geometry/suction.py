@@ -558,7 +558,16 @@ def hull_volume_and_centroid(vertices: np.ndarray, faces: np.ndarray) -> tuple[f
     """A closed, outward triangle mesh's volume and centre of volume (the divergence
     theorem over tetrahedra from the origin)."""
     a, b, c = vertices[faces[:, 0]], vertices[faces[:, 1]], vertices[faces[:, 2]]
-    v6 = np.einsum("ij,ij->i", a, np.cross(b, c))
+    # b x c per column (np.cross's own products, without its ~20 us of set-up)
+    bxc = np.stack(
+        [
+            b[:, 1] * c[:, 2] - b[:, 2] * c[:, 1],
+            b[:, 2] * c[:, 0] - b[:, 0] * c[:, 2],
+            b[:, 0] * c[:, 1] - b[:, 1] * c[:, 0],
+        ],
+        axis=1,
+    )
+    v6 = np.einsum("ij,ij->i", a, bxc)
     vol6 = float(v6.sum())
     if vol6 <= 0:
         return 0.0, vertices.mean(axis=0)
