@@ -3,6 +3,7 @@
     .venv/bin/python benchmarks/suction.py                      # mOSD (50) and uois (9)
     .venv/bin/python benchmarks/suction.py --set mosd --limit 10
     .venv/bin/python benchmarks/suction.py --profiles panda,panda-hybrid
+    .venv/bin/python benchmarks/suction.py --ratio               # the predicates stage's cost
 
 Each frame is segmented once (the default settings), then planned by `clear plan`'s own
 stages for each profile with its default grasp kinds (panda: pinch, rim, slide;
@@ -17,11 +18,20 @@ Sets: ``mosd``: the 50 shared mOSD Kinect frames (learn and test); ``uois``: the
 RealSense frames of ../shared/data/scenes/uois_realsense. The defaults of [suction] were
 set from the makers' and YCB's figures (clearcli/settings/suction.py), not from these
 frames; the seal tests' thresholds were looked at on mOSD learn only.
+
+``--ratio``: the predicates stage (`compute_state`, models reused: each profile run once
+first) on mOSD test57 and the 50 mOSD frames, panda-hybrid against panda, the two
+interleaved frame by frame in one run so that the machine's other work weighs on both
+alike; per frame the minimum of ``--repeat`` runs (wall and CPU time); printed: test57's
+ratio, and over the mOSD frames the ratio of the summed minima and the median of the
+per-frame ratios (issue 36's target: test57 at most 1.3).
 """
 
 from __future__ import annotations
 
 import argparse
+import math
+import os
 import re
 import statistics
 import sys
@@ -56,12 +66,61 @@ def _why(detail: str) -> str:
     return text[:40]
 
 
+def ratio(paths: list[Path], repeat: int) -> None:
+    """The predicates stage, panda-hybrid against panda, per frame (see the module)."""
+    from clearcli import pipeline
+    from clearcli.io.read import read_frame
+    from clearcli.predicates.state_builder import compute_state
+    from clearcli.settings import Settings
+    from clearcli.settings.tree import load_settings
+
+    fingers = load_settings(None, ["robot.name=panda"])
+    hybrid = load_settings(None, ["robot.name=panda-hybrid"])
+    rows = []
+    for p in paths:
+        frame = read_frame(p)
+        seg = pipeline.segmented(frame, Settings())
+        best: dict[str, list[float]] = {"panda": [math.inf, math.inf], "panda-hybrid": [math.inf, math.inf]}
+        for settings in (fingers, hybrid):  # the first run of each: imports, caches
+            compute_state(frame, seg, settings)
+        for _ in range(repeat):
+            for name, settings in (("panda", fingers), ("panda-hybrid", hybrid)):
+                t0, c0 = time.perf_counter(), time.process_time()
+                compute_state(frame, seg, settings)
+                wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+                best[name] = [min(best[name][0], wall), min(best[name][1], cpu)]
+        rows.append((p.stem, best["panda"], best["panda-hybrid"]))
+    load = os.getloadavg()
+    print(f"load average {load[0]:.2f}; minimum of {repeat} runs per frame and profile, panda / panda-hybrid")
+    for stem, f, h in rows:
+        if stem == "test57":
+            print(
+                f"  test57: wall {f[0]:.3f} -> {h[0]:.3f} s ({h[0] / f[0]:.2f}x), "
+                f"CPU {f[1]:.3f} -> {h[1]:.3f} s ({h[1] / f[1]:.2f}x)"
+            )
+    for k, what in ((0, "wall"), (1, "CPU")):
+        fs = [f[k] for _, f, _ in rows]
+        hs = [h[k] for _, _, h in rows]
+        print(
+            f"  {len(rows)} frames, {what}: median {statistics.median(fs):.3f} -> {statistics.median(hs):.3f} s, "
+            f"summed {sum(hs) / sum(fs):.2f}x, median of the frames' ratios "
+            f"{statistics.median(h / f for f, h in zip(fs, hs)):.2f}x, largest {max(h / f for f, h in zip(fs, hs)):.2f}x"
+        )
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--set", choices=("mosd", "uois", "all"), default="all")
     ap.add_argument("--limit", type=int, default=None, help="the first N frames of each set")
     ap.add_argument("--profiles", default=",".join(PROFILES))
+    ap.add_argument("--ratio", action="store_true", help="the predicates stage's time, panda-hybrid / panda")
+    ap.add_argument("--repeat", type=int, default=5, help="--ratio: runs per frame and profile (the minimum)")
     args = ap.parse_args()
+    if args.ratio:
+        if args.repeat < 1:
+            ap.error("--repeat: at least 1")
+        ratio(_sets("mosd", args.limit)["mosd"], args.repeat)
+        return
 
     from clearcli import pipeline
     from clearcli.errors import NoPlanError
