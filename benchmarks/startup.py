@@ -123,7 +123,7 @@ def _import_only_argv(modules: list[str]) -> list[str]:
         "try:\n"
         "    from clearcli import cli\n"
         "    cli._single_threaded_numerics()\n"
-        "    cli._defer_numpy_tooling()\n"
+        "    cli._lighten_imports()\n"
         "except (ImportError, AttributeError):\n"
         "    pass\n"
         f"for m in {modules!r}:\n"

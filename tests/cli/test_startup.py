@@ -28,6 +28,8 @@ def _report():
         # type(), not module.__class__: any attribute access would load a lazy module
         state[name] = "absent" if module is None else "deferred" if type(module) is importlib.util._LazyModule else "loaded"
     state["scipy"] = "scipy" in sys.modules
+    array_api = sys.modules.get("scipy._lib._array_api")
+    state["scipy_docs"] = getattr(getattr(array_api, "FunctionDoc", None), "__name__", None)
     with open(os.environ["CLEAR_TEST_REPORT"], "w") as out:
         json.dump(state, out)
 
@@ -44,14 +46,15 @@ def test_segment_leaves_numpy_tooling_unrun(tmp_path: Path) -> None:
     assert json.loads(res.stdout)["schema"] == "clear.segmentation"
     state = json.loads(report.read_text())
     assert state.pop("scipy") is True, "segment did not import SciPy: nothing was checked"
+    assert state.pop("scipy_docs") == "_DocstringKept"  # SciPy's docstrings left unparsed
     assert state == dict.fromkeys(DEFERRED_MODULES, "deferred")
 
 
 def test_deferred_modules_load_whole_on_use() -> None:
     code = """
 import importlib.util, sys
-from clearcli.cli import _defer_numpy_tooling
-_defer_numpy_tooling()
+from clearcli.cli import _lighten_imports
+_lighten_imports()
 import scipy.sparse
 assert type(sys.modules["numpy.testing"]) is importlib.util._LazyModule
 import numpy as np
@@ -64,6 +67,41 @@ print("ok")
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO, timeout=120)
     assert res.returncode == 0, res.stderr
     assert res.stdout.strip() == "ok"
+
+
+def test_scipy_keeps_its_docstrings_unparsed_and_works() -> None:
+    """SciPy's array-API decorator leaves each docstring as it is (clearcli/cli.py
+    _DocstringKept): the text whole, its capability table filled, the functions the same."""
+    code = """
+import json, sys
+from clearcli.cli import _lighten_imports
+_lighten_imports()
+import numpy as np
+import scipy.linalg, scipy.ndimage, scipy.spatial, scipy.special
+from scipy._lib import _array_api
+labels, n = scipy.ndimage.label(np.array([[1, 0, 1], [1, 0, 0]]))
+hull = scipy.spatial.ConvexHull(np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [0.2, 0.2]]))
+print(json.dumps({
+    "kept": _array_api.FunctionDoc.__name__,
+    "table": len(_array_api.xp_capabilities_table),
+    "doc": scipy.ndimage.label.__doc__,
+    "results": [labels.tolist(), n, sorted(hull.vertices.tolist()), float(scipy.special.gamma(5.0))],
+}))
+"""
+    kept = json.loads(_run_python(code))
+    plain = json.loads(_run_python(code.replace("_lighten_imports()", "")))
+    assert (kept["kept"], plain["kept"]) == ("_DocstringKept", "FunctionDoc")
+    assert kept["results"] == plain["results"] == [[[1, 0, 2], [1, 0, 0]], 2, [0, 1, 2], 24.0]
+    assert kept["table"] == plain["table"] > 100
+    assert kept["doc"].startswith("Label features in an array.") and "Parameters\n    ----------" in kept["doc"]
+    # what is dropped: numpydoc's re-rendering and its note on array-API support
+    assert "Array API Standard Support" in plain["doc"] and "Array API Standard Support" not in kept["doc"]
+
+
+def _run_python(code: str) -> str:
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO, timeout=120)
+    assert res.returncode == 0, res.stderr
+    return res.stdout
 
 
 # `clear --help` printed from its recording (clearcli/commands/root_help.py) without
