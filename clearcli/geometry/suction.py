@@ -163,6 +163,11 @@ class Disc:
     pinv: np.ndarray  # (6, K)
 
     @functools.cached_property
+    def pad(self) -> int:
+        """The height maps' margin: one cell beyond the disc's reach."""
+        return int(np.abs(self.offsets).max()) + 1
+
+    @functools.cached_property
     def steps(self) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
         """Per direction of `disc_neighbours` (in its order): the disc's cells whose
         neighbour that way lies in the disc, and those neighbours."""
@@ -204,6 +209,11 @@ class FaceFrame:
     e1: np.ndarray
     e2: np.ndarray
     n: np.ndarray
+
+    @functools.cached_property
+    def basis(self) -> np.ndarray:
+        """(2, 3) e1 and e2."""
+        return np.stack([self.e1, self.e2])
 
 
 def bounds(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -348,13 +358,13 @@ def judge_face(
         return None
     cell = spec.gap_m
     r = spec.radius_m
-    basis = np.stack([frame.e1, frame.e2])
+    basis = frame.basis
     uv = own @ basis.T
     w = own @ frame.n
     ij = np.floor(uv / cell).astype(np.int64)
     d = disc(r, cell)
     offsets = d.offsets
-    pad = int(np.abs(offsets).max()) + 1
+    pad = d.pad
     # per column: a reduction along axis 0 of an (n, 2) array is several times slower
     lo = np.array([ij[:, 0].min(), ij[:, 1].min()]) - pad
     shape = np.array([ij[:, 0].max(), ij[:, 1].max()]) - lo + pad + 1
@@ -380,15 +390,18 @@ def judge_face(
         if inside.any():
             theirs = _outermost(oij[inside, 0] * shape[1] + oij[inside, 1], (others @ frame.n)[inside], theirs.size)
     ci, cj = np.divmod(cells, shape[1])
-    centre_uv = (np.stack([ci, cj], axis=1) + lo + 0.5) * cell
     # places every other cell (8 mm apart, on the grid of the face's frame itself, so a
     # shifted object does not shift its places): a quarter of the work, and a cup of
     # 30 mm loses nothing between them
-    on_grid = ((ci + lo[0]) % PLACE_STRIDE == 0) & ((cj + lo[1]) % PLACE_STRIDE == 0)
-    keep = on_grid & (centre_uv[:, 1] >= e2_range[0]) & (centre_uv[:, 1] <= e2_range[1])
-    if not keep.any():
+    keep = ((ci + lo[0]) % PLACE_STRIDE == 0) & ((cj + lo[1]) % PLACE_STRIDE == 0)
+    if math.isfinite(e2_range[0]) or math.isfinite(e2_range[1]):
+        e2 = (cj + lo[1] + 0.5) * cell  # the centre's e2, as centre_uv has it below
+        keep &= (e2 >= e2_range[0]) & (e2 <= e2_range[1])
+    keep = np.flatnonzero(keep)
+    if not len(keep):
         return None
-    ci, cj, centre_uv = ci[keep], cj[keep], centre_uv[keep]
+    ci, cj = ci[keep], cj[keep]
+    centre_uv = (np.stack([ci, cj], axis=1) + lo + 0.5) * cell
     window = (ci[:, None] + offsets[None, :, 0]) * shape[1] + (cj[:, None] + offsets[None, :, 1])
     H = height[window]  # (N, K)
     covered = np.isfinite(H)  # a point there, or hidden by what stands on the object
@@ -482,8 +495,9 @@ class FacePlaces:
     def __len__(self) -> int:
         return len(self.points)
 
-    @property
+    @functools.cached_property
     def seal(self) -> np.ndarray:
+        """(N,) the smallest of each place's margins (once: it is asked for twice)."""
         return self.margins.min(axis=1)
 
     def contact(self, k: int) -> Contact:
@@ -602,14 +616,22 @@ def volume_above(
     return volume - below, (centre * volume - c_below * below) / (volume - below)
 
 
-def face_frames(axes2d: np.ndarray) -> list[FaceFrame]:
-    """The top, then the four sides across the footprint's axes (outward)."""
-    out = [FaceFrame("top", np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]), UP.copy())]
+TOP_FRAME = FaceFrame("top", np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]), UP.copy())
+
+
+def side_frames(axes2d: np.ndarray) -> Iterator[FaceFrame]:
+    """The four sides across the footprint's axes (outward), each made as it is reached
+    (the sides are seldom searched)."""
     for axis in (axes2d[0], axes2d[1], -axes2d[0], -axes2d[1]):
         u = np.array([axis[0], axis[1], 0.0])
         u /= np.linalg.norm(u)
-        out.append(FaceFrame("side", np.array([-u[1], u[0], 0.0]), UP.copy(), u))
-    return out
+        yield FaceFrame("side", np.array([-u[1], u[0], 0.0]), UP.copy(), u)
+
+
+def face_frames(axes2d: np.ndarray) -> Iterator[FaceFrame]:
+    """The top, then the four sides across the footprint's axes (outward)."""
+    yield TOP_FRAME
+    yield from side_frames(axes2d)
 
 
 def judge_object(

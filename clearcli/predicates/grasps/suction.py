@@ -70,13 +70,19 @@ def swept_mask(
     out = np.zeros(len(points), dtype=bool)
     if not len(points):
         return out
-    # first the depth along the normal alone (one matrix-vector product), a micrometre
-    # wide of the volume's ends: most points lie beside the tool, and only those left
-    # are tested as below
+    # first the box around the volume in the contact's own axes (one matrix product: the
+    # depth along the normal and two directions across it), a micrometre wide: most
+    # points lie beside the tool, and only those left are tested as below
     w_min = min(s.bellows_compliance_m, s.stem_length_m)
     w_max = max(s.stem_length_m + approach_m, s.stem_length_m + s.body_length_m + approach_m)
-    depth = points @ normal - float(point @ normal)
-    maybe = np.flatnonzero((depth > w_min - 1e-6) & (depth <= w_max + 1e-6))
+    across = max(s.cup_diameter_m / 2.0 + STEM_CLEARANCE_M, s.body_radius_m) + 1e-6
+    a = _cross(normal, np.array([1.0, 0.0, 0.0]) if abs(normal[0]) < 0.9 else np.array([0.0, 1.0, 0.0]))
+    a = a / np.linalg.norm(a)
+    axes = np.stack([normal, a, _cross(normal, a)])
+    q = points @ axes.T - axes @ point
+    maybe = np.flatnonzero(
+        (q[:, 0] > w_min - 1e-6) & (q[:, 0] <= w_max + 1e-6) & (np.abs(q[:, 1]) <= across) & (np.abs(q[:, 2]) <= across)
+    )
     rel = points[maybe] - point
     w = rel @ normal
     radial2 = np.einsum("ij,ij->i", rel, rel) - w * w
