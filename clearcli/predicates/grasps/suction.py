@@ -95,13 +95,17 @@ def swept_mask(
     return out
 
 
-def swept_radius_m(s: SuctionSettings, approach_m: float) -> float:
-    """How far from the contact a point of the tool's swept volume can lie (its farthest
-    corner, and a micrometre for rounding): a box this far around the contacts holds
-    every point `swept_mask` can find."""
-    length = max(s.stem_length_m + approach_m, s.stem_length_m + s.body_length_m + approach_m)
+def swept_boxes(at: np.ndarray, normals: np.ndarray, s: SuctionSettings, approach_m: float) -> np.ndarray:
+    """(C, 2, 3) the box (table frame: smallest, largest corner) around the tool's swept
+    volume at each of C contacts (``at``, outward ``normals``), a micrometre wide: a
+    cylinder along the normal as long as the stem and the body, as wide as the wider
+    (its end discs reach sqrt(1 - n_k^2) times the radius along axis k)."""
+    w_min = min(s.bellows_compliance_m, s.stem_length_m)
+    w_max = max(s.stem_length_m + approach_m, s.stem_length_m + s.body_length_m + approach_m)
     across = max(s.cup_diameter_m / 2.0 + STEM_CLEARANCE_M, s.body_radius_m)
-    return math.hypot(length, across) + 1e-6
+    a, b = at + w_min * normals, at + w_max * normals
+    r = across * np.sqrt(np.clip(1.0 - normals * normals, 0.0, 1.0)) + 1e-6
+    return np.stack([np.minimum(a, b) - r, np.maximum(a, b) + r], axis=1)
 
 
 def contact_poses(
@@ -179,7 +183,6 @@ class SuctionGrasp(KindModule):
         # shows with hundreds of points; a stride by index moves with no rounding)
         sample = [p[::BLOCK_STRIDE] for p in full[:m]]
         s_box = [bounds(p) if len(p) else (np.full(3, np.inf), np.full(3, -np.inf)) for p in sample]
-        swept_r = swept_radius_m(s, approach_m)
         out: list[Offer] = []
         for i, g in enumerate(scene.objects):
             own = pts[i] if i < len(pts) else empty
@@ -230,9 +233,9 @@ class SuctionGrasp(KindModule):
             pieces: list[np.ndarray] = []
             owners: list[np.ndarray] = []
             if i < m and len(judged.points):
-                a_lo, a_hi = bounds(judged.points)
-                lo = np.maximum(b_lo[i] - reach, a_lo - swept_r)
-                hi = np.minimum(b_hi[i] + reach, a_hi + swept_r)
+                boxes = swept_boxes(judged.points, judged.normals, s, approach_m)
+                lo = np.maximum(b_lo[i] - reach, boxes[:, 0].min(axis=0))
+                hi = np.minimum(b_hi[i] + reach, boxes[:, 1].max(axis=0))
                 for j in np.flatnonzero(near_all[i]):
                     if np.all(s_box[j][0] <= hi) and np.all(s_box[j][1] >= lo):
                         pieces.append(sample[j][in_box(sample[j], lo, hi)])
