@@ -210,8 +210,10 @@ def _single_threaded_numerics() -> None:
 # more (numpy.ma is left alone: SciPy's functions touch it on their first call). Here
 # importing one of them only creates the module; its code runs at the first use of one
 # of its attributes (the standard library's importlib.util.LazyLoader), so code that does
-# use them gets them whole.
-DEFERRED_MODULES = frozenset({"numpy.f2py", "numpy.testing", "numpy.polynomial"})
+# use them gets them whole. scipy.spatial imports its rotations (scipy.spatial.transform,
+# ~20 ms on a quiet machine) with `from . import transform`; clear uses its trees and
+# hulls only.
+DEFERRED_MODULES = frozenset({"numpy.f2py", "numpy.testing", "numpy.polynomial", "scipy.spatial.transform"})
 
 
 class _DocstringKept:

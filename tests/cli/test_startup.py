@@ -62,6 +62,10 @@ from numpy.testing import assert_allclose
 assert_allclose(np.polynomial.Polynomial([1.0, 2.0])(3.0), 7.0)
 assert type(sys.modules["numpy.testing"]) is not importlib.util._LazyModule
 assert "unittest" in sys.modules
+import scipy.spatial
+assert type(sys.modules["scipy.spatial.transform"]) is importlib.util._LazyModule
+from scipy.spatial.transform import Rotation
+assert abs(Rotation.from_euler("z", 90, degrees=True).as_matrix()[1, 0] - 1.0) < 1e-12
 print("ok")
 """
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO, timeout=120)
@@ -77,7 +81,7 @@ import json, sys
 from clearcli.cli import _lighten_imports
 _lighten_imports()
 import numpy as np
-import scipy.linalg, scipy.ndimage, scipy.spatial, scipy.special
+import scipy.linalg, scipy.ndimage, scipy.spatial, scipy.spatial.transform, scipy.special
 from scipy._lib import _array_api
 labels, n = scipy.ndimage.label(np.array([[1, 0, 1], [1, 0, 0]]))
 hull = scipy.spatial.ConvexHull(np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [0.2, 0.2]]))
