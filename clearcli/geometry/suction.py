@@ -339,30 +339,40 @@ def hidden_cells(
     return hidden, plane
 
 
-def judge_face(
-    own: np.ndarray,
-    others: np.ndarray,
-    frame: FaceFrame,
-    spec: CupSpec,
-    e2_range: tuple[float, float] = (-math.inf, math.inf),
-    hidden_by: np.ndarray | None = None,
-    T_camera_table: np.ndarray | None = None,
-) -> FacePlaces | None:
-    """Every place of one face: the cup centred on each cell of the object's height map
-    in ``frame`` (``own``, ``others``: table-frame points), the cells whose centre's e2
-    lies in ``e2_range`` (a side's heights the tool may take). Judged as the module
-    says; the load is not judged here. Where ``hidden_by`` (what stands on the object,
-    taken first) hides the face from the camera (``T_camera_table``), the face is taken
-    to go on as its plane: those cells are neither holes nor edges (`hidden_cells`)."""
+@dataclass(frozen=True)
+class FaceJob:
+    """One face to judge (`judge_faces`): the object's points, the others' near it, the
+    face's frame, the cup centre's e2 range, and what hides the face from the camera."""
+
+    own: np.ndarray
+    others: np.ndarray
+    frame: FaceFrame
+    e2_range: tuple[float, float] = (-math.inf, math.inf)
+    hidden_by: np.ndarray | None = None
+    T_camera_table: np.ndarray | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class _Grid:
+    """A face's height map as `judge_faces` judges it (flat, ``shape``) and its places."""
+
+    height: np.ndarray  # the cells' heights (NaN: empty)
+    seen: np.ndarray  # the cells the camera saw a point in
+    theirs: np.ndarray  # the others' outermost point per cell (-inf: none)
+    window: np.ndarray  # (N, K) the disc's cells at each place
+    centre_uv: np.ndarray  # (N, 2) the places' cell centres
+
+
+def _grid(job: FaceJob, spec: CupSpec, d: Disc) -> _Grid | None:
+    """The height map of ``job``'s face and its places (None: none)."""
+    own, others, frame, e2_range = job.own, job.others, job.frame, job.e2_range
     if len(own) < 3:
         return None
     cell = spec.gap_m
-    r = spec.radius_m
     basis = frame.basis
     uv = own @ basis.T
     w = own @ frame.n
     ij = np.floor(uv / cell).astype(np.int64)
-    d = disc(r, cell)
     offsets = d.offsets
     pad = d.pad
     # per column: a reduction along axis 0 of an (n, 2) array is several times slower
@@ -374,14 +384,13 @@ def judge_face(
     cells, tops = _mean_per_key(keys, w, int(shape[0] * shape[1]))
     height = np.full(int(shape[0] * shape[1]), np.nan)
     height[cells] = tops
+    seen = np.zeros(height.shape, dtype=bool)
+    seen[cells] = True
+    hidden_by, T_camera_table = job.hidden_by, job.T_camera_table
     if hidden_by is not None and T_camera_table is not None and len(hidden_by):
         hidden, plane = hidden_cells(height, shape, lo, cell, frame, hidden_by, T_camera_table)
         height[hidden] = plane[hidden]
-        seen = np.zeros(height.shape, dtype=bool)
-        seen[cells] = True
         cells = np.flatnonzero(np.isfinite(height))  # a hidden cell is a place too
-    else:
-        seen = None
     # the others' outermost point per cell of the same grid (those within it)
     theirs = np.full(height.shape, -np.inf)
     if len(others):
@@ -403,6 +412,53 @@ def judge_face(
     ci, cj = ci[keep], cj[keep]
     centre_uv = (np.stack([ci, cj], axis=1) + lo + 0.5) * cell
     window = (ci[:, None] + offsets[None, :, 0]) * shape[1] + (cj[:, None] + offsets[None, :, 1])
+    return _Grid(height, seen, theirs, window, centre_uv)
+
+
+def judge_face(
+    own: np.ndarray,
+    others: np.ndarray,
+    frame: FaceFrame,
+    spec: CupSpec,
+    e2_range: tuple[float, float] = (-math.inf, math.inf),
+    hidden_by: np.ndarray | None = None,
+    T_camera_table: np.ndarray | None = None,
+) -> FacePlaces | None:
+    """Every place of one face: the cup centred on each cell of the object's height map
+    in ``frame`` (``own``, ``others``: table-frame points), the cells whose centre's e2
+    lies in ``e2_range`` (a side's heights the tool may take). Judged as the module
+    says; the load is not judged here. Where ``hidden_by`` (what stands on the object,
+    taken first) hides the face from the camera (``T_camera_table``), the face is taken
+    to go on as its plane: those cells are neither holes nor edges (`hidden_cells`)."""
+    return judge_faces([FaceJob(own, others, frame, e2_range, hidden_by, T_camera_table)], spec)[0]
+
+
+def judge_faces(jobs: list[FaceJob], spec: CupSpec) -> list[FacePlaces | None]:
+    """`judge_face` of many faces at once: each face's height map made on its own, then
+    every place of every face judged in one pass (the matrix products per face, as one
+    face alone has them: a product's rounding depends on its rows' count)."""
+    r = spec.radius_m
+    d = disc(r, spec.gap_m)
+    grids = [_grid(job, spec, d) for job in jobs]
+    live = [k for k, g in enumerate(grids) if g is not None]
+    out: list[FacePlaces | None] = [None] * len(jobs)
+    if not live:
+        return out
+    # the faces' height maps end to end, each face's windows shifted to its own
+    grid_list = [g for g in grids if g is not None]
+    base = np.cumsum([0] + [len(g.height) for g in grid_list])
+    height = np.concatenate([g.height for g in grid_list])
+    seen_all = np.concatenate([g.seen for g in grid_list])
+    theirs = np.concatenate([g.theirs for g in grid_list])
+    window = np.concatenate([g.window + b for g, b in zip(grid_list, base)])
+    centre_uv = np.concatenate([g.centre_uv for g in grid_list])
+    counts = [len(g.window) for g in grid_list]
+    ends = np.cumsum([0] + counts)
+    slices = [slice(int(a), int(b)) for a, b in zip(ends[:-1], ends[1:])]
+    frames = [jobs[k].frame for k in live]
+    E1 = np.repeat(np.array([f.e1 for f in frames]), counts, axis=0)
+    E2 = np.repeat(np.array([f.e2 for f in frames]), counts, axis=0)
+    EN = np.repeat(np.array([f.n for f in frames]), counts, axis=0)
     H = height[window]  # (N, K)
     covered = np.isfinite(H)  # a point there, or hidden by what stands on the object
     share = covered.mean(axis=1)
@@ -435,21 +491,30 @@ def judge_face(
     A = d.design  # cell centres relative to the centre cell's
     pinv = d.pinv  # (6, K): the same least squares for every full window
     Hf = np.where(covered_or_filled, filled, 0.0)
-    coef = Hf @ pinv.T
+    coef = np.empty((len(Hf), pinv.shape[0]))
+    fitted = np.empty_like(Hf)
+    for sl in slices:  # per face: see the docstring
+        coef[sl] = Hf[sl] @ pinv.T
+        fitted[sl] = coef[sl] @ A.T
     # the spread only over what the camera saw (a hidden cell sits on the plane)
-    measured = covered if seen is None else seen[window]
-    resid = np.where(measured, Hf - coef @ A.T, 0.0)
+    measured = seen_all[window]
+    resid = np.where(measured, Hf - fitted, 0.0)
     # the 90th percentile by nearest rank (a partition, not a sort)
     rank = int(math.ceil(0.9 * resid.shape[1])) - 1
     spread = np.partition(np.abs(resid), rank, axis=1)[:, rank]
     sag = sags(coef, r)
     grad = coef[:, 1:3]
-    normal = frame.n[None, :] - grad[:, :1] * frame.e1[None, :] - grad[:, 1:2] * frame.e2[None, :]
+    normal = EN - grad[:, :1] * E1 - grad[:, 1:2] * E2
     normal /= np.linalg.norm(normal, axis=1, keepdims=True)
-    tilt = np.degrees(np.arccos(np.clip(normal @ frame.n, -1.0, 1.0)))
+    along = np.empty(len(normal))
+    slope = np.empty_like(Hf)
+    for sl, f in zip(slices, frames):
+        along[sl] = normal[sl] @ f.n
+        slope[sl] = grad[sl] @ A[:, 1:3].T
+    tilt = np.degrees(np.arccos(np.clip(along, -1.0, 1.0)))
     # another object under the disc: its outermost point within the bellows' stroke of
     # the fitted face (farther out it is in the way of the approach: a blocker)
-    surface = coef[:, :1] + grad @ A[:, 1:3].T
+    surface = coef[:, :1] + slope
     intruders = (np.abs(theirs[window] - surface) <= spec.compliance_m).sum(axis=1)
     gaps = empty.sum(axis=1)
     m_cover = np.where(full, 1.0, -np.maximum(hole_cells.sum(axis=1), 1) / covered.shape[1])
@@ -458,21 +523,23 @@ def judge_face(
     m_tilt = 1.0 - tilt / spec.max_tilt_deg
     m_alone = np.where(intruders > 0, -1.0, 1.0)
     margins = np.stack([m_cover, m_sag, m_spread, m_tilt, m_alone], axis=1)
-    points = centre_uv[:, :1] * frame.e1 + centre_uv[:, 1:2] * frame.e2 + coef[:, :1] * frame.n
-    return FacePlaces(
-        frame=frame,
-        points=points,
-        normals=normal,
-        covered=share,
-        empty=gaps,
-        full=full,
-        sag_m=sag,
-        spread_m=spread,
-        tilt_deg=tilt,
-        intruders=intruders,
-        margins=margins,
-        cell_m=cell,
-    )
+    points = centre_uv[:, :1] * E1 + centre_uv[:, 1:2] * E2 + coef[:, :1] * EN
+    for k, sl, f in zip(live, slices, frames):
+        out[k] = FacePlaces(
+            frame=f,
+            points=points[sl],
+            normals=normal[sl],
+            covered=share[sl],
+            empty=gaps[sl],
+            full=full[sl],
+            sag_m=sag[sl],
+            spread_m=spread[sl],
+            tilt_deg=tilt[sl],
+            intruders=intruders[sl],
+            margins=margins[sl],
+            cell_m=spec.gap_m,
+        )
+    return out
 
 
 @dataclass(frozen=True, eq=False)
@@ -634,6 +701,22 @@ def face_frames(axes2d: np.ndarray) -> Iterator[FaceFrame]:
     yield from side_frames(axes2d)
 
 
+@dataclass(frozen=True)
+class ObjectJob:
+    """One object to judge (`judge_objects`; the arguments of `judge_object`)."""
+
+    own: np.ndarray
+    others: np.ndarray
+    axes2d: np.ndarray
+    top_height_m: float
+    mass_kg: float
+    com_table: np.ndarray
+    min_height_m: float
+    hidden_by: np.ndarray | None = None
+    T_camera_table: np.ndarray | None = None
+    skip: frozenset[str] = frozenset()
+
+
 def judge_object(
     own: np.ndarray,
     others: np.ndarray,
@@ -653,37 +736,66 @@ def judge_object(
     points facing its way (those within 1 cm of its outermost), the top on all, where
     ``hidden_by`` (what stands on the object) hides it taken as its plane (`judge_face`);
     the faces named in ``skip`` ("top", "side") are not judged."""
-    faces: list[FacePlaces] = []
+    job = ObjectJob(
+        own, others, axes2d, top_height_m, mass_kg, com_table, min_height_m, hidden_by, T_camera_table, skip
+    )
+    return judge_objects([job], spec)[0]
+
+
+def judge_objects(jobs: list[ObjectJob], spec: CupSpec) -> list[Judged]:
+    """`judge_object` of many objects at once: every top in one pass of `judge_faces`,
+    then the sides of those whose top seals nowhere in another."""
     band = max(spec.compliance_m, 0.01)
-    # at most MAX_POINTS of the object's points, every k-th (by index: a stride moves
-    # with no rounding): ~2 a cell on a 0.3 x 0.2 m top, which a Kinect at 1 m sees with 5
-    own = own[:: max(1, math.ceil(len(own) / MAX_POINTS))]
-    if len(own) and len(others):
-        # only the others near the object can be under a cup on it
-        reach = spec.radius_m + spec.compliance_m + band
-        lo, hi = bounds(own)
-        others = others[in_box(others, lo - reach, hi + reach)]
-    for frame in face_frames(axes2d):
-        if frame.name in skip:  # tried, and the cup did not seal there
+    owns, others_near = [], []
+    for job in jobs:
+        # at most MAX_POINTS of the object's points, every k-th (by index: a stride moves
+        # with no rounding): ~2 a cell on a 0.3 x 0.2 m top, which a Kinect at 1 m sees with 5
+        own, others = job.own[:: max(1, math.ceil(len(job.own) / MAX_POINTS))], job.others
+        if len(own) and len(others):
+            # only the others near the object can be under a cup on it
+            reach = spec.radius_m + spec.compliance_m + band
+            lo, hi = bounds(own)
+            others = others[in_box(others, lo - reach, hi + reach)]
+        owns.append(own)
+        others_near.append(others)
+    faces: list[list[FacePlaces]] = [[] for _ in jobs]
+    tops = [k for k, job in enumerate(jobs) if "top" not in job.skip]  # skipped: tried, no seal
+    judged = judge_faces(
+        [
+            FaceJob(
+                owns[k], others_near[k], TOP_FRAME, (-math.inf, math.inf), jobs[k].hidden_by, jobs[k].T_camera_table
+            )
+            for k in tops
+        ],
+        spec,
+    )
+    for k, places in zip(tops, judged):
+        if places is not None and len(places):
+            faces[k].append(places)
+    sides: list[tuple[int, FaceJob]] = []
+    for k, job in enumerate(jobs):
+        if "side" in job.skip:
             continue
-        if frame.name == "side" and faces and faces[0].frame.name == "top" and bool((faces[0].seal > 0).any()):
+        if faces[k] and bool((faces[k][0].seal > 0).any()):
             # the top seals somewhere: it is the surer grasp (the weight pulls along the
             # cup's axis, not across its lip), and the sides are not searched
-            break
-        if frame.name == "top":
-            mine, e2_range = own, (-math.inf, math.inf)
-        else:
+            continue
+        e2_range = (job.min_height_m, job.top_height_m - spec.radius_m)
+        if e2_range[1] < e2_range[0]:
+            continue
+        own = owns[k]
+        for frame in side_frames(job.axes2d):
             depth = own @ frame.n
             mine = own[depth >= depth.max() - band] if len(own) else own
-            e2_range = (min_height_m, top_height_m - spec.radius_m)
-            if e2_range[1] < e2_range[0]:
-                continue
-        if frame.name == "top":
-            places = judge_face(mine, others, frame, spec, e2_range, hidden_by, T_camera_table)
-        else:
-            places = judge_face(mine, others, frame, spec, e2_range)
+            sides.append((k, FaceJob(mine, others_near[k], frame, e2_range)))
+    for (k, _), places in zip(sides, judge_faces([fj for _, fj in sides], spec)):
         if places is not None and len(places):
-            faces.append(places)
+            faces[k].append(places)
+    return [_judged(faces[k], job.mass_kg, job.com_table, spec) for k, job in enumerate(jobs)]
+
+
+def _judged(faces: list[FacePlaces], mass_kg: float, com_table: np.ndarray, spec: CupSpec) -> Judged:
+    """One object's judged faces' places, ranked by their margins (seal and load)."""
     if not faces:
         return Judged()
     seal = np.concatenate([f.seal for f in faces])

@@ -35,7 +35,16 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from clearcli.geometry.poses import _cross, _pose
-from clearcli.geometry.suction import MAX_POINTS, CupSpec, Judged, bounds, in_box, judge_object, volume_above
+from clearcli.geometry.suction import (
+    MAX_POINTS,
+    CupSpec,
+    Judged,
+    ObjectJob,
+    bounds,
+    in_box,
+    judge_objects,
+    volume_above,
+)
 from clearcli.predicates.grasps.base import KindFacts, KindModule, Offer, Scene, SimWorld
 
 if TYPE_CHECKING:
@@ -183,7 +192,9 @@ class SuctionGrasp(KindModule):
         # shows with hundreds of points; a stride by index moves with no rounding)
         sample = [p[::BLOCK_STRIDE] for p in full[:m]]
         s_box = [bounds(p) if len(p) else (np.full(3, np.inf), np.full(3, -np.inf)) for p in sample]
-        out: list[Offer] = []
+        # every object's places judged at once (`judge_objects`), then each one's offer
+        jobs: dict[int, ObjectJob] = {}
+        masses: dict[int, float] = {}
         for i, g in enumerate(scene.objects):
             own = pts[i] if i < len(pts) else empty
             close = (
@@ -210,21 +221,19 @@ class SuctionGrasp(KindModule):
             hidden_by = np.concatenate(above) if above else None
             skip = scene.avoid_faces.get(i, frozenset())
             if skip >= frozenset(self.faces):
+                continue
+            masses[i] = mass
+            jobs[i] = ObjectJob(
+                own, others, g.axes2d, g.top_height_m, mass, com, min_side, hidden_by, scene.tf.T_camera_table, skip
+            )
+        all_judged = dict(zip(jobs, judge_objects(list(jobs.values()), spec)))
+        out: list[Offer] = []
+        for i, g in enumerate(scene.objects):
+            if i not in all_judged:
                 out.append(Offer(why_not="the cup did not seal on any of its faces (top, sides) when tried"))
                 continue
-            judged: Judged = judge_object(
-                own,
-                others,
-                g.axes2d,
-                g.top_height_m,
-                mass,
-                com,
-                spec,
-                min_side,
-                hidden_by,
-                scene.tf.T_camera_table,
-                skip,
-            )
+            judged: Judged = all_judged[i]
+            mass = masses[i]
             if judged.best is None:
                 out.append(Offer(why_not=judged.why_not(spec)))
                 continue
