@@ -6,6 +6,12 @@
     .venv/bin/python benchmarks/foreign.py --part choose --set segment.color_importance=0.5
     .venv/bin/python benchmarks/foreign.py --show uois_image_0003 [--out picture.png]
     .venv/bin/python benchmarks/foreign.py --grid uois_image_0003   # the colour image with a pixel grid, to label
+                                                    # (any frame under ../shared/data/scenes/*/ by name)
+
+Frames: uois_realsense (9), PCL's two tabletop frames, gqcnn (7: a YuMi cell's foam board,
+two PhoXi bins whose floor is the support) and cleargrasp_d435 (4, 1280x720, transparent
+objects); each source's frames sorted by name alternate choose, report, choose... (the
+uois and PCL frames were split before that rule, see their files).
 
 Labels (benchmarks/foreign/<frame>.toml, written by hand for this project, one file per
 frame): the frame's path under ../shared/data, its part ("choose" or "report"), and per
@@ -120,7 +126,7 @@ def show(name: str, out: Path) -> None:
     objs = spec["object"]
     segments = [np.nonzero(labels == 10 * (k + 1))[0] for k in range(len(objs))]
     image = outlined(frame.colors, frame.shape, segments, [palette(k % 20) for k in range(len(objs))], width_px=2)
-    fig, ax = plt.subplots(figsize=(12.8, 9.6), dpi=100)
+    fig, ax = plt.subplots(figsize=_figsize(*frame.shape), dpi=100)
     ax.imshow(image)
     for k, (obj, seg) in enumerate(zip(objs, segments)):
         poly = np.asarray(obj["polygon"] + obj["polygon"][:1], dtype=float)
@@ -141,6 +147,20 @@ def show(name: str, out: Path) -> None:
     fig.tight_layout()
     fig.savefig(out)
     print(out)
+
+
+def _figsize(h: int, w: int) -> tuple[float, float]:
+    """1280 pixels wide, the frame's aspect: 12.8 x 9.6 in for 640x480 as before, and a
+    1280x720 frame (cleargrasp_d435) at its own pixel size, its grid lines readable."""
+    return 12.8, 12.8 * h / w
+
+
+def _unlabelled(name: str) -> Path:
+    """A frame without a label file yet, found by name under ../shared/data/scenes/*/."""
+    found = sorted((DATA / "scenes").glob(f"*/{name}.pcd"))
+    if not found:
+        raise SystemExit(f"no frame {name}.pcd under {DATA / 'scenes'}")
+    return found[0]
 
 
 def _pixel_grid(ax, h: int, w: int) -> None:
@@ -165,9 +185,9 @@ def grid(name: str, out: Path) -> None:
     )
     from clearcli.io.read import read_frame
 
-    frame = read_frame(DATA / (spec["source"] if spec else f"scenes/uois_realsense/{name}.pcd"))
+    frame = read_frame(DATA / spec["source"] if spec else _unlabelled(name))
     h, w = frame.shape
-    fig, ax = plt.subplots(figsize=(12.8, 9.6), dpi=100)
+    fig, ax = plt.subplots(figsize=_figsize(h, w), dpi=100)
     ax.imshow(frame.colors.reshape(h, w, 3))
     _pixel_grid(ax, h, w)
     fig.tight_layout()
