@@ -291,7 +291,9 @@ def _object_model(
 
 
 def _finite(points: np.ndarray) -> np.ndarray:
-    return points[np.isfinite(points).all(axis=1)]
+    # per column: this NumPy's reduction along axis 1 of an (n, 3) array is several times slower
+    ok = np.isfinite(points)
+    return points[ok[:, 0] & ok[:, 1] & ok[:, 2]]
 
 
 def _detail_to_camera(detail: Any, tf: TableFrame) -> dict[str, Any]:
