@@ -799,7 +799,13 @@ def _judged(faces: list[FacePlaces], mass_kg: float, com_table: np.ndarray, spec
     if not faces:
         return Judged()
     seal = np.concatenate([f.seal for f in faces])
-    load = np.concatenate([load_margins(f, mass_kg, com_table, spec) for f in faces])
+    # the load only where the cup seals (it is read nowhere else): each place's on its own
+    load = np.full(len(seal), np.nan)
+    sealed = np.flatnonzero(seal > 0)
+    if len(sealed):
+        normals = np.concatenate([f.normals for f in faces])[sealed]
+        points = np.concatenate([f.points for f in faces])[sealed]
+        load[sealed] = _load(normals, points, mass_kg, com_table, spec)[3]
     margin = np.where(seal > 0, np.minimum(seal, load), seal)
     which = np.concatenate([np.full(len(f), i) for i, f in enumerate(faces)])
     index = np.concatenate([np.arange(len(f)) for f in faces])
