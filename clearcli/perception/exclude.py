@@ -12,7 +12,8 @@ set aside with the reason, for --json to list as ``excluded``.
   shelf). Or it goes on below the support's level beyond its outline (a desk's face).
   The thing's extent is taken along the frame's pixel grid (neighbouring pixels within
   `_LINK_M` of each other are one surface), not as the crow flies, so a wall or a
-  cupboard behind an object at the edge is not the object's own.
+  cupboard behind an object at the edge is not the object's own. An unorganized cloud
+  has no pixel grid: there only the points touched count, and the rule rarely fires.
 - hangs above the support: its lowest point well above it (more than `_HANG_M` plus the
   range's noise) and the support seen beneath it (in at least `_SEEN_UNDER_SHARE` of the
   cells it covers, the camera sees the support's own points), so nothing it could stand
