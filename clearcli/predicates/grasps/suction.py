@@ -30,6 +30,7 @@ other (each has its own ``ik_unfeasible_*`` fact).
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -76,32 +77,67 @@ def swept_mask(
     """Which of ``points`` (table frame) lie in the volume the tool sweeps coming to the
     contact (``point``, outward ``normal``) from ``approach_m`` out: the stem, then the
     body. Points within the bellows' stroke of the face belong to the seal test."""
-    out = np.zeros(len(points), dtype=bool)
-    if not len(points):
-        return out
-    # first the box around the volume in the contact's own axes (one matrix product: the
-    # depth along the normal and two directions across it), a micrometre wide: most
-    # points lie beside the tool, and only those left are tested as below
+    return next(swept_masks(points, point[None, :], normal[None, :], s, approach_m))
+
+
+def swept_masks(
+    points: np.ndarray, at: np.ndarray, normals: np.ndarray, s: SuctionSettings, approach_m: float
+) -> Iterator[np.ndarray]:
+    """`swept_mask` at each of C contacts (``at``, ``normals``: (C, 3)) in turn, each made
+    as it is reached. First the box around each volume in its contact's own axes (one
+    matrix product for all: the depth along the normal and two directions across it),
+    a micrometre wide: most points lie beside the tool; only those left are tested."""
     w_min = min(s.bellows_compliance_m, s.stem_length_m)
     w_max = max(s.stem_length_m + approach_m, s.stem_length_m + s.body_length_m + approach_m)
     across = max(s.cup_diameter_m / 2.0 + STEM_CLEARANCE_M, s.body_radius_m) + 1e-6
-    a = _cross(normal, np.array([1.0, 0.0, 0.0]) if abs(normal[0]) < 0.9 else np.array([0.0, 1.0, 0.0]))
-    a = a / np.linalg.norm(a)
-    axes = np.stack([normal, a, _cross(normal, a)])
-    q = points @ axes.T - axes @ point
-    maybe = np.flatnonzero(
-        (q[:, 0] > w_min - 1e-6) & (q[:, 0] <= w_max + 1e-6) & (np.abs(q[:, 1]) <= across) & (np.abs(q[:, 2]) <= across)
-    )
-    rel = points[maybe] - point
-    w = rel @ normal
-    radial2 = np.einsum("ij,ij->i", rel, rel) - w * w
     r_stem = s.cup_diameter_m / 2.0 + STEM_CLEARANCE_M
-    stem = (w > s.bellows_compliance_m) & (w <= s.stem_length_m + approach_m) & (radial2 <= r_stem**2)
-    body = (
-        (w > s.stem_length_m) & (w <= s.stem_length_m + s.body_length_m + approach_m) & (radial2 <= s.body_radius_m**2)
+    if not len(points) or not len(at):
+        for _ in range(len(at)):
+            yield np.zeros(len(points), dtype=bool)
+        return
+    # per contact: the normal, a unit direction across it, and the third
+    n = normals
+    ref = np.where((np.abs(n[:, 0]) < 0.9)[:, None], np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]))
+    a = np.stack(
+        [
+            n[:, 1] * ref[:, 2] - n[:, 2] * ref[:, 1],
+            n[:, 2] * ref[:, 0] - n[:, 0] * ref[:, 2],
+            n[:, 0] * ref[:, 1] - n[:, 1] * ref[:, 0],
+        ],
+        axis=1,
     )
-    out[maybe] = stem | body
-    return out
+    a /= np.linalg.norm(a, axis=1, keepdims=True)
+    b = np.stack(
+        [
+            n[:, 1] * a[:, 2] - n[:, 2] * a[:, 1],
+            n[:, 2] * a[:, 0] - n[:, 0] * a[:, 2],
+            n[:, 0] * a[:, 1] - n[:, 1] * a[:, 0],
+        ],
+        axis=1,
+    )
+    axes = np.stack([n, a, b], axis=1).reshape(-1, 3)  # (3C, 3)
+    q = points @ axes.T - np.einsum("ck,ck->c", axes, np.repeat(at, 3, axis=0))
+    for c in range(len(at)):
+        qc = q[:, 3 * c : 3 * c + 3]
+        maybe = np.flatnonzero(
+            (qc[:, 0] > w_min - 1e-6)
+            & (qc[:, 0] <= w_max + 1e-6)
+            & (np.abs(qc[:, 1]) <= across)
+            & (np.abs(qc[:, 2]) <= across)
+        )
+        point, normal = at[c], normals[c]
+        rel = points[maybe] - point
+        w = rel @ normal
+        radial2 = np.einsum("ij,ij->i", rel, rel) - w * w
+        stem = (w > s.bellows_compliance_m) & (w <= s.stem_length_m + approach_m) & (radial2 <= r_stem**2)
+        body = (
+            (w > s.stem_length_m)
+            & (w <= s.stem_length_m + s.body_length_m + approach_m)
+            & (radial2 <= s.body_radius_m**2)
+        )
+        out = np.zeros(len(points), dtype=bool)
+        out[maybe] = stem | body
+        yield out
 
 
 def swept_boxes(at: np.ndarray, normals: np.ndarray, s: SuctionSettings, approach_m: float) -> np.ndarray:
@@ -192,6 +228,8 @@ class SuctionGrasp(KindModule):
         # shows with hundreds of points; a stride by index moves with no rounding)
         sample = [p[::BLOCK_STRIDE] for p in full[:m]]
         s_box = [bounds(p) if len(p) else (np.full(3, np.inf), np.full(3, -np.inf)) for p in sample]
+        s_lo = np.array([b[0] for b in s_box]).reshape(-1, 3)
+        s_hi = np.array([b[1] for b in s_box]).reshape(-1, 3)
         # every object's places judged at once (`judge_objects`), then each one's offer
         jobs: dict[int, ObjectJob] = {}
         masses: dict[int, float] = {}
@@ -245,17 +283,16 @@ class SuctionGrasp(KindModule):
                 boxes = swept_boxes(judged.points, judged.normals, s, approach_m)
                 lo = np.maximum(b_lo[i] - reach, boxes[:, 0].min(axis=0))
                 hi = np.minimum(b_hi[i] + reach, boxes[:, 1].max(axis=0))
-                for j in np.flatnonzero(near_all[i]):
-                    if np.all(s_box[j][0] <= hi) and np.all(s_box[j][1] >= lo):
-                        pieces.append(sample[j][in_box(sample[j], lo, hi)])
-                        owners.append(np.full(len(pieces[-1]), j))
+                meets = (s_lo <= hi) & (s_hi >= lo)  # (m, 3): each neighbour's box, per axis
+                for j in np.flatnonzero(near_all[i] & meets[:, 0] & meets[:, 1] & meets[:, 2]):
+                    pieces.append(sample[j][in_box(sample[j], lo, hi)])
+                    owners.append(np.full(len(pieces[-1]), j))
             cloud = np.concatenate(pieces) if pieces else empty
             labels = np.concatenate(owners) if owners else np.zeros(0, int)
             # up to 8 places that seal and hold, best first: the first that nothing
             # blocks ends the search, else the one fewest do
             pick, blockers = 0, frozenset[int]()
-            for rank in range(len(judged.order)):
-                inside = swept_mask(cloud, judged.points[rank], judged.normals[rank], s, approach_m)
+            for rank, inside in enumerate(swept_masks(cloud, judged.points, judged.normals, s, approach_m)):
                 hit = frozenset(int(j) for j in np.unique(labels[inside]))
                 if rank == 0 or len(hit) < len(blockers):
                     pick, blockers = rank, hit
