@@ -115,6 +115,18 @@ class Pipeline:
         self._plan_fn = plan_fn
         self._robot = robot
 
+    def with_settings(self, settings: Settings) -> Pipeline:
+        """The same stages, arm and placement under other settings (a replay planning
+        one frame once more with a setting relaxed)."""
+        return Pipeline(
+            settings,
+            T_base_camera=self.T_base_camera,
+            segment_fn=self._segment_fn,
+            state_fn=self._state_fn,
+            plan_fn=self._plan_fn,
+            robot=self.robot,
+        )
+
     @property
     def robot(self) -> Arm:
         """The arm every stage and the simulated world use, resolved once."""

@@ -144,3 +144,48 @@ def test_clear_simulate_takes_the_suction_mix_scene(tmp_path: Path) -> None:
     payload = task.run(request, tmp_path / "suction.mcap")
     assert payload["scene"] == "suction_mix(1)" and payload["objects"] == suction_mix(1).n_objects
     assert payload["steps"][0]["action"] == "(grasp_suction 0)" and payload["steps"][0]["outcome"] == "removed"
+
+
+def _alone(box: Any, max_actions: int) -> tuple[EpisodeResult, Scene]:
+    from clearcli.pipeline import Pipeline
+    from clearcli.replay.session import ReplayOptions, Session
+    from clearcli.settings.tree import load_settings
+    from clearcli.sim.episode import Episode
+    from clearcli.sim.scene import make_scene
+    from clearcli.sim.truth import truth_segment
+
+    settings = load_settings(None, ["robot.name=panda-hybrid"])
+    pipeline = Pipeline(settings, segment_fn=truth_segment)
+    episode = Episode(make_scene("alone", [box]), Session(pipeline, ReplayOptions()), seed=3, max_actions=max_actions)
+    for _ in episode:
+        pass
+    assert episode.result is not None
+    return episode.result, episode.scene
+
+
+def test_a_big_light_box_the_estimate_calls_too_heavy_is_tried_and_taken() -> None:
+    # 28 x 26 x 7 cm: 5.1 l, estimated at 650 kg/m^3 (the median household object's) 3.3
+    # kg, which the cup does not hold with a safety factor of 2; truly 0.2 kg (a cereal
+    # box). The session plans once more as if it were as light as a cracker box, against
+    # the cup's own hold, and the world's cup lifts it
+    from clearcli.sim.scene import Box
+
+    box = Box(0, 0.28, 0.26, 0.07, 0.0, 0.0, 0.3, mass_kg=0.2)
+    result, end = _alone(box, max_actions=3)
+    done = [(s.action, s.outcome) for s in result.steps if s.action]
+    assert done == [("(grasp_suction 0)", "removed")], done
+    assert result.end == "cleared" and not end.objects
+
+
+def test_a_box_truly_too_heavy_for_the_cup_costs_one_try() -> None:
+    # the same box truly 8 kg (78 N against the cup's 57 N): the lift drops it where it
+    # stood, and the cup is not tried on it again (its sides are too low for the hand's
+    # body, its top failed)
+    from clearcli.sim.scene import Box
+
+    box = Box(0, 0.28, 0.26, 0.07, 0.0, 0.0, 0.3, mass_kg=8.0)
+    result, end = _alone(box, max_actions=4)
+    done = [(s.action, s.outcome) for s in result.steps if s.action]
+    cups = [o for a, o in done if a.startswith("(grasp_suction ")]
+    assert len(cups) == 1 and cups[0].startswith("suction failed: dropped: too heavy"), done
+    assert result.end != "budget" and [o.object_id for o in end.objects] == [0], done
