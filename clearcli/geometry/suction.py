@@ -415,6 +415,103 @@ def _grid(job: FaceJob, spec: CupSpec, d: Disc) -> _Grid | None:
     return _Grid(height, seen, theirs, window, centre_uv)
 
 
+_Grids = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+
+
+def _grids(jobs: list[FaceJob], spec: CupSpec, d: Disc) -> _Grids | None:
+    """Every face's height map (`_grid`), end to end: the heights, the cells seen, the
+    others' outermost points, the places' windows (into the whole), their cell centres,
+    and each face's count of places (None: no face has one)."""
+    grids = [_grid(job, spec, d) for job in jobs]
+    grid_list = [g for g in grids if g is not None]
+    if not grid_list:
+        return None
+    base = np.cumsum([0] + [len(g.height) for g in grid_list])
+    return (
+        np.concatenate([g.height for g in grid_list]),
+        np.concatenate([g.seen for g in grid_list]),
+        np.concatenate([g.theirs for g in grid_list]),
+        np.concatenate([g.window + b for g, b in zip(grid_list, base)]),
+        np.concatenate([g.centre_uv for g in grid_list]),
+        np.array([0 if g is None else len(g.window) for g in grids]),
+    )
+
+
+def _top_grids(jobs: list[FaceJob], spec: CupSpec, d: Disc) -> _Grids | None:
+    """`_grids` of tops (`TOP_FRAME`, no height range), all binned at once: the top's
+    frame is the table's, so a point's u, v, w are its x, y, z (exactly what the
+    products with the frame give), and each face's cells are a block of one grid."""
+    cell = spec.gap_m
+    pad = d.pad
+    valid = [k for k, job in enumerate(jobs) if len(job.own) >= 3]
+    if not valid:
+        return None
+    owns = [jobs[k].own for k in valid]
+    n_pts = np.array([len(o) for o in owns])
+    P = np.concatenate(owns)
+    obj = np.repeat(np.arange(len(valid)), n_pts)
+    starts = np.r_[0, np.cumsum(n_pts)[:-1]]
+    i0 = np.floor(P[:, 0] / cell).astype(np.int64)
+    i1 = np.floor(P[:, 1] / cell).astype(np.int64)
+    lo0 = np.minimum.reduceat(i0, starts) - pad
+    lo1 = np.minimum.reduceat(i1, starts) - pad
+    rows = np.maximum.reduceat(i0, starts) - lo0 + pad + 1
+    cols = np.maximum.reduceat(i1, starts) - lo1 + pad + 1
+    sizes = rows * cols
+    base = np.r_[0, np.cumsum(sizes)]
+    total = int(base[-1])
+    keys = base[obj] + (i0 - lo0[obj]) * cols[obj] + (i1 - lo1[obj])
+    # a cell's value: the mean of its points (each face's cells are its own keys)
+    cells, tops = _mean_per_key(keys, P[:, 2], total)
+    height = np.full(total, np.nan)
+    height[cells] = tops
+    seen = np.zeros(total, dtype=bool)
+    seen[cells] = True
+    for v, k in enumerate(valid):
+        job = jobs[k]
+        if job.hidden_by is not None and job.T_camera_table is not None and len(job.hidden_by):
+            mine = height[base[v] : base[v + 1]]  # a view: the hidden cells are filled in place
+            hidden, plane = hidden_cells(
+                mine,
+                np.array([rows[v], cols[v]]),
+                np.array([lo0[v], lo1[v]]),
+                cell,
+                job.frame,
+                job.hidden_by,
+                job.T_camera_table,
+            )
+            mine[hidden] = plane[hidden]
+    # the others' outermost point per cell of each face's grid (those within it)
+    theirs = np.full(total, -np.inf)
+    others = [jobs[k].others for k in valid]
+    if any(len(o) for o in others):
+        Q = np.concatenate(others)
+        tid = np.repeat(np.arange(len(valid)), [len(o) for o in others])
+        o0 = np.floor(Q[:, 0] / cell).astype(np.int64) - lo0[tid]
+        o1 = np.floor(Q[:, 1] / cell).astype(np.int64) - lo1[tid]
+        inside = (o0 >= 0) & (o1 >= 0) & (o0 < rows[tid]) & (o1 < cols[tid])
+        if inside.any():
+            theirs = _outermost(base[tid[inside]] + o0[inside] * cols[tid[inside]] + o1[inside], Q[inside, 2], total)
+    cells = np.flatnonzero(np.isfinite(height))  # a hidden cell is a place too
+    face = np.searchsorted(base, cells, side="right") - 1
+    ci, cj = np.divmod(cells - base[face], cols[face])
+    # places every other cell (8 mm apart, on the grid of the face's frame itself)
+    keep = np.flatnonzero(((ci + lo0[face]) % PLACE_STRIDE == 0) & ((cj + lo1[face]) % PLACE_STRIDE == 0))
+    if not len(keep):
+        return None
+    ci, cj, face = ci[keep], cj[keep], face[keep]
+    centre_uv = (np.stack([ci + lo0[face], cj + lo1[face]], axis=1) + 0.5) * cell
+    offsets = d.offsets
+    window = (
+        (ci[:, None] + offsets[None, :, 0]) * cols[face][:, None]
+        + (cj[:, None] + offsets[None, :, 1])
+        + base[face][:, None]
+    )
+    n_places = np.zeros(len(jobs), dtype=np.int64)
+    n_places[valid] = np.bincount(face, minlength=len(valid))
+    return height, seen, theirs, window, centre_uv, n_places
+
+
 def judge_face(
     own: np.ndarray,
     others: np.ndarray,
@@ -439,27 +536,24 @@ def judge_faces(jobs: list[FaceJob], spec: CupSpec) -> list[FacePlaces | None]:
     face alone has them: a product's rounding depends on its rows' count)."""
     r = spec.radius_m
     d = disc(r, spec.gap_m)
-    grids = [_grid(job, spec, d) for job in jobs]
-    live = [k for k, g in enumerate(grids) if g is not None]
     out: list[FacePlaces | None] = [None] * len(jobs)
-    if not live:
+    if jobs and all(job.frame is TOP_FRAME and job.e2_range == (-math.inf, math.inf) for job in jobs):
+        grids = _top_grids(jobs, spec, d)
+    else:
+        grids = _grids(jobs, spec, d)
+    if grids is None:
         return out
-    # the faces' height maps end to end, each face's windows shifted to its own
-    grid_list = [g for g in grids if g is not None]
-    base = np.cumsum([0] + [len(g.height) for g in grid_list])
-    height = np.concatenate([g.height for g in grid_list])
-    seen_all = np.concatenate([g.seen for g in grid_list])
-    theirs = np.concatenate([g.theirs for g in grid_list])
-    window = np.concatenate([g.window + b for g, b in zip(grid_list, base)])
-    centre_uv = np.concatenate([g.centre_uv for g in grid_list])
-    counts = [len(g.window) for g in grid_list]
+    # the faces' height maps end to end, each face's windows into its own
+    height, seen_all, theirs, window, centre_uv, n_places = grids
+    live = [k for k in range(len(jobs)) if n_places[k] > 0]
+    counts = [int(n_places[k]) for k in live]
     ends = np.cumsum([0] + counts)
     slices = [slice(int(a), int(b)) for a, b in zip(ends[:-1], ends[1:])]
     frames = [jobs[k].frame for k in live]
     E1 = np.repeat(np.array([f.e1 for f in frames]), counts, axis=0)
     E2 = np.repeat(np.array([f.e2 for f in frames]), counts, axis=0)
     EN = np.repeat(np.array([f.n for f in frames]), counts, axis=0)
-    H = height[window]  # (N, K)
+    H: np.ndarray = height[window]  # (N, K)
     covered = np.isfinite(H)  # a point there, or hidden by what stands on the object
     share = covered.mean(axis=1)
     # a hole: an empty cell beside another empty one under the disc (a gap of two cells,
