@@ -253,8 +253,11 @@ class Episode:
         # the world's verdict, with the grasp kinds the planner was given: a bowl is no
         # excuse when the rim grasp was allowed and the world's fingers close on its wall
         kinds = tuple(k.strip() for k in str(self.session.pipeline.settings.plan.grasps).split(","))
+        # the robot's own cup tool, when it has one (its body must clear the table on a side)
+        settings = self.session.pipeline.settings
+        cup = settings.suction if "cup" in tools_of(settings.robot.name) else None
         too_wide_or_narrow = tuple(
-            sorted(o.object_id for o in self.scene.objects if truly_ungraspable_by(o, gripper, kinds))
+            sorted(o.object_id for o in self.scene.objects if truly_ungraspable_by(o, gripper, kinds, cup))
         )
         world_why = self._world_verdicts(too_wide_or_narrow)
         self.result = EpisodeResult(

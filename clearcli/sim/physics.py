@@ -79,16 +79,33 @@ def open_container(obj: SceneObject) -> bool:
     return isinstance(obj, Cylinder) and obj.is_open
 
 
-def truly_ungraspable_by(obj: SceneObject, gripper: Any, kinds: tuple[str, ...] | None = None) -> bool:
+def truly_ungraspable_by(
+    obj: SceneObject, gripper: Any, kinds: tuple[str, ...] | None = None, suction: SuctionSettings | None = None
+) -> bool:
     """No grasp kind in ``kinds`` (clearcli/predicates/grasps; default the thesis's pinch
     alone) can take the object by the world's own rules, each kind's `world_holds` (with
     this module as its rules): the pinch when it is not `truly_ungraspable`, a rim grasp
     an open cylinder whose wall the fingers close on, a slide a box or a closed cylinder
     the gripper pinches at an edge, suction an object with a face the cup seals on and
-    holds it by (`world_suction_holds`)."""
-    rules = sys.modules[__name__]
+    holds it by (`world_suction_holds`, with ``suction`` the robot's cup tool: default
+    the [suction] defaults)."""
+    rules: Any = sys.modules[__name__] if suction is None else _CupRules(suction)
     chosen = [kind(k) for k in kinds] if kinds is not None else [k for k in registered() if k.thesis]
     return not any(k.world_holds(obj, gripper, rules) for k in chosen)
+
+
+class _CupRules:
+    """This module's rules with the robot's own cup tool (its [suction]: the cup, the
+    vacuum, the body that must clear the table) in `world_suction_holds`."""
+
+    def __init__(self, suction: SuctionSettings) -> None:
+        self._suction = suction
+
+    def world_suction_holds(self, obj: SceneObject, s: SuctionSettings | None = None) -> bool:
+        return world_suction_holds(obj, s if s is not None else self._suction)
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(sys.modules[__name__], name)
 
 
 def world_grasp(
@@ -810,10 +827,13 @@ def world_suction_holds(obj: SceneObject, s: SuctionSettings | None = None) -> b
     under the cup (``s``, default the [suction] defaults: a 30 mm cup) and hold its true
     mass? Each face is tried where its load is least: at its middle (a top straight
     down, a side level at its middle height; a cylinder's side from four directions
-    clear of its handle)."""
+    clear of its handle), but no lower than the tool lying level clears the table: its
+    cup's or its body's radius (``body_radius_m``: a hand 21 cm wide carrying the cup
+    puts it on no side lower than 10.5 cm)."""
     s = SuctionSettings() if s is None else s
     alone = make_scene("alone", [obj])
-    mid = np.array([obj.x_m, obj.y_m, obj.base_z_m + obj.height_m / 2])
+    level = max(obj.height_m / 2, s.cup_diameter_m / 2, s.body_radius_m)
+    mid = np.array([obj.x_m, obj.y_m, obj.base_z_m + level])
     tries: list[tuple[np.ndarray, np.ndarray]] = [
         (np.array([obj.x_m, obj.y_m, obj.top_z_m]), np.array([0.0, 0.0, -1.0]))
     ]

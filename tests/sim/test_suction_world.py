@@ -235,3 +235,22 @@ def test_suction_mix_draws_wide_objects_masses_and_surfaces() -> None:
     assert heavy and all(o.mass_kg <= 5.0 for o in heavy)
     assert len(heavy) < len(boxes + lids) / 3
     assert all(0.1 <= o.mass_kg <= 1.5 for o in boxes + lids if o not in heavy)
+
+
+def test_a_side_is_taken_only_where_the_tool_lying_level_clears_the_table() -> None:
+    from clearcli.settings.tree import load_settings
+
+    hybrid = load_settings(None, ["robot.name=panda-hybrid"]).suction  # the hand's 21 cm round the cup
+    assert hybrid.body_radius_m == pytest.approx(0.105)
+    # porous on top, smooth sides 7 cm tall: an EPick (body 4 cm round) seals on a side
+    # at 4 cm; the hand's cup would have to be 10.5 cm up, past the top
+    low = S.Box(0, 0.2, 0.15, 0.07, 0.0, 0.0, mass_kg=0.3, surface="porous")
+    assert world_suction_holds(low, CUP)
+    assert not world_suction_holds(low, hybrid)
+    gripper = GripperSettings()
+    assert not truly_ungraspable_by(low, gripper, ("pinch", "suction"))
+    assert truly_ungraspable_by(low, gripper, ("pinch", "suction"), hybrid)
+    # 14 cm tall: the hand's cup on a side at 10.5 cm (its lip up to 12 cm)
+    tall = replace(low, size_z_m=0.14)
+    assert world_suction_holds(tall, hybrid)
+    assert not truly_ungraspable_by(tall, gripper, ("pinch", "suction"), hybrid)
