@@ -352,107 +352,42 @@ class FaceJob:
     T_camera_table: np.ndarray | None = None
 
 
-@dataclass(frozen=True, eq=False)
-class _Grid:
-    """A face's height map as `judge_faces` judges it (flat, ``shape``) and its places."""
-
-    height: np.ndarray  # the cells' heights (NaN: empty)
-    seen: np.ndarray  # the cells the camera saw a point in
-    theirs: np.ndarray  # the others' outermost point per cell (-inf: none)
-    window: np.ndarray  # (N, K) the disc's cells at each place
-    centre_uv: np.ndarray  # (N, 2) the places' cell centres
-
-
-def _grid(job: FaceJob, spec: CupSpec, d: Disc) -> _Grid | None:
-    """The height map of ``job``'s face and its places (None: none)."""
-    own, others, frame, e2_range = job.own, job.others, job.frame, job.e2_range
-    if len(own) < 3:
-        return None
-    cell = spec.gap_m
-    basis = frame.basis
-    uv = own @ basis.T
-    w = own @ frame.n
-    ij = np.floor(uv / cell).astype(np.int64)
-    offsets = d.offsets
-    pad = d.pad
-    # per column: a reduction along axis 0 of an (n, 2) array is several times slower
-    lo = np.array([ij[:, 0].min(), ij[:, 1].min()]) - pad
-    shape = np.array([ij[:, 0].max(), ij[:, 1].max()]) - lo + pad + 1
-    keys = (ij[:, 0] - lo[0]) * shape[1] + (ij[:, 1] - lo[1])
-    # a cell's value: the mean of its points (the face at the cell's centre, the sensor's
-    # noise averaged; the outermost point would flatten a curved face by a cell's slope)
-    cells, tops = _mean_per_key(keys, w, int(shape[0] * shape[1]))
-    height = np.full(int(shape[0] * shape[1]), np.nan)
-    height[cells] = tops
-    seen = np.zeros(height.shape, dtype=bool)
-    seen[cells] = True
-    hidden_by, T_camera_table = job.hidden_by, job.T_camera_table
-    if hidden_by is not None and T_camera_table is not None and len(hidden_by):
-        hidden, plane = hidden_cells(height, shape, lo, cell, frame, hidden_by, T_camera_table)
-        height[hidden] = plane[hidden]
-        cells = np.flatnonzero(np.isfinite(height))  # a hidden cell is a place too
-    # the others' outermost point per cell of the same grid (those within it)
-    theirs = np.full(height.shape, -np.inf)
-    if len(others):
-        oij = np.floor((others @ basis.T) / cell).astype(np.int64) - lo
-        inside = (oij[:, 0] >= 0) & (oij[:, 1] >= 0) & (oij[:, 0] < shape[0]) & (oij[:, 1] < shape[1])
-        if inside.any():
-            theirs = _outermost(oij[inside, 0] * shape[1] + oij[inside, 1], (others @ frame.n)[inside], theirs.size)
-    ci, cj = np.divmod(cells, shape[1])
-    # places every other cell (8 mm apart, on the grid of the face's frame itself, so a
-    # shifted object does not shift its places): a quarter of the work, and a cup of
-    # 30 mm loses nothing between them
-    keep = ((ci + lo[0]) % PLACE_STRIDE == 0) & ((cj + lo[1]) % PLACE_STRIDE == 0)
-    if math.isfinite(e2_range[0]) or math.isfinite(e2_range[1]):
-        e2 = (cj + lo[1] + 0.5) * cell  # the centre's e2, as centre_uv has it below
-        keep &= (e2 >= e2_range[0]) & (e2 <= e2_range[1])
-    keep = np.flatnonzero(keep)
-    if not len(keep):
-        return None
-    ci, cj = ci[keep], cj[keep]
-    centre_uv = (np.stack([ci, cj], axis=1) + lo + 0.5) * cell
-    window = (ci[:, None] + offsets[None, :, 0]) * shape[1] + (cj[:, None] + offsets[None, :, 1])
-    return _Grid(height, seen, theirs, window, centre_uv)
-
-
 _Grids = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
 
 
+def _in_frame(points: np.ndarray, frame: FaceFrame) -> tuple[np.ndarray, np.ndarray]:
+    """(n, 2) u, v and (n,) w of table-frame ``points`` in a face's frame. The top's
+    frame is the table's: its u, v, w are x, y, z, exactly what the products give."""
+    if frame is TOP_FRAME:
+        return points[:, :2], points[:, 2]
+    return points @ frame.basis.T, points @ frame.n
+
+
 def _grids(jobs: list[FaceJob], spec: CupSpec, d: Disc) -> _Grids | None:
-    """Every face's height map (`_grid`), end to end: the heights, the cells seen, the
-    others' outermost points, the places' windows (into the whole), their cell centres,
-    and each face's count of places (None: no face has one)."""
-    grids = [_grid(job, spec, d) for job in jobs]
-    grid_list = [g for g in grids if g is not None]
-    if not grid_list:
-        return None
-    base = np.cumsum([0] + [len(g.height) for g in grid_list])
-    return (
-        np.concatenate([g.height for g in grid_list]),
-        np.concatenate([g.seen for g in grid_list]),
-        np.concatenate([g.theirs for g in grid_list]),
-        np.concatenate([g.window + b for g, b in zip(grid_list, base)]),
-        np.concatenate([g.centre_uv for g in grid_list]),
-        np.array([0 if g is None else len(g.window) for g in grids]),
-    )
-
-
-def _top_grids(jobs: list[FaceJob], spec: CupSpec, d: Disc) -> _Grids | None:
-    """`_grids` of tops (`TOP_FRAME`, no height range), all binned at once: the top's
-    frame is the table's, so a point's u, v, w are its x, y, z (exactly what the
-    products with the frame give), and each face's cells are a block of one grid."""
+    """Every face's height map, all binned at once (each face's cells are a block of
+    one grid; each face's own points and the others' in its frame, by `_in_frame`): the
+    heights (a cell's the mean of its points: the face at the cell's centre, the
+    sensor's noise averaged; the outermost point would flatten a curved face by a
+    cell's slope), the cells seen, the others' outermost point per cell, the places'
+    windows (into the whole), their cell centres (u, v), and each face's count of
+    places (None: no face has one). A place is every other cell (8 mm apart, on the grid
+    of the face's frame itself, so a shifted object does not shift its places: a
+    quarter of the work, and a cup of 30 mm loses nothing between them) whose centre's
+    e2 lies in the job's range; where ``hidden_by`` hides the face (`hidden_cells`) its
+    plane fills the cells, and they are places too."""
     cell = spec.gap_m
     pad = d.pad
     valid = [k for k, job in enumerate(jobs) if len(job.own) >= 3]
     if not valid:
         return None
-    owns = [jobs[k].own for k in valid]
-    n_pts = np.array([len(o) for o in owns])
-    P = np.concatenate(owns)
+    mine = [_in_frame(jobs[k].own, jobs[k].frame) for k in valid]
+    n_pts = np.array([len(w) for _, w in mine])
+    UV = np.concatenate([uv for uv, _ in mine])
+    W = np.concatenate([w for _, w in mine])
     obj = np.repeat(np.arange(len(valid)), n_pts)
     starts = np.r_[0, np.cumsum(n_pts)[:-1]]
-    i0 = np.floor(P[:, 0] / cell).astype(np.int64)
-    i1 = np.floor(P[:, 1] / cell).astype(np.int64)
+    i0 = np.floor(UV[:, 0] / cell).astype(np.int64)
+    i1 = np.floor(UV[:, 1] / cell).astype(np.int64)
     lo0 = np.minimum.reduceat(i0, starts) - pad
     lo1 = np.minimum.reduceat(i1, starts) - pad
     rows = np.maximum.reduceat(i0, starts) - lo0 + pad + 1
@@ -462,7 +397,7 @@ def _top_grids(jobs: list[FaceJob], spec: CupSpec, d: Disc) -> _Grids | None:
     total = int(base[-1])
     keys = base[obj] + (i0 - lo0[obj]) * cols[obj] + (i1 - lo1[obj])
     # a cell's value: the mean of its points (each face's cells are its own keys)
-    cells, tops = _mean_per_key(keys, P[:, 2], total)
+    cells, tops = _mean_per_key(keys, W, total)
     height = np.full(total, np.nan)
     height[cells] = tops
     seen = np.zeros(total, dtype=bool)
@@ -470,9 +405,9 @@ def _top_grids(jobs: list[FaceJob], spec: CupSpec, d: Disc) -> _Grids | None:
     for v, k in enumerate(valid):
         job = jobs[k]
         if job.hidden_by is not None and job.T_camera_table is not None and len(job.hidden_by):
-            mine = height[base[v] : base[v + 1]]  # a view: the hidden cells are filled in place
+            block = height[base[v] : base[v + 1]]  # a view: the hidden cells are filled in place
             hidden, plane = hidden_cells(
-                mine,
+                block,
                 np.array([rows[v], cols[v]]),
                 np.array([lo0[v], lo1[v]]),
                 cell,
@@ -480,23 +415,29 @@ def _top_grids(jobs: list[FaceJob], spec: CupSpec, d: Disc) -> _Grids | None:
                 job.hidden_by,
                 job.T_camera_table,
             )
-            mine[hidden] = plane[hidden]
+            block[hidden] = plane[hidden]
     # the others' outermost point per cell of each face's grid (those within it)
     theirs = np.full(total, -np.inf)
-    others = [jobs[k].others for k in valid]
-    if any(len(o) for o in others):
-        Q = np.concatenate(others)
-        tid = np.repeat(np.arange(len(valid)), [len(o) for o in others])
-        o0 = np.floor(Q[:, 0] / cell).astype(np.int64) - lo0[tid]
-        o1 = np.floor(Q[:, 1] / cell).astype(np.int64) - lo1[tid]
+    theirs_in = [_in_frame(jobs[k].others, jobs[k].frame) for k in valid if len(jobs[k].others)]
+    if theirs_in:
+        QUV = np.concatenate([uv for uv, _ in theirs_in])
+        QW = np.concatenate([w for _, w in theirs_in])
+        tid = np.repeat([v for v, k in enumerate(valid) if len(jobs[k].others)], [len(w) for _, w in theirs_in])
+        o0 = np.floor(QUV[:, 0] / cell).astype(np.int64) - lo0[tid]
+        o1 = np.floor(QUV[:, 1] / cell).astype(np.int64) - lo1[tid]
         inside = (o0 >= 0) & (o1 >= 0) & (o0 < rows[tid]) & (o1 < cols[tid])
         if inside.any():
-            theirs = _outermost(base[tid[inside]] + o0[inside] * cols[tid[inside]] + o1[inside], Q[inside, 2], total)
+            theirs = _outermost(base[tid[inside]] + o0[inside] * cols[tid[inside]] + o1[inside], QW[inside], total)
     cells = np.flatnonzero(np.isfinite(height))  # a hidden cell is a place too
     face = np.searchsorted(base, cells, side="right") - 1
     ci, cj = np.divmod(cells - base[face], cols[face])
-    # places every other cell (8 mm apart, on the grid of the face's frame itself)
-    keep = np.flatnonzero(((ci + lo0[face]) % PLACE_STRIDE == 0) & ((cj + lo1[face]) % PLACE_STRIDE == 0))
+    keep = ((ci + lo0[face]) % PLACE_STRIDE == 0) & ((cj + lo1[face]) % PLACE_STRIDE == 0)
+    e2_lo = np.array([jobs[k].e2_range[0] for k in valid])
+    e2_hi = np.array([jobs[k].e2_range[1] for k in valid])
+    if np.isfinite(e2_lo).any() or np.isfinite(e2_hi).any():
+        e2 = (cj + lo1[face] + 0.5) * cell  # the centre's e2, as centre_uv has it below
+        keep &= (e2 >= e2_lo[face]) & (e2 <= e2_hi[face])
+    keep = np.flatnonzero(keep)
     if not len(keep):
         return None
     ci, cj, face = ci[keep], cj[keep], face[keep]
@@ -537,10 +478,7 @@ def judge_faces(jobs: list[FaceJob], spec: CupSpec) -> list[FacePlaces | None]:
     r = spec.radius_m
     d = disc(r, spec.gap_m)
     out: list[FacePlaces | None] = [None] * len(jobs)
-    if jobs and all(job.frame is TOP_FRAME and job.e2_range == (-math.inf, math.inf) for job in jobs):
-        grids = _top_grids(jobs, spec, d)
-    else:
-        grids = _grids(jobs, spec, d)
+    grids = _grids(jobs, spec, d)
     if grids is None:
         return out
     # the faces' height maps end to end, each face's windows into its own
