@@ -52,6 +52,10 @@ def make_app(only: str | None = None) -> typer.Typer:
     # (clearcli/interrupts.py), so a signal during its ~85 ms of imports is held
     import typer  # noqa: PLC0415  (~85 ms, after interrupts.hold())
 
+    from clearcli.commands import coercion  # noqa: PLC0415  (with typer)
+
+    coercion.install()  # options converted without pydantic where typer's result is certain
+
     def _version(value: bool) -> None:
         if value:
             from clearcli.provenance import version_line  # noqa: PLC0415  (--version only)
