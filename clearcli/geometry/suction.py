@@ -472,9 +472,10 @@ def judge_face(
 
 
 def judge_faces(jobs: list[FaceJob], spec: CupSpec) -> list[FacePlaces | None]:
-    """`judge_face` of many faces at once: each face's height map made on its own, then
-    every place of every face judged in one pass (the matrix products per face, as one
-    face alone has them: a product's rounding depends on its rows' count)."""
+    """`judge_face` of many faces at once: the faces' height maps binned together
+    (`_grids`), then every place of every face judged in one pass (the matrix products
+    per face, as one face alone has them: a product's rounding depends on its rows'
+    count)."""
     r = spec.radius_m
     d = disc(r, spec.gap_m)
     out: list[FacePlaces | None] = [None] * len(jobs)
