@@ -30,7 +30,6 @@ other (each has its own ``ik_unfeasible_*`` fact).
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -77,24 +76,39 @@ def swept_mask(
     """Which of ``points`` (table frame) lie in the volume the tool sweeps coming to the
     contact (``point``, outward ``normal``) from ``approach_m`` out: the stem, then the
     body. Points within the bellows' stroke of the face belong to the seal test."""
-    return next(swept_masks(points, point[None, :], normal[None, :], s, approach_m))
+    out = np.zeros(len(points), dtype=bool)
+    out[_swept_pairs(points, point[None, :], normal[None, :], s, approach_m)[0]] = True
+    return out
 
 
-def swept_masks(
+def swept_hits(
+    points: np.ndarray, labels: np.ndarray, at: np.ndarray, normals: np.ndarray, s: SuctionSettings, approach_m: float
+) -> list[frozenset[int]]:
+    """The labels of ``points`` in the tool's volume (`swept_mask`) at each of C
+    contacts (``at``, ``normals``: (C, 3)), all at once."""
+    m, c = _swept_pairs(points, at, normals, s, approach_m)
+    hits: list[set[int]] = [set() for _ in range(len(at))]
+    if len(m):
+        n_labels = int(labels.max()) + 1
+        for key in np.unique(c * n_labels + labels[m]):
+            hits[int(key) // n_labels].add(int(key) % n_labels)
+    return [frozenset(h) for h in hits]
+
+
+def _swept_pairs(
     points: np.ndarray, at: np.ndarray, normals: np.ndarray, s: SuctionSettings, approach_m: float
-) -> Iterator[np.ndarray]:
-    """`swept_mask` at each of C contacts (``at``, ``normals``: (C, 3)) in turn, each made
-    as it is reached. First the box around each volume in its contact's own axes (one
-    matrix product for all: the depth along the normal and two directions across it),
-    a micrometre wide: most points lie beside the tool; only those left are tested."""
+) -> tuple[np.ndarray, np.ndarray]:
+    """(point, contact) index pairs: each of ``points`` in the tool's volume at each of
+    C contacts. First the box around each volume in its contact's own axes (one matrix
+    product for all: the depth along the normal and two directions across it), a
+    micrometre wide: most points lie beside the tool; only those left are tested."""
+    none = np.zeros(0, dtype=np.int64)
+    if not len(points) or not len(at):
+        return none, none
     w_min = min(s.bellows_compliance_m, s.stem_length_m)
     w_max = max(s.stem_length_m + approach_m, s.stem_length_m + s.body_length_m + approach_m)
     across = max(s.cup_diameter_m / 2.0 + STEM_CLEARANCE_M, s.body_radius_m) + 1e-6
     r_stem = s.cup_diameter_m / 2.0 + STEM_CLEARANCE_M
-    if not len(points) or not len(at):
-        for _ in range(len(at)):
-            yield np.zeros(len(points), dtype=bool)
-        return
     # per contact: the normal, a unit direction across it, and the third
     n = normals
     ref = np.where((np.abs(n[:, 0]) < 0.9)[:, None], np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]))
@@ -116,28 +130,19 @@ def swept_masks(
         axis=1,
     )
     axes = np.stack([n, a, b], axis=1).reshape(-1, 3)  # (3C, 3)
-    q = points @ axes.T - np.einsum("ck,ck->c", axes, np.repeat(at, 3, axis=0))
-    for c in range(len(at)):
-        qc = q[:, 3 * c : 3 * c + 3]
-        maybe = np.flatnonzero(
-            (qc[:, 0] > w_min - 1e-6)
-            & (qc[:, 0] <= w_max + 1e-6)
-            & (np.abs(qc[:, 1]) <= across)
-            & (np.abs(qc[:, 2]) <= across)
-        )
-        point, normal = at[c], normals[c]
-        rel = points[maybe] - point
-        w = rel @ normal
-        radial2 = np.einsum("ij,ij->i", rel, rel) - w * w
-        stem = (w > s.bellows_compliance_m) & (w <= s.stem_length_m + approach_m) & (radial2 <= r_stem**2)
-        body = (
-            (w > s.stem_length_m)
-            & (w <= s.stem_length_m + s.body_length_m + approach_m)
-            & (radial2 <= s.body_radius_m**2)
-        )
-        out = np.zeros(len(points), dtype=bool)
-        out[maybe] = stem | body
-        yield out
+    q = (points @ axes.T - np.einsum("ck,ck->c", axes, np.repeat(at, 3, axis=0))).reshape(len(points), len(at), 3)
+    box = (q[..., 0] > w_min - 1e-6) & (q[..., 0] <= w_max + 1e-6) & (np.abs(q[..., 1]) <= across)
+    box &= np.abs(q[..., 2]) <= across
+    m, c = np.nonzero(box)
+    rel = points[m] - at[c]
+    w = np.einsum("ij,ij->i", rel, normals[c])
+    radial2 = np.einsum("ij,ij->i", rel, rel) - w * w
+    stem = (w > s.bellows_compliance_m) & (w <= s.stem_length_m + approach_m) & (radial2 <= r_stem**2)
+    body = (
+        (w > s.stem_length_m) & (w <= s.stem_length_m + s.body_length_m + approach_m) & (radial2 <= s.body_radius_m**2)
+    )
+    inside = stem | body
+    return m[inside], c[inside]
 
 
 def swept_boxes(at: np.ndarray, normals: np.ndarray, s: SuctionSettings, approach_m: float) -> np.ndarray:
@@ -292,8 +297,7 @@ class SuctionGrasp(KindModule):
             # up to 8 places that seal and hold, best first: the first that nothing
             # blocks ends the search, else the one fewest do
             pick, blockers = 0, frozenset[int]()
-            for rank, inside in enumerate(swept_masks(cloud, judged.points, judged.normals, s, approach_m)):
-                hit = frozenset(int(j) for j in np.unique(labels[inside]))
+            for rank, hit in enumerate(swept_hits(cloud, labels, judged.points, judged.normals, s, approach_m)):
                 if rank == 0 or len(hit) < len(blockers):
                     pick, blockers = rank, hit
                 if not blockers:
