@@ -13,10 +13,14 @@ from clearcli.geometry.suction import (
     Contact,
     CupSpec,
     FaceFrame,
+    FaceJob,
+    ObjectJob,
     disc_cells,
     hull_volume_and_centroid,
     judge_face,
+    judge_faces,
     judge_object,
+    judge_objects,
     load_margin,
     quadric_design,
     sags,
@@ -345,3 +349,90 @@ def test_an_object_standing_on_another_weighs_what_lies_above_its_bottom() -> No
     # of the footprint from the bottom to the top stands for it
     vol1, com1 = volume_above(corners, faces, footprint * 2.0, 0.25)
     assert vol1 == pytest.approx(0.08 * 0.05) and com1 == pytest.approx([0.2, 0.1, 0.275])
+
+
+# ---------------------------------------------------------------- many at once
+def _same_contact(a: Contact | None, b: Contact | None) -> bool:
+    """Every field equal to the bit (the arrays too)."""
+    if a is None or b is None:
+        return a is b
+    return all(
+        np.array_equal(getattr(a, f), getattr(b, f), equal_nan=True)
+        if isinstance(getattr(a, f), np.ndarray)
+        else (getattr(a, f) == getattr(b, f) or (getattr(a, f) != getattr(a, f) and getattr(b, f) != getattr(b, f)))
+        for f in a.__dataclass_fields__
+    )
+
+
+def test_judging_objects_together_gives_each_what_it_gets_alone() -> None:
+    # judge_objects bins every face at once and judges every place in one pass: each
+    # object's places, margins and contacts must be those it gets alone, to the bit (a
+    # matrix product's rounding depends on its rows' count: the fits stay per face)
+    seen, can, T = _box_top_with_a_can_on_it()
+    holed = _flat(half=0.08)
+    holed = holed[~((holed[:, 0] > 0.05) & (holed[:, 1] > 0.05) & (holed[:, 0] < 0.07) & (holed[:, 1] < 0.07))]
+    # a can lying on its side (radius 3 cm, curved on top): its top seals nowhere, so
+    # its sides are judged too
+    a, x = np.meshgrid(np.linspace(0.0, np.pi, 60), np.arange(-0.1, 0.1 + 1e-9, STEP))
+    curved = np.stack([x.ravel(), 0.3 + 0.03 * np.cos(a.ravel()), 0.03 + 0.03 * np.sin(a.ravel())], axis=1)
+    yawed = np.array([[np.cos(0.4), np.sin(0.4)], [-np.sin(0.4), np.cos(0.4)]])
+    # a box lying flat, its top and its side at y = -0.1 seen; its top not to be tried
+    u, z = np.meshgrid(np.arange(0.42, 0.58 + 1e-9, STEP), np.arange(0.0, 0.08, STEP))
+    side = np.stack([u.ravel(), np.full(u.size, -0.08), z.ravel()], axis=1)
+    box = np.concatenate([holed + [0.5, 0.0, -0.02], side])
+    jobs = [
+        ObjectJob(seen, NONE, np.eye(2), 0.08, 1.5, np.array([0.0, 0.0, 0.04]), 0.045, can, T),
+        ObjectJob(holed, NONE, np.eye(2), 0.1, 0.3, np.array([0.0, 0.0, 0.05]), 0.045),
+        ObjectJob(curved, seen[::7], yawed, 0.06, 0.2, np.array([0.0, 0.3, 0.03]), 0.02),
+        ObjectJob(box, curved, np.eye(2), 0.08, 0.3, np.array([0.5, -0.06, 0.04]), 0.045, skip=frozenset({"top"})),
+    ]
+    together = judge_objects(jobs, SPEC)
+    assert any(c.face == "side" for j in together for c in j.ranked)  # the sides were judged
+    for job, got in zip(jobs, together):
+        alone = judge_object(
+            job.own, job.others, job.axes2d, job.top_height_m, job.mass_kg, job.com_table, SPEC,
+            job.min_height_m, job.hidden_by, job.T_camera_table, job.skip,
+        )  # fmt: skip
+        assert got.order == alone.order and got.n_kept == alone.n_kept
+        assert _same_contact(got.best, alone.best) and _same_contact(got.closest, alone.closest)
+        assert all(_same_contact(p, q) for p, q in zip(got.ranked, alone.ranked))
+        assert np.array_equal(got.points, alone.points) and np.array_equal(got.normals, alone.normals)
+
+
+def test_judging_faces_together_gives_every_place_what_it_gets_alone() -> None:
+    # every place of every face, each array to the bit: faces of odd and even counts of
+    # places, a top hidden in part, a side, and others under the cup
+    seen, can, T = _box_top_with_a_can_on_it()
+    x = np.array([1.0, 0.0, 0.0])
+    side = FaceFrame("side", np.array([0.0, 1.0, 0.0]), UP, x)
+    u, v = _grid()
+    wall = np.stack([np.full_like(u, 0.1), u, 0.1 + v], axis=1)
+    bumpy = _flat(half=0.033) + [0.0, 0.0, 0.001] * np.sin(np.arange(len(_flat(half=0.033))))[:, None]
+    jobs = [
+        FaceJob(seen, NONE, TOP, hidden_by=can, T_camera_table=T),
+        FaceJob(bumpy, NONE, TOP),
+        FaceJob(wall, NONE, side, (0.09, 0.125)),
+        FaceJob(_flat(half=0.031) + [0.3, 0.0, 0.0], bumpy + [0.3, 0.0, 0.002], TOP),
+        FaceJob(_flat()[:2], NONE, TOP),  # two points: no face
+    ]
+    together = judge_faces(jobs, SPEC)
+    assert together[-1] is None and len({len(p) % 2 for p in together[:-1] if p is not None}) == 2
+    for job, got in zip(jobs, together):
+        alone = judge_face(job.own, job.others, job.frame, SPEC, job.e2_range, job.hidden_by, job.T_camera_table)
+        if alone is None:
+            assert got is None
+            continue
+        assert got is not None
+        for f in (
+            "points",
+            "normals",
+            "covered",
+            "empty",
+            "full",
+            "sag_m",
+            "spread_m",
+            "tilt_deg",
+            "intruders",
+            "margins",
+        ):
+            assert np.array_equal(getattr(got, f), getattr(alone, f)), f
