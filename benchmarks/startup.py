@@ -144,14 +144,15 @@ def _bytecode_fresh(source: Path) -> bool:
 
 def _import_only_argv(modules: list[str]) -> list[str]:
     # what `clear`'s main does before its first import (clearcli/cli.py): one BLAS
-    # thread, NumPy's unused tooling deferred; without it the imports would cost more here
-    # than in the command
+    # thread, the import hooks (_lighten_imports; _defer_numpy_tooling before issue 39's
+    # rename, so that an older checkout is measured the same way); without them the
+    # imports would cost more here than in the command
     code = (
         "import importlib\n"
         "try:\n"
         "    from clearcli import cli\n"
         "    cli._single_threaded_numerics()\n"
-        "    cli._lighten_imports()\n"
+        "    (getattr(cli, '_lighten_imports', None) or getattr(cli, '_defer_numpy_tooling'))()\n"
         "except (ImportError, AttributeError):\n"
         "    pass\n"
         f"for m in {modules!r}:\n"
