@@ -231,7 +231,7 @@ class _DocstringKept:
     minima of 6 runs on a loaded machine). No `clear` command shows a SciPy docstring;
     the decorator's other work (its table of capabilities) is left as it is, and so is
     every other use of FunctionDoc in SciPy. The decorator does
-    ``str(FunctionDoc(f)).split("\n", 1)[1].lstrip(" \n")`` (the first line is the
+    ``str(FunctionDoc(f)).split("\\n", 1)[1].lstrip(" \\n")`` (the first line is the
     signature): so str() is a blank first line, then the docstring."""
 
     def __init__(self, func: Any) -> None:
