@@ -5,6 +5,17 @@ set aside with the reason, for --json to list as ``excluded``.
   ends at the support's hull (grown by ``hull_margin_m``); a segment that touches that
   side of the prism and goes on beyond it, above the support's plane, is part of
   something standing elsewhere. An object cut by the image's border does not go on.
+- enters from beyond the image's border, above the support: where the support's outline
+  runs out of the view (a robot's arms over the near part of the table, a table wider
+  than the view), what reaches in is cut by the image's border instead. It is cut there
+  above the support (most of its points at the border more than `_HANG_M` above resting
+  height), and apart from where it comes down to the support: the median in-plane
+  distance from those points to its own resting points is more than `_APART_M`, or it
+  rests nowhere. An object standing on the table whose top the border cuts has its side
+  walls rising from its base to the cut, so its cut part stands over its base (mOSD has
+  no such cut; uois_image_0002's tall box: 0.8 cm); an object lying at the border is cut
+  at its resting height. An arm the sensor's inpainting joins to the table meets it only
+  along its silhouette, centimetres off (gqcnn's YuMi arms: 4.5 to 6.3 cm).
 - stands beyond the support's edge, on or as part of furniture: it touches a thing
   outside the support's outline (above its plane) that goes on `_FAR_BEYOND_M` or more
   beyond the outline, farther than any object the hull cuts can reach (a second desk
@@ -50,6 +61,14 @@ _TOUCH_M = 0.015
 # beyond the outline, at most about the 30 cm of the widest objects cleared
 _FAR_BEYOND_M = 0.25
 _LINK_M = 0.02  # neighbouring pixels this near in space are one surface
+# a part cut by the image's border this far (median, in-plane) from where its segment rests
+# on the support is not held up by it: an object's cut top stands within its walls' lean
+# and the depth's fattening of its base (1 cm); an inpainted arm's silhouette, 4.5 cm and
+# more off. Between the two with a margin of 1.5 cm and more either side.
+_APART_M = 0.025
+# pixels this near the image's edge are where it cuts a segment (a few, not one: a working
+# grid at stride k ends up to k - 1 pixels short of the edge; a sensor's edge pixels drop out)
+_BORDER_PX = 3
 
 
 def beyond_outline(xy: np.ndarray, polygon_2d: np.ndarray) -> np.ndarray:
@@ -167,6 +186,47 @@ def _far_touched(touching: np.ndarray, out_tree: object, outside_reach: np.ndarr
     return float(np.sort(outside_reach[j[ok]])[-_GOES_ON_MIN])
 
 
+def at_image_border(indices: list[np.ndarray], shape: tuple[int, int] | None) -> list[np.ndarray] | None:
+    """Per object (its points' pixel ``indices`` in a frame of ``shape``), which of them lie
+    within `_BORDER_PX` of the image's border; None without a pixel grid."""
+    if shape is None:
+        return None
+    rows, cols = shape
+    out = []
+    for idx in indices:
+        r, c = np.divmod(idx, cols)
+        out.append((r < _BORDER_PX) | (r >= rows - _BORDER_PX) | (c < _BORDER_PX) | (c >= cols - _BORDER_PX))
+    return out
+
+
+def _enters_over_border(
+    p: np.ndarray, border: np.ndarray, h: np.ndarray, rests: float, to_2d: Callable[[np.ndarray], np.ndarray]
+) -> str:
+    """Why the object ``p`` (heights ``h``, its points at the image's border ``border``)
+    enters from beyond the image above the support, or "" when it does not."""
+    from scipy.spatial import cKDTree
+
+    n_border = int(border.sum())
+    high = border & (h > rests + _HANG_M)
+    n_high = int(high.sum())
+    # cut above the support: at least `_GOES_ON_MIN` points, and most of its cut
+    if n_high < _GOES_ON_MIN or 2 * n_high < n_border:
+        return ""
+    resting = h <= rests
+    if resting.any():
+        d, _ = cKDTree(to_2d(p[resting])).query(to_2d(p[high]))
+        apart = float(np.median(d))
+        if apart <= _APART_M:
+            return ""
+        where = f"{apart:.3f} m from where it comes down to the support"
+    else:
+        where = "resting nowhere on the support"
+    return (
+        f"reaches in from beyond the image's border above the support ({n_high} of its points at the border "
+        f"more than {_HANG_M:.2f} m above it, {where}): an arm, a hand, a cable"
+    )
+
+
 @dataclass(frozen=True)
 class Verdict:
     index: int  # into the objects
@@ -190,6 +250,7 @@ def not_standing(
     inside_side: Callable[[np.ndarray], np.ndarray],
     rests_m: Callable[[np.ndarray], float],
     outside_reach: np.ndarray | None = None,
+    at_border: list[np.ndarray] | None = None,
 ) -> list[Verdict]:
     """Which of ``objects`` (each an (M, 3) array of its points) do not stand on the
     support, and why.
@@ -200,7 +261,9 @@ def not_standing(
     coordinates; ``inside_side``: (N,) bool, the points farther than `_BORDER_M` inside
     the prism's side; ``rests_m``: for an object's points, the height below which it
     rests on the support (grows with range); ``outside_reach``: for each of ``outside``,
-    how far its part reaches beyond the outline (`reach_beyond`; None: not known).
+    how far its part reaches beyond the outline (`reach_beyond`; None: not known);
+    ``at_border``: per object, (M,) bool, its points at the image's border (None: the
+    frame has no pixel grid).
     """
     from scipy.spatial import cKDTree
 
@@ -234,6 +297,11 @@ def not_standing(
                         f"outline that goes on {far:.2f} m beyond it: a desk, a shelf, furniture behind"
                     )
                     continue
+        if at_border is not None:
+            why = _enters_over_border(p, at_border[k], height(p), rests_m(p), to_2d)
+            if why:
+                verdicts[k] = why
+                continue
         if low_tree is not None and edge.shape[0]:
             down = int((np.asarray(low_tree.query_ball_point(edge, _GOES_ON_M, return_length=True)) > 0).sum())
             if down >= _GOES_ON_MIN:

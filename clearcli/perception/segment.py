@@ -33,7 +33,7 @@ from clearcli.io.frames import Frame
 from clearcli.perception.clock import Clock
 from clearcli.perception.context import RefineContext
 from clearcli.perception.edges import cut_depth_edges
-from clearcli.perception.exclude import beyond_outline, not_standing, reach_beyond
+from clearcli.perception.exclude import at_image_border, beyond_outline, not_standing, reach_beyond
 from clearcli.perception.filters import clean_mask
 from clearcli.perception.flat import flat_objects
 from clearcli.perception.lccp import lccp_segments
@@ -442,6 +442,7 @@ def _exclude(w: _Work) -> None:
         lambda p: fit.inside(p, settings.hull_margin_m - 0.02),
         rests_m,
         reach,
+        at_image_border([o.indices for o in w.objects], w.frame.shape) if w.organized else None,
     )
     if not verdicts:
         return
