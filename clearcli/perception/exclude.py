@@ -31,6 +31,9 @@ set aside with the reason, for --json to list as ``excluded``.
   on is hidden there: a shelf board, a lamp, the arm's gripper seen apart. Unless an
   object lies beneath its outline, reaching up to within `_HANG_M` of its bottom: it
   stands on that object where the contact is hidden (a box laid across two others).
+- part of what reaches in: it rests nowhere on the support (its lowest point above
+  resting height) and is joined, more than `_REACH_ABOVE_M` above the support, to a
+  segment excluded as reaching in (an arm's forearm cut from its upper arm).
 - stands on something excluded: its bottom within `_TOUCH_M` of an excluded segment's
   points, and above the support (a box on the shelf board, on the arm).
 
@@ -334,10 +337,30 @@ def not_standing(
             break
         tree = cKDTree(np.vstack([objects[k] for k in gone]))
         owner = np.concatenate([np.full(objects[k].shape[0], k) for k in gone])
+        reaching = [k for k in gone if verdicts[k].startswith("reaches in")]
+        reach_tree = cKDTree(np.vstack([objects[k] for k in reaching])) if reaching else None
         for k, p in enumerate(objects):
-            if k in verdicts or lows[k] <= rests_m(p) + _HANG_M:
+            if k in verdicts or lows[k] <= rests_m(p):
                 continue
             h = height(p)
+            # the rest of an arm the segmentation cut apart: it rests nowhere on the
+            # support and is joined to what reaches in more than `_REACH_ABOVE_M` above
+            # it (an object the arm touches stands on the support; the gripper's tip at
+            # the table is lower than that)
+            if reach_tree is not None:
+                high = p[h > rests_m(p) + _REACH_ABOVE_M]
+                if high.shape[0]:
+                    d, _ = reach_tree.query(high, distance_upper_bound=_TOUCH_M)
+                    joined = int(np.isfinite(d).sum())
+                    if joined >= _GOES_ON_MIN:
+                        verdicts[k] = (
+                            f"part of what reaches in ({joined} of its points joined to it more than "
+                            f"{_REACH_ABOVE_M:.2f} m above the support, its lowest {lows[k]:.3f} m above it)"
+                        )
+                        changed = True
+                        continue
+            if lows[k] <= rests_m(p) + _HANG_M:
+                continue
             bottom = p[h <= lows[k] + _TOUCH_M]
             d, j = tree.query(bottom, distance_upper_bound=_TOUCH_M)
             hit = np.isfinite(d)

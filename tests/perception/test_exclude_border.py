@@ -1,0 +1,104 @@
+"""What the image's border cuts above the support, apart from where it rests on it, is
+excluded (issue 37, perception/exclude.py ``_enters_over_border``): a robot arm entering
+the view where the support's outline runs out of the image, so no outline is crossed.
+Each test shows the rule is needed: with it off the arm is an object."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+from helpers.foreign import labelled
+
+from clearcli.evaluate.exact import exact_report
+from clearcli.evaluate.segmentation import score
+from clearcli.perception import exclude
+from clearcli.perception.exclude import not_standing
+from clearcli.perception.segment import segment
+from clearcli.settings.segment import SegmentSettings
+from clearcli.sim.families import support_frame
+
+ON = dataclasses.replace(SegmentSettings(), exclude_not_standing=True)
+BORDER = "reaches in from beyond the image's border"
+
+
+def _rule_off(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(exclude, "_enters_over_border", lambda *args: "")
+
+
+@pytest.mark.parametrize("seed", [5, 7])
+def test_an_arm_cut_by_the_image_border_over_the_table_is_excluded(seed: int, monkeypatch: pytest.MonkeyPatch) -> None:
+    # the arm's upper part leaves the image over the table (the table's outline runs out
+    # of the view with it); seed 5: its forearm comes down to within 3 cm of the table,
+    # so it does not hang; seed 7: objects lie under the upper arm
+    frame = support_frame("arm_entering", seed)
+    truth = np.asarray(frame.fields["label"])
+    seg = segment(frame, ON)
+    sc = score(seg.labels(), truth)
+    assert sc.true_positives == sc.n_true == sc.n_pred
+    arm = [e for e in seg.excluded if e.reason.startswith(BORDER)]
+    assert len(arm) == 1 and "resting nowhere" in arm[0].reason, [e.reason for e in seg.excluded]
+    _rule_off(monkeypatch)
+    off = segment(frame, ON)
+    sc_off = score(off.labels(), truth)
+    assert sc_off.true_positives == sc_off.n_true and sc_off.n_pred > sc_off.n_true  # the arm, in one or two
+    assert not any(e.reason.startswith(BORDER) for e in off.excluded)
+
+
+def test_the_yumi_arms_on_a_real_gqcnn_frame_are_excluded(monkeypatch: pytest.MonkeyPatch) -> None:
+    # Berkeley's YuMi: its two arms fill the bottom of the Primesense view, 6-14 cm above
+    # the foam board, their silhouettes joined to it by the authors' inpainted depth
+    frame, truth, _ = labelled("gqcnn_primesense_0")
+    seg = segment(frame, ON)
+    arms = [e for e in seg.excluded if e.reason.startswith(BORDER)]
+    assert len(arms) == 2, [e.reason for e in seg.excluded]
+    h, w = frame.shape
+    for e in arms:
+        rows = e.indices // w
+        assert np.median(rows) > 0.75 * h  # the bottom of the view, where the arms are
+        assert np.mean(truth[e.indices] >= 10) < 0.05  # no labelled object's
+    right = exact_report(seg.labels(), truth)
+    _rule_off(monkeypatch)
+    off = segment(frame, ON)
+    assert len(off.objects) == len(seg.objects) + 2
+    assert exact_report(off.labels(), truth).spurious == right.spurious + 2
+
+
+def _column(x: float, y: float, r: float, z0: float, z1: float, step: float = 0.004) -> np.ndarray:
+    """The points of a square column's four sides, x, y its centre, r its half width."""
+    zs = np.arange(z0, z1 + 1e-9, step)
+    s = np.arange(-r, r + 1e-9, step)
+    sides = [np.stack(np.broadcast_arrays(x + s[:, None], y + e, zs[None, :]), -1) for e in (-r, r)]
+    sides += [np.stack(np.broadcast_arrays(x + e, y + s[:, None], zs[None, :]), -1) for e in (-r, r)]
+    return np.vstack([a.reshape(-1, 3) for a in sides])
+
+
+@pytest.mark.parametrize(
+    "arm_m, excluded",
+    [(0.0, False), (0.10, True)],
+)
+def test_what_the_border_cuts_above_its_own_base_stands(arm_m: float, excluded: bool) -> None:
+    # a 22 cm column standing on the support, the border cutting its top (uois_image_0002's
+    # box): its cut part stands over its base; the same cut part 10 cm off, joined to the
+    # support only by a low skirt there (an inpainted arm's silhouette), reaches in
+    base = _column(0.0, 0.0, 0.03, 0.0, 0.10)
+    top = _column(arm_m, 0.0, 0.03, 0.10, 0.22)
+    p = np.vstack([base, top])
+    at_border = p[:, 2] > 0.19
+    g = np.arange(-0.2, 0.2, 0.005)
+    support = np.stack(np.meshgrid(g, g, [0.0]), -1).reshape(-1, 3)
+    none = np.zeros((0, 3))
+    found = not_standing(
+        [p],
+        none,
+        none,
+        support,
+        lambda q: q[:, 2],
+        lambda q: q[:, :2],
+        lambda q: np.ones(q.shape[0], dtype=bool),
+        lambda q: 0.013,
+        None,
+        [at_border],
+    )
+    assert any(v.reason.startswith(BORDER) for v in found) == excluded, [v.reason for v in found]
