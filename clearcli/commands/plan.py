@@ -64,6 +64,14 @@ plan); errors (3, 4, 6, 8) are one line on stderr.
                               order of every joint vector, "gripper": {"name",
                               "opening_width_m", "closing_width_m"}}
     camera_pose_source        "given" | "thesis" | "default from table"
+    assumes                   only when the plan rests on it: {"suction_mass":
+                              {"density_kg_m3", "safety_factor": what was assumed,
+                              "estimate_density_kg_m3", "estimate_safety_factor": the
+                              [suction] values that refused, "objects": those the plan
+                              lifts only so}}: nothing could be removed on the estimated
+                              mass, so the frame was planned again as if its objects were
+                              as light as a cracker box (170 kg/m^3), against the cup's own
+                              hold (factor 1); the lift weighs them (clearcli/settings/weigh.py)
     timings_s                 seconds per stage
 """
 
@@ -100,6 +108,14 @@ def print_plan(payload: Mapping[str, Any]) -> None:
         out(f"partial: removes {n_goal} objects, leaves {n_left}")
     else:
         out(f"no plan: none of the {n_left} objects can be removed")
+    light = payload.get("assumes", {}).get("suction_mass")
+    if light:
+        out(
+            f"assumes {', '.join(light['objects']) or 'the objects'} as light as "
+            f"{light['density_kg_m3']:g} kg/m^3 on the cup's own hold (factor {light['safety_factor']:g}): "
+            f"the estimate at {light['estimate_density_kg_m3']:g} kg/m^3 with factor "
+            f"{light['estimate_safety_factor']:g} refused them; the lift weighs them"
+        )
     kind = "optimal (proven)" if payload["optimal"] else "not proven optimal"
     if payload["deadline"]:
         kind += ", time limit reached"

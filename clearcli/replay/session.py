@@ -35,8 +35,8 @@ from clearcli.replay.tracking import (
     update,
     vec3,
 )
-from clearcli.settings.profiles import tools_of
 from clearcli.settings.replay import MemoryParams, TrackingParams
+from clearcli.settings.weigh import lightest_plausible
 
 if TYPE_CHECKING:
     from clearcli.io.frames import Frame
@@ -99,12 +99,6 @@ def expected_effect(
         grasp_kind=action.grasp_kind,
         grasp_face=str(obj.kind_details.get(action.grasp_kind or "", {}).get("face", "")),
     )
-
-
-# The lightest density a household object plausibly has (kg/m^3): a cracker box's 170,
-# the lightest of the twelve YCB objects [suction] density_kg_m3's default (their
-# median) was taken from (clearcli/settings/suction.py).
-_LIGHTEST_DENSITY_KG_M3 = 170.0
 
 
 class Session:
@@ -258,27 +252,17 @@ class Session:
         volume at [suction] density_kg_m3 (the median household object's: a big light box
         of 5 l is estimated at 3.5 kg, and may truly weigh 0.2) and with the safety
         factor: plan this frame once more as if the object were as light as a household
-        object plausibly is (`_LIGHTEST_DENSITY_KG_M3`), against the cup's own hold
+        object plausibly is (clearcli/settings/weigh.py), against the cup's own hold
         (factor 1). What only the estimate refused is then tried rather than given up:
         the cup seals and the arm lifts, which weighs it (a vacuum that does not hold
         lets it down where it stood), and a cup that did not hold is given up on that
         object (the kind's ``give_up_unmoved``), so each such object costs one try, as
         the Amazon Robotics Challenge systems tried suction first and checked the
         vacuum. Else ``result``."""
-        settings = self.pipeline.settings
-        kinds = {k.strip() for k in str(settings.plan.grasps).split(",")}
         seg = result.segmentation
-        if (
-            seg is None
-            or result.state is None
-            or settings.suction.safety_factor <= 1.0
-            or "suction" not in kinds
-            or "cup" not in tools_of(settings.robot.name)
-        ):
+        relaxed = lightest_plausible(self.pipeline.settings)  # shared with the plan task
+        if seg is None or result.state is None or relaxed is None:
             return result
-        lightest = min(settings.suction.density_kg_m3, _LIGHTEST_DENSITY_KG_M3)
-        cup = dataclasses.replace(settings.suction, safety_factor=1.0, density_kg_m3=lightest)
-        relaxed = dataclasses.replace(settings, suction=cup)
         pipeline = self.pipeline.with_settings(relaxed)
         t0 = time.perf_counter()
         timings = dict(result.timings_s)

@@ -4,9 +4,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from clearcli import pipeline
-from clearcli.errors import EXIT_NO_PLAN, EXIT_OK, EXIT_PARTIAL_PLAN
+from clearcli.errors import EXIT_NO_PLAN, EXIT_OK, EXIT_PARTIAL_PLAN, ClearError
 from clearcli.files import atomic_output, atomic_path
 from clearcli.planning.backtrack import with_grasp_kinds
 from clearcli.planning.payload import plan_payload
@@ -19,7 +20,13 @@ from clearcli.predicates.state import SymbolicState
 from clearcli.render.plan_png import render_plan
 from clearcli.robot.arm import resolve_arm
 from clearcli.settings import Settings
+from clearcli.settings.weigh import lightest_plausible
 from clearcli.tasks.base import NO_OUTPUTS, Outcome, Outputs, Source
+
+if TYPE_CHECKING:
+    from clearcli.io.frames import Frame
+    from clearcli.perception.types import Segmentation
+    from clearcli.robot.arm import Arm
 
 SCHEMA, VERSION = PLAN_SCHEMA, PLAN_VERSION  # the planner's (clearcli/planning/versions.py)
 OUTPUTS = ("problem", "domain", "plan", "png")
@@ -45,6 +52,11 @@ def run(request: Request, source: Source) -> Outcome:
     done = pipeline.planned(
         state, request.settings, robot, request.camera_pose, "first" if request.first_only else None
     )
+    assumes: dict[str, Any] = {}
+    if done.no_plan is not None:
+        weighed = _weigh_on_lift(request, robot, frame, seg, state)
+        if weighed is not None:
+            state, done, assumes = weighed
     plan = done.plan
     # the model the plan was made in: the facts of the grasp kinds [plan] grasps allows
     state = with_grasp_kinds(state, parse_kinds(request.settings.plan.grasps))
@@ -57,6 +69,8 @@ def run(request: Request, source: Source) -> Outcome:
         {o.name: o.kind_details for o in state.objects},
     )
     payload["robot"] = robot.block()
+    if assumes:
+        payload["assumes"] = assumes
     out = request.outputs
     write_plan_files(state, plan, problem=out.get("problem"), domain=out.get("domain"), output=out.get("plan"))
     png = out.get("png")
@@ -70,6 +84,41 @@ def run(request: Request, source: Source) -> Outcome:
         code = EXIT_PARTIAL_PLAN if plan.status == "partial" else EXIT_OK
     kept = {"frame": frame, "segmentation": seg, "state": state} if request.keep else {}
     return Outcome(SCHEMA, VERSION, payload, code, out.all(), kept)
+
+
+def _weigh_on_lift(
+    request: Request, robot: Arm, frame: Frame, seg: Segmentation, state: SymbolicState
+) -> tuple[SymbolicState, pipeline.Planned, dict[str, Any]] | None:
+    """Nothing can be done while a cup's load was judged on the mass estimated from the
+    volume (clearcli/settings/weigh.py): the frame planned once more as if its objects
+    were as light as a household object plausibly is, against the cup's own hold, as the
+    closed loop does (clearcli/replay/session.py): the lift weighs them. That state, plan
+    and the document's ``assumes`` block (the settings assumed, the estimate's, and the
+    objects only the estimate refused the cup) when that plan removes something; else
+    None (the first answer stands, an error of the second attempt included)."""
+    relaxed = lightest_plausible(request.settings)
+    if relaxed is None:
+        return None
+    check = "first" if request.first_only else None
+    try:
+        light = pipeline.stated(frame, seg, relaxed)
+        done = pipeline.planned(light, relaxed, robot, request.camera_pose, check)
+    except ClearError:
+        return None
+    if done.no_plan is not None or not done.plan.actions:
+        return None
+    refused = {o.name for o in state.objects if "suction" not in o.kind_details}
+    lifted = sorted({a.obj for a in done.plan.actions if a.kind == "grasp" and a.grasp_kind == "suction"} & refused)
+    assumes = {
+        "suction_mass": {
+            "density_kg_m3": relaxed.suction.density_kg_m3,
+            "safety_factor": relaxed.suction.safety_factor,
+            "estimate_density_kg_m3": request.settings.suction.density_kg_m3,
+            "estimate_safety_factor": request.settings.suction.safety_factor,
+            "objects": lifted,
+        }
+    }
+    return light, done, assumes
 
 
 def write_plan_files(
