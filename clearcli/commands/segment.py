@@ -33,7 +33,8 @@ and no ``excluded``):
                    (clearcli/perception/support.py)
     excluded      [{points: int, centroid: [3], reason: str}] segments above the
                    support that are no objects: they reach in from beyond its outline
-                   (an arm, a hand, a cable), hang above it, or stand on such a thing
+                   (an arm, a hand, a cable), are one with furniture beyond its edge
+                   (a desk or shelf behind), hang above it, or stand on such a thing
                    (clearcli/perception/exclude.py); an empty object list with these
                    is still exit 0
     objects       [{id: int (k, from 0), label: int (10 (k + 1), as in -o),
