@@ -5,9 +5,10 @@ some and leaves others, each with its reason; 5 nothing can be done. With ``--js
 document is printed in all three cases (and for a deadline that ends with a checked
 plan); errors (3, 4, 6, 8) are one line on stderr.
 
---json prints one document, schema ``clear.plan`` version 4 (version 1 had no
+--json prints one document, schema ``clear.plan`` version 5 (version 1 had no
 ``status``/``left``, and its ``optimal`` and ``steps`` meant less; version 2 had no
-``robot`` and no ``T_base_gripper`` per step; version 3 no ``grasp_kind`` per step):
+``robot`` and no ``T_base_gripper`` per step; version 3 no ``grasp_kind`` per step;
+version 4 no ``assumes``: a plan always rested on the estimated mass):
 
     source, frame_id          where the frame came from
     status                    "complete" | "partial" | "no_plan"

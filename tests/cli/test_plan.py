@@ -75,7 +75,7 @@ def test_complete_plan_exit_0_files_validated(tmp_path: Path) -> None:
     res = clear("plan", FIXTURES / "two_touching_boxes.pcd", "--json", "-o", out, "--problem", prob)
     assert res.returncode == 0, res.stderr
     doc = json.loads(res.stdout)
-    assert doc["schema"] == "clear.plan" and doc["version"] == 4
+    assert doc["schema"] == "clear.plan" and doc["version"] == 5
     assert doc["status"] == "complete" and doc["left"] == [] and doc["check"] == "whole"
     assert doc["goal"] == ["o0", "o1"] and len(doc["actions"]) == 2
     for step in doc["steps"]:  # every action carries its joint solutions

@@ -233,7 +233,7 @@ def test_cli_plan_on_a_real_frame() -> None:
     res = _clear("plan", str(pcd), "--json")
     assert res.returncode == 10, res.stderr  # partial: test57 has boxes too wide to grasp
     doc = json.loads(res.stdout)
-    assert doc["schema"] == "clear.plan" and doc["version"] == 4
+    assert doc["schema"] == "clear.plan" and doc["version"] == 5
     assert doc["cost"] == len(doc["actions"]) >= 1
     assert isinstance(doc["optimal"], bool) and doc["camera_pose_source"] == "default from table"
     first = doc["first_action"]

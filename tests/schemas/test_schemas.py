@@ -189,7 +189,7 @@ def test_an_unknown_or_missing_schema_name_is_a_failure() -> None:
 
 def test_the_in_process_hook_sees_what_print_line_writes(capsys: pytest.CaptureFixture[str]) -> None:
     before = len(FAILURES)
-    provenance.print_line(json.dumps({"schema": "clear.plan", "version": 4}))
+    provenance.print_line(json.dumps({"schema": "clear.plan", "version": 5}))
     try:
         assert len(FAILURES) == before + 1 and "clear.plan" in FAILURES[-1]
     finally:
@@ -222,4 +222,4 @@ def test_the_schemas_load_from_a_zipped_package(tmp_path: Path) -> None:
     assert done.returncode == 0, done.stderr
     where, listing = done.stdout.splitlines()
     assert str(archive) in where
-    assert listing == f"{len(NAMES)} clear.plan version 4"
+    assert listing == f"{len(NAMES)} clear.plan version 5"
