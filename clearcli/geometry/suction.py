@@ -312,19 +312,25 @@ def hidden_cells(
     R, t = T_camera_table[:3, :3], T_camera_table[:3, 3]
     Pc = P @ R.T + t
     Qc = hidden_by @ R.T + t
-    Qc = Qc[Qc[:, 2] > 1e-6]
-    if not len(Qc) or not (Pc[:, 2] > 1e-6).all():
+    qz = Qc[:, 2]
+    ahead = qz > 1e-6
+    if not ahead.any() or not (Pc[:, 2] > 1e-6).all():
         return hidden, plane
     step = 1.5 * cell / float(np.median(Pc[:, 2]))
-    qb = np.floor(Qc[:, :2] / Qc[:, 2:3] / step).astype(np.int64)
     pb = np.floor(Pc[:, :2] / Pc[:, 2:3] / step).astype(np.int64)
-    # only the occluder's points whose bin is within one of a candidate's can hide it
+    # only the occluder's points whose bin is within one of a candidate's can hide it;
+    # its bins per column on all its points (the same divisions, element by element, as
+    # on those in front alone), the points behind the camera masked, not copied out
     p_lo = np.array([pb[:, 0].min(), pb[:, 1].min()]) - 1
     p_hi = np.array([pb[:, 0].max(), pb[:, 1].max()]) + 1
-    near = (qb[:, 0] >= p_lo[0]) & (qb[:, 0] <= p_hi[0]) & (qb[:, 1] >= p_lo[1]) & (qb[:, 1] <= p_hi[1])
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        q0 = np.floor(Qc[:, 0] / qz / step)
+        q1 = np.floor(Qc[:, 1] / qz / step)
+        near = ahead & (q0 >= p_lo[0]) & (q0 <= p_hi[0]) & (q1 >= p_lo[1]) & (q1 <= p_hi[1])
     if not near.any():
         return hidden, plane
-    qb, qz = qb[near], Qc[near, 2]
+    qb = np.stack([q0[near], q1[near]], axis=1).astype(np.int64)
+    qz = qz[near]
     # the bins on a dense grid over the candidates' bins and one around (the occluder's
     # kept points fall in it): the nearest point of each bin, then each candidate's
     # nearest over its bin and the eight around it (the occluder's bins grown by one)
