@@ -32,7 +32,7 @@ def test_no_name_lists_them_and_json_is_a_document() -> None:
     assert doc["schema"] == "clear.schemas" and doc["version"] == 1
     assert [r["name"] for r in doc["schemas"]] == schemas.names()
     plan = next(r for r in doc["schemas"] if r["name"] == "plan")
-    assert (plan["schema"], plan["version"]) == ("clear.plan", 4)
+    assert (plan["schema"], plan["version"]) == ("clear.plan", 5)
 
 
 def test_an_unknown_name_is_one_line_naming_the_valid_ones() -> None:

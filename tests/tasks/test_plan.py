@@ -131,7 +131,7 @@ def test_outcome_carries_the_schema_the_cli_prints(capsys, monkeypatch) -> None:
         cli.main()
     assert int(exit_info.value.code or 0) == outcome.exit_code == 0
     doc = json.loads(capsys.readouterr().out)
-    assert (doc["schema"], doc["version"]) == (f"clear.{outcome.schema}", outcome.version) == ("clear.plan", 4)
+    assert (doc["schema"], doc["version"]) == (f"clear.{outcome.schema}", outcome.version) == ("clear.plan", 5)
     assert set(doc) - {"schema", "version", "clear"} == set(outcome.payload)
     assert doc["actions"] == outcome.payload["actions"] == ["(grasp o0)"]
 
