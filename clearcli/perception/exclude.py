@@ -15,7 +15,7 @@ set aside with the reason, for --json to list as ``excluded``.
   walls rising from its base to the cut, so its cut part stands over its base (mOSD has
   no such cut; uois_image_0002's tall box: 0.8 cm); an object lying at the border is cut
   at its resting height. An arm the sensor's inpainting joins to the table meets it only
-  along its silhouette, centimetres off (gqcnn's YuMi arms: 4.5 to 6.3 cm).
+  along its silhouette, centimetres off (gqcnn's YuMi arms: 4.8 to 6.8 cm).
 - stands beyond the support's edge, on or as part of furniture: it touches a thing
   outside the support's outline (above its plane) that goes on `_FAR_BEYOND_M` or more
   beyond the outline, farther than any object the hull cuts can reach (a second desk
@@ -65,9 +65,12 @@ _TOUCH_M = 0.015
 _FAR_BEYOND_M = 0.25
 _LINK_M = 0.02  # neighbouring pixels this near in space are one surface
 # a part cut by the image's border this far (median, in-plane) from where its segment rests
-# on the support is not held up by it: an object's cut top stands within its walls' lean
-# and the depth's fattening of its base (1 cm); an inpainted arm's silhouette, 4.5 cm and
-# more off. Between the two with a margin of 1.5 cm and more either side.
+# on the support is not held up by it: an object's cut top stands over its base, within its
+# walls' lean and the depth's fattening (uois_image_0002's tall box: 0.8 cm); an inpainted
+# arm's silhouette meets the support centimetres off (gqcnn's YuMi arms: 4.8 to 6.8 cm; a
+# PhoXi bin's wall, cut by the border along its rim: 3.2 cm). Measured on the choose part:
+# 1.7 cm of margin below, 0.7 cm and more above (a median of hundreds of points: rounding
+# moves it by micrometres).
 _APART_M = 0.025
 # pixels this near the image's edge are where it cuts a segment (a few, not one: a working
 # grid at stride k ends up to k - 1 pixels short of the edge; a sensor's edge pixels drop out)
