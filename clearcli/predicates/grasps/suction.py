@@ -30,6 +30,7 @@ other (each has its own ``ik_unfeasible_*`` fact).
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator, Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -56,6 +57,8 @@ UP = np.array([0.0, 0.0, 1.0])
 STEM_CLEARANCE_M = 0.003  # the stem's radius beyond the cup's
 TURNS_DEG = (0.0, 180.0, 90.0, 270.0)  # half turns first, as the pinch's candidates
 BLOCK_STRIDE = 4  # every 4th point of a neighbour is checked against the tool's volume
+# the places' blockers: the best place alone, then the others together (`swept_hits`)
+FIRST_THEN_REST = (slice(0, 1), slice(1, None))
 
 
 def cup_spec(s: SuctionSettings) -> CupSpec:
@@ -82,29 +85,54 @@ def swept_mask(
 
 
 def swept_hits(
-    points: np.ndarray, labels: np.ndarray, at: np.ndarray, normals: np.ndarray, s: SuctionSettings, approach_m: float
-) -> list[frozenset[int]]:
+    points: np.ndarray,
+    labels: np.ndarray,
+    at: np.ndarray,
+    normals: np.ndarray,
+    s: SuctionSettings,
+    approach_m: float,
+    parts: Sequence[slice] = (slice(None),),
+) -> Iterator[frozenset[int]]:
     """The labels of ``points`` in the tool's volume (`swept_mask`) at each of C
-    contacts (``at``, ``normals``: (C, 3)), all at once."""
-    m, c = _swept_pairs(points, at, normals, s, approach_m)
-    hits: list[set[int]] = [set() for _ in range(len(at))]
-    if len(m):
-        n_labels = int(labels.max()) + 1
-        for key in np.unique(c * n_labels + labels[m]):
-            hits[int(key) // n_labels].add(int(key) % n_labels)
-    return [frozenset(h) for h in hits]
+    contacts (``at``, ``normals``: (C, 3)), in order, made part by part (``parts``:
+    consecutive slices of the C, each made when the first of it is asked for: a search
+    that stops at the first contact makes no more)."""
+    for asked, (m, c) in _swept_parts(points, at, normals, s, approach_m, parts):
+        hits: dict[int, set[int]] = {k: set() for k in asked}
+        if len(m):
+            n_labels = int(labels.max()) + 1
+            for key in np.unique(c * n_labels + labels[m]):
+                hits[int(key) // n_labels].add(int(key) % n_labels)
+        yield from (frozenset(hits[k]) for k in asked)
 
 
 def _swept_pairs(
     points: np.ndarray, at: np.ndarray, normals: np.ndarray, s: SuctionSettings, approach_m: float
 ) -> tuple[np.ndarray, np.ndarray]:
     """(point, contact) index pairs: each of ``points`` in the tool's volume at each of
-    C contacts. First the box around each volume in its contact's own axes (one matrix
-    product for all: the depth along the normal and two directions across it), a
-    micrometre wide: most points lie beside the tool; only those left are tested."""
+    C contacts (`_swept_parts` in one part)."""
+    return next(_swept_parts(points, at, normals, s, approach_m, (slice(None),)))[1]
+
+
+def _swept_parts(
+    points: np.ndarray,
+    at: np.ndarray,
+    normals: np.ndarray,
+    s: SuctionSettings,
+    approach_m: float,
+    parts: Sequence[slice],
+) -> Iterator[tuple[range, tuple[np.ndarray, np.ndarray]]]:
+    """Per part (a slice of the C contacts) its contacts and its (point, contact) index
+    pairs: each of ``points`` in the tool's volume at each of them. First the box around
+    each volume in its contact's own axes (one matrix product for all C, whatever the
+    parts: a product's rounding may depend on its shape; the depth along the normal and
+    two directions across it), a micrometre wide: most points lie beside the tool; only
+    those left are tested. Each part's pairs are made when it is asked for."""
     none = np.zeros(0, dtype=np.int64)
     if not len(points) or not len(at):
-        return none, none
+        for part in parts:
+            yield range(len(at))[part], (none, none)
+        return
     w_min = min(s.bellows_compliance_m, s.stem_length_m)
     w_max = max(s.stem_length_m + approach_m, s.stem_length_m + s.body_length_m + approach_m)
     across = max(s.cup_diameter_m / 2.0 + STEM_CLEARANCE_M, s.body_radius_m) + 1e-6
@@ -130,19 +158,29 @@ def _swept_pairs(
         axis=1,
     )
     axes = np.stack([n, a, b], axis=1).reshape(-1, 3)  # (3C, 3)
-    q = (points @ axes.T - np.einsum("ck,ck->c", axes, np.repeat(at, 3, axis=0))).reshape(len(points), len(at), 3)
-    box = (q[..., 0] > w_min - 1e-6) & (q[..., 0] <= w_max + 1e-6) & (np.abs(q[..., 1]) <= across)
-    box &= np.abs(q[..., 2]) <= across
-    m, c = np.nonzero(box)
-    rel = points[m] - at[c]
-    w = np.einsum("ij,ij->i", rel, normals[c])
-    radial2 = np.einsum("ij,ij->i", rel, rel) - w * w
-    stem = (w > s.bellows_compliance_m) & (w <= s.stem_length_m + approach_m) & (radial2 <= r_stem**2)
-    body = (
-        (w > s.stem_length_m) & (w <= s.stem_length_m + s.body_length_m + approach_m) & (radial2 <= s.body_radius_m**2)
-    )
-    inside = stem | body
-    return m[inside], c[inside]
+    q_all = (points @ axes.T - np.einsum("ck,ck->c", axes, np.repeat(at, 3, axis=0))).reshape(len(points), len(at), 3)
+    for part in parts:
+        asked = range(len(at))[part]
+        if not len(asked):
+            yield asked, (none, none)
+            continue
+        # the elementwise tests below give each contact's pairs alike in any part
+        q = q_all[:, part]
+        box = (q[..., 0] > w_min - 1e-6) & (q[..., 0] <= w_max + 1e-6) & (np.abs(q[..., 1]) <= across)
+        box &= np.abs(q[..., 2]) <= across
+        m, c = np.nonzero(box)
+        c = np.asarray(asked)[c]
+        rel = points[m] - at[c]
+        w = np.einsum("ij,ij->i", rel, normals[c])
+        radial2 = np.einsum("ij,ij->i", rel, rel) - w * w
+        stem = (w > s.bellows_compliance_m) & (w <= s.stem_length_m + approach_m) & (radial2 <= r_stem**2)
+        body = (
+            (w > s.stem_length_m)
+            & (w <= s.stem_length_m + s.body_length_m + approach_m)
+            & (radial2 <= s.body_radius_m**2)
+        )
+        inside = stem | body
+        yield asked, (m[inside], c[inside])
 
 
 def swept_boxes(at: np.ndarray, normals: np.ndarray, s: SuctionSettings, approach_m: float) -> np.ndarray:
@@ -297,7 +335,10 @@ class SuctionGrasp(KindModule):
             # up to 8 places that seal and hold, best first: the first that nothing
             # blocks ends the search, else the one fewest do
             pick, blockers = 0, frozenset[int]()
-            for rank, hit in enumerate(swept_hits(cloud, labels, judged.points, judged.normals, s, approach_m)):
+            # the best place alone first: where nothing blocks it the rest are not looked
+            # at (each judged as among all, `_swept_parts`: the same hits)
+            hits = swept_hits(cloud, labels, judged.points, judged.normals, s, approach_m, FIRST_THEN_REST)
+            for rank, hit in enumerate(hits):
                 if rank == 0 or len(hit) < len(blockers):
                     pick, blockers = rank, hit
                 if not blockers:
