@@ -8,7 +8,9 @@
 Each frame is segmented once (the default settings), then planned by `clear plan`'s own
 stages for each profile with its default grasp kinds (panda: pinch, rim, slide;
 panda-hybrid: those and suction; panda-suction and ur5e-epick: suction alone). Printed
-per set and profile: objects removed (the plan's goal) out of the segments found, plans
+per set and profile: objects removed (the plan's goal) out of the segments found (a frame
+with nothing to do where a cup's load was judged on the estimated mass planned once more
+as light as a cracker box, as `clear plan` does: clearcli/settings/weigh.py), plans
 that remove nothing, which kinds the plans used, the predicates stage's median time,
 and why the objects left were left (the plan's reason, and for the ungraspable the
 suction kind's reason class: "curved", "rough", "hole or edge", "tilted", "another
@@ -130,6 +132,7 @@ def main() -> None:
     from clearcli.robot.arm import resolve_arm
     from clearcli.settings import Settings
     from clearcli.settings.tree import load_settings
+    from clearcli.settings.weigh import lightest_plausible
 
     profiles = [p.strip() for p in args.profiles.split(",") if p.strip()]
     for name, paths in _sets(args.set, args.limit).items():
@@ -143,7 +146,7 @@ def main() -> None:
         for robot in profiles:
             settings = load_settings(None, [f"robot.name={robot}"])
             arm = resolve_arm(settings)
-            removed, nothing, kinds, left, t_pred = 0, 0, Counter(), Counter(), []
+            removed, nothing, weighed, kinds, left, t_pred = 0, 0, 0, Counter(), Counter(), []
             for _stem, frame, seg in segs:
                 t0 = time.perf_counter()
                 state = compute_state(frame, seg, settings)
@@ -152,6 +155,15 @@ def main() -> None:
                     plan = make_plan(state, settings, robot=arm)
                 except NoPlanError as err:
                     plan = err.plan  # type: ignore[attr-defined]
+                relaxed = lightest_plausible(settings) if not plan.actions else None
+                if relaxed is not None:  # as `clear plan` does (clearcli/tasks/plan.py): weigh on the lift
+                    try:
+                        light = make_plan(compute_state(frame, seg, relaxed), relaxed, robot=arm)
+                    except NoPlanError as err:
+                        light = err.plan  # type: ignore[attr-defined]
+                    if light.actions:
+                        plan = light
+                        weighed += 1
                 removed += len(plan.goal)
                 nothing += not plan.goal
                 kinds.update(a.grasp_kind for a in plan.actions if a.kind == "grasp")
@@ -161,6 +173,7 @@ def main() -> None:
             print(
                 f"  {robot:14s} {removed:5d} ({share:5.1f} %) {nothing:8d} {statistics.median(t_pred):9.3f} s"
                 f"  {dict(kinds)}; {dict(left.most_common(6))}"
+                + (f"; {weighed} frame(s) planned as light as a cracker box (weigh on lift)" if weighed else "")
             )
 
 
