@@ -17,7 +17,14 @@ from typing import Any
 import numpy as np
 
 from clearcli.geometry.gripper import GripperModel, gripper_model, push_tool_model
-from clearcli.geometry.models import DegenerateObject, ObjectGeometry, TableFrame, build_from_columns, object_columns
+from clearcli.geometry.models import (
+    DegenerateObject,
+    ObjectGeometry,
+    TableFrame,
+    build_from_columns,
+    object_columns,
+    table_rows,
+)
 from clearcli.geometry.poses import PushGeometry, push_geometry
 from clearcli.io.frames import Frame
 from clearcli.perception.openings import TableEdge, rim_of, seen_edges
@@ -296,19 +303,7 @@ def _points_table(points_camera: np.ndarray, groups: Sequence[np.ndarray], tf: T
     if not groups or not sum(sizes):
         return [np.zeros((0, 3)) for _ in groups]
     idx = np.concatenate([np.asarray(g, dtype=np.int64) for g in groups])
-    src = [points_camera[:, i].take(idx).astype(np.float64) for i in range(3)]
-    T = tf.T_table_camera
-    q = np.empty((len(idx), 3))
-    col, tmp = np.empty(len(idx)), np.empty(len(idx))
-    with np.errstate(invalid="ignore", over="ignore"):  # non-finite points: dropped below
-        for j in range(3):
-            np.multiply(src[0], T[j, 0], out=col)
-            np.multiply(src[1], T[j, 1], out=tmp)
-            col += tmp
-            np.multiply(src[2], T[j, 2], out=tmp)
-            col += tmp
-            col += T[j, 3]
-            q[:, j] = col
+    q = np.ascontiguousarray(table_rows(points_camera, idx, tf.T_table_camera).T)  # non-finite: dropped below
     # a non-finite coordinate makes all three transformed ones non-finite (float32 or
     # float64 input: no finite one overflows), so the height alone tells
     cuts = np.cumsum([0, *sizes])

@@ -10,7 +10,6 @@ import dataclasses
 import json
 import os
 import subprocess
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -21,15 +20,14 @@ from clearcli.io.pcd import write_pcd
 from clearcli.sim.camera import render
 from clearcli.sim.families import FURNITURE_ID, SUPPORT_FAMILIES, support_frame
 from clearcli.sim.scene import make_scene
+from tests.helpers import run_clear
 
 
 def _clear(*args: str) -> subprocess.CompletedProcess[str]:
     """The installed entry point, without CLEAR_DEBUG (under which an internal error
     prints its traceback on purpose)."""
-    exe = Path(sys.executable).parent / "clear"
-    cmd = [str(exe)] if exe.exists() else [sys.executable, "-m", "clearcli.cli"]
     env = {k: v for k, v in os.environ.items() if k != "CLEAR_DEBUG"}
-    res = subprocess.run([*cmd, *args], capture_output=True, text=True, timeout=300, env=env)
+    res = run_clear(*args, timeout=300, env=env)
     assert "Traceback" not in res.stderr, res.stderr
     assert res.returncode in EXIT_CODES, (res.returncode, res.stderr)
     return res
