@@ -348,11 +348,14 @@ def _many_frames() -> list[str]:
 def test_sigterm_stops_a_batch_with_its_summary_and_exit_143(tmp_path: Path) -> None:
     frames = _many_frames()
     proc = start_clear("plan", *frames, "--json", "--jobs", "2", text=True, start_new_session=True)
-    time.sleep(4.0)
+    # signalled once its first frame's line is out, however loaded the machine is (a fixed
+    # sleep could signal a batch still starting, or one with no frame done yet)
+    assert proc.stdout is not None
+    first = proc.stdout.readline()
     proc.send_signal(signal.SIGTERM)
-    stdout, stderr = proc.communicate(timeout=60)
+    rest, stderr = proc.communicate(timeout=120)
     assert proc.returncode == 143, stderr
-    rows, summary = lines_of(stdout)
+    rows, summary = lines_of(first + rest)
     assert summary["interrupted"] and "terminated" in stderr and "Traceback" not in stderr
     assert 0 < len(rows) < summary["frames"] == 135 and summary["not_done"] > 0
 
@@ -368,7 +371,9 @@ def test_workers_die_with_a_killed_batch(tmp_path: Path) -> None:
     frames = _many_frames()
     quiet = {"stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL}
     proc = start_clear("plan", *frames, "--json", "--jobs", "2", **quiet, start_new_session=True)
-    time.sleep(3.0)
+    started = time.time() + 60  # the workers' start-up, on a loaded machine too
+    while len(_alive_in_group(proc.pid)) < 3 and time.time() < started:
+        time.sleep(0.2)
     assert len(_alive_in_group(proc.pid)) >= 3  # the batch and its two workers (and a tracker)
     os.kill(proc.pid, signal.SIGKILL)
     proc.wait(10)
