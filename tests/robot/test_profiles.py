@@ -176,7 +176,7 @@ def test_plan_with_another_robot_lands_every_step_on_its_recorded_pose(name: str
     res = clear("plan", "fixtures/clutter10.pcd", "--robot", name, "--json")
     assert res.returncode in (0, 10), res.stderr
     doc = json.loads(res.stdout)
-    assert doc["version"] == 4 and doc["robot"]["name"] == name and doc["robot"]["base_frame"] == base
+    assert doc["version"] == 5 and doc["robot"]["name"] == name and doc["robot"]["base_frame"] == base
     kin = kinematics_from_settings(load_settings(sets=[f"robot.name={name}"]).robot)
     assert doc["robot"]["joint_names"] == list(kin.joint_names)
     checked = [s for s in doc["steps"] if s["checked"]]
