@@ -3,14 +3,13 @@
 from __future__ import annotations
 
 import json
-import os
 import subprocess
-import sys
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
+from helpers import run_clear_as_user
 from helpers.segment import box_frame  # noqa: F401  (fixtures)
 from helpers.segment_bad_input import (
     LOW_AREA_M2,
@@ -21,7 +20,7 @@ from helpers.segment_bad_input import (
     _unorganized,
 )
 
-from clearcli.errors import EXIT_CODES, EXIT_OK
+from clearcli.errors import EXIT_OK
 from clearcli.io.frames import Frame
 from clearcli.io.pcd import write_pcd
 from clearcli.io.read import read_frame
@@ -82,15 +81,7 @@ def test_cli_segment_errors_exit_codes(tmp_path, box_frame: Frame) -> None:  # t
 
 
 def _clear(*args: str) -> subprocess.CompletedProcess[str]:
-    """The installed entry point, as a user runs it: without CLEAR_DEBUG, under which an
-    internal error would print its traceback on purpose."""
-    exe = Path(sys.executable).parent / "clear"
-    cmd = [str(exe)] if exe.exists() else [sys.executable, "-m", "clearcli.cli"]
-    env = {k: v for k, v in os.environ.items() if k != "CLEAR_DEBUG"}
-    res = subprocess.run([*cmd, *args], capture_output=True, text=True, timeout=120, env=env)
-    assert "Traceback" not in res.stderr, res.stderr
-    assert res.returncode in EXIT_CODES, (res.returncode, res.stderr)
-    return res
+    return run_clear_as_user(*args, timeout=120)
 
 
 def _json(res: subprocess.CompletedProcess[str]) -> dict[str, Any]:

@@ -8,29 +8,22 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import os
 import subprocess
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from helpers import run_clear_as_user
 
-from clearcli.errors import EXIT_CODES, EXIT_OK, EXIT_SCENE
+from clearcli.errors import EXIT_OK, EXIT_SCENE
 from clearcli.io.pcd import write_pcd
 from clearcli.sim.camera import render
 from clearcli.sim.families import FURNITURE_ID, SUPPORT_FAMILIES, support_frame
 from clearcli.sim.scene import make_scene
-from tests.helpers import run_clear
 
 
 def _clear(*args: str) -> subprocess.CompletedProcess[str]:
-    """The installed entry point, without CLEAR_DEBUG (under which an internal error
-    prints its traceback on purpose)."""
-    env = {k: v for k, v in os.environ.items() if k != "CLEAR_DEBUG"}
-    res = run_clear(*args, timeout=300, env=env)
-    assert "Traceback" not in res.stderr, res.stderr
-    assert res.returncode in EXIT_CODES, (res.returncode, res.stderr)
-    return res
+    return run_clear_as_user(*args, timeout=300)
 
 
 def _json(res: subprocess.CompletedProcess[str]) -> dict[str, Any]:

@@ -39,6 +39,18 @@ def run_clear(
     )
 
 
+def run_clear_as_user(*args: object, timeout: float = 120) -> subprocess.CompletedProcess[str]:
+    """`run_clear` as a user runs it, without CLEAR_DEBUG (under which an internal error
+    prints its traceback on purpose): no traceback, and a documented exit code."""
+    from clearcli.errors import EXIT_CODES
+
+    env = {k: v for k, v in os.environ.items() if k != "CLEAR_DEBUG"}
+    res = run_clear(*args, timeout=timeout, env=env)
+    assert "Traceback" not in res.stderr, res.stderr
+    assert res.returncode in EXIT_CODES, (res.returncode, res.stderr)
+    return res
+
+
 def start_clear(*args: object, **popen: Any) -> subprocess.Popen[Any]:
     """`python -m clearcli.cli ARGS` started and not waited for (to signal or kill it on
     the way): stdout and stderr piped unless ``popen`` (`subprocess.Popen`'s own keywords)
