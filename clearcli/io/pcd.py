@@ -1,12 +1,15 @@
 """PCD files <-> `Frame`.
 
-Reading: the header grammar is parsed by pypcd4 (`MetaData.parse_header`), but the header
-lines are collected and the data block is decoded here, with NumPy and python-lzf (the
-decompressor pypcd4 itself uses). pypcd4's own `PointCloud.from_path` is not used for the
-data because it trusts the header: a binary file shorter than declared silently yields
-fewer points, it stops looking for DATA after ten header lines, and it splits COUNT>1
-fields of compressed files into the wrong blocks. Here every size the header claims is
-checked against the file and any failure becomes an `InputError` naming the file.
+Reading: the header is parsed here (`_parse_metadata`, the rules of pypcd4 1.5.1's
+`MetaData.parse_header` and of its pydantic model, checked in tests/io/test_pcd.py), the
+data block decoded with NumPy and python-lzf (the decompressor pypcd4 itself uses).
+pypcd4 is not imported to read: it imports pydantic, 0.13-0.2 s of every cold
+`clear segment` / `plan` / `info` on a PCD (issue 39), for a header of a dozen ASCII lines.
+pypcd4's own `PointCloud.from_path` is not used for the data either, because it trusts
+the header: a binary file shorter than declared silently yields fewer points, it stops
+looking for DATA after ten header lines, and it splits COUNT>1 fields of compressed files
+into the wrong blocks. Here every size the header claims is checked against the file and
+any failure becomes an `InputError` naming the file.
 
 Writing: pypcd4 composes the header and the binary_compressed block (readable by PCL,
 open3d and this reader); the file appears atomically.
@@ -15,9 +18,11 @@ open3d and this reader); the file appears atomically.
 from __future__ import annotations
 
 import os
+import re
 import struct
+from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, BinaryIO
+from typing import BinaryIO
 
 import numpy as np
 
@@ -26,9 +31,6 @@ from clearcli.files import atomic_path
 from clearcli.io.frames import Frame, labels_to_write
 from clearcli.io.pointfields import frame_from_records, pack_rgb_float
 from clearcli.io.sniff import PCD_HEADER_KEYS, open_input
-
-if TYPE_CHECKING:
-    from pypcd4.pypcd4 import MetaData
 
 # A PCD header is ten short lines; anything without DATA in the first 64 KiB is not a PCD.
 _MAX_HEADER_BYTES = 1 << 16
@@ -45,8 +47,106 @@ _PCD_CODES = {
     ("I", 4): "i4",
     ("I", 8): "i8",
 }
-# pypcd4 renames the PCL padding field "_" to this prefix plus random letters.
-_PYPCD4_PADDING_PREFIX = "#$%&~~"
+# PCL's name of a padding field.
+_PADDING = "_"
+# A header line as pypcd4 1.5.1 reads it (its HEADER_PATTERN): a key, then the longest run
+# of these characters; a line that does not match is skipped, as there.
+_HEADER_LINE = re.compile(r"(\w+)\s+([\w\s\.\-?\d+\.?\d*]+)")
+_ENCODINGS = ("ascii", "binary", "binary_compressed", "binaryscompressed")  # pypcd4's Encoding
+_VERSIONS = (".7", "0.7")
+_DEFAULT_VIEWPOINT = (0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0)
+
+
+@dataclass(frozen=True)
+class PcdHeader:
+    """What a PCD header says (pypcd4's MetaData fields, same defaults)."""
+
+    fields: tuple[str, ...]
+    size: tuple[int, ...]
+    type: tuple[str, ...]
+    count: tuple[int, ...]
+    points: int
+    width: int
+    height: int = 1
+    version: str = "0.7"
+    viewpoint: tuple[float, ...] = _DEFAULT_VIEWPOINT
+    data: str = "binary_compressed"  # the encoding
+
+
+class _BadHeader(ValueError):
+    """A header value pypcd4's model would reject: "loc: msg" as pydantic words it."""
+
+
+def _header_values(lines: list[str]) -> dict[str, object]:
+    """pypcd4's parse_header: each known key's value, converted (a bad number raises
+    ValueError here, as there); the last line of a key wins."""
+    header: dict[str, object] = {}
+    for line in lines:
+        if line.startswith("#") or len(line) < 2:
+            continue
+        match = _HEADER_LINE.match(line)
+        if match is None:
+            continue
+        value = match.group(2).split()
+        key = match.group(1).lower()
+        if key in ("version", "data"):
+            header[key] = value[0]
+        elif key in ("width", "height", "points"):
+            header[key] = int(value[0])
+        elif key in ("fields", "type"):
+            header[key] = tuple(value)
+        elif key in ("size", "count"):
+            header[key] = tuple(int(v) for v in value)
+        elif key == "viewpoint":
+            header[key] = tuple(float(v) for v in value)
+    return header
+
+
+def _validated(values: dict[str, object]) -> PcdHeader:
+    """pypcd4's MetaData model's checks on `_header_values`, in the order of its fields;
+    the first failure raises `_BadHeader` with pydantic's wording."""
+
+    def need(key: str) -> object:
+        if key not in values:
+            raise _BadHeader(f"{key}: Field required")
+        return values[key]
+
+    def positive(key: str) -> tuple[int, ...]:
+        sizes: tuple[int, ...] = need(key)  # type: ignore[assignment]  # a tuple of int (_header_values)
+        for i, v in enumerate(sizes):
+            if v <= 0:
+                raise _BadHeader(f"{key}.{i}: Input should be greater than 0")
+        return sizes
+
+    def non_negative(key: str, default: int | None = None) -> int:
+        v: int = values.get(key, default) if default is not None else need(key)  # type: ignore[assignment]
+        if v < 0:
+            raise _BadHeader(f"{key}: Input should be greater than or equal to 0")
+        return v
+
+    fields: tuple[str, ...] = need("fields")  # type: ignore[assignment]  # a tuple of str
+    size = positive("size")
+    types: tuple[str, ...] = need("type")  # type: ignore[assignment]  # a tuple of str
+    for i, t in enumerate(types):
+        if t not in ("F", "U", "I"):
+            raise _BadHeader(f"type.{i}: Input should be 'F', 'U' or 'I'")
+    count = positive("count")
+    points = non_negative("points")
+    width = non_negative("width")
+    height = non_negative("height", 1)
+    version = str(values.get("version", "0.7"))
+    if version not in _VERSIONS:
+        raise _BadHeader("version: Input should be '.7' or '0.7'")
+    viewpoint: tuple[float, ...] = values.get("viewpoint", _DEFAULT_VIEWPOINT)  # type: ignore[assignment]
+    if len(viewpoint) < 7:
+        raise _BadHeader(f"viewpoint.{len(viewpoint)}: Field required")
+    if len(viewpoint) > 7:
+        raise _BadHeader(f"viewpoint: Tuple should have at most 7 items after validation, not {len(viewpoint)}")
+    data = str(values.get("data", "binary_compressed"))
+    if data not in _ENCODINGS:
+        listed = ", ".join(f"'{e}'" for e in _ENCODINGS[:-1])
+        raise _BadHeader(f"data: Input should be {listed} or '{_ENCODINGS[-1]}'")
+    return PcdHeader(fields, size, types, count, points, width, height, version, viewpoint, data)
 
 
 def _read_header_lines(fp: BinaryIO, path: Path) -> tuple[list[str], int]:
@@ -79,15 +179,13 @@ def _read_header_lines(fp: BinaryIO, path: Path) -> tuple[list[str], int]:
             return lines, offset
 
 
-def _parse_metadata(lines: list[str], path: Path) -> MetaData:
-    from pypcd4.pypcd4 import MetaData
-
+def _parse_metadata(lines: list[str], path: Path) -> PcdHeader:
     keys = {line.split(None, 1)[0].upper() for line in lines}
     missing = [k for k in ("FIELDS", "SIZE", "TYPE", "WIDTH") if k not in keys]
     if missing:
         raise InputError(f"{path}: bad PCD header: no {', '.join(missing)} line")
     # PCL accepts headers without COUNT/HEIGHT/POINTS (defaults 1s, 1, WIDTH*HEIGHT);
-    # pypcd4 wants them, so fill them in the same way.
+    # pypcd4's model wants them, so they are filled in the same way.
     fields_line = next(line for line in lines if line.upper().startswith("FIELDS"))
     n_fields = len(fields_line.split()) - 1
     if "COUNT" not in keys:
@@ -99,15 +197,9 @@ def _parse_metadata(lines: list[str], path: Path) -> MetaData:
             width = int(next(line for line in lines if line.upper().startswith("WIDTH")).split()[1])
             height = int(next(line for line in lines if line.upper().startswith("HEIGHT")).split()[1])
             lines = lines[:-1] + [f"POINTS {width * height}"] + lines[-1:]
-        meta = MetaData.parse_header(lines)
-    except Exception as exc:  # pydantic.ValidationError, ValueError, IndexError
+        meta = _validated(_header_values(lines))
+    except (ValueError, IndexError) as exc:  # a bad number, a check of the model (_BadHeader)
         reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        if hasattr(exc, "errors"):
-            try:
-                first = exc.errors()[0]
-                reason = f"{'.'.join(str(p) for p in first['loc'])}: {first['msg']}"
-            except Exception:
-                pass
         raise InputError(f"{path}: bad PCD header ({reason})") from None
     lengths = {len(meta.fields), len(meta.size), len(meta.type), len(meta.count)}
     if len(lengths) != 1:
@@ -126,24 +218,24 @@ def _parse_metadata(lines: list[str], path: Path) -> MetaData:
     return meta
 
 
-def _record_dtype(meta: MetaData) -> np.dtype:
+def _record_dtype(meta: PcdHeader) -> np.dtype:
     """Packed little-endian record dtype; COUNT>1 fields become sub-arrays, `_` padding `_pad<i>`."""
     names, formats = [], []
     for i, (name, typ, size, count) in enumerate(zip(meta.fields, meta.type, meta.size, meta.count)):
         base = np.dtype("<" + _PCD_CODES[(typ, size)])
-        if name.startswith(_PYPCD4_PADDING_PREFIX) or name in names:
+        if name == _PADDING or name in names:
             name = f"_pad{i}"
         names.append(name)
         formats.append(base if count == 1 else (base, (count,)))
     return np.dtype({"names": names, "formats": formats})
 
 
-def _decode_data(fp: BinaryIO, path: Path, meta: MetaData, dtype: np.dtype, data_bytes: int) -> np.ndarray:
+def _decode_data(fp: BinaryIO, path: Path, meta: PcdHeader, dtype: np.dtype, data_bytes: int) -> np.ndarray:
     import lzf
 
     n = int(meta.points)
     need = n * dtype.itemsize
-    encoding = str(meta.data.value)
+    encoding = meta.data
     if encoding == "ascii":
         try:
             records = np.loadtxt(fp, dtype=dtype, ndmin=1, comments="#")
@@ -274,9 +366,9 @@ def pcd_header_fields(path: Path) -> dict[str, object]:
         raise InputError(f"{path}: cannot read ({exc.strerror})") from None
     meta = _parse_metadata(lines, path)
     return {
-        "encoding": str(meta.data.value),
+        "encoding": meta.data,
         "fields": [
-            {"name": "_" if f.startswith(_PYPCD4_PADDING_PREFIX) else f, "type": f"{t}{s}", "count": c}
+            {"name": f, "type": f"{t}{s}", "count": c}
             for f, t, s, c in zip(meta.fields, meta.type, meta.size, meta.count)
         ],
         "width": int(meta.width),

@@ -231,3 +231,106 @@ def test_pcd_truncation_fuzz_only_clear_errors(tmp_path: Path) -> None:
             continue
         # a flip the reader accepts changed a value, never how many points there are
         assert back.n_points == frame.n_points
+
+
+# Header lines changed from helpers.io._header (binary, 3 points of x y z): what pypcd4's
+# reader and its pydantic model make of each, which the reader's own parser must repeat.
+_HEADER_VARIANTS: dict[str, tuple[bytes, bytes]] = {
+    "as_is": (b"", b""),
+    "version_06": (b"VERSION 0.7", b"VERSION 0.6"),
+    "version_dot7": (b"VERSION 0.7", b"VERSION .7"),
+    "no_version": (b"VERSION 0.7\n", b""),
+    "no_viewpoint": (b"VIEWPOINT 0 0 0 1 0 0 0\n", b""),
+    "viewpoint_6": (b"VIEWPOINT 0 0 0 1 0 0 0", b"VIEWPOINT 0 0 0 1 0 0"),
+    "viewpoint_8": (b"VIEWPOINT 0 0 0 1 0 0 0", b"VIEWPOINT 0 0 0 1 0 0 0 0"),
+    "viewpoint_word": (b"VIEWPOINT 0 0 0 1 0 0 0", b"VIEWPOINT 0 0 0 1 0 0 x"),
+    "viewpoint_values": (b"VIEWPOINT 0 0 0 1 0 0 0", b"VIEWPOINT 0.5 -1e-3 2 1 0 0 0"),
+    "size_0": (b"SIZE 4 4 4", b"SIZE 4 4 0"),
+    "size_negative": (b"SIZE 4 4 4", b"SIZE 4 4 -4"),
+    "count_0": (b"COUNT 1 1 1", b"COUNT 1 1 0"),
+    "type_lower": (b"TYPE F F F", b"TYPE F F f"),
+    "width_negative": (b"WIDTH 3", b"WIDTH -3"),
+    "width_float": (b"WIDTH 3", b"WIDTH 3.0"),
+    "width_underscore": (b"WIDTH 3", b"WIDTH 3_0"),
+    "width_plus": (b"WIDTH 3", b"WIDTH +3"),
+    "width_twice": (b"WIDTH 3", b"WIDTH 5\nWIDTH 3"),
+    "width_lower_key": (b"WIDTH 3", b"width 3"),
+    "width_comment": (b"WIDTH 3", b"WIDTH 3 # c"),
+    "height_word": (b"HEIGHT 1", b"HEIGHT x"),
+    "points_word": (b"POINTS 3", b"POINTS x"),
+    "data_upper": (b"DATA binary", b"DATA BINARY"),
+    "data_no_value": (b"DATA binary", b"DATA"),
+    "size_no_value": (b"SIZE 4 4 4", b"SIZE"),
+    "fields_no_value": (b"FIELDS x y z", b"FIELDS"),
+    "fields_comma": (b"FIELDS x y z", b"FIELDS x,y z"),
+    "fields_colon": (b"FIELDS x y z", b"FIELDS x y z:1"),
+    "tabs": (b"SIZE 4 4 4", b"SIZE\t4\t4\t4"),
+}
+
+
+@pytest.mark.parametrize("name", sorted(_HEADER_VARIANTS))
+def test_header_parsed_as_pypcd4_does(name: str) -> None:
+    """The reader's header parser (written so that reading does not import pypcd4 and
+    pydantic) takes what pypcd4's MetaData.parse_header takes, with the same values, and
+    rejects what it rejects, with pydantic's words for the same first error."""
+    import pydantic
+    from pypcd4.pypcd4 import MetaData
+
+    from clearcli.io import pcd
+
+    old, new = _HEADER_VARIANTS[name]
+    text = _header().replace(old, new).decode()
+    lines = [line.strip() for line in text.splitlines() if line.strip() and not line.startswith("#")]
+    try:
+        theirs = MetaData.parse_header(lines)
+    except (pydantic.ValidationError, ValueError, IndexError) as exc:
+        with pytest.raises((ValueError, IndexError)) as info:
+            pcd._validated(pcd._header_values(lines))
+        if isinstance(exc, pydantic.ValidationError):
+            first = exc.errors()[0]
+            assert str(info.value) == f"{'.'.join(str(p) for p in first['loc'])}: {first['msg']}"
+        else:
+            assert str(info.value) == str(exc)
+        return
+    ours = pcd._validated(pcd._header_values(lines))
+    for key in ("fields", "size", "type", "count", "points", "width", "height", "version", "viewpoint"):
+        assert getattr(ours, key) == getattr(theirs, key), key
+    assert ours.data == theirs.data.value
+
+
+def test_header_of_every_shared_pcd_as_pypcd4_reads_it() -> None:
+    from pypcd4.pypcd4 import MetaData
+
+    from clearcli.io import pcd
+
+    for path in _all_pcds():
+        with open(path, "rb") as fp:
+            lines, _ = pcd._read_header_lines(fp, path)
+        ours = pcd._parse_metadata(lines, path)
+        theirs = MetaData.parse_header(lines)
+        fields = tuple("_" if f.startswith("#$%&~~") else f for f in theirs.fields)  # pypcd4 renames padding
+        assert (ours.fields, ours.size, ours.type, ours.count) == (fields, theirs.size, theirs.type, theirs.count)
+        assert (ours.width, ours.height, ours.points, ours.viewpoint) == (
+            theirs.width,
+            theirs.height,
+            theirs.points,
+            theirs.viewpoint,
+        )
+        assert ours.data == theirs.data.value, path
+
+
+def test_reading_a_pcd_imports_neither_pypcd4_nor_pydantic() -> None:
+    """Cold start (issue 39): pypcd4 imports pydantic, 0.13-0.2 s; reading needs neither."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys\n"
+        "from clearcli.io.pcd import pcd_header_fields, read_pcd\n"
+        f"f = read_pcd({str(shared_path('mosd/test/test57.pcd'))!r})\n"
+        f"h = pcd_header_fields({str(shared_path('pcd_formats/bun0.pcd'))!r})\n"
+        "assert f.n_points == 307200 and h['encoding'] == 'ascii'\n"
+        "print(sorted(m for m in sys.modules if m.split('.')[0] in ('pypcd4', 'pydantic')))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[]"
