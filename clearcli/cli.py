@@ -216,8 +216,10 @@ def _single_threaded_numerics() -> None:
 # of its attributes (the standard library's importlib.util.LazyLoader), so code that does
 # use them gets them whole. scipy.spatial imports its rotations (scipy.spatial.transform,
 # ~20 ms on a quiet machine) with `from . import transform`; clear uses its trees and
-# hulls only.
-DEFERRED_MODULES = frozenset({"numpy.f2py", "numpy.testing", "numpy.polynomial", "scipy.spatial.transform"})
+# hulls only. SciPy's docstring parser (scipy._lib._docscrape, imported by its array-API
+# layer) imports pydoc at its top and uses it only inside functions clear does not reach:
+# pydoc was 30-40 ms of a cold `clear plan` here (issue 39).
+DEFERRED_MODULES = frozenset({"numpy.f2py", "numpy.testing", "numpy.polynomial", "scipy.spatial.transform", "pydoc"})
 
 
 class _DocstringKept:

@@ -66,6 +66,9 @@ import scipy.spatial
 assert type(sys.modules["scipy.spatial.transform"]) is importlib.util._LazyModule
 from scipy.spatial.transform import Rotation
 assert abs(Rotation.from_euler("z", 90, degrees=True).as_matrix()[1, 0] - 1.0) < 1e-12
+assert type(sys.modules["pydoc"]) is importlib.util._LazyModule  # SciPy's docscrape imported it
+import pydoc
+assert pydoc.getdoc(Rotation).startswith("Rotation in 3 dimensions")
 print("ok")
 """
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO, timeout=120)
