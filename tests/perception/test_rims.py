@@ -68,3 +68,25 @@ def test_rim_merge_keeps_touching_tops_apart() -> None:
     rim = np.vstack([outer, inner])
     rim_seg = np.r_[np.zeros(len(outer), np.int64), np.ones(len(inner), np.int64)]
     assert int(merge_rims(rim_seg, rim, rim[:, 2], 0.015, 0.02, voxel_is_top=np.zeros(len(rim), bool)).max()) == 0
+
+
+def test_near_another_segment_holds_every_pair_across_segments() -> None:
+    """The pairs search runs on the voxels `_near_another_segment` keeps: every pair of
+    two segments' voxels within reach has both ends among them, on random clouds with
+    points exactly on the cells' boundaries too."""
+    from scipy.spatial import cKDTree
+
+    from clearcli.perception.rims import _near_another_segment
+
+    rng = np.random.default_rng(3)
+    for trial in range(20):
+        pts = rng.uniform(0, 0.2, (600, 3))
+        if trial % 2:
+            pts = np.round(pts / 0.0101) * 0.0101  # on the 1.01 * reach cells' boundaries
+        seg = rng.integers(0, 1 + trial % 5, 600)
+        pairs = cKDTree(pts).query_pairs(0.01, output_type="ndarray")
+        across = pairs[seg[pairs[:, 0]] != seg[pairs[:, 1]]]
+        near = _near_another_segment(seg, pts, 0.01, int(seg.max()) + 1)
+        assert near[across].all()
+        if trial % 5 == 0:  # one segment: no voxel has another near
+            assert not near.any()
