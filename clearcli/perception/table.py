@@ -568,9 +568,12 @@ def beyond_the_edge(
         grid = np.column_stack([gx.ravel(), gy.ravel()])
         centres = (grid + 0.5) * cell
         added = inside_convex(centres, both) & ~inside_convex(centres, main_hull, cell)
-        if added.any():  # not the piece's own cells
-            mine = {tuple(c) for c in own.tolist()}
-            added &= np.array([tuple(c) not in mine for c in grid.tolist()])
+        if added.any():  # not the piece's own cells (one integer key per cell, not a set of tuples)
+            base = np.minimum(grid.min(axis=0), own.min(axis=0))
+            span = int(max(grid[:, 1].max(), own[:, 1].max()) - base[1]) + 1
+            added &= ~np.isin(
+                (grid[:, 0] - base[0]) * span + grid[:, 1] - base[1], (own[:, 0] - base[0]) * span + own[:, 1] - base[1]
+            )
         looks = origin + centres[added] @ basis  # points of the plane in the added area
         through = nearer = 0
         if looks.shape[0]:
