@@ -1,25 +1,27 @@
-"""The Barrett WAM's kinematics: forward and inverse kinematics on our URDF (Pinocchio),
-the IK in closed form over the arm's swivel angle, and its collision capsules at a joint
-configuration. What the capsules may hit is `clearcli.robot.collision`; what every arm's
-kinematics offers, `clearcli.robot.kinematics`.
+"""The Barrett WAM's kinematics: forward and inverse kinematics on our URDF (read with
+the standard library, computed with NumPy: no Pinocchio, see "the URDF's chain in NumPy"
+below), the IK in closed form over the arm's swivel angle, and its collision capsules at
+a joint configuration. What the capsules may hit is `clearcli.robot.collision`; what
+every arm's kinematics offers, `clearcli.robot.kinematics`.
 
 Frames: ``base`` is the WAM's DH frame 0 at the shoulder (z up, x towards the table by
 default placement), ``tcp`` the gripper closing point (z = approach, x = closing
-direction), 0.115 m past the tool plate. Pinocchio is imported inside functions: the CLI
-must start fast.
+direction), 0.115 m past the tool plate.
 """
 
 from __future__ import annotations
 
 import copy
+import functools
 import math
+import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from clearcli.robot.kinematics import IKStats, SolverAccess, cache_lookup, se3
+from clearcli.robot.kinematics import IKStats, SolverAccess, cache_lookup
 from clearcli.settings.robot import RobotSettings
 
 URDF_PATH = Path(__file__).with_name("wam.urdf")
@@ -124,6 +126,169 @@ def dh_fk(q: np.ndarray) -> np.ndarray:
     return T
 
 
+# -- the URDF's chain in NumPy ----------------------------------------------------------
+# Forward kinematics, the TCP's Jacobian and the pose error are computed here, not by
+# Pinocchio: importing Pinocchio (its C++ bindings, and coal's) was 0.1-0.45 s of every
+# cold `clear plan` on this project's machines (issue 39), for a chain of seven revolute
+# joints whose solver needs a few dozen of these products per plan. The formulas are
+# Pinocchio's (rpy = Rz(y) Ry(p) Rx(r) as in URDF, joint placements, the LOCAL frame
+# Jacobian, log6 with its Taylor branches), so the results agree with it to rounding
+# (tests/robot/test_kinematics.py checks them against Pinocchio on random configurations).
+_EPS = float(np.finfo(float).eps)
+_PREC2 = _EPS ** (1.0 / 3.0)  # Pinocchio's TaylorSeriesExpansion<double>::precision<2>()
+
+
+def _rpy(r: float, p: float, y: float) -> np.ndarray:
+    """URDF's rpy as a rotation: Rz(y) Ry(p) Rx(r)."""
+    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
+    Rx = np.array([[1.0, 0.0, 0.0], [0.0, cr, -sr], [0.0, sr, cr]])
+    Ry = np.array([[cp, 0.0, sp], [0.0, 1.0, 0.0], [-sp, 0.0, cp]])
+    Rz = np.array([[cy, -sy, 0.0], [sy, cy, 0.0], [0.0, 0.0, 1.0]])
+    return Rz @ Ry @ Rx
+
+
+def _origin(joint: ET.Element) -> np.ndarray:
+    """A joint's <origin> as a 4x4 pose of its frame in its parent link's."""
+    T = np.eye(4)
+    origin = joint.find("origin")
+    if origin is not None:
+        T[:3, :3] = _rpy(*(float(v) for v in origin.get("rpy", "0 0 0").split()))
+        T[:3, 3] = [float(v) for v in origin.get("xyz", "0 0 0").split()]
+    return T
+
+
+class _UrdfChain:
+    """The serial chain of a URDF whose movable joints are revolute about their z axis
+    (the WAM's): per joint its placement in the previous joint's frame, its limits; per
+    link (and joint) name the joint it hangs from and its placement in that joint's frame."""
+
+    def __init__(self, urdf: Path) -> None:
+        root = ET.parse(urdf).getroot()
+        by_parent = {j.find("parent").get("link"): j for j in root.iter("joint")}  # type: ignore[union-attr]  # URDF joints have a <parent>
+        children = {j.find("child").get("link") for j in root.iter("joint")}  # type: ignore[union-attr]
+        link = next(str(k.get("name")) for k in root.iter("link") if k.get("name") not in children)
+        self.root_link = link
+        self.placements: list[np.ndarray] = []  # joint i in joint i-1's frame (the root's for 0)
+        self.names: list[str] = []
+        lower, upper = [], []
+        # frame name -> (index of the joint it hangs from, -1 for the root; its placement there)
+        self.frames: dict[str, tuple[int, np.ndarray]] = {link: (-1, np.eye(4))}
+        since = np.eye(4)  # the fixed transforms since the last revolute joint
+        while link in by_parent:
+            joint = by_parent[link]
+            T = since @ _origin(joint)
+            kind, name = joint.get("type"), str(joint.get("name"))
+            link = str(joint.find("child").get("link"))  # type: ignore[union-attr]
+            if kind == "fixed":
+                since = T
+                self.frames[name] = self.frames[link] = (len(self.names) - 1, T)
+                continue
+            axis = joint.find("axis")
+            xyz = [float(v) for v in (axis.get("xyz", "1 0 0") if axis is not None else "1 0 0").split()]
+            if kind != "revolute" or xyz != [0.0, 0.0, 1.0]:
+                raise ValueError(f"{urdf}: joint {name!r}: only revolute joints about z are modelled here")
+            limit = joint.find("limit")
+            assert limit is not None  # a revolute joint has limits (urdf_joints checks)
+            lower.append(float(limit.get("lower", "0")))
+            upper.append(float(limit.get("upper", "0")))
+            self.placements.append(T)
+            self.names.append(name)
+            since = np.eye(4)
+            self.frames[name] = self.frames[link] = (len(self.names) - 1, np.eye(4))
+        self.lower = np.array(lower)
+        self.upper = np.array(upper)
+
+    def joint_poses(self, q: np.ndarray) -> list[np.ndarray]:
+        """Each joint's frame in the root's (4x4) at q: Pinocchio's oMi[1:]."""
+        out: list[np.ndarray] = []
+        T = np.eye(4)
+        for placement, angle in zip(self.placements, np.asarray(q, dtype=float).tolist()):
+            c, s = math.cos(angle), math.sin(angle)
+            T = (
+                T
+                @ placement
+                @ np.array([[c, -s, 0.0, 0.0], [s, c, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
+            )
+            out.append(T)
+        return out
+
+    def frame_pose(self, poses: list[np.ndarray], frame: str) -> np.ndarray:
+        """A frame's pose in the root's, given `joint_poses`."""
+        joint, placement = self.frames[frame]
+        return placement if joint < 0 else poses[joint] @ placement
+
+
+def _log3(R: np.ndarray) -> tuple[np.ndarray, float]:
+    """Pinocchio's log3: the rotation vector of R and its angle (its renormalisation, its
+    branches)."""
+    c0 = R[:, 0] / np.linalg.norm(R[:, 0])
+    c1 = R[:, 1] / np.linalg.norm(R[:, 1])
+    c2 = np.cross(c0, c1)
+    c0 = np.cross(c1, c2)
+    Rn = np.column_stack([c0, c1, c2])
+    tr = float(Rn[0, 0] + Rn[1, 1] + Rn[2, 2])
+    cos_value = (tr - 1.0) / 2.0
+    acos_expansion = math.sqrt(2.0 * (1.0 - cos_value) + _EPS * _EPS)
+    if tr <= 3.0 - _PREC2:
+        theta = math.acos(cos_value) if tr >= -1.0 + _PREC2 else math.pi - acos_expansion
+    else:
+        theta = acos_expansion
+    if cos_value < -1.0 + _PREC2:
+        return _log3_near_pi(Rn, tr)
+    a = 0.5 * np.array([Rn[2, 1] - Rn[1, 2], Rn[0, 2] - Rn[2, 0], Rn[1, 0] - Rn[0, 1]])
+    if theta >= _PREC2:
+        t = theta / math.sin(theta)
+    else:
+        n2 = float(a @ a)
+        t = 1.0 + n2 / 6.0 + n2 * n2 * 3.0 / 40.0
+    return t * a, theta
+
+
+def _log3_near_pi(Rn: np.ndarray, tr: float) -> tuple[np.ndarray, float]:
+    """Pinocchio's log3 near a half turn (compute_theta_axis on the largest diagonal term)."""
+    val = 2.0 * np.diagonal(Rn) - tr + 1.0
+    if val[0] >= val[1]:
+        i0 = 0 if val[0] >= val[2] else 2
+    else:
+        i0 = 1 if val[1] >= val[2] else 2
+    i1, i2 = (i0 + 1) % 3, (i0 + 2) % 3
+    s = math.sqrt(float(val[i0]) + _EPS + _EPS * _EPS) * (1.0 if Rn[i2, i1] >= Rn[i1, i2] else -1.0)
+    axis = np.empty(3)
+    axis[i0] = s / 2.0
+    axis[i1] = 1.0 / (2.0 * s) * (Rn[i1, i0] + Rn[i0, i1])
+    axis[i2] = 1.0 / (2.0 * s) * (Rn[i2, i0] + Rn[i0, i2])
+    w = 1.0 / (2.0 * s) * (Rn[i2, i1] - Rn[i1, i2])
+    norm = float(np.linalg.norm(axis))
+    angle = 2.0 * math.atan2(norm, w)
+    return angle * (axis / norm), angle
+
+
+def log6(T: np.ndarray) -> np.ndarray:
+    """Pinocchio's log6 of a 4x4 pose: (v, w), the twist whose exponential it is."""
+    R, p = T[:3, :3], T[:3, 3]
+    a = 0.5 * np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
+    t2 = float(a @ a)
+    tr = float(R[0, 0] + R[1, 1] + R[2, 2])
+    w, theta = _log3(R)
+    if tr >= 3.0 - _PREC2:
+        alpha = 1.0 - t2 / 12.0 - t2 * t2 / 720.0
+        beta = 1.0 / 12.0 + t2 / 720.0
+    else:
+        st, ct = math.sin(theta), math.cos(theta)
+        alpha = theta * st / (2.0 * (1.0 - ct))
+        beta = 1.0 / (theta * theta) - st / (2.0 * theta * (1.0 - ct))
+    v = alpha * p - 0.5 * np.cross(w, p) + (beta * float(w @ p)) * w
+    return np.concatenate([v, w])
+
+
+def _act_inv(A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """A^-1 B for rigid poses (Pinocchio's A.actInv(B))."""
+    out = np.eye(4)
+    out[:3, :3] = A[:3, :3].T @ B[:3, :3]
+    out[:3, 3] = A[:3, :3].T @ (B[:3, 3] - A[:3, 3])
+    return out
+
+
 class WamKinematics(SolverAccess):
     """The WAM model loaded from ``wam.urdf`` with joint limits from the manual."""
 
@@ -137,8 +302,6 @@ class WamKinematics(SolverAccess):
     ) -> None:
         """The IK search's bounds; None: [robot]'s (clearcli/settings/robot.py, their one
         home; a profile passes a user's: `kinematics_of_wam`)."""
-        import pinocchio as pin
-
         robot = RobotSettings()
         damping = robot.ik_damping if damping is None else damping
         max_iterations = robot.ik_max_iterations if max_iterations is None else max_iterations
@@ -146,14 +309,10 @@ class WamKinematics(SolverAccess):
         tolerance_rad = robot.ik_tolerance_rad if tolerance_rad is None else tolerance_rad
         n_seeds = robot.ik_seeds if n_seeds is None else n_seeds
 
-        self.pin = pin
-        self.model = pin.buildModelFromUrdf(str(URDF_PATH))
-        self.data = self.model.createData()
-        self.tcp_id = self.model.getFrameId(TCP_FRAME)
-        self.joint_names = tuple(self.model.names[1:])
-        self.plate_id = self.model.getFrameId(TOOL_PLATE_FRAME)
-        self.lower = np.array(self.model.lowerPositionLimit, dtype=float)
-        self.upper = np.array(self.model.upperPositionLimit, dtype=float)
+        self.chain = _chain(URDF_PATH)
+        self.joint_names = tuple(self.chain.names)
+        self.lower = self.chain.lower.copy()
+        self.upper = self.chain.upper.copy()
         self.damping = float(damping)
         self.max_iterations = int(max_iterations)
         self.tolerance_m = float(tolerance_m)
@@ -161,17 +320,16 @@ class WamKinematics(SolverAccess):
         self.n_seeds = max(1, int(n_seeds))
         self.stats = IKStats()
         self._cache: dict[bytes, np.ndarray | None] = {}
-        # Pinocchio's world is the URDF root (the footprint); our poses are in the base
-        # (shoulder) frame, 0.346 m above it.
-        pin.framesForwardKinematics(self.model, self.data, np.zeros(self.model.nq))
-        self.M_root_base = self.data.oMf[self.model.getFrameId(BASE_FRAME)].copy()
-        self.M_base_root = self.M_root_base.inverse()
+        # The chain's root is the URDF's (the footprint); our poses are in the base
+        # (shoulder) frame, 0.346 m above it. (4x4 poses: T_root_base and its inverse.)
+        n = len(self.joint_names)
+        self.M_root_base = self.chain.frame_pose(self.chain.joint_poses(np.zeros(n)), BASE_FRAME)
+        self.M_base_root = _act_inv(self.M_root_base, np.eye(4))
         # The analytic IK inverts the DH table: use it only if the URDF is that arm (it
         # is; a changed wam.urdf falls back to damped least squares from seeds alone).
         rng = np.random.default_rng(0)
         self.analytic = all(
-            np.allclose(dh_fk(q), self.fk(q), atol=1e-9)
-            for q in rng.uniform(self.lower, self.upper, size=(8, self.model.nq))
+            np.allclose(dh_fk(q), self.fk(q), atol=1e-9) for q in rng.uniform(self.lower, self.upper, size=(8, n))
         )
         # the limits of the shoulder's and the wrist's ZYZ angles (see swivel_sweep)
         lo = np.stack([self.lower[0:3], self.lower[4:7]], axis=-1).reshape(3, 1, 1, 1, 2)
@@ -196,24 +354,19 @@ class WamKinematics(SolverAccess):
 
     # -- forward kinematics ---------------------------------------------------------
     def fk(self, q: np.ndarray, frame: str | None = None) -> np.ndarray:
-        """T_base_<frame> (4x4) at joint angles q (7,); the TCP by default."""
-        pin = self.pin
-        pin.framesForwardKinematics(self.model, self.data, np.asarray(q, dtype=float))
-        fid = self.model.getFrameId(TCP_FRAME if frame is None else frame)
-        return np.array((self.M_base_root * self.data.oMf[fid]).homogeneous)
+        """T_base_<frame> (4x4) at joint angles q (7,); the TCP by default (a frame: a
+        link's or a joint's name)."""
+        poses = self.chain.joint_poses(q)
+        return self.M_base_root @ self.chain.frame_pose(poses, TCP_FRAME if frame is None else frame)
 
     def capsules(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Arm capsules at q: (C,3) start points, (C,3) end points, (C,) radii (base frame)."""
-        pin = self.pin
-        pin.framesForwardKinematics(self.model, self.data, np.asarray(q, dtype=float))
-        return self._capsules_now()
-
-    def _capsules_now(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        oMi = self.data.oMi
-        plate = self.data.oMf[self.plate_id].translation
-        a = np.array([oMi[i].translation for i, _, _ in _CAPSULES])
-        b = np.array([plate if j < 0 else oMi[j].translation for _, j, _ in _CAPSULES])
-        R, t = self.M_base_root.rotation, self.M_base_root.translation
+        poses = self.chain.joint_poses(q)
+        # joint indices from 1 (Pinocchio's, as in _CAPSULES); -1 the tool plate
+        plate = self.chain.frame_pose(poses, TOOL_PLATE_FRAME)[:3, 3]
+        a = np.array([poses[i - 1][:3, 3] for i, _, _ in _CAPSULES])
+        b = np.array([plate if j < 0 else poses[j - 1][:3, 3] for _, j, _ in _CAPSULES])
+        R, t = self.M_base_root[:3, :3], self.M_base_root[:3, 3]
         a = a @ R.T + t
         b = b @ R.T + t
         r = np.array([rad for _, _, rad in _CAPSULES])
@@ -244,8 +397,6 @@ class WamKinematics(SolverAccess):
     def _solve_from(self, target: Any, q0: np.ndarray, iterations: int | None = None) -> np.ndarray | None:
         """Damped least squares from q0 (clipped to the limits at every step), for
         ``iterations`` (default ``max_iterations``)."""
-        pin = self.pin
-        model, data, fid, local = self.model, self.data, self.tcp_id, pin.LOCAL
         lo, hi = self.lower, self.upper
         tol_m2, tol_rad2 = self.tolerance_m**2, self.tolerance_rad**2
         q = q0.copy()
@@ -253,14 +404,14 @@ class WamKinematics(SolverAccess):
         self.stats.starts += 1
         n_it = self.max_iterations if iterations is None else int(iterations)
         for it in range(n_it):
-            pin.computeJointJacobians(model, data, q)
-            pin.updateFramePlacement(model, data, fid)
-            err = pin.log6(data.oMf[fid].actInv(target)).vector  # in the TCP frame
+            poses = self.chain.joint_poses(q)
+            T_root_tcp = self.chain.frame_pose(poses, TCP_FRAME)
+            err = log6(_act_inv(T_root_tcp, target))  # in the TCP frame
             vx, vy, vz, wx, wy, wz = err.tolist()
             if vx * vx + vy * vy + vz * vz < tol_m2 and wx * wx + wy * wy + wz * wz < tol_rad2:
                 self.stats.iterations += it
                 return q
-            J = pin.getFrameJacobian(model, data, fid, local)
+            J = self._tcp_jacobian(poses, T_root_tcp)
             dq = J.T @ np.linalg.solve(J @ J.T + damp, err)
             step = float(np.abs(dq).max())
             if step > 0.4:  # keep the linearisation honest far from the target
@@ -269,11 +420,42 @@ class WamKinematics(SolverAccess):
         self.stats.iterations += n_it
         return None
 
+    @staticmethod
+    def _tcp_jacobian(poses: list[np.ndarray], T_root_tcp: np.ndarray) -> np.ndarray:
+        """The TCP's Jacobian (6, 7) in its own frame (Pinocchio's LOCAL frame Jacobian:
+        rows v then w), from the joints' poses: joint i turns about its z axis a_i at p_i,
+        moving the TCP by a_i x (p_tcp - p_i)."""
+        P = np.array([T[:3, 3] for T in poses])
+        A = np.array([T[:3, 2] for T in poses])
+        R = T_root_tcp[:3, :3]
+        J = np.empty((6, len(poses)))
+        J[:3] = R.T @ np.cross(A, T_root_tcp[:3, 3] - P).T
+        J[3:] = R.T @ A.T
+        return J
+
+    def target(self, T_base_tcp: np.ndarray) -> np.ndarray:
+        """``T_base_tcp`` as the solvers' target: T_root_tcp (4x4), in the chain's root."""
+        return self.M_root_base @ np.asarray(T_base_tcp, dtype=float)
+
+    def within_tolerance(self, target: Any, q: np.ndarray) -> bool:
+        """q within the joint limits puts the TCP on ``target`` within the tolerances."""
+        if np.any(q < self.lower) or np.any(q > self.upper):
+            return False
+        vx, vy, vz, wx, wy, wz = self.pose_error(target, q).tolist()
+        return (
+            math.sqrt(vx * vx + vy * vy + vz * vz) < self.tolerance_m
+            and math.sqrt(wx * wx + wy * wy + wz * wz) < self.tolerance_rad
+        )
+
+    def pose_error(self, target: Any, q: np.ndarray) -> np.ndarray:
+        """The TCP's pose error at q against the target (log6, 6 values, in the TCP frame)."""
+        T_root_tcp = self.chain.frame_pose(self.chain.joint_poses(q), TCP_FRAME)
+        return log6(_act_inv(T_root_tcp, target))
+
     def fresh(self) -> WamKinematics:
         """A new IK search on this model: the same arm and settings, an empty cache and
-        statistics, its own Pinocchio data (as if built again, without reading the URDF)."""
+        statistics (as if built again, without reading the URDF)."""
         out = copy.copy(self)
-        out.data = self.model.createData()
         out.stats = IKStats()
         out._cache = {}
         return out
@@ -430,12 +612,12 @@ class WamKinematics(SolverAccess):
             T_in = self._into_reach(T)
             if T_in is None:
                 return None
-            target = self.M_root_base * se3(T)
+            target = self.target(T)
             T, q4s = T_in, self.elbow_angles(T_in)
             if not q4s:
                 return None
         if target is None:
-            target = self.M_root_base * se3(T)
+            target = self.target(T)
         if warm is not None:
             ref = np.clip(warm, self.lower, self.upper)
         else:
@@ -503,7 +685,7 @@ class WamKinematics(SolverAccess):
         if self.analytic:
             q = self._ik_analytic(T_base_tcp, warm)
         else:
-            target = self.M_root_base * se3(T_base_tcp)
+            target = self.target(T_base_tcp)
             starts = ([np.clip(warm, self.lower, self.upper)] if warm is not None else []) + self.seeds(T_base_tcp)
             for q0 in starts:
                 q = self._solve_from(target, q0)
@@ -517,6 +699,11 @@ class WamKinematics(SolverAccess):
         shoulder (the base origin)."""
         plate = T_base_tcp[:3, 3] - TCP_PAST_TOOL_PLATE_M * T_base_tcp[:3, 2]
         return float(np.linalg.norm(plate)) <= REACH_TOOL_PLATE_M + slack_m
+
+
+@functools.cache
+def _chain(urdf: Path) -> _UrdfChain:
+    return _UrdfChain(urdf)
 
 
 def kinematics_of_wam(robot: RobotSettings) -> WamKinematics:

@@ -246,10 +246,8 @@ def test_ik_rejects_top_down_at_the_shoulder_axis(kin: WamKinematics) -> None:
         assert fresh.ik(T) is None
     assert fresh.stats.starts == 0 and fresh.stats.sweeps == 0  # in closed form
     # an independent check: damped least squares from many random starts finds nothing
-    import pinocchio as pin
-
     T = _top_down(0.0, 0.0, TABLE_Z + 0.05)
-    target = kin.M_root_base * pin.SE3(T[:3, :3].copy(), T[:3, 3].copy())
+    target = kin.target(T)
     rng = np.random.default_rng(5)
     assert all(kin._solve_from(target, rng.uniform(kin.lower, kin.upper)) is None for _ in range(16))
     # ...while 0.35 m out, beyond the fold, the same grasp has one
@@ -264,3 +262,62 @@ def test_dh_fk_is_the_urdf(kin: WamKinematics) -> None:
     rng = np.random.default_rng(8)
     for q in rng.uniform(kin.lower, kin.upper, size=(50, 7)):
         np.testing.assert_allclose(dh_fk(q), kin.fk(q), atol=1e-12)
+
+
+def test_numpy_chain_is_pinocchios(kin: WamKinematics) -> None:
+    """The WAM's FK, TCP Jacobian, pose error (log6) and capsules are computed with NumPy
+    (no Pinocchio import at plan time, issue 39): the same as Pinocchio's on our URDF."""
+    import pinocchio as pin
+
+    from clearcli.robot import wam_kinematics as wk
+
+    model = pin.buildModelFromUrdf(str(wk.URDF_PATH))
+    data = model.createData()
+    tcp = model.getFrameId(wk.TCP_FRAME)
+    assert kin.joint_names == tuple(model.names[1:])
+    assert np.array_equal(kin.lower, model.lowerPositionLimit) and np.array_equal(kin.upper, model.upperPositionLimit)
+    pin.framesForwardKinematics(model, data, np.zeros(7))
+    M_base_root = data.oMf[model.getFrameId(wk.BASE_FRAME)].inverse()
+    rng = np.random.default_rng(3)
+    for q in rng.uniform(kin.lower, kin.upper, size=(40, 7)):
+        pin.computeJointJacobians(model, data, q)
+        pin.updateFramePlacement(model, data, tcp)
+        poses = kin.chain.joint_poses(q)
+        T_root_tcp = kin.chain.frame_pose(poses, wk.TCP_FRAME)
+        np.testing.assert_allclose(T_root_tcp, data.oMf[tcp].homogeneous, atol=1e-14)
+        np.testing.assert_allclose(
+            kin._tcp_jacobian(poses, T_root_tcp), pin.getFrameJacobian(model, data, tcp, pin.LOCAL), atol=1e-14
+        )
+        starts, ends, _ = kin.capsules(q)
+        pin.framesForwardKinematics(model, data, q)
+        expected = np.array([(M_base_root * data.oMi[i]).translation for i, _, _ in wk._CAPSULES])
+        np.testing.assert_allclose(starts, expected, atol=1e-14)
+        # pose errors from tiny (the Taylor branches) to near a half turn (the singular one)
+        for angle in (1e-9, 1e-4, 0.3, 2.0, np.pi - 1e-6):
+            axis = rng.normal(size=3)
+            T = np.eye(4)
+            T[:3, :3] = pin.exp3(axis / np.linalg.norm(axis) * angle) @ T_root_tcp[:3, :3]
+            T[:3, 3] = T_root_tcp[:3, 3] + rng.normal(size=3) * min(angle, 0.2)
+            theirs = pin.log6(data.oMf[tcp].actInv(pin.SE3(T))).vector
+            np.testing.assert_allclose(kin.pose_error(T, q), theirs, atol=1e-12)
+            assert kin.within_tolerance(T, q) == (
+                bool(np.all(q >= kin.lower) and np.all(q <= kin.upper))
+                and np.linalg.norm(theirs[:3]) < kin.tolerance_m
+                and np.linalg.norm(theirs[3:]) < kin.tolerance_rad
+            )
+
+
+def test_plan_time_kinematics_import_no_pinocchio() -> None:
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, numpy as np\n"
+        "from clearcli.robot.wam_kinematics import WamKinematics\n"
+        "kin = WamKinematics().fresh()\n"
+        "T = kin.fk(np.array([0.0, 0.6, 0.0, 1.6, 0.0, 0.6, 0.0]))\n"
+        "assert kin.ik(T) is not None and kin.capsules(np.zeros(7))[0].shape == (4, 3)\n"
+        "print('pinocchio' in sys.modules, 'coal' in sys.modules)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.split() == ["False", "False"]
