@@ -248,10 +248,8 @@ def verified(kin: Any, q: np.ndarray | None, T: np.ndarray) -> bool:
 
 def thorough_solution(kin: Any, T: np.ndarray, n_starts: int = 48, iterations: int = 200) -> bool:
     """Damped least squares (the old solver's iteration) from many random starts."""
-    import pinocchio as pin
-
     rng = np.random.default_rng(99)
-    target = kin.M_root_base * pin.SE3(np.ascontiguousarray(T[:3, :3]), np.ascontiguousarray(T[:3, 3]))
+    target = kin.target(T)
     saved = kin.max_iterations
     kin.max_iterations = iterations
     try:
