@@ -5,8 +5,9 @@ profile and kinematics model, clearcli/robot/arm.py -- and its placement, the st
 functions, resolved once) and runs the stages one by one, timing each, so that a replay
 can step in between them (tracking needs the segmentation before the state is planned
 on, push memory changes the state's costs). `Pipeline.run` chains them for one frame.
-The stages themselves are the stage modules' pure functions, imported with this module;
-their heavy libraries (SciPy, Pinocchio, FCL) are imported by the stages when first
+The stages themselves are the stage modules' pure functions: segmentation imported with
+this module, predicates, planning and the arm where first called (`clear segment` runs
+neither); their heavy libraries (SciPy, Pinocchio, FCL) are imported by the stages when first
 used. What the stages build per call is cheap once those libraries are imported (an IK
 search on the arm's model, the gripper boxes: microseconds), so nothing else is cached:
 the first frame pays the imports (about 2 s), later frames only their own work.
@@ -19,7 +20,7 @@ import os
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
@@ -28,14 +29,16 @@ from clearcli.io.frames import Frame
 from clearcli.io.read import read_frame
 from clearcli.perception.segment import segment
 from clearcli.perception.types import Segmentation
-from clearcli.planning.backtrack import make_plan
-from clearcli.planning.types import Plan
-from clearcli.predicates.state import SymbolicState
-from clearcli.predicates.state_builder import compute_state
-from clearcli.predicates.synthetic import segmentation_from_labels
-from clearcli.robot.arm import Arm, resolve_arm
 from clearcli.settings import Settings
 from clearcli.status import FrameStatus
+
+if TYPE_CHECKING:
+    # The predicates and planning stages (and the arm) are imported where they are first
+    # called: `clear segment` runs neither, and their modules were 0.1-0.2 s of its cold
+    # start (issue 39).
+    from clearcli.planning.types import Plan
+    from clearcli.predicates.state import SymbolicState
+    from clearcli.robot.arm import Arm
 
 SegmentFn = Callable[[Frame, Any], Segmentation]
 
@@ -56,7 +59,7 @@ class StateFn(Protocol):
     ) -> SymbolicState: ...
 
 
-PlanFn = Callable[..., Plan]
+PlanFn = Callable[..., "Plan"]  # a string: Plan is imported for type checking only
 
 # Statuses of one frame (clearcli/status.py), by their short names.
 OK, CLEARED, NO_TABLE = FrameStatus.OK, FrameStatus.CLEARED, FrameStatus.NO_TABLE
@@ -82,10 +85,14 @@ def _default_segment() -> SegmentFn:
 
 
 def _default_state() -> StateFn:
+    from clearcli.predicates.state_builder import compute_state  # noqa: PLC0415  (not for segment: see the top)
+
     return compute_state
 
 
 def _default_plan(robot: Arm) -> PlanFn:
+    from clearcli.planning.backtrack import make_plan  # noqa: PLC0415  (not for segment: see the top)
+
     return functools.partial(make_plan, robot=robot)
 
 
@@ -131,6 +138,8 @@ class Pipeline:
     def robot(self) -> Arm:
         """The arm every stage and the simulated world use, resolved once."""
         if self._robot is None:
+            from clearcli.robot.arm import resolve_arm  # noqa: PLC0415  (not for segment: see the top)
+
             self._robot = resolve_arm(self.settings)
         return self._robot
 
@@ -257,6 +266,8 @@ def truth_segmentation(frame: Frame, path: Any) -> Segmentation:
     """The segmentation the frame's own 'label' field gives (mOSD ground truth)."""
     if "label" not in frame.fields:
         raise InputError(f"{path}: --ground-truth needs a 'label' field, and this frame has none")
+    from clearcli.predicates.synthetic import segmentation_from_labels  # noqa: PLC0415  (see the top)
+
     return segmentation_from_labels(frame)
 
 
@@ -266,6 +277,8 @@ def stated(
     settings: Settings,
     avoid_faces: Mapping[int, frozenset[str]] | None = None,
 ) -> SymbolicState:
+    from clearcli.predicates.state_builder import compute_state  # noqa: PLC0415  (not for segment: see the top)
+
     return compute_state(frame, segmentation, settings, avoid_faces)
 
 
@@ -286,6 +299,8 @@ def planned(
     """Place ``robot`` (``camera_pose`` as given on the command line, else [robot]'s
     rules), then plan with every action IK-checked against it (``check``: None for
     [plan] check)."""
+    from clearcli.planning.backtrack import make_plan  # noqa: PLC0415  (not for segment: see the top)
+
     T_base_camera, pose_source = robot.place(state, camera_pose)
     try:
         plan = make_plan(state, settings, T_base_camera, check=check, robot=robot)

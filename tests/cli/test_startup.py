@@ -180,3 +180,35 @@ def test_help_of_a_command_or_a_completion_request_goes_through_the_app(tmp_path
     )
     assert res.returncode == 0 and res.stdout.split() == ["plan"]
     assert loaded["typer"] is True
+
+
+_MODULES_HOOK = """
+import atexit, json, os, sys
+
+def _report():
+    with open(os.environ["CLEAR_TEST_REPORT"], "w") as out:
+        json.dump(sorted(sys.modules), out)
+
+atexit.register(_report)
+"""
+
+
+@pytest.mark.parametrize("command", ["segment", "plan"])
+def test_a_command_imports_only_what_it_runs(tmp_path: Path, command: str) -> None:
+    """Issue 39: reading a PCD needs neither pypcd4 nor pydantic (its header is parsed by
+    clearcli/io/pcd.py), a plan on the default arm (the WAM) not Pinocchio (its
+    kinematics are NumPy's), and `segment` none of the predicates' or planner's modules."""
+    report = tmp_path / "modules.json"
+    env = hooked_env(tmp_path, _MODULES_HOOK)
+    env["CLEAR_TEST_REPORT"] = str(report)
+    res = run_clear(command, FIXTURES / "isolated_box.pcd", "--json", timeout=180, env=env)
+    assert res.returncode in (0, 10), res.stderr
+    modules = set(json.loads(report.read_text()))
+    assert "clearcli.perception.segment" in modules and "clearcli.io.pcd" in modules  # it did run
+    heavy = {"pypcd4", "pydantic", "pinocchio", "coal"}
+    assert not {m.split(".")[0] for m in modules} & heavy
+    stages = {m for m in modules if m.startswith(("clearcli.planning", "clearcli.predicates", "clearcli.robot"))}
+    if command == "segment":
+        assert stages == set()
+    else:
+        assert {"clearcli.planning.backtrack", "clearcli.robot.wam_kinematics"} <= stages
