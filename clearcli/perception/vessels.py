@@ -129,7 +129,10 @@ def find_rim(
         return None
     centres, radii = centres[ok], radii[ok]
     sample = band_xy if n <= _SCORE_SAMPLES else band_xy[rng.choice(n, _SCORE_SAMPLES, replace=False)]
-    dist = np.linalg.norm(sample[None, :, :] - centres[:, None, :], axis=2)  # (R, n)
+    # (R, n) distances, by coordinate: no (R, n, 2) array (what np.linalg.norm sums, in its order)
+    dx = sample[None, :, 0] - centres[:, 0, None]
+    dy = sample[None, :, 1] - centres[:, 1, None]
+    dist = np.sqrt(dx * dx + dy * dy)
     score = (np.abs(dist - radii[:, None]) <= np.maximum(_INLIER * radii, _INLIER_M)[:, None]).sum(axis=1)
     best = int(np.argmax(score))
     centre, radius = centres[best], float(radii[best])
