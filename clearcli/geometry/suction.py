@@ -400,7 +400,6 @@ def _grids(jobs: list[FaceJob], spec: CupSpec, d: Disc) -> _Grids | None:
     n_pts = np.array([len(w) for _, w in mine])
     UV = np.concatenate([uv for uv, _ in mine])
     W = np.concatenate([w for _, w in mine])
-    obj = np.repeat(np.arange(len(valid)), n_pts)
     starts = np.r_[0, np.cumsum(n_pts)[:-1]]
     i0 = np.floor(UV[:, 0] / cell).astype(np.int64)
     i1 = np.floor(UV[:, 1] / cell).astype(np.int64)
@@ -411,7 +410,11 @@ def _grids(jobs: list[FaceJob], spec: CupSpec, d: Disc) -> _Grids | None:
     sizes = rows * cols
     base = np.r_[0, np.cumsum(sizes)]
     total = int(base[-1])
-    keys = base[obj] + (i0 - lo0[obj]) * cols[obj] + (i1 - lo1[obj])
+    # each face's key of a cell: its block's start, then row by row (integers: exact in
+    # any order), per point by repeats, not gathers
+    keys = i0 * np.repeat(cols, n_pts)
+    keys += i1
+    keys += np.repeat(base[:-1] - lo0 * cols - lo1, n_pts)
     # a cell's value: the mean of its points (each face's cells are its own keys)
     cells, tops = _mean_per_key(keys, W, total)
     height = np.full(total, np.nan)
@@ -616,16 +619,22 @@ class FacePlaces:
         """(N,) the smallest of each place's margins (once: it is asked for twice)."""
         return self.margins.min(axis=1)
 
-    def contact(self, k: int) -> Contact:
-        """Place ``k`` as a `Contact`, with why it does not seal."""
+    def contact(self, k: int, load: tuple[float, str] | None = None) -> Contact:
+        """Place ``k`` as a `Contact`, with why it does not seal (and ``load``: its load
+        margin and why it fails, `load_margin`, where judged)."""
         face, m = self.frame.name, self.margins[k]
+        # the reason of the first test that fails, worded only for it (most places built
+        # are the best, which seals)
+        first = next((t for t, mk in enumerate(m.tolist()) if mk <= 0), None)
         whys = (
-            f"a hole or an edge under the cup ({self.empty[k]} of its cells of {1000 * self.cell_m:.0f} mm "
-            "hold no point)",
-            f"the {face} is curved (it bends {1000 * self.sag_m[k]:.1f} mm under the cup)",
-            f"the {face} is rough (points spread {1000 * self.spread_m[k]:.1f} mm about it)",
-            f"the {face} is tilted {self.tilt_deg[k]:.0f} deg from the approach",
-            f"another object lies under the cup ({self.intruders[k]} cells)",
+            lambda: (
+                f"a hole or an edge under the cup ({self.empty[k]} of its cells of {1000 * self.cell_m:.0f} mm "
+                "hold no point)"
+            ),
+            lambda: f"the {face} is curved (it bends {1000 * self.sag_m[k]:.1f} mm under the cup)",
+            lambda: f"the {face} is rough (points spread {1000 * self.spread_m[k]:.1f} mm about it)",
+            lambda: f"the {face} is tilted {self.tilt_deg[k]:.0f} deg from the approach",
+            lambda: f"another object lies under the cup ({self.intruders[k]} cells)",
         )
         full = bool(self.full[k])
         return Contact(
@@ -638,7 +647,9 @@ class FacePlaces:
             tilt_deg=float(self.tilt_deg[k]) if full else math.nan,
             others=int(self.intruders[k]),
             seal_margin=float(m.min()),
-            why=next((w for mk, w in zip(m, whys) if mk <= 0), ""),
+            why=whys[first]() if first is not None else "",
+            load_margin=math.nan if load is None else load[0],
+            load_why="" if load is None else load[1],
         )
 
 
@@ -666,9 +677,16 @@ def load_margins(places: FacePlaces, mass_kg: float, com_table: np.ndarray, spec
 
 def load_margin(contact: Contact, mass_kg: float, com_table: np.ndarray, spec: CupSpec) -> tuple[float, str]:
     """1 - the load's utilisation of the cup, and why it fails ("" when it holds)."""
+    return load_margin_at(contact.normal, contact.point, mass_kg, com_table, spec)
+
+
+def load_margin_at(
+    normal: np.ndarray, point: np.ndarray, mass_kg: float, com_table: np.ndarray, spec: CupSpec
+) -> tuple[float, str]:
+    """`load_margin` of a contact at ``point`` with the outward ``normal``."""
     W = mass_kg * GRAVITY_M_S2
     F = spec.holding_force_n
-    t, sh, mo, m = _load(contact.normal[None, :], contact.point[None, :], mass_kg, com_table, spec)
+    t, sh, mo, m = _load(normal[None, :], point[None, :], mass_kg, com_table, spec)
     tension, shear, moment, margin = float(t[0]), float(sh[0]), float(mo[0]), float(m[0])
     if margin > 0:
         return margin, ""
@@ -860,11 +878,10 @@ def _judged(faces: list[FacePlaces], mass_kg: float, com_table: np.ndarray, spec
     index = np.concatenate([np.arange(len(f)) for f in faces])
 
     def contact(k: int) -> Contact:
-        c = faces[int(which[k])].contact(int(index[k]))
+        f, j = faces[int(which[k])], int(index[k])
         if seal[k] > 0:
-            lm, why = load_margin(c, mass_kg, com_table, spec)
-            c = dataclasses.replace(c, load_margin=lm, load_why=why)
-        return c
+            return f.contact(j, load_margin_at(f.normals[j], f.points[j], mass_kg, com_table, spec))
+        return f.contact(j)
 
     built: dict[int, Contact] = {}
 

@@ -96,13 +96,29 @@ def swept_hits(
     """The labels of ``points`` in the tool's volume (`swept_mask`) at each of C
     contacts (``at``, ``normals``: (C, 3)), in order, made part by part (``parts``:
     consecutive slices of the C, each made when the first of it is asked for: a search
-    that stops at the first contact makes no more)."""
-    for asked, (m, c) in _swept_parts(points, at, normals, s, approach_m, parts):
+    that stops at the first contact makes no more). A label is in where one of its points
+    is: of the (point, contact) pairs in the boxes (`_box_parts`) the exact test
+    (`_inside`) first takes one pair per contact and label, and the others of a pair
+    that fails only (an object in the tool's way has hundreds of points in it: one says
+    so; each pair's test is the same whichever pairs are tested with it)."""
+    for asked, (m, c) in _box_parts(points, at, normals, s, approach_m, parts):
         hits: dict[int, set[int]] = {k: set() for k in asked}
         if len(m):
             n_labels = int(labels.max()) + 1
-            for key in np.unique(c * n_labels + labels[m]):
-                hits[int(key) // n_labels].add(int(key) % n_labels)
+            key = c * n_labels + labels[m]
+            # one pair of each key (any one: a key is in where one of its pairs is)
+            one = np.full(len(at) * n_labels, -1)
+            one[key] = np.arange(len(key))
+            pick = one[one >= 0]
+            ok = _inside(points, at, normals, m[pick], c[pick], s, approach_m)
+            hit = np.zeros(len(one), dtype=bool)
+            hit[key[pick[ok]]] = True
+            if not ok.all():
+                # the keys whose pair fell outside: all their pairs
+                rest = np.flatnonzero(np.isin(key, key[pick[~ok]]))
+                hit[key[rest][_inside(points, at, normals, m[rest], c[rest], s, approach_m)]] = True
+            for k in np.flatnonzero(hit).tolist():
+                hits[k // n_labels].add(k % n_labels)
         yield from (frozenset(hits[k]) for k in asked)
 
 
@@ -123,11 +139,28 @@ def _swept_parts(
     parts: Sequence[slice],
 ) -> Iterator[tuple[range, tuple[np.ndarray, np.ndarray]]]:
     """Per part (a slice of the C contacts) its contacts and its (point, contact) index
-    pairs: each of ``points`` in the tool's volume at each of them. First the box around
-    each volume in its contact's own axes (one matrix product for all C, whatever the
-    parts: a product's rounding may depend on its shape; the depth along the normal and
-    two directions across it), a micrometre wide: most points lie beside the tool; only
-    those left are tested. Each part's pairs are made when it is asked for."""
+    pairs: each of ``points`` in the tool's volume at each of them (the pairs in the
+    boxes, `_box_parts`, that pass the exact test, `_inside`). Each part's pairs are made
+    when it is asked for."""
+    for asked, (m, c) in _box_parts(points, at, normals, s, approach_m, parts):
+        inside = _inside(points, at, normals, m, c, s, approach_m)
+        yield asked, (m[inside], c[inside])
+
+
+def _box_parts(
+    points: np.ndarray,
+    at: np.ndarray,
+    normals: np.ndarray,
+    s: SuctionSettings,
+    approach_m: float,
+    parts: Sequence[slice],
+) -> Iterator[tuple[range, tuple[np.ndarray, np.ndarray]]]:
+    """Per part (a slice of the C contacts) its contacts and the (point, contact) index
+    pairs of ``points`` in the box around the tool's volume at each of them, in the
+    contact's own axes (one matrix product for all C, whatever the parts: a product's
+    rounding may depend on its shape; the depth along the normal and two directions
+    across it), a micrometre wide: most points lie beside the tool; only those left are
+    tested (`_inside`). Each part's pairs are made when it is asked for."""
     none = np.zeros(0, dtype=np.int64)
     if not len(points) or not len(at):
         for part in parts:
@@ -136,7 +169,6 @@ def _swept_parts(
     w_min = min(s.bellows_compliance_m, s.stem_length_m)
     w_max = max(s.stem_length_m + approach_m, s.stem_length_m + s.body_length_m + approach_m)
     across = max(s.cup_diameter_m / 2.0 + STEM_CLEARANCE_M, s.body_radius_m) + 1e-6
-    r_stem = s.cup_diameter_m / 2.0 + STEM_CLEARANCE_M
     # per contact: the normal, a unit direction across it, and the third
     n = normals
     ref = np.where((np.abs(n[:, 0]) < 0.9)[:, None], np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]))
@@ -158,29 +190,46 @@ def _swept_parts(
         axis=1,
     )
     axes = np.stack([n, a, b], axis=1).reshape(-1, 3)  # (3C, 3)
-    q_all = (points @ axes.T - np.einsum("ck,ck->c", axes, np.repeat(at, 3, axis=0))).reshape(len(points), len(at), 3)
+    q_all = points @ axes.T - np.einsum("ck,ck->c", axes, np.repeat(at, 3, axis=0))
+    # per contact its three rows (depth, across, across), each contiguous: the tests
+    # below run along the points
+    q_rows = np.ascontiguousarray(q_all.T).reshape(len(at), 3, len(points))
     for part in parts:
         asked = range(len(at))[part]
         if not len(asked):
             yield asked, (none, none)
             continue
         # the elementwise tests below give each contact's pairs alike in any part
-        q = q_all[:, part]
-        box = (q[..., 0] > w_min - 1e-6) & (q[..., 0] <= w_max + 1e-6) & (np.abs(q[..., 1]) <= across)
-        box &= np.abs(q[..., 2]) <= across
-        m, c = np.nonzero(box)
-        c = np.asarray(asked)[c]
-        rel = points[m] - at[c]
-        w = np.einsum("ij,ij->i", rel, normals[c])
-        radial2 = np.einsum("ij,ij->i", rel, rel) - w * w
-        stem = (w > s.bellows_compliance_m) & (w <= s.stem_length_m + approach_m) & (radial2 <= r_stem**2)
-        body = (
-            (w > s.stem_length_m)
-            & (w <= s.stem_length_m + s.body_length_m + approach_m)
-            & (radial2 <= s.body_radius_m**2)
-        )
-        inside = stem | body
-        yield asked, (m[inside], c[inside])
+        q = q_rows[part]
+        depth = q[:, 0]
+        box = (depth > w_min - 1e-6) & (depth <= w_max + 1e-6)
+        box &= np.abs(q[:, 1]) <= across
+        box &= np.abs(q[:, 2]) <= across
+        c, m = np.nonzero(box)
+        yield asked, (m, np.asarray(asked)[c])
+
+
+def _inside(
+    points: np.ndarray,
+    at: np.ndarray,
+    normals: np.ndarray,
+    m: np.ndarray,
+    c: np.ndarray,
+    s: SuctionSettings,
+    approach_m: float,
+) -> np.ndarray:
+    """Which (point ``m``, contact ``c``) pairs lie in the tool's volume: the stem, then
+    the body (row by row: a pair's answer is the same whichever pairs come with it)."""
+    r_stem = s.cup_diameter_m / 2.0 + STEM_CLEARANCE_M
+    rel = points[m] - at[c]
+    w = np.einsum("ij,ij->i", rel, normals[c])
+    radial2 = np.einsum("ij,ij->i", rel, rel) - w * w
+    stem = (w > s.bellows_compliance_m) & (w <= s.stem_length_m + approach_m) & (radial2 <= r_stem**2)
+    body = (
+        (w > s.stem_length_m) & (w <= s.stem_length_m + s.body_length_m + approach_m) & (radial2 <= s.body_radius_m**2)
+    )
+    out: np.ndarray = stem | body
+    return out
 
 
 def swept_boxes(at: np.ndarray, normals: np.ndarray, s: SuctionSettings, approach_m: float) -> np.ndarray:
