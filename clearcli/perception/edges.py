@@ -47,7 +47,9 @@ def pixel_pieces(points: np.ndarray, shape: tuple[int, int], point_index: np.nda
     where = np.full(height * width, -1, dtype=np.int64)
     where[point_index] = np.arange(m)
     img = where.reshape(height, width)
-    rng = np.linalg.norm(points[point_index].astype(np.float64), axis=1)
+    p = points[point_index].astype(np.float64)
+    # np.linalg.norm(p, axis=1)'s sums in its order, a fifth of its time (no (M, 3) squares)
+    rng = np.sqrt((p[:, 0] * p[:, 0] + p[:, 1] * p[:, 1]) + p[:, 2] * p[:, 2])
     src, dst = [], []
     for dv, du in _PIXEL_OFFSETS:
         a = img[: height - dv, max(0, -du) : width - max(0, du)]
