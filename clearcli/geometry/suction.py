@@ -659,11 +659,19 @@ def _load(
     """Per place ((N, 3) outward normals and contact points): the weight's pull along
     the cup's axis, its shear along the lip, its moment about the contact, and the
     margin 1 - the cup's utilisation."""
-    W = mass_kg * GRAVITY_M_S2
-    up = np.clip(normals @ UP, -1.0, 1.0)
+    return _load_terms(normals @ UP, points, mass_kg * GRAVITY_M_S2, com_table[None, :], spec)
+
+
+def _load_terms(
+    up: np.ndarray, points: np.ndarray, W: float | np.ndarray, com: np.ndarray, spec: CupSpec
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """`_load` from each place's normal's upward part ``up``, the weight ``W`` (N) and
+    the centre of mass ``com`` ((1, 3) or (N, 3)): elementwise, so many objects' places
+    at once are each as alone."""
+    up = np.clip(up, -1.0, 1.0)
     tension = W * np.maximum(up, 0.0)  # the weight pulls the face off the cup
     shear = W * np.sqrt(np.maximum(1.0 - up * up, 0.0))  # ...or slides it along the lip
-    arm = com_table[None, :] - points
+    arm = com - points
     moment = W * np.hypot(arm[:, 0], arm[:, 1])  # |arm x gravity| / |gravity| * W
     F = spec.holding_force_n
     use = spec.safety_factor * (tension / F + shear / (spec.lip_friction * F) + moment / (F * spec.radius_m))
@@ -782,6 +790,9 @@ class ObjectJob:
     hidden_by: np.ndarray | None = None
     T_camera_table: np.ndarray | None = None
     skip: frozenset[str] = frozenset()
+    # the caller kept of ``others`` those within the seal test's reach of ``own``'s box
+    # already (`judge_objects` would keep them all again)
+    others_near: bool = False
 
 
 def judge_object(
@@ -818,7 +829,7 @@ def judge_objects(jobs: list[ObjectJob], spec: CupSpec) -> list[Judged]:
         # at most MAX_POINTS of the object's points, every k-th (by index: a stride moves
         # with no rounding): ~2 a cell on a 0.3 x 0.2 m top, which a Kinect at 1 m sees with 5
         own, others = job.own[:: max(1, math.ceil(len(job.own) / MAX_POINTS))], job.others
-        if len(own) and len(others):
+        if len(own) and len(others) and not job.others_near:
             # only the others near the object can be under a cup on it
             reach = spec.radius_m + spec.compliance_m + band
             lo, hi = bounds(own)
@@ -858,21 +869,52 @@ def judge_objects(jobs: list[ObjectJob], spec: CupSpec) -> list[Judged]:
     for (k, _), places in zip(sides, judge_faces([fj for _, fj in sides], spec)):
         if places is not None and len(places):
             faces[k].append(places)
-    return [_judged(faces[k], job.mass_kg, job.com_table, spec) for k, job in enumerate(jobs)]
+    # the load of every object's sealing places at once (elementwise: each place's as
+    # alone), read by `_judged` only where the cup seals
+    seals = [np.concatenate([f.seal for f in fs]) if fs else np.zeros(0) for fs in faces]
+    sealed = [np.flatnonzero(seal > 0) for seal in seals]
+    loads: list[np.ndarray | None] = [None] * len(jobs)
+    n_sealed = [len(x) for x in sealed]
+    if sum(n_sealed):
+        per = [(fs, x, job) for fs, x, job in zip(faces, sealed, jobs) if len(x)]
+        # each object's normals' upward part by its own product (as `_load` has it)
+        up = np.concatenate([np.concatenate([f.normals for f in fs])[x] @ UP for fs, x, _ in per])
+        points = np.concatenate([np.concatenate([f.points for f in fs])[x] for fs, x, _ in per])
+        W = np.repeat([job.mass_kg * GRAVITY_M_S2 for job in jobs], n_sealed)
+        com = np.repeat(np.array([job.com_table for job in jobs], dtype=float).reshape(-1, 3), n_sealed, axis=0)
+        margins = _load_terms(up, points, W, com, spec)[3]
+        cuts = np.cumsum([0, *n_sealed])
+        for k, x in enumerate(sealed):
+            load = np.full(len(seals[k]), np.nan)
+            load[x] = margins[cuts[k] : cuts[k + 1]]
+            loads[k] = load
+    return [_judged(faces[k], job.mass_kg, job.com_table, spec, (seals[k], loads[k])) for k, job in enumerate(jobs)]
 
 
-def _judged(faces: list[FacePlaces], mass_kg: float, com_table: np.ndarray, spec: CupSpec) -> Judged:
-    """One object's judged faces' places, ranked by their margins (seal and load)."""
+def _judged(
+    faces: list[FacePlaces],
+    mass_kg: float,
+    com_table: np.ndarray,
+    spec: CupSpec,
+    seal_load: tuple[np.ndarray, np.ndarray | None] | None = None,
+) -> Judged:
+    """One object's judged faces' places, ranked by their margins (seal and load;
+    ``seal_load``: both, judged by the caller, the load NaN where the cup does not seal
+    and None where it seals nowhere)."""
     if not faces:
         return Judged()
-    seal = np.concatenate([f.seal for f in faces])
-    # the load only where the cup seals (it is read nowhere else): each place's on its own
-    load = np.full(len(seal), np.nan)
-    sealed = np.flatnonzero(seal > 0)
-    if len(sealed):
-        normals = np.concatenate([f.normals for f in faces])[sealed]
-        points = np.concatenate([f.points for f in faces])[sealed]
-        load[sealed] = _load(normals, points, mass_kg, com_table, spec)[3]
+    if seal_load is not None:
+        seal, given = seal_load
+        load = given if given is not None else np.full(len(seal), np.nan)
+    else:
+        seal = np.concatenate([f.seal for f in faces])
+        # the load only where the cup seals (it is read nowhere else): each place's on its own
+        load = np.full(len(seal), np.nan)
+        sealed = np.flatnonzero(seal > 0)
+        if len(sealed):
+            normals = np.concatenate([f.normals for f in faces])[sealed]
+            points = np.concatenate([f.points for f in faces])[sealed]
+            load[sealed] = _load(normals, points, mass_kg, com_table, spec)[3]
     margin = np.where(seal > 0, np.minimum(seal, load), seal)
     which = np.concatenate([np.full(len(f), i) for i, f in enumerate(faces)])
     index = np.concatenate([np.arange(len(f)) for f in faces])

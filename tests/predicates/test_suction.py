@@ -152,3 +152,48 @@ def test_a_plan_with_suction_validates_and_its_joints_land_on_its_poses(tmp_path
         assert T1[:3, 2] @ np.asarray(c["normal_base"]) < -0.99
         lip = T1[:3, 3] + settings.suction.lip_past_tcp_m * T1[:3, 2]
         assert np.linalg.norm(lip - np.asarray(c["point_base_m"])) < 1e-3
+
+
+def test_the_tool_path_check_finds_the_labels_the_exact_test_does_even_at_its_bounds() -> None:
+    # swept_hits decides most points from the contact's axes and tests only those within
+    # SURE_M of a bound exactly: the same labels as the exact test on every point, here
+    # on random clouds and on points put on the volume's bounds (within 1e-12 m)
+    from clearcli.predicates.grasps.suction import FIRST_THEN_REST, STEM_CLEARANCE_M, swept_hits, swept_mask
+    from clearcli.settings import Settings
+
+    s = Settings().suction
+    approach_m = Settings().push.approach_m
+    rng = np.random.default_rng(7)
+    r_stem = s.cup_diameter_m / 2.0 + STEM_CLEARANCE_M
+    for trial in range(30):
+        c = int(rng.integers(1, 9))
+        at = rng.uniform(-0.1, 0.1, (c, 3))
+        normals = rng.normal(size=(c, 3))
+        normals[: c // 2] = [0.0, 0.0, 1.0]  # tops, the common case
+        normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+        points = rng.uniform(-0.3, 0.3, (400, 3))
+        # points on the bounds of the first contact's stem and body: depth and radius
+        n = normals[0]
+        a = np.cross(n, [1.0, 0.0, 0.0] if abs(n[0]) < 0.9 else [0.0, 1.0, 0.0])
+        a /= np.linalg.norm(a)
+        depths = [s.bellows_compliance_m, s.stem_length_m + approach_m, s.stem_length_m, 0.02]
+        radii = [r_stem, s.body_radius_m, 0.005]
+        edge = np.array(
+            [
+                at[0] + (d + e) * n + (r + f) * a
+                for d in depths
+                for r in radii
+                for e in (-1e-12, 0.0, 1e-12)
+                for f in (-1e-12, 0.0, 1e-12)
+            ]
+        )
+        points = np.concatenate([points, edge])
+        labels = rng.integers(0, 5, len(points))
+        labels[-len(edge) :] = np.arange(len(edge)) % 7 + 5  # the edge points' own labels
+        exact = [
+            frozenset(np.unique(labels[swept_mask(points, at[j], normals[j], s, approach_m)]).tolist())
+            for j in range(c)
+        ]
+        assert list(swept_hits(points, labels, at, normals, s, approach_m)) == exact, trial
+        assert list(swept_hits(points, labels, at, normals, s, approach_m, FIRST_THEN_REST)) == exact, trial
+        assert any(exact), "the clouds reach the tool's volume"

@@ -56,6 +56,10 @@ if TYPE_CHECKING:
 UP = np.array([0.0, 0.0, 1.0])
 STEM_CLEARANCE_M = 0.003  # the stem's radius beyond the cup's
 TURNS_DEG = (0.0, 180.0, 90.0, 270.0)  # half turns first, as the pinch's candidates
+# a point this far (m, and m^2 for squared distances) inside or outside every bound of
+# the tool's volume in the contact's axes is in or out by the exact test too (the two
+# computations differ by rounding, ~1e-16 m at a metre)
+SURE_M = 1e-9
 BLOCK_STRIDE = 4  # every 4th point of a neighbour is checked against the tool's volume
 # the places' blockers: the best place alone, then the others together (`swept_hits`)
 FIRST_THEN_REST = (slice(0, 1), slice(1, None))
@@ -96,30 +100,40 @@ def swept_hits(
     """The labels of ``points`` in the tool's volume (`swept_mask`) at each of C
     contacts (``at``, ``normals``: (C, 3)), in order, made part by part (``parts``:
     consecutive slices of the C, each made when the first of it is asked for: a search
-    that stops at the first contact makes no more). A label is in where one of its points
-    is: of the (point, contact) pairs in the boxes (`_box_parts`) the exact test
-    (`_inside`) first takes one pair per contact and label, and the others of a pair
-    that fails only (an object in the tool's way has hundreds of points in it: one says
-    so; each pair's test is the same whichever pairs are tested with it)."""
-    for asked, (m, c) in _box_parts(points, at, normals, s, approach_m, parts):
+    that stops at the first contact makes no more). Each point is placed in the contact's
+    own axes (`_box_parts`' product); a point farther than `SURE_M` inside or outside
+    every bound there is in or out as the exact test (`_inside`) would say (the two differ
+    by rounding, ~1e-16 m), and only the points nearer a bound are tested exactly."""
+    n_labels = int(labels.max()) + 1 if len(labels) else 1
+    r_stem = s.cup_diameter_m / 2.0 + STEM_CLEARANCE_M
+    stem = (s.bellows_compliance_m, s.stem_length_m + approach_m, r_stem**2)
+    body = (s.stem_length_m, s.stem_length_m + s.body_length_m + approach_m, s.body_radius_m**2)
+    for asked, q in _axes_parts(points, at, normals, s, approach_m, parts):
         hits: dict[int, set[int]] = {k: set() for k in asked}
-        if len(m):
-            n_labels = int(labels.max()) + 1
-            key = c * n_labels + labels[m]
-            # one pair of each key (any one: a key is in where one of its pairs is)
-            one = np.full(len(at) * n_labels, -1)
-            one[key] = np.arange(len(key))
-            pick = one[one >= 0]
-            ok = _inside(points, at, normals, m[pick], c[pick], s, approach_m)
-            hit = np.zeros(len(one), dtype=bool)
-            hit[key[pick[ok]]] = True
-            if not ok.all():
-                # the keys whose pair fell outside: all their pairs
-                rest = np.flatnonzero(np.isin(key, key[pick[~ok]]))
-                hit[key[rest][_inside(points, at, normals, m[rest], c[rest], s, approach_m)]] = True
+        if q is not None:
+            depth = q[:, 0]
+            radial2 = q[:, 1] * q[:, 1] + q[:, 2] * q[:, 2]
+            sure = _zone(depth, radial2, *stem, SURE_M) | _zone(depth, radial2, *body, SURE_M)
+            near = (_zone(depth, radial2, *stem, -SURE_M) | _zone(depth, radial2, *body, -SURE_M)) & ~sure
+            first = np.asarray(asked)
+            hit = np.zeros(len(at) * n_labels, dtype=bool)
+            c_in, m_in = np.nonzero(sure)
+            hit[first[c_in] * n_labels + labels[m_in]] = True
+            c_near, m_near = np.nonzero(near)
+            if len(m_near):
+                c_near = first[c_near]
+                ok = _inside(points, at, normals, m_near, c_near, s, approach_m)
+                hit[c_near[ok] * n_labels + labels[m_near[ok]]] = True
             for k in np.flatnonzero(hit).tolist():
                 hits[k // n_labels].add(k % n_labels)
         yield from (frozenset(hits[k]) for k in asked)
+
+
+def _zone(depth: np.ndarray, radial2: np.ndarray, lo: float, hi: float, r2: float, e: float) -> np.ndarray:
+    """Where a depth along the normal lies in (lo + e, hi - e] and a squared distance
+    from the axis is at most r2 - e (``e`` < 0: grown by as much)."""
+    out: np.ndarray = (depth > lo + e) & (depth <= hi - e) & (radial2 <= r2 - e)
+    return out
 
 
 def _swept_pairs(
@@ -157,18 +171,42 @@ def _box_parts(
 ) -> Iterator[tuple[range, tuple[np.ndarray, np.ndarray]]]:
     """Per part (a slice of the C contacts) its contacts and the (point, contact) index
     pairs of ``points`` in the box around the tool's volume at each of them, in the
-    contact's own axes (one matrix product for all C, whatever the parts: a product's
-    rounding may depend on its shape; the depth along the normal and two directions
-    across it), a micrometre wide: most points lie beside the tool; only those left are
-    tested (`_inside`). Each part's pairs are made when it is asked for."""
+    contact's own axes (`_axes_parts`), a micrometre wide: most points lie beside the
+    tool; only those left are tested (`_inside`). Each part's pairs are made when it is
+    asked for."""
     none = np.zeros(0, dtype=np.int64)
-    if not len(points) or not len(at):
-        for part in parts:
-            yield range(len(at))[part], (none, none)
-        return
     w_min = min(s.bellows_compliance_m, s.stem_length_m)
     w_max = max(s.stem_length_m + approach_m, s.stem_length_m + s.body_length_m + approach_m)
     across = max(s.cup_diameter_m / 2.0 + STEM_CLEARANCE_M, s.body_radius_m) + 1e-6
+    for asked, q in _axes_parts(points, at, normals, s, approach_m, parts):
+        if q is None:
+            yield asked, (none, none)
+            continue
+        # the elementwise tests below give each contact's pairs alike in any part
+        depth = q[:, 0]
+        box = (depth > w_min - 1e-6) & (depth <= w_max + 1e-6)
+        box &= np.abs(q[:, 1]) <= across
+        box &= np.abs(q[:, 2]) <= across
+        c, m = np.nonzero(box)
+        yield asked, (m, np.asarray(asked)[c])
+
+
+def _axes_parts(
+    points: np.ndarray,
+    at: np.ndarray,
+    normals: np.ndarray,
+    s: SuctionSettings,
+    approach_m: float,
+    parts: Sequence[slice],
+) -> Iterator[tuple[range, np.ndarray | None]]:
+    """Per part (a slice of the C contacts) its contacts and ``points`` in each one's own
+    axes ((part's C, 3, n): the depth along the normal, two directions across it; None
+    where there are no points or no contacts), from one matrix product for all C,
+    whatever the parts (a product's rounding may depend on its shape)."""
+    if not len(points) or not len(at):
+        for part in parts:
+            yield range(len(at))[part], None
+        return
     # per contact: the normal, a unit direction across it, and the third
     n = normals
     ref = np.where((np.abs(n[:, 0]) < 0.9)[:, None], np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]))
@@ -191,22 +229,11 @@ def _box_parts(
     )
     axes = np.stack([n, a, b], axis=1).reshape(-1, 3)  # (3C, 3)
     q_all = points @ axes.T - np.einsum("ck,ck->c", axes, np.repeat(at, 3, axis=0))
-    # per contact its three rows (depth, across, across), each contiguous: the tests
-    # below run along the points
+    # per contact its three rows, each contiguous: the tests run along the points
     q_rows = np.ascontiguousarray(q_all.T).reshape(len(at), 3, len(points))
     for part in parts:
         asked = range(len(at))[part]
-        if not len(asked):
-            yield asked, (none, none)
-            continue
-        # the elementwise tests below give each contact's pairs alike in any part
-        q = q_rows[part]
-        depth = q[:, 0]
-        box = (depth > w_min - 1e-6) & (depth <= w_max + 1e-6)
-        box &= np.abs(q[:, 1]) <= across
-        box &= np.abs(q[:, 2]) <= across
-        c, m = np.nonzero(box)
-        yield asked, (m, np.asarray(asked)[c])
+        yield asked, (q_rows[part] if len(asked) else None)
 
 
 def _inside(
@@ -269,6 +296,14 @@ def contact_poses(
     return tuple(out)
 
 
+def _within(points: np.ndarray, p_lo: np.ndarray, p_hi: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """Those of ``points`` (their box ``p_lo``, ``p_hi``: `bounds`) in the box [lo, hi]
+    (`in_box`): all of them, not tested one by one, where their box lies in it."""
+    if bool(np.all(p_lo >= lo)) and bool(np.all(p_hi <= hi)):
+        return points
+    return points[in_box(points, lo, hi)]
+
+
 class SuctionGrasp(KindModule):
     name = "suction"
     label = "suction grasp"
@@ -329,7 +364,7 @@ class SuctionGrasp(KindModule):
             own = pts[i] if i < len(pts) else empty
             close = (
                 [
-                    pts[j][in_box(pts[j], b_lo[i] - seal_reach, b_hi[i] + seal_reach)]
+                    _within(pts[j], b_lo[j], b_hi[j], b_lo[i] - seal_reach, b_hi[i] + seal_reach)
                     for j in np.flatnonzero(close_all[i])
                 ]
                 if i < m
@@ -354,7 +389,17 @@ class SuctionGrasp(KindModule):
                 continue
             masses[i] = mass
             jobs[i] = ObjectJob(
-                own, others, g.axes2d, g.top_height_m, mass, com, min_side, hidden_by, scene.tf.T_camera_table, skip
+                own,
+                others,
+                g.axes2d,
+                g.top_height_m,
+                mass,
+                com,
+                min_side,
+                hidden_by,
+                scene.tf.T_camera_table,
+                skip,
+                others_near=True,  # kept within the seal test's reach above
             )
         all_judged = dict(zip(jobs, judge_objects(list(jobs.values()), spec)))
         out: list[Offer] = []
@@ -377,7 +422,7 @@ class SuctionGrasp(KindModule):
                 hi = np.minimum(b_hi[i] + reach, boxes[:, 1].max(axis=0))
                 meets = (s_lo <= hi) & (s_hi >= lo)  # (m, 3): each neighbour's box, per axis
                 for j in np.flatnonzero(near_all[i] & meets[:, 0] & meets[:, 1] & meets[:, 2]):
-                    pieces.append(sample[j][in_box(sample[j], lo, hi)])
+                    pieces.append(_within(sample[j], s_lo[j], s_hi[j], lo, hi))
                     owners.append(np.full(len(pieces[-1]), j))
             cloud = np.concatenate(pieces) if pieces else empty
             labels = np.concatenate(owners) if owners else np.zeros(0, int)
