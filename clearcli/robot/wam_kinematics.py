@@ -197,79 +197,81 @@ class _UrdfChain:
             self.frames[name] = self.frames[link] = (len(self.names) - 1, np.eye(4))
         self.lower = np.array(lower)
         self.upper = np.array(upper)
+        self._placements = np.array(self.placements)
 
-    def joint_poses(self, q: np.ndarray) -> list[np.ndarray]:
-        """Each joint's frame in the root's (4x4) at q: Pinocchio's oMi[1:]."""
-        out: list[np.ndarray] = []
-        T = np.eye(4)
-        for placement, angle in zip(self.placements, np.asarray(q, dtype=float).tolist()):
-            c, s = math.cos(angle), math.sin(angle)
-            T = (
-                T
-                @ placement
-                @ np.array([[c, -s, 0.0, 0.0], [s, c, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
-            )
-            out.append(T)
+    def joint_poses(self, q: np.ndarray) -> np.ndarray:
+        """Each joint's frame in the root's at q, (n, 4, 4): Pinocchio's oMi[1:]. (The
+        placements turned by their angles at once: this runs in every solver iteration.)"""
+        q = np.asarray(q, dtype=float)
+        c, s = np.cos(q)[:, None], np.sin(q)[:, None]
+        P = self._placements
+        local = P.copy()
+        local[:, :, 0] = P[:, :, 0] * c + P[:, :, 1] * s  # placement @ Rz(q)
+        local[:, :, 1] = P[:, :, 1] * c - P[:, :, 0] * s
+        out = np.empty_like(local)
+        out[0] = local[0]
+        for i in range(1, len(local)):
+            np.matmul(out[i - 1], local[i], out=out[i])
         return out
 
-    def frame_pose(self, poses: list[np.ndarray], frame: str) -> np.ndarray:
+    def frame_pose(self, poses: np.ndarray, frame: str) -> np.ndarray:
         """A frame's pose in the root's, given `joint_poses`."""
         joint, placement = self.frames[frame]
         return placement if joint < 0 else poses[joint] @ placement
 
 
-def _log3(R: np.ndarray) -> tuple[np.ndarray, float]:
-    """Pinocchio's log3: the rotation vector of R and its angle (its renormalisation, its
-    branches)."""
-    c0 = R[:, 0] / np.linalg.norm(R[:, 0])
-    c1 = R[:, 1] / np.linalg.norm(R[:, 1])
-    c2 = np.cross(c0, c1)
-    c0 = np.cross(c1, c2)
-    Rn = np.column_stack([c0, c1, c2])
-    tr = float(Rn[0, 0] + Rn[1, 1] + Rn[2, 2])
+def _log3(R: list[list[float]]) -> tuple[float, float, float, float]:
+    """Pinocchio's log3 (its renormalisation, its branches): the rotation vector of R
+    (rows, plain floats: 3x3 NumPy products cost more than they compute here) and its
+    angle."""
+    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = R
+    n0 = math.sqrt(r00 * r00 + r10 * r10 + r20 * r20)
+    n1 = math.sqrt(r01 * r01 + r11 * r11 + r21 * r21)
+    a0, a1, a2 = r00 / n0, r10 / n0, r20 / n0
+    b0, b1, b2 = r01 / n1, r11 / n1, r21 / n1
+    c0, c1, c2 = a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0  # col 2 = col 0 x col 1
+    a0, a1, a2 = b1 * c2 - b2 * c1, b2 * c0 - b0 * c2, b0 * c1 - b1 * c0  # col 0 = col 1 x col 2
+    Rn = ((a0, b0, c0), (a1, b1, c1), (a2, b2, c2))
+    tr = a0 + b1 + c2
     cos_value = (tr - 1.0) / 2.0
-    acos_expansion = math.sqrt(2.0 * (1.0 - cos_value) + _EPS * _EPS)
-    if tr <= 3.0 - _PREC2:
-        theta = math.acos(cos_value) if tr >= -1.0 + _PREC2 else math.pi - acos_expansion
-    else:
-        theta = acos_expansion
     if cos_value < -1.0 + _PREC2:
         return _log3_near_pi(Rn, tr)
-    a = 0.5 * np.array([Rn[2, 1] - Rn[1, 2], Rn[0, 2] - Rn[2, 0], Rn[1, 0] - Rn[0, 1]])
+    acos_expansion = math.sqrt(2.0 * (1.0 - cos_value) + _EPS * _EPS)
+    theta = math.acos(cos_value) if tr <= 3.0 - _PREC2 else acos_expansion
+    u0, u1, u2 = 0.5 * (b2 - c1), 0.5 * (c0 - a2), 0.5 * (a1 - b0)  # unSkew(Rn)
     if theta >= _PREC2:
         t = theta / math.sin(theta)
     else:
-        n2 = float(a @ a)
+        n2 = u0 * u0 + u1 * u1 + u2 * u2
         t = 1.0 + n2 / 6.0 + n2 * n2 * 3.0 / 40.0
-    return t * a, theta
+    return t * u0, t * u1, t * u2, theta
 
 
-def _log3_near_pi(Rn: np.ndarray, tr: float) -> tuple[np.ndarray, float]:
+def _log3_near_pi(Rn: tuple[tuple[float, ...], ...], tr: float) -> tuple[float, float, float, float]:
     """Pinocchio's log3 near a half turn (compute_theta_axis on the largest diagonal term)."""
-    val = 2.0 * np.diagonal(Rn) - tr + 1.0
+    val = [2.0 * Rn[k][k] - tr + 1.0 for k in range(3)]
     if val[0] >= val[1]:
         i0 = 0 if val[0] >= val[2] else 2
     else:
         i0 = 1 if val[1] >= val[2] else 2
     i1, i2 = (i0 + 1) % 3, (i0 + 2) % 3
-    s = math.sqrt(float(val[i0]) + _EPS + _EPS * _EPS) * (1.0 if Rn[i2, i1] >= Rn[i1, i2] else -1.0)
-    axis = np.empty(3)
+    s = math.sqrt(val[i0] + _EPS + _EPS * _EPS) * (1.0 if Rn[i2][i1] >= Rn[i1][i2] else -1.0)
+    axis = [0.0, 0.0, 0.0]
     axis[i0] = s / 2.0
-    axis[i1] = 1.0 / (2.0 * s) * (Rn[i1, i0] + Rn[i0, i1])
-    axis[i2] = 1.0 / (2.0 * s) * (Rn[i2, i0] + Rn[i0, i2])
-    w = 1.0 / (2.0 * s) * (Rn[i2, i1] - Rn[i1, i2])
-    norm = float(np.linalg.norm(axis))
+    axis[i1] = 1.0 / (2.0 * s) * (Rn[i1][i0] + Rn[i0][i1])
+    axis[i2] = 1.0 / (2.0 * s) * (Rn[i2][i0] + Rn[i0][i2])
+    w = 1.0 / (2.0 * s) * (Rn[i2][i1] - Rn[i1][i2])
+    norm = math.sqrt(axis[0] ** 2 + axis[1] ** 2 + axis[2] ** 2)
     angle = 2.0 * math.atan2(norm, w)
-    return angle * (axis / norm), angle
+    return angle * axis[0] / norm, angle * axis[1] / norm, angle * axis[2] / norm, angle
 
 
-def log6(T: np.ndarray) -> np.ndarray:
-    """Pinocchio's log6 of a 4x4 pose: (v, w), the twist whose exponential it is."""
-    R, p = T[:3, :3], T[:3, 3]
-    a = 0.5 * np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
-    t2 = float(a @ a)
-    tr = float(R[0, 0] + R[1, 1] + R[2, 2])
-    w, theta = _log3(R)
+def _log6_rows(R: list[list[float]], p: list[float]) -> list[float]:
+    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = R
+    u0, u1, u2 = 0.5 * (r21 - r12), 0.5 * (r02 - r20), 0.5 * (r10 - r01)
+    t2 = u0 * u0 + u1 * u1 + u2 * u2
+    tr = r00 + r11 + r22
+    w0, w1, w2, theta = _log3(R)
     if tr >= 3.0 - _PREC2:
         alpha = 1.0 - t2 / 12.0 - t2 * t2 / 720.0
         beta = 1.0 / 12.0 + t2 / 720.0
@@ -277,8 +279,90 @@ def log6(T: np.ndarray) -> np.ndarray:
         st, ct = math.sin(theta), math.cos(theta)
         alpha = theta * st / (2.0 * (1.0 - ct))
         beta = 1.0 / (theta * theta) - st / (2.0 * theta * (1.0 - ct))
-    v = alpha * p - 0.5 * np.cross(w, p) + (beta * float(w @ p)) * w
-    return np.concatenate([v, w])
+    p0, p1, p2 = p
+    bwp = beta * (w0 * p0 + w1 * p1 + w2 * p2)
+    return [
+        alpha * p0 - 0.5 * (w1 * p2 - w2 * p1) + bwp * w0,
+        alpha * p1 - 0.5 * (w2 * p0 - w0 * p2) + bwp * w1,
+        alpha * p2 - 0.5 * (w0 * p1 - w1 * p0) + bwp * w2,
+        w0,
+        w1,
+        w2,
+    ]
+
+
+def _error(A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """log6(A^-1 B) for rigid poses (Pinocchio's log6(A.actInv(B))): B seen from A."""
+    a, b = A.tolist(), B.tolist()
+    R = [[sum(a[k][i] * b[k][j] for k in range(3)) for j in range(3)] for i in range(3)]
+    d = [b[k][3] - a[k][3] for k in range(3)]
+    p = [a[0][i] * d[0] + a[1][i] * d[1] + a[2][i] * d[2] for i in range(3)]
+    return np.array(_log6_rows(R, p))
+
+
+def _dh_error_and_jacobian(q: np.ndarray, target: list[list[float]]) -> tuple[list[float], list[list[float]]]:
+    """The damped least squares' step inputs on the DH arm, in plain floats: the pose
+    error log6(T_base_tcp(q)^-1 target) and the TCP's Jacobian in its own frame (rows v
+    then w, 6 x 7), for ``target`` a T_base_tcp's rows. The same values as the URDF
+    chain's (`_error`, `_tcp_jacobian`) to rounding, about five times faster: this is
+    the solver's inner loop (a plan runs it a few hundred times)."""
+    q1, q2, q3, q4, q5, q6, q7 = q.tolist()
+
+    def turn_z(x: tuple[float, ...], y: tuple[float, ...], t: float) -> tuple[tuple[float, ...], ...]:
+        c, s = math.cos(t), math.sin(t)
+        return (
+            (c * x[0] + s * y[0], c * x[1] + s * y[1], c * x[2] + s * y[2]),
+            (c * y[0] - s * x[0], c * y[1] - s * x[1], c * y[2] - s * x[2]),
+        )
+
+    def turn_y(x: tuple[float, ...], z: tuple[float, ...], t: float) -> tuple[tuple[float, ...], ...]:
+        c, s = math.cos(t), math.sin(t)
+        return (
+            (c * x[0] - s * z[0], c * x[1] - s * z[1], c * x[2] - s * z[2]),
+            (s * x[0] + c * z[0], s * x[1] + c * z[1], s * x[2] + c * z[2]),
+        )
+
+    # R = Rz(q1) Ry(q2) Rz(q3) Ry(q4) Rz(q5) Ry(q6) Rz(q7) by its columns x, y, z; joint
+    # i turns about the column its factor leaves fixed, through the shoulder (joints
+    # 1-3), the elbow (4) or the wrist centre (5-7)
+    x: tuple[float, ...] = (1.0, 0.0, 0.0)
+    y: tuple[float, ...] = (0.0, 1.0, 0.0)
+    z: tuple[float, ...] = (0.0, 0.0, 1.0)
+    axes = [z]
+    x, y = turn_z(x, y, q1)
+    axes.append(y)
+    x, z = turn_y(x, z, q2)
+    axes.append(z)
+    x, y = turn_z(x, y, q3)
+    ux, uz = float(_UPPER_ARM[0]), float(_UPPER_ARM[2])
+    elbow = (ux * x[0] + uz * z[0], ux * x[1] + uz * z[1], ux * x[2] + uz * z[2])
+    axes.append(y)
+    x, z = turn_y(x, z, q4)
+    fx, fz = float(_FOREARM[0]), float(_FOREARM[2])
+    wrist = tuple(elbow[k] + fx * x[k] + fz * z[k] for k in range(3))
+    axes.append(z)
+    x, y = turn_z(x, y, q5)
+    axes.append(y)
+    x, z = turn_y(x, z, q6)
+    axes.append(z)
+    x, y = turn_z(x, y, q7)
+    tcp = [wrist[k] + _WRIST_TO_TCP_M * z[k] for k in range(3)]
+    origin = (0.0, 0.0, 0.0)
+    J: list[list[float]] = [[], [], [], [], [], []]
+    for a, at in zip(axes, (origin, origin, origin, elbow, wrist, wrist, wrist)):
+        d0, d1, d2 = tcp[0] - at[0], tcp[1] - at[1], tcp[2] - at[2]
+        v = (a[1] * d2 - a[2] * d1, a[2] * d0 - a[0] * d2, a[0] * d1 - a[1] * d0)
+        for row, col in enumerate((x, y, z)):
+            J[row].append(col[0] * v[0] + col[1] * v[1] + col[2] * v[2])
+            J[row + 3].append(col[0] * a[0] + col[1] * a[1] + col[2] * a[2])
+    cols = (x, y, z)
+    R = [
+        [cols[i][0] * target[0][j] + cols[i][1] * target[1][j] + cols[i][2] * target[2][j] for j in range(3)]
+        for i in range(3)
+    ]
+    d = [target[k][3] - tcp[k] for k in range(3)]
+    p = [cols[i][0] * d[0] + cols[i][1] * d[1] + cols[i][2] * d[2] for i in range(3)]
+    return _log6_rows(R, p), J
 
 
 def _act_inv(A: np.ndarray, B: np.ndarray) -> np.ndarray:
@@ -403,15 +487,20 @@ class WamKinematics(SolverAccess):
         damp = self.damping**2 * np.eye(6)
         self.stats.starts += 1
         n_it = self.max_iterations if iterations is None else int(iterations)
+        target_base = (self.M_base_root @ target).tolist() if self.analytic else None
         for it in range(n_it):
-            poses = self.chain.joint_poses(q)
-            T_root_tcp = self.chain.frame_pose(poses, TCP_FRAME)
-            err = log6(_act_inv(T_root_tcp, target))  # in the TCP frame
-            vx, vy, vz, wx, wy, wz = err.tolist()
+            if target_base is not None:  # the DH arm: its formulas in plain floats
+                err_list, J_list = _dh_error_and_jacobian(q, target_base)
+                vx, vy, vz, wx, wy, wz = err_list
+            else:
+                poses = self.chain.joint_poses(q)
+                T_root_tcp = self.chain.frame_pose(poses, TCP_FRAME)
+                vx, vy, vz, wx, wy, wz = err_list = _error(T_root_tcp, target).tolist()  # log6, in the TCP frame
             if vx * vx + vy * vy + vz * vz < tol_m2 and wx * wx + wy * wy + wz * wz < tol_rad2:
                 self.stats.iterations += it
                 return q
-            J = self._tcp_jacobian(poses, T_root_tcp)
+            J = np.array(J_list) if target_base is not None else self._tcp_jacobian(poses, T_root_tcp)
+            err = np.array(err_list)
             dq = J.T @ np.linalg.solve(J @ J.T + damp, err)
             step = float(np.abs(dq).max())
             if step > 0.4:  # keep the linearisation honest far from the target
@@ -421,16 +510,17 @@ class WamKinematics(SolverAccess):
         return None
 
     @staticmethod
-    def _tcp_jacobian(poses: list[np.ndarray], T_root_tcp: np.ndarray) -> np.ndarray:
+    def _tcp_jacobian(poses: np.ndarray, T_root_tcp: np.ndarray) -> np.ndarray:
         """The TCP's Jacobian (6, 7) in its own frame (Pinocchio's LOCAL frame Jacobian:
         rows v then w), from the joints' poses: joint i turns about its z axis a_i at p_i,
         moving the TCP by a_i x (p_tcp - p_i)."""
-        P = np.array([T[:3, 3] for T in poses])
-        A = np.array([T[:3, 2] for T in poses])
-        R = T_root_tcp[:3, :3]
-        J = np.empty((6, len(poses)))
-        J[:3] = R.T @ np.cross(A, T_root_tcp[:3, 3] - P).T
-        J[3:] = R.T @ A.T
+        A = poses[:, :3, 2].T  # (3, n)
+        D = T_root_tcp[:3, 3:4] - poses[:, :3, 3].T
+        cross = np.array([A[1] * D[2] - A[2] * D[1], A[2] * D[0] - A[0] * D[2], A[0] * D[1] - A[1] * D[0]])
+        Rt = T_root_tcp[:3, :3].T
+        J = np.empty((6, poses.shape[0]))
+        J[:3] = Rt @ cross
+        J[3:] = Rt @ A
         return J
 
     def target(self, T_base_tcp: np.ndarray) -> np.ndarray:
@@ -450,7 +540,7 @@ class WamKinematics(SolverAccess):
     def pose_error(self, target: Any, q: np.ndarray) -> np.ndarray:
         """The TCP's pose error at q against the target (log6, 6 values, in the TCP frame)."""
         T_root_tcp = self.chain.frame_pose(self.chain.joint_poses(q), TCP_FRAME)
-        return log6(_act_inv(T_root_tcp, target))
+        return _error(T_root_tcp, target)
 
     def fresh(self) -> WamKinematics:
         """A new IK search on this model: the same arm and settings, an empty cache and

@@ -288,6 +288,12 @@ def test_numpy_chain_is_pinocchios(kin: WamKinematics) -> None:
         np.testing.assert_allclose(
             kin._tcp_jacobian(poses, T_root_tcp), pin.getFrameJacobian(model, data, tcp, pin.LOCAL), atol=1e-14
         )
+        # the solver's inner loop on the DH arm (plain floats): the same error and Jacobian
+        T_target = T_root_tcp.copy()
+        T_target[:3, 3] += [0.01, -0.02, 0.005]
+        err, J = wk._dh_error_and_jacobian(q, (kin.M_base_root @ T_target).tolist())
+        np.testing.assert_allclose(J, pin.getFrameJacobian(model, data, tcp, pin.LOCAL), atol=1e-14)
+        np.testing.assert_allclose(err, pin.log6(data.oMf[tcp].actInv(pin.SE3(T_target))).vector, atol=1e-14)
         starts, ends, _ = kin.capsules(q)
         pin.framesForwardKinematics(model, data, q)
         expected = np.array([(M_base_root * data.oMi[i]).translation for i, _, _ in wk._CAPSULES])
