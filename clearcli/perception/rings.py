@@ -151,13 +151,21 @@ def merge_rings(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
     top = np.full(n_seg, -np.inf)
     np.maximum.at(top, seg_of_voxel, voxel_height)
     cand = [s for s in range(n_seg) if sizes[s] >= min_voxels]
-    band = {s: voxel_xy[(seg_of_voxel == s) & (voxel_height >= top[s] - tolerance_m)] for s in cand}
+    # each segment's voxels in index order (what a mask over all voxels gives), from one
+    # sort: no pass over every voxel per segment
+    order = np.argsort(seg_of_voxel, kind="stable")
+    bounds = np.searchsorted(seg_of_voxel[order], np.arange(n_seg + 1))
+    band: dict[int, np.ndarray] = {}
     walls: dict[int, np.ndarray] = {}
+    lo: dict[int, np.ndarray] = {}
+    hi: dict[int, np.ndarray] = {}
     for s in cand:
-        svs = np.unique(voxel_label[seg_of_voxel == s])
+        members = order[bounds[s] : bounds[s + 1]]
+        band[s] = voxel_xy[members[voxel_height[members] >= top[s] - tolerance_m]]
+        svs = np.unique(voxel_label[members])
         walls[s] = svs[sv_is_wall[svs]]
-    lo = {s: voxel_xy[seg_of_voxel == s].min(axis=0) for s in cand}
-    hi = {s: voxel_xy[seg_of_voxel == s].max(axis=0) for s in cand}
+        xy = voxel_xy[members]
+        lo[s], hi[s] = xy.min(axis=0), xy.max(axis=0)
     joined: list[tuple[int, int]] = []
     for i, a in enumerate(cand):
         for b in cand[i + 1 :]:
