@@ -539,6 +539,8 @@ class WamKinematics(SolverAccess):
 
     def pose_error(self, target: Any, q: np.ndarray) -> np.ndarray:
         """The TCP's pose error at q against the target (log6, 6 values, in the TCP frame)."""
+        if self.analytic:  # the DH arm's floats, as in the solver (the simulated world's least squares)
+            return np.array(_dh_error_and_jacobian(np.asarray(q, dtype=float), (self.M_base_root @ target).tolist())[0])
         T_root_tcp = self.chain.frame_pose(self.chain.joint_poses(q), TCP_FRAME)
         return _error(T_root_tcp, target)
 
