@@ -311,17 +311,25 @@ def table_rows(points_camera: np.ndarray, idx: np.ndarray, T_table_camera: np.nd
 
 
 def object_columns(
-    points_camera: np.ndarray, groups: list[np.ndarray], frame: TableFrame, cell_m: float
+    points_camera: np.ndarray,
+    groups: list[np.ndarray],
+    frame: TableFrame,
+    cell_m: float,
+    rows: np.ndarray | None = None,
 ) -> list[Columns | None]:
     """`Columns` of each group of point indices, in one vectorised pass over all of them
     (per-object NumPy calls cost more than the arithmetic here). None for a group without
-    finite points."""
+    finite points. ``rows``: the groups' points end to end in the table frame
+    (`table_rows`), where the caller has them (read, not changed)."""
     n_g = len(groups)
     sizes = np.array([len(g) for g in groups], dtype=np.int64)
     if n_g == 0 or sizes.sum() == 0:
         return [None] * n_g
-    idx = np.concatenate([np.asarray(g, dtype=np.int64) for g in groups])
-    q = table_rows(points_camera, idx, frame.T_table_camera)
+    if rows is None:
+        idx = np.concatenate([np.asarray(g, dtype=np.int64) for g in groups])
+        q = table_rows(points_camera, idx, frame.T_table_camera)
+    else:
+        q = rows.copy()  # its heights are clamped in place below
     # a non-finite coordinate makes every transformed coordinate non-finite (nan or inf,
     # no finite input overflows in float64), so the table height alone tells
     finite = np.isfinite(q[2])

@@ -64,7 +64,16 @@ def compute_state(
     pusher = push_tool_model(s.gripper, s.suction, tools_of(s.robot.name))
     geoms = []
     skipped: list[tuple[int, str]] = []
-    columns = object_columns(frame.points, [o.indices for o in seg.objects], tf, ps.model_cell_m)
+    tools = tools_of(s.robot.name)
+    groups = [o.indices for o in seg.objects]
+    # a cup judges its seal on the objects' own points (table frame; fingers need none):
+    # transformed once, for the models too
+    rows = (
+        table_rows(frame.points, np.concatenate([np.asarray(g, dtype=np.int64) for g in groups]), tf.T_table_camera)
+        if "cup" in tools and groups and sum(len(g) for g in groups)
+        else None
+    )
+    columns = object_columns(frame.points, groups, tf, ps.model_cell_m, rows)
     for k, cols in enumerate(columns):
         try:
             if cols is None:
@@ -128,10 +137,8 @@ def compute_state(
     # every grasp kind, in preference order (the thesis's pinch first: block_grasp,
     # ungraspable), each offered where it takes the object, with its blockers
     t0 = time.perf_counter()
-    tools = tools_of(s.robot.name)
-    # a cup judges its seal on the objects' own points (table frame); fingers need none
     points_table = (
-        _points_table(frame.points, [seg.objects[g.segment_index].indices for g in geoms], tf) if "cup" in tools else []
+        _points_table(rows, [len(g) for g in groups], [g.segment_index for g in geoms]) if "cup" in tools else []
     )
     by_index = {g.segment_index: i for i, g in enumerate(geoms)}
     avoid = {by_index[k]: v for k, v in (avoid_faces or {}).items() if k in by_index and v}
@@ -295,22 +302,21 @@ def _object_model(
     )
 
 
-def _points_table(points_camera: np.ndarray, groups: Sequence[np.ndarray], tf: TableFrame) -> list[np.ndarray]:
-    """Each group's finite points in the table frame, (n, 3) C-ordered, in one pass over
-    all of them: per column the same products and sums, in the same order, as
-    `TableFrame.to_table` (bit-identical), with no per-object (n, 3) temporaries."""
-    sizes = [len(g) for g in groups]
-    if not groups or not sum(sizes):
-        return [np.zeros((0, 3)) for _ in groups]
-    idx = np.concatenate([np.asarray(g, dtype=np.int64) for g in groups])
-    q = np.ascontiguousarray(table_rows(points_camera, idx, tf.T_table_camera).T)  # non-finite: dropped below
-    # a non-finite coordinate makes all three transformed ones non-finite (float32 or
-    # float64 input: no finite one overflows), so the height alone tells
+def _points_table(rows: np.ndarray | None, sizes: Sequence[int], order: Sequence[int]) -> list[np.ndarray]:
+    """Of the segments' points end to end in the table frame (``rows``: (3, N),
+    `table_rows`; ``sizes``: each segment's count), those of the segments ``order``
+    names, each (n, 3) C-ordered, its non-finite points dropped (a non-finite coordinate
+    makes all three transformed ones non-finite: float32 or float64 input, no finite one
+    overflows, so the height alone tells)."""
+    if rows is None:
+        return [np.zeros((0, 3)) for _ in order]
     cuts = np.cumsum([0, *sizes])
-    ok = np.isfinite(q[:, 2])
-    if ok.all():
-        return [q[cuts[k] : cuts[k + 1]] for k in range(len(groups))]
-    return [q[cuts[k] : cuts[k + 1]][ok[cuts[k] : cuts[k + 1]]] for k in range(len(groups))]
+    out = []
+    for k in order:
+        q = np.ascontiguousarray(rows[:, cuts[k] : cuts[k + 1]].T)
+        ok = np.isfinite(q[:, 2])
+        out.append(q if ok.all() else q[ok])
+    return out
 
 
 def _detail_to_camera(detail: Any, tf: TableFrame) -> dict[str, Any]:
