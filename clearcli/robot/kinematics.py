@@ -4,8 +4,9 @@
 simulated world (`target`, `solve_from`, `within_tolerance`, `pose_error`: the world runs
 a solver of its own on the arm's model; every arm has them from `SolverAccess`) use;
 `fresh` gives a new IK search (its cache, warm starts and statistics empty) on the same
-model, read once per command. The WAM's analytic solver is `wam_kinematics.py`, every
-other arm's `generic.py`.
+model, read once per command. The WAM's analytic solver is `wam_kinematics.py` (its
+model in NumPy: a plan on the WAM does not import Pinocchio), every other arm's
+`generic.py` (Pinocchio's model; `SolverAccess` below).
 
 Frames: poses are ``T_base_tcp`` in the arm's base frame; the TCP is the gripper's
 closing point (z = approach, x = closing direction). Pinocchio is imported inside
