@@ -523,7 +523,7 @@ def judge_faces(jobs: list[FaceJob], spec: CupSpec) -> list[FacePlaces | None]:
     empty = ~covered
     gappy = np.flatnonzero(empty.any(axis=1))  # most places have no empty cell: only these
     hole_cells = np.zeros_like(empty)
-    filled = H.copy()
+    filled = H  # H is read no more below (the gappy rows' heights are copied out)
     if len(gappy):
         eg = empty[gappy]
         Hg = H[gappy]
@@ -550,10 +550,13 @@ def judge_faces(jobs: list[FaceJob], spec: CupSpec) -> list[FacePlaces | None]:
         fitted[sl] = coef[sl] @ A.T
     # the spread only over what the camera saw (a hidden cell sits on the plane)
     measured = seen_all[window]
-    resid = np.where(measured, Hf - fitted, 0.0)
+    resid = Hf - fitted
+    np.abs(resid, out=resid)
+    resid *= measured  # |residual|, 0 where unseen (finite: times 0 is 0)
     # the 90th percentile by nearest rank (a partition, not a sort)
     rank = int(math.ceil(0.9 * resid.shape[1])) - 1
-    spread = np.partition(np.abs(resid), rank, axis=1)[:, rank]
+    resid.partition(rank, axis=1)
+    spread = resid[:, rank]
     sag = sags(coef, r)
     grad = coef[:, 1:3]
     normal = EN - grad[:, :1] * E1 - grad[:, 1:2] * E2
@@ -567,7 +570,10 @@ def judge_faces(jobs: list[FaceJob], spec: CupSpec) -> list[FacePlaces | None]:
     # another object under the disc: its outermost point within the bellows' stroke of
     # the fitted face (farther out it is in the way of the approach: a blocker)
     surface = coef[:, :1] + slope
-    intruders = (np.abs(theirs[window] - surface) <= spec.compliance_m).sum(axis=1)
+    off = theirs[window]
+    off -= surface
+    np.abs(off, out=off)
+    intruders = (off <= spec.compliance_m).sum(axis=1)
     gaps = empty.sum(axis=1)
     m_cover = np.where(full, 1.0, -np.maximum(hole_cells.sum(axis=1), 1) / covered.shape[1])
     m_sag = 1.0 - sag / spec.compliance_m
