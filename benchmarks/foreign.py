@@ -149,6 +149,44 @@ def show(name: str, out: Path) -> None:
     print(out)
 
 
+def result(name: str, out: Path) -> None:
+    """The segmenter's objects (solid outlines, numbered) and what it excluded (grey,
+    lettered) over the colour image, the labels' polygons dashed: to see what goes wrong."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from clearcli import pipeline
+    from clearcli.render.camera import outlined
+    from clearcli.settings import Settings
+
+    frame, _, spec = load(name)
+    seg = pipeline.segmented(frame, Settings())
+    palette = matplotlib.colormaps["tab20"]
+    segments = [np.asarray(o.indices) for o in seg.objects] + [np.asarray(e.indices) for e in seg.excluded]
+    colours = [palette(k % 20) for k in range(len(seg.objects))] + [(0.5, 0.5, 0.5, 1.0)] * len(seg.excluded)
+    image = outlined(frame.colors, frame.shape, segments, colours, width_px=2)
+    fig, ax = plt.subplots(figsize=_figsize(*frame.shape), dpi=100)
+    ax.imshow(image)
+    for obj in spec["object"]:
+        poly = np.asarray(obj["polygon"] + obj["polygon"][:1], dtype=float)
+        ax.plot(poly[:, 0], poly[:, 1], "--", color="white", lw=0.6)
+    for k, idx in enumerate(segments):
+        rows, cols = np.divmod(idx, frame.shape[1])
+        text = str(k) if k < len(seg.objects) else chr(ord("A") + k - len(seg.objects))
+        ax.text(
+            cols.mean(), rows.mean(), text, fontsize=9, color="white", bbox=dict(fc=colours[k], alpha=0.8, ec="none")
+        )
+    for k, e in enumerate(seg.excluded):
+        print(chr(ord("A") + k), e.reason)
+    _pixel_grid(ax, *frame.shape)
+    ax.set_title(f"{name}: {len(seg.objects)} objects, {len(seg.excluded)} excluded (dashed: the labels)")
+    fig.tight_layout()
+    fig.savefig(out)
+    print(out)
+
+
 def _figsize(h: int, w: int) -> tuple[float, float]:
     """1280 pixels wide, the frame's aspect: 12.8 x 9.6 in for 640x480 as before, and a
     1280x720 frame (cleargrasp_d435) at its own pixel size, its grid lines readable."""
@@ -233,6 +271,7 @@ def main() -> None:
     parser.add_argument("--part", choices=("choose", "report", "all"), default="report")
     parser.add_argument("--show", metavar="FRAME")
     parser.add_argument("--grid", metavar="FRAME")
+    parser.add_argument("--result", metavar="FRAME", help="draw the segmenter's objects and exclusions")
     parser.add_argument("--out", type=Path)
     parser.add_argument(
         "--set",
@@ -244,6 +283,8 @@ def main() -> None:
     args = parser.parse_args()
     if args.show:
         show(args.show, args.out or Path(f"/tmp/{args.show}_labels.png"))
+    elif args.result:
+        result(args.result, args.out or Path(f"/tmp/{args.result}_result.png"))
     elif args.grid:
         grid(args.grid, args.out or Path(f"/tmp/{args.grid}_grid.png"))
     else:

@@ -72,6 +72,34 @@ _LINK_M = 0.02  # neighbouring pixels this near in space are one surface
 # 1.7 cm of margin below, 0.7 cm and more above (a median of hundreds of points: rounding
 # moves it by micrometres).
 _APART_M = 0.025
+# a wall, a cupboard's side, a bin's wall: one flat face standing on the support (its
+# footprint a line: `_FACE_THIN_M` across, between the 5th and 95th percentiles) larger
+# than any object cleared: the diagonal of its length along the support (2nd to 98th
+# percentile) and its height at least `_WALL_FACE_M`, the tallest an object standing on
+# the support may be (support.py's 0.4 m; the widest is some 30 cm). Measured on the
+# choose part: the walls at cleargrasp's table edges 0.48 and 1.18 m; the largest face
+# of an object, uois_image_0002's tall box seen front on (its top cut by the border),
+# 0.26 m; footprints 0.6 to 1.3 cm across (a box's front face 1.8 cm) against 3 cm.
+_FACE_THIN_M = 0.03
+# a face stands upright when it is this many times taller than thick (the walls: 10 and 50
+# times; a long strip lying flat, less than once)
+_UPRIGHT = 4.0
+_WALL_FACE_M = 0.4
+# the support seen around a segment: in the ring `_RING_PX` pixels wide around its
+# silhouette, among the pixels seen (a point kept) and in no segment, the share that are
+# the support's. An object standing on the support has it seen at its foot on some side
+# (on the choose part at least 17 % of such pixels, uois_image_0006's tin among others
+# 19 %); a stretch of another surface at nearly the support's height beyond its edge
+# (gqcnn's bench behind the foam board, 1.5 cm above its plane, cut by the image's top)
+# has none (0 %). Decided only on `_RING_MIN_PX` pixels or more (an object inside a heap
+# has the others around it, not the support or anything else).
+_RING_PX = 4
+# only the ring's pixels at about the support's level count (within this of its plane, the
+# hang height: where the support would be seen if it went on there); what is higher is an
+# object's part the prism left out (mOSD test57: a heap's pieces beyond the hull, 6-9 cm up)
+AROUND_LEVEL_M = 0.03
+_RING_MIN_PX = 100
+_RING_SUPPORT_SHARE = 0.05
 # pixels this near the image's edge are where it cuts a segment (a few, not one: a working
 # grid at stride k ends up to k - 1 pixels short of the edge; a sensor's edge pixels drop out)
 _BORDER_PX = 3
@@ -205,6 +233,33 @@ def at_image_border(indices: list[np.ndarray], shape: tuple[int, int] | None) ->
     return out
 
 
+def support_around(
+    indices: list[np.ndarray], support: np.ndarray, seen: np.ndarray, shape: tuple[int, int]
+) -> list[tuple[int, int]]:
+    """Per segment (its pixel ``indices`` in a frame of ``shape``): (how many pixels of the
+    ring `_RING_PX` wide around it are seen and in no segment, how many of those are the
+    support's). ``support``, ``seen``: (H*W,) bool masks (``seen``: the pixels that count,
+    at about the support's level, `AROUND_LEVEL_M`)."""
+    from scipy.ndimage import binary_dilation
+
+    rows, cols = shape
+    in_any = np.zeros(rows * cols, dtype=bool)
+    for idx in indices:
+        in_any[idx] = True
+    free = (seen & ~in_any).reshape(rows, cols)
+    sup = support.reshape(rows, cols)
+    out = []
+    for idx in indices:
+        r, c = np.divmod(idx, cols)
+        r0, r1 = max(int(r.min()) - _RING_PX, 0), min(int(r.max()) + _RING_PX + 1, rows)
+        c0, c1 = max(int(c.min()) - _RING_PX, 0), min(int(c.max()) + _RING_PX + 1, cols)
+        own = np.zeros((r1 - r0, c1 - c0), dtype=bool)
+        own[r - r0, c - c0] = True
+        ring = binary_dilation(own, iterations=_RING_PX) & ~own & free[r0:r1, c0:c1]
+        out.append((int(ring.sum()), int((ring & sup[r0:r1, c0:c1]).sum())))
+    return out
+
+
 def _enters_over_border(
     p: np.ndarray, border: np.ndarray, h: np.ndarray, rests: float, to_2d: Callable[[np.ndarray], np.ndarray]
 ) -> str:
@@ -233,6 +288,58 @@ def _enters_over_border(
     )
 
 
+def _face(xy: np.ndarray, h: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, float, float]:
+    """The in-plane footprint ``xy`` of a segment (heights ``h``) as a face: (its middle,
+    the unit normal of its footprint's line, its thickness across that line, its length
+    along it, its height); percentiles, not extremes, so a few stray points do not count."""
+    mid = xy.mean(axis=0)
+    c = xy - mid
+    _, vecs = np.linalg.eigh(c.T @ c)
+    across, along = c @ vecs[:, 0], c @ vecs[:, 1]
+    thick = float(np.percentile(across, 95) - np.percentile(across, 5))
+    length = float(np.percentile(along, 98) - np.percentile(along, 2))
+    tall = float(np.percentile(h, 98) - np.percentile(h, 2))
+    return mid, vecs[:, 0], thick, length, tall
+
+
+def _walls(
+    objects: list[np.ndarray],
+    verdicts: dict[int, str],
+    height: Callable[[np.ndarray], np.ndarray],
+    to_2d: Callable[[np.ndarray], np.ndarray],
+) -> None:
+    """Add to ``verdicts`` the walls among ``objects`` (`_WALL_FACE_M`), and the flat
+    pieces lying in a wall's face (the segmentation cut a wall's foot or its trim apart
+    from it: thin, and all within `_FACE_THIN_M` of the wall's line)."""
+    faces = {}
+    for k, p in enumerate(objects):
+        if k in verdicts or p.shape[0] < _GOES_ON_MIN:
+            continue
+        faces[k] = _face(to_2d(p), height(p))
+    walls = []
+    for k, (mid, normal, thick, length, tall) in faces.items():
+        size = float(np.hypot(length, tall))
+        # upright: taller than `_UPRIGHT` times its thickness (a strip lying flat is not)
+        if thick <= _FACE_THIN_M and tall >= _UPRIGHT * thick and size >= _WALL_FACE_M:
+            verdicts[k] = (
+                f"a wall: one flat face {length:.2f} m long and {tall:.2f} m high on the support ({thick * 100:.1f} cm "
+                f"across), larger than any object ({_WALL_FACE_M:.2f} m): a wall, a cupboard's side, a bin's wall"
+            )
+            walls.append((mid, normal))
+    for k, (_, _, thick, _, tall) in faces.items():
+        if k in verdicts or thick > _FACE_THIN_M or tall < _UPRIGHT * thick:
+            continue
+        xy = to_2d(objects[k])
+        for mid, normal in walls:
+            off = float(np.percentile(np.abs((xy - mid) @ normal), 95))
+            if off <= _FACE_THIN_M:
+                verdicts[k] = (
+                    f"part of a wall: a flat piece lying in a wall's face (95 % of it within {off * 100:.1f} cm of "
+                    "its line)"
+                )
+                break
+
+
 @dataclass(frozen=True)
 class Verdict:
     index: int  # into the objects
@@ -257,6 +364,7 @@ def not_standing(
     rests_m: Callable[[np.ndarray], float],
     outside_reach: np.ndarray | None = None,
     at_border: list[np.ndarray] | None = None,
+    around: list[tuple[int, int]] | None = None,
 ) -> list[Verdict]:
     """Which of ``objects`` (each an (M, 3) array of its points) do not stand on the
     support, and why.
@@ -269,7 +377,8 @@ def not_standing(
     rests on the support (grows with range); ``outside_reach``: for each of ``outside``,
     how far its part reaches beyond the outline (`reach_beyond`; None: not known);
     ``at_border``: per object, (M,) bool, its points at the image's border (None: the
-    frame has no pixel grid).
+    frame has no pixel grid); ``around``: per object, `support_around`'s counts (None:
+    no pixel grid).
     """
     from scipy.spatial import cKDTree
 
@@ -315,6 +424,13 @@ def not_standing(
                     f"stands beyond the support's edge: it goes on below the support's level outside its "
                     f"outline ({down} of its points touch such points): a desk, a shelf, furniture behind"
                 )
+    _walls(objects, verdicts, height, to_2d)
+    for k, (n_free, n_support) in enumerate(around or ()):
+        if k not in verdicts and n_free >= _RING_MIN_PX and n_support < _RING_SUPPORT_SHARE * n_free:
+            verdicts[k] = (
+                f"stands beyond the support's edge: the support is seen nowhere around it ({n_support} of the "
+                f"{n_free} pixels seen around it): another surface at nearly the support's height, furniture behind"
+            )
     # hangs: decided after the two rules above, so what lies beneath counts only when it
     # is itself an object (not an arm's or a shelf's part), whatever the objects' order
     standing = [k for k in range(len(objects)) if k not in verdicts]

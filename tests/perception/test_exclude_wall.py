@@ -1,0 +1,78 @@
+"""A wall at the table's edge is no object (issue 37, perception/exclude.py `_walls`): on a
+self-made frame, desk_behind's objects on the table and, instead of the desk, a wall
+standing on the table along its far edge (a partition, a wall the table is set into:
+the cleargrasp frames' wall stands inside the table's outline, so no rule about what lies
+beyond the outline sees it). With the wall rule off the wall's face is an object."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from clearcli.evaluate.segmentation import score
+from clearcli.io.frames import LABEL_NONE, object_label
+from clearcli.perception import exclude
+from clearcli.perception.payload import segmentation_payload
+from clearcli.perception.segment import segment
+from clearcli.settings.segment import SegmentSettings
+from clearcli.sim.camera import render
+from clearcli.sim.families import FURNITURE_ID, desk_behind
+from clearcli.sim.scene import Box, Table, make_scene
+
+ON = dataclasses.replace(SegmentSettings(), exclude_not_standing=True)
+
+
+def _wall_frame(seed: int, gap_m: float):  # -> Frame
+    """desk_behind(seed)'s objects on the table; a wall 2 cm thick and 1.5 m tall on the
+    table, as wide as the table less 2 cm, ``gap_m`` inside its far edge."""
+    base = desk_behind(seed)
+    objs = [o for o in base.objects if o.object_id < FURNITURE_ID]
+    table = Table()
+    y = table.size_y_m / 2 - gap_m - 0.01
+    wall = Box(FURNITURE_ID, round(table.size_x_m - 0.02, 4), 0.02, 1.5, 0.0, round(y, 4), 0.0, 0.0)
+    frame = render(make_scene(f"wall({seed})", [*objs, wall]), seed=seed)
+    labels = np.asarray(frame.fields["label"]).copy()
+    labels[labels >= object_label(FURNITURE_ID)] = LABEL_NONE
+    return dataclasses.replace(frame, fields={**frame.fields, "label": labels})
+
+
+@pytest.mark.parametrize("seed, gap_m", [(0, 0.0), (3, 0.03)])
+def test_a_wall_at_the_table_edge_is_excluded_with_its_reason(
+    seed: int, gap_m: float, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    frame = _wall_frame(seed, gap_m)
+    truth = np.asarray(frame.fields["label"])
+    seg = segment(frame, ON)
+    sc = score(seg.labels(), truth)
+    assert sc.true_positives == sc.n_true == sc.n_pred, (sc, [e.reason for e in seg.excluded])
+    walls = [e for e in seg.excluded if e.reason.startswith("a wall")]
+    assert len(walls) == 1, [e.reason for e in seg.excluded]
+    assert np.mean(truth[walls[0].indices] == LABEL_NONE) > 0.95  # the wall's points, not an object's
+    doc = segmentation_payload(seg)
+    assert any(e["reason"] == walls[0].reason and e["points"] == walls[0].indices.size for e in doc["excluded"])
+    # the wall rule off (no face is large enough): the wall's face is an object
+    monkeypatch.setattr(exclude, "_WALL_FACE_M", np.inf)
+    off = segment(frame, ON)
+    sc_off = score(off.labels(), truth)
+    assert sc_off.n_pred > sc_off.n_true
+    assert not any(e.reason.startswith("a wall") for e in off.excluded)
+
+
+def test_an_object_seen_front_on_is_no_wall() -> None:
+    # a tall box's front face alone (its top cut by the image's border, uois_image_0002):
+    # thin, but 17 cm wide and 20 cm high, well under a wall's 40 cm
+    rng = np.random.default_rng(0)
+    face = np.column_stack([rng.uniform(-0.085, 0.085, 3000), rng.normal(0, 0.003, 3000), rng.uniform(0.0, 0.2, 3000)])
+    wall = face * [4.0, 1.0, 2.0]  # 68 cm wide, 40 cm high
+
+    def height(p: np.ndarray) -> np.ndarray:
+        return p[:, 2]
+
+    def to_2d(p: np.ndarray) -> np.ndarray:
+        return p[:, :2]
+
+    verdicts: dict[int, str] = {}
+    exclude._walls([face, wall + [0.0, 0.5, 0.0]], verdicts, height, to_2d)
+    assert list(verdicts) == [1] and verdicts[1].startswith("a wall"), verdicts
