@@ -33,7 +33,14 @@ from clearcli.io.frames import Frame
 from clearcli.perception.clock import Clock
 from clearcli.perception.context import RefineContext
 from clearcli.perception.edges import cut_depth_edges
-from clearcli.perception.exclude import at_image_border, beyond_outline, not_standing, reach_beyond
+from clearcli.perception.exclude import (
+    AROUND_LEVEL_M,
+    at_image_border,
+    beyond_outline,
+    not_standing,
+    reach_beyond,
+    support_around,
+)
 from clearcli.perception.filters import clean_mask
 from clearcli.perception.flat import flat_objects
 from clearcli.perception.lccp import lccp_segments
@@ -443,12 +450,26 @@ def _exclude(w: _Work) -> None:
         rests_m,
         reach,
         at_image_border([o.indices for o in w.objects], w.frame.shape) if w.organized else None,
+        _support_around(w) if w.organized else None,
     )
     if not verdicts:
         return
     gone = {v.index: v.reason for v in verdicts}
     w.excluded = [Excluded(o.indices, o.centroid, gone[k]) for k, o in enumerate(w.objects) if k in gone]
     w.objects = [o for k, o in enumerate(w.objects) if k not in gone]
+
+
+def _support_around(w: _Work) -> list[tuple[int, int]]:
+    """exclude.support_around on the frame's pixel grid: the support's pixels, and those
+    seen (kept by the filter) outside the prism within `AROUND_LEVEL_M` of the support's
+    level (where the support would be seen if it went on there)."""
+    assert w.frame.shape is not None and w.fit is not None  # organized; the table's step ran
+    n = w.frame.shape[0] * w.frame.shape[1]
+    support, seen = np.zeros(n, dtype=bool), np.zeros(n, dtype=bool)
+    support[w.idx[w.table_mask]] = True
+    level = np.abs(w.fit.plane.height_of(w.pts)) <= AROUND_LEVEL_M
+    seen[w.idx[~w.prism_mask & level]] = True
+    return support_around([o.indices for o in w.objects], support, seen, w.frame.shape)
 
 
 def _openings(w: _Work) -> None:
