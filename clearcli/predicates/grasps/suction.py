@@ -35,7 +35,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from clearcli.geometry.poses import _cross, _pose
+from clearcli.geometry.poses import _cross
 from clearcli.geometry.suction import (
     MAX_POINTS,
     CupSpec,
@@ -283,17 +283,23 @@ def contact_poses(
         x0 = _cross(z, np.array([1.0, 0.0, 0.0]))
     x0 = x0 / np.linalg.norm(x0)
     y0 = _cross(z, x0)  # np.cross costs ~20 us for 3-vectors (the same products)
-    out = []
-    for turn in TURNS_DEG:
-        a = math.radians(turn)
-        x = math.cos(a) * x0 + math.sin(a) * y0
-        tcp = point - s.lip_past_tcp_m * z  # the TCP behind the lip, on the cup's axis
-        T = _pose(x, z, tcp)
-        pre, lift = T.copy(), T.copy()
-        pre[:3, 3] += approach_m * normal
-        lift[:3, 3] += approach_m * UP
-        out.append((pre, T, lift))
-    return tuple(out)
+    # every turn at once, elementwise as `_pose` makes each: x, y = z cross x, z, the TCP
+    cos = np.array([math.cos(math.radians(turn)) for turn in TURNS_DEG])[:, None]
+    sin = np.array([math.sin(math.radians(turn)) for turn in TURNS_DEG])[:, None]
+    x = cos * x0 + sin * y0
+    y = np.stack(
+        [z[1] * x[:, 2] - z[2] * x[:, 1], z[2] * x[:, 0] - z[0] * x[:, 2], z[0] * x[:, 1] - z[1] * x[:, 0]], axis=1
+    )
+    tcp = point - s.lip_past_tcp_m * z  # the TCP behind the lip, on the cup's axis
+    T = np.zeros((len(TURNS_DEG), 3, 4, 4))
+    T[:, :, 3, 3] = 1.0
+    T[:, :, :3, 0] = x[:, None, :]
+    T[:, :, :3, 1] = y[:, None, :]
+    T[:, :, :3, 2] = z
+    T[:, 0, :3, 3] = tcp + approach_m * normal  # pre
+    T[:, 1, :3, 3] = tcp
+    T[:, 2, :3, 3] = tcp + approach_m * UP  # lift
+    return tuple((T[k, 0].copy(), T[k, 1].copy(), T[k, 2].copy()) for k in range(len(TURNS_DEG)))
 
 
 def _within(points: np.ndarray, p_lo: np.ndarray, p_hi: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
@@ -301,7 +307,13 @@ def _within(points: np.ndarray, p_lo: np.ndarray, p_hi: np.ndarray, lo: np.ndarr
     (`in_box`): all of them, not tested one by one, where their box lies in it."""
     if bool(np.all(p_lo >= lo)) and bool(np.all(p_hi <= hi)):
         return points
-    return points[in_box(points, lo, hi)]
+    # x first over all of them, then y and z over those left (the same points, in order)
+    x = points[:, 0]
+    first = np.flatnonzero((x >= lo[0]) & (x <= hi[0]))
+    if len(first) * 2 > len(points):
+        return points[in_box(points, lo, hi)]
+    rest = points[first]
+    return rest[in_box(rest, lo, hi)]
 
 
 class SuctionGrasp(KindModule):
