@@ -127,7 +127,8 @@ def choose(
     min_points: int,
 ) -> Choice | None:
     """The surface the objects stand on instead of ``surfaces[best]`` (the one with the
-    most points above it), or None when that one stays: see the module's docstring.
+    most points above it), or None when that one stays (a Choice of ``best`` itself when
+    it stays and a concave surface was turned down, to say why): see the module's docstring.
     ``loose``: the points on no candidate plane (what stands on them), ``every``: all
     points (a raised surface's body is often a candidate plane itself, its front face);
     ``*band_m``: per point, the height above a surface that is off it (noise grows with
@@ -187,7 +188,8 @@ def choose(
             )
         )
     if not picks:
-        return None
+        # the best one stays; the concave surfaces turned down still say why
+        return Choice(best, "the most points standing on it", concave) if concave else None
     # the highest such surface (a raised one over a mat on the floor is still raised)
     picks.sort(key=lambda p: (-p[0], p[1]))
     _, k, why, lower_why = picks[0]

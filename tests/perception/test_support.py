@@ -109,6 +109,10 @@ def test_the_inside_of_a_large_bowl_is_never_the_support(seed: int, monkeypatch:
     seg = segment(frame, ON)
     chosen = next(v for v in seg.support if v.chosen)
     assert chosen.why == "the most points standing on it"
+    # the table stays, and the bowl's floor turned down says why (in --json's support list)
+    assert any(v.why.startswith("concave: a wall rises around it") for v in seg.support if not v.chosen), [
+        v.why for v in seg.support
+    ]
     assert abs(seg.table.offset - segment(frame, OFF).table.offset) < 0.005  # the table, as without the rule
     labels = seg.labels()
     assert np.mean(labels[truth == bowl] == LABEL_TABLE) < 0.05  # the bowl's floor is not support
