@@ -182,7 +182,7 @@ def test_help_of_a_command_or_a_completion_request_goes_through_the_app(tmp_path
     assert loaded["typer"] is True
 
 
-_MODULES_HOOK = """
+_ALL_MODULES_HOOK = """
 import atexit, json, os, sys
 
 def _report():
@@ -199,7 +199,7 @@ def test_a_command_imports_only_what_it_runs(tmp_path: Path, command: str) -> No
     clearcli/io/pcd.py), a plan on the default arm (the WAM) not Pinocchio (its
     kinematics are NumPy's), and `segment` none of the predicates' or planner's modules."""
     report = tmp_path / "modules.json"
-    env = hooked_env(tmp_path, _MODULES_HOOK)
+    env = hooked_env(tmp_path, _ALL_MODULES_HOOK)
     env["CLEAR_TEST_REPORT"] = str(report)
     res = run_clear(command, FIXTURES / "isolated_box.pcd", "--json", timeout=180, env=env)
     assert res.returncode in (0, 10), res.stderr
