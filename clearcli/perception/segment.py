@@ -460,16 +460,23 @@ def _exclude(w: _Work) -> None:
 
 
 def _support_around(w: _Work) -> list[tuple[int, int]]:
-    """exclude.support_around on the frame's pixel grid: the support's pixels, and those
-    seen (kept by the filter) outside the prism within `AROUND_LEVEL_M` of the support's
-    level (where the support would be seen if it went on there)."""
-    assert w.frame.shape is not None and w.fit is not None  # organized; the table's step ran
-    n = w.frame.shape[0] * w.frame.shape[1]
-    support, seen = np.zeros(n, dtype=bool), np.zeros(n, dtype=bool)
-    support[w.idx[w.table_mask]] = True
-    level = np.abs(w.fit.plane.height_of(w.pts)) <= AROUND_LEVEL_M
-    seen[w.idx[~w.prism_mask & level]] = True
-    return support_around([o.indices for o in w.objects], support, seen, w.frame.shape)
+    """exclude.support_around on the frame's pixel grid: a pixel counts when its point was
+    kept by the filter, lies outside the prism and within `AROUND_LEVEL_M` of the support's
+    level (where the support would be seen if it went on there); the support's are the
+    table's points."""
+    fit, shape = w.fit, w.frame.shape
+    assert fit is not None and shape is not None  # the table's step ran; organized
+
+    def state(pixels: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        j = np.minimum(np.searchsorted(w.idx, pixels), w.idx.size - 1)  # w.idx is sorted
+        kept = w.idx[j] == pixels
+        jk = j[kept]
+        counts, support = np.zeros(pixels.size, dtype=bool), np.zeros(pixels.size, dtype=bool)
+        counts[kept] = ~w.prism_mask[jk] & (np.abs(fit.plane.height_of(w.pts[jk])) <= AROUND_LEVEL_M)
+        support[kept] = w.table_mask[jk]
+        return counts, support
+
+    return support_around([o.indices for o in w.objects], shape, state)
 
 
 def _openings(w: _Work) -> None:
