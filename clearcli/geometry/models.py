@@ -310,6 +310,12 @@ def table_rows(points_camera: np.ndarray, idx: np.ndarray, T_table_camera: np.nd
     return q
 
 
+def groups_table_rows(points_camera: np.ndarray, groups: list[np.ndarray], T_table_camera: np.ndarray) -> np.ndarray:
+    """`table_rows` of the groups' point indices end to end (3, N)."""
+    idx = np.concatenate([np.asarray(g, dtype=np.int64) for g in groups])
+    return table_rows(points_camera, idx, T_table_camera)
+
+
 def object_columns(
     points_camera: np.ndarray,
     groups: list[np.ndarray],
@@ -326,8 +332,7 @@ def object_columns(
     if n_g == 0 or sizes.sum() == 0:
         return [None] * n_g
     if rows is None:
-        idx = np.concatenate([np.asarray(g, dtype=np.int64) for g in groups])
-        q = table_rows(points_camera, idx, frame.T_table_camera)
+        q = groups_table_rows(points_camera, groups, frame.T_table_camera)
     else:
         q = rows.copy()  # its heights are clamped in place below
     # a non-finite coordinate makes every transformed coordinate non-finite (nan or inf,

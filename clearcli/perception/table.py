@@ -196,16 +196,24 @@ def inside_convex_raster(
     return out
 
 
+def _packed(*cells: np.ndarray) -> tuple[list[np.ndarray], np.ndarray, int]:
+    """Each (N, 2) int64 array of grid indices (none empty) as one int64 key per row over
+    their joint range (offset to non-negative, first column major: the keys sort as the
+    rows do), with the offset and the second column's span that unpack them."""
+    lo = np.min([c.min(axis=0) for c in cells], axis=0)
+    span = int(max(int(c[:, 1].max()) for c in cells) - lo[1]) + 1
+    return [(c[:, 0] - lo[0]) * span + (c[:, 1] - lo[1]) for c in cells], lo, span
+
+
 def unique_cells(cells: np.ndarray) -> np.ndarray:
     """The distinct rows of ``cells`` (N, 2) int64 grid indices, in the lexicographic
-    order of ``np.unique(cells, axis=0)``: each row packed into one int64 key (offset to
-    non-negative, first column major) and those sorted, several times faster than the
-    sort on rows that ``axis=0`` does (it was most of the table stage on 1280x720)."""
+    order of ``np.unique(cells, axis=0)``: each row packed into one int64 key (`_packed`)
+    and those sorted, several times faster than the sort on rows that ``axis=0`` does (it
+    was most of the table stage on 1280x720)."""
     if cells.shape[0] == 0:
         return cells.reshape(0, 2)
-    lo = cells.min(axis=0)
-    span = int(cells[:, 1].max() - lo[1]) + 1
-    keys = np.unique((cells[:, 0] - lo[0]) * span + (cells[:, 1] - lo[1]))
+    (packed,), lo, span = _packed(cells)
+    keys = np.unique(packed)
     return np.stack([keys // span + lo[0], keys % span + lo[1]], axis=1)
 
 
@@ -571,11 +579,8 @@ def beyond_the_edge(
         centres = (grid + 0.5) * cell
         added = inside_convex(centres, both) & ~inside_convex(centres, main_hull, cell)
         if added.any():  # not the piece's own cells (one integer key per cell, not a set of tuples)
-            base = np.minimum(grid.min(axis=0), own.min(axis=0))
-            span = int(max(grid[:, 1].max(), own[:, 1].max()) - base[1]) + 1
-            added &= ~np.isin(
-                (grid[:, 0] - base[0]) * span + grid[:, 1] - base[1], (own[:, 0] - base[0]) * span + own[:, 1] - base[1]
-            )
+            (grid_keys, own_keys), _, _ = _packed(grid, own)
+            added &= ~np.isin(grid_keys, own_keys)
         looks = origin + centres[added] @ basis  # points of the plane in the added area
         through = nearer = 0
         if looks.shape[0]:

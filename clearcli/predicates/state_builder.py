@@ -22,8 +22,8 @@ from clearcli.geometry.models import (
     ObjectGeometry,
     TableFrame,
     build_from_columns,
+    groups_table_rows,
     object_columns,
-    table_rows,
 )
 from clearcli.geometry.poses import PushGeometry, push_geometry
 from clearcli.io.frames import Frame
@@ -69,7 +69,7 @@ def compute_state(
     # a cup judges its seal on the objects' own points (table frame; fingers need none):
     # transformed once, for the models too
     rows = (
-        table_rows(frame.points, np.concatenate([np.asarray(g, dtype=np.int64) for g in groups]), tf.T_table_camera)
+        groups_table_rows(frame.points, groups, tf.T_table_camera)
         if "cup" in tools and groups and sum(len(g) for g in groups)
         else None
     )
