@@ -32,7 +32,8 @@ import dataclasses
 
 import numpy as np
 
-from clearcli.perception.supervoxels import VoxelCloud, _components
+from clearcli.perception.graph import components
+from clearcli.perception.supervoxels import VoxelCloud
 
 # 4 of the 8 neighbour offsets (row, column): each undirected pixel pair found once
 _PIXEL_OFFSETS = ((0, 1), (1, 0), (1, 1), (1, -1))
@@ -61,7 +62,7 @@ def pixel_pieces(points: np.ndarray, shape: tuple[int, int], point_index: np.nda
         near = np.abs(ra - rb) <= rel * np.minimum(ra, rb)
         src.append(a[near])
         dst.append(b[near])
-    return _components(m, np.stack([np.concatenate(src), np.concatenate(dst)], axis=1))
+    return components(m, np.stack([np.concatenate(src), np.concatenate(dst)], axis=1))
 
 
 def _voxel_piece(point_voxel: np.ndarray, point_piece: np.ndarray, n_voxels: int) -> np.ndarray:

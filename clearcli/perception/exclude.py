@@ -49,6 +49,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from clearcli.perception.graph import components
+
 _BORDER_M = 0.02  # a segment's points this near the prism's side touch it
 _GOES_ON_M = 0.02  # points beyond the side within this of those continue the segment
 _GOES_ON_MIN = 15  # at least this many such points
@@ -126,9 +128,6 @@ def reach_beyond(points: np.ndarray, pixel: np.ndarray | None, width: int, beyon
     pixels wide) within `_LINK_M` of each other. Without a pixel grid, each point's own."""
     if pixel is None or points.shape[0] < 2:
         return beyond.copy()
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
     order = np.argsort(pixel, kind="stable")
     pix = pixel[order]
     rows: list[np.ndarray] = []
@@ -145,8 +144,7 @@ def reach_beyond(points: np.ndarray, pixel: np.ndarray | None, width: int, beyon
         cols.append(b[near])
     r, c = np.concatenate(rows), np.concatenate(cols)
     n = points.shape[0]
-    graph = coo_matrix((np.ones(r.size, dtype=np.int8), (r, c)), shape=(n, n))
-    _, part = connected_components(graph, directed=False)
+    part = components(n, np.stack([r, c], axis=1))
     far = np.full(int(part.max()) + 1, -np.inf)
     np.maximum.at(far, part, beyond)
     return far[part]

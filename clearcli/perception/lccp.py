@@ -19,8 +19,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from clearcli.perception.graph import components
 from clearcli.perception.size import SegmentSize
-from clearcli.perception.supervoxels import Supervoxels, _components
+from clearcli.perception.supervoxels import Supervoxels
 from clearcli.settings.segment import SegmentSettings
 
 
@@ -79,17 +80,13 @@ def lccp_segments(
     box's top and front cut off by an object standing on the box is at the box's
     height) is a whole small object, not a piece of a larger one, and keeps its own
     segment when it holds at least ``min_object_area_m2`` of surface."""
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
     n_sv = sv.centroids.shape[0]
     if n_sv == 0:
         return np.zeros(0, dtype=np.int64)
     size = size if size is not None else SegmentSize.of(settings)
     convex = convex_edges(sv, settings, size)
     e = sv.edges[convex]
-    graph = coo_matrix((np.ones(e.shape[0], dtype=np.int8), (e[:, 0], e[:, 1])), shape=(n_sv, n_sv))
-    seg = connected_components(graph, directed=False)[1].astype(np.int64)
+    seg = components(n_sv, e)
     # "small" also by area: the connectivity step of the supervoxels can leave a small
     # patch in several pieces, which would count as several supervoxels
     keep: np.ndarray | None = None
@@ -113,12 +110,8 @@ def lccp_segments(
 def join_pairs(seg: np.ndarray, pairs: list[tuple[int, int]] | np.ndarray, n_seg: int) -> np.ndarray:
     """``seg`` (labels 0..n_seg-1) with every pair of segments in ``pairs`` joined (and
     what they chain to), renumbered 0..G-1 in order of first label."""
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
     p = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
-    graph = coo_matrix((np.ones(p.shape[0], dtype=np.int8), (p[:, 0], p[:, 1])), shape=(n_seg, n_seg))
-    comp = connected_components(graph, directed=False)[1]
+    comp = components(n_seg, p)
     _, out = np.unique(comp[seg], return_inverse=True)
     return out.astype(np.int64)
 
@@ -133,7 +126,7 @@ def rejoin_pieces(
     """After a cut: every segment of ``seg`` split into its connected pieces over
     ``edges``, and small pieces joined to their largest neighbour (`merge_small_segments`)."""
     keep = seg[edges[:, 0]] == seg[edges[:, 1]]
-    pieces = _components(seg.size, edges[keep]).astype(np.int64)
+    pieces = components(seg.size, edges[keep]).astype(np.int64)
     return merge_small_segments(pieces, edges, min_size, sizes, min_voxels)
 
 

@@ -42,8 +42,8 @@ from __future__ import annotations
 import numpy as np
 
 from clearcli.perception.context import RefineContext
+from clearcli.perception.graph import components
 from clearcli.perception.lccp import join_pairs
-from clearcli.perception.supervoxels import _components
 
 # share of the candidate upper object that must stand within the lower top's hull
 _MIN_INSIDE = 0.9
@@ -75,7 +75,7 @@ def _inside_hull(xy: np.ndarray, hull_xy: np.ndarray, slack_m: float) -> np.ndar
 def _component(seed_mask: np.ndarray, allowed: np.ndarray, edges: np.ndarray) -> np.ndarray:
     """(V,) voxels reachable from ``seed_mask`` through ``allowed`` voxels."""
     keep = allowed[edges[:, 0]] & allowed[edges[:, 1]]
-    comp = _components(allowed.size, edges[keep])
+    comp = components(allowed.size, edges[keep])
     seeds = np.unique(comp[seed_mask & allowed])
     return allowed & np.isin(comp, seeds)
 

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from clearcli.perception.graph import components
 from clearcli.perception.size import SegmentSize
 from clearcli.settings.segment import SegmentSettings
 
@@ -191,16 +192,6 @@ def _pairs_of(keys: np.ndarray, n: int) -> np.ndarray:
     return np.stack([keys // n, keys % n], axis=1)
 
 
-def _components(n: int, edges: np.ndarray) -> np.ndarray:
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
-    # float64 CSR, what csgraph works on: handed a COO of int8 it converts it again
-    # (a fifth of the time); the labels depend only on the graph
-    graph = coo_matrix((np.ones(edges.shape[0]), (edges[:, 0], edges[:, 1])), shape=(n, n)).tocsr()
-    return connected_components(graph, directed=False)[1]
-
-
 def supervoxel_labels(
     vox: VoxelCloud, normals: np.ndarray, settings: SegmentSettings, size: SegmentSize | None = None
 ) -> np.ndarray:
@@ -278,7 +269,7 @@ def supervoxel_labels(
     # unassigned voxels form pieces of their own
     e = vox.edges
     same = labels[e[:, 0]] == labels[e[:, 1]]
-    piece = _components(n_vox, e[same])
+    piece = components(n_vox, e[same])
     # the piece holding most of a supervoxel's voxels keeps it; other pieces are orphans
     n_pieces = int(piece.max()) + 1 if n_vox else 0
     piece_size = np.bincount(piece, minlength=n_pieces)

@@ -16,6 +16,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from clearcli.errors import SceneError
+from clearcli.perception.graph import components
 from clearcli.perception.support import Surface, choose, standing_on
 from clearcli.perception.types import PlaneVerdict, TablePlane
 from clearcli.settings.segment import SegmentSettings
@@ -222,9 +223,6 @@ def _label_grid(grid: np.ndarray) -> tuple[np.ndarray, int]:
     cells, 1..n numbered in raster order of each component's first cell, as
     scipy.ndimage.label numbers them (this replaces ndimage.label and binary_dilation:
     importing scipy.ndimage cost more than everything they did here)."""
-    from scipy.sparse import csr_matrix
-    from scipy.sparse.csgraph import connected_components
-
     h, w = grid.shape
     flat = np.flatnonzero(grid)  # raster order
     m = flat.size
@@ -242,8 +240,8 @@ def _label_grid(grid: np.ndarray) -> tuple[np.ndarray, int]:
         src.append(inner[hit])
         dst.append(nbr[hit])
     a, b = np.concatenate(src), np.concatenate(dst)
-    graph = csr_matrix((np.ones(a.size, dtype=np.int8), (a, b)), shape=(m, m))
-    n, comp = connected_components(graph, directed=False)
+    comp = components(m, np.stack([a, b], axis=1))
+    n = int(comp.max()) + 1
     first = np.full(n, m, dtype=np.int64)
     np.minimum.at(first, comp, np.arange(m))
     rank = np.empty(n, dtype=np.int32)

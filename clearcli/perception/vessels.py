@@ -45,8 +45,8 @@ from __future__ import annotations
 import numpy as np
 
 from clearcli.perception.context import RefineContext
+from clearcli.perception.graph import components
 from clearcli.perception.rings import cover_deg, facing_cos, fit_circle
-from clearcli.perception.supervoxels import _components
 
 _MIN_RADIUS_M = 0.02
 _RANSAC_ROUNDS = 200
@@ -282,7 +282,7 @@ def rebuild_vessels(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
             if idx.size == 0:
                 continue
             keep = rest[voxel_edges[:, 0]] & rest[voxel_edges[:, 1]]
-            comp = _components(seg.size, voxel_edges[keep])[idx]
+            comp = components(seg.size, voxel_edges[keep])[idx]
             for c in np.unique(comp):
                 piece = idx[comp == c]
                 if np.median(d[piece]) <= radius:

@@ -1,0 +1,62 @@
+"""Connected components in NumPy against SciPy's csgraph, which they replace."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+
+from clearcli.perception.graph import components
+
+
+def _scipy(n: int, edges: np.ndarray) -> np.ndarray:
+    graph = coo_matrix((np.ones(edges.shape[0]), (edges[:, 0], edges[:, 1])), shape=(n, n))
+    return connected_components(graph, directed=False)[1]
+
+
+def test_worked_example() -> None:
+    # nodes 0..6: {0, 3, 5}, {1}, {2, 6}, {4}; the labels follow each one's lowest node
+    edges = np.array([[5, 3], [3, 0], [6, 2]])
+    assert components(7, edges).tolist() == [0, 1, 2, 0, 3, 0, 2]
+
+
+def test_no_edges_and_no_nodes() -> None:
+    assert components(3, np.zeros((0, 2), dtype=np.int64)).tolist() == [0, 1, 2]
+    assert components(0, np.zeros((0, 2), dtype=np.int64)).tolist() == []
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_random_graphs_match_csgraph(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(1, 500))
+    edges = rng.integers(0, n, size=(int(rng.integers(0, 2 * n)), 2))  # loops and repeats too
+    assert np.array_equal(components(n, edges), _scipy(n, edges))
+
+
+@pytest.mark.parametrize("reverse", [False, True])
+def test_long_path_either_way(reverse: bool) -> None:
+    # a path is the worst case for hooking by rounds: one component, its root node 0
+    n = 20_000
+    edges = np.stack([np.arange(n - 1), np.arange(1, n)], axis=1)
+    if reverse:
+        edges = edges[::-1, ::-1]
+    assert not components(n, edges).any()
+
+
+def test_pixel_grid_matches_csgraph() -> None:
+    rng = np.random.default_rng(7)
+    h, w = 120, 160
+    ids = np.arange(h * w).reshape(h, w)
+    on = (rng.random((h, w)) < 0.6).ravel()
+    pairs = []
+    for a, b in (
+        (ids[:, :-1], ids[:, 1:]),
+        (ids[:-1], ids[1:]),
+        (ids[:-1, :-1], ids[1:, 1:]),
+        (ids[:-1, 1:], ids[1:, :-1]),
+    ):
+        keep = on[a.ravel()] & on[b.ravel()]
+        pairs.append(np.stack([a.ravel()[keep], b.ravel()[keep]], axis=1))
+    edges = np.concatenate(pairs)
+    assert np.array_equal(components(h * w, edges), _scipy(h * w, edges))
