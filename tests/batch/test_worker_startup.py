@@ -1,0 +1,55 @@
+"""A batch's workers start as a single call does (clearcli/startup.py): one BLAS thread,
+NumPy's and SciPy's unused modules deferred and SciPy's docstrings left unparsed. A
+worker is a fresh interpreter that never runs the CLI's main (issue 39: without this a
+worker's first frame paid ~1 s of SciPy imports on a loaded machine)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from helpers import FIXTURES
+from helpers.batch import clear, hooked_env, lines_of
+
+from clearcli.startup import DEFERRED_MODULES, SINGLE_THREADED
+
+# In every child: at exit, a report named by its pid (a worker: a multiprocessing child
+# running the pool's worker module).
+_HOOK = """
+import atexit, importlib.util, json, multiprocessing, os, sys
+
+def _report():
+    state = {"worker": multiprocessing.parent_process() is not None and "clearcli.batch.pool" in sys.modules, "scipy": "scipy" in sys.modules}
+    for name in DEFERRED:
+        module = sys.modules.get(name)
+        # type(), not module.__class__: any attribute access would load a lazy module
+        state[name] = "absent" if module is None else "deferred" if type(module) is importlib.util._LazyModule else "loaded"
+    array_api = sys.modules.get("scipy._lib._array_api")
+    state["scipy_docs"] = getattr(getattr(array_api, "FunctionDoc", None), "__name__", None)
+    state["env"] = {var: os.environ.get(var) for var in THREADS}
+    with open(os.path.join(os.environ["CLEAR_TEST_REPORTS"], f"{os.getpid()}.json"), "w") as out:
+        json.dump(state, out)
+
+atexit.register(_report)
+""".replace("DEFERRED", repr(sorted(DEFERRED_MODULES))).replace("THREADS", repr(SINGLE_THREADED))
+
+
+def test_batch_workers_start_light(tmp_path: Path) -> None:
+    reports = tmp_path / "reports"
+    reports.mkdir()
+    env = hooked_env(tmp_path, _HOOK)
+    env["CLEAR_TEST_REPORTS"] = str(reports)
+    for var in SINGLE_THREADED:
+        env.pop(var, None)
+    frames = [FIXTURES / "isolated_box.pcd", FIXTURES / "two_touching_boxes.pcd"]
+    res = clear("segment", *frames, "--json", "--jobs", "2", env=env)
+    assert res.returncode == 0, res.stderr
+    rows, summary = lines_of(res.stdout)
+    assert [r["exit_code"] for r in rows] == [0, 0] and summary["failed"] == 0
+    workers = [s for s in (json.loads(p.read_text()) for p in reports.glob("*.json")) if s.pop("worker")]
+    assert workers, "no worker reported: nothing was checked"
+    for state in workers:
+        assert state.pop("scipy") is True, "the worker did not import SciPy: nothing was checked"
+        assert state.pop("scipy_docs") == "_DocstringKept"
+        assert state.pop("env") == dict.fromkeys(SINGLE_THREADED, "1")
+        assert state == dict.fromkeys(DEFERRED_MODULES, "deferred")
