@@ -6,27 +6,22 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from clearcli import pipeline
 from clearcli.errors import EXIT_NO_PLAN, EXIT_OK, EXIT_PARTIAL_PLAN, ClearError
-from clearcli.files import atomic_output, atomic_path
-from clearcli.planning.backtrack import with_grasp_kinds
-from clearcli.planning.payload import plan_payload
-from clearcli.planning.pddl import domain_for, unit_cost, write_plan, write_problem
-from clearcli.planning.types import Plan
 from clearcli.planning.versions import PLAN_SCHEMA as PLAN_SCHEMA  # the commands read it here
 from clearcli.planning.versions import PLAN_VERSION as PLAN_VERSION
-from clearcli.predicates.grasps import parse_kinds
-from clearcli.predicates.state import SymbolicState
-from clearcli.render.plan_png import render_plan
-from clearcli.robot.arm import resolve_arm
-from clearcli.settings import Settings
-from clearcli.settings.weigh import lightest_plausible
 from clearcli.tasks.base import NO_OUTPUTS, Outcome, Outputs, Source
 
 if TYPE_CHECKING:
+    # The stages, the planner, the arm and the picture are imported where `run` first
+    # needs them: a batch's parent builds a Request and never runs one (its workers do),
+    # and it imported them all (~0.3 s of CPU, before its workers were started; issue 39).
+    from clearcli import pipeline
     from clearcli.io.frames import Frame
     from clearcli.perception.types import Segmentation
+    from clearcli.planning.types import Plan
+    from clearcli.predicates.state import SymbolicState
     from clearcli.robot.arm import Arm
+    from clearcli.settings import Settings
 
 SCHEMA, VERSION = PLAN_SCHEMA, PLAN_VERSION  # the planner's (clearcli/planning/versions.py)
 OUTPUTS = ("problem", "domain", "plan", "png")
@@ -44,6 +39,14 @@ class Request:
 def run(request: Request, source: Source) -> Outcome:
     """The clear.plan payload and exit code (0 complete, 10 partial, 5 nothing can be
     done), the output files written. Errors raise ClearError."""
+    from clearcli import pipeline  # noqa: PLC0415  (see the top)
+    from clearcli.planning.backtrack import with_grasp_kinds  # noqa: PLC0415
+    from clearcli.planning.payload import plan_payload  # noqa: PLC0415
+    from clearcli.planning.pddl import unit_cost  # noqa: PLC0415
+    from clearcli.predicates.grasps import parse_kinds  # noqa: PLC0415
+    from clearcli.render.plan_png import render_plan  # noqa: PLC0415
+    from clearcli.robot.arm import resolve_arm  # noqa: PLC0415
+
     # the robot, resolved once: placement, planning, the payload's block and the picture
     robot = resolve_arm(request.settings)
     frame = pipeline.read(source.path, source.topic, source.index, request.settings, source.color)
@@ -75,6 +78,8 @@ def run(request: Request, source: Source) -> Outcome:
     write_plan_files(state, plan, problem=out.get("problem"), domain=out.get("domain"), output=out.get("plan"))
     png = out.get("png")
     if png is not None:
+        from clearcli.files import atomic_path  # noqa: PLC0415  (see the top)
+
         with atomic_path(png) as tmp:
             render_plan(tmp, frame, state, plan, seg, robot)
     if done.no_plan is not None:
@@ -96,6 +101,9 @@ def _weigh_on_lift(
     and the document's ``assumes`` block (the settings assumed, the estimate's, and the
     objects only the estimate refused the cup) when that plan removes something; else
     None (the first answer stands, an error of the second attempt included)."""
+    from clearcli import pipeline  # noqa: PLC0415  (see the top)
+    from clearcli.settings.weigh import lightest_plausible  # noqa: PLC0415
+
     relaxed = lightest_plausible(request.settings)
     if relaxed is None:
         return None
@@ -126,6 +134,9 @@ def write_plan_files(
 ) -> None:
     """The problem (and domain) first, the plan file last, each written whole or not at
     all: a plan file on disk means its problem is complete."""
+    from clearcli.files import atomic_output  # noqa: PLC0415  (see the top)
+    from clearcli.planning.pddl import domain_for, unit_cost, write_plan, write_problem  # noqa: PLC0415
+
     if problem is not None:
         text = write_problem(state, goal_objects=plan.goal, extra_facts=plan.ik_facts)
         with atomic_output(problem, "w") as handle:
