@@ -154,68 +154,80 @@ def _near_box(points: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     """The rows of ``points`` inside the box [lo, hi] (as many columns as ``lo``): only they
     can be within the box's margin of what it was grown around, so a nearest-neighbour
     search against them alone gives the same answer as against all the points."""
-    return points[((points[:, : lo.size] >= lo) & (points[:, : lo.size] <= hi)).all(axis=1)]
+    return points[((points >= lo) & (points <= hi)).all(axis=1)]
 
 
-def _rests_on_another(
-    k: int, p: np.ndarray, height: Callable[[np.ndarray], np.ndarray], low: float, objects: list[np.ndarray]
-) -> bool:
-    """Does the bottom of object ``k`` touch another object (it leans on it, stands on it)?"""
+@dataclass(frozen=True)
+class _Boxes:
+    """Every object's box (``lo``, ``hi``: (n, 3) corners) and in-plane box (``lo_2d``,
+    ``hi_2d``), and its highest point above the support (``top``): an object whose box
+    misses a search box has no point in it, and is not searched (a heap's far objects)."""
+
+    lo: np.ndarray
+    hi: np.ndarray
+    lo_2d: np.ndarray
+    hi_2d: np.ndarray
+    top: np.ndarray
+
+    def meet(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+        return np.flatnonzero((self.lo <= hi).all(axis=1) & (self.hi >= lo).all(axis=1))
+
+    def meet_2d(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+        return np.flatnonzero((self.lo_2d <= hi).all(axis=1) & (self.hi_2d >= lo).all(axis=1))
+
+
+def _rests_on_another(k: int, objects: list[np.ndarray], h: np.ndarray, low: float, boxes: _Boxes) -> bool:
+    """Does the bottom of object ``k`` (its points' heights ``h``, the lowest ``low``) touch
+    another object (it leans on it, stands on it)?"""
     from scipy.spatial import cKDTree
 
-    bottom = p[height(p) <= low + _TOUCH_M]
+    bottom = objects[k][h <= low + _TOUCH_M]
     if not bottom.shape[0]:
         return False
     lo, hi = bottom.min(axis=0) - _TOUCH_M, bottom.max(axis=0) + _TOUCH_M
-    others = [_near_box(o, lo, hi) for j, o in enumerate(objects) if j != k]
+    others = [_near_box(objects[j], lo, hi) for j in boxes.meet(lo, hi).tolist() if j != k]
     near = np.vstack(others) if others else np.zeros((0, 3))
     if not near.shape[0]:
         return False
+    # only the bottom's points within the others' box (grown) can touch them
+    bottom = _near_box(bottom, near.min(axis=0) - _TOUCH_M, near.max(axis=0) + _TOUCH_M)
     d, _ = cKDTree(near).query(bottom, distance_upper_bound=_TOUCH_M)
     return bool(np.isfinite(d).sum() >= 5)
 
 
 def _on_what_is_beneath(
-    p: np.ndarray,
-    low: float,
-    others: list[np.ndarray],
-    height: Callable[[np.ndarray], np.ndarray],
-    to_2d: Callable[[np.ndarray], np.ndarray],
+    xy: np.ndarray, low: float, standing: list[int], xy_each: list[np.ndarray], h_each: list[np.ndarray], boxes: _Boxes
 ) -> bool:
-    """Does another object lie beneath the outline of the object ``p`` (in-plane, within `_CELL_M`
-    of its points), reaching up to within `_HANG_M` of its lowest point? Then it stands on
-    that object where the camera cannot see the contact: a box laid across two others
-    (mOSD test47: its bottom 1 to 1.5 cm above their tops, their tops hidden under it),
-    though the support is seen between them. The same `_HANG_M` that tells hanging from
-    resting on the support tells it from resting on an object."""
+    """Does another object of ``standing`` lie beneath the outline of an object (its in-plane
+    points ``xy``, within `_CELL_M` of them), reaching up to within `_HANG_M` of its lowest
+    point ``low``? Then it stands on that object where the camera cannot see the contact:
+    a box laid across two others (mOSD test47: its bottom 1 to 1.5 cm above their tops,
+    their tops hidden under it), though the support is seen between them. The same
+    `_HANG_M` that tells hanging from resting on the support tells it from resting on an
+    object. ``xy_each``, ``h_each``: every object's points in-plane and their heights."""
     from scipy.spatial import cKDTree
 
-    if not others:
+    lo, hi = xy.min(axis=0) - _CELL_M, xy.max(axis=0) + _CELL_M
+    meet = set(boxes.meet_2d(lo, hi).tolist())
+    q2 = [
+        _near_box(xy_each[j][h_each[j] >= low - _HANG_M], lo, hi)
+        for j in standing
+        if j in meet and boxes.top[j] >= low - _HANG_M
+    ]
+    near = np.vstack(q2) if q2 else np.zeros((0, 2))
+    if not near.shape[0]:
         return False
-    q = np.vstack(others)
-    q = q[height(q) >= low - _HANG_M]
-    if not q.shape[0]:
-        return False
-    p2 = to_2d(p)
-    q2 = _near_box(to_2d(q), p2.min(axis=0) - _CELL_M, p2.max(axis=0) + _CELL_M)
-    if not q2.shape[0]:
-        return False
-    d, _ = cKDTree(p2).query(q2, distance_upper_bound=_CELL_M)
+    d, _ = cKDTree(xy).query(near, distance_upper_bound=_CELL_M)
     return bool(np.isfinite(d).sum() >= _GOES_ON_MIN)
 
 
-def _far_touched(touching: np.ndarray, out_tree: object, outside_reach: np.ndarray) -> float:
-    """How far beyond the outline the part outside it that the points ``touching`` touch
-    reaches: each touching point counts the part of its nearest outside point, and the
+def _far_touched(nearest: np.ndarray, outside_reach: np.ndarray) -> float:
+    """How far beyond the outline the part outside it that an object's points touch
+    reaches: each touching point counts the part of its ``nearest`` outside point, and the
     reach is the one `_GOES_ON_MIN` of them attain."""
-    from scipy.spatial import cKDTree
-
-    assert isinstance(out_tree, cKDTree)
-    d, j = out_tree.query(touching, distance_upper_bound=_GOES_ON_M)
-    ok = np.isfinite(d)
-    if int(ok.sum()) < _GOES_ON_MIN:
+    if nearest.size < _GOES_ON_MIN:
         return float("-inf")
-    return float(np.sort(outside_reach[j[ok]])[-_GOES_ON_MIN])
+    return float(np.sort(outside_reach[nearest])[-_GOES_ON_MIN])
 
 
 def at_image_border(indices: list[np.ndarray], shape: tuple[int, int] | None) -> list[np.ndarray] | None:
@@ -262,11 +274,9 @@ def support_around(
     return out
 
 
-def _enters_over_border(
-    p: np.ndarray, border: np.ndarray, h: np.ndarray, rests: float, to_2d: Callable[[np.ndarray], np.ndarray]
-) -> str:
-    """Why the object ``p`` (heights ``h``, its points at the image's border ``border``)
-    enters from beyond the image above the support, or "" when it does not."""
+def _enters_over_border(border: np.ndarray, h: np.ndarray, rests: float, xy: np.ndarray) -> str:
+    """Why an object (its points' heights ``h``, in-plane ``xy``, which are at the image's
+    border ``border``) enters from beyond the image above the support, or "" when it does not."""
     from scipy.spatial import cKDTree
 
     n_border = int(border.sum())
@@ -277,7 +287,7 @@ def _enters_over_border(
         return ""
     resting = h <= rests
     if resting.any():
-        d, _ = cKDTree(to_2d(p[resting])).query(to_2d(p[high]))
+        d, _ = cKDTree(xy[resting]).query(xy[high])
         apart = float(np.median(d))
         if apart <= _APART_M:
             return ""
@@ -290,50 +300,50 @@ def _enters_over_border(
     )
 
 
-def _face(xy: np.ndarray, h: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, float, float]:
+def _face(xy: np.ndarray, h: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, float, float] | None:
     """The in-plane footprint ``xy`` of a segment (heights ``h``) as a face: (its middle,
     the unit normal of its footprint's line, its thickness across that line, its length
-    along it, its height); percentiles, not extremes, so a few stray points do not count."""
+    along it, its height); percentiles, not extremes, so a few stray points do not count.
+    None when it is thicker than a face (`_FACE_THIN_M`): neither a wall nor a piece of one."""
     mid = xy.mean(axis=0)
     c = xy - mid
     _, vecs = np.linalg.eigh(c.T @ c)
-    across, along = c @ vecs[:, 0], c @ vecs[:, 1]
-    thick = float(np.percentile(across, 95) - np.percentile(across, 5))
-    length = float(np.percentile(along, 98) - np.percentile(along, 2))
-    tall = float(np.percentile(h, 98) - np.percentile(h, 2))
-    return mid, vecs[:, 0], thick, length, tall
+    across_5, across_95 = np.percentile(c @ vecs[:, 0], [5, 95])
+    thick = float(across_95 - across_5)
+    if thick > _FACE_THIN_M:
+        return None
+    along_2, along_98 = np.percentile(c @ vecs[:, 1], [2, 98])
+    h_2, h_98 = np.percentile(h, [2, 98])
+    return mid, vecs[:, 0], thick, float(along_98 - along_2), float(h_98 - h_2)
 
 
-def _walls(
-    objects: list[np.ndarray],
-    verdicts: dict[int, str],
-    height: Callable[[np.ndarray], np.ndarray],
-    to_2d: Callable[[np.ndarray], np.ndarray],
-) -> None:
-    """Add to ``verdicts`` the walls among ``objects`` (`_WALL_FACE_M`), and the flat
-    pieces lying in a wall's face (the segmentation cut a wall's foot or its trim apart
-    from it: thin, and all within `_FACE_THIN_M` of the wall's line)."""
+def _walls(xy_each: list[np.ndarray], h_each: list[np.ndarray], verdicts: dict[int, str]) -> None:
+    """Add to ``verdicts`` the walls among the objects (each one's in-plane points
+    ``xy_each``, heights ``h_each``; `_WALL_FACE_M`), and the flat pieces lying in a wall's
+    face (the segmentation cut a wall's foot or its trim apart from it: thin, and all
+    within `_FACE_THIN_M` of the wall's line)."""
     faces = {}
-    for k, p in enumerate(objects):
-        if k in verdicts or p.shape[0] < _GOES_ON_MIN:
+    for k, (xy, h) in enumerate(zip(xy_each, h_each, strict=True)):
+        if k in verdicts or xy.shape[0] < _GOES_ON_MIN:
             continue
-        faces[k] = _face(to_2d(p), height(p))
+        face = _face(xy, h)
+        if face is not None:
+            faces[k] = face
     walls = []
     for k, (mid, normal, thick, length, tall) in faces.items():
         size = float(np.hypot(length, tall))
         # upright: taller than `_UPRIGHT` times its thickness (a strip lying flat is not)
-        if thick <= _FACE_THIN_M and tall >= _UPRIGHT * thick and size >= _WALL_FACE_M:
+        if tall >= _UPRIGHT * thick and size >= _WALL_FACE_M:
             verdicts[k] = (
                 f"a wall: one flat face {length:.2f} m long and {tall:.2f} m high on the support ({thick * 100:.1f} cm "
                 f"across), larger than any object ({_WALL_FACE_M:.2f} m): a wall, a cupboard's side, a bin's wall"
             )
             walls.append((mid, normal))
     for k, (_, _, thick, _, tall) in faces.items():
-        if k in verdicts or thick > _FACE_THIN_M or tall < _UPRIGHT * thick:
+        if k in verdicts or tall < _UPRIGHT * thick:
             continue
-        xy = to_2d(objects[k])
         for mid, normal in walls:
-            off = float(np.percentile(np.abs((xy - mid) @ normal), 95))
+            off = float(np.percentile(np.abs((xy_each[k] - mid) @ normal), 95))
             if off <= _FACE_THIN_M:
                 verdicts[k] = (
                     f"part of a wall: a flat piece lying in a wall's face (95 % of it within {off * 100:.1f} cm of "
@@ -384,30 +394,50 @@ def not_standing(
     """
     from scipy.spatial import cKDTree
 
+    if not objects:
+        return []
+    # every object's points at once (``owner``: whose; ``bounds``: where each one's rows
+    # start): the per-point quantities once, split back per object
+    sizes = [p.shape[0] for p in objects]
+    bounds = np.concatenate([[0], np.cumsum(sizes)])
+    every = np.vstack(objects)
+    h_all, xy_all = height(every), to_2d(every)
+    h_each, xy_each = np.split(h_all, bounds[1:-1]), np.split(xy_all, bounds[1:-1])
+    lows = [float(h.min()) for h in h_each]
+    rests = [rests_m(p) for p in objects]
+    # the points on the prism's side (not farther than `_BORDER_M` inside it), and for
+    # each, whether it touches what lies outside above the support, below it
+    edge_rows = np.flatnonzero(~inside_side(every))
+    edge_bounds = np.searchsorted(edge_rows, bounds)
+    edge = every[edge_rows]
     out_tree = cKDTree(outside) if outside.shape[0] else None
     low_tree = cKDTree(outside_below) if outside_below.shape[0] else None
-    support_cells = _cells(to_2d(support_pts)) if support_pts.shape[0] else np.zeros(0, dtype=np.int64)
+    # the nearest outside point within `_GOES_ON_M` (-1: none): a nearest-neighbour query
+    # stops at the first point in reach, where counting every point in reach (dense
+    # outside points) costs ten times more
+    nearest_out = np.full(edge_rows.size, -1, dtype=np.int64)
+    touches_below = np.zeros(edge_rows.size, dtype=bool)
+    if out_tree is not None and edge_rows.size:
+        d, j = out_tree.query(edge, distance_upper_bound=_GOES_ON_M)
+        nearest_out = np.where(np.isfinite(d), j, -1)
+    if low_tree is not None and edge_rows.size:
+        touches_below = np.isfinite(low_tree.query(edge, distance_upper_bound=_GOES_ON_M)[0])
     verdicts: dict[int, str] = {}
-    lows = []
-    # the side test once for all objects' points (it is per point), split back per object
-    inside_all = inside_side(np.vstack(objects)) if objects else np.zeros(0, dtype=bool)
-    inside_each = np.split(inside_all, np.cumsum([p.shape[0] for p in objects])[:-1])
-    for k, p in enumerate(objects):
-        lows.append(float(height(p).min()))
-        edge = p[~inside_each[k]]
-        if out_tree is not None and edge.shape[0]:
-            near = np.asarray(out_tree.query_ball_point(edge, _GOES_ON_M, return_length=True)) > 0
-            goes_on = int(near.sum())
+    for k in range(len(objects)):
+        e0, e1 = edge_bounds[k], edge_bounds[k + 1]
+        near = nearest_out[e0:e1] >= 0
+        goes_on = int(near.sum())
+        if out_tree is not None and goes_on >= _GOES_ON_MIN:
             # it crosses the side above the support: an object standing at the side (cut
             # by the hull where the table behind it is hidden) crosses it from the bottom
-            if goes_on >= _GOES_ON_MIN and float(height(edge[near]).min()) > rests_m(p) + _REACH_ABOVE_M:
+            if float(h_all[edge_rows[e0:e1][near]].min()) > rests[k] + _REACH_ABOVE_M:
                 verdicts[k] = (
                     f"reaches in from beyond the support's outline ({goes_on} of its points "
                     "touch points above the support outside it): an arm, a hand, a cable"
                 )
                 continue
-            if goes_on >= _GOES_ON_MIN and outside_reach is not None:
-                far = _far_touched(edge[near], out_tree, outside_reach)
+            if outside_reach is not None:
+                far = _far_touched(nearest_out[e0:e1][near], outside_reach)
                 if far >= _FAR_BEYOND_M:
                     verdicts[k] = (
                         f"stands beyond the support's edge: it is one with something outside the support's "
@@ -415,18 +445,17 @@ def not_standing(
                     )
                     continue
         if at_border is not None:
-            why = _enters_over_border(p, at_border[k], height(p), rests_m(p), to_2d)
+            why = _enters_over_border(at_border[k], h_each[k], rests[k], xy_each[k])
             if why:
                 verdicts[k] = why
                 continue
-        if low_tree is not None and edge.shape[0]:
-            down = int((np.asarray(low_tree.query_ball_point(edge, _GOES_ON_M, return_length=True)) > 0).sum())
-            if down >= _GOES_ON_MIN:
-                verdicts[k] = (
-                    f"stands beyond the support's edge: it goes on below the support's level outside its "
-                    f"outline ({down} of its points touch such points): a desk, a shelf, furniture behind"
-                )
-    _walls(objects, verdicts, height, to_2d)
+        down = int(touches_below[e0:e1].sum())
+        if down >= _GOES_ON_MIN:
+            verdicts[k] = (
+                f"stands beyond the support's edge: it goes on below the support's level outside its "
+                f"outline ({down} of its points touch such points): a desk, a shelf, furniture behind"
+            )
+    _walls(xy_each, h_each, verdicts)
     for k, (n_free, n_support) in enumerate(around or ()):
         if k not in verdicts and n_free >= _RING_MIN_PX and n_support < _RING_SUPPORT_SHARE * n_free:
             verdicts[k] = (
@@ -436,17 +465,26 @@ def not_standing(
     # hangs: decided after the two rules above, so what lies beneath counts only when it
     # is itself an object (not an arm's or a shelf's part), whatever the objects' order
     standing = [k for k in range(len(objects)) if k not in verdicts]
-    for k in standing:
-        p, low = objects[k], lows[k]
-        if low <= rests_m(p) + _HANG_M or not support_cells.size or _rests_on_another(k, p, height, low, objects):
+    lifted = [k for k in standing if lows[k] > rests[k] + _HANG_M] if support_pts.shape[0] else []
+    if lifted:
+        support_cells = _cells(to_2d(support_pts))
+        boxes = _Boxes(
+            np.minimum.reduceat(every, bounds[:-1], axis=0),
+            np.maximum.reduceat(every, bounds[:-1], axis=0),
+            np.minimum.reduceat(xy_all, bounds[:-1], axis=0),
+            np.maximum.reduceat(xy_all, bounds[:-1], axis=0),
+            np.maximum.reduceat(h_all, bounds[:-1]),
+        )
+    for k in lifted:
+        if _rests_on_another(k, objects, h_each[k], lows[k], boxes):
             continue
-        if _on_what_is_beneath(p, low, [objects[j] for j in standing if j != k], height, to_2d):
+        if _on_what_is_beneath(xy_each[k], lows[k], [j for j in standing if j != k], xy_each, h_each, boxes):
             continue
-        own = _cells(to_2d(p))
+        own = _cells(xy_each[k])
         seen = int(np.isin(own, support_cells, assume_unique=True).sum()) / max(1, own.size)
         if seen >= _SEEN_UNDER_SHARE:
             verdicts[k] = (
-                f"hangs above the support: its lowest point {low:.3f} m above it, the support seen "
+                f"hangs above the support: its lowest point {lows[k]:.3f} m above it, the support seen "
                 f"beneath {100 * seen:.0f} % of it"
             )
     # what stands on an excluded thing, until nothing more is found
@@ -454,22 +492,23 @@ def not_standing(
     while changed:
         changed = False
         gone = [k for k in verdicts]
-        if not gone:
+        # only what rests nowhere on the support can stand on something excluded
+        if not gone or all(k in verdicts or lows[k] <= rests[k] for k in range(len(objects))):
             break
         tree = cKDTree(np.vstack([objects[k] for k in gone]))
-        owner = np.concatenate([np.full(objects[k].shape[0], k) for k in gone])
+        gone_owner = np.concatenate([np.full(objects[k].shape[0], k) for k in gone])
         reaching = [k for k in gone if verdicts[k].startswith("reaches in")]
         reach_tree = cKDTree(np.vstack([objects[k] for k in reaching])) if reaching else None
         for k, p in enumerate(objects):
-            if k in verdicts or lows[k] <= rests_m(p):
+            if k in verdicts or lows[k] <= rests[k]:
                 continue
-            h = height(p)
+            h = h_each[k]
             # the rest of an arm the segmentation cut apart: it rests nowhere on the
             # support and is joined to what reaches in more than `_REACH_ABOVE_M` above
             # it (an object the arm touches stands on the support; the gripper's tip at
             # the table is lower than that)
             if reach_tree is not None:
-                high = p[h > rests_m(p) + _REACH_ABOVE_M]
+                high = p[h > rests[k] + _REACH_ABOVE_M]
                 if high.shape[0]:
                     d, _ = reach_tree.query(high, distance_upper_bound=_TOUCH_M)
                     joined = int(np.isfinite(d).sum())
@@ -480,13 +519,13 @@ def not_standing(
                         )
                         changed = True
                         continue
-            if lows[k] <= rests_m(p) + _HANG_M:
+            if lows[k] <= rests[k] + _HANG_M:
                 continue
             bottom = p[h <= lows[k] + _TOUCH_M]
             d, j = tree.query(bottom, distance_upper_bound=_TOUCH_M)
             hit = np.isfinite(d)
             if hit.sum() >= 5:
-                under = int(np.bincount(owner[j[hit]]).argmax())
+                under = int(np.bincount(gone_owner[j[hit]]).argmax())
                 what = verdicts[under].split(":")[0].split(" (")[0]
                 verdicts[k] = f"stands on something excluded (what {what}), {lows[k]:.3f} m above the support"
                 changed = True

@@ -74,5 +74,6 @@ def test_an_object_seen_front_on_is_no_wall() -> None:
         return p[:, :2]
 
     verdicts: dict[int, str] = {}
-    exclude._walls([face, wall + [0.0, 0.5, 0.0]], verdicts, height, to_2d)
+    objects = [face, wall + [0.0, 0.5, 0.0]]
+    exclude._walls([to_2d(p) for p in objects], [height(p) for p in objects], verdicts)
     assert list(verdicts) == [1] and verdicts[1].startswith("a wall"), verdicts
