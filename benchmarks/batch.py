@@ -13,6 +13,15 @@ Prints:
    ten passes (500 frames), and their ratio;
 4. `clear evaluate dataset` on the frames: its mean F1 and wall time, against a loop of
    single `clear segment -o` + `clear evaluate segmentation` calls.
+
+    .venv/bin/python benchmarks/batch.py --stages   # only this (about a minute)
+
+`--stages`: what a warm worker spends per frame, stage by stage (one process, one BLAS
+thread, the lighter imports, a first pass over the frames untimed, as a worker that has
+done a few frames): read, segment, predicates, plan (placement, search, IK), median and
+mean ms per frame and each stage's share; then `plan`'s whole task on each frame right
+after its stages, timed apart (its payload and the rest are the difference), and the frames/s two such
+workers would reach with nothing else to do.
 """
 
 from __future__ import annotations
@@ -144,13 +153,70 @@ def evaluate(files: list[Path], loop: bool) -> None:
         )
 
 
+def stages(files: list[Path]) -> None:
+    """A warm worker's time per frame, stage by stage (see the module's docstring)."""
+    from clearcli import startup
+
+    startup.single_threaded_numerics()  # as a worker does, before NumPy loads
+    startup.lighten_imports()
+    from clearcli import pipeline
+    from clearcli.robot.arm import resolve_arm
+    from clearcli.settings import Settings
+    from clearcli.tasks import plan as task
+    from clearcli.tasks.base import Source
+
+    settings = Settings()
+    request = task.Request(settings)
+    for f in files:  # warm: imports and first calls, as a worker's first frames
+        task.run(request, Source(str(f), 0, None, f.stem))
+    names = ("read", "segment", "predicates", "plan")
+    per: dict[str, list[float]] = {n: [] for n in names}
+    whole: list[float] = []
+    for f in files:
+        t = [time.perf_counter()]
+        robot = resolve_arm(settings)
+        frame = pipeline.read(f, None, 0, settings)
+        t.append(time.perf_counter())
+        seg = pipeline.segmented(frame, settings)
+        t.append(time.perf_counter())
+        if seg.objects:
+            state = pipeline.stated(frame, seg, settings)
+            t.append(time.perf_counter())
+            pipeline.planned(state, settings, robot, None, None)
+            t.append(time.perf_counter())
+        else:
+            t += [t[-1], t[-1]]
+        for k, name in enumerate(names):
+            per[name].append(t[k + 1] - t[k])
+        t0 = time.perf_counter()  # the whole task on the same frame, right after: the same load
+        task.run(request, Source(str(f), 0, None, f.stem))
+        whole.append(time.perf_counter() - t0)
+    total = sum(statistics.mean(v) for v in per.values())
+    print(f"a warm worker, per frame ({len(files)} frames; ms median / mean / share of the stages' mean total):")
+    for name in names:
+        v = per[name]
+        print(
+            f"  {name:<11} {1e3 * statistics.median(v):7.1f} {1e3 * statistics.mean(v):7.1f} {statistics.mean(v) / total:6.0%}"
+        )
+    print(f"  {'stages':<11} {'':7} {1e3 * total:7.1f}")
+    task_s = statistics.mean(whole)
+    print(
+        f"  {'plan task':<11} {1e3 * statistics.median(whole):7.1f} {1e3 * task_s:7.1f}   (timed apart; "
+        f"-> two such workers: {2 / task_s:.2f} frames/s at most)"
+    )
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--stages", action="store_true", help="only a warm worker's time per frame, stage by stage")
     args = ap.parse_args()
     if not MOSD.is_dir():
         raise SystemExit(f"{MOSD} is not here: the benchmark needs ../shared/data/mosd")
     files = frames(10 if args.quick else None)
+    if args.stages:
+        stages(files)
+        return
     pool_wall = plan_throughput(files, loop=not args.quick)
     ray_throughput(files, pool_wall)
     memory(files, 10)
