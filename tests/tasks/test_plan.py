@@ -157,3 +157,21 @@ def test_a_missing_frame_is_a_clear_error(tmp_path: Path) -> None:
     with pytest.raises(ClearError) as info:
         task.run(task.Request(Settings()), Source(tmp_path / "nothing.pcd"))
     assert info.value.exit_code == 3 and "nothing.pcd" in str(info.value)
+
+
+def test_a_request_is_built_without_loading_the_stages() -> None:
+    """A batch's parent builds the Request and its workers run it: importing the task and
+    building one loads neither NumPy nor the pipeline (issue 39: ~0.3 s of CPU in the
+    parent before its workers started); `run` imports them."""
+    import subprocess
+
+    code = (
+        "import sys\n"
+        "from clearcli.settings import Settings\n"
+        "from clearcli.tasks import plan as task\n"
+        "task.Request(Settings())\n"
+        "print(sorted(m for m in ('numpy', 'scipy', 'fcl', 'clearcli.pipeline') if m in sys.modules))\n"
+    )
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert res.returncode == 0, res.stderr
+    assert res.stdout.strip() == "[]"
