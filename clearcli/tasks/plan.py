@@ -44,7 +44,6 @@ def run(request: Request, source: Source) -> Outcome:
     from clearcli.planning.payload import plan_payload  # noqa: PLC0415
     from clearcli.planning.pddl import unit_cost  # noqa: PLC0415
     from clearcli.predicates.grasps import parse_kinds  # noqa: PLC0415
-    from clearcli.render.plan_png import render_plan  # noqa: PLC0415
     from clearcli.robot.arm import resolve_arm  # noqa: PLC0415
 
     # the robot, resolved once: placement, planning, the payload's block and the picture
@@ -79,6 +78,7 @@ def run(request: Request, source: Source) -> Outcome:
     png = out.get("png")
     if png is not None:
         from clearcli.files import atomic_path  # noqa: PLC0415  (see the top)
+        from clearcli.render.plan_png import render_plan  # noqa: PLC0415  (--png only)
 
         with atomic_path(png) as tmp:
             render_plan(tmp, frame, state, plan, seg, robot)
