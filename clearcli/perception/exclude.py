@@ -31,6 +31,12 @@ set aside with the reason, for --json to list as ``excluded``.
   on is hidden there: a shelf board, a lamp, the arm's gripper seen apart. Unless an
   object lies beneath its outline, reaching up to within `_HANG_M` of its bottom: it
   stands on that object where the contact is hidden (a box laid across two others).
+  And only when what holds it up is seen (`_held_from`): within `_HOLD_M` of what lies
+  outside the support's outline or of a segment already excluded (an arm, a wall; what
+  the image's border cuts above the support was excluded before). Nothing hangs in
+  the air: held by nothing seen, it is the top of an object whose body the sensor does
+  not see, standing on the support (a clear bottle's neck and shoulders, its glass body
+  giving no depth: cleargrasp_000000080, 13 cm up), and stays an object.
 - part of what reaches in: it rests nowhere on the support (its lowest point above
   resting height) and is joined, more than `_REACH_ABOVE_M` above the support, to a
   segment excluded as reaching in (an arm's forearm cut from its upper arm).
@@ -59,6 +65,10 @@ _HANG_M = 0.03
 # at a side the hull cuts reaches the side lower down)
 _REACH_ABOVE_M = 0.10
 _SEEN_UNDER_SHARE = 0.3
+# what hangs is held by something seen this near it (the gap a dark wrist leaves between an
+# arm and its gripper, a lamp's shade and its post); measured on the choose part, the clear
+# bottles' tops lie 0.36 m and more from any excluded thing, nothing outside or at the border
+_HOLD_M = 0.10
 _CELL_M = 0.01
 _TOUCH_M = 0.015
 # a thing outside the outline reaching this far beyond it is furniture (a desk 40 cm
@@ -87,6 +97,17 @@ _FACE_THIN_M = 0.03
 # times; a long strip lying flat, less than once)
 _UPRIGHT = 4.0
 _WALL_FACE_M = 0.4
+# or a smaller face rising at the support's edge along most of it: a bin's wall is only as
+# long as the bin's floor. Its length along its line at least `_WALL_SPAN` of the support's
+# extent along that line (2nd to 98th percentile of the support's points), and the support
+# not going on beyond it: fewer than `_WALL_BEYOND_SHARE` of the support's points over its
+# length lie more than `_FACE_THIN_M` beyond its line (away from the support's middle).
+# Measured on the choose part: gqcnn_phoxi_dexnet4_0's far bin wall 0.37 m long (0.38 m
+# with its height, under `_WALL_FACE_M`), 74 % of the bin floor's extent, none of the floor
+# beyond it; the faces of objects 8 to 30 % (uois_image_0002's tall box 18 %, the table
+# hidden behind it: none beyond), the walls at cleargrasp's tables 49 and 127 %.
+_WALL_SPAN = 0.5
+_WALL_BEYOND_SHARE = 0.01
 # the support seen around a segment: in the ring `_RING_PX` pixels wide around its
 # silhouette (a square grown around each pixel), among the pixels seen (a point kept) and in no segment, the share that are
 # the support's. An object standing on the support has it seen at its foot on some side
@@ -221,6 +242,27 @@ def _on_what_is_beneath(
     return bool(np.isfinite(d).sum() >= _GOES_ON_MIN)
 
 
+def _held_from(p: np.ndarray, out_tree: object, excluded: list[np.ndarray]) -> str:
+    """What seen holds up the object ``p`` that hangs above the support, or "" for nothing:
+    what lies outside the support's outline (``out_tree``) or one of the segments
+    ``excluded``, within `_HOLD_M`. (Cut by the image's border above the support, it was
+    excluded as entering from beyond it before.)"""
+    from scipy.spatial import cKDTree
+
+    if out_tree is not None:
+        assert isinstance(out_tree, cKDTree)
+        d, _ = out_tree.query(p, distance_upper_bound=_HOLD_M)
+        if np.isfinite(d).any():
+            return f"what lies outside the support's outline, {float(d.min()):.3f} m from it"
+    lo, hi = p.min(axis=0) - _HOLD_M, p.max(axis=0) + _HOLD_M
+    near = [q for q in (_near_box(e, lo, hi) for e in excluded) if q.shape[0]]
+    if near:
+        d, _ = cKDTree(np.vstack(near)).query(p, distance_upper_bound=_HOLD_M)
+        if np.isfinite(d).any():
+            return f"something excluded {float(d.min()):.3f} m from it"
+    return ""
+
+
 def _far_touched(nearest: np.ndarray, outside_reach: np.ndarray) -> float:
     """How far beyond the outline the part outside it that an object's points touch
     reaches: each touching point counts the part of its ``nearest`` outside point, and the
@@ -317,11 +359,32 @@ def _face(xy: np.ndarray, h: np.ndarray) -> tuple[np.ndarray, np.ndarray, float,
     return mid, vecs[:, 0], thick, float(along_98 - along_2), float(h_98 - h_2)
 
 
-def _walls(xy_each: list[np.ndarray], h_each: list[np.ndarray], verdicts: dict[int, str]) -> None:
+def _along_the_edge(mid: np.ndarray, normal: np.ndarray, length: float, support_xy: np.ndarray) -> float:
+    """How much of the support's extent along a face's line (its middle ``mid``, the unit
+    ``normal`` of its line, its ``length``) the face spans, where the support (its in-plane
+    points ``support_xy``) does not go on beyond the line (`_WALL_BEYOND_SHARE`); 0 where it does."""
+    if not support_xy.shape[0]:
+        return 0.0
+    c = support_xy - mid
+    if float(np.mean(c @ normal)) > 0:  # the normal away from the support's middle
+        normal = -normal
+    along = c @ np.array([-normal[1], normal[0]])
+    extent = float(np.percentile(along, 98) - np.percentile(along, 2))
+    over = np.abs(along) <= length / 2
+    beyond = int((over & (c @ normal > _FACE_THIN_M)).sum())
+    if extent <= 0 or beyond >= _WALL_BEYOND_SHARE * max(1, int(over.sum())):
+        return 0.0
+    return length / extent
+
+
+def _walls(
+    xy_each: list[np.ndarray], h_each: list[np.ndarray], verdicts: dict[int, str], support_xy: Callable[[], np.ndarray]
+) -> None:
     """Add to ``verdicts`` the walls among the objects (each one's in-plane points
-    ``xy_each``, heights ``h_each``; `_WALL_FACE_M`), and the flat pieces lying in a wall's
-    face (the segmentation cut a wall's foot or its trim apart from it: thin, and all
-    within `_FACE_THIN_M` of the wall's line)."""
+    ``xy_each``, heights ``h_each``; `_WALL_FACE_M`, `_WALL_SPAN`: ``support_xy`` gives the
+    support's in-plane points), and the flat pieces lying in a wall's face (the
+    segmentation cut a wall's foot or its trim apart from it: thin, and all within
+    `_FACE_THIN_M` of the wall's line)."""
     faces = {}
     for k, (xy, h) in enumerate(zip(xy_each, h_each, strict=True)):
         if k in verdicts or xy.shape[0] < _GOES_ON_MIN:
@@ -333,10 +396,21 @@ def _walls(xy_each: list[np.ndarray], h_each: list[np.ndarray], verdicts: dict[i
     for k, (mid, normal, thick, length, tall) in faces.items():
         size = float(np.hypot(length, tall))
         # upright: taller than `_UPRIGHT` times its thickness (a strip lying flat is not)
-        if tall >= _UPRIGHT * thick and size >= _WALL_FACE_M:
+        if tall < _UPRIGHT * thick:
+            continue
+        if size >= _WALL_FACE_M:
             verdicts[k] = (
                 f"a wall: one flat face {length:.2f} m long and {tall:.2f} m high on the support ({thick * 100:.1f} cm "
                 f"across), larger than any object ({_WALL_FACE_M:.2f} m): a wall, a cupboard's side, a bin's wall"
+            )
+            walls.append((mid, normal))
+            continue
+        span = _along_the_edge(mid, normal, length, support_xy())
+        if span >= _WALL_SPAN:
+            verdicts[k] = (
+                f"a wall: one flat face {length:.2f} m long and {tall:.2f} m high ({thick * 100:.1f} cm across) rising "
+                f"at the support's edge along {100 * span:.0f} % of it, no support seen beyond it: a bin's wall, a "
+                "wall, a cupboard's side"
             )
             walls.append((mid, normal))
     for k, (_, _, thick, _, tall) in faces.items():
@@ -455,7 +529,15 @@ def not_standing(
                 f"stands beyond the support's edge: it goes on below the support's level outside its "
                 f"outline ({down} of its points touch such points): a desk, a shelf, furniture behind"
             )
-    _walls(xy_each, h_each, verdicts)
+    support_xy_once: list[np.ndarray] = []
+
+    def support_xy() -> np.ndarray:
+        """The support's in-plane points, projected the first time they are needed."""
+        if not support_xy_once:
+            support_xy_once.append(to_2d(support_pts) if support_pts.shape[0] else np.zeros((0, 2)))
+        return support_xy_once[0]
+
+    _walls(xy_each, h_each, verdicts, support_xy)
     for k, (n_free, n_support) in enumerate(around or ()):
         if k not in verdicts and n_free >= _RING_MIN_PX and n_support < _RING_SUPPORT_SHARE * n_free:
             verdicts[k] = (
@@ -467,7 +549,7 @@ def not_standing(
     standing = [k for k in range(len(objects)) if k not in verdicts]
     lifted = [k for k in standing if lows[k] > rests[k] + _HANG_M] if support_pts.shape[0] else []
     if lifted:
-        support_cells = _cells(to_2d(support_pts))
+        support_cells = _cells(support_xy())
         boxes = _Boxes(
             np.minimum.reduceat(every, bounds[:-1], axis=0),
             np.maximum.reduceat(every, bounds[:-1], axis=0),
@@ -475,6 +557,7 @@ def not_standing(
             np.maximum.reduceat(xy_all, bounds[:-1], axis=0),
             np.maximum.reduceat(h_all, bounds[:-1]),
         )
+    hanging: list[tuple[int, float]] = []  # (object, share of the support seen beneath it)
     for k in lifted:
         if _rests_on_another(k, objects, h_each[k], lows[k], boxes):
             continue
@@ -483,10 +566,22 @@ def not_standing(
         own = _cells(xy_each[k])
         seen = int(np.isin(own, support_cells, assume_unique=True).sum()) / max(1, own.size)
         if seen >= _SEEN_UNDER_SHARE:
-            verdicts[k] = (
-                f"hangs above the support: its lowest point {lows[k]:.3f} m above it, the support seen "
-                f"beneath {100 * seen:.0f} % of it"
-            )
+            hanging.append((k, seen))
+    # held up by what is seen, or the top of what the sensor does not see standing there;
+    # until nothing more is found (a lamp's shade held by its post, held from the border)
+    changed = True
+    while changed:
+        changed = False
+        for k, seen in hanging:
+            if k in verdicts:
+                continue
+            held = _held_from(objects[k], out_tree, [objects[j] for j in sorted(verdicts)])
+            if held:
+                verdicts[k] = (
+                    f"hangs above the support: its lowest point {lows[k]:.3f} m above it, the support seen "
+                    f"beneath {100 * seen:.0f} % of it, held by {held}"
+                )
+                changed = True
     # what stands on an excluded thing, until nothing more is found
     changed = True
     while changed:

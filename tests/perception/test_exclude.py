@@ -12,6 +12,7 @@ import pytest
 
 from clearcli.evaluate.segmentation import score
 from clearcli.io.frames import LABEL_NONE
+from clearcli.perception import exclude
 from clearcli.perception.exclude import not_standing
 from clearcli.perception.payload import segmentation_payload
 from clearcli.perception.segment import segment
@@ -81,15 +82,16 @@ def _box(x0: float, x1: float, y0: float, y1: float, z0: float, z1: float, step:
     return np.vstack([top, front])
 
 
-def _verdicts(objects: list[np.ndarray]) -> list[str]:
+def _verdicts(objects: list[np.ndarray], outside: np.ndarray | None = None) -> list[str]:
     """`not_standing` over a support z = 0 seen everywhere in a 40 cm square (no outline
-    crossed: every point lies well inside)."""
+    crossed: every point lies well inside); ``outside``: points beyond the support's outline
+    (none by default)."""
     g = np.arange(-0.2, 0.2, 0.005)
     support = np.stack(np.meshgrid(g, g, [0.0]), -1).reshape(-1, 3)
     none = np.zeros((0, 3))
     found = not_standing(
         objects,
-        none,
+        none if outside is None else outside,
         none,
         support,
         lambda p: p[:, 2],
@@ -114,11 +116,41 @@ def test_a_box_laid_across_two_others_stands_on_them_though_the_support_is_seen_
     left = left[(left[:, 2] < 0.08) | (left[:, 0] < -hidden)]
     right = right[(right[:, 2] < 0.08) | (right[:, 0] > hidden)]
     across = _box(-0.06, 0.06, -0.07, 0.03, 0.08 + gap_m, 0.13 + gap_m)
-    verdicts = _verdicts([left, right, across])
+    # a lamp's post reaching in from beyond the support's outline, 7 cm from its corner:
+    # what holds the box up when nothing beneath does
+    post = np.column_stack([np.full(40, 0.11), np.full(40, 0.08), np.linspace(0.1, 0.4, 40)])
+    verdicts = _verdicts([left, right, across], outside=post)
     if hangs:
         assert len(verdicts) == 1 and verdicts[0].startswith("2: hangs above the support"), verdicts
     else:
         assert verdicts == []
-    # without the two boxes beneath it the same box hangs
-    alone = _verdicts([across])
+    # without the two boxes beneath it the same box hangs, held by the post
+    alone = _verdicts([across], outside=post)
     assert len(alone) == 1 and alone[0].startswith("0: hangs above the support"), alone
+    assert "held by what lies outside the support's outline" in alone[0]
+
+
+def _bottle_top(x: float, z0: float = 0.12, z1: float = 0.16, r: float = 0.02) -> np.ndarray:
+    """A clear bottle's neck and shoulders as the sensor sees them: a ring of points from
+    ``z0`` to ``z1`` (m) above the support, its glass body below giving no depth."""
+    a, z = np.meshgrid(np.linspace(0, 2 * np.pi, 60, endpoint=False), np.arange(z0, z1, 0.004))
+    return np.column_stack([x + r * np.cos(a).ravel(), r * np.sin(a).ravel(), z.ravel()])
+
+
+def test_what_nothing_seen_holds_up_is_the_top_of_an_object_standing_there(monkeypatch: pytest.MonkeyPatch) -> None:
+    # cleargrasp_000000080: three clear bottles' tops 13 cm above the table, the table seen
+    # through their bodies beneath them, nothing outside or excluded near them, away from
+    # the image's border: the top of something standing on the support, not a lamp
+    tops = [_bottle_top(-0.1), _bottle_top(0.1)]
+    assert _verdicts(tops) == []
+    # the same tops 3 cm from a wall at the support's far edge (excluded, 60 cm long and 40 cm
+    # high): held by it, as a shelf board is
+    xs, zs = np.meshgrid(np.arange(-0.3, 0.3, 0.005), np.arange(0.0, 0.4, 0.005))
+    wall = np.column_stack([xs.ravel(), np.full(xs.size, 0.15), zs.ravel()])
+    near_wall = _verdicts([wall] + [t + [0.0, 0.1, 0.0] for t in tops])
+    assert near_wall[0].startswith("0: a wall") and len(near_wall) == 3, near_wall
+    assert all("hangs above the support" in v and "held by something excluded" in v for v in near_wall[1:])
+    # the rule off (anything holds what hangs): the tops are excluded as hanging
+    monkeypatch.setattr(exclude, "_held_from", lambda *args: "anything")
+    off = _verdicts(tops)
+    assert len(off) == 2 and all(v.split(": ", 1)[1].startswith("hangs above the support") for v in off), off

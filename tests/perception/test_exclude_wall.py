@@ -52,8 +52,10 @@ def test_a_wall_at_the_table_edge_is_excluded_with_its_reason(
     assert np.mean(truth[walls[0].indices] == LABEL_NONE) > 0.95  # the wall's points, not an object's
     doc = segmentation_payload(seg)
     assert any(e["reason"] == walls[0].reason and e["points"] == walls[0].indices.size for e in doc["excluded"])
-    # the wall rule off (no face is large enough): the wall's face is an object
+    # the wall rule off (no face is large enough, none spans enough of the support's edge):
+    # the wall's face is an object
     monkeypatch.setattr(exclude, "_WALL_FACE_M", np.inf)
+    monkeypatch.setattr(exclude, "_WALL_SPAN", np.inf)
     off = segment(frame, ON)
     sc_off = score(off.labels(), truth)
     assert sc_off.n_pred > sc_off.n_true
@@ -73,7 +75,54 @@ def test_an_object_seen_front_on_is_no_wall() -> None:
     def to_2d(p: np.ndarray) -> np.ndarray:
         return p[:, :2]
 
+    # on a table 1.2 m wide, the face at its far edge (none of the table seen beyond it,
+    # as behind uois_image_0002's box): it spans 14 % of the edge, far under a bin's wall
+    g = np.arange(-0.6, 0.6, 0.01)
+    table = np.stack(np.meshgrid(g, np.arange(-0.5, 0.0, 0.01)), -1).reshape(-1, 2)
     verdicts: dict[int, str] = {}
     objects = [face, wall + [0.0, 0.5, 0.0]]
-    exclude._walls([to_2d(p) for p in objects], [height(p) for p in objects], verdicts)
+    exclude._walls([to_2d(p) for p in objects], [height(p) for p in objects], verdicts, lambda: table)
     assert list(verdicts) == [1] and verdicts[1].startswith("a wall"), verdicts
+
+
+def _bin_frame(seed: int):  # -> Frame
+    """Three boxes in a bin (gqcnn's PhoXi frames): its floor 37 x 42 cm is the support, its
+    walls 1 cm thick and 8 cm high stand on the floor's edges; the far wall 0.37 m long, its
+    diagonal with its height 0.38 m, under a wall's `_WALL_FACE_M`."""
+    sx, sy, t, h = 0.37, 0.42, 0.01, 0.08
+    objs = [
+        Box(0, 0.06, 0.05, 0.07, -0.06, 0.0, 0.3),
+        Box(1, 0.05, 0.05, 0.05, 0.07, 0.03, -0.4),
+        Box(2, 0.07, 0.04, 0.04, 0.0, -0.07, 0.1),
+    ]
+    walls = [
+        Box(FURNITURE_ID, sx, t, h, 0.0, sy / 2 - t / 2),
+        Box(FURNITURE_ID + 1, sx, t, h, 0.0, -sy / 2 + t / 2),
+        Box(FURNITURE_ID + 2, t, sy - 2 * t, h, sx / 2 - t / 2, 0.0),
+        Box(FURNITURE_ID + 3, t, sy - 2 * t, h, -sx / 2 + t / 2, 0.0),
+    ]
+    frame = render(make_scene(f"bin({seed})", [*objs, *walls], table=Table(sx, sy)), seed=seed)
+    labels = np.asarray(frame.fields["label"]).copy()
+    labels[labels >= object_label(FURNITURE_ID)] = LABEL_NONE
+    return dataclasses.replace(frame, fields={**frame.fields, "label": labels})
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_a_bins_walls_are_no_objects(seed: int, monkeypatch: pytest.MonkeyPatch) -> None:
+    # each wall rises at the floor's edge along most of it (the far one 0.36 m of 0.37 m,
+    # as gqcnn_phoxi_dexnet4_0's far wall 74 % of its floor), none of the floor beyond it
+    frame = _bin_frame(seed)
+    truth = np.asarray(frame.fields["label"])
+    seg = segment(frame, ON)
+    sc = score(seg.labels(), truth)
+    assert sc.true_positives == sc.n_true == sc.n_pred == 3, (sc, [e.reason for e in seg.excluded])
+    along = [e for e in seg.excluded if "rising at the support's edge" in e.reason]
+    assert len(along) >= 2, [e.reason for e in seg.excluded]
+    assert all(np.mean(truth[e.indices] == LABEL_NONE) > 0.95 for e in along)
+    doc = segmentation_payload(seg)
+    assert {e.reason for e in along} <= {e["reason"] for e in doc["excluded"]}
+    # the rule off: the walls shorter than `_WALL_FACE_M` are objects
+    monkeypatch.setattr(exclude, "_WALL_SPAN", np.inf)
+    off = segment(frame, ON)
+    sc_off = score(off.labels(), truth)
+    assert sc_off.n_pred >= sc_off.n_true + 2
