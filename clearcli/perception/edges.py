@@ -35,14 +35,21 @@ import numpy as np
 from clearcli.perception.graph import components
 from clearcli.perception.supervoxels import VoxelCloud
 
-# 4 of the 8 neighbour offsets (row, column): each undirected pixel pair found once
+# 4 of the 8 neighbour offsets (row, column): each undirected pixel pair found once; the
+# first joins a pixel to the next in its row
 _PIXEL_OFFSETS = ((0, 1), (1, 0), (1, 1), (1, -1))
 
 
 def pixel_pieces(points: np.ndarray, shape: tuple[int, int], point_index: np.ndarray, rel: float) -> np.ndarray:
     """(M,) piece of each of the M points ``point_index`` (flat pixel indices into the
     organized ``points`` of ``shape``): connected over 8-neighbour pixels of the set whose
-    ranges differ by at most ``rel`` times the nearer one."""
+    ranges differ by at most ``rel`` times the nearer one.
+
+    With ``point_index`` in raster order (as the stages pass it) a pixel joined to the
+    next in its row is the next point: such runs are joined by a running count, and only
+    the pairs between rows go to `components`, one per pair of runs that meet along a row
+    (a tenth of the pixel pairs on an mOSD frame, several times faster). The pieces are
+    numbered as before: in order of their first point."""
     height, width = shape
     m = point_index.shape[0]
     where = np.full(height * width, -1, dtype=np.int64)
@@ -51,18 +58,40 @@ def pixel_pieces(points: np.ndarray, shape: tuple[int, int], point_index: np.nda
     p = points[point_index].astype(np.float64)
     # np.linalg.norm(p, axis=1)'s sums in its order, a fifth of its time (no (M, 3) squares)
     rng = np.sqrt((p[:, 0] * p[:, 0] + p[:, 1] * p[:, 1]) + p[:, 2] * p[:, 2])
-    src, dst = [], []
-    for dv, du in _PIXEL_OFFSETS:
-        a = img[: height - dv, max(0, -du) : width - max(0, du)]
-        b = img[dv:, max(0, du) : width - max(0, -du)]
-        a, b = a.ravel(), b.ravel()
+
+    def pairs(dv: int, du: int) -> tuple[np.ndarray, np.ndarray]:
+        a = img[: height - dv, max(0, -du) : width - max(0, du)].ravel()
+        b = img[dv:, max(0, du) : width - max(0, -du)].ravel()
         both = (a >= 0) & (b >= 0)
         a, b = a[both], b[both]
         ra, rb = rng[a], rng[b]
         near = np.abs(ra - rb) <= rel * np.minimum(ra, rb)
-        src.append(a[near])
-        dst.append(b[near])
-    return components(m, np.stack([np.concatenate(src), np.concatenate(dst)], axis=1))
+        return a[near], b[near]
+
+    if m == 0:
+        return np.zeros(0, dtype=np.int64)
+    run = np.arange(m)  # the run of each point (a point alone: unordered indices)
+    offsets: tuple[tuple[int, int], ...] = _PIXEL_OFFSETS
+    if m == 1 or bool((point_index[1:] > point_index[:-1]).all()):
+        _, b = pairs(*_PIXEL_OFFSETS[0])
+        joined = np.zeros(m, dtype=bool)
+        joined[b] = True  # to the point before it, its left neighbour
+        run = np.cumsum(~joined) - 1
+        offsets = _PIXEL_OFFSETS[1:]
+    src, dst = [], []
+    for dv, du in offsets:
+        a, b = pairs(dv, du)
+        ra, rb = run[a], run[b]
+        if ra.size > 1:  # along a row, neighbouring pairs mostly join the same two runs
+            new = np.empty(ra.size, dtype=bool)
+            new[0] = True
+            np.not_equal(ra[1:], ra[:-1], out=new[1:])
+            new[1:] |= rb[1:] != rb[:-1]
+            ra, rb = ra[new], rb[new]
+        src.append(ra)
+        dst.append(rb)
+    # runs are numbered in point order, so a piece's lowest run holds its first point
+    return components(int(run[-1]) + 1, np.stack([np.concatenate(src), np.concatenate(dst)], axis=1))[run]
 
 
 def _voxel_piece(point_voxel: np.ndarray, point_piece: np.ndarray, n_voxels: int) -> np.ndarray:
