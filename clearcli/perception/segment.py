@@ -54,6 +54,7 @@ from clearcli.perception.table import (
     beyond_the_edge,
     convex_hull_2d,
     find_table,
+    hull_vertices,
     polygon_area,
     project,
     table_and_prism,
@@ -93,7 +94,7 @@ def table_aligned_box(
     of the table reaches down to the table (the prism cuts its bottom, and it stands on
     the table).
     """
-    from scipy.spatial import ConvexHull, QhullError
+    from scipy.spatial import QhullError
 
     n = table.normal
     helper = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
@@ -103,7 +104,7 @@ def table_aligned_box(
     xy = np.stack([points @ u, points @ v], axis=1)  # matvecs: fast for (N, 3)
     h = table.height_of(points)
     try:
-        hull = xy[ConvexHull(xy).vertices]
+        hull = xy[hull_vertices(xy)]
     except (QhullError, ValueError):
         hull = xy
     edges = np.roll(hull, -1, axis=0) - hull
