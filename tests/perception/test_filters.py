@@ -73,3 +73,12 @@ def test_neighbour_counts_bit_for_bit_as_einsum_gave_them() -> None:
             got = _organized_neighbor_counts(p, (h, w), radius)
             assert got.dtype == want.dtype and np.array_equal(got, want)
             assert 0 < got.mean() < 8
+
+
+def test_finite_mask_by_columns() -> None:
+    from clearcli.perception.filters import finite_mask
+
+    p = np.ones((6, 3))
+    p[1, 0], p[2, 1], p[3, 2], p[4] = np.nan, np.inf, -np.inf, np.nan
+    assert finite_mask(p).tolist() == [True, False, False, False, False, True]
+    assert finite_mask(p.astype(np.float32)).tolist() == np.isfinite(p).all(axis=1).tolist()
