@@ -528,20 +528,26 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
     return fit
 
 
+def squared_range(points: np.ndarray) -> np.ndarray:
+    """(M,) squared distance of each point from the sensor (the origin)."""
+    return np.einsum("ij,ij->i", points, points)
+
+
 def table_and_prism(
-    points: np.ndarray, fit: TableFit, settings: SegmentSettings
+    points: np.ndarray, fit: TableFit, settings: SegmentSettings, range2: np.ndarray | None = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Stage 2b: (table mask, prism mask, heights) over ``points`` (M, 3).
 
     Table: within plane distance and inside the hull grown by ``hull_margin_m``. Prism:
     between the prism heights (the lower one growing with range, as depth noise does)
-    and inside the grown hull.
+    and inside the grown hull. ``range2``: `squared_range` of ``points`` when the
+    caller has it already.
     """
     h = fit.plane.height_of(points)
     near = np.abs(h) <= settings.plane_distance_m
-    min_h = settings.prism_min_height_m
+    min_h: float | np.ndarray = settings.prism_min_height_m
     if fit.camera_is_origin and settings.prism_noise_per_m2 > 0:
-        min_h = min_h + settings.prism_noise_per_m2 * np.einsum("ij,ij->i", points, points)
+        min_h = min_h + settings.prism_noise_per_m2 * (squared_range(points) if range2 is None else range2)
     band = (h >= min_h) & (h <= settings.prism_max_height_m)
     cand = np.flatnonzero(near | band)
     # one matrix-vector product per in-plane axis, on the candidates only
