@@ -32,7 +32,7 @@ import dataclasses
 
 import numpy as np
 
-from clearcli.perception.graph import components
+from clearcli.perception.graph import components, run_components
 from clearcli.perception.supervoxels import VoxelCloud
 
 # 4 of the 8 neighbour offsets (row, column): each undirected pixel pair found once; the
@@ -46,10 +46,10 @@ def pixel_pieces(points: np.ndarray, shape: tuple[int, int], point_index: np.nda
     ranges differ by at most ``rel`` times the nearer one.
 
     With ``point_index`` in raster order (as the stages pass it) a pixel joined to the
-    next in its row is the next point: such runs are joined by a running count, and only
-    the pairs between rows go to `components`, one per pair of runs that meet along a row
-    (a tenth of the pixel pairs on an mOSD frame, several times faster). The pieces are
-    numbered as before: in order of their first point."""
+    next in its row is the next point: `run_components` joins such runs by a running
+    count and the pairs between rows once per pair of runs (a tenth of the pixel pairs
+    on an mOSD frame, several times faster); the pieces are numbered as `components`
+    numbers them, in order of their first point."""
     height, width = shape
     m = point_index.shape[0]
     where = np.full(height * width, -1, dtype=np.int64)
@@ -68,30 +68,15 @@ def pixel_pieces(points: np.ndarray, shape: tuple[int, int], point_index: np.nda
         near = np.abs(ra - rb) <= rel * np.minimum(ra, rb)
         return a[near], b[near]
 
-    if m == 0:
-        return np.zeros(0, dtype=np.int64)
-    run = np.arange(m)  # the run of each point (a point alone: unordered indices)
-    offsets: tuple[tuple[int, int], ...] = _PIXEL_OFFSETS
-    if m == 1 or bool((point_index[1:] > point_index[:-1]).all()):
+    if m > 1 and bool((point_index[1:] > point_index[:-1]).all()):
+        # raster order: a pixel joined to the next in its row is the next point
         _, b = pairs(*_PIXEL_OFFSETS[0])
         joined = np.zeros(m, dtype=bool)
-        joined[b] = True  # to the point before it, its left neighbour
-        run = np.cumsum(~joined) - 1
-        offsets = _PIXEL_OFFSETS[1:]
-    src, dst = [], []
-    for dv, du in offsets:
-        a, b = pairs(dv, du)
-        ra, rb = run[a], run[b]
-        if ra.size > 1:  # along a row, neighbouring pairs mostly join the same two runs
-            new = np.empty(ra.size, dtype=bool)
-            new[0] = True
-            np.not_equal(ra[1:], ra[:-1], out=new[1:])
-            new[1:] |= rb[1:] != rb[:-1]
-            ra, rb = ra[new], rb[new]
-        src.append(ra)
-        dst.append(rb)
-    # runs are numbered in point order, so a piece's lowest run holds its first point
-    return components(int(run[-1]) + 1, np.stack([np.concatenate(src), np.concatenate(dst)], axis=1))[run]
+        joined[b] = True
+        rest = [np.stack(pairs(dv, du), axis=1) for dv, du in _PIXEL_OFFSETS[1:]]
+        return run_components(joined, np.concatenate(rest))
+    every = [np.stack(pairs(dv, du), axis=1) for dv, du in _PIXEL_OFFSETS]
+    return components(m, np.concatenate(every))
 
 
 def _voxel_piece(point_voxel: np.ndarray, point_piece: np.ndarray, n_voxels: int) -> np.ndarray:
