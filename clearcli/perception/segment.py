@@ -396,13 +396,17 @@ def _objects(w: _Work) -> None:
     order = np.argsort(seg_of_point, kind="stable")
     bounds = np.searchsorted(seg_of_point[order], np.arange(n_seg + 1))
     rests = settings.prism_min_height_m + settings.plane_distance_m
+    # the points' squared ranges from the table's step (einsum's sums are the same per row
+    # on a part of the rows as on all of them)
+    obj_range2 = w.range2[w.prism_mask] if w.range2 is not None else None
     for s in kept.tolist():
         members = order[bounds[s] : bounds[s + 1]]
         p = w.obj_pts[members]
         # the prism's lower bound grew with range: so does "resting on the table"
         noise = 0.0
         if fit.camera_is_origin:
-            noise = settings.prism_noise_per_m2 * float(np.min(np.einsum("ij,ij->i", p, p)))
+            r2 = obj_range2[members] if obj_range2 is not None else squared_range(p)
+            noise = settings.prism_noise_per_m2 * float(np.min(r2))
         w.objects.append(make_object(w.obj_idx[members], p, fit.plane, rests + noise))
 
 

@@ -147,3 +147,20 @@ def test_hull_vertices_are_qhulls_on_every_point() -> None:
     line = np.stack([np.linspace(0.0, 1.0, 200), np.linspace(0.0, 2.0, 200)], axis=1)
     with pytest.raises(QhullError):
         hull_vertices(line)
+
+
+def test_label_grid_numbers_as_ndimage() -> None:
+    """8-connected labels of the grid, numbered as scipy.ndimage.label numbers them
+    (the runs along the rows joined by a running count give the same pieces)."""
+    from scipy import ndimage
+
+    from clearcli.perception.table import _label_grid
+
+    gen = np.random.default_rng(11)
+    for trial in range(40):
+        h, w = (int(x) for x in gen.integers(1, 60, size=2))
+        grid = gen.random((h, w)) < (0.2 + 0.02 * trial)
+        want, n_want = ndimage.label(grid, structure=np.ones((3, 3), dtype=bool))
+        got, n_got = _label_grid(grid)
+        assert n_got == n_want
+        assert np.array_equal(got, want)
