@@ -32,17 +32,24 @@ import dataclasses
 
 import numpy as np
 
-from clearcli.perception.graph import components
+from clearcli.perception.graph import components, run_components
 from clearcli.perception.supervoxels import VoxelCloud
 
-# 4 of the 8 neighbour offsets (row, column): each undirected pixel pair found once
+# 4 of the 8 neighbour offsets (row, column): each undirected pixel pair found once; the
+# first joins a pixel to the next in its row
 _PIXEL_OFFSETS = ((0, 1), (1, 0), (1, 1), (1, -1))
 
 
 def pixel_pieces(points: np.ndarray, shape: tuple[int, int], point_index: np.ndarray, rel: float) -> np.ndarray:
     """(M,) piece of each of the M points ``point_index`` (flat pixel indices into the
     organized ``points`` of ``shape``): connected over 8-neighbour pixels of the set whose
-    ranges differ by at most ``rel`` times the nearer one."""
+    ranges differ by at most ``rel`` times the nearer one.
+
+    With ``point_index`` in raster order (as the stages pass it) a pixel joined to the
+    next in its row is the next point: `run_components` joins such runs by a running
+    count and the pairs between rows once per pair of runs (a tenth of the pixel pairs
+    on an mOSD frame, several times faster); the pieces are numbered as `components`
+    numbers them, in order of their first point."""
     height, width = shape
     m = point_index.shape[0]
     where = np.full(height * width, -1, dtype=np.int64)
@@ -51,18 +58,25 @@ def pixel_pieces(points: np.ndarray, shape: tuple[int, int], point_index: np.nda
     p = points[point_index].astype(np.float64)
     # np.linalg.norm(p, axis=1)'s sums in its order, a fifth of its time (no (M, 3) squares)
     rng = np.sqrt((p[:, 0] * p[:, 0] + p[:, 1] * p[:, 1]) + p[:, 2] * p[:, 2])
-    src, dst = [], []
-    for dv, du in _PIXEL_OFFSETS:
-        a = img[: height - dv, max(0, -du) : width - max(0, du)]
-        b = img[dv:, max(0, du) : width - max(0, -du)]
-        a, b = a.ravel(), b.ravel()
+
+    def pairs(dv: int, du: int) -> tuple[np.ndarray, np.ndarray]:
+        a = img[: height - dv, max(0, -du) : width - max(0, du)].ravel()
+        b = img[dv:, max(0, du) : width - max(0, -du)].ravel()
         both = (a >= 0) & (b >= 0)
         a, b = a[both], b[both]
         ra, rb = rng[a], rng[b]
         near = np.abs(ra - rb) <= rel * np.minimum(ra, rb)
-        src.append(a[near])
-        dst.append(b[near])
-    return components(m, np.stack([np.concatenate(src), np.concatenate(dst)], axis=1))
+        return a[near], b[near]
+
+    if m > 1 and bool((point_index[1:] > point_index[:-1]).all()):
+        # raster order: a pixel joined to the next in its row is the next point
+        _, b = pairs(*_PIXEL_OFFSETS[0])
+        joined = np.zeros(m, dtype=bool)
+        joined[b] = True
+        rest = [np.stack(pairs(dv, du), axis=1) for dv, du in _PIXEL_OFFSETS[1:]]
+        return run_components(joined, np.concatenate(rest))
+    every = [np.stack(pairs(dv, du), axis=1) for dv, du in _PIXEL_OFFSETS]
+    return components(m, np.concatenate(every))
 
 
 def _voxel_piece(point_voxel: np.ndarray, point_piece: np.ndarray, n_voxels: int) -> np.ndarray:

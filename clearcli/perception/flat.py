@@ -79,6 +79,26 @@ def lab_of(rgb: np.ndarray) -> np.ndarray:
     return _lab_table()[(q[:, 0] << 12) | (q[:, 1] << 6) | q[:, 2]]
 
 
+def _lab_keys(rgb: np.ndarray) -> np.ndarray:
+    """(N,) row of each colour in `_lab_table`."""
+    q = [(rgb[:, c] >> 2).astype(np.int32) for c in range(3)]
+    return (q[0] << 12) | (q[1] << 6) | q[2]
+
+
+def _far_from(rgb: np.ndarray, centre: np.ndarray, threshold: float) -> np.ndarray:
+    """(N,) bool: colours whose CIELAB (`lab_of`) is more than ``threshold`` from
+    ``centre``: each distinct quantized colour judged once (a table shows a few
+    thousand of the 262144), the same float32 sums as per pixel."""
+    key = _lab_keys(rgb)
+    seen = np.zeros(_lab_table().shape[0], dtype=bool)
+    seen[key] = True
+    used = np.flatnonzero(seen)
+    diff = _lab_table()[used] - centre.astype(np.float32)
+    d2 = np.zeros(seen.shape[0], dtype=np.float32)
+    d2[used] = np.einsum("ij,ij->i", diff, diff)
+    return d2[key] > threshold * threshold
+
+
 def flat_objects(
     points: np.ndarray,
     colors: np.ndarray,
@@ -110,8 +130,7 @@ def flat_objects(
     spread = float(np.median(np.linalg.norm(lab_table - centre, axis=1)))
     threshold = max(min_color_delta, 3.0 * spread)
     free = np.concatenate([table_pixels, loose_pixels])
-    diff = lab_of(colors[free]) - centre.astype(np.float32)
-    differs = np.einsum("ij,ij->i", diff, diff) > threshold * threshold
+    differs = _far_from(colors[free], centre, threshold)
     cand = np.zeros(height * width, dtype=bool)
     cand[free[differs]] = True
     if not cand.any():
@@ -127,8 +146,10 @@ def flat_objects(
     is_table = is_table.reshape(height, width)
     found: list[np.ndarray] = []
     square = np.ones((3, 3), dtype=bool)
-    for k, box in enumerate(ndimage.find_objects(comps), start=1):
-        if box is None or sizes[k] < _MIN_PIXELS:
+    boxes = ndimage.find_objects(comps)
+    for k in (np.flatnonzero(sizes[1:] >= _MIN_PIXELS) + 1).tolist():  # most are specks: not even looked at
+        box = boxes[k - 1]
+        if box is None:
             continue
         pad = _RING_OUTER_PX + 1
         v0, v1 = max(0, box[0].start - pad), min(height, box[0].stop + pad)

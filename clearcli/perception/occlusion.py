@@ -18,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from clearcli.perception.context import RefineContext
+from clearcli.perception.filters import finite_mask
 
 # patch normals within this angle count as the same surface
 _MAX_ANGLE_DEG = 15.0
@@ -32,7 +33,7 @@ _LINES = 3  # gap lines judged per pair of segments: the closest coplanar patch 
 def estimate_intrinsics(points: np.ndarray, shape: tuple[int, int]) -> tuple[float, float, float, float] | None:
     """(fx, fy, cx, cy) from an organized cloud, or None when it is not a pinhole image."""
     h, w = shape
-    idx = np.flatnonzero(np.isfinite(points).all(axis=1))[::7]
+    idx = np.flatnonzero(finite_mask(points))[::7]
     if idx.size < 100:
         return None
     p = points[idx].astype(np.float64)

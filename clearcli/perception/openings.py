@@ -40,10 +40,12 @@
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
 
+from clearcli.perception.filters import finite_mask
 from clearcli.perception.types import TablePlane
 
 RIM_BAND_M = 0.008
@@ -94,7 +96,14 @@ class TableEdge:
 
 
 def _table_axes(plane: TablePlane) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    n = np.asarray(plane.normal, dtype=float)
+    return _axes_of(*(float(x) for x in plane.normal))
+
+
+@functools.lru_cache(maxsize=8)
+def _axes_of(nx: float, ny: float, nz: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The table's in-plane axes and normal, once a frame (not once an object); read
+    only."""
+    n = np.array([nx, ny, nz])
     a = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
     e1 = a - (a @ n) * n
     e1 /= np.linalg.norm(e1)
@@ -118,7 +127,7 @@ def rim_of(points_camera: np.ndarray, plane: TablePlane) -> Opening:
     if len(p) > RIM_MAX_POINTS:  # an even sample: a rim is a shape, not a count
         p = p[:: -(-len(p) // RIM_MAX_POINTS)]
     p = np.asarray(p, dtype=float)
-    p = p[np.all(np.isfinite(p), axis=1)]
+    p = p[finite_mask(p)]
     if len(p) < 30:
         return Opening(None, "too few points to see a rim")
     e1, e2, n = _table_axes(plane)

@@ -54,8 +54,10 @@ from clearcli.perception.table import (
     beyond_the_edge,
     convex_hull_2d,
     find_table,
+    hull_vertices,
     polygon_area,
     project,
+    squared_range,
     table_and_prism,
     unique_cells,
 )
@@ -93,7 +95,7 @@ def table_aligned_box(
     of the table reaches down to the table (the prism cuts its bottom, and it stands on
     the table).
     """
-    from scipy.spatial import ConvexHull, QhullError
+    from scipy.spatial import QhullError
 
     n = table.normal
     helper = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
@@ -103,7 +105,7 @@ def table_aligned_box(
     xy = np.stack([points @ u, points @ v], axis=1)  # matvecs: fast for (N, 3)
     h = table.height_of(points)
     try:
-        hull = xy[ConvexHull(xy).vertices]
+        hull = xy[hull_vertices(xy)]
     except (QhullError, ValueError):
         hull = xy
     edges = np.roll(hull, -1, axis=0) - hull
@@ -160,6 +162,7 @@ def _without_what_lies_beyond(
     table_mask: np.ndarray,
     prism_mask: np.ndarray,
     settings: SegmentSettings,
+    range2: np.ndarray | None,
 ) -> tuple[TableFit, np.ndarray, np.ndarray, float]:
     """The table without the pieces of its plane seen beyond its own edge (table.py,
     `beyond_the_edge`): its hull drawn again round the rest, and the prism with it, so
@@ -176,7 +179,7 @@ def _without_what_lies_beyond(
         return fit, table_mask, prism_mask, 0.0
     before = polygon_area(fit.polygon_2d)
     fit = dataclasses.replace(fit, polygon_2d=convex_hull_2d(fit.to_2d(kept)))
-    table_mask, prism_mask, _ = table_and_prism(pts, fit, settings)
+    table_mask, prism_mask, _ = table_and_prism(pts, fit, settings, range2)
     table_mask[on_table[drop]] = False
     return fit, table_mask, prism_mask, max(0.0, before - polygon_area(fit.polygon_2d))
 
@@ -278,6 +281,8 @@ class _Work:
     fit: TableFit | None = None
     table_mask: np.ndarray = field(default_factory=_empty)  # (K,) on the table
     prism_mask: np.ndarray = field(default_factory=_empty)  # (K,) above it, inside its hull
+    heights: np.ndarray = field(default_factory=_empty)  # (K,) height above the table's plane
+    range2: np.ndarray | None = None  # (K,) squared range from the sensor (a camera frame's only)
     beyond_m2: float = 0.0
     obj_idx: np.ndarray = field(default_factory=_empty)  # (M,) frame index of the points above the table
     obj_pts: np.ndarray = field(default_factory=_empty)  # (M, 3)
@@ -310,10 +315,12 @@ def _filter(w: _Work) -> None:
 def _table(w: _Work) -> None:
     """2. the table, its hull, the prism above it (table.py)."""
     fit = find_table(w.pts, w.settings, w.organized, w.frame.source)
-    table_mask, prism_mask, _ = table_and_prism(w.pts, fit, w.settings)
+    # heights and squared ranges of the kept points: the table's stage and _exclude read them
+    w.range2 = squared_range(w.pts) if fit.camera_is_origin else None
+    table_mask, prism_mask, w.heights = table_and_prism(w.pts, fit, w.settings, w.range2)
     if w.organized and w.settings.beyond_edge_check:
         fit, table_mask, prism_mask, w.beyond_m2 = _without_what_lies_beyond(
-            w.frame, w.idx, w.pts, fit, table_mask, prism_mask, w.settings
+            w.frame, w.idx, w.pts, fit, table_mask, prism_mask, w.settings, w.range2
         )
     w.fit, w.table_mask, w.prism_mask = fit, table_mask, prism_mask
 
@@ -389,13 +396,17 @@ def _objects(w: _Work) -> None:
     order = np.argsort(seg_of_point, kind="stable")
     bounds = np.searchsorted(seg_of_point[order], np.arange(n_seg + 1))
     rests = settings.prism_min_height_m + settings.plane_distance_m
+    # the points' squared ranges from the table's step (einsum's sums are the same per row
+    # on a part of the rows as on all of them)
+    obj_range2 = w.range2[w.prism_mask] if w.range2 is not None else None
     for s in kept.tolist():
         members = order[bounds[s] : bounds[s + 1]]
         p = w.obj_pts[members]
         # the prism's lower bound grew with range: so does "resting on the table"
         noise = 0.0
         if fit.camera_is_origin:
-            noise = settings.prism_noise_per_m2 * float(np.min(np.einsum("ij,ij->i", p, p)))
+            r2 = obj_range2[members] if obj_range2 is not None else squared_range(p)
+            noise = settings.prism_noise_per_m2 * float(np.min(r2))
         w.objects.append(make_object(w.obj_idx[members], p, fit.plane, rests + noise))
 
 
@@ -416,8 +427,8 @@ def _exclude(w: _Work) -> None:
     if not settings.exclude_not_standing or not w.objects:
         return
     pts = w.pts
-    h = fit.plane.height_of(pts)
-    rng2 = np.einsum("ij,ij->i", pts, pts) if fit.camera_is_origin else np.zeros(pts.shape[0])
+    h = w.heights  # fit.plane.height_of(pts): the hull changed after the table's stage, not the plane
+    rng2 = w.range2 if w.range2 is not None else np.zeros(pts.shape[0])
     low = settings.prism_min_height_m + settings.prism_noise_per_m2 * rng2
     above = np.flatnonzero(~w.prism_mask & ~w.table_mask & (h > low) & (h <= settings.prism_max_height_m))
     out_sel = above[~fit.inside(pts[above], settings.hull_margin_m)]
@@ -431,7 +442,8 @@ def _exclude(w: _Work) -> None:
     )
     below = np.flatnonzero(~w.table_mask & (h < -low))
     outside_below = pts[below[~fit.inside(pts[below], settings.hull_margin_m)]]
-    support = pts[w.table_mask][:: max(1, int(w.table_mask.sum()) // 50000)]
+    on_table = np.flatnonzero(w.table_mask)
+    support = pts[on_table[:: max(1, on_table.size // 50000)]]  # no copy of every table point first
     rests = settings.prism_min_height_m + settings.plane_distance_m
 
     def rests_m(p: np.ndarray) -> float:

@@ -103,8 +103,14 @@ def step_splits(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
     for _ in range(settings.cut_max_rounds):
         next_label = int(seg.max()) + 1
         cut_round = False
-        for s in np.unique(seg).tolist():
-            members = np.flatnonzero(seg == s)
+        # each segment's voxels in index order (what a mask over all voxels gave), from
+        # one sort; a split this round relabels only the segment being split
+        by_seg = np.argsort(seg, kind="stable")
+        sorted_seg = seg[by_seg]
+        starts = np.flatnonzero(np.r_[True, sorted_seg[1:] != sorted_seg[:-1]])
+        ends = np.append(starts[1:], seg.size)
+        for a, b in zip(starts.tolist(), ends.tolist(), strict=True):
+            members = by_seg[a:b]
             tops = members[top[members]]
             if tops.size < 2:
                 continue

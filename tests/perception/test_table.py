@@ -125,3 +125,42 @@ def test_polygon_area_by_hand() -> None:
 
     assert polygon_area(np.array([[0.0, 0.0], [2.0, 0.0], [2.0, 1.0], [0.0, 1.0]])) == pytest.approx(2.0)
     assert polygon_area(np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])) == pytest.approx(0.5)
+
+
+def test_hull_vertices_are_qhulls_on_every_point() -> None:
+    """Qhull on the points outside the octagon of extremes gives the vertices, in the
+    order, that it gives on all of them (of two equal points either may be the vertex:
+    the same coordinates); degenerate input raises alike."""
+    from scipy.spatial import ConvexHull, QhullError
+
+    from clearcli.perception.table import _hull_candidates, hull_vertices
+
+    gen = np.random.default_rng(7)
+    for trial in range(60):
+        n = int(gen.integers(3, 4000))
+        xy = gen.normal(size=(n, 2)) * gen.uniform(0.01, 1.0, size=2)
+        if trial % 3 == 0:
+            xy = np.round(xy * 50) / 50  # on a grid: ties and collinear points
+        assert xy[hull_vertices(xy)].tolist() == xy[ConvexHull(xy).vertices].tolist()
+        if n > 500 and trial % 3:
+            assert _hull_candidates(xy[:, 0].copy(), xy[:, 1].copy()).mean() < 0.5  # most are thrown away
+    line = np.stack([np.linspace(0.0, 1.0, 200), np.linspace(0.0, 2.0, 200)], axis=1)
+    with pytest.raises(QhullError):
+        hull_vertices(line)
+
+
+def test_label_grid_numbers_as_ndimage() -> None:
+    """8-connected labels of the grid, numbered as scipy.ndimage.label numbers them
+    (the runs along the rows joined by a running count give the same pieces)."""
+    from scipy import ndimage
+
+    from clearcli.perception.table import _label_grid
+
+    gen = np.random.default_rng(11)
+    for trial in range(40):
+        h, w = (int(x) for x in gen.integers(1, 60, size=2))
+        grid = gen.random((h, w)) < (0.2 + 0.02 * trial)
+        want, n_want = ndimage.label(grid, structure=np.ones((3, 3), dtype=bool))
+        got, n_got = _label_grid(grid)
+        assert n_got == n_want
+        assert np.array_equal(got, want)

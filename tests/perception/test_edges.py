@@ -1,0 +1,56 @@
+"""Depth-edge pieces on the pixel grid: the runs along rows give the pieces that every
+pixel pair gives, numbered alike."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from clearcli.perception.edges import _PIXEL_OFFSETS, pixel_pieces
+from clearcli.perception.graph import components
+
+
+def _every_pair(points: np.ndarray, shape: tuple[int, int], point_index: np.ndarray, rel: float) -> np.ndarray:
+    """pixel_pieces by the definition: every 8-neighbour pair of near ranges an edge."""
+    height, width = shape
+    where = np.full(height * width, -1, dtype=np.int64)
+    where[point_index] = np.arange(point_index.size)
+    img = where.reshape(height, width)
+    rng = np.linalg.norm(points[point_index], axis=1)
+    src, dst = [], []
+    for dv, du in _PIXEL_OFFSETS:
+        a = img[: height - dv, max(0, -du) : width - max(0, du)].ravel()
+        b = img[dv:, max(0, du) : width - max(0, -du)].ravel()
+        both = (a >= 0) & (b >= 0)
+        a, b = a[both], b[both]
+        near = np.abs(rng[a] - rng[b]) <= rel * np.minimum(rng[a], rng[b])
+        src.append(a[near])
+        dst.append(b[near])
+    return components(point_index.size, np.stack([np.concatenate(src), np.concatenate(dst)], axis=1))
+
+
+@pytest.mark.parametrize("seed", range(30))
+def test_runs_give_the_pieces_of_every_pair(seed: int) -> None:
+    gen = np.random.default_rng(seed)
+    height, width = (int(x) for x in gen.integers(1, 12, size=2))
+    points = gen.uniform(0.5, 1.5, size=(height * width, 3))
+    index = np.flatnonzero(gen.random(height * width) < 0.7)
+    if seed % 3 == 0:
+        gen.shuffle(index)  # out of raster order: every pair, as before
+    for rel in (0.02, 0.2, 1.0):
+        want = _every_pair(points, (height, width), index, rel)
+        got = pixel_pieces(points, (height, width), index, rel)
+        assert got.dtype == np.int64
+        assert got.tolist() == want.tolist()
+
+
+def test_two_surfaces_apart_in_depth() -> None:
+    # a 4x6 image: the left three columns at 1 m, the right three at 1.5 m
+    height, width = 4, 6
+    points = np.zeros((height, width, 3))
+    points[:, :3, 2] = 1.0
+    points[:, 3:, 2] = 1.5
+    index = np.arange(height * width)
+    pieces = pixel_pieces(points.reshape(-1, 3), (height, width), index, 0.02).reshape(height, width)
+    assert (pieces[:, :3] == 0).all() and (pieces[:, 3:] == 1).all()
+    assert pixel_pieces(points.reshape(-1, 3), (height, width), index[:0], 0.02).size == 0

@@ -1,0 +1,22 @@
+"""Flat objects' colour test: each distinct colour judged once gives the per-pixel
+answer, bit for bit."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from clearcli.perception.flat import _far_from, lab_of
+
+
+def test_far_from_judges_each_colour_as_every_pixel_would() -> None:
+    gen = np.random.default_rng(5)
+    # a table's few colours, repeated, and a scatter of others
+    palette = gen.integers(0, 256, size=(40, 3), dtype=np.uint8)
+    rgb = np.concatenate([palette[gen.integers(0, 40, 20000)], gen.integers(0, 256, size=(3000, 3), dtype=np.uint8)])
+    centre = np.median(lab_of(rgb), axis=0)
+    for threshold in (5.0, 20.0, 47.5):
+        diff = lab_of(rgb) - centre.astype(np.float32)
+        want = np.einsum("ij,ij->i", diff, diff) > threshold * threshold
+        got = _far_from(rgb, centre, threshold)
+        assert np.array_equal(got, want)
+        assert 0 < got.sum() < got.size
