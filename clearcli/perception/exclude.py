@@ -42,6 +42,14 @@ set aside with the reason, for --json to list as ``excluded``.
   segment excluded as reaching in (an arm's forearm cut from its upper arm).
 - stands on something excluded: its bottom within `_TOUCH_M` of an excluded segment's
   points, and above the support (a box on the shelf board, on the arm).
+- a veil of mixed pixels (`_veil`): where a near edge meets the far background the
+  sensor returns depths between the two along each pixel's ray, a thin sheet lying along
+  the camera's line of sight (PCL's ShadowPoints filter: normals perpendicular to the
+  viewing ray). Its depth span along the rays is at least `_VEIL_ALONG` times its narrow
+  extent across them in the image, and its height falls from its near end to its far end
+  as the rays do (`_VEIL_FALLS` of their fall, at least `_VEIL_RISE_M`): a thing lying
+  along the rays (a bottle pointing away from a low camera) keeps its height.
+  Decided last, so a veil neither holds up nor carries anything in the rules above.
 
 A stacked object is not excluded: it stands on an object, and the support under it is
 hidden by that object, not seen. Every threshold keeps a margin of millimetres or tens
@@ -126,6 +134,31 @@ _RING_SUPPORT_SHARE = 0.05
 # pixels this near the image's edge are where it cuts a segment (a few, not one: a working
 # grid at stride k ends up to k - 1 pixels short of the edge; a sensor's edge pixels drop out)
 _BORDER_PX = 3
+# a veil (mixed pixels between a near edge and the far background) lies along the camera's
+# rays: its depth span along them (5th to 95th percentile of range) at least this many times
+# its narrow extent across them (5th to 95th percentile in the image, at its range, across
+# the edge it hangs from): a surface seen at atan(3.5) = 74 degrees or more from face-on.
+# Structured light and active stereo lose a surface's depth well before that (the pattern
+# smears out at grazing incidence; PCL's ShadowPoints default: 84 degrees), so such segments
+# are mostly interpolated depths. Measured on the choose part: the veils beside
+# gqcnn_primesense_2's and _4's robot arm and uois_image_0000's mustard cap 5.8, 5.7, 5.0;
+# every labelled object's segment 2.4 or less (cleargrasp_000000130's clear bottle lying
+# along the rays 2.4, its 6 mm thin piece of a clear cup 1.4): 1.4 times of margin each side.
+_VEIL_ALONG = 3.5
+# and its heights fall from its near end to its far end (median of the nearest and of the
+# farthest tenth of its points) as the rays themselves fall towards the support: at least
+# this share of the mean ray's fall over that range. A veil's points lie on the rays (the
+# choose part's: 0.89 to 1.03; less where its edge is long and its rows reach different
+# heights: 0.57 on the self-made veil of the tests); a thing lying flat along the rays (a
+# bottle or a pen pointing away from a low camera, seen as steeply) keeps its height: 0 or
+# less (its near end's face lower than its far end's top)
+_VEIL_FALLS = 0.25
+# and at least this much: a veil spans the height between the near edge and the background
+# (the choose part's: 44 to 93 mm); the same 3 cm as `_HANG_M`, far above the range noise
+_VEIL_RISE_M = 0.03
+# the camera is at the origin (a camera frame) when the origin lies this far or more above the
+# support's plane (as table.py decides it); otherwise there are no rays to lie along
+_CAMERA_ABOVE_M = 0.05
 
 
 def beyond_outline(xy: np.ndarray, polygon_2d: np.ndarray) -> np.ndarray:
@@ -426,6 +459,43 @@ def _walls(
                 break
 
 
+def _veil(p: np.ndarray, h: np.ndarray, camera_h: float, height: Callable[[np.ndarray], np.ndarray]) -> str:
+    """Why a segment (its points ``p`` in the camera's frame, heights ``h`` above the
+    support; the camera ``camera_h`` above it, ``height`` as for `not_standing`) is a veil
+    of mixed pixels lying along the camera's rays, or "" (`_VEIL_ALONG`, `_VEIL_FALLS`,
+    `_VEIL_RISE_M`)."""
+    rng = np.linalg.norm(p, axis=1)
+    rays = p / np.maximum(rng, 1e-12)[:, None]
+    mean = rays.mean(axis=0)
+    mean /= np.linalg.norm(mean)
+    # two directions across the mean ray: where the points are in the image, at their range
+    seed = np.eye(3)[int(np.argmin(np.abs(mean)))]
+    u = np.cross(mean, seed)
+    u /= np.linalg.norm(u)
+    across = np.column_stack([rays @ u, rays @ np.cross(mean, u)]) * float(np.median(rng))
+    c = across - across.mean(axis=0)
+    _, vecs = np.linalg.eigh(c.T @ c)
+    lo, hi = np.percentile(c @ vecs[:, 0], [5, 95])
+    narrow = float(hi - lo)
+    r5, r10, r90, r95 = np.percentile(rng, [5, 10, 90, 95])
+    deep = float(r95 - r5)
+    if deep < _VEIL_ALONG * narrow:
+        return ""
+    # its far end lower than its near end as the rays fall towards the support
+    near, far = rng <= r10, rng >= r90
+    drop = float(np.median(h[near]) - np.median(h[far]))
+    falls = camera_h - float(height(mean[None, :])[0])  # the mean ray's fall per metre (sine of its elevation)
+    ray_drop = (float(np.median(rng[far])) - float(np.median(rng[near]))) * falls
+    if drop < _VEIL_RISE_M or drop < _VEIL_FALLS * ray_drop:
+        return ""
+    return (
+        f"a veil of mixed pixels: {1000 * deep:.0f} mm deep along the camera's rays, {1000 * narrow:.0f} mm across "
+        f"them (at least {_VEIL_ALONG:g} times as deep), falling {1000 * drop:.0f} mm from its near end to its far "
+        f"end as the rays do ({1000 * ray_drop:.0f} mm): depths the sensor interpolated between a near edge and the "
+        "background behind it, no surface"
+    )
+
+
 @dataclass(frozen=True)
 class Verdict:
     index: int  # into the objects
@@ -624,4 +694,12 @@ def not_standing(
                 what = verdicts[under].split(":")[0].split(" (")[0]
                 verdicts[k] = f"stands on something excluded (what {what}), {lows[k]:.3f} m above the support"
                 changed = True
+    # veils, last: they hold up nothing and carry nothing in the rules above
+    camera_h = float(height(np.zeros((1, 3)))[0])
+    if camera_h >= _CAMERA_ABOVE_M:
+        for k, p in enumerate(objects):
+            if k not in verdicts and p.shape[0] >= _GOES_ON_MIN:
+                why = _veil(p, h_each[k], camera_h, height)
+                if why:
+                    verdicts[k] = why
     return [Verdict(k, why) for k, why in sorted(verdicts.items())]
