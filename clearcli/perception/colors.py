@@ -19,7 +19,10 @@ proposes where a seam may run, and geometry decides whether it is one:
    thickness; a print, a label or a shadow lies in the surface it is printed on;
 4. the pieces then join back, the pairs sharing the most adjacencies first (ties by
    piece number), except where a join would put two pieces that are apart into one
-   segment; a piece apart from all its neighbours stays a segment of its own.
+   segment; a piece apart from all its neighbours stays a segment of its own;
+5. a segment need not be connected (occlusion.py joins the parts of one object seen
+   either side of a nearer one): a group that touches no other and is apart from none
+   joins the largest group of its segment of a similar mean colour (``_PART_DE``).
 
 Measured (pieces of the 45 mOSD learn frames and of the foreign choose frames,
 `benchmarks/foreign.py`): between two objects the median rise is 11-31 mm for 11 of
@@ -44,6 +47,12 @@ from clearcli.perception.supervoxels import Supervoxels
 
 # a convex crease (never cut by colour): normals this far apart
 _CREASE_DEG = 30.0
+# two parts of a segment that touch nowhere (occlusion.py joined them across a nearer
+# object) stay one when their mean colours (CIELAB, voxel-weighted) differ by less than
+# this: on the mOSD learn frames the two parts of one object seen either side of a
+# nearer one differ by up to 26.7 dE (learn29: light and shade on a box); on the
+# foreign choose frames the parts of a heap's segment that are two objects 50-56 dE
+_PART_DE = 40.0
 
 
 def supervoxel_lab(sv: Supervoxels, point_voxel: np.ndarray, colors: np.ndarray) -> np.ndarray:
@@ -146,20 +155,27 @@ def color_splits(
         if ra != rb and rb not in enemies.get(ra, ()):
             join(ra, rb)
     # a segment need not be connected (occlusion.py joins the pieces of an object a
-    # nearer one cuts apart): what is left of it that nothing keeps apart joins the
-    # largest of its groups it may join
+    # nearer one cuts apart): a group apart from nothing joins the largest group of its
+    # segment whose mean colour is within _PART_DE of its own (the far side of one
+    # object); a group apart from another, or of another colour, stays (in a heap, what
+    # shows on either side of an object lying across another is seldom one object)
     seg_of_piece = np.zeros(n_piece, dtype=np.int64)
     seg_of_piece[piece] = seg_of_sv
     roots = np.array([root(p) for p in range(n_piece)])
     group_size = np.bincount(roots, weights=size, minlength=n_piece)
     heads = np.flatnonzero(roots == np.arange(n_piece))
     kept: dict[int, list[int]] = {}
+    weight = sv.n_voxels.astype(np.float64)
+    group_lab = (
+        np.stack([np.bincount(roots[piece], weights=weight * lab[:, c], minlength=n_piece) for c in range(3)], axis=1)
+        / np.maximum(group_size, 1e-12)[:, None]
+    )
     for r in heads[np.lexsort((heads, -group_size[heads], seg_of_piece[heads]))].tolist():
         mine = kept.setdefault(int(seg_of_piece[r]), [])
-        into = next((k for k in mine if r not in enemies.get(k, ())), None)
-        if into is None:
+        near = [k for k in mine if np.linalg.norm(group_lab[k] - group_lab[r]) < _PART_DE]
+        if enemies.get(r) or not near:
             mine.append(r)
         else:
-            join(into, r)
+            join(near[0], r)
     # pieces are inside one segment, and so are their pairs: no join crosses segments
     return join_pairs(piece, np.asarray(joined, dtype=np.int64).reshape(-1, 2), n_piece)
