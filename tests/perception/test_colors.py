@@ -112,3 +112,25 @@ def test_a_segment_in_two_parts_stays_one_without_a_seam() -> None:
     lab = np.array([RED, BLUE, RED, BLUE])
     out = color_splits(np.zeros(4, dtype=np.int64), sv, sv.centroids, lab, 25.0, RISE_M, 60)
     assert np.all(out == 0)
+
+
+def test_a_piece_split_off_joins_the_object_of_its_colour() -> None:
+    """Segment 0: a red top and the lower part of a blue wall standing on it (LCCP left
+    the wall's foot with the top); segment 1: the rest of the blue wall. The foot is apart
+    from the top (its seam rises) and continues the blue wall (same colour, flat seam):
+    it joins segment 1. Without the blue wall beside it, it stays a segment of its own."""
+    from clearcli.perception.colors import color_splits
+
+    sv = Supervoxels(
+        voxel_label=np.arange(4),
+        centroids=np.array([[0.0, 0, 0], [-0.03, 0, 0], [0.02, 0, 0.02], [0.02, 0, 0.05]]),
+        normals=np.array([[0, 0, 1.0], [0, 0, 1], [-1, 0, 0], [-1, 0, 0]]),
+        n_voxels=np.array([80, 80, 70, 70]),
+        edges=np.array([[0, 1], [0, 2], [2, 3]]),
+    )
+    lab = np.array([RED, RED, BLUE, BLUE])
+    out = color_splits(np.array([0, 0, 0, 1]), sv, sv.centroids, lab, 25.0, RISE_M, 60)
+    assert out[0] == out[1] and out[2] == out[3] and out[0] != out[2]
+    # the rest of the wall green: the foot is a segment of its own
+    out = color_splits(np.array([0, 0, 0, 1]), sv, sv.centroids, np.array([RED, RED, BLUE, GREEN]), 25.0, RISE_M, 60)
+    assert len({int(out[0]), int(out[2]), int(out[3])}) == 3
