@@ -204,8 +204,8 @@ def _to_own_object(
         return out
     weight = sv.n_voxels.astype(np.float64)
     size = np.bincount(out, weights=weight, minlength=n_out)
-    mean_lab = np.stack([np.bincount(out, weights=weight * lab[:, c], minlength=n_out) for c in range(3)], axis=1)
-    mean_lab = mean_lab / np.maximum(size, 1e-12)[:, None]
+    lab_sum = np.stack([np.bincount(out, weights=weight * lab[:, c], minlength=n_out) for c in range(3)], axis=1)
+    mean_lab = lab_sum / np.maximum(size, 1e-12)[:, None]
     seg_of_out = np.zeros(n_out, dtype=np.int64)
     seg_of_out[out] = seg_of_sv
     # the largest group of each segment (ties: the lower number) stays where it is
