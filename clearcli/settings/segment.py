@@ -176,16 +176,21 @@ class SegmentSettings(Section):
     # more above a top of at least min_object_area_m2, standing inside it
     stack_split: bool = param(True)
     # --- 3b''''. colour splits (ours; colors.py) ----------------------------------------
-    # split a segment where neighbouring patches differ in colour by at least
-    # color_split_delta (CIE76 dE) along a seam at least a quarter concave (a can on a
-    # tin, a tin on an eraser). OFF: measured, colour misleads more than it helps. On the
-    # foreign choose part it splits uois_0006's stack (R2-D2 tin right) but also a drill
-    # at its battery and a mustard bottle at its cap (26 -> 25 of 37 exactly right); on
-    # the 45 mOSD learn frames, printed boxes and cans, mean F1 0.997 -> 0.915 (0.919
-    # with half the seam concave). Kept for objects of plain colours, to measure on
-    # one's own frames.
-    color_split: bool = param(False)
+    # split a segment into pieces of one colour (neighbouring patches differing by at
+    # least color_split_delta, CIE76 dE) and keep two pieces apart where the seam between
+    # them rises: the median of how far either patch reaches out of the other's plane is
+    # at least color_split_min_rise_m (one object lying on or against another; a print
+    # lies in its surface). ON (issue 37): on the foreign choose frames (objects heaped
+    # in a bin, on a foam board) pieces of two objects rise 11-31 mm (11 of 19 pairs),
+    # pieces of one object at most 9.4 mm but for a can's 47-voxel rim; on the 45 mOSD
+    # learn frames no pair rises more than 3.8 mm. Before, a quarter of the seam concave
+    # kept pieces apart, and the pieces joined back only to their largest neighbour,
+    # which left printed boxes and cans in two (mOSD learn mean F1 0.997 -> 0.924).
+    color_split: bool = param(True)
     color_split_delta: float = param(25.0, gt=0, le=200)
+    # 10 mm: between the largest rise of one object's pieces (9.4 mm) and the smallest
+    # of two objects' (11.3 mm); a cm-thick object is the thinnest one lying on another
+    color_split_min_rise_m: float = param(0.01, gt=0, le=0.1)
     # --- 3c. occluded pieces (ours) -------------------------------------------------------
     # join two segments when a nearer object hides the gap between them and their
     # surfaces continue each other (organized frames only; see occlusion.py)

@@ -44,7 +44,7 @@ def test_refinement_stages_run_from_one_list() -> None:
     )
     unorganized = segment(flat, SegmentSettings(occlusion_merge=True))
     # colour is read there by the containers' walls only: the flat objects need the grid
-    assert unorganized.color_used and unorganized.color_note == "read by: containers' walls"
+    assert unorganized.color_used and unorganized.color_note == "read by: colour splits, containers' walls"
     on = unorganized.labels()
     off = segment(flat, SegmentSettings(occlusion_merge=False)).labels()
     assert np.array_equal(on, off) and len(np.unique(on[on >= 10])) >= 5
@@ -125,7 +125,7 @@ def test_refine_runs_the_enabled_stages_and_times_each_by_its_name() -> None:
 
     stages = (
         Stage("sv", lambda s: True, per_sv, per_supervoxel=True),
-        Stage("off", lambda s: s.color_split, never),  # off by default
+        Stage("off", lambda s: not s.color_split, never),  # colour splits are on by default
         Stage("grid", lambda s: True, never, needs_grid=True),
         Stage("voxels", lambda s: True, lambda seg, c: seg + 10),
     )
