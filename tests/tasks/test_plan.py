@@ -103,11 +103,6 @@ def test_written_files_agree_with_the_payload_and_validate(box_on_box: dict) -> 
     assert validate_files(files["domain"], files["problem"], files["plan"])
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="clutter10: the boxes labelled 50 and 70 are one segment since the voxel grid's boundaries left the "
-    "whole millimetre (issue 37, 6a58839), too wide for the WAM's hand: a partial plan (tasks/test_segment.py)",
-)
 def test_clutter10_plan_removes_all_ten_objects() -> None:
     outcome = task.run(task.Request(Settings()), Source(FIXTURES / "clutter10.pcd"))
     payload = outcome.payload

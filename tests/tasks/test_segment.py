@@ -72,17 +72,13 @@ def test_each_fixture_gives_its_objects_each_matching_one_true_object(name: str,
     assert len({segment for segment, _ in best.values()}) == OBJECTS[name]  # one segment each
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="clutter10: the boxes labelled 50 and 70 merge into one segment since the voxel grid's boundaries left "
-    "the whole millimetre (issue 37, 6a58839): 9 objects (the pair 20/80, cut across before, is now told apart)",
-)
 def test_clutter10_gives_ten_objects(tmp_path: Path) -> None:
     objects, pred, truth = _run_with_labels("clutter10", tmp_path)
     assert len(objects) == 10
     best = _best_iou(truth, pred)
-    # all but the pair tested below match a segment of their own
-    assert sum(iou > 0.7 for _, iou in best.values()) >= 8, best
+    # every box matches a segment of its own, the touching pairs 20/80 and 50/70 included
+    assert all(iou > 0.7 for _, iou in best.values()), best
+    assert len({segment for segment, _ in best.values()}) == 10, best
 
 
 def test_clutter10_touching_pair_1_7_is_told_apart(tmp_path: Path) -> None:
