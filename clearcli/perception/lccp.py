@@ -146,9 +146,14 @@ def merge_small_segments(
         _, seg = np.unique(seg, return_inverse=True)
         return seg
     n_seg = int(seg.max()) + 1
-    parent = np.arange(n_seg)
-    size = np.bincount(seg, minlength=n_seg)
-    vox = np.bincount(seg, weights=sv_voxels, minlength=n_seg) if sv_voxels is not None else size.astype(float)
+    # Python lists, not arrays: the loop below reads and writes them one element at a
+    # time (NumPy's scalar indexing cost most of a call); same values, same arithmetic
+    parent = list(range(n_seg))
+    size = np.bincount(seg, minlength=n_seg).tolist()
+    vox = (
+        np.bincount(seg, weights=sv_voxels, minlength=n_seg) if sv_voxels is not None else np.asarray(size, dtype=float)
+    ).tolist()
+    kept = keep.tolist() if keep is not None else [False] * n_seg
 
     def root(i: int) -> int:
         while parent[i] != i:
@@ -156,18 +161,17 @@ def merge_small_segments(
             i = parent[i]
         return i
 
-    # segment adjacency (loops below run over segments, a few hundred at most)
+    # segment adjacency (loops below run over segments, a few hundred at most); the
+    # pairs packed into one integer key: the same sorted pairs as unique rows, no row sort
     a, b = seg[sv_edges[:, 0]], seg[sv_edges[:, 1]]
     cross = a != b
-    pairs = np.unique(np.stack([np.minimum(a[cross], b[cross]), np.maximum(a[cross], b[cross])], 1), axis=0)
+    key = np.unique(np.minimum(a[cross], b[cross]) * n_seg + np.maximum(a[cross], b[cross]))
     neighbours: dict[int, set[int]] = {}
-    for s, t in pairs.tolist():
+    for s, t in zip((key // n_seg).tolist(), (key % n_seg).tolist(), strict=True):
         neighbours.setdefault(s, set()).add(t)
         neighbours.setdefault(t, set()).add(s)
-    for s in np.argsort(size, kind="stable").tolist():
-        if (size[s] >= min_size and vox[s] >= min_voxels) or root(s) != s:
-            continue
-        if keep is not None and keep[s]:
+    for s in np.argsort(np.asarray(size), kind="stable").tolist():
+        if (size[s] >= min_size and vox[s] >= min_voxels) or root(s) != s or kept[s]:
             continue
         roots = {root(t) for t in neighbours.get(s, ())} - {s}
         if not roots:
