@@ -72,12 +72,27 @@ def _inside_hull(xy: np.ndarray, hull_xy: np.ndarray, slack_m: float) -> np.ndar
     return (signed <= slack_m).all(axis=1)
 
 
-def _component(seed_mask: np.ndarray, allowed: np.ndarray, edges: np.ndarray) -> np.ndarray:
-    """(V,) voxels reachable from ``seed_mask`` through ``allowed`` voxels."""
-    keep = allowed[edges[:, 0]] & allowed[edges[:, 1]]
-    comp = components(allowed.size, edges[keep])
-    seeds = np.unique(comp[seed_mask & allowed])
-    return allowed & np.isin(comp, seeds)
+class _Reach:
+    """The connected components of the ``allowed`` voxels (V,) over ``edges`` (both ends
+    allowed), numbered over those voxels alone: worked out once for every seed that
+    grows through the same voxels (not once per seed over all the frame's voxels)."""
+
+    def __init__(self, allowed: np.ndarray, edges: np.ndarray) -> None:
+        self.nodes = np.flatnonzero(allowed)
+        self.local = np.full(allowed.size, -1, dtype=np.int64)
+        self.local[self.nodes] = np.arange(self.nodes.size)
+        keep = allowed[edges[:, 0]] & allowed[edges[:, 1]]
+        self.comp = components(self.nodes.size, self.local[edges[keep]])
+        self.size = allowed.size
+
+    def component(self, seeds: np.ndarray) -> np.ndarray:
+        """(V,) the allowed voxels reachable from the voxels ``seeds`` (indices) through
+        allowed voxels."""
+        at = self.local[seeds]
+        reached = np.isin(self.comp, np.unique(self.comp[at[at >= 0]]))
+        out = np.zeros(self.size, dtype=bool)
+        out[self.nodes[reached]] = True
+        return out
 
 
 def separate_stacks(seg_of_sv: np.ndarray, ctx: RefineContext) -> np.ndarray:
@@ -132,10 +147,9 @@ def stack_splits(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
                 continue
             above = members & (voxel_height > level_h[lo] + 0.5 * settings.step_min_m)
             lower_xy = xy[tops[level == lo]]
+            reach = _Reach(above, edges_in)
             for hi in range(n_levels - 1, lo, -1):
-                seed = np.zeros(seg.size, dtype=bool)
-                seed[tops[level == hi]] = True
-                cand = _component(seed, above, edges_in)
+                cand = reach.component(tops[level == hi])
                 n_cand = int(cand.sum())
                 if n_cand < min_side_vox or int(members.sum()) - n_cand < min_side_vox:
                     continue
