@@ -44,29 +44,32 @@ def best_separating_line(xy: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray,
     # one row per direction (D, N): every sort, sum and difference below runs along
     # contiguous rows (along the columns of (N, D) it was several times slower)
     proj = np.ascontiguousarray((xy @ normals.T).T)
-    cols = np.arange(proj.shape[0])
+    n_dir, n = proj.shape
+    cols = np.arange(n_dir)
     order = np.argsort(proj, axis=1)
-    up_sorted = upper[order].astype(np.int64)  # (D, N)
     n_up = int(upper.sum())
-    n_low = upper.size - n_up
-    # threshold after the first k points (k = 0..N): below it lower, above it upper
-    up_below = np.hstack([np.zeros((proj.shape[0], 1), dtype=np.int64), np.cumsum(up_sorted, axis=1)])
-    k = np.arange(upper.size + 1)[None, :]
-    low_below = k - up_below
-    err_pos = up_below + (n_low - low_below)  # upper side = larger projections
-    err_neg = low_below + (n_up - up_below)  # upper side = smaller projections
-    errs = np.minimum(err_pos, err_neg)
+    n_low = n - n_up
+    # threshold after the first k points (k = 0..N): below it lower, above it upper.
+    # With u upper points below it, err_pos = u + (n_low - (k - u)) (upper side = larger
+    # projections) and err_neg = (k - u) + (n_up - u): both from t = 2u - k, exact in
+    # int32 (counts of at most N points), in two (D, N+1) arrays instead of six
+    t = np.zeros((n_dir, n + 1), dtype=np.int32)
+    np.cumsum(upper[order], axis=1, dtype=np.int32, out=t[:, 1:])
+    t *= 2
+    t -= np.arange(n + 1, dtype=np.int32)
+    errs = np.minimum(t + n_low, n_up - t)
     # fewest errors; among directions with as few, the widest gap at the threshold (two
     # tops apart by a few millimetres are separated by many directions, and only the
     # widest-margin one runs along the seam)
     all_sorted = np.take_along_axis(proj, order, axis=1)
-    gaps = np.full(errs.shape, -np.inf)
-    gaps[:, 1:-1] = np.diff(all_sorted, axis=1)
     k_best = np.argmin(errs, axis=1)
     e_best = errs[cols, k_best]
     fewest = e_best == e_best.min()
     # the best threshold of each direction among those with its fewest errors: widest gap
-    masked_gaps = np.where(errs == e_best[:, None], gaps, -np.inf)
+    masked_gaps = np.empty(errs.shape)
+    masked_gaps[:, 0] = masked_gaps[:, -1] = -np.inf
+    np.subtract(all_sorted[:, 1:], all_sorted[:, :-1], out=masked_gaps[:, 1:-1])
+    masked_gaps[errs != e_best[:, None]] = -np.inf
     k_best = np.argmax(masked_gaps, axis=1)
     margin = masked_gaps[cols, k_best]
     d = int(np.argmax(np.where(fewest, margin, -np.inf)))
@@ -74,12 +77,12 @@ def best_separating_line(xy: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray,
     sorted_proj = all_sorted[d]
     if kk == 0:
         offset = float(sorted_proj[0]) - 1e-6
-    elif kk == upper.size:
+    elif kk == n:
         offset = float(sorted_proj[-1]) + 1e-6
     else:
         offset = float(sorted_proj[kk - 1] + sorted_proj[kk]) / 2
     normal = normals[d]
-    if err_neg[d, kk] < err_pos[d, kk]:
+    if n_up - t[d, kk] < t[d, kk] + n_low:  # err_neg < err_pos
         normal, offset = -normal, -offset
     return normal, offset, int(errs[d, kk])
 
