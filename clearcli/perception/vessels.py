@@ -130,10 +130,16 @@ def find_rim(
     centres, radii = centres[ok], radii[ok]
     sample = band_xy if n <= _SCORE_SAMPLES else band_xy[rng.choice(n, _SCORE_SAMPLES, replace=False)]
     # (R, n) distances, by coordinate: no (R, n, 2) array (what np.linalg.norm sums, in its order)
-    dx = sample[None, :, 0] - centres[:, 0, None]
+    # (in place: the same operations in the same order, no temporaries)
+    dist = sample[None, :, 0] - centres[:, 0, None]
     dy = sample[None, :, 1] - centres[:, 1, None]
-    dist = np.sqrt(dx * dx + dy * dy)
-    score = (np.abs(dist - radii[:, None]) <= np.maximum(_INLIER * radii, _INLIER_M)[:, None]).sum(axis=1)
+    dist *= dist
+    dy *= dy
+    dist += dy
+    np.sqrt(dist, out=dist)
+    dist -= radii[:, None]
+    np.abs(dist, out=dist)
+    score = np.count_nonzero(dist <= np.maximum(_INLIER * radii, _INLIER_M)[:, None], axis=1)
     best = int(np.argmax(score))
     centre, radius = centres[best], float(radii[best])
     inl = np.abs(np.linalg.norm(band_xy - centre, axis=1) - radius) <= max(_INLIER * radius, _INLIER_M)
