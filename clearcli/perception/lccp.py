@@ -85,7 +85,7 @@ def lccp_segments(
         return np.zeros(0, dtype=np.int64)
     size = size if size is not None else SegmentSize.of(settings)
     convex = convex_edges(sv, settings, size)
-    e = sv.edges[convex]
+    e = np.compress(convex, sv.edges, axis=0)  # rows by a mask: compress is several times faster
     seg = components(n_sv, e)
     # "small" also by area: the connectivity step of the supervoxels can leave a small
     # patch in several pieces, which would count as several supervoxels
@@ -126,7 +126,8 @@ def rejoin_pieces(
     """After a cut: every segment of ``seg`` split into its connected pieces over
     ``edges``, and small pieces joined to their largest neighbour (`merge_small_segments`)."""
     keep = seg[edges[:, 0]] == seg[edges[:, 1]]
-    pieces = components(seg.size, edges[keep]).astype(np.int64)
+    # rows by a mask: np.compress, several times faster than boolean indexing of rows
+    pieces = components(seg.size, np.compress(keep, edges, axis=0)).astype(np.int64)
     return merge_small_segments(pieces, edges, min_size, sizes, min_voxels)
 
 

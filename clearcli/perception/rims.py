@@ -66,12 +66,14 @@ def merge_rims(
     top = np.full(n_seg, -np.inf)
     np.maximum.at(top, seg_of_voxel, voxel_height)
     ea, eb = a[cross], b[cross]
-    ha, hb = voxel_height[voxel_edges[cross, 0]], voxel_height[voxel_edges[cross, 1]]
+    # rows by a mask: np.compress, several times faster than boolean indexing of rows
+    edges_cross = np.compress(cross, voxel_edges, axis=0)
+    ha, hb = voxel_height[edges_cross[:, 0]], voxel_height[edges_cross[:, 1]]
     h_contact = 0.5 * (ha + hb)
     lo, hi = np.minimum(ea, eb), np.maximum(ea, eb)
     at_top = (h_contact >= top[lo] - tolerance_m) & (h_contact >= top[hi] - tolerance_m)
     if voxel_is_top is not None:
-        at_top &= ~(voxel_is_top[voxel_edges[cross, 0]] | voxel_is_top[voxel_edges[cross, 1]])
+        at_top &= ~(voxel_is_top[edges_cross[:, 0]] | voxel_is_top[edges_cross[:, 1]])
     key = lo * n_seg + hi
     uniq, inv = np.unique(key, return_inverse=True)
     n_contacts = np.bincount(inv)

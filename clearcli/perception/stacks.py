@@ -82,7 +82,7 @@ class _Reach:
         self.local = np.full(allowed.size, -1, dtype=np.int64)
         self.local[self.nodes] = np.arange(self.nodes.size)
         keep = allowed[edges[:, 0]] & allowed[edges[:, 1]]
-        self.comp = components(self.nodes.size, self.local[edges[keep]])
+        self.comp = components(self.nodes.size, self.local[np.compress(keep, edges, axis=0)])
         self.size = allowed.size
 
     def component(self, seeds: np.ndarray) -> np.ndarray:
@@ -122,7 +122,8 @@ def stack_splits(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
     min_side_vox = ctx.size.min_side_voxels_stacks
     # only segments with two top levels can split: edges within a segment, once
     same = seg[voxel_edges[:, 0]] == seg[voxel_edges[:, 1]]
-    edges_in = voxel_edges[same]
+    # rows by a mask with np.compress: several times faster than boolean indexing of rows
+    edges_in = np.compress(same, voxel_edges, axis=0)
     next_label = int(seg.max()) + 1
     pending = np.unique(seg).tolist()
     while pending:
@@ -153,7 +154,7 @@ def stack_splits(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
                 n_cand = int(cand.sum())
                 if n_cand < min_side_vox or int(members.sum()) - n_cand < min_side_vox:
                     continue
-                inside = _inside_hull(xy[cand], lower_xy, ctx.size.voxel_m)
+                inside = _inside_hull(np.compress(cand, xy, axis=0), lower_xy, ctx.size.voxel_m)
                 if inside.mean() >= _MIN_INSIDE:
                     split = cand
                     break
@@ -162,7 +163,7 @@ def stack_splits(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
         if split is None:
             continue
         seg[split] = next_label
-        edges_in = edges_in[seg[edges_in[:, 0]] == seg[edges_in[:, 1]]]
+        edges_in = np.compress(seg[edges_in[:, 0]] == seg[edges_in[:, 1]], edges_in, axis=0)
         pending += [s, next_label]  # either may hold another stack
         next_label += 1
     _, out = np.unique(seg, return_inverse=True)
@@ -206,7 +207,7 @@ def join_supports(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
                 if (s1, s2) not in touching:
                     continue
                 level = top & np.isin(seg, (s1, s2)) & (np.abs(voxel_height - h) <= settings.step_min_m)
-                inside = _inside_hull(xy[seg == upper], xy[level], ctx.size.voxel_m)
+                inside = _inside_hull(np.compress(seg == upper, xy, axis=0), xy[level], ctx.size.voxel_m)
                 if inside.mean() >= _MIN_INSIDE:
                     joined.append((s1, s2))
     return join_pairs(seg, joined, n_seg)
