@@ -16,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from clearcli.perception.context import RefineContext
+from clearcli.perception.lccp import dense_labels
 
 
 def rejoin_fragments(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
@@ -71,5 +72,4 @@ def join_fragments(
             best[f], target[f] = d, rest_seg[k]
     joined = target >= 0
     out[joined[seg]] = target[seg[joined[seg]]]
-    _, out = np.unique(out, return_inverse=True)
-    return out.astype(np.int64)
+    return dense_labels(out)

@@ -107,13 +107,27 @@ def lccp_segments(
     return merge_small_segments(seg, sv.edges, size.min_segment_supervoxels, sv.n_voxels, size.min_segment_voxels, keep)
 
 
+def dense_labels(labels: np.ndarray) -> np.ndarray:
+    """(N,) int64: each of the integer ``labels`` (N,) numbered by its rank among the
+    distinct ones, what ``np.unique(labels, return_inverse=True)[1]`` gives, by counting
+    the labels present instead of sorting them (labels are 0..G-1 with gaps here); it
+    falls back on np.unique for negative labels or ones far above their count."""
+    if labels.size == 0:
+        return np.unique(labels, return_inverse=True)[1].astype(np.int64)
+    top, low = int(labels.max()), int(labels.min())
+    if low < 0 or top >= 8 * labels.size + 4096:
+        return np.unique(labels, return_inverse=True)[1].astype(np.int64)
+    present = np.zeros(top + 1, dtype=bool)
+    present[labels] = True
+    return (np.cumsum(present, dtype=np.int64) - 1)[labels]
+
+
 def join_pairs(seg: np.ndarray, pairs: list[tuple[int, int]] | np.ndarray, n_seg: int) -> np.ndarray:
     """``seg`` (labels 0..n_seg-1) with every pair of segments in ``pairs`` joined (and
     what they chain to), renumbered 0..G-1 in order of first label."""
     p = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
     comp = components(n_seg, p)
-    _, out = np.unique(comp[seg], return_inverse=True)
-    return out.astype(np.int64)
+    return dense_labels(comp[seg])
 
 
 def rejoin_pieces(
@@ -144,8 +158,7 @@ def merge_small_segments(
     small segments stay, and so do those flagged in ``keep`` (G,)."""
     seg = seg.copy()
     if (min_size <= 1 and min_voxels <= 0) or sv_edges.shape[0] == 0:
-        _, seg = np.unique(seg, return_inverse=True)
-        return seg
+        return dense_labels(seg)
     n_seg = int(seg.max()) + 1
     # Python lists, not arrays: the loop below reads and writes them one element at a
     # time (NumPy's scalar indexing cost most of a call); same values, same arithmetic
@@ -184,5 +197,4 @@ def merge_small_segments(
         for t in neighbours.get(s, ()):
             neighbours.setdefault(target, set()).add(t)
     final = np.array([root(s) for s in range(n_seg)])[seg]
-    _, out = np.unique(final, return_inverse=True)
-    return out.astype(np.int64)
+    return dense_labels(final)

@@ -43,7 +43,7 @@ import numpy as np
 
 from clearcli.perception.context import RefineContext
 from clearcli.perception.graph import components
-from clearcli.perception.lccp import join_pairs
+from clearcli.perception.lccp import dense_labels, join_pairs
 
 # share of the candidate upper object that must stand within the lower top's hull
 _MIN_INSIDE = 0.9
@@ -106,7 +106,7 @@ def separate_stacks(seg_of_sv: np.ndarray, ctx: RefineContext) -> np.ndarray:
     n_seg = int(seg_of_voxel.max()) + 1
     votes = np.zeros((sv.centroids.shape[0], n_seg), dtype=np.int64)
     np.add.at(votes, (sv.voxel_label, seg_of_voxel), 1)
-    return np.unique(votes.argmax(axis=1), return_inverse=True)[1]
+    return dense_labels(votes.argmax(axis=1))
 
 
 def stack_splits(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
@@ -132,7 +132,7 @@ def stack_splits(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
         tops = np.flatnonzero(members & top)
         if tops.size < 2:
             continue
-        _, patch = np.unique(sv.voxel_label[tops], return_inverse=True)
+        patch = dense_labels(sv.voxel_label[tops])
         n_vox = np.bincount(patch)
         h_patch = np.bincount(patch, weights=voxel_height[tops]) / n_vox
         level_of_patch = _levels(h_patch, settings.step_min_m)
@@ -166,8 +166,7 @@ def stack_splits(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
         edges_in = np.compress(seg[edges_in[:, 0]] == seg[edges_in[:, 1]], edges_in, axis=0)
         pending += [s, next_label]  # either may hold another stack
         next_label += 1
-    _, out = np.unique(seg, return_inverse=True)
-    return out.astype(np.int64)
+    return dense_labels(seg)
 
 
 def join_supports(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:

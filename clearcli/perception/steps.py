@@ -29,7 +29,7 @@ from __future__ import annotations
 import numpy as np
 
 from clearcli.perception.context import RefineContext
-from clearcli.perception.lccp import rejoin_pieces
+from clearcli.perception.lccp import dense_labels, rejoin_pieces
 
 _N_DIRECTIONS = 90  # 2 degree steps over half a turn
 _SEAM_BAND_VOXELS = 1.5
@@ -118,7 +118,7 @@ def step_splits(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
             if tops.size < 2:
                 continue
             # top patches: the segment's part of each top supervoxel, at its mean height
-            _, patch = np.unique(sv.voxel_label[tops], return_inverse=True)
+            patch = dense_labels(sv.voxel_label[tops])
             n_vox = np.bincount(patch)
             h = np.bincount(patch, weights=voxel_height[tops]) / n_vox
             order = np.argsort(h)
@@ -150,8 +150,7 @@ def step_splits(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
             break
         cut_any = True
     if not cut_any:
-        _, out = np.unique(seg, return_inverse=True)
-        return out.astype(np.int64)
+        return dense_labels(seg)
     # a side may fall apart into pieces: pieces are connected components, small ones
     # rejoin their largest neighbour (LCCP's rule, counted in voxels)
     return rejoin_pieces(seg, ctx.vox.edges, size.min_segment_voxels)

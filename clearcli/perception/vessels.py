@@ -46,6 +46,7 @@ import numpy as np
 
 from clearcli.perception.context import RefineContext
 from clearcli.perception.graph import components
+from clearcli.perception.lccp import dense_labels
 from clearcli.perception.rings import cover_deg, facing_cos, fit_circle
 
 _MIN_RADIUS_M = 0.02
@@ -317,5 +318,4 @@ def rebuild_vessels(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
                 else:
                     seg[piece] = vessel
             done.add(k)
-    _, out = np.unique(seg, return_inverse=True)
-    return out.astype(np.int64)
+    return dense_labels(seg)
