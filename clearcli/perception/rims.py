@@ -95,17 +95,18 @@ def _near_another_segment(
     dims = cell.max(axis=0) + 2
     packed = (cell[:, 0] * dims[1] + cell[:, 1]) * dims[2] + cell[:, 2]
     cell_seg = np.unique(packed * n_seg + seg_of_voxel)  # (cell, segment) pairs, sorted
-    cells, first = np.unique(cell_seg // n_seg, return_index=True)
+    cell_of = cell_seg // n_seg  # sorted: each cell's first pair where it changes
+    first = np.flatnonzero(np.r_[True, cell_of[1:] != cell_of[:-1]])
+    cells = cell_of[first]
     seg = cell_seg % n_seg
     lo = seg[first]  # each cell's lowest and highest segment
     hi = seg[np.r_[first[1:], seg.size] - 1]
-    lo_near, hi_near = lo.copy(), hi.copy()  # ... over the cell and its neighbours
-    for dx in (-1, 0, 1):
-        for dy in (-1, 0, 1):
-            for dz in (-1, 0, 1):
-                target = cells + (dx * dims[1] + dy) * dims[2] + dz
-                pos = np.minimum(np.searchsorted(cells, target), cells.size - 1)
-                hit = cells[pos] == target
-                lo_near[hit] = np.minimum(lo_near[hit], lo[pos[hit]])
-                hi_near[hit] = np.maximum(hi_near[hit], hi[pos[hit]])
+    # ... over the cell and its 26 neighbours, all 27 offsets in one search (each row
+    # of targets is sorted, as the cells are); the cell itself is always found
+    step = np.array([(dx * dims[1] + dy) * dims[2] + dz for dx in (-1, 0, 1) for dy in (-1, 0, 1) for dz in (-1, 0, 1)])
+    target = cells[None, :] + step[:, None]
+    pos = np.minimum(np.searchsorted(cells, target), cells.size - 1)
+    hit = cells[pos] == target
+    lo_near = np.where(hit, lo[pos], n_seg).min(axis=0)
+    hi_near = np.where(hit, hi[pos], -1).max(axis=0)
     return (lo_near != hi_near)[np.searchsorted(cells, packed)]
