@@ -93,7 +93,8 @@ def _pieces(seg_of_sv: np.ndarray, sv: Supervoxels, lab: np.ndarray, min_delta: 
     crease = convex & (_angle_deg(n1, n2) >= _CREASE_DEG)
     cut = same & (np.linalg.norm(lab[a] - lab[b], axis=1) >= min_delta) & ~crease
     n_sv = seg_of_sv.shape[0]
-    piece = join_pairs(np.arange(n_sv), e[same & ~cut], n_sv)
+    # rows by a mask: np.compress, several times faster than boolean indexing of rows
+    piece = join_pairs(np.arange(n_sv), np.compress(same & ~cut, e, axis=0), n_sv)
     return piece, cut & (piece[a] != piece[b])
 
 

@@ -146,7 +146,8 @@ def planar_cuts(
     # of the top it stands on, are not a wall to cut along
     min_patch = 0.25 * size.seed_voxels
     pick = concave & top_side & (np.minimum(sv.n_voxels[e[:, 0]], sv.n_voxels[e[:, 1]]) >= min_patch)
-    rising[pick] = seam_rise(sv, ctx.vox.centroids, e[pick]) >= settings.cut_min_rise_m
+    # rows by a mask: np.compress, several times faster than boolean indexing of rows
+    rising[pick] = seam_rise(sv, ctx.vox.centroids, np.compress(pick, e, axis=0)) >= settings.cut_min_rise_m
     cut_any = False
     for _ in range(settings.cut_max_rounds):
         inside = seg[e[:, 0]] == seg[e[:, 1]]

@@ -133,4 +133,5 @@ def cut_depth_edges(
     cut = (a != b) & large[a] & large[b]
     if not cut.any():
         return vox
-    return dataclasses.replace(vox, edges=vox.edges[~cut])
+    # rows by a mask: np.compress, several times faster than boolean indexing of rows
+    return dataclasses.replace(vox, edges=np.compress(~cut, vox.edges, axis=0))

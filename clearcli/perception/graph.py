@@ -26,20 +26,24 @@ def components(n: int, edges: np.ndarray) -> np.ndarray:
     so later rounds cost only what is still being joined."""
     root = np.arange(n, dtype=np.int64)
     e = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
-    u, v = e[:, 0], e[:, 1]
-    ru, rv = u, v  # every node is its own root at first
-    while u.size:
-        apart = ru != rv
-        if not apart.any():
-            break
-        u, v, ru, rv = u[apart], v[apart], ru[apart], rv[apart]
+    r = e  # the roots of each edge's ends: every node is its own root at first
+    while e.shape[0]:
+        apart = r[:, 0] != r[:, 1]
+        # no filtering pass when every edge still joins two trees (the first round, with
+        # no self-loops): keeping all rows is the same; rows by a mask with np.compress,
+        # several times faster than boolean indexing of rows
+        if not apart.all():
+            if not apart.any():
+                break
+            e, r = np.compress(apart, e, axis=0), np.compress(apart, r, axis=0)
+        ru, rv = r[:, 0], r[:, 1]
         np.minimum.at(root, np.maximum(ru, rv), np.minimum(ru, rv))
         while True:  # point every node at its root (pointer jumping)
             up = root[root]
             if np.array_equal(up, root):
                 break
             root = up
-        ru, rv = root[u], root[v]
+        r = root[e]
     # the roots are the components' lowest nodes: numbering them in node order numbers
     # the components as csgraph does, without a sort
     is_root = root == np.arange(n)

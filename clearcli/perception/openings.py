@@ -176,7 +176,7 @@ def _pinhole(points: np.ndarray, shape: tuple[int, int]) -> tuple[float, float, 
     p = np.asarray(points[idx], dtype=float)
     ok = np.all(np.isfinite(p), axis=1)
     ok[ok] = p[ok, 2] > 1e-3
-    idx, p = idx[ok], p[ok]
+    idx, p = idx[ok], np.compress(ok, p, axis=0)  # rows by a mask: compress is several times faster
     if len(idx) < 100:
         return None
     v, u = np.divmod(idx, wid)

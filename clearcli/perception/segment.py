@@ -330,7 +330,7 @@ def _voxels(w: _Work) -> None:
     (fitted to an unorganized cloud's density), the voxel grid."""
     w.obj_idx = w.idx[w.prism_mask]
     w.color_used, w.color_note = color_state(w.frame, w.organized, w.settings)
-    w.obj_pts = w.pts[w.prism_mask]
+    w.obj_pts = np.compress(w.prism_mask, w.pts, axis=0)  # rows by a mask: compress is several times faster
     w.size = SegmentSize.of(w.settings, None if w.organized else w.obj_pts)
     if w.obj_pts.shape[0] < 4:
         return

@@ -269,7 +269,7 @@ def supervoxel_labels(
     # unassigned voxels form pieces of their own
     e = vox.edges
     same = labels[e[:, 0]] == labels[e[:, 1]]
-    piece = components(n_vox, e[same])
+    piece = components(n_vox, np.compress(same, e, axis=0))  # rows by a mask: compress is several times faster
     # the piece holding most of a supervoxel's voxels keeps it; other pieces are orphans
     n_pieces = int(piece.max()) + 1 if n_vox else 0
     piece_size = np.bincount(piece, minlength=n_pieces)
@@ -288,7 +288,8 @@ def supervoxel_labels(
     cross = pa != pb
     pa, pb = pa[cross], pb[cross]
     pairs = np.concatenate([np.stack([pa, pb], 1), np.stack([pb, pa], 1)])
-    pairs = pairs[~main[pairs[:, 0]] & main[pairs[:, 1]]]
+    # rows by a mask: np.compress, several times faster than boolean indexing of rows
+    pairs = np.compress(~main[pairs[:, 0]] & main[pairs[:, 1]], pairs, axis=0)
     target = np.arange(n_pieces)
     if pairs.shape[0]:
         keys, cnt = np.unique(_pair_keys(pairs, n_pieces), return_counts=True)

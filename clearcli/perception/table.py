@@ -141,7 +141,7 @@ def ransac_plane(
     for _ in range(_REFITS):
         if inl.sum() < 3:
             break
-        n, d = fit_plane_lsq(points[inl])
+        n, d = fit_plane_lsq(np.compress(inl, points, axis=0))  # rows by a mask: compress is several times faster
         again = np.abs(points @ n + d) <= distance_m
         if (again == inl).all():
             break
@@ -422,7 +422,8 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
     any_plane = np.zeros(sample.shape[0], dtype=bool)
     for c in candidates:
         any_plane |= c.on_plane
-    loose = sample[~any_plane]  # points on none of the candidate planes
+    # points on none of the candidate planes (rows by a mask: compress is several times faster)
+    loose = np.compress(~any_plane, sample, axis=0)
     loose_range2 = np.einsum("ij,ij->i", loose, loose)
 
     best: tuple[tuple[int, float], TableFit, int, int] | None = None
