@@ -208,7 +208,9 @@ def _near_box(points: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     """The rows of ``points`` inside the box [lo, hi] (as many columns as ``lo``): only they
     can be within the box's margin of what it was grown around, so a nearest-neighbour
     search against them alone gives the same answer as against all the points."""
-    return points[((points >= lo) & (points <= hi)).all(axis=1)]
+    # rows by a mask: np.compress, several times faster than boolean indexing of rows (this
+    # runs for every pair of nearby objects)
+    return np.compress(((points >= lo) & (points <= hi)).all(axis=1), points, axis=0)
 
 
 @dataclass(frozen=True)
@@ -235,7 +237,7 @@ def _rests_on_another(k: int, objects: list[np.ndarray], h: np.ndarray, low: flo
     another object (it leans on it, stands on it)?"""
     from scipy.spatial import cKDTree
 
-    bottom = objects[k][h <= low + _TOUCH_M]
+    bottom = np.compress(h <= low + _TOUCH_M, objects[k], axis=0)  # rows by a mask: compress is faster
     if not bottom.shape[0]:
         return False
     lo, hi = bottom.min(axis=0) - _TOUCH_M, bottom.max(axis=0) + _TOUCH_M
@@ -264,7 +266,7 @@ def _on_what_is_beneath(
     lo, hi = xy.min(axis=0) - _CELL_M, xy.max(axis=0) + _CELL_M
     meet = set(boxes.meet_2d(lo, hi).tolist())
     q2 = [
-        _near_box(xy_each[j][h_each[j] >= low - _HANG_M], lo, hi)
+        _near_box(np.compress(h_each[j] >= low - _HANG_M, xy_each[j], axis=0), lo, hi)
         for j in standing
         if j in meet and boxes.top[j] >= low - _HANG_M
     ]
