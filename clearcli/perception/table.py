@@ -452,7 +452,8 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
         # noise of the plane itself, not things standing on it
         band = (np.abs(h) > settings.prism_min_height_m + _NOISE_PER_M2 * loose_range2) & (np.abs(h) <= _SCORE_HEIGHT_M)
         ins = np.zeros(loose.shape[0], dtype=bool)
-        ins[band] = inside_convex(project(loose[band], basis) - origin @ basis.T, poly, -_EDGE_BAND_M)
+        loose_band = np.compress(band, loose, axis=0)  # rows by a mask: compress is faster
+        ins[band] = inside_convex(project(loose_band, basis) - origin @ basis.T, poly, -_EDGE_BAND_M)
         above = int((ins & (h > 0)).sum())
         below = int((ins & (h < 0)).sum())
         if camera_is_origin:
@@ -630,7 +631,9 @@ def beyond_the_edge(
     flat_pts = points.reshape(-1, 3).astype(np.float64)
 
     def cells(k: int) -> np.ndarray:
-        xy = project(flat_pts[flat_pieces == k], basis) - origin @ basis.T
+        # rows of the whole frame by a mask: np.compress, several times faster than boolean
+        # indexing of rows
+        xy = project(np.compress(flat_pieces == k, flat_pts, axis=0), basis) - origin @ basis.T
         return unique_cells(np.floor(xy / cell).astype(np.int64))
 
     main_cells = cells(main)
