@@ -8,7 +8,7 @@ After the mOSD frames it scores the self-made scene families of `clearcli.sim.fa
 the camera and across the line of sight, dense mixes, open containers), each rendered
 like a Kinect frame, on the report seeds 1000-1099 (`--seeds choose` for 0-99, the
 seeds settings are chosen on; `--families-only` skips mOSD; `--n-seeds N` takes the
-first N). Per family: mean F1, mean best IoU, over- and under-segmented objects per
+first N; 0 skips them). Per family: mean F1, mean best IoU, over- and under-segmented objects per
 render, the share of renders segmented exactly right ("right": every object matched at
 IoU >= 0.5 and nothing more predicted) and the median time.
 
@@ -201,7 +201,8 @@ def main() -> None:
     print(f"peak memory (resident, whole process): {peak_mb:.0f} MB")
     print(f"overall mean F1 over all {len(every)} frames: {np.mean([r[1] for r in every]):.3f}")
     print()
-    families(settings, seeds)
+    if len(seeds):  # --n-seeds 0: mOSD alone
+        families(settings, seeds)
 
 
 if __name__ == "__main__":
