@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from clearcli.perception.context import RefineContext
-from clearcli.perception.lccp import dense_labels
+from clearcli.perception.graph import dense_labels
 
 
 def rejoin_fragments(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:

@@ -14,6 +14,21 @@ from __future__ import annotations
 import numpy as np
 
 
+def dense_labels(labels: np.ndarray) -> np.ndarray:
+    """(N,) int64: each of the integer ``labels`` (N,) numbered by its rank among the
+    distinct ones, what ``np.unique(labels, return_inverse=True)[1]`` gives, by counting
+    the labels present instead of sorting them (labels are 0..G-1 with gaps here); it
+    falls back on np.unique for negative labels or ones far above their count."""
+    if labels.size == 0:
+        return np.unique(labels, return_inverse=True)[1].astype(np.int64)
+    top, low = int(labels.max()), int(labels.min())
+    if low < 0 or top >= 8 * labels.size + 4096:
+        return np.unique(labels, return_inverse=True)[1].astype(np.int64)
+    present = np.zeros(top + 1, dtype=bool)
+    present[labels] = True
+    return (np.cumsum(present, dtype=np.int64) - 1)[labels]
+
+
 def components(n: int, edges: np.ndarray) -> np.ndarray:
     """(n,) int64 component label of each of the ``n`` nodes joined by ``edges`` ((E, 2)
     ints in [0, n)), numbered 0..C-1 in order of each component's lowest node.
@@ -46,8 +61,7 @@ def components(n: int, edges: np.ndarray) -> np.ndarray:
         r = root[e]
     # the roots are the components' lowest nodes: numbering them in node order numbers
     # the components as csgraph does, without a sort
-    is_root = root == np.arange(n)
-    return (np.cumsum(is_root) - 1)[root]
+    return dense_labels(root)
 
 
 def run_components(joined_to_previous: np.ndarray, edges: np.ndarray) -> np.ndarray:

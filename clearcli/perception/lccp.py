@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from clearcli.perception.graph import components
+from clearcli.perception.graph import components, dense_labels
 from clearcli.perception.size import SegmentSize
 from clearcli.perception.supervoxels import Supervoxels
 from clearcli.settings.segment import SegmentSettings
@@ -105,21 +105,6 @@ def lccp_segments(
         keep[a[level]] = False
         keep[b[level]] = False
     return merge_small_segments(seg, sv.edges, size.min_segment_supervoxels, sv.n_voxels, size.min_segment_voxels, keep)
-
-
-def dense_labels(labels: np.ndarray) -> np.ndarray:
-    """(N,) int64: each of the integer ``labels`` (N,) numbered by its rank among the
-    distinct ones, what ``np.unique(labels, return_inverse=True)[1]`` gives, by counting
-    the labels present instead of sorting them (labels are 0..G-1 with gaps here); it
-    falls back on np.unique for negative labels or ones far above their count."""
-    if labels.size == 0:
-        return np.unique(labels, return_inverse=True)[1].astype(np.int64)
-    top, low = int(labels.max()), int(labels.min())
-    if low < 0 or top >= 8 * labels.size + 4096:
-        return np.unique(labels, return_inverse=True)[1].astype(np.int64)
-    present = np.zeros(top + 1, dtype=bool)
-    present[labels] = True
-    return (np.cumsum(present, dtype=np.int64) - 1)[labels]
 
 
 def join_pairs(seg: np.ndarray, pairs: list[tuple[int, int]] | np.ndarray, n_seg: int) -> np.ndarray:

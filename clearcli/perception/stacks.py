@@ -42,8 +42,8 @@ from __future__ import annotations
 import numpy as np
 
 from clearcli.perception.context import RefineContext
-from clearcli.perception.graph import components
-from clearcli.perception.lccp import dense_labels, join_pairs
+from clearcli.perception.graph import components, dense_labels
+from clearcli.perception.lccp import join_pairs
 
 # share of the candidate upper object that must stand within the lower top's hull
 _MIN_INSIDE = 0.9

@@ -29,7 +29,8 @@ from __future__ import annotations
 import numpy as np
 
 from clearcli.perception.context import RefineContext
-from clearcli.perception.lccp import dense_labels, rejoin_pieces
+from clearcli.perception.graph import dense_labels
+from clearcli.perception.lccp import rejoin_pieces
 
 _N_DIRECTIONS = 90  # 2 degree steps over half a turn
 _SEAM_BAND_VOXELS = 1.5

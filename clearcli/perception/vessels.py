@@ -45,8 +45,7 @@ from __future__ import annotations
 import numpy as np
 
 from clearcli.perception.context import RefineContext
-from clearcli.perception.graph import components
-from clearcli.perception.lccp import dense_labels
+from clearcli.perception.graph import components, dense_labels
 from clearcli.perception.rings import cover_deg, facing_cos, fit_circle
 
 _MIN_RADIUS_M = 0.02

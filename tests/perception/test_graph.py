@@ -7,7 +7,7 @@ import pytest
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-from clearcli.perception.graph import components
+from clearcli.perception.graph import components, dense_labels
 
 
 def _scipy(n: int, edges: np.ndarray) -> np.ndarray:
@@ -77,3 +77,23 @@ def test_runs_give_the_labels_of_every_join(seed: int) -> None:
     assert got.tolist() == components(n, every).tolist()
     assert got.tolist() == _scipy(n, every).tolist()
     assert run_components(np.zeros(0, dtype=bool), np.zeros((0, 2), dtype=np.int64)).size == 0
+
+
+# ------------------------------------------------------------------ labels numbered densely
+def test_dense_labels_number_labels_as_unique_does() -> None:
+    """`dense_labels` numbers labels by counting (no sort): the inverse np.unique gives,
+    with gaps, repeats and an empty input, and on the fallbacks (negative labels, labels
+    far above their count)."""
+    rng = np.random.default_rng(3)
+    cases = [
+        np.array([5, 2, 2, 9, 5, 0]),
+        np.zeros(0, dtype=np.int64),
+        np.array([-4, 7, -4, 3]),
+        np.array([10**9, 3, 10**9]),
+        *(rng.integers(0, 60, 40) for _ in range(20)),
+    ]
+    for labels in cases:
+        got = dense_labels(labels)
+        assert got.dtype == np.int64
+        assert np.array_equal(got, np.unique(labels, return_inverse=True)[1])
+    assert dense_labels(np.array([5, 2, 2, 9])).tolist() == [1, 0, 0, 2]

@@ -34,25 +34,3 @@ def test_lccp_joins_convex_and_cuts_concave(sign: float, n_segments: int) -> Non
         xs = sv.centroids[:, 0]
         far = np.abs(xs) > 0.02
         assert len(set(zip((xs[far] > 0).tolist(), seg[far].tolist()))) == 2
-
-
-# ------------------------------------------------------------------ labels numbered densely
-def test_dense_labels_number_labels_as_unique_does() -> None:
-    """`dense_labels` numbers labels by counting (no sort): the inverse np.unique gives,
-    with gaps, repeats and an empty input, and on the fallbacks (negative labels, labels
-    far above their count)."""
-    from clearcli.perception.lccp import dense_labels
-
-    rng = np.random.default_rng(3)
-    cases = [
-        np.array([5, 2, 2, 9, 5, 0]),
-        np.zeros(0, dtype=np.int64),
-        np.array([-4, 7, -4, 3]),
-        np.array([10**9, 3, 10**9]),
-        *(rng.integers(0, 60, 40) for _ in range(20)),
-    ]
-    for labels in cases:
-        got = dense_labels(labels)
-        assert got.dtype == np.int64
-        assert np.array_equal(got, np.unique(labels, return_inverse=True)[1])
-    assert dense_labels(np.array([5, 2, 2, 9])).tolist() == [1, 0, 0, 2]
