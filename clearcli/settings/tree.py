@@ -11,10 +11,8 @@ sections or keys are an error: a typo must not be silently ignored.
 from __future__ import annotations
 
 import dataclasses
-import hashlib
 import os
 import stat
-import tomllib
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -146,6 +144,8 @@ def parse_set(text: str) -> tuple[str, str, Any]:
     """``section.key=value`` -> (section, key, value). The value is read as TOML (numbers,
     true/false, [lists], "strings", nan, inf); bare words (with commas too: pinch,rim)
     are a string."""
+    import tomllib  # noqa: PLC0415  (~4 ms: only --set and --settings read TOML)
+
     name, sep, raw = text.partition("=")
     section, dot, key = name.strip().partition(".")
     if not sep or not dot or not section or not key:
@@ -172,6 +172,8 @@ def apply_sets(settings: Settings, sets: Iterable[str]) -> Settings:
 
 
 def read_settings_file(path: Path) -> dict[str, Any]:
+    import tomllib  # noqa: PLC0415  (~4 ms: only --set and --settings read TOML)
+
     try:
         if not stat.S_ISREG(os.stat(path).st_mode):  # a FIFO would be waited on for ever
             raise SettingsError(f"{path}: not a regular file; give a TOML settings file")
@@ -257,6 +259,9 @@ def settings_to_toml(settings: Settings, sections: Iterable[str] | None = None, 
 def digest(settings: Settings, sections: Iterable[str]) -> str:
     """A short hash of the named sections' resolved values: two results with the same
     digest were made with the same settings for what that command reads."""
+    # OpenSSL's hashlib is ~4-10 ms to import, and only --json's provenance asks for this
+    import hashlib  # noqa: PLC0415  (~4-10 ms: --json only)
+
     text = settings_to_toml(settings, tuple(sections))
     return "sha256:" + hashlib.sha256(text.encode("utf-8")).hexdigest()[:16]
 
