@@ -73,10 +73,30 @@ def _lab_table() -> np.ndarray:
     return cielab(np.stack([r.ravel(), g.ravel(), b.ravel()], axis=1)).astype(np.float32)
 
 
+@functools.cache
+def _lab_cache() -> tuple[np.ndarray, np.ndarray]:
+    """`_lab_table`'s rows filled as colours are met, and which are filled: a frame meets
+    a few thousand of the 262144, and the whole table cost a cold call ~0.1 s of CPU
+    (issue 39). Each row is `cielab` of its colour, the very numbers of the whole table
+    (the conversion is row by row; tests/perception/test_flat.py compares every row)."""
+    return np.empty((1 << 18, 3), dtype=np.float32), np.zeros(1 << 18, dtype=bool)
+
+
+def _lab_rows(keys: np.ndarray) -> np.ndarray:
+    """(N, 3) float32: the rows ``keys`` of `_lab_table`, those not met before computed now."""
+    table, filled = _lab_cache()
+    new = np.unique(keys[~filled[keys]])
+    if new.size:
+        centres = np.stack([new >> 12, (new >> 6) & 63, new & 63], axis=1) * 4 + 2
+        table[new] = cielab(centres.astype(np.uint8)).astype(np.float32)
+        filled[new] = True
+    return table[keys]
+
+
 def lab_of(rgb: np.ndarray) -> np.ndarray:
     """(N, 3) uint8 sRGB -> (N, 3) CIELAB, looked up (see _lab_table)."""
     q = (rgb >> 2).astype(np.int64)
-    return _lab_table()[(q[:, 0] << 12) | (q[:, 1] << 6) | q[:, 2]]
+    return _lab_rows((q[:, 0] << 12) | (q[:, 1] << 6) | q[:, 2])
 
 
 def _lab_keys(rgb: np.ndarray) -> np.ndarray:
@@ -90,10 +110,10 @@ def _far_from(rgb: np.ndarray, centre: np.ndarray, threshold: float) -> np.ndarr
     ``centre``: each distinct quantized colour judged once (a table shows a few
     thousand of the 262144), the same float32 sums as per pixel."""
     key = _lab_keys(rgb)
-    seen = np.zeros(_lab_table().shape[0], dtype=bool)
+    seen = np.zeros(1 << 18, dtype=bool)
     seen[key] = True
     used = np.flatnonzero(seen)
-    diff = _lab_table()[used] - centre.astype(np.float32)
+    diff = _lab_rows(used) - centre.astype(np.float32)
     d2 = np.zeros(seen.shape[0], dtype=np.float32)
     d2[used] = np.einsum("ij,ij->i", diff, diff)
     return d2[key] > threshold * threshold

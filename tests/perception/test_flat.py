@@ -20,3 +20,23 @@ def test_far_from_judges_each_colour_as_every_pixel_would() -> None:
         got = _far_from(rgb, centre, threshold)
         assert np.array_equal(got, want)
         assert 0 < got.sum() < got.size
+
+
+def test_the_rows_filled_as_met_are_the_whole_tables_bit_for_bit() -> None:
+    """Issue 39: a cold call converts only the colours it meets (`_lab_rows`); every row,
+    met in scattered batches of every size, is the whole table's row."""
+    from clearcli.perception.flat import _lab_cache, _lab_rows, _lab_table
+
+    _lab_cache.cache_clear()
+    gen = np.random.default_rng(7)
+    order = gen.permutation(1 << 18)
+    start = 0
+    while start < order.size:
+        n = int(gen.integers(1, 4000))
+        keys = order[start : start + n]
+        got = _lab_rows(np.concatenate([keys, keys[: n // 3]]))  # repeats, and met twice
+        assert got.shape == (keys.size + n // 3, 3)
+        start += n
+    table, filled = _lab_cache()
+    assert filled.all()
+    assert np.array_equal(table.view(np.uint32), _lab_table().view(np.uint32))
