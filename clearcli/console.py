@@ -15,6 +15,7 @@ import errno
 import os
 import re
 import sys
+from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any, cast
 
 if TYPE_CHECKING:
@@ -48,21 +49,88 @@ _PLAIN_MAX = 50_000  # characters: under half the width even if every one were w
 _RICH_ENV = ("FORCE_COLOR", "TTY_COMPATIBLE", "JUPYTER_COLUMNS", "JUPYTER_LINES")
 
 
-def _plain(text: Any, kwargs: dict[str, Any]) -> bool:
-    """Whether ``console.print(text, **kwargs)`` on a console not yet built may write
-    ``text`` and a newline itself: the very bytes rich would write (tests/test_console.py
-    compares the two), without importing rich."""
+def _plain(text: Any, kwargs: dict[str, Any]) -> str | None:
+    """What ``console.print(text, **kwargs)``, on a console not yet built whose stream is
+    not a terminal, writes before its newline when it can be written without rich (the
+    very bytes rich writes: tests/test_console.py compares the two), else None."""
     if type(text) is not str or len(text) > _PLAIN_MAX or not text.isascii():
-        return False  # non-ASCII: rich's message on an encoding error differs
+        return None  # non-ASCII: rich's message on an encoding error differs
     if any(key not in ("markup", "highlight") for key in kwargs):
-        return False  # highlighting only adds styles, which a pipe never shows
+        return None  # highlighting only adds styles, which a pipe never shows
+    if _NOT_PLAIN.search(text) or not _plain_stream():
+        return None
     if kwargs.get("markup", True) is not False and "[" in text:
-        return False
-    if _NOT_PLAIN.search(text) or any(os.environ.get(name) is not None for name in _RICH_ENV):
-        return False
-    if "IPython" in sys.modules:  # rich writes to a notebook its own way
-        return False
-    return True
+        # one bold span (segment's first line) is its text on a pipe; other markup: rich
+        head, bold, rest = text.partition("[bold]")
+        inner, close, tail = rest.partition("[/bold]")
+        if not bold or not close or "\\" in text or "[" in head + inner + tail:
+            return None
+        return head + inner + tail
+    return text
+
+
+def _plain_stream() -> bool:
+    """Whether nothing but isatty decides if rich takes the stream for a terminal."""
+    return all(os.environ.get(name) is None for name in _RICH_ENV) and "IPython" not in sys.modules
+
+
+def _plain_cell(text: Any) -> bool:
+    """A table cell rich (markup on) draws as it is: ASCII, one line, no markup, emoji or
+    control code, no space at either end nor two in a row (rich may wrap or trim those)."""
+    return (
+        type(text) is str
+        and text.isascii()
+        and "\n" not in text
+        and "[" not in text
+        and "\\" not in text
+        and not _NOT_PLAIN.search(text)
+        and text == text.strip()
+        and "  " not in text
+    )
+
+
+def _plain_table(headers: Sequence[str], rows: Sequence[Sequence[str]]) -> str | None:
+    """rich's ``Table(*headers)`` with ``rows`` as rich draws it on a pipe or a file
+    (heavy head box, one space of padding, every column as wide as its widest cell), when
+    every cell is plain (`_plain_cell`) and the table is far narrower than the console;
+    else None."""
+    cols = len(headers)
+    if not all(map(_plain_cell, headers)) or any(len(r) != cols or not all(map(_plain_cell, r)) for r in rows):
+        return None
+    widths = [max(len(c) for c in column) for column in zip(headers, *rows)]
+    if sum(widths) + 3 * cols + 1 > _PLAIN_MAX:
+        return None
+
+    def rule(left: str, fill: str, mid: str, right: str) -> str:
+        return left + mid.join(fill * (w + 2) for w in widths) + right
+
+    def cells(sep: str, values: Sequence[str]) -> str:
+        return sep + sep.join(f" {v.ljust(w)} " for v, w in zip(values, widths)) + sep
+
+    lines = [rule("┏", "━", "┳", "┓"), cells("┃", headers), rule("┡", "━", "╇", "┩")]
+    lines += [cells("│", row) for row in rows]
+    lines.append(rule("└", "─", "┴", "┘"))
+    return "\n".join(lines)
+
+
+def print_table(target: Console, headers: Sequence[str], rows: Sequence[Sequence[str]]) -> None:
+    """``target.print(Table(*headers))`` with ``rows`` added: rich's table; drawn here
+    without importing rich (~50 ms of a cold `clear segment`, issue 39) when it goes to a
+    pipe or a file before the console is built, its stream takes UTF-8 (rich draws ASCII
+    boxes otherwise) and `_plain_table` can draw it."""
+    if isinstance(target, _OnFirstUse):
+        file = target._plain_file()
+        if file is not None and str(getattr(file, "encoding", None) or "utf-8").lower().startswith("utf"):
+            text = _plain_table(headers, rows)
+            if text is not None:
+                target._write(file, text)
+                return
+    from rich.table import Table  # noqa: PLC0415  (~6 ms after rich.console: not for `clear --help`)
+
+    table = Table(*headers)
+    for row in rows:
+        table.add_row(*row)
+    target.print(table)
 
 
 class _OnFirstUse:
@@ -89,24 +157,30 @@ class _OnFirstUse:
     def print(self, *objects: Any, **kwargs: Any) -> None:
         """rich's Console.print; a plain line to a pipe or a file before the console is
         built is written here (`_plain`), as rich writes it: the text, a newline, a flush."""
-        stderr = object.__getattribute__(self, "_stderr")
-        file = sys.stderr if stderr else sys.stdout
-        if (
-            object.__getattribute__(self, "_built") is None
-            and len(objects) == 1
-            and _plain(objects[0], kwargs)
-            and file is not None  # rich writes nowhere then
-            and not hasattr(file, "rich_proxied_file")  # rich's own redirection (a Live's)
-            and not _isatty(file)
-        ):
-            try:
-                file.write(objects[0] + "\n")
-                file.flush()
-            except BrokenPipeError:
-                # as the console's on_broken_pipe: quiet from now on, then the error
-                self._console().on_broken_pipe()
-            return
-        self._console().print(*objects, **kwargs)
+        file = self._plain_file()
+        text = _plain(objects[0], kwargs) if file is not None and len(objects) == 1 else None
+        if text is None:
+            self._console().print(*objects, **kwargs)
+        else:
+            self._write(file, text)
+
+    def _plain_file(self) -> Any:
+        """The stream, when the console is not built yet and rich would take the stream
+        for a pipe or a file (see `_plain` for the text), else None."""
+        if object.__getattribute__(self, "_built") is not None:
+            return None  # built: rich prints from now on (a Live or a Progress may hold it)
+        file = sys.stderr if object.__getattribute__(self, "_stderr") else sys.stdout
+        if file is None or hasattr(file, "rich_proxied_file") or _isatty(file) or not _plain_stream():
+            return None  # nowhere (rich writes to nothing); rich's own redirection; a terminal
+        return file
+
+    def _write(self, file: Any, text: str) -> None:
+        try:
+            file.write(text + "\n")
+            file.flush()
+        except BrokenPipeError:
+            # as the console's on_broken_pipe: quiet from now on, then the error
+            self._console().on_broken_pipe()
 
     def __setattr__(self, name: str, value: Any) -> None:
         setattr(self._console(), name, value)

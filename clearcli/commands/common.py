@@ -8,10 +8,10 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from clearcli.console import stderr, stdout
+from clearcli.console import print_table, stderr, stdout
 from clearcli.files import atomic_output, atomic_path, check_output_path
 
-__all__ = ["atomic_output", "atomic_path", "check_output_path", "print_json", "stderr", "stdout"]
+__all__ = ["atomic_output", "atomic_path", "check_output_path", "print_json", "print_table", "stderr", "stdout"]
 
 
 def print_json(schema: str, version: int, payload: Mapping[str, Any], settings: Any, command: str) -> None:

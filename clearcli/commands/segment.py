@@ -67,7 +67,7 @@ from typing import Annotated
 import typer
 
 from clearcli.commands import options as bo
-from clearcli.commands.common import check_output_path, print_json, stderr, stdout
+from clearcli.commands.common import check_output_path, print_json, print_table, stderr, stdout
 from clearcli.errors import InputError
 from clearcli.tasks.base import Outputs, Source
 
@@ -159,8 +159,6 @@ def segment_cmd(
     if json_out:
         print_json(outcome.schema, outcome.version, doc, settings, "segment")
         return
-    from rich.table import Table  # noqa: PLC0415  (~6 ms: not for `clear --help`)
-
     n = doc["table"]["normal"]
     stdout.print(
         f"[bold]{doc['source']}[/bold]: table normal ({n[0]:.3f}, {n[1]:.3f}, {n[2]:.3f}), "
@@ -170,17 +168,20 @@ def segment_cmd(
     for thing in doc["excluded"]:
         stdout.print(f"  excluded ({thing['points']} points): {thing['reason']}")
     if doc["objects"]:
-        table = Table("id", "label", "points", "centroid (m)", "box extents (m)")
+        rows = []
         for obj in doc["objects"]:
             c, e = obj["centroid"], obj["obb"]["extents"]
-            table.add_row(
-                str(obj["id"]),
-                str(obj["label"]),
-                str(obj["n_points"]),
-                f"{c[0]:+.3f} {c[1]:+.3f} {c[2]:+.3f}",
-                f"{e[0]:.3f} x {e[1]:.3f} x {e[2]:.3f}",
+            rows.append(
+                [
+                    str(obj["id"]),
+                    str(obj["label"]),
+                    str(obj["n_points"]),
+                    f"{c[0]:+.3f} {c[1]:+.3f} {c[2]:+.3f}",
+                    f"{e[0]:.3f} x {e[1]:.3f} x {e[2]:.3f}",
+                ]
             )
-        stdout.print(table)
+        # rich's table; on a pipe or a file drawn without importing rich (clearcli/console.py)
+        print_table(stdout, ["id", "label", "points", "centroid (m)", "box extents (m)"], rows)
     times = ", ".join(f"{k} {v * 1000:.0f} ms" for k, v in doc["timings_s"].items())
     stdout.print(f"timings: {times}")
     for out, what in ((labels_out, "labels"), (png, "picture")):
