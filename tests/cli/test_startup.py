@@ -212,3 +212,22 @@ def test_a_command_imports_only_what_it_runs(tmp_path: Path, command: str) -> No
         assert stages == set()
     else:
         assert {"clearcli.planning.backtrack", "clearcli.robot.wam_kinematics"} <= stages
+
+
+@pytest.mark.parametrize("command", ["segment", "plan"])
+def test_text_to_a_pipe_does_not_import_rich(tmp_path: Path, command: str) -> None:
+    """Issue 39: `clear segment` and `clear plan` print their text to a pipe without rich
+    (clearcli/console.py writes what rich would); rich was ~40-60 ms of their cold start."""
+    report = tmp_path / "modules.json"
+    env = hooked_env(tmp_path, _ALL_MODULES_HOOK)
+    env["CLEAR_TEST_REPORT"] = str(report)
+    for name in ("FORCE_COLOR", "TTY_COMPATIBLE", "JUPYTER_COLUMNS", "JUPYTER_LINES"):
+        env.pop(name, None)
+    res = run_clear(command, FIXTURES / "isolated_box.pcd", timeout=180, env=env)
+    assert res.returncode in (0, 10), res.stderr
+    assert res.stdout.strip()  # it printed its text
+    if command == "segment":
+        assert "┏━" in res.stdout and "isolated_box.pcd: table normal" in res.stdout  # the table, the bold line
+    modules = set(json.loads(report.read_text()))
+    assert "clearcli.console" in modules
+    assert not {m for m in modules if m == "rich" or m.startswith("rich.")}
