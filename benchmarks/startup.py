@@ -1,7 +1,7 @@
 """Cold start of `clear`: wall time per command, each run a fresh process, and the
 share of it spent importing.
 
-    .venv/bin/python benchmarks/startup.py [--runs N] [--no-imports] [--top K]
+    .venv/bin/python benchmarks/startup.py [--runs N] [--no-imports] [--top K] [--against DIR]
 
 Commands timed (FRAME = mosd/test/test57.pcd of the shared data): `clear --help`,
 `clear info FRAME`, `clear segment FRAME`, `clear predicates FRAME`, `clear plan FRAME`.
@@ -24,6 +24,12 @@ which adds its own overhead) are listed per command. "python" is a bare
 A note is printed when some of clearcli's modules have no up-to-date bytecode (e.g.
 PYTHONDONTWRITEBYTECODE set with an editable install whose sources were edited since):
 every run then compiles those it imports from source.
+
+--against DIR measures another version of clearcli back to back with this one: DIR is a
+folder holding a `clearcli` package (an older checkout, or `git archive REV clearcli`
+unpacked), put first on PYTHONPATH for its runs. Each run then starts both versions of
+each command one after the other (which goes first alternates), so that the load of a
+busy machine falls on both alike; its rows are marked with "*".
 
 Shared data: $CLEAR_SHARED, else ../shared/data beside the repository.
 """
@@ -55,18 +61,20 @@ def _clear_cmd() -> list[str]:
     return [sys.executable, "-m", "clearcli.cli"]
 
 
-def _run(argv: list[str]) -> tuple[float, float, int]:
+def _run(argv: list[str], env: dict[str, str] | None = None) -> tuple[float, float, int]:
     """(wall s, CPU s of the process and its children, exit code)."""
     r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
-    proc = subprocess.run(argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    proc = subprocess.run(argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
     wall = time.perf_counter() - t0
     r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
     return wall, cpu, proc.returncode
 
 
-def _imports(clear: list[str], args: list[str]) -> tuple[list[str], list[tuple[float, str]]]:
+def _imports(
+    clear: list[str], args: list[str], env: dict[str, str] | None = None
+) -> tuple[list[str], list[tuple[float, str]]]:
     """The top-level modules a command imports after `site` (in order), and their
     cumulative ms."""
     proc = subprocess.run(
@@ -74,6 +82,7 @@ def _imports(clear: list[str], args: list[str]) -> tuple[list[str], list[tuple[f
         stdout=subprocess.DEVNULL,
         stderr=subprocess.PIPE,
         text=True,
+        env=env,
     )
     names: list[str] = []
     costs: list[tuple[float, str]] = []
@@ -169,6 +178,9 @@ def main() -> None:
     ap.add_argument("--runs", type=int, default=7, help="fresh processes per command (default 7)")
     ap.add_argument("--no-imports", action="store_true", help="skip the import-share measurement")
     ap.add_argument("--top", type=int, default=6, help="heaviest top-level imports listed per command")
+    ap.add_argument(
+        "--against", type=Path, help="a folder holding another clearcli package: measured back to back, rows marked *"
+    )
     opts = ap.parse_args()
     runs = max(1, opts.runs)
 
@@ -179,6 +191,14 @@ def main() -> None:
             f"startup.py: shared data not found: {frame} is missing.\n"
             "Set CLEAR_SHARED to the shared data directory (the one holding mosd/test/test57.pcd)."
         )
+    # (mark, environment): this checkout as the environment has it, and --against's
+    versions: list[tuple[str, dict[str, str] | None]] = [("", None)]
+    if opts.against is not None:
+        against = opts.against.resolve()
+        if not (against / "clearcli" / "__init__.py").is_file():
+            sys.exit(f"startup.py: --against {against}: no clearcli package in it")
+        path = os.pathsep.join(p for p in (str(against), os.environ.get("PYTHONPATH", "")) if p)
+        versions.append(("*", dict(os.environ, PYTHONPATH=path)))
 
     clear = _clear_cmd()
     commands: list[tuple[str, list[str]]] = [
@@ -190,31 +210,37 @@ def main() -> None:
     ]
     load0 = os.getloadavg()[0]
     print(f"clear: {' '.join(clear)}\nframe: {frame}\nruns: {runs}   cpus: {os.cpu_count()}")
+    if opts.against is not None:
+        print(f"*: clearcli from {opts.against.resolve()}")
 
+    rows = [(label + mark, args, env) for label, args in commands for mark, env in versions]
     import_argv: dict[str, list[str]] = {}
     top: dict[str, list[tuple[float, str]]] = {}
     if not opts.no_imports:
-        for label, args in commands:
-            names, costs = _imports(clear, args)
-            import_argv[label] = _import_only_argv(names)
-            top[label] = sorted(costs, reverse=True)[: opts.top]
+        for key, args, env in rows:
+            names, costs = _imports(clear, args, env)
+            import_argv[key] = _import_only_argv(names)
+            top[key] = sorted(costs, reverse=True)[: opts.top]
 
-    walls: dict[str, list[float]] = {label: [] for label, _ in commands}
-    cpus: dict[str, list[float]] = {label: [] for label, _ in commands}
-    imps: dict[str, list[float]] = {label: [] for label, _ in commands}
-    codes: dict[str, set[int]] = {label: set() for label, _ in commands}
+    walls: dict[str, list[float]] = {key: [] for key, _, _ in rows}
+    cpus: dict[str, list[float]] = {key: [] for key, _, _ in rows}
+    imps: dict[str, list[float]] = {key: [] for key, _, _ in rows}
+    codes: dict[str, set[int]] = {key: set() for key, _, _ in rows}
     bare: list[float] = []
-    for _, args in commands:  # warm-up: page cache
-        _run(clear + args)
-    for _ in range(runs):
+    for _, args, env in rows:  # warm-up: page cache
+        _run(clear + args, env)
+    for run in range(runs):
         bare.append(_run([sys.executable, "-c", "pass"])[0])
         for label, args in commands:
-            wall, cpu, rc = _run(clear + args)
-            walls[label].append(wall)
-            cpus[label].append(cpu)
-            codes[label].add(rc)
-            if label in import_argv:
-                imps[label].append(_run(import_argv[label])[0])
+            # both versions of a command back to back, which goes first alternating
+            for mark, env in versions if run % 2 == 0 else versions[::-1]:
+                key = label + mark
+                wall, cpu, rc = _run(clear + args, env)
+                walls[key].append(wall)
+                cpus[key].append(cpu)
+                codes[key].add(rc)
+                if key in import_argv:
+                    imps[key].append(_run(import_argv[key], env)[0])
     load1 = os.getloadavg()[0]
 
     print(f"load average (1 min) before {load0:.2f}, after {load1:.2f}")
@@ -227,22 +253,22 @@ def main() -> None:
         f"{'work':>7}  exit"
     )
     print(f"{'python':<12} {statistics.median(bare):9.3f} {min(bare):7.3f}")
-    for label, _ in commands:
-        w = statistics.median(walls[label])
-        ratio = statistics.median(c / max(wall, 1e-9) for c, wall in zip(cpus[label], walls[label]))
-        line = f"{label:<12} {w:9.3f} {min(walls[label]):7.3f} {statistics.median(cpus[label]):8.3f} {ratio:8.2f}"
-        if imps[label]:
-            i = statistics.median(imps[label])
+    for key, _, _ in rows:
+        w = statistics.median(walls[key])
+        ratio = statistics.median(c / max(wall, 1e-9) for c, wall in zip(cpus[key], walls[key]))
+        line = f"{key:<12} {w:9.3f} {min(walls[key]):7.3f} {statistics.median(cpus[key]):8.3f} {ratio:8.2f}"
+        if imps[key]:
+            i = statistics.median(imps[key])
             line += f" {i:8.3f} {100 * i / w:5.0f}% {w - i:7.3f}"
         else:
             line += " " * 23
-        line += "  " + ",".join(str(c) for c in sorted(codes[label]))
+        line += "  " + ",".join(str(c) for c in sorted(codes[key]))
         print(line)
     print("(seconds; wall: a fresh `clear` process; imports: a fresh process importing only what it imports)")
     if top:
         print("\nheaviest top-level imports (-X importtime cumulative, ms):")
-        for label, _ in commands:
-            print(f"  {label:<11} " + ", ".join(f"{name} {ms:.0f}" for ms, name in top[label]))
+        for key, _, _ in rows:
+            print(f"  {key:<11} " + ", ".join(f"{name} {ms:.0f}" for ms, name in top[key]))
 
 
 if __name__ == "__main__":
