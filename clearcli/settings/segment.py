@@ -230,6 +230,10 @@ class SegmentSettings(Section):
     # a face seen edge-on that the outlier filter thinned) to the nearest segment
     # within this distance (m; 0 = off): three voxels
     fragment_join_m: float = param(0.015, ge=0, le=0.1)
+    # join touching segments a learned model (perception/learned.py, trained by
+    # training/join.py) finds one object with at least this probability, plus a margin
+    learned_join: bool = param(False)
+    learned_join_min_p: float = param(0.9, gt=0.5, lt=1)
     # --- 3e. objects lying flat (ours; flat.py) -----------------------------------------
     # markers, pens, cutlery: 1-2 cm high, inside the table's depth noise; found by
     # colour on organized frames with colour. A candidate differs from the table's median
