@@ -4,9 +4,9 @@
     .venv/bin/python training/join.py fit       # join_pairs.csv -> clearcli/data/join_model.json
     .venv/bin/python training/join.py           # both
 
-Data: the 45 mOSD learn frames (../shared/data/mosd/learn, their ``label`` field) and the
+Data: the 45 mOSD learn frames (../shared/data/mosd/learn, their ``label`` field), the
 choose part of the foreign frames (benchmarks/foreign/*.toml with ``part = "choose"``;
-the report part is never read). Each frame is segmented with the default settings and
+the report part is never read) and self-made renders (`SIM_FAMILIES`, choose seeds). Each frame is segmented with the default settings and
 the learned join off; every pair of touching segments is one row: its `FEATURES` and
 whether both segments are mostly one labelled object (1), two different ones or one
 object and the table (0); pairs of two unlabelled segments are left out.
@@ -37,11 +37,17 @@ from clearcli.io.read import read_frame  # noqa: E402
 from clearcli.perception import learned, segment  # noqa: E402
 from clearcli.perception.learned import FEATURES, MARGIN_LOGIT, MODEL_FORMAT, JoinModel  # noqa: E402
 from clearcli.settings.segment import SegmentSettings  # noqa: E402
+from clearcli.sim.camera import render  # noqa: E402
+from clearcli.sim.families import FAMILIES  # noqa: E402
 
 DATA = REPO.parent / "shared" / "data"
 PAIRS = Path(__file__).resolve().parent / "join_pairs.csv"
 MODEL = REPO / "clearcli" / "data" / "join_model.json"
 VERSION = "join-1 (issue 37: mOSD learn 45 + foreign choose, logistic, L2 1.0)"
+# self-made renders (clearcli/sim/families.py) on the choose seeds (0-99; the report
+# seeds 1000-1099 are never used): cluttered families where objects touch
+SIM_FAMILIES = ("dense_mix", "wide_objects", "open_container")
+SIM_SEEDS = range(10)
 L2 = 1.0  # on the standardised weights (not the bias)
 NEWTON_STEPS = 30
 
@@ -62,6 +68,10 @@ def _frames():  # -> iterator of (source, name, Frame, labels (N,))
     for name in foreign.names("choose"):
         frame, labels, _ = foreign.load(name)
         yield "foreign", name, frame, labels
+    for family in SIM_FAMILIES:
+        for seed in SIM_SEEDS:
+            frame = render(FAMILIES[family](seed), seed=seed)
+            yield "sim", f"{family}{seed}", frame, frame.fields["label"]
 
 
 # each frame is segmented as it is, and with noise added to its depth (a sensor noisier
@@ -195,6 +205,12 @@ def dumps(model: dict) -> str:
     return json.dumps(model, indent=1) + "\n"
 
 
+def _source(frame: str) -> str:
+    if frame.startswith("learn"):
+        return "mOSD learn"
+    return "sim renders" if frame.rstrip("@n0123456789").rstrip("0123456789") in SIM_FAMILIES else "foreign choose"
+
+
 def report(frames: list[str], x: np.ndarray, y: np.ndarray, model: dict, min_p: float = 0.9) -> None:
     """What the model joins at ``min_p`` (plus the stage's margin), per source; and the
     same, each frame's pairs scored by a model fitted without that frame (and its noisy
@@ -208,13 +224,13 @@ def report(frames: list[str], x: np.ndarray, y: np.ndarray, model: dict, min_p: 
         mine = names == f
         held[mine] = JoinModel.from_dict(fit(x[~mine], y[~mine])).logit(x[mine])
     for label, score in (("fitted on all", logit), ("held out, as-is", held)):
-        for src in ("learn", "other"):
-            sel = np.array([n.startswith("learn") == (src == "learn") for n in frames])
+        for src in ("mOSD learn", "foreign choose", "sim renders"):
+            sel = np.array([_source(n) == src for n in frames])
             sel &= np.array(["@" not in n for n in frames]) | (label == "fitted on all")
             yes = score[sel] >= cut
             t = y[sel] == 1
             print(
-                f"{label:15s} {'mOSD learn' if src == 'learn' else 'foreign choose':15s} pairs {int(sel.sum()):4d}"
+                f"{label:15s} {src:15s} pairs {int(sel.sum()):4d}"
                 f" one object {int(t.sum()):3d}: joined right {int((yes & t).sum()):3d},"
                 f" joined wrong {int((yes & ~t).sum()):3d}"
             )

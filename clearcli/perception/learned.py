@@ -211,11 +211,17 @@ def pair_features(seg_of_voxel: np.ndarray, ctx: RefineContext) -> PairFeatures:
     lab = ctx.voxel_lab
     if lab is not None:
         w = ctx.vox.counts.astype(np.float64)
-        seg_lab = np.stack([np.bincount(seg, weights=w * lab[:, k], minlength=n_seg) for k in range(3)], axis=1)
-        seg_lab /= np.maximum(np.bincount(seg, weights=w, minlength=n_seg), 1e-12)[:, None]
+        seg_w = np.maximum(np.bincount(seg, weights=w, minlength=n_seg), 1e-12)
+        seg_lab = (
+            np.stack([np.bincount(seg, weights=w * lab[:, k], minlength=n_seg) for k in range(3)], axis=1)
+            / seg_w[:, None]
+        )
         colour_de = np.linalg.norm(seg_lab[pairs[:, 0]] - seg_lab[pairs[:, 1]], axis=1)
-        sv_lab = np.stack([np.bincount(svl, weights=w * lab[:, k], minlength=n_sv) for k in range(3)], axis=1)
-        sv_lab /= np.maximum(np.bincount(svl, weights=w, minlength=n_sv), 1e-12)[:, None]
+        sv_w = np.maximum(np.bincount(svl, weights=w, minlength=n_sv), 1e-12)
+        sv_lab = (
+            np.stack([np.bincount(svl, weights=w * lab[:, k], minlength=n_sv) for k in range(3)], axis=1)
+            / sv_w[:, None]
+        )
         de = np.linalg.norm(sv_lab[sv_edges[:, 0]] - sv_lab[sv_edges[:, 1]], axis=1) if sv_edges.size else np.zeros(0)
         seam_de = _median_by(sv_pair, de, n_pair, 0.0)
     # sizes and heights
