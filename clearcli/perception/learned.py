@@ -40,7 +40,8 @@ from clearcli.perception.lccp import _angle_deg, convex_edges, join_pairs
 MODEL_RESOURCE = "data/join_model.json"
 # the file's format (the version of its weights is the file's "version")
 MODEL_FORMAT = "clear-join-logistic-1"
-# a join needs a log-odds this much above the threshold's: 0.2 is p 0.90 -> 0.917
+# a join needs a log-odds this much above the threshold's: 0.2 is p 0.70 -> 0.74; a
+# +-1 um move of the points changes a pair's log-odds by ~0.002 (gqcnn_primesense_4)
 MARGIN_LOGIT = 0.2
 # two segments are a pair when outline voxels of both are this close (m): touching
 # (voxels 5 mm apart, 8.7 mm diagonally) or a few voxels apart
