@@ -78,6 +78,9 @@ _SEEN_UNDER_SHARE = 0.3
 # bottles' tops lie 0.36 m and more from any excluded thing, nothing outside or at the border
 _HOLD_M = 0.10
 _CELL_M = 0.01
+# a height band grown by this share of its width, so that the rounding of heights cannot
+# leave out a point the exact distance keeps (a speed-up that changes no answer)
+_BAND_SLACK = 2.0
 _TOUCH_M = 0.015
 # a thing outside the outline reaching this far beyond it is furniture (a desk 40 cm
 # deep); an object the hull cuts (the table behind it hidden) reaches its own depth
@@ -238,16 +241,24 @@ class _Boxes:
         return np.flatnonzero((self.lo_2d <= hi).all(axis=1) & (self.hi_2d >= lo).all(axis=1))
 
 
-def _rests_on_another(k: int, objects: list[np.ndarray], h: np.ndarray, low: float, boxes: _Boxes) -> bool:
-    """Does the bottom of object ``k`` (its points' heights ``h``, the lowest ``low``) touch
-    another object (it leans on it, stands on it)?"""
+def _rests_on_another(k: int, objects: list[np.ndarray], h_each: list[np.ndarray], low: float, boxes: _Boxes) -> bool:
+    """Does the bottom of object ``k`` (the lowest of its points' heights ``h_each[k]``:
+    ``low``) touch another object (it leans on it, stands on it)?"""
     from scipy.spatial import cKDTree
 
-    bottom = np.compress(h <= low + _TOUCH_M, objects[k], axis=0)  # rows by a mask: compress is faster
+    bottom = np.compress(h_each[k] <= low + _TOUCH_M, objects[k], axis=0)  # rows by a mask: compress is faster
     if not bottom.shape[0]:
         return False
     lo, hi = bottom.min(axis=0) - _TOUCH_M, bottom.max(axis=0) + _TOUCH_M
-    others = [_near_box(objects[j], lo, hi) for j in boxes.meet(lo, hi).tolist() if j != k]
+    # only the others' points within `_TOUCH_M` of the bottom's heights can touch it (a
+    # height differs by at most the distance; `_BAND_SLACK` for its rounding): the same
+    # answer from a smaller tree
+    band_lo, band_hi = low - _TOUCH_M * _BAND_SLACK, low + _TOUCH_M * (1.0 + _BAND_SLACK)
+    others = [
+        _near_box(np.compress((h_each[j] >= band_lo) & (h_each[j] <= band_hi), objects[j], axis=0), lo, hi)
+        for j in boxes.meet(lo, hi).tolist()
+        if j != k
+    ]
     near = np.vstack(others) if others else np.zeros((0, 3))
     if not near.shape[0]:
         return False
@@ -279,7 +290,12 @@ def _on_what_is_beneath(
     near = np.vstack(q2) if q2 else np.zeros((0, 2))
     if not near.shape[0]:
         return False
-    d, _ = cKDTree(xy).query(near, distance_upper_bound=_CELL_M)
+    # only its points within `_CELL_M` of the others' box can be that near them (twice, for
+    # the rounding): the same answer from a smaller tree
+    own = _near_box(xy, near.min(axis=0) - 2 * _CELL_M, near.max(axis=0) + 2 * _CELL_M)
+    if not own.shape[0]:
+        return False
+    d, _ = cKDTree(own).query(near, distance_upper_bound=_CELL_M)
     return bool(np.isfinite(d).sum() >= _GOES_ON_MIN)
 
 
@@ -342,7 +358,7 @@ def support_around(
     for idx in indices:
         in_any[idx] = True
     in_any_2d = in_any.reshape(rows, cols)
-    out = []
+    rings = []
     for idx in indices:
         r, c = np.divmod(idx, cols)
         r0, r1 = max(int(r.min()) - _RING_PX, 0), min(int(r.max()) + _RING_PX + 1, rows)
@@ -352,9 +368,15 @@ def support_around(
         grown = maximum_filter1d(maximum_filter1d(own, 2 * _RING_PX + 1, axis=0), 2 * _RING_PX + 1, axis=1)
         ring = (grown > 0) & ~in_any_2d[r0:r1, c0:c1]
         rr, cc = np.nonzero(ring)
-        counts, support = state((rr + r0) * cols + (cc + c0))
-        out.append((int(counts.sum()), int((counts & support).sum())))
-    return out
+        rings.append((rr + r0) * cols + (cc + c0))
+    # every ring's pixels in one call of ``state`` (elementwise: the same answer per pixel)
+    if not rings:
+        return []
+    counts, support = state(np.concatenate(rings))
+    ends = np.cumsum([ring.size for ring in rings])[:-1]
+    return [
+        (int(n.sum()), int((n & s).sum())) for n, s in zip(np.split(counts, ends), np.split(support, ends), strict=True)
+    ]
 
 
 def _enters_over_border(border: np.ndarray, h: np.ndarray, rests: float, xy: np.ndarray) -> str:
@@ -467,15 +489,37 @@ def _walls(
                 break
 
 
-def _veil(p: np.ndarray, h: np.ndarray, camera_h: float, height: Callable[[np.ndarray], np.ndarray]) -> str:
+def _veil(
+    p: np.ndarray,
+    h: np.ndarray,
+    camera_h: float,
+    height: Callable[[np.ndarray], np.ndarray],
+    rng: np.ndarray | None = None,
+) -> str:
     """Why a segment (its points ``p`` in the camera's frame, heights ``h`` above the
-    support; the camera ``camera_h`` above it, ``height`` as for `not_standing`) is a veil
-    of mixed pixels lying along the camera's rays, or "" (`_VEIL_ALONG`, `_VEIL_FALLS`,
-    `_VEIL_FALLS_MAX`, `_VEIL_RISE_M`)."""
-    rng = np.linalg.norm(p, axis=1)
+    support; the camera ``camera_h`` above it, ``height`` as for `not_standing`; ``rng``:
+    its points' ranges, when known) is a veil of mixed pixels lying along the camera's
+    rays, or "" (`_VEIL_ALONG`, `_VEIL_FALLS`, `_VEIL_FALLS_MAX`, `_VEIL_RISE_M`).
+
+    Every test must hold; the cheapest goes first (its far end `_VEIL_RISE_M` lower than
+    its near end: a segment standing on the support is seen from above, its near face no
+    higher than its top behind it), and most segments stop there. The order changes no
+    result: each value is what it would be in any order."""
+    if rng is None:
+        rng = np.linalg.norm(p, axis=1)
+    # its far end lower than its near end as the rays fall towards the support
+    r10, r90 = np.percentile(rng, [10, 90])
+    near, far = rng <= r10, rng >= r90
+    drop = float(np.median(h[near]) - np.median(h[far]))
+    if drop < _VEIL_RISE_M:
+        return ""
     rays = p / np.maximum(rng, 1e-12)[:, None]
     mean = rays.mean(axis=0)
     mean /= np.linalg.norm(mean)
+    falls = camera_h - float(height(mean[None, :])[0])  # the mean ray's fall per metre (sine of its elevation)
+    ray_drop = (float(np.median(rng[far])) - float(np.median(rng[near]))) * falls
+    if drop < _VEIL_FALLS * ray_drop or drop > _VEIL_FALLS_MAX * ray_drop:
+        return ""
     # two directions across the mean ray: where the points are in the image, at their range
     seed = np.eye(3)[int(np.argmin(np.abs(mean)))]
     u = np.cross(mean, seed)
@@ -485,16 +529,9 @@ def _veil(p: np.ndarray, h: np.ndarray, camera_h: float, height: Callable[[np.nd
     _, vecs = np.linalg.eigh(c.T @ c)
     lo, hi = np.percentile(c @ vecs[:, 0], [5, 95])
     narrow = float(hi - lo)
-    r5, r10, r90, r95 = np.percentile(rng, [5, 10, 90, 95])
+    r5, r95 = np.percentile(rng, [5, 95])
     deep = float(r95 - r5)
     if deep < _VEIL_ALONG * narrow:
-        return ""
-    # its far end lower than its near end as the rays fall towards the support
-    near, far = rng <= r10, rng >= r90
-    drop = float(np.median(h[near]) - np.median(h[far]))
-    falls = camera_h - float(height(mean[None, :])[0])  # the mean ray's fall per metre (sine of its elevation)
-    ray_drop = (float(np.median(rng[far])) - float(np.median(rng[near]))) * falls
-    if drop < _VEIL_RISE_M or drop < _VEIL_FALLS * ray_drop or drop > _VEIL_FALLS_MAX * ray_drop:
         return ""
     return (
         f"a veil of mixed pixels: {1000 * deep:.0f} mm deep along the camera's rays, {1000 * narrow:.0f} mm across "
@@ -637,7 +674,7 @@ def not_standing(
         )
     hanging: list[tuple[int, float]] = []  # (object, share of the support seen beneath it)
     for k in lifted:
-        if _rests_on_another(k, objects, h_each[k], lows[k], boxes):
+        if _rests_on_another(k, objects, h_each, lows[k], boxes):
             continue
         if _on_what_is_beneath(xy_each[k], lows[k], [j for j in standing if j != k], xy_each, h_each, boxes):
             continue
@@ -705,9 +742,11 @@ def not_standing(
     # veils, last: they hold up nothing and carry nothing in the rules above
     camera_h = float(height(np.zeros((1, 3)))[0])
     if camera_h >= _CAMERA_ABOVE_M:
+        # every point's range at once (row by row, as for one segment's points)
+        rng_each = np.split(np.linalg.norm(every, axis=1), bounds[1:-1])
         for k, p in enumerate(objects):
             if k not in verdicts and p.shape[0] >= _GOES_ON_MIN:
-                why = _veil(p, h_each[k], camera_h, height)
+                why = _veil(p, h_each[k], camera_h, height, rng_each[k])
                 if why:
                     verdicts[k] = why
     return [Verdict(k, why) for k, why in sorted(verdicts.items())]
