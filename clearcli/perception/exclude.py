@@ -33,6 +33,16 @@ set aside with the reason, for --json to list as ``excluded``.
   An object standing on the support rests on it inside the outline, where the support is
   seen: at least 94 % of its resting points on the choose part and mOSD, the table hidden
   behind it or not (the hull cut short at its foot).
+- goes on below the support's level beneath itself (`_beneath_below`): an upright face (its
+  footprint a line, `_FACE_THIN_M` across, at least `_BELOW_UPRIGHT` times as tall as
+  thick) over at least `_BENEATH_SHARE` of whose footprint cells the camera sees points
+  between `_BELOW_M` and `_BELOW_DEEP_M` below the support's level: its surface goes on
+  down past the level of the support it seems to stand on (a chair's back, a board, a
+  cupboard's front standing on the floor at the support's edge, its strip at the
+  support's level taken for support). An object standing on the support has the support
+  beneath it, not its own face going on (the choose part, mOSD, the fixtures: no upright
+  face of an object has any such cell; the floor under the table, seen past its near
+  edge, lies far deeper).
 - hangs above the support: its lowest point well above it (more than `_HANG_M` plus the
   range's noise) and the support seen beneath it (in at least `_SEEN_UNDER_SHARE` of the
   cells it covers, the camera sees the support's own points), so nothing it could stand
@@ -91,6 +101,19 @@ _HOLD_M = 0.10
 # excluded by the support seen around it, 0.51)
 _FOOT_INSIDE_SHARE = 0.2
 _CELL_M = 0.01
+# what goes on below the support's level beneath an upright face: points this far below it
+# (twice the plane's inlier distance; the table's own noise reaches 9 mm on 1 % of its points)
+# and not deeper than `_BELOW_DEEP_M` (the floor under the table, seen past its near edge,
+# lies some 70 cm down beneath every object near that edge: no face's continuation)
+_BELOW_M = 0.02
+_BELOW_DEEP_M = 0.15
+# a face this many times as tall as it is thick stands upright (a lying pen or strip does not:
+# 0.6 times); rendered boards standing at the table's edge: 3.4 to 6.5 times
+_BELOW_UPRIGHT = 2.0
+# the share of its footprint's cells (`_CELL_M`, at least `_GOES_ON_MIN` of them) with such
+# points beneath: rendered boards at the table's edge 0.33 to 0.67; every upright face of an
+# object on the choose part, mOSD and the fixtures 0 (the walls at cleargrasp's tables 0.05)
+_BENEATH_SHARE = 0.25
 # a height band grown by this share of its width, so that the rounding of heights cannot
 # leave out a point the exact distance keeps (a speed-up that changes no answer)
 _BAND_SLACK = 2.0
@@ -455,12 +478,12 @@ def _along_the_edge(mid: np.ndarray, normal: np.ndarray, length: float, support_
 
 def _walls(
     xy_each: list[np.ndarray], h_each: list[np.ndarray], verdicts: dict[int, str], support_xy: Callable[[], np.ndarray]
-) -> None:
+) -> dict[int, tuple[np.ndarray, np.ndarray, float, float, float]]:
     """Add to ``verdicts`` the walls among the objects (each one's in-plane points
     ``xy_each``, heights ``h_each``; `_WALL_FACE_M`, `_WALL_SPAN`: ``support_xy`` gives the
     support's in-plane points), and the flat pieces lying in a wall's face (the
     segmentation cut a wall's foot or its trim apart from it: thin, and all within
-    `_FACE_THIN_M` of the wall's line)."""
+    `_FACE_THIN_M` of the wall's line). Returns the faces found (`_face`), by object."""
     faces = {}
     for k, (xy, h) in enumerate(zip(xy_each, h_each, strict=True)):
         if k in verdicts or xy.shape[0] < _GOES_ON_MIN:
@@ -500,6 +523,7 @@ def _walls(
                     "its line)"
                 )
                 break
+    return faces
 
 
 def _veil(
@@ -554,6 +578,31 @@ def _veil(
     )
 
 
+def _beneath_below(
+    faces: dict[int, tuple[np.ndarray, np.ndarray, float, float, float]],
+    xy_each: list[np.ndarray],
+    verdicts: dict[int, str],
+    below_cells: Callable[[], np.ndarray],
+) -> None:
+    """Add to ``verdicts`` the upright faces (``faces``, by object; in-plane points
+    ``xy_each``) whose surface goes on below the support's level beneath them:
+    `_BENEATH_SHARE` of their footprint's cells hold points between `_BELOW_M` and
+    `_BELOW_DEEP_M` below it (``below_cells``: those cells, `_cells`)."""
+    for k, (_, _, thick, _, tall) in faces.items():
+        if k in verdicts or tall < _BELOW_UPRIGHT * thick:
+            continue
+        own = _cells(xy_each[k])
+        if own.size < _GOES_ON_MIN:
+            continue
+        under = int(np.isin(own, below_cells(), assume_unique=True).sum())
+        if under >= _BENEATH_SHARE * own.size:
+            verdicts[k] = (
+                f"stands beyond the support's edge: an upright face {tall:.2f} m high that goes on below the "
+                f"support's level beneath {100 * under / own.size:.0f} % of it ({1000 * _BELOW_M:.0f} to "
+                f"{1000 * _BELOW_DEEP_M:.0f} mm below): a chair's back, a board, furniture standing on the floor"
+            )
+
+
 @dataclass(frozen=True)
 class Verdict:
     index: int  # into the objects
@@ -579,6 +628,7 @@ def not_standing(
     outside_reach: np.ndarray | None = None,
     at_border: list[np.ndarray] | None = None,
     around: list[tuple[int, int]] | None = None,
+    below: np.ndarray | None = None,
 ) -> list[Verdict]:
     """Which of ``objects`` (each an (M, 3) array of its points) do not stand on the
     support, and why.
@@ -592,7 +642,8 @@ def not_standing(
     how far its part reaches beyond the outline (`reach_beyond`; None: not known);
     ``at_border``: per object, (M,) bool, its points at the image's border (None: the
     frame has no pixel grid); ``around``: per object, `support_around`'s counts (None:
-    no pixel grid).
+    no pixel grid); ``below``: the points below the support's level, not the support's,
+    inside the outline or not (None: not known, `_beneath_below` is not decided).
     """
     from scipy.spatial import cKDTree
 
@@ -675,7 +726,20 @@ def not_standing(
             support_xy_once.append(to_2d(support_pts) if support_pts.shape[0] else np.zeros((0, 2)))
         return support_xy_once[0]
 
-    _walls(xy_each, h_each, verdicts, support_xy)
+    faces = _walls(xy_each, h_each, verdicts, support_xy)
+    if below is not None:
+        below_once: list[np.ndarray] = []
+
+        def below_cells() -> np.ndarray:
+            """The cells of the points `_BELOW_M` to `_BELOW_DEEP_M` below the support, the first time."""
+            if not below_once:
+                assert below is not None  # checked above
+                hb = height(below)
+                near = np.compress((hb <= -_BELOW_M) & (hb >= -_BELOW_DEEP_M), below, axis=0)
+                below_once.append(_cells(to_2d(near)) if near.shape[0] else np.zeros(0, dtype=np.int64))
+            return below_once[0]
+
+        _beneath_below(faces, xy_each, verdicts, below_cells)
     for k, (n_free, n_support) in enumerate(around or ()):
         if k not in verdicts and n_free >= _RING_MIN_PX and n_support < _RING_SUPPORT_SHARE * n_free:
             verdicts[k] = (
