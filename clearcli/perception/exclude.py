@@ -674,6 +674,9 @@ def not_standing(
         d, j = out_tree.query(edge, distance_upper_bound=_GOES_ON_M)
         nearest_out = np.where(np.isfinite(d), j, -1)
     if low_tree is not None and edge_rows.size:
+        # (only a flat object's points come this near: a segment of the prism lies more than
+        # the prism's floor above the plane, these more than as far below it, 2 cm apart at
+        # least; what goes on below beneath a face is `_beneath_below`'s)
         touches_below = np.isfinite(low_tree.query(edge, distance_upper_bound=_GOES_ON_M)[0])
     verdicts: dict[int, str] = {}
     for k in range(len(objects)):
