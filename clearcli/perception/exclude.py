@@ -25,6 +25,24 @@ set aside with the reason, for --json to list as ``excluded``.
   `_LINK_M` of each other are one surface), not as the crow flies, so a wall or a
   cupboard behind an object at the edge is not the object's own. An unorganized cloud
   has no pixel grid: there only the points touched count, and the rule rarely fires.
+- comes down to the support's level only beyond its outline (`_FOOT_INSIDE_SHARE`): of its
+  points at resting height (at least `_GOES_ON_MIN`), fewer than that share lie within the
+  prism's side (the outline grown by ``hull_margin_m`` less `_BORDER_M`): it stands beyond
+  the support's edge, on the floor or on furniture, and only rises into the prism (a
+  chair's back or a box standing just behind the table, its top above the table's level).
+  An object standing on the support rests on it inside the outline, where the support is
+  seen: at least 94 % of its resting points on the choose part and mOSD, the table hidden
+  behind it or not (the hull cut short at its foot).
+- goes on below the support's level beneath itself (`_beneath_below`): an upright face (its
+  footprint a line, `_FACE_THIN_M` across, at least `_BELOW_UPRIGHT` times as tall as
+  thick) over at least `_BENEATH_SHARE` of whose footprint cells the camera sees points
+  between `_BELOW_M` and `_BELOW_DEEP_M` below the support's level: its surface goes on
+  down past the level of the support it seems to stand on (a chair's back, a board, a
+  cupboard's front standing on the floor at the support's edge, its strip at the
+  support's level taken for support). An object standing on the support has the support
+  beneath it, not its own face going on (the choose part, mOSD, the fixtures: no upright
+  face of an object has any such cell; the floor under the table, seen past its near
+  edge, lies far deeper).
 - hangs above the support: its lowest point well above it (more than `_HANG_M` plus the
   range's noise) and the support seen beneath it (in at least `_SEEN_UNDER_SHARE` of the
   cells it covers, the camera sees the support's own points), so nothing it could stand
@@ -77,7 +95,28 @@ _SEEN_UNDER_SHARE = 0.3
 # arm and its gripper, a lamp's shade and its post); measured on the choose part, the clear
 # bottles' tops lie 0.36 m and more from any excluded thing, nothing outside or at the border
 _HOLD_M = 0.10
+# an object rests on the support inside its outline: of its points at resting height, fewer
+# than this share within the prism's side and it rests beyond the outline (on the choose part
+# and mOSD the objects' shares are 0.94 and more; the bench behind gqcnn_primesense_0's board,
+# excluded by the support seen around it, 0.51)
+_FOOT_INSIDE_SHARE = 0.2
 _CELL_M = 0.01
+# what goes on below the support's level beneath an upright face: points this far below it
+# (twice the plane's inlier distance; the table's own noise reaches 9 mm on 1 % of its points)
+# and not deeper than `_BELOW_DEEP_M` (the floor under the table, seen past its near edge,
+# lies some 70 cm down beneath every object near that edge: no face's continuation)
+_BELOW_M = 0.02
+_BELOW_DEEP_M = 0.15
+# a face this many times as tall as it is thick stands upright (a lying pen or strip does not:
+# 0.6 times); rendered boards standing at the table's edge: 3.4 to 6.5 times
+_BELOW_UPRIGHT = 2.0
+# the share of its footprint's cells (`_CELL_M`, at least `_GOES_ON_MIN` of them) with such
+# points beneath: rendered boards at the table's edge 0.33 to 0.67; every upright face of an
+# object on the choose part, mOSD and the fixtures 0 (the walls at cleargrasp's tables 0.05)
+_BENEATH_SHARE = 0.25
+# a height band grown by this share of its width, so that the rounding of heights cannot
+# leave out a point the exact distance keeps (a speed-up that changes no answer)
+_BAND_SLACK = 2.0
 _TOUCH_M = 0.015
 # a thing outside the outline reaching this far beyond it is furniture (a desk 40 cm
 # deep); an object the hull cuts (the table behind it hidden) reaches its own depth
@@ -238,16 +277,24 @@ class _Boxes:
         return np.flatnonzero((self.lo_2d <= hi).all(axis=1) & (self.hi_2d >= lo).all(axis=1))
 
 
-def _rests_on_another(k: int, objects: list[np.ndarray], h: np.ndarray, low: float, boxes: _Boxes) -> bool:
-    """Does the bottom of object ``k`` (its points' heights ``h``, the lowest ``low``) touch
-    another object (it leans on it, stands on it)?"""
+def _rests_on_another(k: int, objects: list[np.ndarray], h_each: list[np.ndarray], low: float, boxes: _Boxes) -> bool:
+    """Does the bottom of object ``k`` (the lowest of its points' heights ``h_each[k]``:
+    ``low``) touch another object (it leans on it, stands on it)?"""
     from scipy.spatial import cKDTree
 
-    bottom = np.compress(h <= low + _TOUCH_M, objects[k], axis=0)  # rows by a mask: compress is faster
+    bottom = np.compress(h_each[k] <= low + _TOUCH_M, objects[k], axis=0)  # rows by a mask: compress is faster
     if not bottom.shape[0]:
         return False
     lo, hi = bottom.min(axis=0) - _TOUCH_M, bottom.max(axis=0) + _TOUCH_M
-    others = [_near_box(objects[j], lo, hi) for j in boxes.meet(lo, hi).tolist() if j != k]
+    # only the others' points within `_TOUCH_M` of the bottom's heights can touch it (a
+    # height differs by at most the distance; `_BAND_SLACK` for its rounding): the same
+    # answer from a smaller tree
+    band_lo, band_hi = low - _TOUCH_M * _BAND_SLACK, low + _TOUCH_M * (1.0 + _BAND_SLACK)
+    others = [
+        _near_box(np.compress((h_each[j] >= band_lo) & (h_each[j] <= band_hi), objects[j], axis=0), lo, hi)
+        for j in boxes.meet(lo, hi).tolist()
+        if j != k
+    ]
     near = np.vstack(others) if others else np.zeros((0, 3))
     if not near.shape[0]:
         return False
@@ -279,7 +326,12 @@ def _on_what_is_beneath(
     near = np.vstack(q2) if q2 else np.zeros((0, 2))
     if not near.shape[0]:
         return False
-    d, _ = cKDTree(xy).query(near, distance_upper_bound=_CELL_M)
+    # only its points within `_CELL_M` of the others' box can be that near them (twice, for
+    # the rounding): the same answer from a smaller tree
+    own = _near_box(xy, near.min(axis=0) - 2 * _CELL_M, near.max(axis=0) + 2 * _CELL_M)
+    if not own.shape[0]:
+        return False
+    d, _ = cKDTree(own).query(near, distance_upper_bound=_CELL_M)
     return bool(np.isfinite(d).sum() >= _GOES_ON_MIN)
 
 
@@ -342,7 +394,7 @@ def support_around(
     for idx in indices:
         in_any[idx] = True
     in_any_2d = in_any.reshape(rows, cols)
-    out = []
+    rings = []
     for idx in indices:
         r, c = np.divmod(idx, cols)
         r0, r1 = max(int(r.min()) - _RING_PX, 0), min(int(r.max()) + _RING_PX + 1, rows)
@@ -352,9 +404,15 @@ def support_around(
         grown = maximum_filter1d(maximum_filter1d(own, 2 * _RING_PX + 1, axis=0), 2 * _RING_PX + 1, axis=1)
         ring = (grown > 0) & ~in_any_2d[r0:r1, c0:c1]
         rr, cc = np.nonzero(ring)
-        counts, support = state((rr + r0) * cols + (cc + c0))
-        out.append((int(counts.sum()), int((counts & support).sum())))
-    return out
+        rings.append((rr + r0) * cols + (cc + c0))
+    # every ring's pixels in one call of ``state`` (elementwise: the same answer per pixel)
+    if not rings:
+        return []
+    counts, support = state(np.concatenate(rings))
+    ends = np.cumsum([ring.size for ring in rings])[:-1]
+    return [
+        (int(n.sum()), int((n & s).sum())) for n, s in zip(np.split(counts, ends), np.split(support, ends), strict=True)
+    ]
 
 
 def _enters_over_border(border: np.ndarray, h: np.ndarray, rests: float, xy: np.ndarray) -> str:
@@ -420,12 +478,12 @@ def _along_the_edge(mid: np.ndarray, normal: np.ndarray, length: float, support_
 
 def _walls(
     xy_each: list[np.ndarray], h_each: list[np.ndarray], verdicts: dict[int, str], support_xy: Callable[[], np.ndarray]
-) -> None:
+) -> dict[int, tuple[np.ndarray, np.ndarray, float, float, float]]:
     """Add to ``verdicts`` the walls among the objects (each one's in-plane points
     ``xy_each``, heights ``h_each``; `_WALL_FACE_M`, `_WALL_SPAN`: ``support_xy`` gives the
     support's in-plane points), and the flat pieces lying in a wall's face (the
     segmentation cut a wall's foot or its trim apart from it: thin, and all within
-    `_FACE_THIN_M` of the wall's line)."""
+    `_FACE_THIN_M` of the wall's line). Returns the faces found (`_face`), by object."""
     faces = {}
     for k, (xy, h) in enumerate(zip(xy_each, h_each, strict=True)):
         if k in verdicts or xy.shape[0] < _GOES_ON_MIN:
@@ -465,17 +523,40 @@ def _walls(
                     "its line)"
                 )
                 break
+    return faces
 
 
-def _veil(p: np.ndarray, h: np.ndarray, camera_h: float, height: Callable[[np.ndarray], np.ndarray]) -> str:
+def _veil(
+    p: np.ndarray,
+    h: np.ndarray,
+    camera_h: float,
+    height: Callable[[np.ndarray], np.ndarray],
+    rng: np.ndarray | None = None,
+) -> str:
     """Why a segment (its points ``p`` in the camera's frame, heights ``h`` above the
-    support; the camera ``camera_h`` above it, ``height`` as for `not_standing`) is a veil
-    of mixed pixels lying along the camera's rays, or "" (`_VEIL_ALONG`, `_VEIL_FALLS`,
-    `_VEIL_FALLS_MAX`, `_VEIL_RISE_M`)."""
-    rng = np.linalg.norm(p, axis=1)
+    support; the camera ``camera_h`` above it, ``height`` as for `not_standing`; ``rng``:
+    its points' ranges, when known) is a veil of mixed pixels lying along the camera's
+    rays, or "" (`_VEIL_ALONG`, `_VEIL_FALLS`, `_VEIL_FALLS_MAX`, `_VEIL_RISE_M`).
+
+    Every test must hold; the cheapest goes first (its far end `_VEIL_RISE_M` lower than
+    its near end: a segment standing on the support is seen from above, its near face no
+    higher than its top behind it), and most segments stop there. The order changes no
+    result: each value is what it would be in any order."""
+    if rng is None:
+        rng = np.linalg.norm(p, axis=1)
+    # its far end lower than its near end as the rays fall towards the support
+    r10, r90 = np.percentile(rng, [10, 90])
+    near, far = rng <= r10, rng >= r90
+    drop = float(np.median(h[near]) - np.median(h[far]))
+    if drop < _VEIL_RISE_M:
+        return ""
     rays = p / np.maximum(rng, 1e-12)[:, None]
     mean = rays.mean(axis=0)
     mean /= np.linalg.norm(mean)
+    falls = camera_h - float(height(mean[None, :])[0])  # the mean ray's fall per metre (sine of its elevation)
+    ray_drop = (float(np.median(rng[far])) - float(np.median(rng[near]))) * falls
+    if drop < _VEIL_FALLS * ray_drop or drop > _VEIL_FALLS_MAX * ray_drop:
+        return ""
     # two directions across the mean ray: where the points are in the image, at their range
     seed = np.eye(3)[int(np.argmin(np.abs(mean)))]
     u = np.cross(mean, seed)
@@ -485,16 +566,9 @@ def _veil(p: np.ndarray, h: np.ndarray, camera_h: float, height: Callable[[np.nd
     _, vecs = np.linalg.eigh(c.T @ c)
     lo, hi = np.percentile(c @ vecs[:, 0], [5, 95])
     narrow = float(hi - lo)
-    r5, r10, r90, r95 = np.percentile(rng, [5, 10, 90, 95])
+    r5, r95 = np.percentile(rng, [5, 95])
     deep = float(r95 - r5)
     if deep < _VEIL_ALONG * narrow:
-        return ""
-    # its far end lower than its near end as the rays fall towards the support
-    near, far = rng <= r10, rng >= r90
-    drop = float(np.median(h[near]) - np.median(h[far]))
-    falls = camera_h - float(height(mean[None, :])[0])  # the mean ray's fall per metre (sine of its elevation)
-    ray_drop = (float(np.median(rng[far])) - float(np.median(rng[near]))) * falls
-    if drop < _VEIL_RISE_M or drop < _VEIL_FALLS * ray_drop or drop > _VEIL_FALLS_MAX * ray_drop:
         return ""
     return (
         f"a veil of mixed pixels: {1000 * deep:.0f} mm deep along the camera's rays, {1000 * narrow:.0f} mm across "
@@ -502,6 +576,31 @@ def _veil(p: np.ndarray, h: np.ndarray, camera_h: float, height: Callable[[np.nd
         f"end as the rays do ({1000 * ray_drop:.0f} mm): depths the sensor interpolated between a near edge and the "
         "background behind it, no surface"
     )
+
+
+def _beneath_below(
+    faces: dict[int, tuple[np.ndarray, np.ndarray, float, float, float]],
+    xy_each: list[np.ndarray],
+    verdicts: dict[int, str],
+    below_cells: Callable[[], np.ndarray],
+) -> None:
+    """Add to ``verdicts`` the upright faces (``faces``, by object; in-plane points
+    ``xy_each``) whose surface goes on below the support's level beneath them:
+    `_BENEATH_SHARE` of their footprint's cells hold points between `_BELOW_M` and
+    `_BELOW_DEEP_M` below it (``below_cells``: those cells, `_cells`)."""
+    for k, (_, _, thick, _, tall) in faces.items():
+        if k in verdicts or tall < _BELOW_UPRIGHT * thick:
+            continue
+        own = _cells(xy_each[k])
+        if own.size < _GOES_ON_MIN:
+            continue
+        under = int(np.isin(own, below_cells(), assume_unique=True).sum())
+        if under >= _BENEATH_SHARE * own.size:
+            verdicts[k] = (
+                f"stands beyond the support's edge: an upright face {tall:.2f} m high that goes on below the "
+                f"support's level beneath {100 * under / own.size:.0f} % of it ({1000 * _BELOW_M:.0f} to "
+                f"{1000 * _BELOW_DEEP_M:.0f} mm below): a chair's back, a board, furniture standing on the floor"
+            )
 
 
 @dataclass(frozen=True)
@@ -529,6 +628,7 @@ def not_standing(
     outside_reach: np.ndarray | None = None,
     at_border: list[np.ndarray] | None = None,
     around: list[tuple[int, int]] | None = None,
+    below: np.ndarray | None = None,
 ) -> list[Verdict]:
     """Which of ``objects`` (each an (M, 3) array of its points) do not stand on the
     support, and why.
@@ -542,7 +642,8 @@ def not_standing(
     how far its part reaches beyond the outline (`reach_beyond`; None: not known);
     ``at_border``: per object, (M,) bool, its points at the image's border (None: the
     frame has no pixel grid); ``around``: per object, `support_around`'s counts (None:
-    no pixel grid).
+    no pixel grid); ``below``: the points below the support's level, not the support's,
+    inside the outline or not (None: not known, `_beneath_below` is not decided).
     """
     from scipy.spatial import cKDTree
 
@@ -573,6 +674,9 @@ def not_standing(
         d, j = out_tree.query(edge, distance_upper_bound=_GOES_ON_M)
         nearest_out = np.where(np.isfinite(d), j, -1)
     if low_tree is not None and edge_rows.size:
+        # (only a flat object's points come this near: a segment of the prism lies more than
+        # the prism's floor above the plane, these more than as far below it, 2 cm apart at
+        # least; what goes on below beneath a face is `_beneath_below`'s)
         touches_below = np.isfinite(low_tree.query(edge, distance_upper_bound=_GOES_ON_M)[0])
     verdicts: dict[int, str] = {}
     for k in range(len(objects)):
@@ -596,6 +700,16 @@ def not_standing(
                         f"outline that goes on {far:.2f} m beyond it: a desk, a shelf, furniture behind"
                     )
                     continue
+        resting = h_each[k] <= rests[k]
+        n_rest = int(resting.sum())
+        n_in = n_rest - int(resting[edge_rows[e0:e1] - bounds[k]].sum())
+        if n_rest >= _GOES_ON_MIN and n_in < _FOOT_INSIDE_SHARE * n_rest:
+            verdicts[k] = (
+                f"stands beyond the support's edge: it comes down to the support's level only beyond its outline "
+                f"({n_in} of its {n_rest} points at resting height within it): a chair, a box on the floor, "
+                "furniture at the edge"
+            )
+            continue
         if at_border is not None:
             why = _enters_over_border(at_border[k], h_each[k], rests[k], xy_each[k])
             if why:
@@ -615,7 +729,20 @@ def not_standing(
             support_xy_once.append(to_2d(support_pts) if support_pts.shape[0] else np.zeros((0, 2)))
         return support_xy_once[0]
 
-    _walls(xy_each, h_each, verdicts, support_xy)
+    faces = _walls(xy_each, h_each, verdicts, support_xy)
+    if below is not None:
+        below_once: list[np.ndarray] = []
+
+        def below_cells() -> np.ndarray:
+            """The cells of the points `_BELOW_M` to `_BELOW_DEEP_M` below the support, the first time."""
+            if not below_once:
+                assert below is not None  # checked above
+                hb = height(below)
+                near = np.compress((hb <= -_BELOW_M) & (hb >= -_BELOW_DEEP_M), below, axis=0)
+                below_once.append(_cells(to_2d(near)) if near.shape[0] else np.zeros(0, dtype=np.int64))
+            return below_once[0]
+
+        _beneath_below(faces, xy_each, verdicts, below_cells)
     for k, (n_free, n_support) in enumerate(around or ()):
         if k not in verdicts and n_free >= _RING_MIN_PX and n_support < _RING_SUPPORT_SHARE * n_free:
             verdicts[k] = (
@@ -637,7 +764,7 @@ def not_standing(
         )
     hanging: list[tuple[int, float]] = []  # (object, share of the support seen beneath it)
     for k in lifted:
-        if _rests_on_another(k, objects, h_each[k], lows[k], boxes):
+        if _rests_on_another(k, objects, h_each, lows[k], boxes):
             continue
         if _on_what_is_beneath(xy_each[k], lows[k], [j for j in standing if j != k], xy_each, h_each, boxes):
             continue
@@ -705,9 +832,11 @@ def not_standing(
     # veils, last: they hold up nothing and carry nothing in the rules above
     camera_h = float(height(np.zeros((1, 3)))[0])
     if camera_h >= _CAMERA_ABOVE_M:
+        # every point's range at once (row by row, as for one segment's points)
+        rng_each = np.split(np.linalg.norm(every, axis=1), bounds[1:-1])
         for k, p in enumerate(objects):
             if k not in verdicts and p.shape[0] >= _GOES_ON_MIN:
-                why = _veil(p, h_each[k], camera_h, height)
+                why = _veil(p, h_each[k], camera_h, height, rng_each[k])
                 if why:
                     verdicts[k] = why
     return [Verdict(k, why) for k, why in sorted(verdicts.items())]

@@ -463,6 +463,7 @@ def _exclude(w: _Work) -> None:
         reach,
         at_image_border([o.indices for o in w.objects], w.frame.shape) if w.organized else None,
         _support_around(w) if w.organized else None,
+        below=pts[below],
     )
     if not verdicts:
         return
