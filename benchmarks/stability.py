@@ -63,12 +63,17 @@ MIN_GROUP = 30  # points: smaller groups are not judged (a voxel, a speck)
 
 def frame_sets(root: Path = SHARED) -> dict[str, list[Path]]:
     """The frames the stability target names: the 50 mOSD frames, the nine uois RealSense
-    frames and the fixtures' PCDs."""
+    frames and the fixtures' PCDs; and "scenes", the other labs' frames in
+    ../shared/data/scenes (gqcnn, cleargrasp_d435, pcl, industrial), which the target
+    does not name but which a user's frames resemble more than mOSD's."""
     mosd = sorted((root / "mosd/learn").glob("*.pcd")) + sorted((root / "mosd/test").glob("*.pcd"))
     return {
         "mosd": mosd,
         "uois": sorted((root / "scenes/uois_realsense").glob("*.pcd")),
         "fixtures": sorted((REPO / "fixtures").glob("*.pcd")),
+        "scenes": sorted(
+            p for d in ("gqcnn", "cleargrasp_d435", "pcl", "industrial") for p in (root / "scenes" / d).rglob("*.pcd")
+        ),
     }
 
 
@@ -119,7 +124,7 @@ def trace(frame: Frame, settings: SegmentSettings) -> Iterator[tuple[str, np.nda
         return out
 
     def components() -> np.ndarray:
-        from clearcli.perception.supervoxels import _components
+        from clearcli.perception.graph import components as _components
 
         assert w.vox is not None
         return over_frame(w.obj_idx, _components(w.vox.n_voxels, w.vox.edges)[w.vox.point_voxel])
