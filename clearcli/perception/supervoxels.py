@@ -129,10 +129,11 @@ def _adjacency(uniq: np.ndarray, dims: list[int]) -> np.ndarray:
 
 def orient_towards(normals: np.ndarray, points: np.ndarray, viewpoint: np.ndarray) -> np.ndarray:
     """Flip normals so that they face the viewpoint."""
-    flip = np.einsum("ij,ij->i", normals, viewpoint - points) < 0
-    out = normals.copy()
-    out[flip] *= -1
-    return out
+    # the dot product column by column, summed as einsum("ij,ij->i") sums it (_dot3):
+    # a normal almost across the line of sight flips as it did
+    to_view = tuple(viewpoint[j] - points[:, j] for j in range(3))
+    flip = _dot3(tuple(normals[:, j] for j in range(3)), to_view) < 0
+    return np.where(flip[:, None], -normals, normals)
 
 
 def smallest_eigenvectors(cov: np.ndarray) -> np.ndarray:
@@ -260,6 +261,20 @@ def _pairs_of(keys: np.ndarray, n: int) -> np.ndarray:
     return np.stack([keys // n, keys % n], axis=1)
 
 
+def _seed_sums(values: np.ndarray, lab: np.ndarray, used: np.ndarray | None, n_seeds: int) -> np.ndarray:
+    """(n_seeds, 3) per-seed sums of the rows of ``values`` (V, 3) of the voxels ``used``
+    (all when None), whose seeds are ``lab``; bincount's sums, in voxel order."""
+    return np.stack(
+        [
+            np.bincount(
+                lab, weights=values[:, j] if used is None else np.compress(used, values[:, j]), minlength=n_seeds
+            )
+            for j in range(3)
+        ],
+        axis=1,
+    )
+
+
 def supervoxel_labels(
     vox: VoxelCloud, normals: np.ndarray, settings: SegmentSettings, size: SegmentSize | None = None
 ) -> np.ndarray:
@@ -272,12 +287,12 @@ def supervoxel_labels(
     n_vox = vox.n_voxels
     seed_m = size.seed_m
     # seeds: in every occupied seed cell holding enough voxels (a speck is no seed), the
-    # voxel nearest to the mean of that cell's voxels
-    cell = grid_cells(cent, seed_m)
-    cell -= cell.min(axis=0)
-    cdims = cell.max(axis=0) + 1
-    cpacked = (cell[:, 0] * cdims[1] + cell[:, 1]) * cdims[2] + cell[:, 2]
-    _, cinv = np.unique(cpacked, return_inverse=True)
+    # voxel nearest to the mean of that cell's voxels (the first of equals)
+    cols = [np.floor((cent[:, k] + GRID_SHIFT_M) / seed_m).astype(np.int64) for k in range(3)]  # grid_cells
+    cols = [c - c.min() for c in cols]
+    cdims = [int(c.max()) + 1 for c in cols]
+    # the voxels come in key order, so a seed cell's voxels come in runs too
+    _, cinv = _unique_inverse((cols[0] * cdims[1] + cols[1]) * cdims[2] + cols[2])
     n_cells = int(cinv.max()) + 1 if n_vox else 0
     ccount = np.bincount(cinv, minlength=n_cells)
     cmean = np.stack(
@@ -285,11 +300,13 @@ def supervoxel_labels(
     )
     cmean /= ccount[:, None]
     dist_to_mean = np.linalg.norm(cent - cmean[cinv], axis=1)
-    order = np.lexsort((dist_to_mean, cinv))
-    first = np.ones(order.shape[0], dtype=bool)
-    first[1:] = cinv[order[1:]] != cinv[order[:-1]]
-    seed_vox = order[first]
-    seed_vox = seed_vox[ccount[cinv[seed_vox]] >= size.min_seed_voxels]
+    # per cell the least distance, then the lowest voxel at it: a lexsort's first, unsorted
+    least = np.full(n_cells, np.inf)
+    np.minimum.at(least, cinv, dist_to_mean)
+    at_least = np.flatnonzero(dist_to_mean == least[cinv])
+    seed_of_cell = np.full(n_cells, n_vox, dtype=np.int64)
+    np.minimum.at(seed_of_cell, cinv[at_least], at_least)
+    seed_vox = seed_of_cell[ccount >= size.min_seed_voxels]
     if seed_vox.size == 0:
         seed_vox = np.array([0], dtype=np.int64)
 
@@ -298,40 +315,45 @@ def supervoxel_labels(
     seed_col = vox.colors[seed_vox] if (vox.colors is not None and settings.color_importance > 0) else None
     k = min(8, seed_pos.shape[0])
     labels = np.full(n_vox, -1, dtype=np.int64)
+    voxel_nrm = tuple(normals[:, j, None] for j in range(3))
+    rows = np.arange(n_vox)
     for _ in range(max(1, settings.supervoxel_iterations)):
-        tree = cKDTree(seed_pos)
-        dist, nb = tree.query(cent, k=k, distance_upper_bound=1.5 * seed_m)
+        n_s = seed_pos.shape[0]
+        dist, nb = cKDTree(seed_pos).query(cent, k=k, distance_upper_bound=1.5 * seed_m)
         if k == 1:
             dist, nb = dist[:, None], nb[:, None]
-        valid = np.isfinite(dist)
-        nb_safe = np.where(valid, nb, 0)
+        # a missing neighbour has index n_s and distance inf: its cost is inf whatever the
+        # rest (spatial_importance > 0), so no mask; it reads a zero normal appended at n_s
+        seed_nrm_cols = tuple(np.append(seed_nrm[:, j], 0.0)[nb] for j in range(3))
         cost = settings.spatial_importance * dist / seed_m
-        cost = cost + settings.normal_importance * (1.0 - np.abs(np.einsum("vj,vkj->vk", normals, seed_nrm[nb_safe])))
+        # the normals' dot products summed as einsum("vj,vkj->vk") sums them (_dot3)
+        cost = cost + settings.normal_importance * (1.0 - np.abs(_dot3(voxel_nrm, seed_nrm_cols)))
         if seed_col is not None and vox.colors is not None:
+            nb_safe = np.where(nb < n_s, nb, 0)
             cost = (
                 cost
                 + settings.color_importance * np.linalg.norm(vox.colors[:, None, :] - seed_col[nb_safe], axis=2) / 255.0
             )
-        cost[~valid] = np.inf
-        pick = np.argmin(cost, axis=1)
-        labels = np.where(valid[np.arange(n_vox), pick], nb_safe[np.arange(n_vox), pick], -1)
+        picked = nb[rows, np.argmin(cost, axis=1)]
+        labels = np.where(picked < n_s, picked, -1)
         # move the seeds to the mean of their voxels
         used = labels >= 0
-        n_s = seed_pos.shape[0]
-        cnt = np.bincount(labels[used], minlength=n_s)
+        every = bool(used.all())
+        lab = labels if every else np.compress(used, labels)
+        cnt = np.bincount(lab, minlength=n_s)
         keep = cnt > 0
-        new_pos = np.stack([np.bincount(labels[used], weights=cent[used, j], minlength=n_s) for j in range(3)], axis=1)
-        new_nrm = np.stack(
-            [np.bincount(labels[used], weights=normals[used, j], minlength=n_s) for j in range(3)], axis=1
-        )
+
+        new_pos = _seed_sums(cent, lab, None if every else used, n_s)
+        new_nrm = _seed_sums(normals, lab, None if every else used, n_s)
         seed_pos = np.where(keep[:, None], new_pos / np.maximum(cnt, 1)[:, None], seed_pos)
         nn = np.linalg.norm(new_nrm, axis=1)
         seed_nrm = np.where((keep & (nn > 1e-9))[:, None], new_nrm / np.maximum(nn, 1e-9)[:, None], seed_nrm)
         if seed_col is not None and vox.colors is not None:
-            new_col = np.stack(
-                [np.bincount(labels[used], weights=vox.colors[used, j], minlength=n_s) for j in range(3)], axis=1
+            seed_col = np.where(
+                keep[:, None],
+                _seed_sums(vox.colors, lab, None if every else used, n_s) / np.maximum(cnt, 1)[:, None],
+                seed_col,
             )
-            seed_col = np.where(keep[:, None], new_col / np.maximum(cnt, 1)[:, None], seed_col)
 
     # connectivity: pieces of one supervoxel that do not touch become separate pieces;
     # unassigned voxels form pieces of their own
@@ -354,7 +376,7 @@ def supervoxel_labels(
     # an orphan piece joins the main piece it shares most adjacencies with (one pass)
     pa, pb = piece[e[:, 0]], piece[e[:, 1]]
     cross = pa != pb
-    pa, pb = pa[cross], pb[cross]
+    pa, pb = np.compress(cross, pa), np.compress(cross, pb)
     pairs = np.concatenate([np.stack([pa, pb], 1), np.stack([pb, pa], 1)])
     # rows by a mask: np.compress, several times faster than boolean indexing of rows
     pairs = np.compress(~main[pairs[:, 0]] & main[pairs[:, 1]], pairs, axis=0)
@@ -368,8 +390,10 @@ def supervoxel_labels(
         firsts[1:] = u[1:, 0] != u[:-1, 0]
         target[u[firsts, 0]] = u[firsts, 1]
     final = target[piece]
-    _, out = np.unique(final, return_inverse=True)
-    return out.astype(np.int64)
+    # the rank of each voxel's piece among the pieces left: np.unique's inverse, unsorted
+    present = np.zeros(n_pieces, dtype=bool)
+    present[final] = True
+    return (np.cumsum(present) - 1)[final]
 
 
 @dataclass(frozen=True, eq=False)
@@ -408,8 +432,10 @@ def supervoxel_stats(
     e = vox.edges
     la, lb = labels[e[:, 0]], labels[e[:, 1]]
     cross = la != lb
-    pairs = np.stack([np.minimum(la[cross], lb[cross]), np.maximum(la[cross], lb[cross])], axis=1)
-    pairs = _pairs_of(np.unique(_pair_keys(pairs, n_sv)), n_sv) if pairs.shape[0] else np.zeros((0, 2), np.int64)
+    la, lb = np.compress(cross, la), np.compress(cross, lb)
+    # the keys of `_pair_keys` of the rows (min, max), without the rows
+    keys = np.minimum(la, lb) * n_sv + np.maximum(la, lb)
+    pairs = _pairs_of(np.unique(keys), n_sv) if keys.shape[0] else np.zeros((0, 2), np.int64)
     return Supervoxels(labels, mean, normals, cnt.astype(np.int64), pairs)
 
 
