@@ -64,7 +64,10 @@ def test_dot3_sums_as_einsum() -> None:
     gen = np.random.default_rng(11)
     x = gen.standard_normal((200_000, 3)) * 10.0 ** gen.integers(-8, 3, (200_000, 3))
     y = gen.standard_normal((200_000, 3)) * 10.0 ** gen.integers(-8, 3, (200_000, 3))
-    cols = lambda a: tuple(a[:, j] for j in range(3))  # noqa: E731
+
+    def cols(a: np.ndarray) -> tuple[np.ndarray, ...]:
+        return tuple(a[:, j] for j in range(3))
+
     assert np.array_equal(_dot3(cols(x), cols(y)), np.einsum("ij,ij->i", x, y))
     # a normal against the normals of its 8 nearest seeds
     v, s = x[:25_000], y.reshape(25_000, 8, 3)
