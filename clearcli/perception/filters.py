@@ -45,7 +45,9 @@ def _organized_neighbor_counts(points: np.ndarray, shape: tuple[int, int], radiu
     # einsum("ijk,ijk->ij") gave on (h, w, 3) rows, in its order ((x x + y y) + z z), in
     # half its time
     grid = points.reshape(h, w, 3)
-    counts = np.zeros((h, w), dtype=np.int16)
+    # at most 8: counted in uint8, adding the hits' bytes (a bool's byte is 0 or 1), where
+    # adding bools to int16 went through a cast on every pass
+    counts = np.zeros((h, w), dtype=np.uint8)
     k2 = np.float32((radius_at_1m_m * 0.5) ** 2)
     rows = max(1, _BLOCK_PIXELS // max(w, 1))
     size = (rows + 1) * w
@@ -80,9 +82,10 @@ def _organized_neighbor_counts(points: np.ndarray, shape: tuple[int, int], radiu
             np.multiply(k2, rr, out=limit)
             limit *= rr
             np.less(d2, limit, out=hit)  # NaN compares False
-            block[ys_a, xs_a] += hit
-            block[ys_b, xs_b] += hit
-    return counts.reshape(-1)
+            hit8 = hit.view(np.uint8)
+            block[ys_a, xs_a] += hit8
+            block[ys_b, xs_b] += hit8
+    return counts.reshape(-1).astype(np.int16)
 
 
 def depth_radius_mask(
