@@ -122,9 +122,14 @@ def _adjacency(uniq: np.ndarray, dims: list[int]) -> np.ndarray:
             src = np.flatnonzero(hit)
             blocks[(dx, dy, dz)] = (src, pos[src])
             pos = pos + hit  # the next key follows when this one was present
-    src_all = np.concatenate([blocks[(int(o[0]), int(o[1]), int(o[2]))][0] for o in _HALF_OFFSETS])
-    dst_all = np.concatenate([blocks[(int(o[0]), int(o[1]), int(o[2]))][1] for o in _HALF_OFFSETS])
-    return np.stack([src_all, dst_all], axis=1)
+    ordered = [blocks[(int(o[0]), int(o[1]), int(o[2]))] for o in _HALF_OFFSETS]
+    edges = np.empty((sum(src.shape[0] for src, _ in ordered), 2), dtype=np.int64)
+    at = 0
+    for src, dst in ordered:  # straight into the columns: no concatenated copies to stack
+        edges[at : at + src.shape[0], 0] = src
+        edges[at : at + src.shape[0], 1] = dst
+        at += src.shape[0]
+    return edges
 
 
 def orient_towards(normals: np.ndarray, points: np.ndarray, viewpoint: np.ndarray) -> np.ndarray:
@@ -325,9 +330,16 @@ def supervoxel_labels(
         # a missing neighbour has index n_s and distance inf: its cost is inf whatever the
         # rest (spatial_importance > 0), so no mask; it reads a zero normal appended at n_s
         seed_nrm_cols = tuple(np.append(seed_nrm[:, j], 0.0)[nb] for j in range(3))
-        cost = settings.spatial_importance * dist / seed_m
-        # the normals' dot products summed as einsum("vj,vkj->vk") sums them (_dot3)
-        cost = cost + settings.normal_importance * (1.0 - np.abs(_dot3(voxel_nrm, seed_nrm_cols)))
+        # spatial_importance * dist / seed_m + normal_importance * (1 - |n . n_s|), the
+        # same operations in the same order, in place; the normals' dot products summed
+        # as einsum("vj,vkj->vk") sums them (_dot3)
+        cost = np.multiply(settings.spatial_importance, dist, out=dist)
+        cost /= seed_m
+        normal_term = _dot3(voxel_nrm, seed_nrm_cols)
+        np.abs(normal_term, out=normal_term)
+        np.subtract(1.0, normal_term, out=normal_term)
+        np.multiply(settings.normal_importance, normal_term, out=normal_term)
+        cost += normal_term
         if seed_col is not None and vox.colors is not None:
             nb_safe = np.where(nb < n_s, nb, 0)
             cost = (
