@@ -55,14 +55,32 @@ class VoxelCloud:
         return int(self.centroids.shape[0])
 
 
+def _unique_inverse(keys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``np.unique(keys, return_inverse=True)`` of (M,) int64 ``keys`` listed in runs (the
+    points of a frame in pixel order: a voxel's points mostly come one after another):
+    the sort is done on one key per run, a third of the points on a camera frame, and
+    the inverse spread back over the runs. The same arrays, in half the time."""
+    m = keys.shape[0]
+    if m == 0:
+        return keys.copy(), np.zeros(0, dtype=np.int64)
+    starts = np.flatnonzero(keys[1:] != keys[:-1]) + 1
+    run_keys = np.concatenate((keys[:1], keys[starts]))
+    uniq, run_inverse = np.unique(run_keys, return_inverse=True)
+    lengths = np.diff(np.concatenate(([0], starts, [m])))
+    return uniq, np.repeat(run_inverse.astype(np.int64, copy=False), lengths)
+
+
 def voxelize(points: np.ndarray, voxel_m: float, colors: np.ndarray | None = None) -> VoxelCloud:
     """Voxel grid of ``points`` (M, 3) and the voxel adjacency graph."""
-    keys3 = grid_cells(points, voxel_m)
-    lo = keys3.min(axis=0) - 1  # one empty layer around so offsets never wrap
-    keys3 -= lo
-    dims = keys3.max(axis=0) + 2
-    packed = (keys3[:, 0] * dims[1] + keys3[:, 1]) * dims[2] + keys3[:, 2]
-    uniq, inverse = np.unique(packed, return_inverse=True)
+    # the cells of `grid_cells`, one coordinate at a time: reductions over axis 0 of an
+    # (M, 3) array are several times slower than over a column; floor is monotonic, so
+    # a column's lowest cell is the cell of its lowest float
+    cols = [np.floor((points[:, k] + GRID_SHIFT_M) / voxel_m) for k in range(3)]
+    lo = [int(c.min()) - 1 for c in cols]  # one empty layer around so offsets never wrap
+    keys_cols = [c.astype(np.int64) - low for c, low in zip(cols, lo)]
+    dims = [int(c.max()) + 2 for c in keys_cols]
+    packed = (keys_cols[0] * dims[1] + keys_cols[1]) * dims[2] + keys_cols[2]
+    uniq, inverse = _unique_inverse(packed)
     n_vox = uniq.shape[0]
     counts = np.bincount(inverse, minlength=n_vox)
     cent = np.stack(
@@ -79,25 +97,48 @@ def voxelize(points: np.ndarray, voxel_m: float, colors: np.ndarray | None = Non
             / counts[:, None]
         )
     keys = np.stack([uniq // (dims[1] * dims[2]), (uniq // dims[2]) % dims[1], uniq % dims[2]], axis=1)
-    src: list[np.ndarray] = []
-    dst: list[np.ndarray] = []
-    for off in _HALF_OFFSETS:
-        target = uniq + (off[0] * dims[1] + off[1]) * dims[2] + off[2]
-        pos = np.searchsorted(uniq, target)
-        pos[pos >= n_vox] = n_vox - 1
-        hit = uniq[pos] == target
-        src.append(np.flatnonzero(hit))
-        dst.append(pos[hit])
-    edges = np.stack([np.concatenate(src), np.concatenate(dst)], axis=1) if src else np.zeros((0, 2), np.int64)
-    return VoxelCloud(inverse.astype(np.int64), cent, counts, keys, vcol, edges)
+    return VoxelCloud(inverse, cent, counts, keys, vcol, _adjacency(uniq, dims))
+
+
+def _adjacency(uniq: np.ndarray, dims: list[int]) -> np.ndarray:
+    """(E, 2) pairs of the sorted packed voxel keys ``uniq`` one of `_HALF_OFFSETS` apart:
+    the offsets' blocks in their order, each ascending in its first voxel.
+
+    The keys are sorted with z fastest, so the three offsets (dx, dy, -1..1) of one
+    (dx, dy) are consecutive keys: one binary search finds the first, and each of the
+    other two is the next key when the one before was present. 5 searches, not 13."""
+    n_vox = uniq.shape[0]
+    if n_vox == 0:
+        return np.zeros((0, 2), np.int64)
+    # a sentinel past every key, so that a position one past the last reads no key
+    ext = np.concatenate((uniq, [uniq[-1] + 2 * dims[2] * dims[1] + 2]))
+    blocks: dict[tuple[int, int, int], tuple[np.ndarray, np.ndarray]] = {}
+    for dx, dy in ((0, 0), (0, 1), (1, -1), (1, 0), (1, 1)):
+        base = uniq + (dx * dims[1] + dy) * dims[2]
+        dzs = (1,) if (dx, dy) == (0, 0) else (-1, 0, 1)
+        pos = np.searchsorted(uniq, base + dzs[0])
+        for dz in dzs:
+            hit = ext[pos] == base + dz
+            src = np.flatnonzero(hit)
+            blocks[(dx, dy, dz)] = (src, pos[src])
+            pos = pos + hit  # the next key follows when this one was present
+    ordered = [blocks[(int(o[0]), int(o[1]), int(o[2]))] for o in _HALF_OFFSETS]
+    edges = np.empty((sum(src.shape[0] for src, _ in ordered), 2), dtype=np.int64)
+    at = 0
+    for src, dst in ordered:  # straight into the columns: no concatenated copies to stack
+        edges[at : at + src.shape[0], 0] = src
+        edges[at : at + src.shape[0], 1] = dst
+        at += src.shape[0]
+    return edges
 
 
 def orient_towards(normals: np.ndarray, points: np.ndarray, viewpoint: np.ndarray) -> np.ndarray:
     """Flip normals so that they face the viewpoint."""
-    flip = np.einsum("ij,ij->i", normals, viewpoint - points) < 0
-    out = normals.copy()
-    out[flip] *= -1
-    return out
+    # the dot product column by column, summed as einsum("ij,ij->i") sums it (_dot3):
+    # a normal almost across the line of sight flips as it did
+    to_view = tuple(viewpoint[j] - points[:, j] for j in range(3))
+    flip = _dot3(tuple(normals[:, j] for j in range(3)), to_view) < 0
+    return np.where(flip[:, None], -normals, normals)
 
 
 def smallest_eigenvectors(cov: np.ndarray) -> np.ndarray:
@@ -110,14 +151,34 @@ def smallest_eigenvectors(cov: np.ndarray) -> np.ndarray:
     normal estimation). np.linalg.eigh for the rest. A few times faster than eigh alone
     on thousands of matrices; the same vectors up to sign (1e-5 degrees).
     """
-    n = cov.shape[0]
+    return _smallest_eigenvectors6(cov[:, 0, 0], cov[:, 0, 1], cov[:, 0, 2], cov[:, 1, 1], cov[:, 1, 2], cov[:, 2, 2])
+
+
+def _dot3(x: tuple[np.ndarray, ...], y: tuple[np.ndarray, ...]) -> np.ndarray:
+    """x . y of 3-vectors given by their components, summed as ``np.einsum`` sums a row of
+    3 (two SIMD lanes: (x0 y0 + x2 y2) + x1 y1), so that the bits are einsum's: the
+    callers replaced einsum over (N, 3) rows, and every later comparison sees the same
+    floats (tests/perception/test_supervoxels.py holds einsum to it)."""
+    return (x[0] * y[0] + x[2] * y[2]) + x[1] * y[1]
+
+
+def _smallest_eigenvectors6(
+    c00: np.ndarray, c01: np.ndarray, c02: np.ndarray, c11: np.ndarray, c12: np.ndarray, c22: np.ndarray
+) -> np.ndarray:
+    """`smallest_eigenvectors` of the symmetric matrices given by their 6 distinct
+    entries, each (N,): the same arithmetic on contiguous columns instead of (N, 3, 3)
+    views, the cross products written out (np.cross's order of operations) and no
+    (N, 3, 3) array but for the matrices eigh takes."""
+    n = c00.shape[0]
     out = np.empty((n, 3))
     if n == 0:
         return out
-    scale = np.abs(cov.reshape(n, 9)).max(axis=1)
+    scale = np.maximum(
+        np.maximum(np.maximum(np.abs(c00), np.abs(c01)), np.maximum(np.abs(c02), np.abs(c11))),
+        np.maximum(np.abs(c12), np.abs(c22)),
+    )
     scale[scale == 0] = 1.0
-    a = cov / scale[:, None, None]
-    a00, a01, a02, a11, a12, a22 = a[:, 0, 0], a[:, 0, 1], a[:, 0, 2], a[:, 1, 1], a[:, 1, 2], a[:, 2, 2]
+    a00, a01, a02, a11, a12, a22 = (c / scale for c in (c00, c01, c02, c11, c12, c22))
     q = (a00 + a11 + a22) / 3.0
     b00, b11, b22 = a00 - q, a11 - q, a22 - q
     p = np.sqrt((b00 * b00 + b11 * b11 + b22 * b22 + 2.0 * (a01 * a01 + a02 * a02 + a12 * a12)) / 6.0)
@@ -126,21 +187,30 @@ def smallest_eigenvectors(cov: np.ndarray) -> np.ndarray:
     det = (b00 * (b11 * b22 - a12 * a12) - a01 * (a01 * b22 - a12 * a02) + a02 * (a01 * a12 - b11 * a02)) / ps**3
     half = np.clip(0.5 * det, -1.0, 1.0)
     lam = q + 2.0 * p * np.cos(np.arccos(half) / 3.0 + 2.0 * np.pi / 3.0)  # the smallest
-    r0 = np.stack([a00 - lam, a01, a02], axis=1)
-    r1 = np.stack([a01, a11 - lam, a12], axis=1)
-    r2 = np.stack([a02, a12, a22 - lam], axis=1)
-    cross = np.stack([np.cross(r0, r1), np.cross(r0, r2), np.cross(r1, r2)], axis=1)  # (N, 3, 3)
-    len2 = np.einsum("nij,nij->ni", cross, cross)
-    best = np.argmax(len2, axis=1)
-    rows = np.arange(n)
-    vec = cross[rows, best]
-    length = np.sqrt(len2[rows, best])
+    m00, m11, m22 = a00 - lam, a11 - lam, a22 - lam
+    # the rows r0 = (m00, a01, a02), r1 = (a01, m11, a12), r2 = (a02, a12, m22); each
+    # cross product (u1 v2 - u2 v1, u2 v0 - u0 v2, u0 v1 - u1 v0) as np.cross computes it
+    c_01 = (a01 * a12 - a02 * m11, a02 * a01 - m00 * a12, m00 * m11 - a01 * a01)  # r0 x r1
+    c_02 = (a01 * m22 - a02 * a12, a02 * a02 - m00 * m22, m00 * a12 - a01 * a02)  # r0 x r2
+    c_12 = (m11 * m22 - a12 * a12, a12 * a02 - a01 * m22, a01 * a12 - m11 * a02)  # r1 x r2
+    len2 = [_dot3(c, c) for c in (c_01, c_02, c_12)]
+    # the longest, the first of equals (np.argmax)
+    take1 = len2[1] > len2[0]
+    best_len2 = np.where(take1, len2[1], len2[0])
+    take2 = len2[2] > best_len2
+    best_len2 = np.where(take2, len2[2], best_len2)
+    length = np.sqrt(best_len2)
     # half < 0: the smallest eigenvalue is the one farthest from the other two
     fast = ok & (half < 0.0) & (length > 1e-12)
-    out[fast] = vec[fast] / length[fast, None]
-    slow = ~fast
-    if slow.any():
-        out[slow] = np.linalg.eigh(cov[slow])[1][:, :, 0]
+    safe = np.where(fast, length, 1.0)
+    for j in range(3):
+        out[:, j] = np.where(take2, c_12[j], np.where(take1, c_02[j], c_01[j])) / safe
+    slow = np.flatnonzero(~fast)
+    if slow.size:
+        cov = np.empty((slow.size, 3, 3))
+        for (i, j), c in zip(((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)), (c00, c01, c02, c11, c12, c22)):
+            cov[:, i, j] = cov[:, j, i] = c[slow]
+        out[slow] = np.linalg.eigh(cov)[1][:, :, 0]
     return out
 
 
@@ -161,20 +231,24 @@ def voxel_normals(centroids: np.ndarray, radius_m: float, viewpoint: np.ndarray,
     if n == 0:
         return np.zeros((0, 3))
     k = min(max_nn, n)
+    # the k-d tree's query is most of the time and stays as it is: centroids at equal
+    # distances are common (whole-millimetre depths), and the order the tree lists them
+    # in decides the order of the sums below, so no other search gives the same bits
     _, nb = cKDTree(centroids).query(centroids, k=k, distance_upper_bound=radius_m)
     nb = nb.reshape(n, k)
-    valid = nb < n  # a missing neighbour has index n
-    cnt = valid.sum(axis=1)
-    # offsets from the query centroid (no cancellation); a missing neighbour is the
-    # centroid itself, offset 0, which adds nothing to the sums
-    nb = np.where(valid, nb, np.arange(n)[:, None])
-    off = [centroids[:, j][nb] - centroids[:, j, None] for j in range(3)]  # 3 x (V, k)
-    mean = [o.sum(axis=1) / cnt for o in off]
-    cov = np.empty((n, 3, 3))
-    for a in range(3):
-        for b in range(a, 3):
-            cov[:, a, b] = cov[:, b, a] = np.einsum("vk,vk->v", off[a], off[b]) / cnt - mean[a] * mean[b]
-    normals = smallest_eigenvectors(cov)
+    # a missing neighbour has index n; it becomes the centroid itself, offset 0, which
+    # adds nothing to the sums (offsets from the query centroid: no cancellation)
+    flat = nb.reshape(-1)
+    missing = np.flatnonzero(flat == n)
+    cnt = k - np.bincount(missing // k, minlength=n)
+    flat[missing] = missing // k
+    # (3, V, k): one contiguous (V, k) block of offsets per coordinate, as before
+    cols = np.ascontiguousarray(centroids.T)
+    off = np.take(cols, nb, axis=1)
+    off -= cols[:, :, None]
+    mean = off.sum(axis=2) / cnt
+    c = {(a, b): np.einsum("vk,vk->v", off[a], off[b]) / cnt - mean[a] * mean[b] for a in range(3) for b in range(a, 3)}
+    normals = _smallest_eigenvectors6(c[0, 0], c[0, 1], c[0, 2], c[1, 1], c[1, 2], c[2, 2])
     normals[cnt < 3] = (0.0, 0.0, 1.0)
     return orient_towards(normals, centroids, viewpoint)
 
@@ -192,6 +266,20 @@ def _pairs_of(keys: np.ndarray, n: int) -> np.ndarray:
     return np.stack([keys // n, keys % n], axis=1)
 
 
+def _seed_sums(values: np.ndarray, lab: np.ndarray, used: np.ndarray | None, n_seeds: int) -> np.ndarray:
+    """(n_seeds, 3) per-seed sums of the rows of ``values`` (V, 3) of the voxels ``used``
+    (all when None), whose seeds are ``lab``; bincount's sums, in voxel order."""
+    return np.stack(
+        [
+            np.bincount(
+                lab, weights=values[:, j] if used is None else np.compress(used, values[:, j]), minlength=n_seeds
+            )
+            for j in range(3)
+        ],
+        axis=1,
+    )
+
+
 def supervoxel_labels(
     vox: VoxelCloud, normals: np.ndarray, settings: SegmentSettings, size: SegmentSize | None = None
 ) -> np.ndarray:
@@ -204,12 +292,12 @@ def supervoxel_labels(
     n_vox = vox.n_voxels
     seed_m = size.seed_m
     # seeds: in every occupied seed cell holding enough voxels (a speck is no seed), the
-    # voxel nearest to the mean of that cell's voxels
-    cell = grid_cells(cent, seed_m)
-    cell -= cell.min(axis=0)
-    cdims = cell.max(axis=0) + 1
-    cpacked = (cell[:, 0] * cdims[1] + cell[:, 1]) * cdims[2] + cell[:, 2]
-    _, cinv = np.unique(cpacked, return_inverse=True)
+    # voxel nearest to the mean of that cell's voxels (the first of equals)
+    cols = [np.floor((cent[:, k] + GRID_SHIFT_M) / seed_m).astype(np.int64) for k in range(3)]  # grid_cells
+    cols = [c - c.min() for c in cols]
+    cdims = [int(c.max()) + 1 for c in cols]
+    # the voxels come in key order, so a seed cell's voxels come in runs too
+    _, cinv = _unique_inverse((cols[0] * cdims[1] + cols[1]) * cdims[2] + cols[2])
     n_cells = int(cinv.max()) + 1 if n_vox else 0
     ccount = np.bincount(cinv, minlength=n_cells)
     cmean = np.stack(
@@ -217,11 +305,13 @@ def supervoxel_labels(
     )
     cmean /= ccount[:, None]
     dist_to_mean = np.linalg.norm(cent - cmean[cinv], axis=1)
-    order = np.lexsort((dist_to_mean, cinv))
-    first = np.ones(order.shape[0], dtype=bool)
-    first[1:] = cinv[order[1:]] != cinv[order[:-1]]
-    seed_vox = order[first]
-    seed_vox = seed_vox[ccount[cinv[seed_vox]] >= size.min_seed_voxels]
+    # per cell the least distance, then the lowest voxel at it: a lexsort's first, unsorted
+    least = np.full(n_cells, np.inf)
+    np.minimum.at(least, cinv, dist_to_mean)
+    at_least = np.flatnonzero(dist_to_mean == least[cinv])
+    seed_of_cell = np.full(n_cells, n_vox, dtype=np.int64)
+    np.minimum.at(seed_of_cell, cinv[at_least], at_least)
+    seed_vox = seed_of_cell[ccount >= size.min_seed_voxels]
     if seed_vox.size == 0:
         seed_vox = np.array([0], dtype=np.int64)
 
@@ -230,40 +320,52 @@ def supervoxel_labels(
     seed_col = vox.colors[seed_vox] if (vox.colors is not None and settings.color_importance > 0) else None
     k = min(8, seed_pos.shape[0])
     labels = np.full(n_vox, -1, dtype=np.int64)
+    voxel_nrm = tuple(normals[:, j, None] for j in range(3))
+    rows = np.arange(n_vox)
     for _ in range(max(1, settings.supervoxel_iterations)):
-        tree = cKDTree(seed_pos)
-        dist, nb = tree.query(cent, k=k, distance_upper_bound=1.5 * seed_m)
+        n_s = seed_pos.shape[0]
+        dist, nb = cKDTree(seed_pos).query(cent, k=k, distance_upper_bound=1.5 * seed_m)
         if k == 1:
             dist, nb = dist[:, None], nb[:, None]
-        valid = np.isfinite(dist)
-        nb_safe = np.where(valid, nb, 0)
-        cost = settings.spatial_importance * dist / seed_m
-        cost = cost + settings.normal_importance * (1.0 - np.abs(np.einsum("vj,vkj->vk", normals, seed_nrm[nb_safe])))
+        # a missing neighbour has index n_s and distance inf: its cost is inf whatever the
+        # rest (spatial_importance > 0), so no mask; it reads a zero normal appended at n_s
+        seed_nrm_cols = tuple(np.append(seed_nrm[:, j], 0.0)[nb] for j in range(3))
+        # spatial_importance * dist / seed_m + normal_importance * (1 - |n . n_s|), the
+        # same operations in the same order, in place; the normals' dot products summed
+        # as einsum("vj,vkj->vk") sums them (_dot3)
+        cost = np.multiply(settings.spatial_importance, dist, out=dist)
+        cost /= seed_m
+        normal_term = _dot3(voxel_nrm, seed_nrm_cols)
+        np.abs(normal_term, out=normal_term)
+        np.subtract(1.0, normal_term, out=normal_term)
+        np.multiply(settings.normal_importance, normal_term, out=normal_term)
+        cost += normal_term
         if seed_col is not None and vox.colors is not None:
+            nb_safe = np.where(nb < n_s, nb, 0)
             cost = (
                 cost
                 + settings.color_importance * np.linalg.norm(vox.colors[:, None, :] - seed_col[nb_safe], axis=2) / 255.0
             )
-        cost[~valid] = np.inf
-        pick = np.argmin(cost, axis=1)
-        labels = np.where(valid[np.arange(n_vox), pick], nb_safe[np.arange(n_vox), pick], -1)
+        picked = nb[rows, np.argmin(cost, axis=1)]
+        labels = np.where(picked < n_s, picked, -1)
         # move the seeds to the mean of their voxels
         used = labels >= 0
-        n_s = seed_pos.shape[0]
-        cnt = np.bincount(labels[used], minlength=n_s)
+        every = bool(used.all())
+        lab = labels if every else np.compress(used, labels)
+        cnt = np.bincount(lab, minlength=n_s)
         keep = cnt > 0
-        new_pos = np.stack([np.bincount(labels[used], weights=cent[used, j], minlength=n_s) for j in range(3)], axis=1)
-        new_nrm = np.stack(
-            [np.bincount(labels[used], weights=normals[used, j], minlength=n_s) for j in range(3)], axis=1
-        )
+
+        new_pos = _seed_sums(cent, lab, None if every else used, n_s)
+        new_nrm = _seed_sums(normals, lab, None if every else used, n_s)
         seed_pos = np.where(keep[:, None], new_pos / np.maximum(cnt, 1)[:, None], seed_pos)
         nn = np.linalg.norm(new_nrm, axis=1)
         seed_nrm = np.where((keep & (nn > 1e-9))[:, None], new_nrm / np.maximum(nn, 1e-9)[:, None], seed_nrm)
         if seed_col is not None and vox.colors is not None:
-            new_col = np.stack(
-                [np.bincount(labels[used], weights=vox.colors[used, j], minlength=n_s) for j in range(3)], axis=1
+            seed_col = np.where(
+                keep[:, None],
+                _seed_sums(vox.colors, lab, None if every else used, n_s) / np.maximum(cnt, 1)[:, None],
+                seed_col,
             )
-            seed_col = np.where(keep[:, None], new_col / np.maximum(cnt, 1)[:, None], seed_col)
 
     # connectivity: pieces of one supervoxel that do not touch become separate pieces;
     # unassigned voxels form pieces of their own
@@ -286,7 +388,7 @@ def supervoxel_labels(
     # an orphan piece joins the main piece it shares most adjacencies with (one pass)
     pa, pb = piece[e[:, 0]], piece[e[:, 1]]
     cross = pa != pb
-    pa, pb = pa[cross], pb[cross]
+    pa, pb = np.compress(cross, pa), np.compress(cross, pb)
     pairs = np.concatenate([np.stack([pa, pb], 1), np.stack([pb, pa], 1)])
     # rows by a mask: np.compress, several times faster than boolean indexing of rows
     pairs = np.compress(~main[pairs[:, 0]] & main[pairs[:, 1]], pairs, axis=0)
@@ -300,8 +402,10 @@ def supervoxel_labels(
         firsts[1:] = u[1:, 0] != u[:-1, 0]
         target[u[firsts, 0]] = u[firsts, 1]
     final = target[piece]
-    _, out = np.unique(final, return_inverse=True)
-    return out.astype(np.int64)
+    # the rank of each voxel's piece among the pieces left: np.unique's inverse, unsorted
+    present = np.zeros(n_pieces, dtype=bool)
+    present[final] = True
+    return (np.cumsum(present) - 1)[final]
 
 
 @dataclass(frozen=True, eq=False)
@@ -340,8 +444,10 @@ def supervoxel_stats(
     e = vox.edges
     la, lb = labels[e[:, 0]], labels[e[:, 1]]
     cross = la != lb
-    pairs = np.stack([np.minimum(la[cross], lb[cross]), np.maximum(la[cross], lb[cross])], axis=1)
-    pairs = _pairs_of(np.unique(_pair_keys(pairs, n_sv)), n_sv) if pairs.shape[0] else np.zeros((0, 2), np.int64)
+    la, lb = np.compress(cross, la), np.compress(cross, lb)
+    # the keys of `_pair_keys` of the rows (min, max), without the rows
+    keys = np.minimum(la, lb) * n_sv + np.maximum(la, lb)
+    pairs = _pairs_of(np.unique(keys), n_sv) if keys.shape[0] else np.zeros((0, 2), np.int64)
     return Supervoxels(labels, mean, normals, cnt.astype(np.int64), pairs)
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 
 # ------------------------------------------------------------------ 1. outliers
@@ -82,3 +83,21 @@ def test_finite_mask_by_columns() -> None:
     p[1, 0], p[2, 1], p[3, 2], p[4] = np.nan, np.inf, -np.inf, np.nan
     assert finite_mask(p).tolist() == [True, False, False, False, False, True]
     assert finite_mask(p.astype(np.float32)).tolist() == np.isfinite(p).all(axis=1).tolist()
+
+
+def test_neighbour_counts_the_same_whatever_the_blocks_of_rows(monkeypatch: pytest.MonkeyPatch) -> None:
+    from clearcli.perception import filters
+
+    gen = np.random.default_rng(5)
+    h, w = 37, 29
+    v, u = np.mgrid[0:h, 0:w]
+    z = 0.9 - 0.003 * v + gen.normal(0, 0.003, size=(h, w))
+    pts = np.stack([(u - w / 2) * z / 500, (v - h / 2) * z / 500, z], axis=-1).reshape(-1, 3).astype(np.float32)
+    pts[gen.random(h * w) < 0.1] = np.nan
+    want = _counts_by_einsum(pts, (h, w), 0.01)
+    assert 0 < want.mean() < 8
+    # one row a block, a few rows (the last block shorter), one row short of all, all
+    for pixels in (1, w, 3 * w + 5, (h - 1) * w, h * w, 10**7):
+        monkeypatch.setattr(filters, "_BLOCK_PIXELS", pixels)
+        got = filters._organized_neighbor_counts(pts, (h, w), 0.01)
+        assert np.array_equal(got, want), pixels

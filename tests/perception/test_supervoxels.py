@@ -14,3 +14,82 @@ def test_voxel_adjacency_is_the_26_neighbourhood() -> None:
     # pairs of a 3x3x3 block at Chebyshev distance 1: (27*26 - non-adjacent) / 2
     d = np.abs(vox.keys[:, None, :] - vox.keys[None, :, :]).max(-1)
     assert vox.edges.shape[0] == int((d == 1).sum()) // 2
+
+
+def _edges_by_13_searches(uniq: np.ndarray, dims: list[int]) -> np.ndarray:
+    """The adjacency as voxelize found it before: one binary search per half offset."""
+    from clearcli.perception.supervoxels import _HALF_OFFSETS
+
+    n = uniq.shape[0]
+    src, dst = [], []
+    for off in _HALF_OFFSETS:
+        target = uniq + (off[0] * dims[1] + off[1]) * dims[2] + off[2]
+        pos = np.minimum(np.searchsorted(uniq, target), n - 1)
+        hit = uniq[pos] == target
+        src.append(np.flatnonzero(hit))
+        dst.append(pos[hit])
+    return np.stack([np.concatenate(src), np.concatenate(dst)], axis=1)
+
+
+def test_adjacency_and_voxels_as_the_searches_and_np_unique_gave_them() -> None:
+    from clearcli.perception.supervoxels import _adjacency, _unique_inverse, grid_cells, voxelize
+
+    gen = np.random.default_rng(7)
+    for n_points, extent_m in ((300, 0.02), (3000, 0.05), (5000, 0.2)):
+        # points in runs along x (as a camera row lists them), some voxels dense, some sparse
+        start = gen.uniform(0, extent_m, (n_points // 5, 3))
+        pts = (start[:, None, :] + np.arange(5)[None, :, None] * [0.0011, 0, 0]).reshape(-1, 3)
+        vox = voxelize(pts, 0.005)
+        keys = grid_cells(pts, 0.005)
+        keys -= keys.min(axis=0) - 1
+        dims = [int(d) for d in keys.max(axis=0) + 2]
+        packed = (keys[:, 0] * dims[1] + keys[:, 1]) * dims[2] + keys[:, 2]
+        uniq, inverse = np.unique(packed, return_inverse=True)
+        got_u, got_i = _unique_inverse(packed)
+        assert np.array_equal(got_u, uniq) and np.array_equal(got_i, inverse)
+        assert np.array_equal(vox.point_voxel, inverse)
+        want = _edges_by_13_searches(uniq, dims)
+        assert want.shape[0] > 0
+        assert np.array_equal(_adjacency(uniq, dims), want)  # the same pairs in the same order
+        assert np.array_equal(vox.edges, want)
+    empty = np.zeros(0, dtype=np.int64)
+    assert _unique_inverse(empty)[0].shape == (0,) and _adjacency(empty, [3, 3, 3]).shape == (0, 2)
+
+
+def test_dot3_sums_as_einsum() -> None:
+    """The callers of _dot3 replaced np.einsum over rows of 3 and must give its bits
+    (orient_towards's flips, the VCCS costs): a NumPy whose einsum sums otherwise fails here."""
+    from clearcli.perception.supervoxels import _dot3
+
+    gen = np.random.default_rng(11)
+    x = gen.standard_normal((200_000, 3)) * 10.0 ** gen.integers(-8, 3, (200_000, 3))
+    y = gen.standard_normal((200_000, 3)) * 10.0 ** gen.integers(-8, 3, (200_000, 3))
+
+    def cols(a: np.ndarray) -> tuple[np.ndarray, ...]:
+        return tuple(a[:, j] for j in range(3))
+
+    assert np.array_equal(_dot3(cols(x), cols(y)), np.einsum("ij,ij->i", x, y))
+    # a normal against the normals of its 8 nearest seeds
+    v, s = x[:25_000], y.reshape(25_000, 8, 3)
+    got = _dot3(tuple(v[:, j, None] for j in range(3)), tuple(s[:, :, j] for j in range(3)))
+    assert np.array_equal(got, np.einsum("vj,vkj->vk", v, s))
+
+
+def test_smallest_eigenvectors_are_eighs() -> None:
+    from clearcli.perception.supervoxels import smallest_eigenvectors
+
+    gen = np.random.default_rng(13)
+    n = 4000
+    # covariances of patches: flat (the closed form), thin lines and near-isotropic (eigh)
+    axes = np.linalg.qr(gen.standard_normal((n, 3, 3)))[0]
+    spread = np.stack([gen.uniform(1e-6, 1, n), gen.uniform(1e-6, 1, n), gen.uniform(1e-6, 1, n)], axis=1)
+    spread[: n // 4, 0] = spread[: n // 4, 1]  # two equal: the smallest stands apart or not
+    cov = np.einsum("nij,nj,nkj->nik", axes, spread, axes) * 1e-5
+    got = smallest_eigenvectors(cov)
+    evals, evecs = np.linalg.eigh(cov)
+    apart = (evals[:, 1] - evals[:, 0]) > 1e-3 * evals[:, 2]
+    assert apart.sum() > n // 2
+    assert np.allclose(np.linalg.norm(got, axis=1), 1.0)
+    # the same vector up to sign where the smallest eigenvalue is distinct
+    assert np.abs(np.abs(np.einsum("ij,ij->i", got[apart], evecs[apart, :, 0])) - 1.0).max() < 1e-9
+    assert np.allclose(np.einsum("nij,nj->ni", cov, got), evals[:, :1] * got, atol=1e-12)
