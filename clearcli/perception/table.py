@@ -133,20 +133,79 @@ def ransac_plane(
             break
     if best_n is None:
         raise SceneError("no plane: the points are degenerate")
-    # refine: least squares on the inliers until they no longer change, so that the
-    # plane is a fixed point of the refit rather than of the draws (which points the
-    # random indices pick changes when one point more or less survives the filter)
-    n, d = best_n, best_d
+    return _refined(points, best_n, best_d, distance_m)
+
+
+def _refined(points: np.ndarray, n: np.ndarray, d: float, distance_m: float) -> tuple[np.ndarray, float]:
+    """RANSAC's plane (n, d) refined: least squares on the inliers until they no longer
+    change, so that the plane is a fixed point of the refit rather than of the draws
+    (which points the random indices pick changes when one point more or less survives
+    the filter); at most ``_REFITS`` refits, the last one's plane.
+
+    The plane returned is `fit_plane_lsq` of the same inliers as refitting with it every
+    time gives, bit for bit, for one SVD in all: the refits between are the plane of the
+    scatter matrix's smallest eigenvector, its sums kept up to date by the points that
+    join or leave (a tenth of an SVD each). Where that plane could put a point on the
+    other side of ``distance_m`` than the SVD's would (a point within `_moments_margin`
+    of it, or an ill-posed scatter), that refit and those after it are SVDs."""
     inl = np.abs(points @ n + d) <= distance_m
+    fitted: np.ndarray | None = None  # the inliers of the last refit, when it was by moments
+    r2 = float(np.einsum("ij,ij->i", points, points).max()) if points.shape[0] else 0.0
+    count = int(inl.sum())
+    chosen = np.compress(inl, points, axis=0)  # rows by a mask: compress is several times faster
+    s1, s2 = chosen.sum(axis=0), chosen.T @ chosen
+    exact = False
     for _ in range(_REFITS):
-        if inl.sum() < 3:
+        if count < 3:
             break
-        n, d = fit_plane_lsq(np.compress(inl, points, axis=0))  # rows by a mask: compress is several times faster
-        again = np.abs(points @ n + d) <= distance_m
+        if not exact:
+            plane = _moments_plane(s1, s2, count, r2)
+            if plane is None:
+                exact = True
+            else:
+                dist = np.abs(points @ plane[0] + plane[1])
+                if bool((np.abs(dist - distance_m) <= plane[2]).any()):
+                    exact = True
+        if exact:
+            fitted = None
+            n, d = fit_plane_lsq(np.compress(inl, points, axis=0))
+            again = np.abs(points @ n + d) <= distance_m
+        else:
+            fitted = inl
+            again = dist <= distance_m
         if (again == inl).all():
             break
+        changed = np.flatnonzero(again != inl)
+        if not exact:
+            moved = points[changed]
+            sign = np.where(again[changed], 1.0, -1.0)
+            s1 = s1 + (sign[:, None] * moved).sum(axis=0)
+            s2 = s2 + (moved * sign[:, None]).T @ moved
+        count += int(again[changed].sum()) * 2 - changed.size
         inl = again
+    if fitted is not None:
+        return fit_plane_lsq(np.compress(fitted, points, axis=0))
     return n, d
+
+
+def _moments_plane(s1: np.ndarray, s2: np.ndarray, count: int, r2: float) -> tuple[np.ndarray, float, float] | None:
+    """(normal, offset, margin) of the least-squares plane of ``count`` points from their
+    sum ``s1`` and the sum of their outer products ``s2``: the smallest eigenvector of
+    the scatter matrix; ``margin`` (m) bounds how far its distances may lie from the
+    SVD's (`fit_plane_lsq`) on points within sqrt(``r2``) of the origin. None when the
+    bound is not small (an ill-posed scatter: a line of points)."""
+    c = s1 / count
+    scatter = s2 - count * np.outer(c, c)
+    w, vecs = np.linalg.eigh(scatter)
+    gap = float(w[1] - w[0])
+    # the sums' rounding (and the SVD's) bounded generously: count * eps * r2 per entry,
+    # a hundredfold; the normal turns by at most that over the eigenvalues' gap (radians)
+    err = 100.0 * count * 2.3e-16 * max(r2, 1.0)
+    if gap <= 0.0 or err > 1e-9 * gap:
+        return None
+    normal = vecs[:, 0]
+    margin = max(1e-9, 4.0 * (err / gap) * np.sqrt(max(r2, 1.0)))
+    return normal, float(-normal @ c), margin
 
 
 def _hull_candidates(x: np.ndarray, y: np.ndarray) -> np.ndarray:
