@@ -527,14 +527,14 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
         ins[band] = inside_convex(project(loose_band, basis) - origin @ basis.T, poly, -_EDGE_BAND_M)
         above = int((ins & (h > 0)).sum())
         below = int((ins & (h < 0)).sum())
-        if camera_is_origin:
-            if d < 0:  # orient the normal towards the camera
-                n, d, above, below = -n, -d, below, above
-        elif below > above:  # not a camera frame: "up" is where the objects are
+        # orient the normal towards the camera, or, not in a camera frame, "up" where the
+        # objects are
+        if (d < 0) if camera_is_origin else (below > above):
             n, d, above, below = -n, -d, below, above
-        basis = plane_basis(n)
-        origin = -d * n
-        poly = convex_hull_2d(project(members, basis) - origin @ basis.T)
+            # the hull again in the turned plane's axes (unturned, it is the one above)
+            basis = plane_basis(n)
+            origin = -d * n
+            poly = convex_hull_2d(project(members, basis) - origin @ basis.T)
         fit = TableFit(TablePlane(normal=n, offset=float(d)), poly, origin, basis, camera_is_origin)
         # noise lies on both sides of a plane, objects on one: score the difference
         key = (abs(above - below), c.area_m2)
@@ -749,11 +749,11 @@ def _pinhole_of(pts: np.ndarray, finite: np.ndarray) -> Callable[[np.ndarray], t
     an organized cloud's own points (column = fx X/Z + cx, row = fy Y/Z + cy, least
     squares on a sample); None when the cloud is not a pinhole image (a fit off by more
     than a pixel)."""
-    rows, cols = np.nonzero(finite & (pts[..., 2] > 0))
-    if rows.size < 100:
+    flat = np.flatnonzero(finite & (pts[..., 2] > 0))  # np.nonzero's pixels in its order, as one array
+    if flat.size < 100:
         return None
-    pick = np.linspace(0, rows.size - 1, 2000).astype(np.int64)
-    rows, cols = rows[pick], cols[pick]
+    pick = np.linspace(0, flat.size - 1, 2000).astype(np.int64)
+    rows, cols = np.divmod(flat[pick], pts.shape[1])
     p = pts[rows, cols].astype(np.float64)
     x, y = p[:, 0] / p[:, 2], p[:, 1] / p[:, 2]
     fu, *_ = np.linalg.lstsq(np.column_stack([x, np.ones_like(x)]), cols.astype(np.float64), rcond=None)
