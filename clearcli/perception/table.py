@@ -124,7 +124,12 @@ def ransac_plane(
             continue
         normals = normals[ok] / norm[ok, None]
         offsets = -np.einsum("ij,ij->i", normals, tri[ok, 0])
-        counts = (np.abs(ev @ normals.T + offsets) <= distance_m).sum(axis=0)
+        # each hypothesis's inliers among the scoring points, in place (one (E, K) array:
+        # the same sums, a few times faster than a temporary per operation)
+        dist = ev @ normals.T
+        dist += offsets
+        np.abs(dist, out=dist)
+        counts = np.count_nonzero(dist <= distance_m, axis=0)
         k = int(np.argmax(counts))
         if counts[k] > best_count:
             best_count, best_n, best_d = int(counts[k]), normals[k], float(offsets[k])
