@@ -50,10 +50,15 @@ def pixel_pieces(points: np.ndarray, shape: tuple[int, int], point_index: np.nda
     count and the pairs between rows once per pair of runs (a tenth of the pixel pairs
     on an mOSD frame, several times faster); the pieces are numbered as `components`
     numbers them, in order of their first point."""
-    height, width = shape
     m = point_index.shape[0]
+    # the pairs lie within the set's bounding box: the image of the points' numbers (-1
+    # elsewhere) over that box only, the pairs in the same raster order over a fraction
+    # of the pixels
+    row, col = np.divmod(point_index, shape[1])
+    top, left = (int(row.min()), int(col.min())) if m else (0, 0)
+    height, width = (int(row.max()) + 1 - top, int(col.max()) + 1 - left) if m else (0, 0)
     where = np.full(height * width, -1, dtype=np.int64)
-    where[point_index] = np.arange(m)
+    where[(row - top) * width + (col - left)] = np.arange(m)
     img = where.reshape(height, width)
     p = points[point_index].astype(np.float64)
     # np.linalg.norm(p, axis=1)'s sums in its order, a fifth of its time (no (M, 3) squares)

@@ -44,7 +44,7 @@ from clearcli.perception.exclude import (
 from clearcli.perception.filters import clean_mask
 from clearcli.perception.flat import flat_objects
 from clearcli.perception.lccp import lccp_segments
-from clearcli.perception.openings import Opening, TableEdge, rim_of, seen_edges
+from clearcli.perception.openings import RIM_MAX_POINTS, Opening, TableEdge, rim_of, seen_edges
 from clearcli.perception.refine import STAGES, refine
 from clearcli.perception.resolution import WorkingGrid
 from clearcli.perception.size import SegmentSize
@@ -73,11 +73,12 @@ _SATURATED = 250
 _FLAT_COLOR = 2
 
 
-def principal_axes(points: np.ndarray) -> np.ndarray:
-    """(3, 3) rows: unit PCA axes, largest variance first, right-handed."""
+def principal_axes(points: np.ndarray, mean: np.ndarray | None = None) -> np.ndarray:
+    """(3, 3) rows: unit PCA axes, largest variance first, right-handed. ``mean``: the
+    points' ``mean(axis=0)`` when the caller has it already."""
     if points.shape[0] < 2:
         return np.eye(3)
-    c = points - points.mean(axis=0)
+    c = points - (points.mean(axis=0) if mean is None else mean)
     _, vecs = np.linalg.eigh(c.T @ c)
     axes = vecs[:, ::-1].T.copy()
     axes[2] = np.cross(axes[0], axes[1])
@@ -144,13 +145,14 @@ def make_object(
     frame_indices: np.ndarray, points: np.ndarray, table: TablePlane, rests_below_m: float
 ) -> SegmentedObject:
     center, axes, extents = table_aligned_box(points, table, rests_below_m)
+    centroid = points.mean(axis=0)
     return SegmentedObject(
         indices=frame_indices.astype(np.int64),
-        centroid=points.mean(axis=0),
+        centroid=centroid,
         obb_center=center,
         obb_axes=axes,
         obb_extents=extents,
-        principal_axes=principal_axes(points),
+        principal_axes=principal_axes(points, centroid),
     )
 
 
@@ -401,7 +403,7 @@ def _objects(w: _Work) -> None:
     obj_range2 = w.range2[w.prism_mask] if w.range2 is not None else None
     for s in kept.tolist():
         members = order[bounds[s] : bounds[s + 1]]
-        p = w.obj_pts[members]
+        p = np.take(w.obj_pts, members, axis=0)  # rows by index: take is several times faster than a[idx]
         # the prism's lower bound grew with range: so does "resting on the table"
         noise = 0.0
         if fit.camera_is_origin:
@@ -497,7 +499,12 @@ def _openings(w: _Work) -> None:
     (openings.py)."""
     fit = w.fit
     assert fit is not None  # the table's step ran
-    w.openings = tuple(rim_of(w.frame.points[o.indices], fit.plane) for o in w.objects)
+    # rim_of looks at an even sample of a large object's points: only those are gathered
+    # (the same rows as its own sampling takes)
+    w.openings = tuple(
+        rim_of(np.take(w.frame.points, o.indices[:: max(1, -(-o.indices.size // RIM_MAX_POINTS))], axis=0), fit.plane)
+        for o in w.objects
+    )
     w.table_edges = seen_edges(w.frame.points, w.frame.shape, fit.plane, fit.polygon)
 
 

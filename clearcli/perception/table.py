@@ -124,7 +124,12 @@ def ransac_plane(
             continue
         normals = normals[ok] / norm[ok, None]
         offsets = -np.einsum("ij,ij->i", normals, tri[ok, 0])
-        counts = (np.abs(ev @ normals.T + offsets) <= distance_m).sum(axis=0)
+        # each hypothesis's inliers among the scoring points, in place (one (E, K) array:
+        # the same sums, a few times faster than a temporary per operation)
+        dist = ev @ normals.T
+        dist += offsets
+        np.abs(dist, out=dist)
+        counts = np.count_nonzero(dist <= distance_m, axis=0)
         k = int(np.argmax(counts))
         if counts[k] > best_count:
             best_count, best_n, best_d = int(counts[k]), normals[k], float(offsets[k])
@@ -133,20 +138,79 @@ def ransac_plane(
             break
     if best_n is None:
         raise SceneError("no plane: the points are degenerate")
-    # refine: least squares on the inliers until they no longer change, so that the
-    # plane is a fixed point of the refit rather than of the draws (which points the
-    # random indices pick changes when one point more or less survives the filter)
-    n, d = best_n, best_d
+    return _refined(points, best_n, best_d, distance_m)
+
+
+def _refined(points: np.ndarray, n: np.ndarray, d: float, distance_m: float) -> tuple[np.ndarray, float]:
+    """RANSAC's plane (n, d) refined: least squares on the inliers until they no longer
+    change, so that the plane is a fixed point of the refit rather than of the draws
+    (which points the random indices pick changes when one point more or less survives
+    the filter); at most ``_REFITS`` refits, the last one's plane.
+
+    The plane returned is `fit_plane_lsq` of the same inliers as refitting with it every
+    time gives, bit for bit, for one SVD in all: the refits between are the plane of the
+    scatter matrix's smallest eigenvector, its sums kept up to date by the points that
+    join or leave (a tenth of an SVD each). Where that plane could put a point on the
+    other side of ``distance_m`` than the SVD's would (a point within `_moments_margin`
+    of it, or an ill-posed scatter), that refit and those after it are SVDs."""
     inl = np.abs(points @ n + d) <= distance_m
+    fitted: np.ndarray | None = None  # the inliers of the last refit, when it was by moments
+    r2 = float(np.einsum("ij,ij->i", points, points).max()) if points.shape[0] else 0.0
+    count = int(inl.sum())
+    chosen = np.compress(inl, points, axis=0)  # rows by a mask: compress is several times faster
+    s1, s2 = chosen.sum(axis=0), chosen.T @ chosen
+    exact = False
     for _ in range(_REFITS):
-        if inl.sum() < 3:
+        if count < 3:
             break
-        n, d = fit_plane_lsq(np.compress(inl, points, axis=0))  # rows by a mask: compress is several times faster
-        again = np.abs(points @ n + d) <= distance_m
+        if not exact:
+            plane = _moments_plane(s1, s2, count, r2)
+            if plane is None:
+                exact = True
+            else:
+                dist = np.abs(points @ plane[0] + plane[1])
+                if bool((np.abs(dist - distance_m) <= plane[2]).any()):
+                    exact = True
+        if exact:
+            fitted = None
+            n, d = fit_plane_lsq(np.compress(inl, points, axis=0))
+            again = np.abs(points @ n + d) <= distance_m
+        else:
+            fitted = inl
+            again = dist <= distance_m
         if (again == inl).all():
             break
+        changed = np.flatnonzero(again != inl)
+        if not exact:
+            moved = points[changed]
+            sign = np.where(again[changed], 1.0, -1.0)
+            s1 = s1 + (sign[:, None] * moved).sum(axis=0)
+            s2 = s2 + (moved * sign[:, None]).T @ moved
+        count += int(again[changed].sum()) * 2 - changed.size
         inl = again
+    if fitted is not None:
+        return fit_plane_lsq(np.compress(fitted, points, axis=0))
     return n, d
+
+
+def _moments_plane(s1: np.ndarray, s2: np.ndarray, count: int, r2: float) -> tuple[np.ndarray, float, float] | None:
+    """(normal, offset, margin) of the least-squares plane of ``count`` points from their
+    sum ``s1`` and the sum of their outer products ``s2``: the smallest eigenvector of
+    the scatter matrix; ``margin`` (m) bounds how far its distances may lie from the
+    SVD's (`fit_plane_lsq`) on points within sqrt(``r2``) of the origin. None when the
+    bound is not small (an ill-posed scatter: a line of points)."""
+    c = s1 / count
+    scatter = s2 - count * np.outer(c, c)
+    w, vecs = np.linalg.eigh(scatter)
+    gap = float(w[1] - w[0])
+    # the sums' rounding (and the SVD's) bounded generously: count * eps * r2 per entry,
+    # a hundredfold; the normal turns by at most that over the eigenvalues' gap (radians)
+    err = 100.0 * count * 2.3e-16 * max(r2, 1.0)
+    if gap <= 0.0 or err > 1e-9 * gap:
+        return None
+    normal = vecs[:, 0]
+    margin = max(1e-9, 4.0 * (err / gap) * np.sqrt(max(r2, 1.0)))
+    return normal, float(-normal @ c), margin
 
 
 def _hull_candidates(x: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -254,16 +318,16 @@ def inside_convex_raster(
     cx = np.floor((points_2d[:, 0] - lo[0]) / cell_m).astype(np.int64)
     cy = np.floor((points_2d[:, 1] - lo[1]) / cell_m).astype(np.int64)
     ok = (cx >= 0) & (cx < dims[0]) & (cy >= 0) & (cy < dims[1])
-    out = np.zeros(points_2d.shape[0], dtype=bool)
-    out[ok] = grid[cx[ok], cy[ok]]
-    return out
+    # one flat lookup, a point off the raster at a cell past its end that is outside
+    cell = np.where(ok, cx * dims[1] + cy, dims[0] * dims[1])
+    return np.take(np.append(grid.ravel(), False), cell)
 
 
 def _packed(*cells: np.ndarray) -> tuple[list[np.ndarray], np.ndarray, int]:
     """Each (N, 2) int64 array of grid indices (none empty) as one int64 key per row over
     their joint range (offset to non-negative, first column major: the keys sort as the
     rows do), with the offset and the second column's span that unpack them."""
-    lo = np.min([c.min(axis=0) for c in cells], axis=0)
+    lo = np.min([[c[:, 0].min(), c[:, 1].min()] for c in cells], axis=0)  # per column: faster than axis=0
     span = int(max(int(c[:, 1].max()) for c in cells) - lo[1]) + 1
     return [(c[:, 0] - lo[0]) * span + (c[:, 1] - lo[1]) for c in cells], lo, span
 
@@ -276,7 +340,15 @@ def unique_cells(cells: np.ndarray) -> np.ndarray:
     if cells.shape[0] == 0:
         return cells.reshape(0, 2)
     (packed,), lo, span = _packed(cells)
-    keys = np.unique(packed)
+    top = int(packed.max()) + 1
+    if top <= 4 * packed.shape[0] + 1024:
+        # the keys' range is not much larger than their number: a mark per key, read back
+        # in order (the sorted distinct keys without a sort)
+        seen = np.zeros(top, dtype=bool)
+        seen[packed] = True
+        keys = np.flatnonzero(seen)
+    else:
+        keys = np.unique(packed)
     return np.stack([keys // span + lo[0], keys % span + lo[1]], axis=1)
 
 
@@ -330,17 +402,18 @@ def largest_component(points_2d: np.ndarray, cell_m: float, join_gap_m: float = 
     """Mask of the points in the largest 8-connected piece of the occupied grid cells,
     together with every other piece within ``join_gap_m`` of it (objects standing on a
     table and their shadows cut its visible surface into pieces), and their area (m^2)."""
-    offsets = np.floor((points_2d - points_2d.min(axis=0)) / cell_m)
+    # reductions per column: along axis 0 of an (N, 2) array they cost several times more
+    offsets = np.floor((points_2d - np.array([points_2d[:, k].min() for k in (0, 1)])) / cell_m)
     # counted in floats: points from absurd intrinsics (a principal point 1e18 px away)
     # span more cells than an int64 holds, and the product of the sides wrapped round
-    sides = offsets.max(axis=0) + 1
+    sides = np.array([offsets[:, k].max() for k in (0, 1)]) + 1
     n_cells = float(np.prod(sides))
     if n_cells > 4_000_000:  # a plane reaching far away: coarser cells (a long thin one: by its long side)
         scale = float(np.ceil(max(np.sqrt(n_cells / 4_000_000), float(sides.max()) / 4_000_000)))
         offsets = np.floor(offsets / scale)
         cell_m *= scale
     cells = offsets.astype(np.int64)
-    dims = cells.max(axis=0) + 1
+    dims = np.array([cells[:, k].max() for k in (0, 1)]) + 1
     grid = np.zeros(dims, dtype=bool)
     grid[cells[:, 0], cells[:, 1]] = True
     labels, n = _label_grid(grid)
@@ -398,7 +471,9 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
         if inl.size < 30:
             continue
         basis = plane_basis(n)
-        comp, area = largest_component(project(sample[inl], basis), settings.table_cell_m, settings.table_join_gap_m)
+        comp, area = largest_component(
+            project(np.take(sample, inl, axis=0), basis), settings.table_cell_m, settings.table_join_gap_m
+        )
         if area < settings.table_min_area_m2:
             small.append(
                 PlaneVerdict(
@@ -430,7 +505,8 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
     far: list[PlaneVerdict] = []
     scored: list[tuple[TableFit, int, float]] = []
     for c in candidates:
-        n, d = fit_plane_lsq(sample[c.members])
+        members = np.take(sample, c.members, axis=0)  # rows by index: take is several times faster than a[idx]
+        n, d = fit_plane_lsq(members)
         camera_is_origin = abs(d) >= _MIN_CAMERA_HEIGHT_M
         if camera_is_origin and abs(d) > settings.table_max_distance_m:
             far.append(
@@ -446,7 +522,7 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
             continue
         basis = plane_basis(n)
         origin = -d * n
-        poly = convex_hull_2d(project(sample[c.members], basis) - origin @ basis.T)
+        poly = convex_hull_2d(project(members, basis) - origin @ basis.T)
         h = loose @ n + d
         # depth noise grows with the square of the range: far off-plane points are
         # noise of the plane itself, not things standing on it
@@ -456,14 +532,14 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
         ins[band] = inside_convex(project(loose_band, basis) - origin @ basis.T, poly, -_EDGE_BAND_M)
         above = int((ins & (h > 0)).sum())
         below = int((ins & (h < 0)).sum())
-        if camera_is_origin:
-            if d < 0:  # orient the normal towards the camera
-                n, d, above, below = -n, -d, below, above
-        elif below > above:  # not a camera frame: "up" is where the objects are
+        # orient the normal towards the camera, or, not in a camera frame, "up" where the
+        # objects are
+        if (d < 0) if camera_is_origin else (below > above):
             n, d, above, below = -n, -d, below, above
-        basis = plane_basis(n)
-        origin = -d * n
-        poly = convex_hull_2d(project(sample[c.members], basis) - origin @ basis.T)
+            # the hull again in the turned plane's axes (unturned, it is the one above)
+            basis = plane_basis(n)
+            origin = -d * n
+            poly = convex_hull_2d(project(members, basis) - origin @ basis.T)
         fit = TableFit(TablePlane(normal=n, offset=float(d)), poly, origin, basis, camera_is_origin)
         # noise lies on both sides of a plane, objects on one: score the difference
         key = (abs(above - below), c.area_m2)
@@ -552,8 +628,10 @@ def table_and_prism(
         min_h = min_h + settings.prism_noise_per_m2 * (squared_range(points) if range2 is None else range2)
     band = (h >= min_h) & (h <= settings.prism_max_height_m)
     cand = np.flatnonzero(near | band)
-    # one matrix-vector product per in-plane axis, on the candidates only
-    xy = project(points[cand], fit.basis) - fit.origin @ fit.basis.T
+    # one matrix-vector product per in-plane axis over all the points, then the
+    # candidates' entries: a row's product does not depend on the rows around it (the
+    # same bits as projecting a copy of the candidates' rows, which cost several times more)
+    xy = np.stack([np.take(points @ a, cand) for a in fit.basis], axis=1) - fit.origin @ fit.basis.T
     ins = inside_convex_raster(xy, fit.polygon_2d, settings.hull_margin_m)
     table = np.zeros(points.shape[0], dtype=bool)
     prism = np.zeros(points.shape[0], dtype=bool)
@@ -627,18 +705,21 @@ def beyond_the_edge(
     basis = plane_basis(plane.normal)
     origin = -plane.offset * plane.normal
     cell = settings.table_cell_m
-    flat_pieces = pieces.ravel()
-    flat_pts = points.reshape(-1, 3).astype(np.float64)
+    # the pieces lie on the table's pixels only: each table point's piece, and its plane
+    # coordinates once (a row's product does not depend on the rows around it: the same
+    # bits as projecting each piece's rows apart), taken per piece in raster order
+    piece_of = np.take(pieces.ravel(), table_pixels)
+    on_table = points.reshape(-1, 3)[table_pixels].astype(np.float64)
+    table_u, table_v = (on_table @ a for a in basis)
 
     def cells(k: int) -> np.ndarray:
-        # rows of the whole frame by a mask: np.compress, several times faster than boolean
-        # indexing of rows
-        xy = project(np.compress(flat_pieces == k, flat_pts, axis=0), basis) - origin @ basis.T
+        mine = piece_of == k
+        xy = np.stack([np.compress(mine, table_u), np.compress(mine, table_v)], axis=1) - origin @ basis.T
         return unique_cells(np.floor(xy / cell).astype(np.int64))
 
     main_cells = cells(main)
     main_hull = convex_hull_2d((main_cells + 0.5) * cell)
-    gone = np.zeros(height * width, dtype=bool)
+    gone: list[int] = []
     for k in others:
         own = cells(k)
         both = convex_hull_2d((np.vstack([main_cells, own]) + 0.5) * cell)
@@ -663,9 +744,9 @@ def beyond_the_edge(
             # nothing (a shadow behind an object is one too)
             through = int((seen > want * (1.0 + rel)).sum())
         if through >= _EDGE_MIN_CELLS and through >= _EDGE_RATIO * nearer:
-            gone |= flat_pieces == k
-    solid = (flat_pieces == main) | np.isin(flat_pieces, [k for k in others]) & ~gone
-    return gone[table_pixels], solid[table_pixels]
+            gone.append(k)
+    dropped = np.isin(piece_of, gone)
+    return dropped, (piece_of == main) | np.isin(piece_of, others) & ~dropped
 
 
 def _pinhole_of(pts: np.ndarray, finite: np.ndarray) -> Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]] | None:
@@ -673,11 +754,11 @@ def _pinhole_of(pts: np.ndarray, finite: np.ndarray) -> Callable[[np.ndarray], t
     an organized cloud's own points (column = fx X/Z + cx, row = fy Y/Z + cy, least
     squares on a sample); None when the cloud is not a pinhole image (a fit off by more
     than a pixel)."""
-    rows, cols = np.nonzero(finite & (pts[..., 2] > 0))
-    if rows.size < 100:
+    flat = np.flatnonzero(finite & (pts[..., 2] > 0))  # np.nonzero's pixels in its order, as one array
+    if flat.size < 100:
         return None
-    pick = np.linspace(0, rows.size - 1, 2000).astype(np.int64)
-    rows, cols = rows[pick], cols[pick]
+    pick = np.linspace(0, flat.size - 1, 2000).astype(np.int64)
+    rows, cols = np.divmod(flat[pick], pts.shape[1])
     p = pts[rows, cols].astype(np.float64)
     x, y = p[:, 0] / p[:, 2], p[:, 1] / p[:, 2]
     fu, *_ = np.linalg.lstsq(np.column_stack([x, np.ones_like(x)]), cols.astype(np.float64), rcond=None)

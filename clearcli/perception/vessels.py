@@ -100,15 +100,18 @@ def _by_colour(
 def _circles3(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Centres (R, 2) and radii (R,) of the circles through each three points of ``p``
     (R, 3, 2); a radius of inf where the three are collinear."""
-    a, b, c = p[:, 0], p[:, 1], p[:, 2]
-    d = 2.0 * (a[:, 0] * (b[:, 1] - c[:, 1]) + b[:, 0] * (c[:, 1] - a[:, 1]) + c[:, 0] * (a[:, 1] - b[:, 1]))
+    # by coordinate columns: a sum or a norm over a row of two is one addition of the two
+    # squares, the same arithmetic as (a**2).sum(1) and np.linalg.norm(..., axis=1)
+    ax, ay, bx, by, cx, cy = p[:, 0, 0], p[:, 0, 1], p[:, 1, 0], p[:, 1, 1], p[:, 2, 0], p[:, 2, 1]
+    d = 2.0 * (ax * (by - cy) + bx * (cy - ay) + cx * (ay - by))
     ok = np.abs(d) > 1e-12
     d = np.where(ok, d, 1.0)
-    a2, b2, c2 = (a**2).sum(1), (b**2).sum(1), (c**2).sum(1)
-    ux = (a2 * (b[:, 1] - c[:, 1]) + b2 * (c[:, 1] - a[:, 1]) + c2 * (a[:, 1] - b[:, 1])) / d
-    uy = (a2 * (c[:, 0] - b[:, 0]) + b2 * (a[:, 0] - c[:, 0]) + c2 * (b[:, 0] - a[:, 0])) / d
+    a2, b2, c2 = ax * ax + ay * ay, bx * bx + by * by, cx * cx + cy * cy
+    ux = (a2 * (by - cy) + b2 * (cy - ay) + c2 * (ay - by)) / d
+    uy = (a2 * (cx - bx) + b2 * (ax - cx) + c2 * (bx - ax)) / d
     centres = np.stack([ux, uy], axis=1)
-    radii = np.where(ok, np.linalg.norm(a - centres, axis=1), np.inf)
+    dx, dy = ax - ux, ay - uy
+    radii = np.where(ok, np.sqrt(dx * dx + dy * dy), np.inf)
     return centres, radii
 
 
@@ -123,7 +126,7 @@ def find_rim(
         return None
     # a point picked twice makes no circle (radius inf); the rounds are scored on at
     # most _SCORE_SAMPLES of the band
-    centres, radii = _circles3(band_xy[rng.integers(0, n, (_RANSAC_ROUNDS, 3))])
+    centres, radii = _circles3(np.take(band_xy, rng.integers(0, n, (_RANSAC_ROUNDS, 3)), axis=0))
     ok = (radii >= _MIN_RADIUS_M) & (radii <= max_radius_m)
     if not ok.any():
         return None
@@ -142,24 +145,31 @@ def find_rim(
     score = np.count_nonzero(dist <= np.maximum(_INLIER * radii, _INLIER_M)[:, None], axis=1)
     best = int(np.argmax(score))
     centre, radius = centres[best], float(radii[best])
-    inl = np.abs(np.linalg.norm(band_xy - centre, axis=1) - radius) <= max(_INLIER * radius, _INLIER_M)
+    bx, by = band_xy[:, 0], band_xy[:, 1]
+
+    def on_circle(centre: np.ndarray, radius: float) -> np.ndarray:
+        # np.linalg.norm(band_xy - centre, axis=1)'s arithmetic, by columns
+        dx, dy = bx - centre[0], by - centre[1]
+        return np.abs(np.sqrt(dx * dx + dy * dy) - radius) <= max(_INLIER * radius, _INLIER_M)
+
+    inl = on_circle(centre, radius)
     if inl.sum() < 10:
         return None
     # least squares on the inliers until they no longer change: the circle is then a
     # fixed point of the refit, not of the draws (which voxel the random indices pick
     # changes with the band's size: one voxel more, other draws, another first circle)
     for _ in range(_REFITS):
-        centre, radius = fit_circle(band_xy[inl])
+        centre, radius = fit_circle(np.compress(inl, band_xy, axis=0))  # rows by a mask: compress is faster
         if not (_MIN_RADIUS_M <= radius <= max_radius_m):
             return None
-        again = np.abs(np.linalg.norm(band_xy - centre, axis=1) - radius) <= max(_INLIER * radius, _INLIER_M)
+        again = on_circle(centre, radius)
         if again.sum() < 10:
             return None
         settled = bool((again == inl).all())
         inl = again
         if settled:
             break
-    if cover_deg(band_xy[inl], centre) < _MIN_COVER_DEG:
+    if cover_deg(np.compress(inl, band_xy, axis=0), centre) < _MIN_COVER_DEG:
         return None
     return centre, radius, inl
 

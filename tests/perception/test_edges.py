@@ -54,3 +54,20 @@ def test_two_surfaces_apart_in_depth() -> None:
     pieces = pixel_pieces(points.reshape(-1, 3), (height, width), index, 0.02).reshape(height, width)
     assert (pieces[:, :3] == 0).all() and (pieces[:, 3:] == 1).all()
     assert pixel_pieces(points.reshape(-1, 3), (height, width), index[:0], 0.02).size == 0
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_a_set_inside_the_image_gives_the_pieces_of_every_pair(seed: int) -> None:
+    """The pairs are looked for within the set's bounding box: a set away from the
+    image's borders gives the pieces every pair gives."""
+    gen = np.random.default_rng(100 + seed)
+    height, width = 30, 40
+    points = gen.uniform(0.5, 1.5, size=(height * width, 3))
+    rows, cols = np.meshgrid(np.arange(5, 17), np.arange(9, 30), indexing="ij")
+    box = (rows * width + cols).ravel()
+    index = box[gen.random(box.size) < 0.7]
+    if seed % 2:
+        gen.shuffle(index)
+    for rel in (0.02, 0.2, 1.0):
+        want = _every_pair(points, (height, width), index, rel)
+        assert pixel_pieces(points, (height, width), index, rel).tolist() == want.tolist()

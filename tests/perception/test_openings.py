@@ -58,3 +58,15 @@ def test_no_edge_is_seen_without_an_image() -> None:
     edges = seen_edges(np.zeros((10, 3)), None, TABLE, square)
     assert len(edges) == 4 and not any(e.seen for e in edges)
     assert all("unorganized" in e.why for e in edges)
+
+
+def test_quantile_is_numpys_linear_quantile_to_the_bit() -> None:
+    from clearcli.perception.openings import _quantile
+
+    gen = np.random.default_rng(2)
+    for trial in range(300):
+        values = gen.normal(size=int(gen.integers(1, 3000))) * 10 ** gen.uniform(-4, 1)
+        if trial % 3 == 0:
+            values = np.round(values, 3)  # ties
+        for q in (0.0, 0.1, 0.5, 0.9, 0.98, 1.0):
+            assert _quantile(values, q) == float(np.quantile(values, q))

@@ -164,3 +164,72 @@ def test_label_grid_numbers_as_ndimage() -> None:
         got, n_got = _label_grid(grid)
         assert n_got == n_want
         assert np.array_equal(got, want)
+
+
+def _refits_by_svd(points: np.ndarray, n: np.ndarray, d: float, distance_m: float) -> tuple[np.ndarray, float]:
+    """ransac_plane's refinement by its definition: an SVD refit on the inliers until they
+    no longer change (at most _REFITS)."""
+    from clearcli.perception.table import _REFITS, fit_plane_lsq
+
+    inl = np.abs(points @ n + d) <= distance_m
+    for _ in range(_REFITS):
+        if inl.sum() < 3:
+            break
+        n, d = fit_plane_lsq(np.compress(inl, points, axis=0))
+        again = np.abs(points @ n + d) <= distance_m
+        if (again == inl).all():
+            break
+        inl = again
+    return n, d
+
+
+def test_refits_by_moments_give_the_svd_refits_plane_bit_for_bit(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The refinement by the scatter's moments returns the plane of refitting by SVD
+    every time, to the bit: on noisy planes with clutter, with points put right at the
+    inlier distance (where it must refit by SVD), and on a line of points (an ill-posed
+    scatter); on a plain plane it does one SVD in all."""
+    from clearcli.perception import table
+
+    gen = np.random.default_rng(5)
+    dist = 0.01
+    for trial in range(60):
+        n_pts = int(gen.integers(50, 20000))
+        normal = gen.normal(size=3)
+        normal /= np.linalg.norm(normal)
+        basis = table.plane_basis(normal)
+        offset = float(gen.uniform(-1.5, 1.5))
+        on = gen.uniform(-0.6, 0.6, size=(n_pts, 2)) @ basis - offset * normal
+        points = on + gen.normal(scale=gen.uniform(0.001, 0.008), size=(n_pts, 1)) * normal
+        clutter = gen.random(n_pts) < gen.uniform(0.0, 0.5)
+        points[clutter] += gen.uniform(0.0, 0.3, size=(int(clutter.sum()), 1)) * normal
+        if trial % 4 == 1:  # some points on the inlier distance of the first plane
+            points[:20] = on[:20] + dist * normal
+        if trial % 10 == 9:  # a line: no plane to speak of
+            points = np.outer(gen.uniform(-1.0, 1.0, n_pts), basis[0]) + gen.normal(scale=1e-4, size=(n_pts, 3))
+            offset = 0.0  # every point an inlier of the first plane
+        start = normal + gen.normal(scale=0.01, size=3)
+        start /= np.linalg.norm(start)
+        want = _refits_by_svd(points, start, offset, dist)
+        got = table._refined(points, start, offset, dist)
+        assert np.array_equal(got[0], want[0]) and got[1] == want[1]
+    # one SVD on a plain plane (the refits between by moments)
+    calls = []
+    svd = table.fit_plane_lsq
+    monkeypatch.setattr(table, "fit_plane_lsq", lambda p: calls.append(p.shape[0]) or svd(p))
+    points = gen.uniform(-0.5, 0.5, size=(5000, 3)) * np.array([1.0, 1.0, 0.004]) + np.array([0.0, 0.0, 0.8])
+    table._refined(points, np.array([0.02, 0.0, 1.0]) / np.hypot(0.02, 1.0), -0.8, dist)
+    assert len(calls) == 1
+
+
+def test_unique_cells_are_numpys_unique_rows() -> None:
+    """The distinct cells in np.unique(axis=0)'s order, by marks over the keys' range
+    (dense cells) and by a sort (sparse ones), negative indices included."""
+    from clearcli.perception.table import unique_cells
+
+    gen = np.random.default_rng(3)
+    for _ in range(40):
+        n = int(gen.integers(1, 5000))
+        spread = int(gen.choice([3, 30, 300, 100_000]))
+        cells = gen.integers(-spread, spread, size=(n, 2)).astype(np.int64)
+        assert np.array_equal(unique_cells(cells), np.unique(cells, axis=0))
+    assert unique_cells(np.zeros((0, 2), dtype=np.int64)).shape == (0, 2)
