@@ -144,8 +144,12 @@ def flat_objects(
     height, width = shape
     if table_pixels.size < 100:
         return []
-    # the table's colour from a sample of its pixels (a few thousand fix a median)
-    lab_table = lab_of(colors[table_pixels[:: max(1, table_pixels.size // 5000)]])
+    # the table's colour from a sample of its pixels (a few thousand fix a median): the
+    # pixels on a fixed lattice of the image, so that a pixel more or less on the table
+    # (a micrometre can move a point across the table's bound) leaves the others in the
+    # sample; every n-th of the table's list shifted the whole sample along by one
+    step = max(1, height * width // 10000)
+    lab_table = lab_of(colors[table_pixels[table_pixels % step == 0]])
     centre = np.median(lab_table, axis=0)
     spread = float(np.median(np.linalg.norm(lab_table - centre, axis=1)))
     threshold = max(min_color_delta, 3.0 * spread)
