@@ -174,6 +174,11 @@ def _refused(frame: Frame, settings: SegmentSettings) -> bool:
 
 def first_difference(frame: Frame, other: Frame, settings: SegmentSettings) -> list[tuple[str, int, int]]:
     """Per step: (name, groups without a partner, points that changed group)."""
+    from clearcli.perception.resolution import WorkingGrid
+
+    # segment works on the working grid (every k-th row and column of a frame far denser
+    # than the voxels, a 1280x720 one): trace that grid, as segment sees it
+    frame, other = WorkingGrid.of(frame, settings, None).frame, WorkingGrid.of(other, settings, None).frame
     out = []
     for (name, a), (_, b) in zip(trace(frame, settings), trace(other, settings)):
         unmatched, moved = _partition_diff(a, b)

@@ -15,7 +15,9 @@ from helpers import FIXTURES, shared_path
 
 
 def _changed(paths: list[Path]) -> list[str]:
-    """The frames of ``paths`` whose objects change under +-1 um, each with how."""
+    """The frames of ``paths`` whose objects change under +-1 um, each with how (a frame
+    refused for want of a table must be refused as well when moved)."""
+    from clearcli.errors import ClearError
     from clearcli.io.read import read_frame
     from clearcli.perception.segment import segment
     from clearcli.perception.stability import object_matches, perturbed, same_objects
@@ -25,7 +27,15 @@ def _changed(paths: list[Path]) -> list[str]:
     out = []
     for path in paths:
         frame = read_frame(path)
-        before = segment(frame, settings)
+        try:
+            before = segment(frame, settings)
+        except ClearError:
+            try:
+                segment(perturbed(frame, 1e-6, seed=0), settings)
+            except ClearError:
+                continue
+            out.append(f"{path.name}: refused, but not when moved")
+            continue
         after = segment(perturbed(frame, 1e-6, seed=0), settings)
         if not same_objects(before, after):
             worst = min([1.0, *object_matches(before, after), *object_matches(after, before)])
@@ -42,6 +52,28 @@ def test_shared_frames_keep_their_objects_under_a_micrometre(where: str, pattern
     paths = sorted(shared_path(where).glob(pattern))
     assert len(paths) == count, f"{where}: {len(paths)} frames, expected {count}"
     assert _changed(paths) == []
+
+
+# The other labs' frames: the target names only the sets above, but a user's frames come
+# from sensors like these. Two Asus Xtion frames stored in float metres (points anywhere
+# relative to the voxel grid, where whole-millimetre depth keeps off its boundaries)
+# still change: a micrometre creates or empties voxels of one point, whose full weight in
+# the normals' PCA turns neighbouring normals by up to 13 degrees, and the supervoxels'
+# first assignments follow. Weighing a voxel by its points (up to 4) mended both but
+# changed cleargrasp_000000130 and split three uois frames more, so it was not taken
+# (stop 46's note). The test fails on a new flip, and on a known one mended, so that
+# this list is kept true.
+_KNOWN_FLIPS = {"gqcnn_primesense_3.pcd", "gqcnn_primesense_4.pcd"}
+
+
+@pytest.mark.parametrize(
+    ("where", "count"), [("scenes/gqcnn", 7), ("scenes/cleargrasp_d435", 4)], ids=["gqcnn", "cleargrasp"]
+)
+def test_other_labs_frames_change_under_a_micrometre_only_where_known(where: str, count: int) -> None:
+    paths = sorted(shared_path(where).glob("*.pcd"))
+    assert len(paths) == count, f"{where}: {len(paths)} frames, expected {count}"
+    changed = _changed(paths)
+    assert {line.split(":")[0] for line in changed} == _KNOWN_FLIPS & {p.name for p in paths}, changed
 
 
 def test_fixtures_keep_their_objects_under_a_micrometre() -> None:
