@@ -45,6 +45,7 @@ import numpy as np
 from clearcli.perception.context import RefineContext
 from clearcli.perception.cuts import seam_rise
 from clearcli.perception.flat import group_lab
+from clearcli.perception.graph import ApartSets
 from clearcli.perception.lccp import _angle_deg, join_pairs
 from clearcli.perception.supervoxels import Supervoxels
 
@@ -129,35 +130,10 @@ def color_splits(
     p_lo, p_hi = pairs // n_piece, pairs % n_piece
     apart = (median >= min_rise_m) & (size[p_lo] >= min_voxels) & (size[p_hi] >= min_voxels)
     # join back, most shared adjacencies first, never two pieces apart into one
-    parent = np.arange(n_piece)
-    enemies: dict[int, set[int]] = {}
-    for lo_p, hi_p in zip(p_lo[apart].tolist(), p_hi[apart].tolist()):
-        enemies.setdefault(lo_p, set()).add(hi_p)
-        enemies.setdefault(hi_p, set()).add(lo_p)
-
-    def root(i: int) -> int:
-        while parent[i] != i:
-            parent[i] = parent[parent[i]]
-            i = int(parent[i])
-        return i
-
-    joined = []
-
-    def join(ra: int, rb: int) -> None:
-        parent[rb] = ra
-        mine = enemies.pop(rb, set())
-        for x in mine:
-            enemies[x].discard(rb)
-            enemies[x].add(ra)
-        enemies.setdefault(ra, set()).update(mine)
-        joined.append((ra, rb))
-
+    sets = ApartSets(n_piece, zip(p_lo[apart].tolist(), p_hi[apart].tolist()))
     for k in np.lexsort((p_hi, p_lo, -total)).tolist():
-        if apart[k]:
-            continue
-        ra, rb = root(int(p_lo[k])), root(int(p_hi[k]))
-        if ra != rb and rb not in enemies.get(ra, ()):
-            join(ra, rb)
+        if not apart[k]:
+            sets.join(int(p_lo[k]), int(p_hi[k]))
     # a segment need not be connected (occlusion.py joins the pieces of an object a
     # nearer one cuts apart): a group apart from nothing joins the largest group of its
     # segment whose mean colour is within _PART_DE of its own (the far side of one
@@ -165,7 +141,7 @@ def color_splits(
     # shows on either side of an object lying across another is seldom one object)
     seg_of_piece = np.zeros(n_piece, dtype=np.int64)
     seg_of_piece[piece] = seg_of_sv
-    roots = np.array([root(p) for p in range(n_piece)])
+    roots = np.array([sets.root(p) for p in range(n_piece)])
     group_size = np.bincount(roots, weights=size, minlength=n_piece)
     heads = np.flatnonzero(roots == np.arange(n_piece))
     kept: dict[int, list[int]] = {}
@@ -177,12 +153,12 @@ def color_splits(
     for r in heads[np.lexsort((heads, -group_size[heads], seg_of_piece[heads]))].tolist():
         mine = kept.setdefault(int(seg_of_piece[r]), [])
         near = [k for k in mine if np.linalg.norm(group_lab[k] - group_lab[r]) < _PART_DE]
-        if enemies.get(r) or not near:
+        if sets.kept_apart(r) or not near:
             mine.append(r)
         else:
-            join(near[0], r)
+            sets.join_roots(near[0], r)
     # pieces are inside one segment, and so are their pairs: no join crosses segments
-    out = join_pairs(piece, np.asarray(joined, dtype=np.int64).reshape(-1, 2), n_piece)
+    out = join_pairs(piece, np.asarray(sets.joined, dtype=np.int64).reshape(-1, 2), n_piece)
     return _to_own_object(out, seg_of_sv, sv, voxel_centroids, lab, min_delta, min_rise_m)
 
 

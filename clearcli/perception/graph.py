@@ -11,6 +11,8 @@ lowest node, so every caller's output is unchanged.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+
 import numpy as np
 
 
@@ -91,3 +93,49 @@ def run_components(joined_to_previous: np.ndarray, edges: np.ndarray) -> np.ndar
         new[1:] |= rb[1:] != rb[:-1]
         ra, rb = ra[new], rb[new]
     return components(int(run[-1]) + 1, np.stack([ra, rb], axis=1))[run]
+
+
+class ApartSets:
+    """Disjoint sets of ``n`` nodes joined a pair at a time, where some pairs must never
+    end in one set: the greedy joins of colors.py (pieces of one colour) and learned.py
+    (segments the model finds one object), where two objects a rule told apart must not
+    be joined, directly or through a chain of joins. A union-find whose roots carry the
+    nodes their set must stay apart from (``apart``: pairs of nodes)."""
+
+    def __init__(self, n: int, apart: Iterable[tuple[int, int]]) -> None:
+        self._parent = list(range(n))
+        self._enemies: dict[int, set[int]] = {}
+        for a, b in apart:
+            self._enemies.setdefault(a, set()).add(b)
+            self._enemies.setdefault(b, set()).add(a)
+        self.joined: list[tuple[int, int]] = []  # (kept root, joined root), in join order
+
+    def root(self, i: int) -> int:
+        parent = self._parent
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    def kept_apart(self, r: int) -> bool:
+        """Whether the set of root ``r`` must stay apart from some other set."""
+        return bool(self._enemies.get(r))
+
+    def join_roots(self, ra: int, rb: int) -> None:
+        """Join the set of root ``rb`` into that of root ``ra`` (no check: see `join`)."""
+        self._parent[rb] = ra
+        mine = self._enemies.pop(rb, set())
+        for x in mine:
+            self._enemies[x].discard(rb)
+            self._enemies[x].add(ra)
+        self._enemies.setdefault(ra, set()).update(mine)
+        self.joined.append((ra, rb))
+
+    def join(self, a: int, b: int) -> bool:
+        """Join the sets of ``a`` and ``b`` unless they are one already or must stay
+        apart; whether they were joined."""
+        ra, rb = self.root(a), self.root(b)
+        if ra == rb or rb in self._enemies.get(ra, ()):
+            return False
+        self.join_roots(ra, rb)
+        return True

@@ -35,6 +35,7 @@ import numpy as np
 from clearcli.errors import ClearError
 from clearcli.perception.context import RefineContext
 from clearcli.perception.cuts import seam_rise
+from clearcli.perception.graph import ApartSets
 from clearcli.perception.lccp import _angle_deg, convex_edges, join_pairs
 
 MODEL_RESOURCE = "data/join_model.json"
@@ -263,32 +264,14 @@ def pair_features(seg_of_voxel: np.ndarray, ctx: RefineContext) -> PairFeatures:
 def joins(feats: PairFeatures, logit: np.ndarray, min_logit: float, n_seg: int) -> list[tuple[int, int]]:
     """The pairs to join: log-odds at least ``min_logit``, most probable first (ties by
     pair), never two segments apart, directly or through a chain of joins."""
-    parent = list(range(n_seg))
-
-    def root(i: int) -> int:
-        while parent[i] != i:
-            parent[i] = parent[parent[i]]
-            i = parent[i]
-        return i
-
-    enemies: dict[int, set[int]] = {}
-    for a, b in feats.pairs[feats.apart].tolist():
-        enemies.setdefault(a, set()).add(b)
-        enemies.setdefault(b, set()).add(a)
+    sets = ApartSets(n_seg, feats.pairs[feats.apart].tolist())
     out = []
     for k in np.lexsort((feats.pairs[:, 1], feats.pairs[:, 0], -logit)).tolist():
         if logit[k] < min_logit or feats.apart[k]:
             continue
-        ra, rb = root(int(feats.pairs[k, 0])), root(int(feats.pairs[k, 1]))
-        if ra == rb or rb in enemies.get(ra, set()):
-            continue
-        parent[rb] = ra
-        mine = enemies.pop(rb, set())
-        for t in mine:
-            enemies[t].discard(rb)
-            enemies[t].add(ra)
-        enemies.setdefault(ra, set()).update(mine)
-        out.append((int(feats.pairs[k, 0]), int(feats.pairs[k, 1])))
+        a, b = int(feats.pairs[k, 0]), int(feats.pairs[k, 1])
+        if sets.join(a, b):
+            out.append((a, b))
     return out
 
 

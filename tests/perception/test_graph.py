@@ -97,3 +97,21 @@ def test_dense_labels_number_labels_as_unique_does() -> None:
         assert got.dtype == np.int64
         assert np.array_equal(got, np.unique(labels, return_inverse=True)[1])
     assert dense_labels(np.array([5, 2, 2, 9])).tolist() == [1, 0, 0, 2]
+
+
+def test_apart_sets_never_join_two_nodes_kept_apart_even_through_a_chain() -> None:
+    from clearcli.perception.graph import ApartSets
+
+    sets = ApartSets(5, [(0, 3)])
+    assert sets.join(0, 1)  # {0, 1}
+    assert sets.join(3, 2)  # {2, 3}
+    assert not sets.join(1, 2)  # would put 0 and 3 in one set
+    assert not sets.join(1, 0)  # one set already
+    assert sets.kept_apart(sets.root(1)) and sets.kept_apart(sets.root(2))
+    assert not sets.kept_apart(4)
+    assert sets.join(4, 1)  # nothing keeps 4 apart
+    assert sets.root(4) == sets.root(0) != sets.root(3)
+    assert sets.joined == [(0, 1), (3, 2), (4, 0)]  # (the first node's root, the other's)
+    # join_roots joins without a check (colors.py's far side of one object)
+    sets.join_roots(sets.root(0), sets.root(3))
+    assert len({sets.root(i) for i in range(5)}) == 1
