@@ -10,6 +10,16 @@ import pytest
 from clearcli import console
 
 
+@pytest.fixture(autouse=True)
+def _as_in_a_command(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The environment of a `clear` process: none of the variables that make rich take a
+    pipe for a terminal, and no IPython loaded (the full suite imports it through another
+    test's libraries; `_plain` then leaves everything to rich, as it should in Jupyter)."""
+    for name in console._RICH_ENV:
+        monkeypatch.delenv(name, raising=False)
+    monkeypatch.delitem(sys.modules, "IPython", raising=False)
+
+
 def test_a_lazy_console_is_a_context_manager_as_rich_uses_it(capsys) -> None:  # type: ignore[no-untyped-def]
     # rich's Live and Progress hold their console with `with console:`; Python looks
     # that up on the type, past the proxy's __getattr__
