@@ -176,16 +176,21 @@ def back_project(depth_m: np.ndarray, model: CameraModel) -> np.ndarray:
     z = depth.astype(np.float32)
     with np.errstate(invalid="ignore"):
         z[~(np.isfinite(z) & (z > 0))] = np.nan
-    if model.distorted:
-        ray_x, ray_y = _undistorted_rays(model, h, w)
-        x, y = ray_x * z, ray_y * z
-    else:
-        # Float32, in the order (u - cx) * z / fx: this reproduces the UOIS PCDs bit for bit;
-        # float64 then cast (or dividing before multiplying) is 1 ulp off in most points.
-        u, v = _pixel_grid(model, h, w)
-        x = (u[None, :].astype(np.float32) - np.float32(model.cx)) * z / np.float32(model.fx)
-        y = (v[:, None].astype(np.float32) - np.float32(model.cy)) * z / np.float32(model.fy)
-    return np.stack([x, y, z], axis=-1).reshape(-1, 3)
+    # A depth near float32's top (a corrupt pixel) overflows x or y to inf: such a pixel is
+    # no point either, marked NaN below rather than warned about.
+    with np.errstate(over="ignore", invalid="ignore"):
+        if model.distorted:
+            ray_x, ray_y = _undistorted_rays(model, h, w)
+            x, y = ray_x * z, ray_y * z
+        else:
+            # Float32, in the order (u - cx) * z / fx: this reproduces the UOIS PCDs bit for bit;
+            # float64 then cast (or dividing before multiplying) is 1 ulp off in most points.
+            u, v = _pixel_grid(model, h, w)
+            x = (u[None, :].astype(np.float32) - np.float32(model.cx)) * z / np.float32(model.fx)
+            y = (v[:, None].astype(np.float32) - np.float32(model.cy)) * z / np.float32(model.fy)
+    points = np.stack([x, y, z], axis=-1).reshape(-1, 3)
+    points[~np.isfinite(points).all(axis=1)] = np.nan
+    return points
 
 
 # --- reading -------------------------------------------------------------------------------

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -303,3 +304,18 @@ def test_a_distorted_depth_image_gives_the_known_undistorted_points() -> None:
 
         ray = fsolve(miss, target, xtol=1e-12)
         np.testing.assert_allclose(points[v, u], [ray[0] * 1.2, ray[1] * 1.2, 1.2], atol=2e-6)
+
+
+def test_back_project_overflowing_depth_is_no_point_and_no_warning() -> None:
+    # 3e38 m is a corrupt pixel: (u - cx) * z overflows float32 to inf at the image's edge
+    depth = np.full((4, 6), 1.0, np.float32)
+    depth[0, 0] = np.float32(3e38)
+    depth[3, 5] = np.float32(3e38)
+    model = CameraModel(2.0, 2.0, 2.5, 1.5, 6, 4)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        points = back_project(depth, model)
+    assert np.isnan(points[0]).all() and np.isnan(points[-1]).all()
+    assert np.isfinite(points[1:-1]).all()
+    # the other pixels by hand: pixel (row 1, column 3) at 1 m is ((3 - 2.5) / 2, (1 - 1.5) / 2, 1)
+    assert np.allclose(points[1 * 6 + 3], [0.25, -0.25, 1.0])
