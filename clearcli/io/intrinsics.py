@@ -360,8 +360,14 @@ def _build(
     values = {}
     for name, value in (("fx", fx), ("fy", fy), ("cx", cx), ("cy", cy)):
         number = _number(value, name, where, fix)
-        if not math.isfinite(number) or (name in ("fx", "fy") and number <= 0):
+        # The back-projection works in float32: a value beyond its range (about 3.4e38), or
+        # a focal length that rounds to 0 there, would make every point inf or NaN.
+        with np.errstate(over="ignore", under="ignore"):
+            as_f32 = float(np.float32(number)) if math.isfinite(number) else number
+        if not math.isfinite(as_f32) or (name in ("fx", "fy") and as_f32 <= 0):
             must = "a positive finite number" if name in ("fx", "fy") else "a finite number"
+            if math.isfinite(number) and not (name in ("fx", "fy") and number <= 0):
+                must += " within float32's range, as the back-projection computes in float32"
             raise InputError(f"{where}: {name} = {value} (must be {must}); {fix}")
         values[name] = number
     w = None if width is None else _count(width, "width", where, 1)

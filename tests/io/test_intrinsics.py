@@ -319,3 +319,10 @@ def test_back_project_overflowing_depth_is_no_point_and_no_warning() -> None:
     assert np.isfinite(points[1:-1]).all()
     # the other pixels by hand: pixel (row 1, column 3) at 1 m is ((3 - 2.5) / 2, (1 - 1.5) / 2, 1)
     assert np.allclose(points[1 * 6 + 3], [0.25, -0.25, 1.0])
+
+
+def test_intrinsics_beyond_float32_are_refused(tmp_path: Path) -> None:
+    # finite in float64 but inf (or 0 for a focal length) in the float32 back-projection
+    _bad("600 600 1e308 240", "cx = 1e+308 (must be a finite number within float32's range")
+    _bad("1e-300 600 320 240", "fx = 1e-300 (must be a positive finite number within float32's range")
+    _bad("600 1e39 320 240", "fy = 1e+39 (must be a positive finite number within float32's range")
