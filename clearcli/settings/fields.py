@@ -123,6 +123,9 @@ def check_value(section: str, key: str, typ: Any, rng: Range, value: Any) -> Any
             raise SettingsError(f"{where}: {wanted}")
         if rng.choices and value not in rng.choices:
             raise SettingsError(f"{where}: must be {rng.describe()}")
+        if "\x00" in value:
+            # no file name, frame or topic holds one, and the OS refuses it in a path
+            raise SettingsError(f"{where}: holds a NUL character; give {rng.text or _type_name(typ)} without it")
         return value
     if typ is int or typ is float:
         if isinstance(value, bool) or not isinstance(value, (int, float)):

@@ -146,3 +146,12 @@ def test_sections_are_frozen_and_replace_checks_again() -> None:
     assert dataclasses.replace(toy, size_m=0.25).size_m == 0.25
     with pytest.raises(SettingsError, match=r"\[toy\] size_m"):
         dataclasses.replace(toy, size_m=-0.25)
+
+
+def test_a_string_with_a_nul_character_is_refused() -> None:
+    # a NUL can be in no path or frame name; pathlib raises ValueError on it (the fuzz
+    # harness found `--set robot.urdf="\u0000"` ending in an internal error)
+    rng = Range(text='"" or a URDF file')
+    assert check_value("robot", "urdf", str, rng, "arm.urdf") == "arm.urdf"
+    with pytest.raises(SettingsError, match=r"\[robot\] urdf = 'a\\x00b': holds a NUL character; give \"\" or a URDF"):
+        check_value("robot", "urdf", str, rng, "a\x00b")
