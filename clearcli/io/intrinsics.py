@@ -313,7 +313,7 @@ def _four_numbers(text: str) -> tuple[float, float, float, float] | None:
 def _k_entries(k: Any, name: str, where: str, row_major: bool) -> tuple[Any, Any, Any, Any]:
     """fx, fy, cx, cy of a 3x3 camera matrix given as 9 numbers, checking its last row
     (which catches a matrix given in the other order)."""
-    values = [float(x) for x in k]
+    values = [_number(x, f"an entry of {name}", where, "fix the camera matrix") for x in k]
     if len(values) != 9:
         raise InputError(f"{where}: {name} has {len(values)} numbers, not 9 (a 3 x 3 matrix); fix the camera matrix")
     last_row = values[6:9] if row_major else values[2::3]

@@ -326,3 +326,11 @@ def test_intrinsics_beyond_float32_are_refused(tmp_path: Path) -> None:
     _bad("600 600 1e308 240", "cx = 1e+308 (must be a finite number within float32's range")
     _bad("1e-300 600 320 240", "fx = 1e-300 (must be a positive finite number within float32's range")
     _bad("600 1e39 320 240", "fy = 1e+39 (must be a positive finite number within float32's range")
+
+
+def test_a_camera_matrix_entry_beyond_any_float_is_refused(tmp_path: Path) -> None:
+    # JSON holds integers of any size; float() of 10**400 raises OverflowError
+    column_major = [FX, 0, 0, 0, FY, 0, 10**400, CY, 1]
+    path = tmp_path / "huge.json"
+    path.write_text(json.dumps({"width": 640, "height": 480, "intrinsic_matrix": column_major}))
+    _bad(path, "huge.json: an entry of intrinsic_matrix = 1000", "is not a number a camera has; fix the camera matrix")
