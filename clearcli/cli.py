@@ -241,7 +241,7 @@ def _main() -> None:
             sys.exit(EXIT_TERMINATED if terminated else EXIT_INTERRUPTED)
         raise
     except ClearError as exc:
-        sys.stderr.write(f"clear: error: {exc}\n")
+        sys.stderr.write(f"clear: error: {_one_line(str(exc))}\n")
         sys.exit(exc.exit_code)
     except Terminated:
         sys.stderr.write("clear: terminated\n")
@@ -266,11 +266,19 @@ def _main() -> None:
         _internal(exc)
 
 
+def _one_line(message: str) -> str:
+    """``message`` on one line: a file name the user gave may hold a newline or another
+    control character, which a script reading stderr line by line would split on."""
+    if message.isprintable():
+        return message
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in message)
+
+
 def _internal(exc: BaseException) -> None:
     if os.environ.get("CLEAR_DEBUG"):
         raise exc
     sys.stderr.write(
-        f"clear: internal error: {type(exc).__name__}: {exc} "
+        f"clear: internal error: {type(exc).__name__}: {_one_line(str(exc))} "
         "(rerun with CLEAR_DEBUG=1 for the traceback and report it)\n"
     )
     sys.exit(EXIT_INTERNAL)

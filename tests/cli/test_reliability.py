@@ -297,3 +297,12 @@ def test_a_settings_file_nested_too_deeply_is_bad_input(tmp_path: Path) -> None:
 def test_two_outputs_naming_one_file_are_refused(tmp_path: Path) -> None:
     line = _one_line(clear("segment", BOX, "-o", tmp_path / "out.png", "--png", tmp_path / "out.png"), 3)
     assert "name the same file" in line and not (tmp_path / "out.png").exists()
+
+
+def test_an_error_naming_a_file_with_a_newline_stays_on_one_line(tmp_path: Path) -> None:
+    # a script reads stderr line by line: the file name's newline is shown escaped
+    odd = tmp_path / "new\nline.pcd"
+    shutil.copy(FIXTURES / "clutter10.pcd", odd)
+    run = clear("segment", odd, "-o", odd)
+    assert run.returncode == 8  # -o naming the input: an output error, refused before anything is read
+    assert run.stderr.count("\n") == 1 and "new\\nline.pcd" in run.stderr, run.stderr
