@@ -19,6 +19,7 @@ resolution, an all-zero depth image.
 from __future__ import annotations
 
 import logging
+import warnings
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -82,9 +83,13 @@ def _open_image(path: Path, what: str) -> PIL.Image.Image:
     Image.MAX_IMAGE_PIXELS = None
     require_regular(path, what)
     try:
-        image = Image.open(path)  # reads the header only
-        check_image_size(image.width, image.height, str(path))
-        image.load()  # decode now: a truncated file fails here, not half-way into a stage
+        # PIL warns of what it can mend (a corrupt EXIF block of a truncated TIFF): what it
+        # cannot mend raises and is reported below as one line; the warning would be a second
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            image = Image.open(path)  # reads the header only
+            check_image_size(image.width, image.height, str(path))
+            image.load()  # decode now: a truncated file fails here, not half-way into a stage
     except FileNotFoundError:
         raise InputError(f"{path}: file not found") from None
     except UnidentifiedImageError:
@@ -145,7 +150,8 @@ def read_depth_m(path: Path, scale_m: float) -> np.ndarray:
     if raw.ndim != 2:
         raise InputError(f"{path}: an array of shape {raw.shape}, not one (height, width) depth image")
     if raw.dtype.kind == "f":
-        depth = raw.astype(np.float32)
+        with np.errstate(over="ignore"):  # float64 beyond float32's range: inf, no depth (as NaN is)
+            depth = raw.astype(np.float32)
     elif raw.dtype.kind in "ui":
         depth = _units_to_m(raw, scale_m)
     else:

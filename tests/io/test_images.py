@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import shutil
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -133,3 +134,29 @@ def test_intrinsics_files_beside_it_that_disagree_ask_which(tmp_path: Path) -> N
     with pytest.raises(InputError, match="disagree.*--intrinsics"):
         read_frame(png)
     assert read_image_frame(png, ImageSettings(intrinsics=str(tmp_path / "intrinsics.json"))).n_points == 640 * 480
+
+
+def test_float64_depth_beyond_float32_is_no_depth_and_no_warning(tmp_path: Path) -> None:
+    from clearcli.io.images import read_depth_m
+
+    depth = np.full((3, 4), 0.75)
+    depth[1, 2] = 1e300  # a flipped exponent bit: no sensor's depth
+    np.save(tmp_path / "f_depth.npy", depth)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        metres = read_depth_m(tmp_path / "f_depth.npy", 0.001)
+    assert metres.dtype == np.float32 and np.isinf(metres[1, 2])
+    assert (np.delete(metres.ravel(), 1 * 4 + 2) == np.float32(0.75)).all()
+
+
+def test_a_truncated_tiff_is_one_error_and_no_library_warning(tmp_path: Path) -> None:
+    from PIL import Image
+
+    from clearcli.io.images import read_depth_m
+
+    Image.fromarray(np.full((48, 64), 0.8, np.float32)).save(tmp_path / "whole.tif")
+    (tmp_path / "cut.tif").write_bytes((tmp_path / "whole.tif").read_bytes()[:30])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(InputError, match="cut.tif: "):
+            read_depth_m(tmp_path / "cut.tif", 0.001)
