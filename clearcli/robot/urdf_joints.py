@@ -46,6 +46,9 @@ def joint_names(urdf: Path) -> tuple[str, ...]:
 CONTINUOUS_RANGE_RAD = (-2.0 * math.pi, 2.0 * math.pi)
 # an axis shorter than this has no direction (Pinocchio divides by its length: NaN poses)
 _MIN_AXIS_LENGTH = 1e-9
+# an origin farther than this from its parent link is a unit mistake (millimetres given
+# as metres) or a corrupt file: the largest industrial arms reach about 4 m
+_MAX_OFFSET_M = 100.0
 # The numbers a link's or a joint's elements carry (attribute, how many): urdfdom refuses
 # NaN and infinities there with its reason on stderr only, and takes lower > upper and a
 # zero axis silently; each is named here instead.
@@ -109,7 +112,13 @@ def checked_urdf(urdf: Path) -> str:
             continue
         for element in owner.iter():
             for attribute, count in _NUMBERS.get(element.tag, ()):
-                numbers(owner, element, attribute, count)
+                values = numbers(owner, element, attribute, count)
+                if element.tag == "origin" and attribute == "xyz" and values and max(map(abs, values)) > _MAX_OFFSET_M:
+                    # no arm has such a link, and its squares overflow the kinematics' floats
+                    raise SettingsError(
+                        f'{urdf}: {owner.tag} {owner.get("name")!r}: <origin xyz="{element.get("xyz")}"> is more than '
+                        f"{_MAX_OFFSET_M:g} m from its parent; give the offset in metres"
+                    )
         if owner.tag != "joint":
             continue
         name, kind = owner.get("name"), owner.get("type")

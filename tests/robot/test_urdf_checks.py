@@ -247,3 +247,12 @@ def test_joints_above_the_base_frame_are_held_at_zero() -> None:
         np.testing.assert_allclose(
             upper.fk(q, "panda_link8"), np.linalg.inv(T_link0_link1) @ T_link0_flange, atol=1e-12
         )
+
+
+@pytest.mark.parametrize("xyz", ["1e308 0 0", "82.5 0 -250"])
+def test_a_joint_origin_hundreds_of_metres_away_is_one_line_exit_3(tmp_path: Path, xyz: str) -> None:
+    # before: "1e308 0 0" overflowed the kinematics (a NumPy RuntimeWarning on stderr, then
+    # exit 4); "82.5 0 -250" is millimetres written as metres
+    urdf = _panda_with(tmp_path, "far", 'origin xyz="0.0825 0 0"', f'origin xyz="{xyz}"')
+    line = _refused("--set", f"robot.urdf={urdf}")
+    assert "'panda_joint4'" in line and f'<origin xyz="{xyz}">' in line and "more than 100 m from its parent" in line
