@@ -253,6 +253,14 @@ def _rosbag2_summary(path: Path) -> BagSummary:
     reader = _rosbag2_reader(path)
     try:
         conns = list(reader.connections)
+        for c in conns:
+            # rosbags takes metadata.yaml's values as they are: a list or a number where a
+            # name belongs would fail later, far from its cause
+            if not (isinstance(c.topic, str) and isinstance(c.msgtype, str)):
+                raise InputError(
+                    f"{path}: {ROSBAG2_METADATA} gives a topic whose name ({c.topic!r}) or type ({c.msgtype!r}) "
+                    "is not text; fix the bag's metadata"
+                )
         channels = tuple(
             ChannelInfo(
                 id=c.id,

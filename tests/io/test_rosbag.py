@@ -547,3 +547,13 @@ def test_replay_places_the_robot_from_a_bags_tf_static(tmp_path: Path, kind: str
     np.testing.assert_allclose(T[:3, 3], [0.1, -0.2, 0.5])
     np.testing.assert_allclose(T[:3, :3], np.eye(3))
     assert base_camera_from_log(bag, "no_such_frame") == (None, "")
+
+
+def test_rosbag2_metadata_with_a_list_for_a_topic_name_is_one_line(tmp_path: Path) -> None:
+    # before: an internal TypeError (unhashable type: 'list') from the summary's topic table
+    bag = write_rosbag2(tmp_path / "bag", {TOPIC: _frames(1)}, storage="sqlite3")
+    meta = bag / "metadata.yaml"
+    meta.write_text(meta.read_text().replace(f"name: {TOPIC}", "name: [nope.db3]", 1))
+    with pytest.raises(InputError, match=r"metadata.yaml gives a topic whose name \(\['nope.db3'\]\) .* is not text"):
+        read_bag_summary(bag)
+    _one_line_error(_clear("info", str(bag)), (EXIT_INPUT,), "is not text; fix the bag's metadata")
