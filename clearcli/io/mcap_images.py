@@ -363,7 +363,7 @@ def _recorded_depth_units(log: LogAccess, depth_topic: str) -> float | None:
         for _, msg, _ in log.decoded(option):
             # a float32 in the bag: 0.001 arrives as 0.0010000000475; seven digits are what it holds
             value = float(f"{float(message_field(msg, 'data', default=0.0) or 0.0):.7g}")
-            if not (value > 0 and value < 1):
+            if not (value >= 1e-9 and value < 1):  # as [images] depth_scale_m's range
                 raise InputError(f"{log.path}: {option} is {value}, not a depth unit in metres; give --depth-scale")
             break
         _units[key] = value

@@ -21,7 +21,9 @@ class ImageSettings(Section):
     intrinsics: str = param("", text='"", an intrinsics file, or "fx fy cx cy"')
     # Metres per unit of an integer depth image (16-bit PNG, uint16 NPY, 16UC1 messages):
     # millimetres, as RealSense, Kinect and most datasets write them. Float images are metres.
-    depth_scale_m: float = param(0.001, gt=0, le=10)
+    # A nanometre is finer than any depth sensor's unit; below it the metres of a unit
+    # underflow float32 (every depth 0) and its reciprocal overflows.
+    depth_scale_m: float = param(0.001, ge=1e-9, le=10)
     # The naming rule for folders of image pairs: `<stem><depth_suffix>.png` is a depth
     # frame, `<stem><color_suffix>.png` its colour image; outputs are named `<stem>`.
     depth_suffix: str = param("_depth", text="a non-empty name ending")

@@ -68,6 +68,7 @@ def test_single_frame_flags_intrinsics_color_and_depth_scale(tmp_path: Path) -> 
         ("--intrinsics", "nope.yaml"),
         ("--depth-scale", "0"),
         ("--depth-scale", "nan"),
+        ("--depth-scale", "5e-324"),  # before: an internal OverflowError (1 / scale is inf)
     ):
         res = clear("segment", depth, *bad)
         assert res.returncode == 3 and len(res.stderr.strip().splitlines()) == 1, (bad, res.stderr)

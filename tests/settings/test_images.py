@@ -46,3 +46,12 @@ def test_the_depth_suffix_is_not_empty_and_differs_from_the_colour_one() -> None
     swapped = ImageSettings(depth_suffix="_color", color_suffix="_depth")
     assert (swapped.depth_suffix, swapped.color_suffix) == ("_color", "_depth")
     assert ImageSettings(color_suffix="").color_suffix == ""  # `<stem>.png` the colour image
+
+
+def test_a_depth_unit_below_a_nanometre_is_refused() -> None:
+    # its reciprocal (units per metre) overflows, and its metres underflow float32
+    from clearcli.errors import SettingsError
+
+    assert ImageSettings(depth_scale_m=1e-9).depth_scale_m == 1e-9
+    with pytest.raises(SettingsError, match=r"depth_scale_m = 5e-324: out of range; accepted: >= 1e-09"):
+        ImageSettings(depth_scale_m=5e-324)
