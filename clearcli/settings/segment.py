@@ -232,14 +232,14 @@ class SegmentSettings(Section):
     fragment_join_m: float = param(0.015, ge=0, le=0.1)
     # join two touching segments across a smooth seam (perception/seams.py): at least
     # seam_join_min_convex of the supervoxel adjacencies across it convex (LCCP's
-    # criterion), at least seam_join_min_adjacencies of them, tops less than step_min_m
-    # apart and colours less than color_split_delta apart. On the training pairs of the
+    # criterion), a median rise under cut_min_rise_m, tops less than step_min_m apart
+    # and colours less than color_split_delta apart. On the training pairs of the
     # learned join (mOSD learn, foreign choose, renders of choose seeds): pieces of one
-    # object 0.73-1.0 convex, pairs of two objects with tops at one height and one
-    # colour at most 0.65
+    # object 0.73-1.0 convex, pairs of two objects with tops at one height, one colour
+    # and no rise at most 0.65. Foreign choose 44 -> 46 of 89 right (a clamp's and a
+    # bracket's halves joined); mOSD and the families' seeds 1000-1019 unchanged
     seam_join: bool = param(True)
     seam_join_min_convex: float = param(0.7, gt=0, le=1)
-    seam_join_min_adjacencies: int = param(3, ge=1, le=1000)
     # join touching segments a learned model (perception/learned.py, trained by
     # training/join.py) finds one object with at least this probability, plus a margin.
     # OFF: on at 0.7, foreign choose 44 -> 45 of 89 right (3 splits joined, 2 merges
