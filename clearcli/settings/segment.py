@@ -246,7 +246,9 @@ class SegmentSettings(Section):
     # made; those frames are in its training data), mOSD learn 0.997 either way, test-5
     # 0.941 -> 0.954 (test55's object cut in two joined); but with each frame held out
     # of the fit, the foreign frames' pairs at 0.7 are 3 joined right, 3 wrong. At 0.9
-    # nothing on the choose part changes
+    # nothing on the choose part changes. With seam_join on (it makes two of those three
+    # joins by rule), on at 0.7 is 46 -> 45: only the wrong join of a soup can and the
+    # tin it stands on is left (uois_image_0002)
     learned_join: bool = param(False)
     learned_join_min_p: float = param(0.7, gt=0.5, lt=1)
     # --- 3e. objects lying flat (ours; flat.py) -----------------------------------------
