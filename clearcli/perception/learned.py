@@ -77,6 +77,9 @@ class PairFeatures:
     pairs: np.ndarray  # (P, 2) segment numbers, lo < hi, sorted
     x: np.ndarray  # (P, len(FEATURES)) float64
     apart: np.ndarray  # (P,) bool: the colour rule keeps them apart
+    # (P,) supervoxel adjacencies across each seam (what convex_share is a share of; 0
+    # where both sides lie in one supervoxel): a share of one or two is no evidence
+    seam_adjacencies: np.ndarray | None = None
 
 
 @dataclasses.dataclass(frozen=True)
@@ -258,7 +261,7 @@ def pair_features(seg_of_voxel: np.ndarray, ctx: RefineContext) -> PairFeatures:
         & (rise_mm >= s.color_split_min_rise_m * 1000.0)
         & (size[small] >= ctx.size.min_object_voxels)
     )
-    return PairFeatures(pairs, x, apart)
+    return PairFeatures(pairs, x, apart, count)
 
 
 def joins(feats: PairFeatures, logit: np.ndarray, min_logit: float, n_seg: int) -> list[tuple[int, int]]:

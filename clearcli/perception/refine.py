@@ -22,6 +22,7 @@ The stages, in order:
   vessels    a container rebuilt from its rim, its wall taken back from what
              stands in it or leans on it (vessels.py)                    voxel level
   fragments  strips of a face seen edge-on, apart from their object (fragments.py) voxel level
+  seams      touching pieces across a smooth, convex seam (seams.py)     voxel level
   learned    touching pieces a trained model finds one object (learned.py) voxel level
 Before the supervoxels, `edges.py` cuts the voxel adjacency at depth discontinuities
 of the pixel grid (stage "edges", organized frames only): it changes the graph every
@@ -37,7 +38,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from clearcli.perception import colors, cuts, fragments, learned, occlusion, rims, rings, stacks, steps, vessels
+from clearcli.perception import colors, cuts, fragments, learned, occlusion, rims, rings, seams, stacks, steps, vessels
 from clearcli.perception.clock import Clock
 from clearcli.perception.context import RefineContext
 from clearcli.settings.segment import SegmentSettings
@@ -66,6 +67,7 @@ STAGES: tuple[Stage, ...] = (
     Stage("rings", lambda s: s.ring_merge, rings.merge_rings),
     Stage("vessels", lambda s: s.vessel_rebuild, vessels.rebuild_vessels),
     Stage("fragments", lambda s: s.fragment_join_m > 0, fragments.rejoin_fragments),
+    Stage("seams", lambda s: s.seam_join, seams.join_smooth_seams),
     Stage("learned", lambda s: s.learned_join, learned.join_learned),
 )
 

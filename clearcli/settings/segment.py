@@ -230,13 +230,25 @@ class SegmentSettings(Section):
     # a face seen edge-on that the outlier filter thinned) to the nearest segment
     # within this distance (m; 0 = off): three voxels
     fragment_join_m: float = param(0.015, ge=0, le=0.1)
+    # join two touching segments across a smooth seam (perception/seams.py): at least
+    # seam_join_min_convex of the supervoxel adjacencies across it convex (LCCP's
+    # criterion), a median rise under cut_min_rise_m, tops less than step_min_m apart
+    # and colours less than color_split_delta apart. On the training pairs of the
+    # learned join (mOSD learn, foreign choose, renders of choose seeds): pieces of one
+    # object 0.73-1.0 convex, pairs of two objects with tops at one height, one colour
+    # and no rise at most 0.65. Foreign choose 44 -> 46 of 89 right (a clamp's and a
+    # bracket's halves joined); mOSD and the families' seeds 1000-1019 unchanged
+    seam_join: bool = param(True)
+    seam_join_min_convex: float = param(0.7, gt=0, le=1)
     # join touching segments a learned model (perception/learned.py, trained by
     # training/join.py) finds one object with at least this probability, plus a margin.
     # OFF: on at 0.7, foreign choose 44 -> 45 of 89 right (3 splits joined, 2 merges
     # made; those frames are in its training data), mOSD learn 0.997 either way, test-5
     # 0.941 -> 0.954 (test55's object cut in two joined); but with each frame held out
     # of the fit, the foreign frames' pairs at 0.7 are 3 joined right, 3 wrong. At 0.9
-    # nothing on the choose part changes
+    # nothing on the choose part changes. With seam_join on (it makes two of those three
+    # joins by rule), on at 0.7 is 46 -> 45: only the wrong join of a soup can and the
+    # tin it stands on is left (uois_image_0002)
     learned_join: bool = param(False)
     learned_join_min_p: float = param(0.7, gt=0.5, lt=1)
     # --- 3e. objects lying flat (ours; flat.py) -----------------------------------------

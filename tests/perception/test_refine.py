@@ -29,6 +29,7 @@ def test_refinement_stages_run_from_one_list() -> None:
         "rings",
         "vessels",
         "fragments",
+        "seams",
         "learned",
     ]
     assert [s.name for s in STAGES if s.needs_grid] == ["occlusion"]
