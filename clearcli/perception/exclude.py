@@ -301,7 +301,9 @@ def _rests_on_another(k: int, objects: list[np.ndarray], h_each: list[np.ndarray
         return False
     # only the bottom's points within the others' box (grown) can touch them
     bottom = _near_box(bottom, near.min(axis=0) - _TOUCH_M, near.max(axis=0) + _TOUCH_M)
-    d, _ = cKDTree(near).query(bottom, distance_upper_bound=_TOUCH_M)
+    # a tree for one query: neither balanced nor compacted (several times faster to build;
+    # the nearest distance found is the same)
+    d, _ = cKDTree(near, balanced_tree=False, compact_nodes=False).query(bottom, distance_upper_bound=_TOUCH_M)
     return bool(np.isfinite(d).sum() >= 5)
 
 
@@ -332,7 +334,8 @@ def _on_what_is_beneath(
     own = _near_box(xy, near.min(axis=0) - 2 * _CELL_M, near.max(axis=0) + 2 * _CELL_M)
     if not own.shape[0]:
         return False
-    d, _ = cKDTree(own).query(near, distance_upper_bound=_CELL_M)
+    # (a tree for one query: see _rests_on_another)
+    d, _ = cKDTree(own, balanced_tree=False, compact_nodes=False).query(near, distance_upper_bound=_CELL_M)
     return bool(np.isfinite(d).sum() >= _GOES_ON_MIN)
 
 
@@ -351,7 +354,8 @@ def _held_from(p: np.ndarray, out_tree: object, excluded: list[np.ndarray]) -> s
     lo, hi = p.min(axis=0) - _HOLD_M, p.max(axis=0) + _HOLD_M
     near = [q for q in (_near_box(e, lo, hi) for e in excluded) if q.shape[0]]
     if near:
-        d, _ = cKDTree(np.vstack(near)).query(p, distance_upper_bound=_HOLD_M)
+        tree = cKDTree(np.vstack(near), balanced_tree=False, compact_nodes=False)  # one query: see _rests_on_another
+        d, _ = tree.query(p, distance_upper_bound=_HOLD_M)
         if np.isfinite(d).any():
             return f"something excluded {float(d.min()):.3f} m from it"
     return ""
@@ -429,7 +433,8 @@ def _enters_over_border(border: np.ndarray, h: np.ndarray, rests: float, xy: np.
         return ""
     resting = h <= rests
     if resting.any():
-        d, _ = cKDTree(xy[resting]).query(xy[high])
+        # (a tree for one query: see _rests_on_another)
+        d, _ = cKDTree(xy[resting], balanced_tree=False, compact_nodes=False).query(xy[high])
         apart = float(np.median(d))
         if apart <= _APART_M:
             return ""
