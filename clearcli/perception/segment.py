@@ -81,8 +81,14 @@ def principal_axes(points: np.ndarray, mean: np.ndarray | None = None) -> np.nda
     c = points - (points.mean(axis=0) if mean is None else mean)
     _, vecs = np.linalg.eigh(c.T @ c)
     axes = vecs[:, ::-1].T.copy()
-    axes[2] = np.cross(axes[0], axes[1])
+    axes[2] = _cross(axes[0], axes[1])
     return axes
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``np.cross`` of two 3-vectors, written out: its products and differences in its
+    order (the same floats) without its ~20 us of set-up, paid several times per object."""
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
 
 
 def table_aligned_box(
@@ -100,16 +106,16 @@ def table_aligned_box(
 
     n = table.normal
     helper = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    u = np.cross(helper, n)
+    u = _cross(helper, n)
     u /= np.linalg.norm(u)
-    v = np.cross(n, u)
+    v = _cross(n, u)
     xy = np.stack([points @ u, points @ v], axis=1)  # matvecs: fast for (N, 3)
     h = table.height_of(points)
     try:
         hull = xy[hull_vertices(xy)]
     except (QhullError, ValueError):
         hull = xy
-    edges = np.roll(hull, -1, axis=0) - hull
+    edges = np.concatenate([hull[1:], hull[:1]]) - hull  # np.roll(hull, -1, axis=0), without its overhead
     lens = np.linalg.norm(edges, axis=1)
     dirs = edges[lens > 1e-12] / lens[lens > 1e-12, None]
     if dirs.shape[0] == 0:

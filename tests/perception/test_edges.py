@@ -110,11 +110,12 @@ def test_most_counted_by_hand() -> None:
 def test_voxel_pieces_on_a_cluttered_frame_are_the_lexsort_rule_s() -> None:
     # mOSD test55 (16 objects): each voxel's piece and the small pieces' joins, against
     # those the lexsort rule chose
+    from helpers import shared_path
+
     from clearcli.io.read import read_frame
     from clearcli.perception import edges
     from clearcli.perception.segment import segment
     from clearcli.settings.segment import SegmentSettings
-    from tests.helpers import shared_path
 
     frame = read_frame(shared_path("mosd/test/test55.pcd"))
     seen: list[tuple[Any, ...]] = []
