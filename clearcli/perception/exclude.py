@@ -255,8 +255,20 @@ def _near_box(points: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     can be within the box's margin of what it was grown around, so a nearest-neighbour
     search against them alone gives the same answer as against all the points."""
     # rows by a mask: np.compress, several times faster than boolean indexing of rows (this
-    # runs for every pair of nearby objects)
-    return np.compress(((points >= lo) & (points <= hi)).all(axis=1), points, axis=0)
+    # runs for every pair of nearby objects); the mask column by column, the same mask an
+    # order of magnitude faster than comparing (N, 3) rows and reducing them along axis 1
+    keep = (points[:, 0] >= lo[0]) & (points[:, 0] <= hi[0])
+    for j in range(1, points.shape[1]):
+        keep &= (points[:, j] >= lo[j]) & (points[:, j] <= hi[j])
+    return np.compress(keep, points, axis=0)
+
+
+def _lo_hi(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(points.min(axis=0), points.max(axis=0))`` of non-empty (N, 2) or (N, 3) ``points``,
+    column by column: the same values (a minimum does no arithmetic), an order of magnitude
+    faster than NumPy's reduction along the rows of a few columns (per object and pair)."""
+    cols = range(points.shape[1])
+    return np.array([points[:, j].min() for j in cols]), np.array([points[:, j].max() for j in cols])
 
 
 @dataclass(frozen=True)
@@ -286,7 +298,8 @@ def _rests_on_another(k: int, objects: list[np.ndarray], h_each: list[np.ndarray
     bottom = np.compress(h_each[k] <= low + _TOUCH_M, objects[k], axis=0)  # rows by a mask: compress is faster
     if not bottom.shape[0]:
         return False
-    lo, hi = bottom.min(axis=0) - _TOUCH_M, bottom.max(axis=0) + _TOUCH_M
+    lo, hi = _lo_hi(bottom)
+    lo, hi = lo - _TOUCH_M, hi + _TOUCH_M
     # only the others' points within `_TOUCH_M` of the bottom's heights can touch it (a
     # height differs by at most the distance; `_BAND_SLACK` for its rounding): the same
     # answer from a smaller tree
@@ -300,7 +313,8 @@ def _rests_on_another(k: int, objects: list[np.ndarray], h_each: list[np.ndarray
     if not near.shape[0]:
         return False
     # only the bottom's points within the others' box (grown) can touch them
-    bottom = _near_box(bottom, near.min(axis=0) - _TOUCH_M, near.max(axis=0) + _TOUCH_M)
+    near_lo, near_hi = _lo_hi(near)
+    bottom = _near_box(bottom, near_lo - _TOUCH_M, near_hi + _TOUCH_M)
     # a tree for one query: neither balanced nor compacted (several times faster to build;
     # the nearest distance found is the same)
     d, _ = cKDTree(near, balanced_tree=False, compact_nodes=False).query(bottom, distance_upper_bound=_TOUCH_M)
@@ -319,7 +333,8 @@ def _on_what_is_beneath(
     object. ``xy_each``, ``h_each``: every object's points in-plane and their heights."""
     from scipy.spatial import cKDTree
 
-    lo, hi = xy.min(axis=0) - _CELL_M, xy.max(axis=0) + _CELL_M
+    lo, hi = _lo_hi(xy)
+    lo, hi = lo - _CELL_M, hi + _CELL_M
     meet = set(boxes.meet_2d(lo, hi).tolist())
     q2 = [
         _near_box(np.compress(h_each[j] >= low - _HANG_M, xy_each[j], axis=0), lo, hi)
@@ -331,7 +346,8 @@ def _on_what_is_beneath(
         return False
     # only its points within `_CELL_M` of the others' box can be that near them (twice, for
     # the rounding): the same answer from a smaller tree
-    own = _near_box(xy, near.min(axis=0) - 2 * _CELL_M, near.max(axis=0) + 2 * _CELL_M)
+    near_lo, near_hi = _lo_hi(near)
+    own = _near_box(xy, near_lo - 2 * _CELL_M, near_hi + 2 * _CELL_M)
     if not own.shape[0]:
         return False
     # (a tree for one query: see _rests_on_another)
@@ -351,7 +367,8 @@ def _held_from(p: np.ndarray, out_tree: object, excluded: list[np.ndarray]) -> s
         d, _ = out_tree.query(p, distance_upper_bound=_HOLD_M)
         if np.isfinite(d).any():
             return f"what lies outside the support's outline, {float(d.min()):.3f} m from it"
-    lo, hi = p.min(axis=0) - _HOLD_M, p.max(axis=0) + _HOLD_M
+    lo, hi = _lo_hi(p)
+    lo, hi = lo - _HOLD_M, hi + _HOLD_M
     near = [q for q in (_near_box(e, lo, hi) for e in excluded) if q.shape[0]]
     if near:
         tree = cKDTree(np.vstack(near), balanced_tree=False, compact_nodes=False)  # one query: see _rests_on_another
