@@ -889,8 +889,10 @@ def not_standing(
     # veils, last: they hold up nothing and carry nothing in the rules above
     camera_h = float(height(np.zeros((1, 3)))[0])
     if camera_h >= _CAMERA_ABOVE_M:
-        # every point's range at once (row by row, as for one segment's points)
-        rng_each = np.split(np.linalg.norm(every, axis=1), bounds[1:-1])
+        # every point's range at once (row by row, as for one segment's points):
+        # np.linalg.norm(every, axis=1)'s sums in its order, a fifth of its time
+        x, y, z = every[:, 0], every[:, 1], every[:, 2]
+        rng_each = np.split(np.sqrt((x * x + y * y) + z * z), bounds[1:-1])
         for k, p in enumerate(objects):
             if k not in verdicts and p.shape[0] >= _GOES_ON_MIN:
                 why = _veil(p, h_each[k], camera_h, height, rng_each[k])
