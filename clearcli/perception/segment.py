@@ -460,7 +460,7 @@ def _exclude(w: _Work) -> None:
         return rests + settings.prism_noise_per_m2 * float(np.min(np.einsum("ij,ij->i", p, p)))
 
     verdicts = not_standing(
-        [w.frame.points[o.indices].astype(np.float64) for o in w.objects],
+        [np.take(w.frame.points, o.indices, axis=0).astype(np.float64) for o in w.objects],  # take: faster than a[idx]
         outside,
         outside_below,
         support,
