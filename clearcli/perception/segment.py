@@ -394,7 +394,7 @@ def _objects(w: _Work) -> None:
     settings, fit, vox, size = w.settings, w.fit, w.vox, w.size
     assert fit is not None and vox is not None and size is not None  # the steps before ran
     seg_of_voxel = w.seg_of_voxel
-    seg_of_point = seg_of_voxel[vox.point_voxel]
+    seg_of_point = np.take(seg_of_voxel, vox.point_voxel)  # take: several times faster than a[idx]
     n_seg = int(seg_of_voxel.max()) + 1 if seg_of_voxel.size else 0
     seg_voxels = np.bincount(seg_of_voxel, minlength=n_seg)
     seg_points = np.bincount(seg_of_point, minlength=n_seg)
@@ -413,7 +413,7 @@ def _objects(w: _Work) -> None:
         # the prism's lower bound grew with range: so does "resting on the table"
         noise = 0.0
         if fit.camera_is_origin:
-            r2 = obj_range2[members] if obj_range2 is not None else squared_range(p)
+            r2 = np.take(obj_range2, members) if obj_range2 is not None else squared_range(p)
             noise = settings.prism_noise_per_m2 * float(np.min(r2))
         w.objects.append(make_object(w.obj_idx[members], p, fit.plane, rests + noise))
 
