@@ -60,7 +60,8 @@ def pixel_pieces(points: np.ndarray, shape: tuple[int, int], point_index: np.nda
     where = np.full(height * width, -1, dtype=np.int64)
     where[(row - top) * width + (col - left)] = np.arange(m)
     img = where.reshape(height, width)
-    p = points[point_index].astype(np.float64)
+    # rows by index: take is several times faster than a[idx]
+    p = np.take(points, point_index, axis=0).astype(np.float64)
     # np.linalg.norm(p, axis=1)'s sums in its order, a fifth of its time (no (M, 3) squares)
     rng = np.sqrt((p[:, 0] * p[:, 0] + p[:, 1] * p[:, 1]) + p[:, 2] * p[:, 2])
 
@@ -89,13 +90,24 @@ def _voxel_piece(point_voxel: np.ndarray, point_piece: np.ndarray, n_voxels: int
     key = point_voxel.astype(np.int64) * (int(point_piece.max()) + 1) + point_piece
     uniq, count = np.unique(key, return_counts=True)
     n_pieces = int(point_piece.max()) + 1
-    vox, piece = uniq // n_pieces, uniq % n_pieces
-    order = np.lexsort((piece, -count, vox))
-    first = np.ones(order.shape[0], dtype=bool)
-    first[1:] = vox[order[1:]] != vox[order[:-1]]
+    vox, piece = _most_counted(uniq // n_pieces, uniq % n_pieces, count)
     out = np.zeros(n_voxels, dtype=np.int64)
-    out[vox[order[first]]] = piece[order[first]]
+    out[vox] = piece
     return out
+
+
+def _most_counted(row: np.ndarray, col: np.ndarray, count: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """For each distinct ``row`` (``row``, ``col``: `np.unique`'s keys unpacked, sorted by
+    row, then column), the ``col`` of the largest ``count`` (ties: the lower column), as
+    (rows, their columns): the first entry reaching its row's maximum, in one pass (the
+    same entries as a lexsort by row, descending count and column, several times faster)."""
+    if row.size == 0:
+        return row, col
+    starts = np.flatnonzero(np.concatenate(([True], row[1:] != row[:-1])))
+    best = np.maximum.reduceat(count, starts)
+    hit = np.flatnonzero(count == np.repeat(best, np.diff(np.append(starts, row.size))))
+    first = np.concatenate(([True], row[hit[1:]] != row[hit[:-1]]))
+    return row[hit[first]], col[hit[first]]
 
 
 def _join_small(piece: np.ndarray, large: np.ndarray, edges: np.ndarray) -> np.ndarray:
@@ -108,12 +120,9 @@ def _join_small(piece: np.ndarray, large: np.ndarray, edges: np.ndarray) -> np.n
     v, p = both[want, 0], piece[both[want, 1]]
     n_pieces = int(piece.max()) + 1
     uniq, count = np.unique(v * n_pieces + p, return_counts=True)
-    vv, pp = uniq // n_pieces, uniq % n_pieces
-    order = np.lexsort((pp, -count, vv))
-    first = np.ones(order.shape[0], dtype=bool)
-    first[1:] = vv[order[1:]] != vv[order[:-1]]
+    vv, pp = _most_counted(uniq // n_pieces, uniq % n_pieces, count)
     out = piece.copy()
-    out[vv[order[first]]] = pp[order[first]]
+    out[vv] = pp
     return out
 
 

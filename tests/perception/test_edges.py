@@ -3,6 +3,8 @@ pixel pair gives, numbered alike."""
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 
@@ -71,3 +73,70 @@ def test_a_set_inside_the_image_gives_the_pieces_of_every_pair(seed: int) -> Non
     for rel in (0.02, 0.2, 1.0):
         want = _every_pair(points, (height, width), index, rel)
         assert pixel_pieces(points, (height, width), index, rel).tolist() == want.tolist()
+
+
+def _most_counted_by_lexsort(row: np.ndarray, col: np.ndarray, count: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The rule _most_counted replaced: sorted by row, descending count, column; the first of each row."""
+    order = np.lexsort((col, -count, row))
+    first = np.ones(order.shape[0], dtype=bool)
+    first[1:] = row[order[1:]] != row[order[:-1]]
+    return row[order[first]], col[order[first]]
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_most_counted_is_the_lexsort_rule(seed: int) -> None:
+    from clearcli.perception.edges import _most_counted
+
+    gen = np.random.default_rng(seed)
+    n_pieces = int(gen.integers(1, 6))
+    keys = np.unique(gen.integers(0, 40 * n_pieces, size=int(gen.integers(1, 200))))
+    count = gen.integers(1, 4, size=keys.size)  # few values: many ties
+    row, col = keys // n_pieces, keys % n_pieces
+    got, want = _most_counted(row, col, count), _most_counted_by_lexsort(row, col, count)
+    assert np.array_equal(got[0], want[0]) and np.array_equal(got[1], want[1])
+
+
+def test_most_counted_by_hand() -> None:
+    from clearcli.perception.edges import _most_counted
+
+    # row 0: columns 1 and 3 both counted 5 (the lower wins); row 2: column 0 alone; row 7: column 2 (9 > 4)
+    row = np.array([0, 0, 0, 2, 7, 7])
+    col = np.array([1, 2, 3, 0, 1, 2])
+    count = np.array([5, 2, 5, 1, 4, 9])
+    rows, cols = _most_counted(row, col, count)
+    assert rows.tolist() == [0, 2, 7] and cols.tolist() == [1, 0, 2]
+
+
+def test_voxel_pieces_on_a_cluttered_frame_are_the_lexsort_rule_s() -> None:
+    # mOSD test55 (16 objects): each voxel's piece and the small pieces' joins, against
+    # those the lexsort rule chose
+    from helpers import shared_path
+
+    from clearcli.io.read import read_frame
+    from clearcli.perception import edges
+    from clearcli.perception.segment import segment
+    from clearcli.settings.segment import SegmentSettings
+
+    frame = read_frame(shared_path("mosd/test/test55.pcd"))
+    seen: list[tuple[Any, ...]] = []
+    real = edges.cut_depth_edges
+
+    def record(*args: Any) -> Any:
+        seen.append(args)
+        return real(*args)
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr("clearcli.perception.segment.cut_depth_edges", record)
+        segment(frame, SegmentSettings())
+    vox, points, shape, point_index, rel, min_piece = seen[0]
+    point_piece = pixel_pieces(points, shape, point_index, rel)
+    got: list[np.ndarray] = []
+    for rule in (edges._most_counted, _most_counted_by_lexsort):
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setattr(edges, "_most_counted", rule)
+            piece = edges._voxel_piece(vox.point_voxel, point_piece, vox.n_voxels)
+            large = np.bincount(piece) >= min_piece
+            got += [piece, edges._join_small(piece, large, vox.edges)]
+    assert np.array_equal(got[0], got[2]) and np.array_equal(got[1], got[3])
+    # a real comparison: voxels of several pieces, small pieces joined to large ones
+    assert np.unique(got[0]).size > 5 and not np.array_equal(got[0], got[1])

@@ -154,3 +154,39 @@ def test_what_nothing_seen_holds_up_is_the_top_of_an_object_standing_there(monke
     monkeypatch.setattr(exclude, "_held_from", lambda *args: "anything")
     off = _verdicts(tops)
     assert len(off) == 2 and all(v.split(": ", 1)[1].startswith("hangs above the support") for v in off), off
+
+
+def test_percentiles_and_median_are_numpys_to_the_bit() -> None:
+    # exclude's own order statistics (one partition each) must give np.percentile's and
+    # np.median's very floats: every verdict's thresholds read them
+    gen = np.random.default_rng(5)
+    for trial in range(400):
+        n = int(gen.integers(1, 4)) if trial % 10 == 0 else int(gen.integers(1, 3000))
+        values = gen.normal(size=n) * 10 ** gen.uniform(-4, 1)
+        if trial % 3 == 0:
+            values = np.round(values, 3)  # ties
+        for percents in ((5, 95), (2, 98), (10, 90), (0, 100), (50,)):
+            assert exclude._percentiles(values, percents) == [float(x) for x in np.percentile(values, percents)]
+        assert exclude._median(values) == float(np.median(values))
+    # by hand: 0..10, the 5th percentile lies half-way between 0 and 1
+    assert exclude._percentiles(np.arange(11.0)[::-1].copy(), (5, 95)) == [0.5, 9.5]
+    assert exclude._median(np.array([4.0, 1.0, 3.0, 2.0])) == 2.5
+
+
+def test_boxes_column_by_column_are_the_row_reductions() -> None:
+    # _lo_hi and _near_box work column by column: the same values and rows as NumPy's
+    # reductions along the rows (a minimum does no arithmetic; the same comparisons)
+    gen = np.random.default_rng(11)
+    for trial in range(200):
+        cols = 2 + trial % 2
+        base = gen.normal(size=(int(gen.integers(1, 4000)) + 3, cols))
+        points = base[3:] if trial % 3 else np.round(base, 2)  # a view, or ties on the box
+        lo, hi = exclude._lo_hi(points)
+        assert np.array_equal(lo, points.min(axis=0)) and np.array_equal(hi, points.max(axis=0))
+        box_lo, box_hi = np.round(gen.normal(size=cols) - 0.5, 2), np.round(gen.normal(size=cols) + 0.5, 2)
+        want = points[((points >= box_lo) & (points <= box_hi)).all(axis=1)]
+        assert np.array_equal(exclude._near_box(points, box_lo, box_hi), want)
+    # by hand: the box's faces count as inside
+    pts = np.array([[0.0, 0.0, 0.0], [1.0, 1.0, 1.0], [1.0, 2.0, 1.0], [-0.5, 0.5, 0.5]])
+    assert exclude._near_box(pts, np.zeros(3), np.ones(3)).tolist() == [[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]]
+    assert [v.tolist() for v in exclude._lo_hi(pts)] == [[-0.5, 0.0, 0.0], [1.0, 2.0, 1.0]]
