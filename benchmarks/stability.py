@@ -186,6 +186,52 @@ def first_difference(frame: Frame, other: Frame, settings: SegmentSettings) -> l
     return out
 
 
+def voxel_difference(frame: Frame, other: Frame, settings: SegmentSettings) -> str:
+    """Where a supervoxel flip starts (issue 37): the voxels one run has and the other
+    not (with their point counts), the voxels whose point count changed, how far the
+    voxel normals of the voxels both have turned, and how many of those voxels changed
+    supervoxel (the most voxels of each supervoxel of the first run kept together)."""
+    from clearcli.perception.resolution import WorkingGrid
+    from clearcli.perception.supervoxels import grid_cells, supervoxel_labels, voxel_normals
+
+    runs = []
+    for f in (frame, other):
+        f = WorkingGrid.of(f, settings, None).frame
+        organized = f.is_organized and f.shape is not None and f.shape[0] * f.shape[1] == f.n_points
+        w = seg_mod._Work(f, settings, organized, Clock())
+        for step in seg_mod.STEPS:
+            if step.run is seg_mod._supervoxels:
+                break
+            if step.above_table and w.vox is None:
+                return "no voxels"
+            step.run(w)
+        assert w.vox is not None and w.size is not None and w.fit is not None
+        viewpoint = np.zeros(3) if w.fit.camera_is_origin else w.fit.polygon.mean(axis=0) + w.fit.plane.normal
+        normals = voxel_normals(w.vox.centroids, w.size.normal_radius_m, viewpoint)
+        labels = supervoxel_labels(w.vox, normals, settings, w.size)
+        # a voxel's cell from its centroid: the grid's cell of every point in it
+        cells = grid_cells(w.vox.centroids, w.size.voxel_m)
+        runs.append(({tuple(c): i for i, c in enumerate(cells.tolist())}, w.vox.counts, normals, labels))
+    (ka, ca, na, la), (kb, cb, nb, lb) = runs
+    only_a = [ca[i] for k, i in ka.items() if k not in kb]
+    only_b = [cb[i] for k, i in kb.items() if k not in ka]
+    both = [(i, kb[k]) for k, i in ka.items() if k in kb]
+    ia = np.array([i for i, _ in both], dtype=np.int64)
+    ib = np.array([j for _, j in both], dtype=np.int64)
+    turn = np.degrees(np.arccos(np.clip(np.abs(np.sum(na[ia] * nb[ib], axis=1)), 0.0, 1.0)))
+    n_b = int(lb.max()) + 1
+    uniq, count = np.unique(la[ia] * n_b + lb[ib], return_counts=True)
+    kept = np.zeros(int(la.max()) + 1)
+    np.maximum.at(kept, uniq // n_b, count)
+    moved_sv = int(ia.size - kept.sum())
+    return (
+        f"voxels only before {len(only_a)} (points {sorted(int(c) for c in only_a)}), only after {len(only_b)} "
+        f"(points {sorted(int(c) for c in only_b)}), point count changed {int((ca[ia] != cb[ib]).sum())}; "
+        f"normals turned > 1 deg {int((turn > 1).sum())}, most {turn.max(initial=0.0):.2f} deg; "
+        f"voxels that changed supervoxel {moved_sv}"
+    )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--sets", default="mosd,uois,fixtures")
@@ -247,6 +293,7 @@ def main() -> None:
                     f"seeds {bad_seeds}); first differing step: {first}"
                 )
                 print(f"      groups unmatched/points moved: {chain}")
+                print(f"      {voxel_difference(frame, other, settings)}")
             if not args.no_noise:
                 for s in range(args.noise_seeds):
                     noisy = seg_mod.segment(sensor_noise(frame, 1e-3, seed=100 + s), settings)
