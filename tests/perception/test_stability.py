@@ -57,20 +57,26 @@ def test_shared_frames_keep_their_objects_under_a_micrometre(where: str, pattern
 # The other labs' frames: the target names only the sets above, but a user's frames come
 # from sensors like these. Two Asus Xtion frames stored in float metres (points anywhere
 # relative to the voxel grid, where whole-millimetre depth keeps off its boundaries)
-# still change: a micrometre creates or empties voxels of one point, whose full weight in
-# the normals' PCA turns neighbouring normals by up to 13 degrees, and the supervoxels'
-# first assignments follow. Weighing a voxel by its points (up to 4) mended both but
-# changed cleargrasp_000000130 and split three uois frames more, so it was not taken
-# (stop 46's note). The test fails on a new flip, and on a known one mended, so that
+# still change: a micrometre creates or empties voxels of one point and moves points
+# between voxels, whose full weight in the normals' PCA (the 30 nearest centroids, most
+# neighbourhoods cut at the 30th) turns neighbouring normals by up to 13 degrees, and
+# the supervoxels' first assignments follow. Weighing a voxel by its points (up to 4)
+# mended both but changed cleargrasp_000000130 and split three uois frames more (stop
+# 46's note); weights falling smoothly to 0 at the normal radius mended them and PCL's
+# milk_cartoon_all_small_clorox (which flips under seeds 1 and 2, not the 0 used here)
+# but split mOSD learn42 and the wide_objects family more (h3-stab's experiment, reverted).
+# Neither was taken. The test fails on a new flip, and on a known one mended, so that
 # this list is kept true.
 _KNOWN_FLIPS = {"gqcnn_primesense_3.pcd", "gqcnn_primesense_4.pcd"}
 
 
 @pytest.mark.parametrize(
-    ("where", "count"), [("scenes/gqcnn", 7), ("scenes/cleargrasp_d435", 4)], ids=["gqcnn", "cleargrasp"]
+    ("where", "count"),
+    [("scenes/gqcnn", 7), ("scenes/cleargrasp_d435", 4), ("scenes/pcl", 6), ("scenes/industrial", 2)],
+    ids=["gqcnn", "cleargrasp", "pcl", "industrial"],
 )
 def test_other_labs_frames_change_under_a_micrometre_only_where_known(where: str, count: int) -> None:
-    paths = sorted(shared_path(where).glob("*.pcd"))
+    paths = sorted(shared_path(where).rglob("*.pcd"))  # pcl's grabber_sequence in its folder
     assert len(paths) == count, f"{where}: {len(paths)} frames, expected {count}"
     changed = _changed(paths)
     assert {line.split(":")[0] for line in changed} == _KNOWN_FLIPS & {p.name for p in paths}, changed
