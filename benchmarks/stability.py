@@ -274,7 +274,11 @@ def main() -> None:
             times.append(time.perf_counter() - t0)
             bad_seeds = []
             for s in range(args.seeds):
-                moved = seg_mod.segment(perturbed(frame, amp, seed=s), settings)
+                try:
+                    moved = seg_mod.segment(perturbed(frame, amp, seed=s), settings)
+                except ClearError:  # refused when moved, segmented as read: different
+                    bad_seeds.append(s)
+                    continue
                 if not same_objects(base, moved):
                     bad_seeds.append(s)
             if not bad_seeds:
@@ -283,7 +287,11 @@ def main() -> None:
             else:
                 flipped += 1
                 other = perturbed(frame, amp, seed=bad_seeds[0])
-                changed = seg_mod.segment(other, settings)
+                try:
+                    changed = seg_mod.segment(other, settings)
+                except ClearError as err:
+                    print(f"  {path.name:24s} DIFFERENT (moved copy seed {bad_seeds[0]} refused: {err})")
+                    continue
                 steps = first_difference(frame, other, settings)
                 first = next((name for name, unmatched, _ in steps if unmatched > 0), "objects")
                 first_steps[first] = first_steps.get(first, 0) + 1
@@ -296,7 +304,12 @@ def main() -> None:
                 print(f"      {voxel_difference(frame, other, settings)}")
             if not args.no_noise:
                 for s in range(args.noise_seeds):
-                    noisy = seg_mod.segment(sensor_noise(frame, 1e-3, seed=100 + s), settings)
+                    try:
+                        noisy = seg_mod.segment(sensor_noise(frame, 1e-3, seed=100 + s), settings)
+                    except ClearError as err:  # the noisy copy refused: none of its objects kept
+                        print(f"  {path.name:24s} noise draw {s} refused ({err})")
+                        kept_share.setdefault(set_name, []).extend([0.0] * len(base.objects))
+                        continue
                     m = object_matches(base, noisy)
                     kept_share.setdefault(set_name, []).extend((m >= KEPT_IOU).astype(float).tolist())
         totals[set_name] = (flipped, len(paths))
