@@ -53,38 +53,41 @@ def _organized_neighbor_counts(points: np.ndarray, shape: tuple[int, int], radiu
     size = (rows + 1) * w
     buf = [np.empty(size, dtype=np.float32) for _ in range(4)]  # d, d2, rr, limit
     hit_buf = np.empty(size, dtype=bool)
-    for r0 in range(0, h, rows):
-        r1 = min(r0 + rows, h)  # the block's rows; the pairs start in them
-        r_end = min(r1 + 1, h)  # and the row below, where the downward pairs end
-        x, y, z = (grid[r0:r_end, :, k].astype(np.float32) for k in range(3))
-        rng = np.sqrt((x * x + y * y) + z * z)  # NaN for invalid pixels
-        block = counts[r0:r_end]
-        for dy, dx in ((0, 1), (1, -1), (1, 0), (1, 1)):
-            n_rows = min(r1 - r0, r_end - r0 - dy)
-            if n_rows <= 0:
-                continue
-            ys_a = slice(0, n_rows)
-            ys_b = slice(dy, dy + n_rows)
-            xs_a = slice(max(0, -dx), w - max(0, dx))
-            xs_b = slice(max(0, dx), w - max(0, -dx))
-            plane = (n_rows, w - abs(dx))
-            d, d2, rr, limit = (b[: plane[0] * plane[1]].reshape(plane) for b in buf)
-            hit = hit_buf[: plane[0] * plane[1]].reshape(plane)
-            np.subtract(x[ys_a, xs_a], x[ys_b, xs_b], out=d)
-            np.multiply(d, d, out=d2)
-            np.subtract(y[ys_a, xs_a], y[ys_b, xs_b], out=d)
-            d *= d
-            d2 += d
-            np.subtract(z[ys_a, xs_a], z[ys_b, xs_b], out=d)
-            d *= d
-            d2 += d
-            np.add(rng[ys_a, xs_a], rng[ys_b, xs_b], out=rr)
-            np.multiply(k2, rr, out=limit)
-            limit *= rr
-            np.less(d2, limit, out=hit)  # NaN compares False
-            hit8 = hit.view(np.uint8)
-            block[ys_a, xs_a] += hit8
-            block[ys_b, xs_b] += hit8
+    # A point beyond 1e19 m (absurd intrinsics: a principal point at 1e30 pixels) squares
+    # to inf, and inf - inf is NaN: such a point has no neighbour, silently (NaN compares False)
+    with np.errstate(over="ignore", invalid="ignore"):
+        for r0 in range(0, h, rows):
+            r1 = min(r0 + rows, h)  # the block's rows; the pairs start in them
+            r_end = min(r1 + 1, h)  # and the row below, where the downward pairs end
+            x, y, z = (grid[r0:r_end, :, k].astype(np.float32) for k in range(3))
+            rng = np.sqrt((x * x + y * y) + z * z)  # NaN for invalid pixels
+            block = counts[r0:r_end]
+            for dy, dx in ((0, 1), (1, -1), (1, 0), (1, 1)):
+                n_rows = min(r1 - r0, r_end - r0 - dy)
+                if n_rows <= 0:
+                    continue
+                ys_a = slice(0, n_rows)
+                ys_b = slice(dy, dy + n_rows)
+                xs_a = slice(max(0, -dx), w - max(0, dx))
+                xs_b = slice(max(0, dx), w - max(0, -dx))
+                plane = (n_rows, w - abs(dx))
+                d, d2, rr, limit = (b[: plane[0] * plane[1]].reshape(plane) for b in buf)
+                hit = hit_buf[: plane[0] * plane[1]].reshape(plane)
+                np.subtract(x[ys_a, xs_a], x[ys_b, xs_b], out=d)
+                np.multiply(d, d, out=d2)
+                np.subtract(y[ys_a, xs_a], y[ys_b, xs_b], out=d)
+                d *= d
+                d2 += d
+                np.subtract(z[ys_a, xs_a], z[ys_b, xs_b], out=d)
+                d *= d
+                d2 += d
+                np.add(rng[ys_a, xs_a], rng[ys_b, xs_b], out=rr)
+                np.multiply(k2, rr, out=limit)
+                limit *= rr
+                np.less(d2, limit, out=hit)  # NaN compares False
+                hit8 = hit.view(np.uint8)
+                block[ys_a, xs_a] += hit8
+                block[ys_b, xs_b] += hit8
     return counts.reshape(-1).astype(np.int16)
 
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -101,3 +103,19 @@ def test_neighbour_counts_the_same_whatever_the_blocks_of_rows(monkeypatch: pyte
         monkeypatch.setattr(filters, "_BLOCK_PIXELS", pixels)
         got = filters._organized_neighbor_counts(pts, (h, w), 0.01)
         assert np.array_equal(got, want), pixels
+
+
+def test_points_beyond_float32_squares_have_no_neighbour_and_no_warning() -> None:
+    # absurd intrinsics (a principal point at 1e30 pixels) put points ~1e28 m out: their
+    # squares overflow float32; they keep no neighbour and NumPy prints nothing
+    from clearcli.perception.filters import depth_radius_mask
+
+    grid = np.zeros((4, 5, 3), np.float32)
+    grid[..., 0] = np.arange(5, dtype=np.float32) * 0.001
+    grid[..., 1] = np.arange(4, dtype=np.float32)[:, None] * 0.001
+    grid[..., 2] = 1.0
+    grid[0, :, 0] = np.float32(1e28) * np.arange(1, 6, dtype=np.float32)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        kept = depth_radius_mask(grid.reshape(-1, 3), (4, 5), 0.01, 2)
+    assert not kept[:5].any() and kept[5:].all()
