@@ -222,6 +222,8 @@ def test_a_command_imports_only_what_it_runs(tmp_path: Path, command: str) -> No
         assert stages == set()
     else:
         assert {"clearcli.planning.backtrack", "clearcli.robot.wam_kinematics"} <= stages
+        # the suction kind is registered, its model only imported for a tool with a cup
+        assert "clearcli.predicates.grasps.suction" in modules and "clearcli.geometry.suction" not in modules
     # SciPy: the tree's and the hull's modules (and the LAPACK table the hull loads), no
     # more of scipy.spatial, scipy.sparse, scipy.linalg or scipy.special (clearcli/startup.py
     # DEFERRED_PACKAGES: ~35 ms of a cold plan on a quiet machine)
