@@ -1,5 +1,6 @@
 """A batch's workers start as a single call does (clearcli/startup.py): one BLAS thread,
-NumPy's and SciPy's unused modules deferred and SciPy's docstrings left unparsed. A
+NumPy's and SciPy's unused modules and SciPy's subpackages' code deferred and SciPy's
+docstrings left unparsed. A
 worker is a fresh interpreter that never runs the CLI's main (issue 39: without this a
 worker's first frame paid ~1 s of SciPy imports on a loaded machine)."""
 
@@ -11,7 +12,7 @@ from pathlib import Path
 from helpers import FIXTURES
 from helpers.batch import clear, hooked_env, lines_of
 
-from clearcli.startup import DEFERRED_MODULES, SINGLE_THREADED
+from clearcli.startup import DEFERRED_MODULES, DEFERRED_PACKAGES, SINGLE_THREADED
 
 # In every child: at exit, a report named by its pid (a worker: a multiprocessing child
 # running the pool's worker module).
@@ -23,7 +24,8 @@ def _report():
     for name in DEFERRED:
         module = sys.modules.get(name)
         # type(), not module.__class__: any attribute access would load a lazy module
-        state[name] = "absent" if module is None else "deferred" if type(module) is importlib.util._LazyModule else "loaded"
+        lazy = type(module) is importlib.util._LazyModule or type(module).__name__ == "_DeferredPackage"
+        state[name] = "absent" if module is None else "deferred" if lazy else "loaded"
     array_api = sys.modules.get("scipy._lib._array_api")
     state["scipy_docs"] = getattr(getattr(array_api, "FunctionDoc", None), "__name__", None)
     state["env"] = {var: os.environ.get(var) for var in THREADS}
@@ -31,7 +33,7 @@ def _report():
         json.dump(state, out)
 
 atexit.register(_report)
-""".replace("DEFERRED", repr(sorted(DEFERRED_MODULES))).replace("THREADS", repr(SINGLE_THREADED))
+""".replace("DEFERRED", repr(sorted(DEFERRED_MODULES | DEFERRED_PACKAGES))).replace("THREADS", repr(SINGLE_THREADED))
 
 
 def test_batch_workers_start_light(tmp_path: Path) -> None:
@@ -52,4 +54,8 @@ def test_batch_workers_start_light(tmp_path: Path) -> None:
         assert state.pop("scipy") is True, "the worker did not import SciPy: nothing was checked"
         assert state.pop("scipy_docs") == "_DocstringKept"
         assert state.pop("env") == dict.fromkeys(SINGLE_THREADED, "1")
-        assert state == dict.fromkeys(DEFERRED_MODULES, "deferred")
+        # scipy.spatial.transform: not imported, scipy.spatial's code (which imports it) not run
+        assert state == {
+            **dict.fromkeys(DEFERRED_MODULES | DEFERRED_PACKAGES, "deferred"),
+            "scipy.spatial.transform": "absent",
+        }

@@ -30,7 +30,8 @@ def hooked_env(folder: Path, code: str) -> dict[str, str]:
     hook = folder / "hook"
     hook.mkdir()
     (hook / "sitecustomize.py").write_text(code)
-    return dict(os.environ, PYTHONPATH=str(hook))
+    # the caller's PYTHONPATH kept after it: a checkout run that way is the one tested
+    return dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in (str(hook), os.environ.get("PYTHONPATH")) if p))
 
 
 def lines_of(out: str) -> tuple[list[dict[str, Any]], dict[str, Any]]:

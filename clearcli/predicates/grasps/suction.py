@@ -36,20 +36,14 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from clearcli.geometry.poses import _cross
-from clearcli.geometry.suction import (
-    MAX_POINTS,
-    CupSpec,
-    Judged,
-    ObjectJob,
-    bounds,
-    in_box,
-    judge_objects,
-    volume_above,
-)
 from clearcli.predicates.grasps.base import KindFacts, KindModule, Offer, Scene, SimWorld
 
 if TYPE_CHECKING:
+    # clearcli.geometry.suction is imported where it is used: every plan imports this
+    # module for its KIND, and only a robot whose tool has a cup uses it (its 8
+    # dataclasses, ~4 ms of a cold `clear plan` on a quiet machine; issue 39)
     from clearcli.geometry.gripper import GripperModel
+    from clearcli.geometry.suction import CupSpec
     from clearcli.settings import Settings
     from clearcli.settings.suction import SuctionSettings
 
@@ -66,6 +60,8 @@ FIRST_THEN_REST = (slice(0, 1), slice(1, None))
 
 
 def cup_spec(s: SuctionSettings) -> CupSpec:
+    from clearcli.geometry.suction import CupSpec  # noqa: PLC0415  (see the top)
+
     return CupSpec(
         diameter_m=s.cup_diameter_m,
         compliance_m=s.bellows_compliance_m,
@@ -305,6 +301,8 @@ def contact_poses(
 def _within(points: np.ndarray, p_lo: np.ndarray, p_hi: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     """Those of ``points`` (their box ``p_lo``, ``p_hi``: `bounds`) in the box [lo, hi]
     (`in_box`): all of them, not tested one by one, where their box lies in it."""
+    from clearcli.geometry.suction import in_box  # noqa: PLC0415  (see the top)
+
     if bool(np.all(p_lo >= lo)) and bool(np.all(p_hi <= hi)):
         return points
     # x first over all of them, then y and z over those left (the same points, in order)
@@ -328,6 +326,15 @@ class SuctionGrasp(KindModule):
     faces = ("top", "side")
 
     def offers(self, scene: Scene, gripper: GripperModel, settings: Settings) -> list[Offer]:
+        from clearcli.geometry.suction import (  # noqa: PLC0415  (see the top)
+            MAX_POINTS,
+            Judged,
+            ObjectJob,
+            bounds,
+            judge_objects,
+            volume_above,
+        )
+
         s = settings.suction
         spec = cup_spec(s)
         approach_m = settings.push.approach_m

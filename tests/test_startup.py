@@ -1,0 +1,96 @@
+"""clearcli/startup.py's deferred packages (DEFERRED_PACKAGES): a SciPy subpackage's own
+code runs at the first use of a name it defines, not at its import; the names clear
+uses of scipy.spatial (PACKAGE_SHORTCUTS) come from their own modules without it; and
+what the package gives, before and after its code ran, is what a plain import gives.
+Each case in a fresh interpreter (the hook changes how that process imports)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+from helpers import REPO
+
+from clearcli.startup import DEFERRED_PACKAGES, PACKAGE_SHORTCUTS
+
+# the same computation with and without the hook: a 3-4-5 triangle and a unit square
+_USE = """
+import json, sys
+import numpy as np
+from scipy.spatial import ConvexHull, QhullError, cKDTree
+tree_then = cKDTree
+square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0], [0.5, 0.5]])
+dist, idx = cKDTree(square).query([[0.9, 0.8]], k=2)
+hull = ConvexHull(square)
+try:
+    ConvexHull(np.zeros((3, 2)))
+    flat = "no error"
+except QhullError:
+    flat = "QhullError"
+unrun = sorted(n for n in DEFERRED if type(sys.modules.get(n)).__name__ == "_DeferredPackage")
+import scipy.spatial
+d = scipy.spatial.distance.euclidean([0.0, 0.0], [3.0, 4.0])  # not a shortcut: runs its code
+print(json.dumps({
+    "unrun_before": unrun,
+    "unrun_after": sorted(n for n in DEFERRED if type(sys.modules.get(n)).__name__ == "_DeferredPackage"),
+    "query": [dist.round(12).tolist(), idx.tolist()],
+    "hull": sorted(hull.vertices.tolist()),
+    "flat": flat,
+    "euclidean": d,
+    "same_tree": scipy.spatial.cKDTree is tree_then is sys.modules["scipy.spatial._ckdtree"].cKDTree,
+    "names": sorted(vars(scipy.spatial)),
+    "linalg": float(scipy.linalg.norm([3.0, 4.0])),
+}))
+""".replace("DEFERRED", repr(sorted(DEFERRED_PACKAGES)))
+
+
+def _run(code: str) -> dict:
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO, timeout=120)
+    assert res.returncode == 0, res.stderr
+    return json.loads(res.stdout)
+
+
+def test_scipy_spatial_gives_its_tree_and_hull_without_running_its_code() -> None:
+    hooked = _run("from clearcli.startup import lighten_imports\nlighten_imports()\n" + _USE)
+    plain = _run(_USE)
+    # with the hook, none of the packages' own code ran for the tree and the hull (the
+    # hull's module imports scipy.linalg's LAPACK table; scipy.special is not imported)
+    unrun = ["scipy.linalg", "scipy.sparse", "scipy.spatial"]
+    assert hooked.pop("unrun_before") == unrun and plain.pop("unrun_before") == []
+    # a name that is not a shortcut ran scipy.spatial's code (and, through it, the
+    # others': scipy.spatial.distance imports scipy.linalg and scipy.special)
+    assert hooked.pop("unrun_after") == ["scipy.sparse"] and plain.pop("unrun_after") == []
+    # the same results and the same namespace as a plain import
+    assert hooked == plain
+    assert hooked["query"] == [[[0.223606797750, 0.5]], [[2, 4]]]  # (1,1): sqrt(0.1^2+0.2^2); centre: sqrt(0.4^2+0.3^2)
+    assert hooked["hull"] == [0, 1, 2, 3] and hooked["flat"] == "QhullError" and hooked["euclidean"] == 5.0
+    assert hooked["same_tree"] is True and hooked["linalg"] == 5.0
+
+
+def test_a_package_without_shortcuts_runs_its_code_at_its_first_name() -> None:
+    code = """
+import sys
+from clearcli.startup import lighten_imports
+lighten_imports()
+import scipy.sparse
+m = sys.modules["scipy.sparse"]
+assert type(m).__name__ == "_DeferredPackage" and hasattr(m, "__path__")
+assert "coo_matrix" not in vars(m)
+a = scipy.sparse.coo_matrix(([1.0, 2.0], ([0, 1], [1, 0])), shape=(2, 2)).toarray().tolist()
+assert type(m) is type(sys) and a == [[0.0, 1.0], [2.0, 0.0]]
+assert m.__spec__.loader is m.__loader__ and type(m.__loader__).__name__ == "SourceFileLoader"
+print("ok")
+"""
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO, timeout=120)
+    assert res.returncode == 0, res.stderr
+    assert res.stdout.strip() == "ok"
+
+
+def test_shortcuts_name_modules_of_their_package_that_define_them() -> None:
+    import importlib
+
+    for package, names in PACKAGE_SHORTCUTS.items():
+        assert package in DEFERRED_PACKAGES
+        for name, module in names.items():
+            assert hasattr(importlib.import_module(f"{package}.{module}"), name), (package, name, module)
