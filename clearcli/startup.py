@@ -89,7 +89,10 @@ class _DeferredPackage(ModuleType):
                     raise AttributeError(f"partially initialised module {self.__name__!r} has no attribute {name!r}")
                 module = PACKAGE_SHORTCUTS.get(self.__name__, {}).get(name)
                 if module is not None:
-                    value = getattr(importlib.import_module(f"{self.__name__}.{module}"), name, _MISSING)
+                    try:
+                        value = getattr(importlib.import_module(f"{self.__name__}.{module}"), name, _MISSING)
+                    except ImportError:  # a SciPy that moved it: its package's code gives it
+                        value = _MISSING
                     if value is not _MISSING:
                         setattr(self, name, value)  # kept: its code, when it runs, binds the same object
                         return value
