@@ -153,6 +153,13 @@ _FACE_THIN_M = 0.03
 # times; a long strip lying flat, less than once)
 _UPRIGHT = 4.0
 _WALL_FACE_M = 0.4
+# a piece lying in a wall's face need not be upright when its top (98th percentile of its
+# heights) is this high or more: a camera lower (30-35 degrees down) sees a wall face-on
+# and the segmentation cuts it into strips 2-6 cm high, each less than `_UPRIGHT` times its
+# 1-1.5 cm across (self-made walls and desks seen 32 degrees down: the strips' tops 4 cm
+# and more); a thin thing lying at a wall's foot (a pen, a marker: its top 1-2 cm up)
+# stays an object
+_PIECE_TOP_M = 0.03
 # or a smaller face rising at the support's edge along most of it: a bin's wall is only as
 # long as the bin's floor. Its length along its line at least `_WALL_SPAN` of the support's
 # extent along that line (2nd to 98th percentile of the support's points), and the support
@@ -533,7 +540,11 @@ def _walls(
             )
             walls.append((mid, normal))
     for k, (_, _, thick, _, tall) in faces.items():
-        if k in verdicts or tall < _UPRIGHT * thick:
+        if k in verdicts:
+            continue
+        # upright, or a strip of the face standing clear of the support's level (what lies
+        # at a wall's foot, a pen, a marker, is lower)
+        if tall < _UPRIGHT * thick and float(np.percentile(h_each[k], 98)) < _PIECE_TOP_M:
             continue
         for mid, normal in walls:
             off = float(np.percentile(np.abs((xy_each[k] - mid) @ normal), 95))
