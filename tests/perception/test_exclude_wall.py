@@ -18,8 +18,8 @@ from clearcli.perception.payload import segmentation_payload
 from clearcli.perception.segment import segment
 from clearcli.settings.segment import SegmentSettings
 from clearcli.sim.camera import render
-from clearcli.sim.families import FURNITURE_ID, desk_behind
-from clearcli.sim.scene import Box, Table, camera_pose_T_camera_table, make_scene
+from clearcli.sim.families import FURNITURE_ID, desk_behind, support_frame
+from clearcli.sim.scene import Box, Table, make_scene
 
 ON = dataclasses.replace(SegmentSettings(), exclude_not_standing=True)
 
@@ -129,19 +129,13 @@ def test_a_bins_walls_are_no_objects(seed: int, monkeypatch: pytest.MonkeyPatch)
 
 
 def test_a_wall_seen_face_on_from_a_low_camera_is_excluded_strip_by_strip(monkeypatch: pytest.MonkeyPatch) -> None:
-    # desk_behind(2)'s objects and a wall 1 cm inside the table's far edge, seen from a
-    # camera 0.68 m above the table pitched 32 degrees down: the wall is face-on and the
-    # segmentation cuts it into strips; the longest are walls, the others lie in their
-    # face, 2-6 cm high and 1-1.5 cm across, not upright (`_UPRIGHT`) but their tops 4 cm
-    # and more above the support (`_PIECE_TOP_M`)
-    scene_T = camera_pose_T_camera_table(0.678, 32.0)
-    objs = [o for o in desk_behind(2).objects if o.object_id < FURNITURE_ID]
-    table = Table()
-    wall = Box(FURNITURE_ID, round(table.size_x_m - 0.02, 4), 0.02, 1.5, 0.0, round(table.size_y_m / 2 - 0.02, 4))
-    frame = render(make_scene("wall(2) low", [*objs, wall], table, scene_T), seed=2)
-    labels = np.asarray(frame.fields["label"]).copy()
-    labels[labels >= object_label(FURNITURE_ID)] = LABEL_NONE
-    truth = labels
+    # wall_at_edge(2) (desk_behind(2)'s objects, a wall 1 cm inside the table's far edge)
+    # seen from a camera 0.68 m above the table pitched 32 degrees down: the wall is
+    # face-on and the segmentation cuts it into strips; the longest are walls, the others
+    # lie in their face, 2-6 cm high and 1-1.5 cm across, not upright (`_UPRIGHT`) but
+    # their tops 4 cm and more above the support (`_PIECE_TOP_M`)
+    frame = support_frame("wall_at_edge", 2, view=(0.678, 32.0))
+    truth = np.asarray(frame.fields["label"])
     seg = segment(frame, ON)
     sc = score(seg.labels(), truth)
     assert sc.true_positives == sc.n_true == 5, (sc, [e.reason for e in seg.excluded])
