@@ -68,6 +68,15 @@ set aside with the reason, for --json to list as ``excluded``.
   as the rays do (`_VEIL_FALLS` of their fall, at least `_VEIL_RISE_M`): a thing lying
   along the rays (a bottle pointing away from a low camera) keeps its height.
   Decided last, so a veil neither holds up nor carries anything in the rules above.
+- a fringe of the support's colour against an object (`_fringe`; frames with colour): where
+  the depth image is registered a few pixels off the colour image, or a stereo sensor
+  fattens a near edge over what lies behind it, an object's depth spreads over the
+  support beside it, and the colour split cuts that piece off: a segment whose pixels all
+  show the support's colour (at most `_FRINGE_OFF_SHARE` differ from it, flat.py's test),
+  low (its top, 95th percentile of heights, `_FRINGE_BELOW_M` or more under the median
+  height of an object it touches: at least `_GOES_ON_MIN` of that object's points within
+  `_TOUCH_M` of its own). An object of the table's own colour standing alone, or as tall
+  as what it touches, stays.
 
 A stacked object is not excluded: it stands on an object, and the support under it is
 hidden by that object, not seen. Every threshold keeps a margin of millimetres or tens
@@ -145,6 +154,13 @@ _FACE_THIN_M = 0.03
 # times; a long strip lying flat, less than once)
 _UPRIGHT = 4.0
 _WALL_FACE_M = 0.4
+# a piece lying in a wall's face need not be upright when its top (98th percentile of its
+# heights) is this high or more: a camera lower (30-35 degrees down) sees a wall face-on
+# and the segmentation cuts it into strips 2-6 cm high, each less than `_UPRIGHT` times its
+# 1-1.5 cm across (self-made walls and desks seen 32 degrees down: the strips' tops 4 cm
+# and more); a thin thing lying at a wall's foot (a pen, a marker: its top 1-2 cm up)
+# stays an object
+_PIECE_TOP_M = 0.03
 # or a smaller face rising at the support's edge along most of it: a bin's wall is only as
 # long as the bin's floor. Its length along its line at least `_WALL_SPAN` of the support's
 # extent along that line (2nd to 98th percentile of the support's points), and the support
@@ -202,6 +218,17 @@ _VEIL_FALLS_MAX = 1.5
 # and at least this much: a veil spans the height between the near edge and the background
 # (the choose part's: 44 to 93 mm); the same 3 cm as `_HANG_M`, far above the range noise
 _VEIL_RISE_M = 0.03
+# a fringe of the support's colour: at most this share of its pixels differ from the
+# support's colour (flat.py's test). Measured on the choose part: uois_image_0006's two
+# fringes beside its tin and its cup 0.1 % and 0 %; every labelled object's segment
+# touching another 5 % or more (gqcnn_primesense_4's grey toys 5 % and 11 %; on mOSD 36 %
+# and more); segments of the table's colour alone (PCL's mug, gqcnn_primesense_2's white
+# tube: 0 %) touch nothing
+_FRINGE_OFF_SHARE = 0.02
+# and its top this far or more under the median height of what it touches: the fringes'
+# tops 35 and 37 mm against the tin's median 96 mm; gqcnn_primesense_4's toy (5 %) 83 mm
+# against 48 and 69 mm
+_FRINGE_BELOW_M = 0.02
 # the camera is at the origin (a camera frame) when the origin lies this far or more above the
 # support's plane (as table.py decides it); otherwise there are no rays to lie along
 _CAMERA_ABOVE_M = 0.05
@@ -570,7 +597,11 @@ def _walls(
             )
             walls.append((mid, normal))
     for k, (_, _, thick, _, tall) in faces.items():
-        if k in verdicts or tall < _UPRIGHT * thick:
+        if k in verdicts:
+            continue
+        # upright, or a strip of the face standing clear of the support's level (what lies
+        # at a wall's foot, a pen, a marker, is lower)
+        if tall < _UPRIGHT * thick and float(np.percentile(h_each[k], 98)) < _PIECE_TOP_M:
             continue
         for mid, normal in walls:
             off = float(np.percentile(np.abs((xy_each[k] - mid) @ normal), 95))
@@ -686,6 +717,7 @@ def not_standing(
     at_border: list[np.ndarray] | None = None,
     around: list[tuple[int, int]] | None = None,
     below: np.ndarray | None = None,
+    off_colour: list[float] | None = None,
 ) -> list[Verdict]:
     """Which of ``objects`` (each an (M, 3) array of its points) do not stand on the
     support, and why.
@@ -700,7 +732,9 @@ def not_standing(
     ``at_border``: per object, (M,) bool, its points at the image's border (None: the
     frame has no pixel grid); ``around``: per object, `support_around`'s counts (None:
     no pixel grid); ``below``: the points below the support's level, not the support's,
-    inside the outline or not (None: not known, `_beneath_below` is not decided).
+    inside the outline or not (None: not known, `_beneath_below` is not decided);
+    ``off_colour``: per object, the share of its pixels whose colour differs from the
+    support's (None: no colour, `_fringe` is not decided).
     """
     from scipy.spatial import cKDTree
 
@@ -898,4 +932,39 @@ def not_standing(
                 why = _veil(p, h_each[k], camera_h, height, rng_each[k])
                 if why:
                     verdicts[k] = why
+    if off_colour is not None:
+        _fringe(objects, h_each, off_colour, verdicts)
     return [Verdict(k, why) for k, why in sorted(verdicts.items())]
+
+
+def _fringe(
+    objects: list[np.ndarray], h_each: list[np.ndarray], off_colour: list[float], verdicts: dict[int, str]
+) -> None:
+    """Add to ``verdicts`` the fringes of the support's colour against an object (module
+    doc; ``off_colour`` per object as for `not_standing`): decided among the objects not
+    excluded before, each against those (a fringe holds up nothing)."""
+    from scipy.spatial import cKDTree
+
+    standing = [k for k in range(len(objects)) if k not in verdicts]
+    medians = {k: float(np.median(h_each[k])) for k in standing}
+    found: dict[int, str] = {}
+    for k in standing:
+        if off_colour[k] > _FRINGE_OFF_SHARE or objects[k].shape[0] < _GOES_ON_MIN:
+            continue
+        top = float(np.percentile(h_each[k], 95))
+        taller = [j for j in standing if j != k and medians[j] >= top + _FRINGE_BELOW_M]
+        if not taller:
+            continue
+        tree = cKDTree(objects[k])
+        for j in taller:
+            d, _ = tree.query(objects[j], distance_upper_bound=_TOUCH_M)
+            touching = int(np.isfinite(d).sum())
+            if touching >= _GOES_ON_MIN:
+                found[k] = (
+                    f"a fringe of the support's colour: {100 * off_colour[k]:.1f} % of its pixels differ from the "
+                    f"support's colour, its top {top:.3f} m above the support, and {touching} points of an object "
+                    f"{medians[j]:.3f} m tall (median) touch it: that object's depth smeared over the support beside "
+                    "it (the colour image shows the support there), no object"
+                )
+                break
+    verdicts.update(found)

@@ -119,6 +119,29 @@ def _far_from(rgb: np.ndarray, centre: np.ndarray, threshold: float) -> np.ndarr
     return d2[key] > threshold * threshold
 
 
+def support_colour(
+    colors: np.ndarray, shape: tuple[int, int], table_pixels: np.ndarray, min_color_delta: float
+) -> tuple[np.ndarray, float]:
+    """(CIELAB centre, threshold): the table's colour and how far (CIE76 dE) a pixel's
+    colour must be from it to differ (module doc, 1.); ``table_pixels`` flat indices into
+    the organized ``colors`` of ``shape``."""
+    height, width = shape
+    # the table's colour from a sample of its pixels (a few thousand fix a median): the
+    # pixels on a fixed lattice of the image, so that a pixel more or less on the table
+    # (a micrometre can move a point across the table's bound) leaves the others in the
+    # sample; every n-th of the table's list shifted the whole sample along by one
+    step = max(1, height * width // 10000)
+    lab_table = lab_of(colors[table_pixels[table_pixels % step == 0]])
+    centre = np.median(lab_table, axis=0)
+    spread = float(np.median(np.linalg.norm(lab_table - centre, axis=1)))
+    return centre, max(min_color_delta, 3.0 * spread)
+
+
+def differs_from(rgb: np.ndarray, centre: np.ndarray, threshold: float) -> np.ndarray:
+    """(N,) bool: the colours ``rgb`` (uint8) that differ from the table's (`support_colour`)."""
+    return _far_from(rgb, centre, threshold)
+
+
 def flat_objects(
     points: np.ndarray,
     colors: np.ndarray,
@@ -144,15 +167,7 @@ def flat_objects(
     height, width = shape
     if table_pixels.size < 100:
         return []
-    # the table's colour from a sample of its pixels (a few thousand fix a median): the
-    # pixels on a fixed lattice of the image, so that a pixel more or less on the table
-    # (a micrometre can move a point across the table's bound) leaves the others in the
-    # sample; every n-th of the table's list shifted the whole sample along by one
-    step = max(1, height * width // 10000)
-    lab_table = lab_of(colors[table_pixels[table_pixels % step == 0]])
-    centre = np.median(lab_table, axis=0)
-    spread = float(np.median(np.linalg.norm(lab_table - centre, axis=1)))
-    threshold = max(min_color_delta, 3.0 * spread)
+    centre, threshold = support_colour(colors, shape, table_pixels, min_color_delta)
     free = np.concatenate([table_pixels, loose_pixels])
     differs = _far_from(colors[free], centre, threshold)
     cand = np.zeros(height * width, dtype=bool)

@@ -42,7 +42,7 @@ from clearcli.perception.exclude import (
     support_around,
 )
 from clearcli.perception.filters import clean_mask
-from clearcli.perception.flat import flat_objects
+from clearcli.perception.flat import differs_from, flat_objects, support_colour
 from clearcli.perception.lccp import lccp_segments
 from clearcli.perception.openings import RIM_MAX_POINTS, Opening, TableEdge, rim_of, seen_edges
 from clearcli.perception.refine import STAGES, refine
@@ -472,12 +472,23 @@ def _exclude(w: _Work) -> None:
         at_image_border([o.indices for o in w.objects], w.frame.shape) if w.organized else None,
         _support_around(w) if w.organized else None,
         below=pts[below],
+        off_colour=_off_colour(w),
     )
     if not verdicts:
         return
     gone = {v.index: v.reason for v in verdicts}
     w.excluded = [Excluded(o.indices, o.centroid, gone[k]) for k, o in enumerate(w.objects) if k in gone]
     w.objects = [o for k, o in enumerate(w.objects) if k not in gone]
+
+
+def _off_colour(w: _Work) -> list[float] | None:
+    """Per object, the share of its pixels whose colour differs from the support's
+    (flat.py's test; exclude.py's fringes); None without usable colour on a pixel grid."""
+    colors, shape = w.frame.colors, w.frame.shape
+    if not (w.color_used and w.organized) or colors is None or shape is None or w.table_idx.size < 100:
+        return None
+    centre, threshold = support_colour(colors, shape, w.table_idx, w.settings.flat_min_color_delta)
+    return [float(differs_from(colors[o.indices], centre, threshold).mean()) for o in w.objects]
 
 
 def _support_around(w: _Work) -> list[tuple[int, int]]:

@@ -89,6 +89,33 @@ def _outline_3d(s: Surface) -> np.ndarray:
     return s.origin + s.polygon_2d @ s.basis
 
 
+def _over(lower: Surface, outline: np.ndarray, rise: float, every: np.ndarray) -> float:
+    """The share of ``outline`` (a surface ``rise`` above ``lower``) that lies over
+    ``lower``: inside its outline grown `_OVER_GROW_M`, or where the camera does not
+    see ``lower`` at all (its rays through ``every`` point do not reach there: a camera
+    low over a stool sees no floor under the stool's near half, below the image's bottom
+    edge). Without a camera above ``lower`` (offset under `_MAT_MIN_M`), the outline only."""
+    inside = lower.inside(outline, _OVER_GROW_M)
+    if inside.all() or lower.offset < _MAT_MIN_M or every.shape[0] < 3:
+        return float(inside.mean())
+    from scipy.spatial import ConvexHull
+
+    # where the camera's rays (from the origin through the points seen) meet the lower
+    # plane: the part of it in view, whatever hides it
+    rays = every / np.maximum(np.linalg.norm(every, axis=1, keepdims=True), 1e-12)
+    down = rays @ lower.normal
+    rays = rays[down < -1e-6]
+    if rays.shape[0] < 3:
+        return float(inside.mean())
+    hits = rays * (-lower.offset / (rays @ lower.normal))[:, None]
+    xy = np.stack([hits @ a for a in lower.basis], axis=1) - lower.origin @ lower.basis.T
+    hull = xy[ConvexHull(xy).vertices]  # counter-clockwise in 2-D
+    beneath = outline - rise * lower.normal  # the outline's foot on the lower plane
+    foot = np.stack([beneath @ a for a in lower.basis], axis=1) - lower.origin @ lower.basis.T
+    unseen = ~_inside_convex(foot, hull, 0.0)
+    return float((inside | unseen).mean())
+
+
 def standing_on(s: Surface, loose: np.ndarray, band_m: np.ndarray) -> np.ndarray:
     """(N,) bool: ``loose`` points standing on ``s``: above it by more than ``band_m``
     (per point: the noise grows with range), at most `_STAND_MAX_M`, inside its outline
@@ -144,7 +171,7 @@ def choose(
         rise = float(np.median(lower.height(outline)))
         if rise <= _MAT_MIN_M:
             continue
-        if lower.inside(outline, _OVER_GROW_M).mean() < _OVER_SHARE:
+        if _over(lower, outline, rise, every) < _OVER_SHARE:
             continue
         on = standing_on(s, loose, band_m)
         n_on = int(on.sum())

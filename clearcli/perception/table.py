@@ -41,6 +41,15 @@ _REFITS = 10  # least-squares refits of a RANSAC plane at most (they settle in a
 # of a wall (or of a big box's front face) lies there off the wall's bottom edge; both
 # within a few mm. What stands on a table, or under one seen from below, is inside.
 _EDGE_BAND_M = 0.02
+# A RANSAC plane smaller than table_min_area_m2 lying along a candidate already found
+# (parallel within `_RESIDUE_COS`, its inliers' median within `_RESIDUE_M` of that plane)
+# is the residue of that surface's own noise: a far floor's depth noise (3 sigma 13 mm at
+# 1.7 m) leaves bands 1-2 cm off its plane that RANSAC finds next. It does not use up one
+# of the plane_candidates tries (at most as many again are spent on residues), or a raised
+# surface over such a floor is never tried (self-made raised_surface(4): the floor's two
+# residues 12 mm off took the last tries, the stool's top was never a candidate).
+_RESIDUE_COS = float(np.cos(np.radians(15.0)))
+_RESIDUE_M = 0.03
 # beyond_the_edge(): pieces of the plane smaller than this many pixels are not judged; a
 # piece is beyond a gap when at least this many looks at the gap see through it, and
 # this many times as many as see something nearer
@@ -452,6 +461,18 @@ class _Candidate:
     on_plane: np.ndarray  # bool over the sample: within distance of this plane
 
 
+def _residue(n: np.ndarray, inliers: np.ndarray, candidates: list[_Candidate]) -> bool:
+    """Is the plane of normal ``n`` (its ``inliers``) a residue of a candidate's own noise:
+    parallel to it within `_RESIDUE_COS` and its inliers' median within `_RESIDUE_M` of it?"""
+    for c in candidates:
+        if (
+            abs(float(n @ c.normal)) >= _RESIDUE_COS
+            and float(np.median(np.abs(inliers @ c.normal + c.offset))) <= _RESIDUE_M
+        ):
+            return True
+    return False
+
+
 def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, source: str = "") -> TableFit:
     """Stage 2a: the support plane among up to ``plane_candidates`` RANSAC planes.
 
@@ -470,7 +491,9 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
     candidates: list[_Candidate] = []
     small: list[PlaneVerdict] = []
     remaining = np.ones(sample.shape[0], dtype=bool)
-    for _ in range(settings.plane_candidates):
+    tries, residues = 0, 0
+    while tries < settings.plane_candidates:
+        tries += 1
         idx = np.flatnonzero(remaining)
         if idx.size < 50:
             break
@@ -484,6 +507,10 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
         comp, area = largest_component(
             project(np.take(sample, inl, axis=0), basis), settings.table_cell_m, settings.table_join_gap_m
         )
+        if area < settings.table_min_area_m2 and residues < settings.plane_candidates:
+            if _residue(n, np.take(sample, inl, axis=0), candidates):
+                tries -= 1  # the residue of a surface found: not a try (`_RESIDUE_M`)
+                residues += 1
         if area < settings.table_min_area_m2:
             small.append(
                 PlaneVerdict(

@@ -22,7 +22,8 @@ from functools import partial
 import numpy as np
 
 from clearcli.io.frames import LABEL_NONE, LABEL_TABLE, Frame, object_label
-from clearcli.sim.camera import FLOOR_BELOW_TABLE_M, render
+from clearcli.settings.sim import DepthNoise, PinholeCamera
+from clearcli.sim.camera import FLOOR_BELOW_TABLE_M, KINECT, render
 from clearcli.sim.scene import (
     MAX_WIDTH_M,
     MIN_WIDTH_M,
@@ -33,6 +34,7 @@ from clearcli.sim.scene import (
     Table,
     _in_region,
     _place_touching,
+    _rows,
     camera_pose_T_camera_table,
     make_scene,
     objects_overlap,
@@ -605,21 +607,54 @@ def large_bowl(seed: int) -> Scene:
     return make_scene(f"large_bowl({seed})", [bowl, *placed, *beside])
 
 
+def wall_at_edge(seed: int) -> Scene:
+    """desk_behind(seed)'s objects on the table and, instead of the desk, a wall 2 cm thick
+    and 1.5 m tall standing on the table 0-4 cm inside its far edge, as wide as the table
+    less 2 cm (a partition; the cleargrasp frames' wall stands inside the table's outline)."""
+    objs = [o for o in desk_behind(seed).objects if o.object_id < FURNITURE_ID]
+    table = Table()
+    gap = float(np.random.default_rng(seed).uniform(0.0, 0.04))
+    y = table.size_y_m / 2 - gap - 0.01
+    wall = Box(FURNITURE_ID, round(table.size_x_m - 0.02, 4), 0.02, 1.5, 0.0, round(y, 4), 0.0, 0.0)
+    return make_scene(f"wall_at_edge({seed})", [*objs, wall], table)
+
+
 SUPPORT_FAMILIES: dict[str, Callable[[int], Scene]] = {
     "mat_on_table": mat_on_table,
     "arm_entering": arm_entering,
     "desk_behind": desk_behind,
     "raised_surface": raised_surface,
     "large_bowl": large_bowl,
+    "wall_at_edge": wall_at_edge,
 }
 _WITH_FLOOR = ("raised_surface",)
+# other sensors for the support families (`support_frame`): a RealSense at 1280x720 (its
+# colour stream's intrinsics, as cleargrasp's D435 frames), and stereo-like depth noise
+# (an active stereo pair's errors: about twice the Kinect's spread, finer disparity steps,
+# more pixels lost behind depth edges)
+REALSENSE_HD = PinholeCamera(width=1280, height=720, fx=920.0, fy=920.0, cx=639.5, cy=359.5)
+STEREO_NOISE = DepthNoise(
+    sigma_base_m=0.002, sigma_quadratic_per_m=0.004, disparity_step_px=0.08, dropout_probability=0.6
+)
 
 
-def support_frame(name: str, seed: int) -> Frame:
+def support_frame(
+    name: str,
+    seed: int,
+    *,
+    view: tuple[float, float] | None = None,
+    camera: PinholeCamera | None = None,
+    noise: DepthNoise | None = None,
+) -> Frame:
     """The render of ``SUPPORT_FAMILIES[name](seed)`` (noise drawn from ``seed``), its labels
     those of the truth: the mat is table; the rest of the furniture, and what stands on
-    it, is none."""
-    frame = render(SUPPORT_FAMILIES[name](seed), seed=seed, floor=name in _WITH_FLOOR)
+    it, is none. ``view``: (camera height above the table (m), pitch below the horizontal
+    (degrees)) instead of the scene's own; ``camera``, ``noise``: another sensor
+    (`REALSENSE_HD`, `STEREO_NOISE`)."""
+    scene = SUPPORT_FAMILIES[name](seed)
+    if view is not None:
+        scene = replace(scene, T_camera_table_rows=_rows(camera_pose_T_camera_table(*view)))
+    frame = render(scene, seed=seed, floor=name in _WITH_FLOOR, camera=camera or KINECT, noise=noise)
     labels = np.asarray(frame.fields["label"]).copy()
     furniture = labels >= object_label(FURNITURE_ID)
     labels[furniture] = LABEL_TABLE if name == "mat_on_table" else LABEL_NONE

@@ -72,8 +72,14 @@ def test_a_veil_beside_an_edge_is_excluded_the_objects_kept(monkeypatch: pytest.
     assert veils[0].indices.size >= 300
     doc = segmentation_payload(seg)
     assert any(e["reason"] == veils[0].reason and e["points"] == veils[0].indices.size for e in doc["excluded"])
-    # the rule off: the veil is an object of its own
+    # the rule off: the veil of the table's colour, lying against the tall box, is taken
+    # for a fringe of the support's colour instead (`_fringe`, decided after the veils)
     monkeypatch.setattr(exclude, "_VEIL_ALONG", np.inf)
+    fringe = segment(frame, ON)
+    assert [e.indices.size for e in fringe.excluded] == [veils[0].indices.size]
+    assert fringe.excluded[0].reason.startswith("a fringe of the support's colour")
+    # and both off: the veil is an object of its own
+    monkeypatch.setattr(exclude, "_FRINGE_OFF_SHARE", -1.0)
     off = segment(frame, ON)
     sc_off = score(off.labels(), truth)
     assert sc_off.n_pred == sc_off.n_true + 1 and not off.excluded

@@ -18,7 +18,7 @@ from clearcli.perception.payload import segmentation_payload
 from clearcli.perception.segment import segment
 from clearcli.settings.segment import SegmentSettings
 from clearcli.sim.camera import render
-from clearcli.sim.families import FURNITURE_ID, desk_behind
+from clearcli.sim.families import FURNITURE_ID, desk_behind, support_frame
 from clearcli.sim.scene import Box, Table, make_scene
 
 ON = dataclasses.replace(SegmentSettings(), exclude_not_standing=True)
@@ -126,3 +126,27 @@ def test_a_bins_walls_are_no_objects(seed: int, monkeypatch: pytest.MonkeyPatch)
     off = segment(frame, ON)
     sc_off = score(off.labels(), truth)
     assert sc_off.n_pred >= sc_off.n_true + 2
+
+
+def test_a_wall_seen_face_on_from_a_low_camera_is_excluded_strip_by_strip(monkeypatch: pytest.MonkeyPatch) -> None:
+    # wall_at_edge(2) (desk_behind(2)'s objects, a wall 1 cm inside the table's far edge)
+    # seen from a camera 0.68 m above the table pitched 32 degrees down: the wall is
+    # face-on and the segmentation cuts it into strips; the longest are walls, the others
+    # lie in their face, 2-6 cm high and 1-1.5 cm across, not upright (`_UPRIGHT`) but
+    # their tops 4 cm and more above the support (`_PIECE_TOP_M`)
+    frame = support_frame("wall_at_edge", 2, view=(0.678, 32.0))
+    truth = np.asarray(frame.fields["label"])
+    seg = segment(frame, ON)
+    sc = score(seg.labels(), truth)
+    assert sc.true_positives == sc.n_true == 5, (sc, [e.reason for e in seg.excluded])
+
+    def walls_kept(objects: list) -> int:  # objects mostly of the wall's points
+        return sum(np.mean(truth[o.indices] == LABEL_NONE) > 0.5 for o in objects)
+
+    assert walls_kept(seg.objects) == 0, [e.reason for e in seg.excluded]
+    pieces = [e for e in seg.excluded if e.reason.startswith("part of a wall")]
+    assert pieces and all(np.mean(truth[e.indices] == LABEL_NONE) > 0.95 for e in pieces)
+    # the pieces must be upright again (as before): the low strips are objects
+    monkeypatch.setattr(exclude, "_PIECE_TOP_M", np.inf)
+    off = segment(frame, ON)
+    assert walls_kept(off.objects) >= 3

@@ -126,3 +126,25 @@ def test_the_inside_of_a_large_bowl_is_never_the_support(seed: int, monkeypatch:
     assert abs(wrong.table.offset - seg.table.offset) > 0.01
     lost = _matched(frame, wrong.labels())
     assert not any(lost[t] for t in beside), lost
+
+
+def test_a_raised_surface_seen_from_low_is_over_the_floor_where_the_floor_is_out_of_view(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # raised_surface(12) seen from 0.54 m above the stool's top, 38 degrees down: the
+    # image's bottom edge cuts the floor 0.67 m out, and the top's near half (from 0.49 m)
+    # lies over floor the camera never sees; only 48 % of its outline is inside the floor's.
+    # Where the camera's rays do not reach the floor, nothing says the top is not over it
+    frame = support_frame("raised_surface", 12, view=(0.541, 38.4))
+    seg = segment(frame, ON)
+    chosen = next(v for v in seg.support if v.chosen)
+    assert "raised surface" in chosen.why and abs(chosen.offset_m) < 0.6
+    assert _right(frame, ON)
+    # "over" by the floor's outline alone (as before): the floor is taken, its stool's body
+    # and bags are objects and the objects on the top are lost
+    monkeypatch.setattr(
+        support, "_over", lambda lower, outline, rise, every: float(lower.inside(outline, support._OVER_GROW_M).mean())
+    )
+    wrong = segment(frame, ON)
+    assert abs(next(v for v in wrong.support if v.chosen).offset_m) > 1.2
+    assert not _right(frame, ON)

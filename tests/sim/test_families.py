@@ -327,3 +327,26 @@ def test_stacks_join_the_top_an_object_stands_on_when_lccp_cuts_it_around_its_fo
     assert _right(frame)
     monkeypatch.setattr(stacks, "join_supports", lambda seg, *args: seg)
     assert not _right(frame)
+
+
+def test_support_frames_seen_otherwise() -> None:
+    # the support families rendered from another viewpoint, by another sensor, with other
+    # noise (issue 37: the exclusion rules judged beyond the one Kinect pose)
+    import math
+
+    from clearcli.io.frames import LABEL_NONE
+    from clearcli.sim.families import REALSENSE_HD, STEREO_NOISE, support_frame
+
+    base = support_frame("wall_at_edge", 2)
+    low = support_frame("wall_at_edge", 2, view=(0.678, 32.0))
+    assert base.shape == low.shape == (480, 640)
+    # the optical axis hits the table's origin: along it, the camera 0.678 / sin(32 deg) away
+    centre = low.points[240 * 640 + 320]
+    assert abs(float(np.linalg.norm(centre)) - 0.678 / math.sin(math.radians(32.0))) < 0.01
+    hd = support_frame("wall_at_edge", 2, camera=REALSENSE_HD)
+    assert hd.shape == (720, 1280)
+    labels = np.asarray(hd.fields["label"])
+    assert (labels == LABEL_NONE).any() and not (labels >= 10 * (100 + 1)).any()  # the wall is none
+    # stereo-like noise loses more pixels behind depth edges and spreads the table more
+    stereo = support_frame("wall_at_edge", 2, noise=STEREO_NOISE)
+    assert np.isnan(stereo.points[:, 2]).sum() > np.isnan(base.points[:, 2]).sum()
