@@ -121,7 +121,12 @@ def merge_occluded(seg_of_sv: np.ndarray, ctx: RefineContext) -> np.ndarray:
     if cand.size < 2:
         return seg_of_sv
     a_seg, b_seg = seg_of_sv[sv_edges[:, 0]], seg_of_sv[sv_edges[:, 1]]
-    touching = {(int(min(x, y)), int(max(x, y))) for x, y in zip(a_seg.tolist(), b_seg.tolist()) if x != y}
+    # the touching pairs (lower, higher), distinct in NumPy before the set: a few hundred,
+    # not one tuple per adjacency
+    cross = a_seg != b_seg
+    t_lo, t_hi = np.minimum(a_seg, b_seg)[cross], np.maximum(a_seg, b_seg)[cross]
+    t_key = np.unique(t_lo * n_seg + t_hi)
+    touching = set(zip((t_key // n_seg).tolist(), (t_key % n_seg).tolist()))
     order = np.argsort(seg_of_sv, kind="stable")
     bounds = np.searchsorted(seg_of_sv[order], np.arange(n_seg + 1))
     members = {int(s): order[bounds[s] : bounds[s + 1]] for s in cand}
