@@ -80,6 +80,7 @@ def split_by_colour(seg_of_sv: np.ndarray, ctx: RefineContext) -> np.ndarray:
         s.color_split_delta,
         s.color_split_min_rise_m,
         ctx.size.min_object_voxels,
+        ctx.voxels_by_sv,
     )
 
 
@@ -107,9 +108,11 @@ def color_splits(
     min_delta: float,
     min_rise_m: float,
     min_voxels: int,
+    voxels_by_sv: np.ndarray | None = None,
 ) -> np.ndarray:
     """(S,) segment per supervoxel after the colour splits (module doc), 0..G-1;
-    ``voxel_centroids`` (V, 3) of the voxels ``sv.voxel_label`` numbers."""
+    ``voxel_centroids`` (V, 3) of the voxels ``sv.voxel_label`` numbers;
+    ``voxels_by_sv``: as for `seam_rise`."""
     e = sv.edges
     if e.shape[0] == 0:
         return seg_of_sv
@@ -119,7 +122,7 @@ def color_splits(
     n_piece = int(piece.max()) + 1
     size = np.bincount(piece, weights=sv.n_voxels, minlength=n_piece)
     ci = np.flatnonzero(between)
-    rise = seam_rise(sv, voxel_centroids, e[ci])
+    rise = seam_rise(sv, voxel_centroids, e[ci], voxels_by_sv)
     pa, pb = piece[e[ci, 0]], piece[e[ci, 1]]
     lo, hi = np.minimum(pa, pb), np.maximum(pa, pb)
     pairs, inverse = np.unique(lo * n_piece + hi, return_inverse=True)
@@ -159,7 +162,7 @@ def color_splits(
             sets.join_roots(near[0], r)
     # pieces are inside one segment, and so are their pairs: no join crosses segments
     out = join_pairs(piece, np.asarray(sets.joined, dtype=np.int64).reshape(-1, 2), n_piece)
-    return _to_own_object(out, seg_of_sv, sv, voxel_centroids, lab, min_delta, min_rise_m)
+    return _to_own_object(out, seg_of_sv, sv, voxel_centroids, lab, min_delta, min_rise_m, voxels_by_sv)
 
 
 def _to_own_object(
@@ -170,6 +173,7 @@ def _to_own_object(
     lab: np.ndarray,
     min_delta: float,
     min_rise_m: float,
+    voxels_by_sv: np.ndarray | None = None,
 ) -> np.ndarray:
     """A group split off its segment (any but the segment's largest) that touches a group
     of another segment of its colour (mean CIELAB within ``min_delta``) along a seam that
@@ -200,7 +204,7 @@ def _to_own_object(
         if sel.size == 0:
             continue
         other = np.where(ga[sel] == g, gb[sel], ga[sel])
-        rise = seam_rise(sv, voxel_centroids, e[sel])
+        rise = seam_rise(sv, voxel_centroids, e[sel], voxels_by_sv)
         best, best_n = -1, 0
         for t in np.unique(other).tolist():
             mine = other == t

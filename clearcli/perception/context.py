@@ -101,6 +101,12 @@ class RefineContext:
         return group_lab(self.vox.point_voxel, self.point_colors, self.vox.centroids.shape[0])
 
     @cached_property
+    def voxels_by_sv(self) -> np.ndarray:
+        """(V,) the voxels ordered by supervoxel, each one's in index order (a stable
+        argsort of ``sv.voxel_label``; `cuts.seam_rise` of three stages reads it)."""
+        return np.argsort(self.sv.voxel_label, kind="stable")
+
+    @cached_property
     def first_voxel(self) -> np.ndarray:
         """(S,) one voxel of each supervoxel (to read a supervoxel's segment)."""
         n_sv = self.sv.centroids.shape[0]

@@ -66,7 +66,9 @@ def concave_adjacencies(sv: Supervoxels, settings: SegmentSettings, size: Segmen
     return ~convex_edges(sv, settings, size) & (_angle_deg(n1, n2) >= settings.cut_concave_deg)
 
 
-def seam_rise(sv: Supervoxels, voxel_centroids: np.ndarray, edges: np.ndarray) -> np.ndarray:
+def seam_rise(
+    sv: Supervoxels, voxel_centroids: np.ndarray, edges: np.ndarray, voxels_by_sv: np.ndarray | None = None
+) -> np.ndarray:
     """(K,) how far (m) either patch of each adjacency in ``edges`` reaches out of the
     other's plane, towards its normal: the largest (x_v - x_j) . n_j over the voxels v
     of i, and the same the other way round.
@@ -74,10 +76,14 @@ def seam_rise(sv: Supervoxels, voxel_centroids: np.ndarray, edges: np.ndarray) -
     Patches meeting in a convex crease stay behind each other's planes; a wall standing
     on a floor rises out of the floor's plane. The odd patch straddling a box's edge
     fails LCCP's sanity check with both faces, like a seam does, but stays behind
-    both planes (a few mm of noise)."""
+    both planes (a few mm of noise).
+
+    ``voxels_by_sv``: the voxels by supervoxel (``np.argsort(sv.voxel_label,
+    kind="stable")``, `RefineContext.voxels_by_sv`), when the caller has it: the sort
+    was half of a call, and three stages call this on one frame."""
     lab = sv.voxel_label
     n_sv = sv.centroids.shape[0]
-    order = np.argsort(lab, kind="stable")
+    order = np.argsort(lab, kind="stable") if voxels_by_sv is None else voxels_by_sv
     count = np.bincount(lab, minlength=n_sv)
     start = np.cumsum(count) - count
     out = np.full(edges.shape[0], -np.inf)
@@ -121,7 +127,10 @@ def planar_cuts(
     e = sv.edges
     if e.shape[0] == 0 or seg.size == 0:
         return seg
-    concave = concave_adjacencies(sv, settings, size)
+    # `concave_adjacencies`, and the convex creases below, from one `convex_edges`
+    convex = convex_edges(sv, settings, size)
+    angle = _angle_deg(sv.normals[e[:, 0]], sv.normals[e[:, 1]])
+    concave = ~convex & (angle >= settings.cut_concave_deg)
     if not concave.any():
         return seg
     d_unit, _ = _unit(sv.centroids[e[:, 0]] - sv.centroids[e[:, 1]])
@@ -129,8 +138,7 @@ def planar_cuts(
     # convex creases (a box's edge between its top and its front) count extra against a
     # cut: a plane along a box's edge crosses the odd patch straddling the edge, whose
     # adjacencies fail LCCP's checks like a seam's
-    angle = _angle_deg(sv.normals[e[:, 0]], sv.normals[e[:, 1]])
-    crease = convex_edges(sv, settings, size) & (angle >= settings.cut_concave_deg)
+    crease = convex & (angle >= settings.cut_concave_deg)
     penalty = 1.0 + settings.cut_crease_weight * crease
     # a side smaller than LCCP's small segments would only rejoin its neighbour
     min_side_vox = size.min_side_voxels
@@ -147,7 +155,9 @@ def planar_cuts(
     min_patch = 0.25 * size.seed_voxels
     pick = concave & top_side & (np.minimum(sv.n_voxels[e[:, 0]], sv.n_voxels[e[:, 1]]) >= min_patch)
     # rows by a mask: np.compress, several times faster than boolean indexing of rows
-    rising[pick] = seam_rise(sv, ctx.vox.centroids, np.compress(pick, e, axis=0)) >= settings.cut_min_rise_m
+    rising[pick] = (
+        seam_rise(sv, ctx.vox.centroids, np.compress(pick, e, axis=0), ctx.voxels_by_sv) >= settings.cut_min_rise_m
+    )
     cut_any = False
     for _ in range(settings.cut_max_rounds):
         inside = seg[e[:, 0]] == seg[e[:, 1]]

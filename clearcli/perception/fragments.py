@@ -56,11 +56,17 @@ def join_fragments(
     fragment = (size < max_fragment_voxels) & ~has_top & ~touches
     if not fragment.any() or fragment.all():
         return seg
-    rest = ~fragment[seg]
+    is_frag = fragment[seg]
+    frag_vox = np.flatnonzero(is_frag)
+    # the tree holds only the other voxels that can lie within max_gap_m of a fragment:
+    # those in the fragments' cells of the grid of cells a little wider than max_gap_m,
+    # or in a neighbouring cell (a few hundred, not the whole table's voxels)
+    rest = ~is_frag & _near_cells(voxel_centroids, frag_vox, max_gap_m)
+    out = seg.copy()
+    if not rest.any():
+        return dense_labels(out)
     tree = cKDTree(np.compress(rest, voxel_centroids, axis=0))  # rows by a mask: compress is faster
     rest_seg = seg[rest]
-    out = seg.copy()
-    frag_vox = np.flatnonzero(fragment[seg])
     dist, nearest = tree.query(voxel_centroids[frag_vox], distance_upper_bound=max_gap_m)
     found = np.isfinite(dist)
     # each fragment to the segment of its voxel nearest to any other segment
@@ -73,3 +79,16 @@ def join_fragments(
     joined = target >= 0
     out[joined[seg]] = target[seg[joined[seg]]]
     return dense_labels(out)
+
+
+def _near_cells(centroids: np.ndarray, seeds: np.ndarray, reach_m: float) -> np.ndarray:
+    """(V,) bool: voxels in the cell of one of the ``seeds`` (voxel indices), or in one
+    of its 26 neighbours, on a grid of cells a little wider than ``reach_m``: every voxel
+    within ``reach_m`` of a seed is among them."""
+    cell = np.floor(centroids / (1.01 * reach_m)).astype(np.int64)  # 1 %: floor's rounding
+    cell -= cell.min(axis=0) - 1  # one empty layer around so offsets never wrap
+    dims = cell.max(axis=0) + 2
+    packed = (cell[:, 0] * dims[1] + cell[:, 1]) * dims[2] + cell[:, 2]
+    step = np.array([(dx * dims[1] + dy) * dims[2] + dz for dx in (-1, 0, 1) for dy in (-1, 0, 1) for dz in (-1, 0, 1)])
+    near = np.unique(np.unique(packed[seeds])[:, None] + step[None, :])
+    return np.isin(packed, near)

@@ -201,7 +201,7 @@ def pair_features(seg_of_voxel: np.ndarray, ctx: RefineContext) -> PairFeatures:
         sv_cross = dataclasses.replace(ctx.sv, edges=sv_edges)
         convex = convex_edges(sv_cross, ctx.settings, ctx.size).astype(np.float64)
         angle = _angle_deg(ctx.sv.normals[sv_edges[:, 0]], ctx.sv.normals[sv_edges[:, 1]])
-        rise = np.clip(seam_rise(ctx.sv, c, sv_edges) * 1000.0, -50.0, 50.0)
+        rise = np.clip(seam_rise(ctx.sv, c, sv_edges, ctx.voxels_by_sv) * 1000.0, -50.0, 50.0)
     else:
         convex = angle = rise = np.zeros(0)
     count = np.bincount(sv_pair, minlength=n_pair)

@@ -121,7 +121,12 @@ def merge_occluded(seg_of_sv: np.ndarray, ctx: RefineContext) -> np.ndarray:
     if cand.size < 2:
         return seg_of_sv
     a_seg, b_seg = seg_of_sv[sv_edges[:, 0]], seg_of_sv[sv_edges[:, 1]]
-    touching = {(int(min(x, y)), int(max(x, y))) for x, y in zip(a_seg.tolist(), b_seg.tolist()) if x != y}
+    # the touching pairs (lower, higher), distinct in NumPy before the set: a few hundred,
+    # not one tuple per adjacency
+    cross = a_seg != b_seg
+    t_lo, t_hi = np.minimum(a_seg, b_seg)[cross], np.maximum(a_seg, b_seg)[cross]
+    t_key = np.unique(t_lo * n_seg + t_hi)
+    touching = set(zip((t_key // n_seg).tolist(), (t_key % n_seg).tolist()))
     order = np.argsort(seg_of_sv, kind="stable")
     bounds = np.searchsorted(seg_of_sv[order], np.arange(n_seg + 1))
     members = {int(s): order[bounds[s] : bounds[s + 1]] for s in cand}
@@ -136,9 +141,22 @@ def merge_occluded(seg_of_sv: np.ndarray, ctx: RefineContext) -> np.ndarray:
             i = parent[i]
         return i
 
+    # the pairs the loop below could join, found for all at once: the gap between their
+    # boxes within max_gap_m (with a margin: the loop's own test decides, this only drops
+    # pairs far past it) and their tops within _TOP_TOL_M (maxima: exact, as the loop's)
+    lo_c = np.stack([lo[s] for s in cand.tolist()])
+    hi_c = np.stack([hi[s] for s in cand.tolist()])
+    gap_c = np.maximum(0.0, np.maximum(lo_c[:, None, :] - hi_c[None, :, :], lo_c[None, :, :] - hi_c[:, None, :]))
+    top = np.full(n_seg, -np.inf)
+    np.maximum.at(top, seg_of_sv, sv_height)
+    top_c = top[cand]
+    maybe = (np.sqrt((gap_c**2).sum(axis=2)) <= max_gap_m * (1 + 1e-6) + 1e-9) & (
+        np.abs(top_c[:, None] - top_c[None, :]) <= _TOP_TOL_M
+    )
     cand_list = cand.tolist()
     for ia, a in enumerate(cand_list):
-        for b in cand_list[ia + 1 :]:
+        for ib in np.flatnonzero(maybe[ia, ia + 1 :]).tolist():
+            b = cand_list[ia + 1 + ib]
             if (a, b) in touching or root(a) == root(b):
                 continue
             gap_box = np.maximum(0.0, np.maximum(lo[a] - hi[b], lo[b] - hi[a]))

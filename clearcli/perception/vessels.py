@@ -238,7 +238,12 @@ def rebuild_vessels(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
         [np.bincount(seg, weights=voxel_xy[:, k], minlength=n_seg) for k in range(2)], axis=1, dtype=np.float64
     )
     mid /= np.maximum(sizes, 1)[:, None]
-    band_of = {s: np.flatnonzero((seg == s) & in_band) for s in cand}
+    # each candidate's band voxels in index order (what a mask over all voxels gave),
+    # from one stable sort of the band's voxels by segment, not a pass over all a segment
+    band_vox = np.flatnonzero(in_band)
+    band_vox = band_vox[np.argsort(seg[band_vox], kind="stable")]
+    band_bounds = np.searchsorted(seg[band_vox], np.arange(n_seg + 1))
+    band_of = {s: band_vox[band_bounds[s] : band_bounds[s + 1]] for s in cand}
     for s in sorted(cand, key=lambda k: -top[k]):
         if s in done:
             continue
@@ -255,7 +260,10 @@ def rebuild_vessels(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
             continue
         centre, radius, on_rim = found
         rim_h = float(np.median(voxel_height[band][on_rim]))
-        d = np.linalg.norm(voxel_xy - centre, axis=1)
+        # every voxel's distance from the axis, by columns: np.linalg.norm(voxel_xy -
+        # centre, axis=1)'s arithmetic (`_circles3`), without its (V, 2) temporaries
+        dx, dy = voxel_xy[:, 0] - centre[0], voxel_xy[:, 1] - centre[1]
+        d = np.sqrt(dx * dx + dy * dy)
         inside_rim = d <= radius + _OUT_M
         # the container reaches down as far as the segments holding its rim do within
         # the circle: what it stands on (a box under a bowl) lies lower

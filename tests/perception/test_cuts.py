@@ -77,3 +77,27 @@ def test_planar_cut_splits_coplanar_touching_boxes(with_lower_box: bool) -> None
     assert out[box_b][0] != out[~box_b][0]
     # off: untouched
     assert np.array_equal(planar_cuts(seg, hand_context(voxels, sv, replace(S, cut_min_score=0.9))), seg)
+
+
+def test_seam_rise_with_the_contexts_voxels_by_supervoxel_is_the_rise_it_sorts_itself() -> None:
+    """The two boxes' patches with their voxels shuffled (a supervoxel's voxels apart in
+    the voxel order): given `RefineContext.voxels_by_sv` the rise is the one seam_rise
+    works out from its own sort, bit for bit, and still A's 32 mm and 2 mm out of B's
+    top; every adjacency's rise on both sides agrees too."""
+    from dataclasses import replace as dc_replace
+
+    from helpers.refine import hand_context
+
+    from clearcli.perception.cuts import seam_rise
+
+    names, sv, voxels = _two_box_patches(True)
+    perm = np.random.default_rng(3).permutation(voxels.shape[0])
+    sv = dc_replace(sv, voxel_label=sv.voxel_label[perm])
+    voxels = voxels[perm]
+    by_sv = hand_context(voxels, sv, S).voxels_by_sv
+    e = [tuple(p) for p in sv.edges.tolist()]
+    pick = sv.edges[
+        [e.index((names.index("af12"), names.index("bt00"))), e.index((names.index("af11"), names.index("bt00")))]
+    ]
+    assert seam_rise(sv, voxels, pick, by_sv) == pytest.approx([0.032, 0.002], abs=1e-9)
+    assert np.array_equal(seam_rise(sv, voxels, sv.edges, by_sv), seam_rise(sv, voxels, sv.edges))

@@ -4,9 +4,13 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+import numpy as np
 import pytest
 from helpers.families import S, _right
+from scipy.spatial import cKDTree
 
+from clearcli.perception.fragments import join_fragments
+from clearcli.perception.graph import dense_labels
 from clearcli.sim.camera import render
 from clearcli.sim.families import FAMILIES
 from clearcli.sim.scene import Box, make_scene
@@ -33,3 +37,75 @@ def test_fragments_of_a_face_seen_edge_on_join_their_object() -> None:
     )
     for seed in range(3):
         assert _right(render(apart, seed=seed))
+
+
+def _join_fragments_full_tree(
+    seg: np.ndarray, centroids: np.ndarray, edges: np.ndarray, is_top: np.ndarray, max_voxels: int, gap_m: float
+) -> np.ndarray:
+    """The stage as it was before it searched only the cells near the fragments: one
+    tree over every voxel outside them."""
+    n_seg = int(seg.max()) + 1
+    size = np.bincount(seg, minlength=n_seg)
+    has_top = np.bincount(seg, weights=is_top.astype(np.float64), minlength=n_seg) > 0
+    a, b = seg[edges[:, 0]], seg[edges[:, 1]]
+    touches = np.zeros(n_seg, dtype=bool)
+    touches[a[a != b]] = True
+    touches[b[a != b]] = True
+    fragment = (size < max_voxels) & ~has_top & ~touches
+    if not fragment.any() or fragment.all():
+        return seg
+    rest = ~fragment[seg]
+    rest_seg = seg[rest]
+    frag_vox = np.flatnonzero(fragment[seg])
+    dist, nearest = cKDTree(centroids[rest]).query(centroids[frag_vox], distance_upper_bound=gap_m)
+    target = np.full(n_seg, -1)
+    best = np.full(n_seg, np.inf)
+    for v, d, k in zip(frag_vox, dist, nearest):
+        if np.isfinite(d) and d < best[seg[v]]:
+            best[seg[v]], target[seg[v]] = d, rest_seg[k]
+    out = seg.copy()
+    joined = target >= 0
+    out[joined[seg]] = target[seg[joined[seg]]]
+    return dense_labels(out)
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_searching_only_the_cells_near_the_fragments_joins_what_one_tree_over_all_joined(seed: int) -> None:
+    """Random tables of segments (blobs with adjacency inside each) and fragments (a few
+    voxels, no adjacency) scattered among them, some within the gap, some beyond it,
+    some at negative coordinates: the same joins as the full tree."""
+    rng = np.random.default_rng(seed)
+    gap_m = 0.015
+    pts, segs, edges = [], [], []
+    n = 0
+    for s in range(int(rng.integers(3, 12))):
+        k = int(rng.integers(2, 40)) if s % 3 else int(rng.integers(1, 4))  # every third a fragment
+        centre = rng.uniform(-0.3, 0.3, 3)
+        p = centre + rng.normal(0, 0.02 if k > 4 else 0.003, (k, 3))
+        pts.append(p)
+        segs.append(np.full(k, s))
+        if k > 4:  # a segment's own voxels adjacent in a chain; fragments touch nothing
+            edges.append(np.stack([np.arange(n, n + k - 1), np.arange(n + 1, n + k)], axis=1))
+        n += k
+    centroids = np.concatenate(pts)
+    seg = np.concatenate(segs)
+    edge_arr = np.concatenate(edges) if edges else np.zeros((0, 2), np.int64)
+    is_top = np.zeros(n, dtype=bool)
+    got = join_fragments(seg, centroids, edge_arr, is_top, 5, gap_m)
+    want = _join_fragments_full_tree(seg, centroids, edge_arr, is_top, 5, gap_m)
+    assert np.array_equal(got, want)
+
+
+def test_a_voxel_just_within_the_gap_in_the_next_cell_is_searched() -> None:
+    """A fragment of one voxel at x = 0.0301 m, the object's nearest voxel at 0.045 m:
+    0.0149 apart, within the 0.015 gap, and in the next cell of the 0.01515 m grid (cells
+    1 and 2): the fragment joins the object. At 0.0299 (0.0151 apart) it stays alone. A
+    lone voxel at x = -1 (a fragment too, far from all) puts cells at negative x."""
+    line = np.array([[0.045, 0.0, 0.0], [0.06, 0.0, 0.0], [0.075, 0.0, 0.0]])
+    edges = np.array([[1, 2], [2, 3]])
+    for x, joined in ((0.0301, True), (0.0299, False)):
+        centroids = np.vstack([[[x, 0.0, 0.0]], line, [[-1.0, 0.0, 0.0]]])
+        seg = np.array([0, 1, 1, 1, 2])
+        out = join_fragments(seg, centroids, edges, np.zeros(5, bool), 2, 0.015)
+        assert bool(out[0] == out[1]) is joined
+        assert out[4] != out[1]
