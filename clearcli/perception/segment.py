@@ -342,7 +342,9 @@ def _voxels(w: _Work) -> None:
     w.size = SegmentSize.of(w.settings, None if w.organized else w.obj_pts)
     if w.obj_pts.shape[0] < 4:
         return
-    colors = w.frame.colors[w.obj_idx] if (w.frame.colors is not None and w.settings.color_importance > 0) else None
+    # the supervoxels read colour only where it is usable (not all black, saturated or flat)
+    colors = w.frame.colors if (w.color_used and w.settings.color_importance > 0) else None
+    colors = colors[w.obj_idx] if colors is not None else None
     w.vox = voxelize(w.obj_pts, w.size.voxel_m, colors)
 
 

@@ -3,11 +3,12 @@
 Voxel grid -> 26-neighbourhood voxel adjacency -> voxel normals -> seeds on a grid of
 ``seed_m`` cells -> every voxel joins the nearby seed with the smallest VCCS distance
     D = spatial_importance * |dx| / seed_m + normal_importance * (1 - |n . n_s|)
-        + color_importance * |dc| / 255,
-seeds move to the mean of their voxels, repeat; finally each supervoxel is split into its
-connected pieces over the voxel adjacency (VCCS grows supervoxels through adjacency, so a
-supervoxel never jumps a gap), and a piece cut off from its seed joins the neighbour it
-touches most.
+        + color_importance * dE / 100
+(dE: CIE76 distance of the voxels' mean colours in CIELAB, where PCL takes the RGB
+distance / 255), seeds move to the mean of their voxels, repeat; finally each supervoxel
+is split into its connected pieces over the voxel adjacency (VCCS grows supervoxels
+through adjacency, so a supervoxel never jumps a gap), and a piece cut off from its seed
+joins the neighbour it touches most.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from clearcli.perception.flat import cielab
 from clearcli.perception.graph import components
 from clearcli.perception.size import SegmentSize
 from clearcli.settings.segment import SegmentSettings
@@ -317,7 +319,11 @@ def supervoxel_labels(
 
     seed_pos = cent[seed_vox]
     seed_nrm = normals[seed_vox]
-    seed_col = vox.colors[seed_vox] if (vox.colors is not None and settings.color_importance > 0) else None
+    # colour in CIELAB, whose distances follow what the eye sees as a difference (the
+    # colour stages after LCCP judge in it too; RGB distances overstate changes of
+    # brightness); / 100 puts dE on the scale of the other terms (100: black to white)
+    voxel_lab = cielab(vox.colors) / 100.0 if (vox.colors is not None and settings.color_importance > 0) else None
+    seed_lab = voxel_lab[seed_vox] if voxel_lab is not None else None
     k = min(8, seed_pos.shape[0])
     labels = np.full(n_vox, -1, dtype=np.int64)
     voxel_nrm = tuple(normals[:, j, None] for j in range(3))
@@ -340,12 +346,9 @@ def supervoxel_labels(
         np.subtract(1.0, normal_term, out=normal_term)
         np.multiply(settings.normal_importance, normal_term, out=normal_term)
         cost += normal_term
-        if seed_col is not None and vox.colors is not None:
+        if seed_lab is not None and voxel_lab is not None:
             nb_safe = np.where(nb < n_s, nb, 0)
-            cost = (
-                cost
-                + settings.color_importance * np.linalg.norm(vox.colors[:, None, :] - seed_col[nb_safe], axis=2) / 255.0
-            )
+            cost = cost + settings.color_importance * np.linalg.norm(voxel_lab[:, None, :] - seed_lab[nb_safe], axis=2)
         picked = nb[rows, np.argmin(cost, axis=1)]
         labels = np.where(picked < n_s, picked, -1)
         # move the seeds to the mean of their voxels
@@ -360,11 +363,11 @@ def supervoxel_labels(
         seed_pos = np.where(keep[:, None], new_pos / np.maximum(cnt, 1)[:, None], seed_pos)
         nn = np.linalg.norm(new_nrm, axis=1)
         seed_nrm = np.where((keep & (nn > 1e-9))[:, None], new_nrm / np.maximum(nn, 1e-9)[:, None], seed_nrm)
-        if seed_col is not None and vox.colors is not None:
-            seed_col = np.where(
+        if seed_lab is not None and voxel_lab is not None:
+            seed_lab = np.where(
                 keep[:, None],
-                _seed_sums(vox.colors, lab, None if every else used, n_s) / np.maximum(cnt, 1)[:, None],
-                seed_col,
+                _seed_sums(voxel_lab, lab, None if every else used, n_s) / np.maximum(cnt, 1)[:, None],
+                seed_lab,
             )
 
     # connectivity: pieces of one supervoxel that do not touch become separate pieces;

@@ -93,3 +93,51 @@ def test_smallest_eigenvectors_are_eighs() -> None:
     # the same vector up to sign where the smallest eigenvalue is distinct
     assert np.abs(np.abs(np.einsum("ij,ij->i", got[apart], evecs[apart, :, 0])) - 1.0).max() < 1e-9
     assert np.allclose(np.einsum("nij,nj->ni", cov, got), evals[:, :1] * got, atol=1e-12)
+
+
+# a voxel boundary (cells of 5 mm shifted by GRID_SHIFT_M: 4.465 cm) in the middle of the
+# seed cell [2.965, 5.965) cm
+_COLOUR_EDGE_M = 0.04465
+_RED, _GREEN = (200, 30, 30), (30, 160, 60)  # 118.5 dE apart
+
+
+def _two_colour_patch(
+    color_importance: float, left_rgb: tuple[int, int, int], right_rgb: tuple[int, int, int]
+) -> tuple[np.ndarray, np.ndarray]:
+    """The supervoxel of each voxel of a flat 12 x 6 cm patch 1 m in front of the camera,
+    facing it, points 1 mm apart, coloured ``left_rgb`` left of _COLOUR_EDGE_M and
+    ``right_rgb`` beyond; and whether each voxel lies left of the edge."""
+    import dataclasses
+
+    from clearcli.perception.supervoxels import supervoxel_labels, voxel_normals, voxelize
+    from clearcli.settings.segment import SegmentSettings
+
+    settings = dataclasses.replace(SegmentSettings(), color_importance=color_importance)
+    x, y = np.meshgrid(np.arange(0.0005, 0.12, 0.001), np.arange(0.0005, 0.06, 0.001), indexing="ij")
+    points = np.stack([x.ravel(), y.ravel(), np.full(x.size, 1.0)], axis=1)
+    left = points[:, 0] < _COLOUR_EDGE_M
+    colors = np.where(left[:, None], np.array(left_rgb), np.array(right_rgb)).astype(np.uint8)
+    vox = voxelize(points, settings.voxel_m, colors)
+    normals = voxel_normals(vox.centroids, settings.normal_radius_m, np.zeros(3))
+    return supervoxel_labels(vox, normals, settings), vox.centroids[:, 0] < _COLOUR_EDGE_M
+
+
+def _straddling(labels: np.ndarray, voxel_left: np.ndarray) -> int:
+    """How many supervoxels hold voxels on both sides of the colour edge."""
+    return sum(len(set(voxel_left[labels == s].tolist())) == 2 for s in range(int(labels.max()) + 1))
+
+
+def test_colour_keeps_a_supervoxel_on_one_side_of_a_colour_edge() -> None:
+    # geometry alone: the two supervoxels seeded in the cells the edge runs through (one
+    # per row of cells) hold both colours; with colour, none does
+    assert _straddling(*_two_colour_patch(0.0, _RED, _GREEN)) == 2
+    assert _straddling(*_two_colour_patch(0.7, _RED, _GREEN)) == 0
+
+
+def test_a_faint_colour_difference_moves_no_voxel() -> None:
+    # 8.7 dE (a print, light and shade): at 0.7 it weighs 0.06 in the cost, too little to
+    # move a voxel here, so the supervoxels are those of geometry alone
+    faint = (180, 30, 30)
+    labels_0, _ = _two_colour_patch(0.0, _RED, faint)
+    labels_c, _ = _two_colour_patch(0.7, _RED, faint)
+    np.testing.assert_array_equal(labels_c, labels_0)
