@@ -264,18 +264,25 @@ def pair_features(seg_of_voxel: np.ndarray, ctx: RefineContext) -> PairFeatures:
     return PairFeatures(pairs, x, apart, count)
 
 
-def joins(feats: PairFeatures, logit: np.ndarray, min_logit: float, n_seg: int) -> list[tuple[int, int]]:
-    """The pairs to join: log-odds at least ``min_logit``, most probable first (ties by
-    pair), never two segments apart, directly or through a chain of joins."""
+def greedy_joins(feats: PairFeatures, score: np.ndarray, chosen: np.ndarray, n_seg: int) -> list[tuple[int, int]]:
+    """The ``chosen`` pairs of ``feats`` to join, highest ``score`` first (ties by pair),
+    never two segments apart, directly or through a chain of joins (this stage's and
+    seams.py's joins alike)."""
     sets = ApartSets(n_seg, feats.pairs[feats.apart].tolist())
     out = []
-    for k in np.lexsort((feats.pairs[:, 1], feats.pairs[:, 0], -logit)).tolist():
-        if logit[k] < min_logit or feats.apart[k]:
+    for k in np.lexsort((feats.pairs[:, 1], feats.pairs[:, 0], -score)).tolist():
+        if not chosen[k] or feats.apart[k]:
             continue
         a, b = int(feats.pairs[k, 0]), int(feats.pairs[k, 1])
         if sets.join(a, b):
             out.append((a, b))
     return out
+
+
+def joins(feats: PairFeatures, logit: np.ndarray, min_logit: float, n_seg: int) -> list[tuple[int, int]]:
+    """The pairs to join: log-odds at least ``min_logit``, most probable first (ties by
+    pair), never two segments apart, directly or through a chain of joins."""
+    return greedy_joins(feats, logit, logit >= min_logit, n_seg)
 
 
 def join_learned(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:

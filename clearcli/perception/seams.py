@@ -36,9 +36,8 @@ from __future__ import annotations
 import numpy as np
 
 from clearcli.perception.context import RefineContext
-from clearcli.perception.graph import ApartSets
 from clearcli.perception.lccp import join_pairs
-from clearcli.perception.learned import FEATURES, PairFeatures, pair_features
+from clearcli.perception.learned import FEATURES, PairFeatures, greedy_joins, pair_features
 
 _CONVEX = FEATURES.index("convex_share")
 _COLOUR = FEATURES.index("colour_de")
@@ -66,16 +65,7 @@ def smooth_seams(
 def seam_joins(feats: PairFeatures, chosen: np.ndarray, n_seg: int) -> list[tuple[int, int]]:
     """The chosen pairs to join, most convex first (ties by pair), never two segments
     apart, directly or through a chain of joins."""
-    sets = ApartSets(n_seg, feats.pairs[feats.apart].tolist())
-    out = []
-    convex = feats.x[:, _CONVEX]
-    for k in np.lexsort((feats.pairs[:, 1], feats.pairs[:, 0], -convex)).tolist():
-        if not chosen[k]:
-            continue
-        a, b = int(feats.pairs[k, 0]), int(feats.pairs[k, 1])
-        if sets.join(a, b):
-            out.append((a, b))
-    return out
+    return greedy_joins(feats, feats.x[:, _CONVEX], chosen, n_seg)
 
 
 def join_smooth_seams(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:

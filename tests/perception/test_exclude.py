@@ -9,11 +9,11 @@ import dataclasses
 
 import numpy as np
 import pytest
+from helpers.exclude import flat_support_verdicts
 
 from clearcli.evaluate.segmentation import score
 from clearcli.io.frames import LABEL_NONE
 from clearcli.perception import exclude
-from clearcli.perception.exclude import not_standing
 from clearcli.perception.payload import segmentation_payload
 from clearcli.perception.segment import segment
 from clearcli.settings.segment import SegmentSettings
@@ -82,26 +82,6 @@ def _box(x0: float, x1: float, y0: float, y1: float, z0: float, z1: float, step:
     return np.vstack([top, front])
 
 
-def _verdicts(objects: list[np.ndarray], outside: np.ndarray | None = None) -> list[str]:
-    """`not_standing` over a support z = 0 seen everywhere in a 40 cm square (no outline
-    crossed: every point lies well inside); ``outside``: points beyond the support's outline
-    (none by default)."""
-    g = np.arange(-0.2, 0.2, 0.005)
-    support = np.stack(np.meshgrid(g, g, [0.0]), -1).reshape(-1, 3)
-    none = np.zeros((0, 3))
-    found = not_standing(
-        objects,
-        none if outside is None else outside,
-        none,
-        support,
-        lambda p: p[:, 2],
-        lambda p: p[:, :2],
-        lambda p: np.ones(p.shape[0], dtype=bool),
-        lambda p: 0.013,
-    )
-    return [f"{v.index}: {v.reason}" for v in found]
-
-
 @pytest.mark.parametrize("gap_m, hangs", [(0.009, False), (0.015, False), (0.05, True)])
 def test_a_box_laid_across_two_others_stands_on_them_though_the_support_is_seen_between(
     gap_m: float, hangs: bool
@@ -119,13 +99,13 @@ def test_a_box_laid_across_two_others_stands_on_them_though_the_support_is_seen_
     # a lamp's post reaching in from beyond the support's outline, 7 cm from its corner:
     # what holds the box up when nothing beneath does
     post = np.column_stack([np.full(40, 0.11), np.full(40, 0.08), np.linspace(0.1, 0.4, 40)])
-    verdicts = _verdicts([left, right, across], outside=post)
+    verdicts = flat_support_verdicts([left, right, across], outside=post)
     if hangs:
         assert len(verdicts) == 1 and verdicts[0].startswith("2: hangs above the support"), verdicts
     else:
         assert verdicts == []
     # without the two boxes beneath it the same box hangs, held by the post
-    alone = _verdicts([across], outside=post)
+    alone = flat_support_verdicts([across], outside=post)
     assert len(alone) == 1 and alone[0].startswith("0: hangs above the support"), alone
     assert "held by what lies outside the support's outline" in alone[0]
 
@@ -142,17 +122,17 @@ def test_what_nothing_seen_holds_up_is_the_top_of_an_object_standing_there(monke
     # through their bodies beneath them, nothing outside or excluded near them, away from
     # the image's border: the top of something standing on the support, not a lamp
     tops = [_bottle_top(-0.1), _bottle_top(0.1)]
-    assert _verdicts(tops) == []
+    assert flat_support_verdicts(tops) == []
     # the same tops 3 cm from a wall at the support's far edge (excluded, 60 cm long and 40 cm
     # high): held by it, as a shelf board is
     xs, zs = np.meshgrid(np.arange(-0.3, 0.3, 0.005), np.arange(0.0, 0.4, 0.005))
     wall = np.column_stack([xs.ravel(), np.full(xs.size, 0.15), zs.ravel()])
-    near_wall = _verdicts([wall] + [t + [0.0, 0.1, 0.0] for t in tops])
+    near_wall = flat_support_verdicts([wall] + [t + [0.0, 0.1, 0.0] for t in tops])
     assert near_wall[0].startswith("0: a wall") and len(near_wall) == 3, near_wall
     assert all("hangs above the support" in v and "held by something excluded" in v for v in near_wall[1:])
     # the rule off (anything holds what hangs): the tops are excluded as hanging
     monkeypatch.setattr(exclude, "_held_from", lambda *args: "anything")
-    off = _verdicts(tops)
+    off = flat_support_verdicts(tops)
     assert len(off) == 2 and all(v.split(": ", 1)[1].startswith("hangs above the support") for v in off), off
 
 

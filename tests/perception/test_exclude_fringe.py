@@ -10,11 +10,11 @@ import dataclasses
 
 import numpy as np
 import pytest
+from helpers.exclude import flat_support_verdicts
 from helpers.foreign import labelled
 
 from clearcli.evaluate.exact import exact_report
 from clearcli.perception import exclude
-from clearcli.perception.exclude import not_standing
 from clearcli.perception.payload import segmentation_payload
 from clearcli.perception.segment import segment
 from clearcli.settings.segment import SegmentSettings
@@ -28,25 +28,6 @@ def _slab(x0: float, x1: float, y0: float, y1: float, z0: float, z1: float, step
     return np.stack(np.meshgrid(*axes), -1).reshape(-1, 3)
 
 
-def _verdicts(objects: list[np.ndarray], off_colour: list[float] | None) -> list[str]:
-    """`not_standing` over a support z = 0 seen everywhere in a 40 cm square."""
-    g = np.arange(-0.2, 0.2, 0.005)
-    support = np.stack(np.meshgrid(g, g, [0.0]), -1).reshape(-1, 3)
-    none = np.zeros((0, 3))
-    found = not_standing(
-        objects,
-        none,
-        none,
-        support,
-        lambda p: p[:, 2],
-        lambda p: p[:, :2],
-        lambda p: np.ones(p.shape[0], dtype=bool),
-        lambda p: 0.013,
-        off_colour=off_colour,
-    )
-    return [f"{v.index}: {v.reason}" for v in found]
-
-
 # a tin 14 cm tall (median 7 cm) and, 4 mm from its side, a strip 2 cm wide rising from
 # the support to 4 cm (its top, 95th percentile, 4 cm: 3 cm under the tin's median)
 TIN = _slab(0.0, 0.06, 0.0, 0.06, 0.0, 0.14)
@@ -54,10 +35,10 @@ STRIP = _slab(-0.024, -0.004, 0.0, 0.06, 0.0, 0.04)
 
 
 def test_a_strip_of_the_supports_colour_against_a_taller_object_is_a_fringe() -> None:
-    found = _verdicts([TIN, STRIP], [0.4, 0.0])
+    found = flat_support_verdicts([TIN, STRIP], off_colour=[0.4, 0.0])
     assert len(found) == 1 and found[0].startswith("1: a fringe of the support's colour"), found
     # one pixel in a hundred of another colour (1 %: under the 2 %) is still the support's
-    assert len(_verdicts([TIN, STRIP], [0.4, 0.01])) == 1
+    assert len(flat_support_verdicts([TIN, STRIP], off_colour=[0.4, 0.01])) == 1
 
 
 @pytest.mark.parametrize(
@@ -71,7 +52,7 @@ def test_a_strip_of_the_supports_colour_against_a_taller_object_is_a_fringe() ->
     ],
 )
 def test_what_is_no_fringe_stays(objects: list[np.ndarray], off_colour: list[float] | None) -> None:
-    assert _verdicts(objects, off_colour) == []
+    assert flat_support_verdicts(objects, off_colour=off_colour) == []
 
 
 def test_the_fringes_on_uois_image_0006_are_excluded_with_their_reason(monkeypatch: pytest.MonkeyPatch) -> None:
