@@ -77,3 +77,13 @@ def rot2(angle_rad: float) -> np.ndarray:
     """2 x 2 rotation by ``angle_rad`` (counter-clockwise) in the plane."""
     c, s = math.cos(angle_rad), math.sin(angle_rad)
     return np.array([[c, -s], [s, c]])
+
+
+def cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``np.cross`` of 3-vectors along the last axis (one vector or rows of them), written
+    out: its products and differences in its order, so the same floats, without its ~20 us
+    of set-up per call (paid per pose, per object and per plane hypothesis)."""
+    x = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
+    y = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
+    z = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+    return np.stack([x, y, z], axis=-1)

@@ -46,6 +46,7 @@ import numpy as np
 from clearcli.geometry.gripper import GripperModel
 from clearcli.geometry.models import ObjectGeometry
 from clearcli.settings.geometry import PushSettings
+from clearcli.transforms import cross3
 
 DIRECTION_NAMES: tuple[str, ...] = ("dir1", "dir2", "dir3", "dir4")
 UP = np.array([0.0, 0.0, 1.0])
@@ -53,13 +54,8 @@ UP = np.array([0.0, 0.0, 1.0])
 MIN_CONTACT_BAND_M = 0.015
 
 
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    # np.cross costs ~20 us per call for 3-vectors; this is called per pose
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
-
-
 def _pose(x: np.ndarray, z: np.ndarray, origin: np.ndarray) -> np.ndarray:
-    y = _cross(z, x)
+    y = cross3(z, x)
     T = np.eye(4)
     T[:3, 0], T[:3, 1], T[:3, 2], T[:3, 3] = x, y, z, origin
     return T
@@ -209,7 +205,7 @@ def push_geometry(obj: ObjectGeometry, gripper: GripperModel, push: PushSettings
         steps = length * np.arange(1, n + 1) / n
         translations = steps[:, None] * d[None, :]
         # the rear face's half width across the push, for contact points off its middle
-        side = _cross(UP, d)
+        side = cross3(UP, d)
         across = hull_xy @ side[:2]
         face_half = float(np.ptp(across)) / 2.0
         centre_across = float((across.max() + across.min()) / 2.0 - c[:2] @ side[:2])
@@ -218,7 +214,7 @@ def push_geometry(obj: ObjectGeometry, gripper: GripperModel, push: PushSettings
         raised: list[PushGeometry] = []
         lifts = raised_contact_lifts(push, part.band_m, extent, obj.top_height_m)
         for along in (parallel, not parallel):  # the documented yaw first, then the other
-            x = d if along else _cross(UP, d)
+            x = d if along else cross3(UP, d)
             half_along = half_parallel if along else half_across
             # half the contact's width across the push: a finger's width, or the pair's
             contact_half = half_across if along else half_parallel

@@ -63,6 +63,7 @@ from clearcli.perception.table import (
 )
 from clearcli.perception.types import Excluded, Segmentation, SegmentedObject, TablePlane
 from clearcli.settings.segment import SegmentSettings
+from clearcli.transforms import cross3
 
 # colour_state(): a frame is "all black" or "all saturated" when this share of its points
 # are (every channel at most _BLACK, or at least _SATURATED); "one flat value" when no
@@ -81,14 +82,8 @@ def principal_axes(points: np.ndarray, mean: np.ndarray | None = None) -> np.nda
     c = points - (points.mean(axis=0) if mean is None else mean)
     _, vecs = np.linalg.eigh(c.T @ c)
     axes = vecs[:, ::-1].T.copy()
-    axes[2] = _cross(axes[0], axes[1])
+    axes[2] = cross3(axes[0], axes[1])
     return axes
-
-
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``np.cross`` of two 3-vectors, written out: its products and differences in its
-    order (the same floats) without its ~20 us of set-up, paid several times per object."""
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
 
 
 def table_aligned_box(
@@ -106,9 +101,9 @@ def table_aligned_box(
 
     n = table.normal
     helper = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    u = _cross(helper, n)
+    u = cross3(helper, n)
     u /= np.linalg.norm(u)
-    v = _cross(n, u)
+    v = cross3(n, u)
     xy = np.stack([points @ u, points @ v], axis=1)  # matvecs: fast for (N, 3)
     h = table.height_of(points)
     try:

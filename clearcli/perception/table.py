@@ -20,6 +20,7 @@ from clearcli.perception.graph import components
 from clearcli.perception.support import Surface, choose, standing_on
 from clearcli.perception.types import PlaneVerdict, TablePlane
 from clearcli.settings.segment import SegmentSettings
+from clearcli.transforms import cross3
 
 # Height band (m) in which points count as "standing on" a candidate plane when scoring
 # candidates: tabletop objects, not furniture standing on a floor.
@@ -97,20 +98,10 @@ def project(points: np.ndarray, axes: np.ndarray) -> np.ndarray:
 def plane_basis(normal: np.ndarray) -> np.ndarray:
     """(2, 3) orthonormal in-plane axes u, v with u x v = normal."""
     helper = np.array([1.0, 0.0, 0.0]) if abs(normal[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    u = _cross(helper, normal)
+    u = cross3(helper, normal)
     u /= np.linalg.norm(u)
-    v = _cross(normal, u)
+    v = cross3(normal, u)
     return np.stack([u, v])
-
-
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``np.cross`` of 3-vectors (the last axis): its products and differences in its
-    order, the same floats, without its ~20 us of set-up (paid per plane hypothesis chunk
-    and per plane: a cluttered table has several candidate planes)."""
-    x = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
-    y = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
-    z = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
-    return np.stack([x, y, z], axis=-1)
 
 
 def fit_plane_lsq(points: np.ndarray) -> tuple[np.ndarray, float]:
@@ -136,7 +127,7 @@ def ransac_plane(
         chunk = min(_RANSAC_CHUNK, iterations - drawn)
         drawn += chunk
         tri = points[rng.integers(0, n_pts, size=(chunk, 3))]
-        normals = _cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+        normals = cross3(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
         norm = np.linalg.norm(normals, axis=1)
         ok = norm > 1e-9
         if not ok.any():

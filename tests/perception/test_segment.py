@@ -348,14 +348,3 @@ def test_unorganized_cloud_finds_the_objects(seed: int) -> None:
         assert isinstance(box, Box)
         assert sorted(obj.obb_extents[:2]) == pytest.approx(sorted([box.size_x_m, box.size_y_m]), abs=0.01)
         assert obj.obb_extents[2] == pytest.approx(box.size_z_m, abs=0.01)
-
-
-def test_cross_is_numpys_to_the_bit() -> None:
-    # the boxes' and principal axes' third axis: np.cross's floats, written out
-    from clearcli.perception.segment import _cross
-
-    gen = np.random.default_rng(7)
-    for _ in range(500):
-        a, b = gen.normal(size=3) * 10 ** gen.uniform(-6, 2), gen.normal(size=3)
-        assert np.array_equal(_cross(a, b), np.cross(a, b))
-    assert _cross(np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0])).tolist() == [0.0, 0.0, 1.0]

@@ -235,18 +235,6 @@ def test_unique_cells_are_numpys_unique_rows() -> None:
     assert unique_cells(np.zeros((0, 2), dtype=np.int64)).shape == (0, 2)
 
 
-def test_cross_is_numpys_to_the_bit() -> None:
-    # the planes' normals and in-plane axes: np.cross's floats, one vector or rows of them
-    from clearcli.perception.table import _cross
-
-    gen = np.random.default_rng(3)
-    a, b = gen.normal(size=(500, 3)) * 10 ** gen.uniform(-4, 1, size=(500, 1)), gen.normal(size=(500, 3))
-    assert np.array_equal(_cross(a, b), np.cross(a, b))
-    for k in range(50):
-        assert np.array_equal(_cross(a[k], b[k]), np.cross(a[k], b[k]))
-    assert _cross(np.array([0.0, 1.0, 0.0]), np.array([0.0, 0.0, 1.0])).tolist() == [1.0, 0.0, 0.0]
-
-
 def test_a_far_floors_noise_bands_do_not_use_up_the_plane_tries(monkeypatch: pytest.MonkeyPatch) -> None:
     # self-made raised_surface(4): a stool's top 0.75 m over a floor 1.7 m from the camera.
     # The floor's depth noise leaves two bands 12 mm off its plane that RANSAC finds after

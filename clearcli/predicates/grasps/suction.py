@@ -35,8 +35,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from clearcli.geometry.poses import _cross
 from clearcli.predicates.grasps.base import KindFacts, KindModule, Offer, Scene, SimWorld
+from clearcli.transforms import cross3
 
 if TYPE_CHECKING:
     # clearcli.geometry.suction is imported where it is used: every plan imports this
@@ -276,9 +276,9 @@ def contact_poses(
     z = -normal
     x0 = across - (across @ z) * z
     if np.linalg.norm(x0) < 1e-6:
-        x0 = _cross(z, np.array([1.0, 0.0, 0.0]))
+        x0 = cross3(z, np.array([1.0, 0.0, 0.0]))
     x0 = x0 / np.linalg.norm(x0)
-    y0 = _cross(z, x0)  # np.cross costs ~20 us for 3-vectors (the same products)
+    y0 = cross3(z, x0)  # np.cross costs ~20 us for 3-vectors (the same products)
     # every turn at once, elementwise as `_pose` makes each: x, y = z cross x, z, the TCP
     cos = np.array([math.cos(math.radians(turn)) for turn in TURNS_DEG])[:, None]
     sin = np.array([math.sin(math.radians(turn)) for turn in TURNS_DEG])[:, None]
