@@ -58,12 +58,20 @@ def concave_adjacencies(sv: Supervoxels, settings: SegmentSettings, size: Segmen
     """(A,) bool: seams, adjacencies LCCP does not merge (concave, or failing its sanity
     or smoothness check) whose normals are at least ``cut_concave_deg`` apart; a small
     angle is a noisy flat patch, not a seam. ``size``: as for `lccp.convex_edges`."""
-    e = sv.edges
-    if e.shape[0] == 0:
+    if sv.edges.shape[0] == 0:
         return np.zeros(0, dtype=bool)
+    convex, angle = _convex_and_angle(sv, settings, size)
+    return ~convex & (angle >= settings.cut_concave_deg)
 
-    n1, n2 = sv.normals[e[:, 0]], sv.normals[e[:, 1]]
-    return ~convex_edges(sv, settings, size) & (_angle_deg(n1, n2) >= settings.cut_concave_deg)
+
+def _convex_and_angle(
+    sv: Supervoxels, settings: SegmentSettings, size: SegmentSize | None
+) -> tuple[np.ndarray, np.ndarray]:
+    """(A,) LCCP's merge verdict (`lccp.convex_edges`) and (A,) the angle (degrees)
+    between the normals of each adjacency: a seam is what LCCP does not merge, a crease
+    what it does, each with its normals at least ``cut_concave_deg`` apart."""
+    e = sv.edges
+    return convex_edges(sv, settings, size), _angle_deg(sv.normals[e[:, 0]], sv.normals[e[:, 1]])
 
 
 def seam_rise(
@@ -128,8 +136,7 @@ def planar_cuts(
     if e.shape[0] == 0 or seg.size == 0:
         return seg
     # `concave_adjacencies`, and the convex creases below, from one `convex_edges`
-    convex = convex_edges(sv, settings, size)
-    angle = _angle_deg(sv.normals[e[:, 0]], sv.normals[e[:, 1]])
+    convex, angle = _convex_and_angle(sv, settings, size)
     concave = ~convex & (angle >= settings.cut_concave_deg)
     if not concave.any():
         return seg
