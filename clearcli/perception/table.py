@@ -498,6 +498,11 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
         comp, area = largest_component(
             project(np.take(sample, inl, axis=0), basis), settings.table_cell_m, settings.table_join_gap_m
         )
+        if np.count_nonzero(comp) < 3:
+            # fewer than 3 points is no plane (points far apart, as an absurd depth scale
+            # gives, where a coarsened cell holds one point but a table's area)
+            small.append(PlaneVerdict(_tuple(n), float(d), area, 0, False, "its largest piece holds under 3 points"))
+            continue
         if area < settings.table_min_area_m2 and residues < settings.plane_candidates:
             if _residue(n, np.take(sample, inl, axis=0), candidates):
                 tries -= 1  # the residue of a surface found: not a try (`_RESIDUE_M`)
@@ -516,7 +521,14 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
             continue
         candidates.append(_Candidate(n, d, inl[comp], area, on_plane))
     if not candidates:
-        considered = ", ".join(f"{v.area_m2:.3f} m^2 at {abs(v.offset_m):.2f} m" for v in small) or "none"
+        considered = (
+            ", ".join(
+                f"{v.area_m2:.3f} m^2 at {abs(v.offset_m):.2f} m"
+                + ("" if v.why.startswith("smaller") else f" ({v.why})")
+                for v in small
+            )
+            or "none"
+        )
         raise SceneError(
             f"{where}no table: no plane of at least {settings.table_min_area_m2} m^2 in the frame (surfaces "
             f"considered: {considered}); is a table in view?"

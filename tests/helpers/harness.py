@@ -1218,6 +1218,8 @@ def gen_color(ctx: Ctx) -> None:
     from PIL import Image
 
     by_flag = ctx.rng.random() < 0.3
+    if color_name == depth_name and mutation in ("directory", "fifo", "symlink_loop", "dangling"):
+        by_flag = True  # equal suffixes name the depth file itself, which cannot become a FIFO or a folder
     cpath = ctx.dir / ("given_colour" + ext if by_flag else color_name)
     if mutation == "valid":
         ctx.note(f"valid {fmt} colour")

@@ -261,3 +261,17 @@ def test_a_far_floors_noise_bands_do_not_use_up_the_plane_tries(monkeypatch: pyt
     assert abs(next(v for v in wrong.support if v.chosen).offset_m) > 1.5  # the floor
     sc_wrong = score(wrong.labels(), truth)
     assert sc_wrong.n_pred > sc_wrong.n_true
+
+
+def test_a_plane_whose_largest_piece_holds_one_point_is_no_table() -> None:
+    # 100 points on the plane z = 1 m, 100 km apart (a depth image read with an absurd
+    # depth scale): the grid of cells is coarsened to keep it small (500 m cells), every
+    # point is its own piece, and one piece's area (0.25 km^2) passes table_min_area_m2.
+    # One point is no plane: no table (exit 4), not an internal error fitting it.
+    from clearcli.perception.table import find_table
+    from clearcli.settings.segment import SegmentSettings
+
+    xs, ys = np.meshgrid(np.arange(10) * 1e5, np.arange(10) * 1e5)
+    points = np.stack([xs.ravel(), ys.ravel(), np.ones(100)], axis=1)
+    with pytest.raises(SceneError, match="no table"):
+        find_table(points, SegmentSettings(), organized=False)
