@@ -34,6 +34,7 @@ from clearcli.io.sniff import PCD_HEADER_KEYS, open_input
 
 # A PCD header is ten short lines; anything without DATA in the first 64 KiB is not a PCD.
 _MAX_HEADER_BYTES = 1 << 16
+_MAX_RECORD_BYTES = 1 << 20  # 1 MiB per point: see _parse_metadata
 _HEADER_KEYS = tuple(k.decode() for k in PCD_HEADER_KEYS)
 _PCD_CODES = {
     ("F", 4): "f4",
@@ -210,6 +211,14 @@ def _parse_metadata(lines: list[str], path: Path) -> PcdHeader:
     for name, typ, size in zip(meta.fields, meta.type, meta.size):
         if (typ, size) not in _PCD_CODES:
             raise InputError(f"{path}: bad PCD header: field {name!r} has TYPE {typ} SIZE {size}")
+    record_bytes = sum(size * count for size, count in zip(meta.size, meta.count))
+    if record_bytes > _MAX_RECORD_BYTES:
+        # PCL's largest point types (descriptor histograms) are a few kilobytes; a record
+        # past this is a damaged header, and numpy cannot even describe one past 2 GiB
+        raise InputError(
+            f"{path}: bad PCD header: one point of {record_bytes} bytes (SIZE x COUNT summed over the "
+            f"fields) is more than {_MAX_RECORD_BYTES} bytes; is COUNT right?"
+        )
     if meta.points != meta.width * meta.height:
         raise InputError(
             f"{path}: bad PCD header: POINTS {meta.points} but WIDTH*HEIGHT = "

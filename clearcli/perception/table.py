@@ -325,8 +325,10 @@ def inside_convex_raster(
     gy = lo[1] + (np.arange(dims[1]) + 0.5) * cell_m
     centers = np.stack(np.meshgrid(gx, gy, indexing="ij"), axis=-1).reshape(-1, 2)
     grid = inside_convex(centers, polygon_2d, margin_m).reshape(dims[0], dims[1])
-    cx = np.floor((points_2d[:, 0] - lo[0]) / cell_m).astype(np.int64)
-    cy = np.floor((points_2d[:, 1] - lo[1]) / cell_m).astype(np.int64)
+    # clipped to one cell beyond the raster before the cast: a point 1e38 m away (a
+    # damaged cloud) has a cell index no int64 holds; off the raster either way
+    cx = np.floor(np.clip((points_2d[:, 0] - lo[0]) / cell_m, -1.0, float(dims[0]))).astype(np.int64)
+    cy = np.floor(np.clip((points_2d[:, 1] - lo[1]) / cell_m, -1.0, float(dims[1]))).astype(np.int64)
     ok = (cx >= 0) & (cx < dims[0]) & (cy >= 0) & (cy < dims[1])
     # one flat lookup, a point off the raster at a cell past its end that is outside
     cell = np.where(ok, cx * dims[1] + cy, dims[0] * dims[1])

@@ -169,6 +169,8 @@ def test_bad_pcd_inputs(tmp_path: Path) -> None:
         "bad_type.pcd": (_header().replace(b"TYPE F F F", b"TYPE F F Q"), "bad PCD header"),
         "bad_width.pcd": (_header().replace(b"WIDTH 3", b"WIDTH three"), "bad PCD header"),
         "no_xyz.pcd": (_header().replace(b"FIELDS x y z", b"FIELDS a b c") + _xyz(3), "no x/y/z"),
+        # a record numpy cannot describe (COUNT 1e9 x 4 bytes): one line, not numpy's ValueError
+        "count_huge.pcd": (_header().replace(b"COUNT 1 1 1", b"COUNT 1 1 1000000000") + _xyz(3), "is COUNT right"),
         "ros1.bag.pcd": (b"#ROSBAG V2.0\n\x00\x00", "truncated or corrupt ROS 1 bag"),
     }
     for name, (content, match) in cases.items():

@@ -275,3 +275,18 @@ def test_a_plane_whose_largest_piece_holds_one_point_is_no_table() -> None:
     points = np.stack([xs.ravel(), ys.ravel(), np.ones(100)], axis=1)
     with pytest.raises(SceneError, match="no table"):
         find_table(points, SegmentSettings(), organized=False)
+
+
+def test_raster_lookup_of_a_point_no_int64_cell_holds_is_outside_without_a_warning() -> None:
+    import warnings
+
+    from clearcli.perception.table import inside_convex_raster
+
+    square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    # enough points that the raster (not the edge test) answers
+    inside = np.random.default_rng(0).uniform(0.1, 0.9, (20000, 2))
+    far = np.array([[1e38, 0.5], [0.5, -1e38], [-1e300, 1e300]])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        got = inside_convex_raster(np.concatenate([inside, far]), square)
+    assert got[:20000].all() and not got[20000:].any()
