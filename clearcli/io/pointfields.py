@@ -170,8 +170,11 @@ def frame_from_records(
     names = list(records.dtype.names or ())
     n = records.shape[0]
     points = np.empty((n, 3), dtype=np.float32)
-    for axis, name in enumerate(("x", "y", "z")):
-        points[:, axis] = records[name]
+    # a float64 coordinate beyond float32's range becomes inf, an invalid point as NaN is,
+    # without numpy's overflow warning (damaged or absurd data, not a sensor's)
+    with np.errstate(over="ignore"):
+        for axis, name in enumerate(("x", "y", "z")):
+            points[:, axis] = records[name]
     consumed = {"x", "y", "z", *skip}
     colors: np.ndarray | None = None
     for name in _PACKED_COLOUR_FIELDS:

@@ -56,3 +56,18 @@ def test_pointcloud2_blob_big_endian_with_row_padding() -> None:
     assert frame.fields["uv"].dtype.isnative
     with pytest.raises(ValueError, match="layout needs"):
         records_from_blob(b"\x00" * 50, specs, step, width, height, width * step, True)
+
+
+def test_float64_coordinates_beyond_float32_become_inf_without_a_warning() -> None:
+    import warnings
+
+    from clearcli.io.pointfields import frame_from_records
+
+    records = np.zeros(3, dtype=[("x", "<f8"), ("y", "<f8"), ("z", "<f8")])
+    records["x"] = (1.0, 1e300, -1e39)
+    records["z"] = 1.0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        frame = frame_from_records(records, None)
+    assert frame.points[0].tolist() == [1.0, 0.0, 1.0]
+    assert frame.points[1, 0] == np.inf and frame.points[2, 0] == -np.inf
