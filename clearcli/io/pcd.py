@@ -17,6 +17,7 @@ open3d and this reader); the file appears atomically.
 
 from __future__ import annotations
 
+import math
 import os
 import re
 import struct
@@ -143,6 +144,9 @@ def _validated(values: dict[str, object]) -> PcdHeader:
         raise _BadHeader(f"viewpoint.{len(viewpoint)}: Field required")
     if len(viewpoint) > 7:
         raise _BadHeader(f"viewpoint: Tuple should have at most 7 items after validation, not {len(viewpoint)}")
+    if not all(math.isfinite(v) for v in viewpoint):
+        # the sensor's pose: a NaN or inf there is damage, and would reach every output
+        raise _BadHeader(f"viewpoint: every value should be a finite number, not {' '.join(map(str, viewpoint))}")
     data = str(values.get("data", "binary_compressed"))
     if data not in _ENCODINGS:
         listed = ", ".join(f"'{e}'" for e in _ENCODINGS[:-1])

@@ -66,7 +66,7 @@ DOCUMENTED = frozenset({0, 3, 4, 5, 6, 8, 9, 10, 11})
 USAGE = 2  # click's usage error: allowed only where a case passes a value click parses
 # exits that are errors of a single call: exactly one `clear: error:` line, the last
 ONE_LINE_ERRORS = frozenset({3, 4, 6, 8, 9})
-KINDS = ("depth", "color", "intrinsics", "log", "urdf", "settings", "outputs")
+KINDS = ("depth", "color", "intrinsics", "log", "urdf", "settings", "outputs", "cloud")
 # share of cases that run a whole segment/plan on a 160 x 120 frame instead of failing fast
 HEAVY_SHARE = 0.06
 CASE_TIMEOUT_S = 25.0
@@ -2784,6 +2784,175 @@ def _odd_target(ctx: Ctx, default_name: str, inputs: dict[str, Path], force: boo
     return ctx.dir / name, f"an odd name {name!r}", False
 
 
+# --- point clouds (PCD) ---------------------------------------------------------------------
+
+
+def _table_cloud(ctx: Ctx, w: int, h: int) -> tuple[np.ndarray, np.ndarray]:
+    """An organized (h*w, 3) float32 cloud of a table 1 m below a camera looking down, a
+    box on it (so a valid cloud segments to one object), and (h*w,) packed grey colours."""
+    u, v = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64))
+    f_px = 0.9 * w
+    box = (np.abs(u - w / 2) < w / 8) & (np.abs(v - h / 2) < h / 8)
+    z = np.where(box, 0.9, 1.0) + ctx.np.normal(0.0, 0.0005, (h, w))
+    pts = np.stack([(u - w / 2) / f_px * z, (v - h / 2) / f_px * z, z], axis=-1).reshape(-1, 3)
+    return pts.astype(np.float32), np.full(h * w, 0x806040, dtype=np.uint32)
+
+
+def gen_cloud(ctx: Ctx) -> None:
+    """PCD point clouds: ASCII, binary and LZF-compressed, their header lines and values
+    damaged (FIELDS/SIZE/TYPE/COUNT/WIDTH/HEIGHT/POINTS/VIEWPOINT/DATA), absurd coordinates
+    (NaN, inf, 1e38), and the data block truncated, flipped or followed by junk."""
+    import lzf
+
+    w, h = ctx.choice([(48, 36), (64, 48), (160, 120)]) if not ctx.case.heavy else (320, 240)
+    pts, rgb = _table_cloud(ctx, w, h)
+    if ctx.rng.random() < 0.15:  # unorganized: one row, or one column
+        w, h = (w * h, 1) if ctx.rng.random() < 0.7 else (1, w * h)
+    n = pts.shape[0]
+    data = ctx.pick({"ascii": 0.3, "binary": 0.35, "binary_compressed": 0.35})
+    ctx.tag(data)
+    fields, size, typ, count = ["x", "y", "z", "rgb"], ["4"] * 4, ["F", "F", "F", "U"], ["1"] * 4
+    coord = "<f4"
+    if ctx.rng.random() < 0.15:  # float64 coordinates
+        size[:3], coord = ["8"] * 3, "<f8"
+        ctx.note("x/y/z as float64")
+    if ctx.rng.random() < 0.3:
+        value = ctx.choice([float("nan"), float("inf"), float("-inf"), 1e38, -3e38, 1e300, 0.0, 1e-45, 1e19])
+        share = ctx.choice([0.01, 0.3, 1.0])
+        rows = ctx.np.random(n) < share
+        cols = ctx.choice([[0], [1], [2], [0, 1, 2]])
+        wide = pts.astype(np.float64)
+        for c in cols:
+            wide[rows, c] = value
+        with np.errstate(over="ignore"):
+            pts = wide.astype(np.float32) if coord == "<f4" else wide  # type: ignore[assignment]
+        ctx.note(f"{value} in {int(rows.sum())} points' {'xyz'[cols[0]] if len(cols) == 1 else 'xyz'}")
+        ctx.tag("values")
+    header: dict[str, str] = {
+        "VERSION": "0.7",
+        "FIELDS": " ".join(fields),
+        "SIZE": " ".join(size),
+        "TYPE": " ".join(typ),
+        "COUNT": " ".join(count),
+        "WIDTH": str(w),
+        "HEIGHT": str(h),
+        "VIEWPOINT": "0 0 0 1 0 0 0",
+        "POINTS": str(n),
+        "DATA": data,
+    }
+    mutation = ctx.pick(
+        {
+            "none": 0.3,
+            "FIELDS": 0.07,
+            "SIZE": 0.06,
+            "TYPE": 0.06,
+            "COUNT": 0.06,
+            "WIDTH": 0.06,
+            "HEIGHT": 0.04,
+            "POINTS": 0.06,
+            "VIEWPOINT": 0.06,
+            "DATA": 0.04,
+            "VERSION": 0.03,
+            "missing": 0.05,
+            "duplicate": 0.03,
+            "crlf": 0.03,
+            "junk_line": 0.03,
+            "order": 0.02,
+        }
+    )
+    ctx.tag("header_" + mutation)
+    odd = {
+        "FIELDS": [
+            "x y",
+            "x x z rgb",
+            "a b c d",
+            "X Y Z RGB",
+            "x y z normal_x",
+            "",
+            "x y z rgb label extra",
+            "x\ty z rgb",
+        ],
+        "SIZE": ["4 4 4", "8 8 8 8", "2 2 2 4", "4 4 4 0", "4 4 4 -4", "4 4 4 99999999999", "a b c d", "1 1 1 1"],
+        "TYPE": ["F F F", "I I I U", "U U U U", "F F F F", "Q F F U", "f f f u", "F F F I"],
+        "COUNT": ["1 1 1", "0 1 1 1", "2 1 1 1", "-1 1 1 1", "1 1 1 1000000000", "1.5 1 1 1", "1 1 1 300"],
+        "WIDTH": ["0", str(w + 1), str(w * 2), "-5", str(10**12), str(2**31), "1e3", "0x10"],
+        "HEIGHT": ["0", str(h + 1), "-1", str(2**63), "nan"],
+        "POINTS": ["0", str(n - 1), str(n + 1), "-1", str(10**15), "abc"],
+        "VIEWPOINT": [
+            "0 0 0 0 0 0 0",
+            "nan 0 0 1 0 0 0",
+            "0 0 0 1 0 0",
+            "1e308 1e308 1e308 1 0 0 0",
+            "0 0 0 inf 0 0 0",
+            "a b c d e f g",
+            "0 0 0 1e-300 0 0 0",
+            "0 0 0 2 0 0 0",
+            "0 0 0 1 0 0 0 0",
+        ],
+        "DATA": ["binaryx", "ASCII", "", "binary_compressed extra", "ascii binary"],
+        "VERSION": ["9", ".7", "0.6", "", "0.7.1"],
+    }
+    if mutation in odd:
+        header[mutation] = ctx.choice(odd[mutation])
+        ctx.note(f"{mutation} {header[mutation]!r}")
+    elif mutation == "missing":
+        gone = ctx.choice(list(header))
+        del header[gone]
+        ctx.note(f"no {gone} line")
+    else:
+        ctx.note(f"header: {mutation}")
+    lines = ["# .PCD v0.7 - made by clear's harness"] + [f"{k} {v}".rstrip() for k, v in header.items()]
+    if mutation == "duplicate":
+        k = ctx.rng.randrange(1, len(lines))
+        lines.insert(k, lines[k].split(" ")[0] + " 3")
+    elif mutation == "junk_line":
+        lines.insert(ctx.rng.randrange(1, len(lines)), ctx.choice(["FOO bar", "\udcff\udcfe junk", "x" * 5000, "   "]))
+    elif mutation == "order":
+        body_lines = lines[1:-1]
+        ctx.rng.shuffle(body_lines)
+        lines = lines[:1] + body_lines + lines[-1:]
+    head = ("\r\n" if mutation == "crlf" else "\n").join(lines) + ("\r\n" if mutation == "crlf" else "\n")
+    head_bytes = head.encode("utf-8", "surrogateescape")
+    rec = np.zeros(n, dtype=[("x", coord), ("y", coord), ("z", coord), ("rgb", "<u4")])
+    for k, name in enumerate("xyz"):
+        rec[name] = pts[:, k]
+    rec["rgb"] = rgb
+    encoding = data if mutation != "DATA" else ctx.choice(["ascii", "binary"])
+    if encoding == "ascii":
+        body = "".join(f"{a!r} {b!r} {c!r} {d}\n" for a, b, c, d in rec.tolist()).encode()
+        if ctx.rng.random() < 0.15:
+            body = body.replace(b"1", ctx.choice([b"x", b"1.2.3", b"", b"1e999"]), 3)
+            ctx.note("odd tokens in the ASCII rows")
+    elif encoding == "binary":
+        body = rec.tobytes()
+    else:
+        columns = b"".join(rec[name].tobytes() for name in ("x", "y", "z", "rgb"))
+        block = lzf.compress(columns) or columns
+        body = struct.pack("<II", len(block), len(columns)) + block
+    damage = ctx.pick({"none": 0.6, "truncate": 0.15, "flip": 0.15, "junk": 0.05, "sizes": 0.05})
+    ctx.tag("data_" + damage)
+    if damage == "truncate":
+        body, off = truncate(body, ctx.rng)
+        ctx.note(f"data truncated at byte {off}")
+    elif damage == "flip":
+        body, how = flip_bytes(body, ctx.rng, ctx.rng.choice([1, 4, 64]))
+        ctx.note(f"data: {how}")
+    elif damage == "junk":
+        body += bytes(ctx.np.integers(0, 256, ctx.choice([1, 7, 1000]), dtype=np.uint8))
+        ctx.note("junk after the data")
+    elif damage == "sizes" and encoding == "binary_compressed":
+        sizes = ctx.choice([(0, 0), (2**32 - 1, 2**32 - 1), (len(body), 2**31), (8, len(body))])
+        body = struct.pack("<II", *sizes) + body[8:]
+        ctx.note(f"compressed sizes {sizes}")
+    path = ctx.write("cloud.pcd", head_bytes + body)
+    ctx.note(f"{data} PCD {w}x{h}")
+    if ctx.case.heavy:
+        ctx.run(ctx.choice(["segment", "plan"]), path, "--json")
+        ctx.case.timeout_s = HEAVY_TIMEOUT_S
+    else:
+        _command_for_image(ctx, path)
+
+
 GENERATORS: dict[str, Callable[[Ctx], None]] = {
     "depth": gen_depth,
     "color": gen_color,
@@ -2792,6 +2961,7 @@ GENERATORS: dict[str, Callable[[Ctx], None]] = {
     "urdf": gen_urdf,
     "settings": gen_settings,
     "outputs": gen_outputs,
+    "cloud": gen_cloud,
 }
 
 

@@ -170,6 +170,8 @@ def test_bad_pcd_inputs(tmp_path: Path) -> None:
         "bad_width.pcd": (_header().replace(b"WIDTH 3", b"WIDTH three"), "bad PCD header"),
         "no_xyz.pcd": (_header().replace(b"FIELDS x y z", b"FIELDS a b c") + _xyz(3), "no x/y/z"),
         # a record numpy cannot describe (COUNT 1e9 x 4 bytes): one line, not numpy's ValueError
+        # the sensor's pose with a NaN: refused (it reached `info --json` as a bare NaN)
+        "viewpoint_nan.pcd": (_header().replace(b"VIEWPOINT 0 0 0 1", b"VIEWPOINT nan 0 0 1") + _xyz(3), "finite"),
         "count_huge.pcd": (_header().replace(b"COUNT 1 1 1", b"COUNT 1 1 1000000000") + _xyz(3), "is COUNT right"),
         "ros1.bag.pcd": (b"#ROSBAG V2.0\n\x00\x00", "truncated or corrupt ROS 1 bag"),
     }
