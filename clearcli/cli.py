@@ -25,6 +25,7 @@ from clearcli.errors import (
     EXIT_CODES,
     EXIT_INTERNAL,
     EXIT_INTERRUPTED,
+    EXIT_MEMORY,
     EXIT_OUTPUT,
     EXIT_TERMINATED,
     ClearError,
@@ -196,6 +197,12 @@ _lighten_imports = startup.lighten_imports
 
 def main() -> None:
     """Entry point of `clear` and `clearcli`: maps ClearError to its exit code."""
+    from clearcli.limits import too_little_memory  # noqa: PLC0415  (first: before NumPy can hang)
+
+    reason = too_little_memory()
+    if reason is not None:
+        sys.stderr.write(f"clear: error: {reason}\n")
+        sys.exit(EXIT_MEMORY)
     _single_threaded_numerics()  # first: before any import of NumPy
     _lighten_imports()  # before anything imports NumPy or SciPy
     if len(sys.argv) == 1 and Path(sys.argv[0]).name == "clear" and sys.stdout.isatty() and sys.stdin.isatty():
@@ -262,6 +269,12 @@ def _main() -> None:
         _quiet_stdout()
         sys.stderr.write(f"clear: error: cannot write the results to stdout ({exc.strerror or exc})\n")
         sys.exit(EXIT_OUTPUT)
+    except MemoryError:
+        sys.stderr.write(
+            "clear: error: out of memory: an allocation failed (a frame larger than the memory the process may "
+            "use: free memory, raise its limit, or use a smaller frame)\n"
+        )
+        sys.exit(EXIT_MEMORY)
     except Exception as exc:  # a bug: one line unless the user asks for the traceback
         _internal(exc)
 

@@ -22,6 +22,7 @@ EXIT_OUTPUT = 8  # an output could not be written (exists without --force, not w
 EXIT_PARTIAL = 9  # a log was read only in part (truncated/corrupt after complete frames)
 EXIT_PARTIAL_PLAN = 10  # the plan removes some objects; the others are left, with reasons
 EXIT_BATCH_FAILED = 11  # a batch ran, and some of its frames failed (their codes in their lines)
+EXIT_MEMORY = 12  # out of memory: an allocation failed, or the memory limit is below what clear needs
 EXIT_INTERRUPTED = 130  # Ctrl-C (128 + SIGINT, as shells report it)
 EXIT_BROKEN_PIPE = 141  # stdout closed by its reader (`clear ... | head`): 128 + SIGPIPE
 EXIT_TERMINATED = 143  # SIGTERM (what Slurm, Kubernetes and `timeout` send): 128 + 15
@@ -39,6 +40,7 @@ EXIT_CODES: dict[int, str] = {
     EXIT_PARTIAL: "log read only in part: truncated or corrupt after the frames reported",
     EXIT_PARTIAL_PLAN: "partial plan: it removes some objects; the others are left, each with its reason",
     EXIT_BATCH_FAILED: "batch (several frames): some frames failed; each one's code and message are in its line",
+    EXIT_MEMORY: "out of memory: an allocation failed, or the memory limit (ulimit -v / -d) is below what clear needs",
     EXIT_INTERRUPTED: "interrupted (Ctrl-C); a batch still prints the summary of what finished",
     EXIT_BROKEN_PIPE: "stdout was closed by its reader (e.g. `| head`): ended quietly",
     EXIT_TERMINATED: "terminated (SIGTERM); a batch still prints the summary of what finished",
@@ -102,6 +104,13 @@ class OutputError(ClearError):
     def __init__(self, message: str, errno_: int | None = None) -> None:
         super().__init__(message)
         self.errno = errno_
+
+
+class MemoryLimitError(ClearError):
+    """Not enough memory: the process's address-space or data limit is below what clear
+    needs to start, or an allocation failed (Python's MemoryError)."""
+
+    exit_code = EXIT_MEMORY
 
 
 class PartialLogError(ClearError):

@@ -20,7 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from clearcli import tasks
-from clearcli.errors import EXIT_INTERNAL, ClearError, OutputError
+from clearcli.errors import EXIT_INTERNAL, EXIT_MEMORY, ClearError, OutputError
 from clearcli.files import atomic_output, check_output_path
 from clearcli.provenance import envelope
 from clearcli.tasks.base import OUTPUT_FILES, Outcome, Outputs, Source
@@ -106,6 +106,8 @@ def run_job(job: Job) -> dict[str, Any]:
         line = frame_line(job, None, (str(exc), exc.exit_code))
         if getattr(exc, "errno", None) == errno.ENOSPC:
             line["_stop"] = "the disk is full"  # no use starting more frames
+    except MemoryError:  # this frame is larger than the memory the worker may use: its own failure
+        line = frame_line(job, None, ("out of memory: an allocation failed while doing this frame", EXIT_MEMORY))
     except Exception as exc:  # a bug: the batch goes on, the line says so
         if os.environ.get("CLEAR_DEBUG"):
             raise

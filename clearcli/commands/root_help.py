@@ -52,6 +52,9 @@ Usage: clear [OPTIONS] COMMAND [ARGS]...
   11: batch (several frames): some frames failed; each one's code and message
   are in its line
 
+  12: out of memory: an allocation failed, or the memory limit (ulimit -v /
+  -d) is below what clear needs
+
   130: interrupted (Ctrl-C); a batch still prints the summary of what finished
 
   141: stdout was closed by its reader (e.g. `| head`): ended quietly

@@ -2,7 +2,7 @@
 targets, each run through `clear` in this process, each checked against the promises of
 the README's "Exit codes", "Reliability", "Inputs" and "RGB-D inputs":
 
-- the exit code is a documented one (0, 3, 4, 5, 6, 8, 9, 10, 11; 1 is a bug) and, where
+- the exit code is a documented one (0, 3, 4, 5, 6, 8, 9, 10, 11, 12; 1 is a bug) and, where
   the case knows better (a truncated log with complete frames: 9; an output onto an
   input: 8; a URDF whose base is its flange: 3), the right one;
 - no Python traceback, ever; an error exit says so in exactly one line on stderr,
@@ -62,7 +62,7 @@ REPO = Path(__file__).resolve().parents[2]
 SHARED_DATA = Path(os.environ.get("CLEAR_SHARED", REPO.parent / "shared")).resolve() / "data"
 SHARED_MCAP = SHARED_DATA / "rgbd" / "uois_realsense_ros2.mcap"
 
-DOCUMENTED = frozenset({0, 3, 4, 5, 6, 8, 9, 10, 11})
+DOCUMENTED = frozenset({0, 3, 4, 5, 6, 8, 9, 10, 11, 12})
 USAGE = 2  # click's usage error: allowed only where a case passes a value click parses
 # exits that are errors of a single call: exactly one `clear: error:` line, the last
 ONE_LINE_ERRORS = frozenset({3, 4, 6, 8, 9})
