@@ -141,3 +141,35 @@ def test_a_faint_colour_difference_moves_no_voxel() -> None:
     labels_0, _ = _two_colour_patch(0.0, _RED, faint)
     labels_c, _ = _two_colour_patch(0.7, _RED, faint)
     np.testing.assert_array_equal(labels_c, labels_0)
+
+
+def test_radius_knn_by_hand() -> None:
+    from clearcli.perception.supervoxels import radius_knn
+
+    # points on a line at 0, 1, 3 and 10 mm: within 5 mm, nearest first; 4 where none
+    pts = np.array([[0.0, 0, 0], [0.001, 0, 0], [0.003, 0, 0], [0.010, 0, 0]])
+    assert radius_knn(pts, 3, 0.005).tolist() == [[0, 1, 2], [1, 0, 2], [2, 1, 0], [3, 4, 4]]
+    assert radius_knn(pts[:1], 1, 0.005).tolist() == [[0]]
+
+
+def test_radius_knn_is_the_trees_query() -> None:
+    """The same neighbours in the same order as cKDTree's k-nearest query, ties included:
+    the normals' sums follow that order, and so every later bit."""
+    from scipy.spatial import cKDTree
+
+    from clearcli.perception.supervoxels import radius_knn
+
+    gen = np.random.default_rng(5)
+    ties = 0
+    for trial in range(120):
+        n = int(gen.integers(2, 500))
+        pts = gen.uniform(0.0, 0.03, (n, 3))
+        if trial % 2:
+            pts = np.round(pts, 3)  # whole millimetres: equal distances, repeated points
+        k = int(min(gen.integers(1, 40), n))
+        radius_m = float(gen.choice([0.002, 0.005, 0.01]))
+        dist, want = cKDTree(pts).query(pts, k=k, distance_upper_bound=radius_m)
+        want, dist = want.reshape(n, k), dist.reshape(n, k)
+        ties += int(np.sum((dist[:, 1:] == dist[:, :-1]) & np.isfinite(dist[:, 1:])))
+        assert np.array_equal(radius_knn(pts, k, radius_m), want)
+    assert ties > 1000  # the trees' order of ties was asked for
