@@ -202,8 +202,11 @@ def _smallest_eigenvectors6(
     take2 = len2[2] > best_len2
     best_len2 = np.where(take2, len2[2], best_len2)
     length = np.sqrt(best_len2)
-    # half < 0: the smallest eigenvalue is the one farthest from the other two
-    fast = ok & (half < 0.0) & (length > 1e-12)
+    # half < 0: the smallest eigenvalue is the one farthest from the other two; else
+    # (a thin strip, an edge: a sixth of a frame's voxels) the longest cross product is
+    # still exact while it is long, the smallest eigenvalue well apart from the middle
+    # one (1e-2: all but a handful of them, within 3e-6 degrees of eigh's vector)
+    fast = ok & (((half < 0.0) & (length > 1e-12)) | (length > 1e-2))
     safe = np.where(fast, length, 1.0)
     for j in range(3):
         out[:, j] = np.where(take2, c_12[j], np.where(take1, c_02[j], c_01[j])) / safe

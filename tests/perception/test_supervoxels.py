@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 
 def test_voxel_adjacency_is_the_26_neighbourhood() -> None:
@@ -173,3 +174,28 @@ def test_radius_knn_is_the_trees_query() -> None:
         ties += int(np.sum((dist[:, 1:] == dist[:, :-1]) & np.isfinite(dist[:, 1:])))
         assert np.array_equal(radius_knn(pts, k, radius_m), want)
     assert ties > 1000  # the trees' order of ties was asked for
+
+
+def test_thin_strips_take_the_closed_form(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A strip's covariance (largest eigenvalue far above the other two, the smallest
+    well apart from the middle one) needs no eigh: its vector is eigh's within 1e-9."""
+    from clearcli.perception import supervoxels
+
+    gen = np.random.default_rng(17)
+    n = 2000
+    axes = np.linalg.qr(gen.standard_normal((n, 3, 3)))[0]
+    # eigenvalues 1, 0.02-0.2, 1e-6-1e-3 (scaled): the middle one nearer the smallest
+    spread = np.stack([gen.uniform(1e-6, 1e-3, n), gen.uniform(0.02, 0.2, n), np.ones(n)], axis=1)
+    cov = np.einsum("nij,nj,nkj->nik", axes, spread, axes) * 1e-5
+    want = np.linalg.eigh(cov)[1][:, :, 0]
+    calls: list[int] = []
+    real_eigh = np.linalg.eigh
+
+    def counted(a: np.ndarray) -> object:
+        calls.append(a.shape[0])
+        return real_eigh(a)
+
+    monkeypatch.setattr(supervoxels.np.linalg, "eigh", counted)
+    got = supervoxels.smallest_eigenvectors(cov)
+    assert calls == []
+    assert np.abs(np.abs(np.einsum("ij,ij->i", got, want)) - 1.0).max() < 1e-9
