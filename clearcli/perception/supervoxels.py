@@ -234,10 +234,13 @@ def radius_knn(points: np.ndarray, k: int, radius_m: float) -> np.ndarray:
     or one near the radius is asked of the tree itself, a few per frame."""
     from scipy.spatial import cKDTree
 
+    points = np.asarray(points, dtype=np.float64)  # the tree's distances are float64
     n = points.shape[0]
     tree = cKDTree(points)
     n_bits = max(1, (n - 1).bit_length())
-    q_bits = 63 - 2 * n_bits
+    # the buckets as whole floats: 2**52 - 1 is one, and no rounding up spills a bucket
+    # into the point's bits
+    q_bits = min(52, 63 - 2 * n_bits)
     if q_bits < 20 or k < 1:  # millions of points: no room for the distances in the key
         return np.asarray(tree.query(points, k=max(k, 1), distance_upper_bound=radius_m)[1]).reshape(n, max(k, 1))
     # a little beyond the radius: the tree's own rounding decides at the radius

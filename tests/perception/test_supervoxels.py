@@ -176,6 +176,25 @@ def test_radius_knn_is_the_trees_query() -> None:
     assert ties > 1000  # the trees' order of ties was asked for
 
 
+def test_radius_knn_at_the_radius() -> None:
+    """Few points (wide distance buckets) a few parts in 1e7 to 1e10 either side of the
+    radius: the tree's verdict, and no bucket spilling into the point's bits."""
+    from scipy.spatial import cKDTree
+
+    from clearcli.perception.supervoxels import radius_knn
+
+    gen = np.random.default_rng(1)
+    radius_m = 0.005
+    for n in range(1, 30):
+        for _ in range(10):
+            pts = np.zeros((n, 3))
+            step = 1.0 + gen.choice([-1.0, 1.0], n) * 10.0 ** gen.uniform(-10, -7, n)
+            pts[:, 0] = radius_m * np.cumsum(step * gen.choice([1.0, 0.5], n))
+            k = int(gen.integers(1, n + 1))
+            want = cKDTree(pts).query(pts, k=k, distance_upper_bound=radius_m)[1].reshape(n, k)
+            assert np.array_equal(radius_knn(pts, k, radius_m), want)
+
+
 def test_thin_strips_take_the_closed_form(monkeypatch: pytest.MonkeyPatch) -> None:
     """A strip's covariance (largest eigenvalue far above the other two, the smallest
     well apart from the middle one) needs no eigh: its vector is eigh's within 1e-9."""
