@@ -237,12 +237,18 @@ def radius_knn(points: np.ndarray, k: int, radius_m: float) -> np.ndarray:
 
     points = np.asarray(points, dtype=np.float64)  # the tree's distances are float64
     n = points.shape[0]
+    if n == 0:
+        return np.zeros((0, max(k, 1)), dtype=np.intp)
     tree = cKDTree(points)
     n_bits = max(1, (n - 1).bit_length())
     # the buckets as whole floats: 2**52 - 1 is one, and no rounding up spills a bucket
     # into the point's bits
     q_bits = min(52, 63 - 2 * n_bits)
-    if q_bits < 20 or k < 1:  # millions of points: no room for the distances in the key
+    # the pairs grow with the radius cubed where the tree's query stays at k a point: a
+    # radius of many voxels (settings) goes to the tree, judged on a sample of points
+    sample = points[:: max(1, n // 64)]
+    crowded = float(np.mean(tree.query_ball_point(sample, radius_m, return_length=True))) > 4 * k
+    if q_bits < 20 or k < 1 or crowded:  # also millions of points: no room for the distances
         return np.asarray(tree.query(points, k=max(k, 1), distance_upper_bound=radius_m)[1]).reshape(n, max(k, 1))
     # a little beyond the radius: the tree's own rounding decides at the radius
     pairs = tree.query_pairs(radius_m * (1.0 + 1e-7), output_type="ndarray")

@@ -151,6 +151,7 @@ def test_radius_knn_by_hand() -> None:
     pts = np.array([[0.0, 0, 0], [0.001, 0, 0], [0.003, 0, 0], [0.010, 0, 0]])
     assert radius_knn(pts, 3, 0.005).tolist() == [[0, 1, 2], [1, 0, 2], [2, 1, 0], [3, 4, 4]]
     assert radius_knn(pts[:1], 1, 0.005).tolist() == [[0]]
+    assert radius_knn(pts[:0], 3, 0.005).shape == (0, 3)
 
 
 def test_radius_knn_is_the_trees_query() -> None:
@@ -174,6 +175,10 @@ def test_radius_knn_is_the_trees_query() -> None:
         ties += int(np.sum((dist[:, 1:] == dist[:, :-1]) & np.isfinite(dist[:, 1:])))
         assert np.array_equal(radius_knn(pts, k, radius_m), want)
     assert ties > 1000  # the trees' order of ties was asked for
+    # a radius of many points (a dense grid: ~500 within it, k = 30): the same
+    pts = np.stack(np.meshgrid(*[np.arange(12) * 0.001] * 3, indexing="ij"), -1).reshape(-1, 3)
+    want = cKDTree(pts).query(pts, k=30, distance_upper_bound=0.005)[1]
+    assert np.array_equal(radius_knn(pts, 30, 0.005), want)
 
 
 def test_radius_knn_at_the_radius() -> None:
