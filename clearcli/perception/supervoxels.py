@@ -202,8 +202,11 @@ def _smallest_eigenvectors6(
     take2 = len2[2] > best_len2
     best_len2 = np.where(take2, len2[2], best_len2)
     length = np.sqrt(best_len2)
-    # half < 0: the smallest eigenvalue is the one farthest from the other two
-    fast = ok & (half < 0.0) & (length > 1e-12)
+    # half < 0: the smallest eigenvalue is the one farthest from the other two; else
+    # (a thin strip, an edge: a sixth of a frame's voxels) the longest cross product is
+    # still exact while it is long, the smallest eigenvalue well apart from the middle
+    # one (1e-2: all but a handful of them, within 3e-6 degrees of eigh's vector)
+    fast = ok & (((half < 0.0) & (length > 1e-12)) | (length > 1e-2))
     safe = np.where(fast, length, 1.0)
     for j in range(3):
         out[:, j] = np.where(take2, c_12[j], np.where(take1, c_02[j], c_01[j])) / safe
@@ -214,6 +217,102 @@ def _smallest_eigenvectors6(
             cov[:, i, j] = cov[:, j, i] = c[slow]
         out[slow] = np.linalg.eigh(cov)[1][:, :, 0]
     return out
+
+
+def radius_knn(points: np.ndarray, k: int, radius_m: float) -> np.ndarray:
+    """(N, k) indices of the ``k`` nearest of ``points`` (N, 3) to each of them (itself
+    included) closer than ``radius_m``, nearest first, ``N`` where fewer: exactly what
+    ``cKDTree(points).query(points, k=k, distance_upper_bound=radius_m)[1]`` gives, with
+    less CPU (mOSD voxel centroids: a fifth less; the tree's query is single-threaded
+    C++, this is NumPy over ~35 neighbours a point).
+
+    The tree's pairs within the radius (``query_pairs``, a fifth of the time of its
+    k-nearest query) are sorted by one int64 key per (point, neighbour): the point, then
+    the squared distance quantised to the bits left over, then the neighbour. Where a
+    point's first k + 1 distances fall into distinct buckets and none near the radius,
+    their order is the distances' and the k nearest are the tree's, whatever its order
+    of ties; a point with two in one bucket (equal distances: whole-millimetre depths)
+    or one near the radius is asked of the tree itself, a few per frame."""
+    from scipy.spatial import cKDTree
+
+    points = np.asarray(points, dtype=np.float64)  # the tree's distances are float64
+    n = points.shape[0]
+    if n == 0:
+        return np.zeros((0, max(k, 1)), dtype=np.intp)
+    tree = cKDTree(points)
+    n_bits = max(1, (n - 1).bit_length())
+    # the buckets as whole floats: 2**52 - 1 is one, and no rounding up spills a bucket
+    # into the point's bits
+    q_bits = min(52, 63 - 2 * n_bits)
+    # the pairs grow with the radius cubed where the tree's query stays at k a point: a
+    # radius of many voxels (settings) goes to the tree, judged on a sample of points
+    sample = points[:: max(1, n // 64)]
+    crowded = float(np.mean(tree.query_ball_point(sample, radius_m, return_length=True))) > 4 * k
+    if q_bits < 20 or k < 1 or crowded:  # also millions of points: no room for the distances
+        return np.asarray(tree.query(points, k=max(k, 1), distance_upper_bound=radius_m)[1]).reshape(n, max(k, 1))
+    # a little beyond the radius: the tree's own rounding decides at the radius
+    pairs = tree.query_pairs(radius_m * (1.0 + 1e-7), output_type="ndarray")
+    n_pairs = pairs.shape[0]
+    first, second = np.ascontiguousarray(pairs[:, 0]), np.ascontiguousarray(pairs[:, 1])
+    # the squared distances, in place: (dx dx + dy dy) + dz dz
+    d2 = np.zeros(n_pairs)
+    for j in range(3):
+        col = np.ascontiguousarray(points[:, j])
+        dj = np.take(col, first)
+        dj -= np.take(col, second)
+        dj *= dj
+        d2 += dj
+    r2 = radius_m * radius_m
+    top = (1 << q_bits) - 1
+    scale = float(top - 1) / r2
+    # floor(d2 * scale) is monotonic in d2: distinct buckets order as the distances do
+    d2 *= scale
+    np.minimum(d2, float(top), out=d2)
+    q = d2.astype(np.int64)
+    band_lo, band_hi = int(r2 * (1.0 - 1e-9) * scale), int(r2 * (1.0 + 1e-9) * scale)
+    shift = n_bits + q_bits
+    q <<= n_bits
+    # the keys of (first, second), (second, first) and (i, i), written in place, and one
+    # past every row's end that reads as no neighbour
+    key = np.empty(2 * n_pairs + n + 1, dtype=np.int64)
+    for part, (src, dst) in enumerate(((first, second), (second, first))):
+        block = key[part * n_pairs : (part + 1) * n_pairs]
+        np.left_shift(src, shift, out=block)
+        block |= q
+        block |= dst
+    own = np.arange(n, dtype=np.int64)
+    selves = key[2 * n_pairs : 2 * n_pairs + n]
+    np.left_shift(own, shift, out=selves)
+    selves |= own
+    key[-1] = np.iinfo(np.int64).max
+    key[:-1].sort()
+    # each point's row of the sorted keys, read one place at a time for all points: the
+    # first k + 1 places of n rows, not every key of every row
+    per_row = np.bincount(first, minlength=n)
+    per_row += np.bincount(second, minlength=n)
+    per_row += 1
+    at = np.cumsum(per_row) - per_row
+    end = at + per_row
+    ask_tree = np.zeros(n, dtype=bool)
+    nb_t = np.empty((k, n), dtype=np.intp)
+    before: np.ndarray | None = None
+    for place in range(k + 1):
+        in_row = at < end
+        here = np.take(key, np.where(in_row, at, key.shape[0] - 1))
+        bucket = (here >> n_bits) & top
+        # two of a point's first k + 1 in one bucket, or one near the radius: the tree decides
+        if before is not None:
+            ask_tree |= in_row & (bucket == before)
+        ask_tree |= in_row & (bucket >= band_lo) & (bucket <= band_hi)
+        if place < k:
+            nb_t[place] = np.where(in_row & (bucket < band_lo), here & ((1 << n_bits) - 1), n)
+        before = bucket
+        at += 1
+    nb = np.ascontiguousarray(nb_t.T)
+    asked = np.flatnonzero(ask_tree)
+    if asked.size:
+        nb[asked] = np.asarray(tree.query(points[asked], k=k, distance_upper_bound=radius_m)[1]).reshape(-1, k)
+    return nb
 
 
 def voxel_normals(centroids: np.ndarray, radius_m: float, viewpoint: np.ndarray, max_nn: int = 30) -> np.ndarray:
@@ -227,17 +326,14 @@ def voxel_normals(centroids: np.ndarray, radius_m: float, viewpoint: np.ndarray,
     the same normals (mOSD frames: all but one in 230k voxels within 0.1 degree) in
     tens of milliseconds, without importing open3d (most of a second).
     """
-    from scipy.spatial import cKDTree
-
     n = centroids.shape[0]
     if n == 0:
         return np.zeros((0, 3))
     k = min(max_nn, n)
-    # the k-d tree's query is most of the time and stays as it is: centroids at equal
-    # distances are common (whole-millimetre depths), and the order the tree lists them
-    # in decides the order of the sums below, so no other search gives the same bits
-    _, nb = cKDTree(centroids).query(centroids, k=k, distance_upper_bound=radius_m)
-    nb = nb.reshape(n, k)
+    # the k-d tree's neighbours in the k-d tree's order (radius_knn): centroids at equal
+    # distances are common (whole-millimetre depths), and the order decides the order
+    # of the sums below, so the bits of the normals
+    nb = radius_knn(centroids, k, radius_m)
     # a missing neighbour has index n; it becomes the centroid itself, offset 0, which
     # adds nothing to the sums (offsets from the query centroid: no cancellation)
     flat = nb.reshape(-1)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 
 def test_voxel_adjacency_is_the_26_neighbourhood() -> None:
@@ -141,3 +142,84 @@ def test_a_faint_colour_difference_moves_no_voxel() -> None:
     labels_0, _ = _two_colour_patch(0.0, _RED, faint)
     labels_c, _ = _two_colour_patch(0.7, _RED, faint)
     np.testing.assert_array_equal(labels_c, labels_0)
+
+
+def test_radius_knn_by_hand() -> None:
+    from clearcli.perception.supervoxels import radius_knn
+
+    # points on a line at 0, 1, 3 and 10 mm: within 5 mm, nearest first; 4 where none
+    pts = np.array([[0.0, 0, 0], [0.001, 0, 0], [0.003, 0, 0], [0.010, 0, 0]])
+    assert radius_knn(pts, 3, 0.005).tolist() == [[0, 1, 2], [1, 0, 2], [2, 1, 0], [3, 4, 4]]
+    assert radius_knn(pts[:1], 1, 0.005).tolist() == [[0]]
+    assert radius_knn(pts[:0], 3, 0.005).shape == (0, 3)
+
+
+def test_radius_knn_is_the_trees_query() -> None:
+    """The same neighbours in the same order as cKDTree's k-nearest query, ties included:
+    the normals' sums follow that order, and so every later bit."""
+    from scipy.spatial import cKDTree
+
+    from clearcli.perception.supervoxels import radius_knn
+
+    gen = np.random.default_rng(5)
+    ties = 0
+    for trial in range(120):
+        n = int(gen.integers(2, 500))
+        pts = gen.uniform(0.0, 0.03, (n, 3))
+        if trial % 2:
+            pts = np.round(pts, 3)  # whole millimetres: equal distances, repeated points
+        k = int(min(gen.integers(1, 40), n))
+        radius_m = float(gen.choice([0.002, 0.005, 0.01]))
+        dist, want = cKDTree(pts).query(pts, k=k, distance_upper_bound=radius_m)
+        want, dist = want.reshape(n, k), dist.reshape(n, k)
+        ties += int(np.sum((dist[:, 1:] == dist[:, :-1]) & np.isfinite(dist[:, 1:])))
+        assert np.array_equal(radius_knn(pts, k, radius_m), want)
+    assert ties > 1000  # the trees' order of ties was asked for
+    # a radius of many points (a dense grid: ~500 within it, k = 30): the same
+    pts = np.stack(np.meshgrid(*[np.arange(12) * 0.001] * 3, indexing="ij"), -1).reshape(-1, 3)
+    want = cKDTree(pts).query(pts, k=30, distance_upper_bound=0.005)[1]
+    assert np.array_equal(radius_knn(pts, 30, 0.005), want)
+
+
+def test_radius_knn_at_the_radius() -> None:
+    """Few points (wide distance buckets) a few parts in 1e7 to 1e10 either side of the
+    radius: the tree's verdict, and no bucket spilling into the point's bits."""
+    from scipy.spatial import cKDTree
+
+    from clearcli.perception.supervoxels import radius_knn
+
+    gen = np.random.default_rng(1)
+    radius_m = 0.005
+    for n in range(1, 30):
+        for _ in range(10):
+            pts = np.zeros((n, 3))
+            step = 1.0 + gen.choice([-1.0, 1.0], n) * 10.0 ** gen.uniform(-10, -7, n)
+            pts[:, 0] = radius_m * np.cumsum(step * gen.choice([1.0, 0.5], n))
+            k = int(gen.integers(1, n + 1))
+            want = cKDTree(pts).query(pts, k=k, distance_upper_bound=radius_m)[1].reshape(n, k)
+            assert np.array_equal(radius_knn(pts, k, radius_m), want)
+
+
+def test_thin_strips_take_the_closed_form(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A strip's covariance (largest eigenvalue far above the other two, the smallest
+    well apart from the middle one) needs no eigh: its vector is eigh's within 1e-9."""
+    from clearcli.perception import supervoxels
+
+    gen = np.random.default_rng(17)
+    n = 2000
+    axes = np.linalg.qr(gen.standard_normal((n, 3, 3)))[0]
+    # eigenvalues 1, 0.02-0.2, 1e-6-1e-3 (scaled): the middle one nearer the smallest
+    spread = np.stack([gen.uniform(1e-6, 1e-3, n), gen.uniform(0.02, 0.2, n), np.ones(n)], axis=1)
+    cov = np.einsum("nij,nj,nkj->nik", axes, spread, axes) * 1e-5
+    want = np.linalg.eigh(cov)[1][:, :, 0]
+    calls: list[int] = []
+    real_eigh = np.linalg.eigh
+
+    def counted(a: np.ndarray) -> object:
+        calls.append(a.shape[0])
+        return real_eigh(a)
+
+    monkeypatch.setattr(supervoxels.np.linalg, "eigh", counted)
+    got = supervoxels.smallest_eigenvectors(cov)
+    assert calls == []
+    assert np.abs(np.abs(np.einsum("ij,ij->i", got, want)) - 1.0).max() < 1e-9
