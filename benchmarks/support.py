@@ -58,7 +58,9 @@ def main() -> None:
                 if r.right != r.n_objects or r.spurious:
                     bad.append(f"{seed}:{r.right}/{r.n_objects} m{r.missed} g{r.merged} s{r.split} sp{r.spurious}")
             tot = [a + b for a, b in zip(tot, acc, strict=True)]
-            print(f"{name:15s} {variant:9s} right {acc[2]:3d}/{acc[1]:3d} missed {acc[3]:2d} spurious {acc[4]:2d}", end="")
+            print(
+                f"{name:15s} {variant:9s} right {acc[2]:3d}/{acc[1]:3d} missed {acc[3]:2d} spurious {acc[4]:2d}", end=""
+            )
             print(("   " + " ".join(bad)) if args.verbose else "", flush=True)
     print(f"TOTAL frames {tot[0]} right {tot[2]}/{tot[1]} missed {tot[3]} spurious {tot[4]}")
 

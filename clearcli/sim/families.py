@@ -654,7 +654,9 @@ def shelf_above(seed: int) -> Scene:
     width = table.size_x_m - 0.04
     board = Box(FURNITURE_ID, round(width, 4), round(depth, 4), 0.02, 0.0, round(y, 4), 0.0, round(rise, 4))
     sides = [
-        Box(FURNITURE_ID + 1 + k, 0.02, round(depth, 4), round(rise, 4), round(sgn * (width / 2 - 0.01), 4), round(y, 4))
+        Box(
+            FURNITURE_ID + 1 + k, 0.02, round(depth, 4), round(rise, 4), round(sgn * (width / 2 - 0.01), 4), round(y, 4)
+        )
         for k, sgn in enumerate((-1.0, 1.0))
     ]
     on_shelf = [
