@@ -767,7 +767,13 @@ def beyond_the_edge(
             ok = (u >= 0) & (u < width) & (v >= 0) & (v < height)
             seen = rng[v[ok], u[ok]]
             want = looks[ok, 2]
-            nearer = int((seen < want * (1.0 - rel)).sum())
+            hidden = seen < want * (1.0 - rel)
+            if settings.beyond_edge_own_load and hidden.any():
+                # what hides a look and stands over the other piece itself (clutter on a
+                # bench behind) is that piece's load: it tells nothing of table in between
+                over = pts[v[ok][hidden], u[ok][hidden]].astype(np.float64) @ basis.T - origin @ basis.T
+                hidden[np.flatnonzero(hidden)[inside_convex(over, convex_hull_2d((own + 0.5) * cell), -cell)]] = False
+            nearer = int(hidden.sum())
             # farther than the plane: nothing stands there. A pixel with no depth tells
             # nothing (a shadow behind an object is one too)
             through = int((seen > want * (1.0 + rel)).sum())

@@ -77,6 +77,12 @@ class SegmentSettings(Section):
     # objects may reach this far (m) outside the convex hull of the visible table points:
     # an object at the far edge hides the table behind it, so the hull edge cuts it
     hull_margin_m: float = param(0.05, ge=0, le=0.5)
+    # in the beyond_edge_check, a look at the gap hidden by something standing over the other piece
+    # itself (a cell in from its hull: clutter on a bench behind, level with the table)
+    # is that piece's load and counts for neither side. On: the bench's clutter hid more
+    # of the gap than the floor showed through it (desk_level_behind: 58 looks hidden,
+    # 28 through), so the bench stayed table and its clutter objects
+    beyond_edge_own_load: bool = param(True)
     # --- 3. supervoxels (VCCS) ---------------------------------------------------------
     voxel_m: float = param(0.005, ge=0.001, le=0.05)
     # 0.03 (library default) rather than the deployed 0.02: larger patches have steadier
