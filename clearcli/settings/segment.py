@@ -83,6 +83,13 @@ class SegmentSettings(Section):
     # of the gap than the floor showed through it (desk_level_behind: 58 looks hidden,
     # 28 through), so the bench stayed table and its clutter objects
     beyond_edge_own_load: bool = param(True)
+    # a mat or board covers the table: a candidate a centimetre or so above the support
+    # through whose outline (off its edge band) the plane below shows on more than this
+    # share of the points at the two levels is flat things lying apart on the table (a
+    # notebook, phones, joined into one plane), not a mat (support.py). 0.3: the mats of
+    # mat_on_table show 0-7 % (stereo noise), thin_flat's notebooks 66-76 %; no candidate
+    # of the choose part, mOSD or the fixtures comes to this test. 1 turns it off
+    mat_below_seen_max_share: float = param(0.3, ge=0, le=1)
     # --- 3. supervoxels (VCCS) ---------------------------------------------------------
     voxel_m: float = param(0.005, ge=0.001, le=0.05)
     # 0.03 (library default) rather than the deployed 0.02: larger patches have steadier
