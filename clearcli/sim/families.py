@@ -645,17 +645,26 @@ def desk_level_behind(seed: int) -> Scene:
 def shelf_above(seed: int) -> Scene:
     """3-5 objects on the table under and before a shelf board (2 cm thick, 20-25 cm deep,
     25-40 cm above the table) over its far part, held by two side boards standing on the
-    table at its left and right ends, 1-3 things on the shelf."""
+    floor 1-3 cm beyond the table's left and right ends (a shelf unit the table is pushed
+    into), 1-3 things on the shelf."""
     rng = np.random.default_rng(seed + 104729)
     table = Table()
     rise = float(rng.uniform(0.25, 0.40))
     depth = float(rng.uniform(0.20, 0.25))
     y = table.size_y_m / 2 - depth / 2 - float(rng.uniform(0.0, 0.03))
-    width = table.size_x_m - 0.04
+    width = table.size_x_m + 2 * float(rng.uniform(0.01, 0.03)) + 0.04
     board = Box(FURNITURE_ID, round(width, 4), round(depth, 4), 0.02, 0.0, round(y, 4), 0.0, round(rise, 4))
+    floor = -FLOOR_BELOW_TABLE_M
     sides = [
         Box(
-            FURNITURE_ID + 1 + k, 0.02, round(depth, 4), round(rise, 4), round(sgn * (width / 2 - 0.01), 4), round(y, 4)
+            FURNITURE_ID + 1 + k,
+            0.02,
+            round(depth, 4),
+            round(rise - floor, 4),
+            round(sgn * (width / 2 - 0.01), 4),
+            round(y, 4),
+            0.0,
+            floor,
         )
         for k, sgn in enumerate((-1.0, 1.0))
     ]
@@ -663,7 +672,7 @@ def shelf_above(seed: int) -> Scene:
         replace(_small(rng, FURNITURE_ID + 3 + i, max_height_m=0.10), object_id=FURNITURE_ID + 3 + i)
         for i in range(int(rng.integers(1, 4)))
     ]
-    shelf_things = _spread(rng, on_shelf, width / 2 - 0.05, depth / 2 - 0.02, round(rise + 0.02, 4), 0.0, y)
+    shelf_things = _spread(rng, on_shelf, width / 2 - 0.07, depth / 2 - 0.02, round(rise + 0.02, 4), 0.0, y)
     objs = [_small(rng, i, max_height_m=min(0.12, rise - 0.08)) for i in range(int(rng.integers(3, 6)))]
     return make_scene(
         f"shelf_above({seed})", [*_spread(rng, objs, 0.33, 0.24, 0.0), board, *sides, *shelf_things], table
