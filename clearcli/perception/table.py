@@ -592,7 +592,15 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
         band_m = settings.prism_min_height_m + _NOISE_PER_M2 * loose_range2
         every_band_m = settings.prism_min_height_m + _NOISE_PER_M2 * np.einsum("ij,ij->i", sample, sample)
         choice = choose(
-            surfaces, best_k, loose, band_m, sample, every_band_m, min_obj, settings.mat_below_seen_max_share
+            surfaces,
+            best_k,
+            loose,
+            band_m,
+            sample,
+            every_band_m,
+            min_obj,
+            settings.mat_below_seen_max_share,
+            settings.raised_below_seen_max_share,
         )
         if choice is not None and choice.index == best_k:
             turned = choice.rejected_why  # it stays; the concave surfaces turned down say why

@@ -188,4 +188,23 @@ def test_below_seen_share_by_hand() -> None:
         return np.column_stack([rng.uniform(lo, hi, (n, 2)), np.full(n, z)])
 
     every = np.vstack([at(30, 0.0105), at(10, 0.0002), at(5, 0.04), at(20, 0.01, 0.001, 0.015)])
-    assert support._below_seen_share(upper, lower, every, 0.01) == pytest.approx(10 / 40)
+    assert support._below_seen_share(upper, every, 0.01, 0.005) == pytest.approx(10 / 40)
+
+
+def test_a_shelf_over_the_table_is_no_raised_surface() -> None:
+    """shelf_above(0): a shelf board 30 cm over the table's far part, its side boards on the
+    floor beyond the table's ends. The board is over the table, held up from it and holds
+    the shelf's things, as a stool's top would be; but the table goes on beneath it (47 %
+    of the points at the two levels within its outline), so the table stays the support
+    and its five objects are right; with the test off (`raised_below_seen_max_share` 1)
+    the board is taken for a raised surface and all five are lost."""
+    from clearcli.evaluate.exact import exact_report
+
+    frame = support_frame("shelf_above", 0)
+    seg = segment(frame, ON)
+    assert not any("raised surface" in v.why for v in seg.support if v.chosen)
+    assert any(v.why.startswith("no raised surface: the plane below goes on beneath it") for v in seg.support)
+    assert exact_report(seg.labels(), frame.fields["label"]).right == 5
+    seg_off = segment(frame, dataclasses.replace(ON, raised_below_seen_max_share=1.0))
+    assert "raised surface" in next(v.why for v in seg_off.support if v.chosen)
+    assert exact_report(seg_off.labels(), frame.fields["label"]).missed == 5
