@@ -1,7 +1,7 @@
 """The support families of issue 37 (`clearcli.sim.families.SUPPORT_FAMILIES`) per sensor
 variant: objects exactly right, missed, and spurious segments (clearcli/evaluate/exact.py).
 
-    .venv/bin/python benchmarks/support.py [--seeds choose|report] [--n 8] [--families a,b] [--variants kinect,hd,stereo,hd_stereo]
+    .venv/bin/python benchmarks/support.py [--seeds choose|report] [--n 8] [--families a,b] [--variants kinect,hd,stereo,hd_stereo] [--off]
 
 Variants: the scene's own Kinect view; ``hd``: a RealSense at 1280x720 seen obliquely
 (0.6 m above the table, 35 degrees down); ``stereo``: the Kinect with stereo-like noise;
@@ -11,6 +11,7 @@ Variants: the scene's own Kinect view; ``hd``: a RealSense at 1280x720 seen obli
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 from pathlib import Path
 
@@ -38,9 +39,18 @@ def main() -> None:
     ap.add_argument("--families", default=",".join(SUPPORT_FAMILIES))
     ap.add_argument("--variants", default=",".join(VARIANTS))
     ap.add_argument("--verbose", action="store_true", help="per frame lines")
+    ap.add_argument(
+        "--off",
+        action="store_true",
+        help="beyond_edge_own_load, mat_below_seen_max_share and raised_below_seen_max_share off (as before them)",
+    )
     args = ap.parse_args()
     first = 0 if args.seeds == "choose" else 1000
     settings = SegmentSettings()
+    if args.off:
+        settings = dataclasses.replace(
+            settings, beyond_edge_own_load=False, mat_below_seen_max_share=1.0, raised_below_seen_max_share=1.0
+        )
     tot = [0, 0, 0, 0, 0]
     for name in args.families.split(","):
         for variant in args.variants.split(","):
