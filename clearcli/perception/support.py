@@ -144,6 +144,19 @@ def walled_sectors(s: Surface, every: np.ndarray) -> int:
     return int(((n > 0) & (up >= _WALL_SHARE * n)).sum())
 
 
+def _below_seen_share(s: Surface, every: np.ndarray, rise: float, half_m: float) -> float:
+    """Of ``every`` point inside ``s``'s outline (off its edge band) at the level of ``s``
+    or of the surface ``rise`` below it (within ``half_m`` of either), the share at the
+    lower level: the lower surface seen through, or beneath, the upper one's outline."""
+    inner = every[s.inside(every, -_EDGE_IN_M)]
+    if not inner.shape[0]:
+        return 0.0
+    h = s.height(inner)
+    upper = int((np.abs(h) < half_m).sum())
+    below = int((np.abs(h + rise) < half_m).sum())
+    return below / max(upper + below, 1)
+
+
 def choose(
     surfaces: list[Surface],
     best: int,
@@ -152,6 +165,8 @@ def choose(
     every: np.ndarray,
     every_band_m: np.ndarray,
     min_points: int,
+    mat_seen_max_share: float = 1.0,
+    raised_seen_max_share: float = 1.0,
 ) -> Choice | None:
     """The surface the objects stand on instead of ``surfaces[best]`` (the one with the
     most points above it), or None when that one stays (a Choice of ``best`` itself when
@@ -187,6 +202,13 @@ def choose(
             )
             continue
         if rise <= _MAT_MAX_M:
+            seen = _below_seen_share(s, every, rise, rise / 2)
+            if seen > mat_seen_max_share:
+                concave[k] = (
+                    f"no mat: the plane below shows within its outline ({seen:.0%} of the points at the two levels "
+                    "there), things lying apart on it"
+                )
+                continue
             picks.append(
                 (
                     rise,
@@ -204,6 +226,13 @@ def choose(
         idx = np.flatnonzero(between)
         body = int(s.inside(every[idx], _BODY_OUT_M).sum()) if idx.size else 0
         if body < min_points:
+            continue
+        seen = _below_seen_share(s, every, rise, _MAT_MAX_M / 2)
+        if seen > raised_seen_max_share:
+            concave[k] = (
+                f"no raised surface: the plane below goes on beneath it ({seen:.0%} of the points at the two "
+                "levels within its outline), a shelf or a board held over the support"
+            )
             continue
         picks.append(
             (

@@ -605,7 +605,17 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
         best_k = next(k for k, (f, _, _) in enumerate(scored) if f is fit)
         band_m = settings.prism_min_height_m + _NOISE_PER_M2 * loose_range2
         every_band_m = settings.prism_min_height_m + _NOISE_PER_M2 * np.einsum("ij,ij->i", sample, sample)
-        choice = choose(surfaces, best_k, loose, band_m, sample, every_band_m, min_obj)
+        choice = choose(
+            surfaces,
+            best_k,
+            loose,
+            band_m,
+            sample,
+            every_band_m,
+            min_obj,
+            settings.mat_below_seen_max_share,
+            settings.raised_below_seen_max_share,
+        )
         if choice is not None and choice.index == best_k:
             turned = choice.rejected_why  # it stays; the concave surfaces turned down say why
         elif choice is not None:
@@ -781,7 +791,13 @@ def beyond_the_edge(
             ok = (u >= 0) & (u < width) & (v >= 0) & (v < height)
             seen = rng[v[ok], u[ok]]
             want = looks[ok, 2]
-            nearer = int((seen < want * (1.0 - rel)).sum())
+            hidden = seen < want * (1.0 - rel)
+            if settings.beyond_edge_own_load and hidden.any():
+                # what hides a look and stands over the other piece itself (clutter on a
+                # bench behind) is that piece's load: it tells nothing of table in between
+                over = pts[v[ok][hidden], u[ok][hidden]].astype(np.float64) @ basis.T - origin @ basis.T
+                hidden[np.flatnonzero(hidden)[inside_convex(over, convex_hull_2d((own + 0.5) * cell), -cell)]] = False
+            nearer = int(hidden.sum())
             # farther than the plane: nothing stands there. A pixel with no depth tells
             # nothing (a shadow behind an object is one too)
             through = int((seen > want * (1.0 + rel)).sum())

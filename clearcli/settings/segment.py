@@ -77,6 +77,28 @@ class SegmentSettings(Section):
     # objects may reach this far (m) outside the convex hull of the visible table points:
     # an object at the far edge hides the table behind it, so the hull edge cuts it
     hull_margin_m: float = param(0.05, ge=0, le=0.5)
+    # in the beyond_edge_check, a look at the gap hidden by something standing over the other piece
+    # itself (a cell in from its hull: clutter on a bench behind, level with the table)
+    # is that piece's load and counts for neither side. On: the bench's clutter hid more
+    # of the gap than the floor showed through it (desk_level_behind: 58 looks hidden,
+    # 28 through), so the bench stayed table and its clutter objects
+    beyond_edge_own_load: bool = param(True)
+    # a mat or board covers the table: a candidate a centimetre or so above the support
+    # through whose outline (off its edge band) the plane below shows on more than this
+    # share of the points at the two levels is flat things lying apart on the table (a
+    # notebook, phones, joined into one plane), not a mat (support.py). 0.3: the mats of
+    # mat_on_table show 0-7 % (stereo noise), thin_flat's notebooks 66-76 %; no candidate
+    # of the choose part, mOSD or the fixtures comes to this test. 1 turns it off
+    mat_below_seen_max_share: float = param(0.3, ge=0, le=1)
+    # a raised surface (a stool's top) stands on its body, which hides the floor under
+    # it: a candidate 0.25 m or more above the support under whose outline (off its edge
+    # band) the plane below shows on more than this share of the points at the two levels
+    # (within 15 mm of either) is a shelf or a board held over the support, not where the
+    # objects stand (support.py). 0.25: shelf_above's boards show 50-54 % of the table
+    # beneath, raised_surface's tops 0-0.1 % of the floor; no candidate of the choose part,
+    # mOSD or the fixtures comes to this test (a stool on thin legs, seen from the front,
+    # might show its floor and is not in the families). 1 turns it off
+    raised_below_seen_max_share: float = param(0.25, ge=0, le=1)
     # --- 3. supervoxels (VCCS) ---------------------------------------------------------
     voxel_m: float = param(0.005, ge=0.001, le=0.05)
     # 0.03 (library default) rather than the deployed 0.02: larger patches have steadier

@@ -619,6 +619,125 @@ def wall_at_edge(seed: int) -> Scene:
     return make_scene(f"wall_at_edge({seed})", [*objs, wall], table)
 
 
+def desk_level_behind(seed: int) -> Scene:
+    """desk_behind(seed)'s objects on the table and, beyond its far edge (2-6 cm gap), a
+    second desk at the table's own height (within 1 cm) with 3-5 things on it: the lab's
+    bench behind, clutter on it, one plane with the table but for the gap."""
+    rng = np.random.default_rng(seed + 7919)
+    table = Table()
+    objs = [o for o in desk_behind(seed).objects if o.object_id < FURNITURE_ID]
+    gap = float(rng.uniform(0.02, 0.06))
+    rise = float(rng.uniform(-0.01, 0.01))
+    depth = 0.40
+    y0 = table.size_y_m / 2 + gap + depth / 2
+    desk = Box(FURNITURE_ID, 1.0, depth, round(rise + 0.7, 4), 0.0, round(y0, 4), 0.0, -0.7)
+    on_desk = [
+        replace(_small(rng, FURNITURE_ID + 1 + i), object_id=FURNITURE_ID + 1 + i)
+        for i in range(int(rng.integers(3, 6)))
+    ]
+    return make_scene(
+        f"desk_level_behind({seed})",
+        [*objs, desk, *_spread(rng, on_desk, 0.45, 0.15, round(rise, 4), 0.0, y0)],
+        table,
+    )
+
+
+def shelf_above(seed: int) -> Scene:
+    """3-5 objects on the table under and before a shelf board (2 cm thick, 20-25 cm deep,
+    25-40 cm above the table) over its far part, held by two side boards standing on the
+    floor 1-3 cm beyond the table's left and right ends (a shelf unit the table is pushed
+    into), 1-3 things on the shelf."""
+    rng = np.random.default_rng(seed + 104729)
+    table = Table()
+    rise = float(rng.uniform(0.25, 0.40))
+    depth = float(rng.uniform(0.20, 0.25))
+    y = table.size_y_m / 2 - depth / 2 - float(rng.uniform(0.0, 0.03))
+    width = table.size_x_m + 2 * float(rng.uniform(0.01, 0.03)) + 0.04
+    board = Box(FURNITURE_ID, round(width, 4), round(depth, 4), 0.02, 0.0, round(y, 4), 0.0, round(rise, 4))
+    floor = -FLOOR_BELOW_TABLE_M
+    sides = [
+        Box(
+            FURNITURE_ID + 1 + k,
+            0.02,
+            round(depth, 4),
+            round(rise - floor, 4),
+            round(sgn * (width / 2 - 0.01), 4),
+            round(y, 4),
+            0.0,
+            floor,
+        )
+        for k, sgn in enumerate((-1.0, 1.0))
+    ]
+    on_shelf = [
+        replace(_small(rng, FURNITURE_ID + 3 + i, max_height_m=0.10), object_id=FURNITURE_ID + 3 + i)
+        for i in range(int(rng.integers(1, 4)))
+    ]
+    shelf_things = _spread(rng, on_shelf, width / 2 - 0.07, depth / 2 - 0.02, round(rise + 0.02, 4), 0.0, y)
+    objs = [_small(rng, i, max_height_m=min(0.12, rise - 0.08)) for i in range(int(rng.integers(3, 6)))]
+    return make_scene(
+        f"shelf_above({seed})", [*_spread(rng, objs, 0.33, 0.24, 0.0), board, *sides, *shelf_things], table
+    )
+
+
+def overhanging(seed: int) -> Scene:
+    """2-4 objects standing at the table's left, right or far edge with 20-40 % of their
+    footprint's width beyond it (a box, a book, a tray pushed to the edge: objects all), and
+    2-3 objects elsewhere on the table."""
+    rng = np.random.default_rng(seed + 15485863)
+    table = Table()
+    placed: list[SceneObject] = []
+    n_edge = int(rng.integers(2, 5))
+    for k in range(n_edge + int(rng.integers(2, 4))):
+        obj = _small(rng, k)
+        if k < n_edge and rng.random() < 0.5:  # a wider flat thing (a book, a tray)
+            obj = _flat_box(rng, k)
+        for _attempt in range(300):
+            if k < n_edge:
+                side = int(rng.integers(3))  # 0 left, 1 right, 2 far
+                poly = replace(obj, x_m=0.0, y_m=0.0).footprint()
+                axis, sign = (0, -1.0) if side == 0 else (0, 1.0) if side == 1 else (1, 1.0)
+                extent = float((sign * poly[:, axis]).max())
+                width = float(poly[:, axis].max() - poly[:, axis].min())
+                out = float(rng.uniform(0.2, 0.4)) * width
+                half = (table.size_x_m, table.size_y_m)[axis] / 2
+                centre = sign * (half + out - extent)
+                along = float(rng.uniform(-0.7, 0.7)) * (table.size_y_m, table.size_x_m)[axis] / 2
+                x, y = (centre, along) if axis == 0 else (along, centre)
+            else:
+                x, y = float(rng.uniform(-0.3, 0.3)), float(rng.uniform(-0.2, 0.2))
+            cand = replace(obj, x_m=round(x, 4), y_m=round(y, 4))
+            if any(objects_overlap(cand, p, 0.015) for p in placed):
+                continue
+            placed.append(cand)
+            break
+    return make_scene(f"overhanging({seed})", placed, table)
+
+
+def thin_flat(seed: int) -> Scene:
+    """3-6 thin things lying flat (a phone, a card, a notebook, a pen, a ruler: boxes 6-20 mm
+    tall, 1.5-20 cm wide, 10-25 cm long) and 1-2 graspable objects on the table."""
+    rng = np.random.default_rng(seed + 32452843)
+    objs: list[SceneObject] = []
+    for k in range(int(rng.integers(3, 7))):
+        if rng.random() < 0.35:  # a pen, a marker, a ruler
+            sx, sy = float(rng.uniform(0.012, 0.03)), float(rng.uniform(0.10, 0.16))
+        else:  # a phone, a card box, a notebook
+            sx, sy = float(rng.uniform(0.06, 0.20)), float(rng.uniform(0.10, 0.25))
+        objs.append(
+            Box(
+                k,
+                round(sx, 4),
+                round(sy, 4),
+                round(float(rng.uniform(0.006, 0.02)), 4),
+                0.0,
+                0.0,
+                round(float(rng.uniform(-math.pi / 2, math.pi / 2)), 4),
+            )
+        )
+    objs += [_small(rng, 10 + k) for k in range(int(rng.integers(1, 3)))]
+    return make_scene(f"thin_flat({seed})", _spread(rng, objs, 0.36, 0.26, 0.0))
+
+
 SUPPORT_FAMILIES: dict[str, Callable[[int], Scene]] = {
     "mat_on_table": mat_on_table,
     "arm_entering": arm_entering,
@@ -626,6 +745,10 @@ SUPPORT_FAMILIES: dict[str, Callable[[int], Scene]] = {
     "raised_surface": raised_surface,
     "large_bowl": large_bowl,
     "wall_at_edge": wall_at_edge,
+    "desk_level_behind": desk_level_behind,
+    "shelf_above": shelf_above,
+    "overhanging": overhanging,
+    "thin_flat": thin_flat,
 }
 _WITH_FLOOR = ("raised_surface",)
 # other sensors for the support families (`support_frame`): a RealSense at 1280x720 (its

@@ -148,3 +148,63 @@ def test_a_raised_surface_seen_from_low_is_over_the_floor_where_the_floor_is_out
     wrong = segment(frame, ON)
     assert abs(next(v for v in wrong.support if v.chosen).offset_m) > 1.2
     assert not _right(frame, ON)
+
+
+def test_flat_things_lying_apart_are_no_mat() -> None:
+    """thin_flat(1): a notebook 15 mm thick and other flat things lying apart on the table,
+    their tops one plane (joined across the gaps) holding points between them. The table
+    shows through that plane's outline (76 % of the points at the two levels there), so
+    it is no mat: the table stays the support, with its verdict saying why; with the test
+    off (`mat_below_seen_max_share` 1) the notebooks' plane is taken for a mat and every
+    object on the table is lost."""
+    from clearcli.evaluate.exact import exact_report
+
+    frame = support_frame("thin_flat", 1)
+    seg = segment(frame, ON)
+    assert not any("mat or board" in v.why for v in seg.support if v.chosen)
+    assert any(v.why.startswith("no mat: the plane below shows") for v in seg.support)
+    assert exact_report(seg.labels(), frame.fields["label"]).missed <= 3
+    off = dataclasses.replace(ON, mat_below_seen_max_share=1.0)
+    seg_off = segment(frame, off)
+    assert "mat or board" in next(v.why for v in seg_off.support if v.chosen)
+    assert exact_report(seg_off.labels(), frame.fields["label"]).missed == 7
+
+
+def test_below_seen_share_by_hand() -> None:
+    """A square surface 1 cm above the plane z = 0 (outline 0-0.4 m, its edge band 2 cm):
+    inside off the band, 30 points at its level, 10 at the lower level, 5 of an object
+    3 cm above it (at neither level) and 20 in the band (not counted): 10 of 40."""
+    lower = support.Surface(
+        np.array([0.0, 0.0, 1.0]),
+        0.0,
+        np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]),
+        np.zeros(3),
+        np.array([[0.0, 0.0], [0.4, 0.0], [0.4, 0.4], [0.0, 0.4]]),
+    )
+    upper = dataclasses.replace(lower, offset=-0.01, origin=np.array([0.0, 0.0, 0.01]))
+    rng = np.random.default_rng(0)
+
+    def at(n: int, z: float, lo: float = 0.05, hi: float = 0.35) -> np.ndarray:
+        return np.column_stack([rng.uniform(lo, hi, (n, 2)), np.full(n, z)])
+
+    every = np.vstack([at(30, 0.0105), at(10, 0.0002), at(5, 0.04), at(20, 0.01, 0.001, 0.015)])
+    assert support._below_seen_share(upper, every, 0.01, 0.005) == pytest.approx(10 / 40)
+
+
+def test_a_shelf_over_the_table_is_no_raised_surface() -> None:
+    """shelf_above(0): a shelf board 30 cm over the table's far part, its side boards on the
+    floor beyond the table's ends. The board is over the table, held up from it and holds
+    the shelf's things, as a stool's top would be; but the table goes on beneath it (47 %
+    of the points at the two levels within its outline), so the table stays the support
+    and its five objects are right; with the test off (`raised_below_seen_max_share` 1)
+    the board is taken for a raised surface and all five are lost."""
+    from clearcli.evaluate.exact import exact_report
+
+    frame = support_frame("shelf_above", 0)
+    seg = segment(frame, ON)
+    assert not any("raised surface" in v.why for v in seg.support if v.chosen)
+    assert any(v.why.startswith("no raised surface: the plane below goes on beneath it") for v in seg.support)
+    assert exact_report(seg.labels(), frame.fields["label"]).right == 5
+    seg_off = segment(frame, dataclasses.replace(ON, raised_below_seen_max_share=1.0))
+    assert "raised surface" in next(v.why for v in seg_off.support if v.chosen)
+    assert exact_report(seg_off.labels(), frame.fields["label"]).missed == 5

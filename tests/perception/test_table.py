@@ -120,6 +120,48 @@ def test_a_piece_of_the_plane_seen_beyond_a_gap_is_not_table() -> None:
     assert not drop.any()
 
 
+def test_the_load_of_a_piece_beyond_a_gap_does_not_keep_it_table() -> None:
+    """The seat behind the gap carries boxes (front faces 1.5 m away, 30 cm tall, over
+    32 of every 40 pixel columns): they hide the seat's far part, the looks at it from
+    the joint hull see them nearer than the plane. With `beyond_edge_own_load` those looks
+    tell nothing (the boxes stand over the seat itself) and the seat goes, as without the
+    boxes; counted as table hidden by objects (off), they outnumber the floor seen through
+    the gap, and the seat stays table."""
+    from clearcli.perception.table import beyond_the_edge
+    from clearcli.perception.types import TablePlane
+
+    plane = TablePlane(normal=np.array([0.0, -1.0, 0.0]), offset=0.4)
+    points, on_plane = _table_gap_seat("floor")
+    h, w, f = 480, 640, 400.0
+    v, u = np.mgrid[0:h, 0:w].astype(np.float64)
+    z_plane = np.where(v > h / 2, 0.4 * f / np.maximum(v - h / 2, 1e-9), np.inf)
+    face = ((u % 40) < 32) & (v - h / 2 > 0.1 * f / 1.5) & (z_plane > 1.5)  # the boxes' 30 cm fronts
+    rays = np.stack([(u - w / 2) / f, (v - h / 2) / f, np.ones_like(u)], axis=-1)
+    grid = points.reshape(h, w, 3)
+    grid[face] = (rays[face] * 1.5).astype(np.float32)
+    on_plane = np.setdiff1d(on_plane, np.flatnonzero(face.ravel()))
+    z = points[on_plane, 2]
+    drop, _ = beyond_the_edge(points, (h, w), on_plane, plane, S)
+    assert drop[z >= 1.4].mean() > 0.8 and not drop[z <= 1.2].any()
+    drop, _ = beyond_the_edge(points, (h, w), on_plane, plane, replace(S, beyond_edge_own_load=False))
+    assert not drop.any()
+
+
+def test_clutter_on_a_bench_level_with_the_table_is_no_object() -> None:
+    """desk_level_behind(0): a bench at the table's height 2-6 cm beyond its far edge with
+    things on it. The bench is no table, its things no objects (excluded), the table's
+    three objects right; off, the bench's things come out as five more objects."""
+    from clearcli.evaluate.exact import exact_report
+    from clearcli.perception.segment import segment
+    from clearcli.sim.families import support_frame
+
+    frame = support_frame("desk_level_behind", 0)
+    on = exact_report(segment(frame, S).labels(), frame.fields["label"])
+    assert (on.right, on.n_objects, on.spurious) == (3, 3, 0)
+    off = exact_report(segment(frame, replace(S, beyond_edge_own_load=False)).labels(), frame.fields["label"])
+    assert off.spurious >= 3
+
+
 def test_polygon_area_by_hand() -> None:
     from clearcli.perception.table import polygon_area
 
