@@ -8,7 +8,12 @@ segment smaller than LCCP's smallest segment (``min_segment_supervoxels`` seeds)
 no top face (no supervoxel within ``step_max_tilt_deg`` of level: a small object
 standing apart has one) and no voxel adjacency to another segment. It joins the segment
 of the nearest voxel outside it when that is within ``fragment_join_m``; farther away
-it is left alone (the size filter drops it if it is tiny).
+it is left alone (the size filter drops it if it is tiny). A strip of one face is
+flat (its voxels within ``fragment_max_thickness_m`` RMS of a plane) or has the colour
+of the object beside it (within ``color_split_delta`` of the target's voxels near it):
+a small object apart from the rest, with no level top (a ball, a deodorant lying in a
+bin), is thicker than a strip and of its own colour, and is left alone. Without colour
+a thick fragment joins as before.
 """
 
 from __future__ import annotations
@@ -29,6 +34,9 @@ def rejoin_fragments(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray
         ctx.voxel_is_top,
         ctx.size.min_segment_voxels,
         ctx.settings.fragment_join_m,
+        ctx.settings.fragment_max_thickness_m,
+        ctx.voxel_lab,
+        ctx.settings.color_split_delta,
     )
 
 
@@ -39,8 +47,14 @@ def join_fragments(
     voxel_is_top: np.ndarray,
     max_fragment_voxels: int,
     max_gap_m: float,
+    max_thickness_m: float = np.inf,
+    voxel_lab: np.ndarray | None = None,
+    max_color_delta: float = np.inf,
 ) -> np.ndarray:
-    """(V,) segment per voxel after joining fragments to their nearest segment."""
+    """(V,) segment per voxel after joining fragments to their nearest segment. With
+    ``voxel_lab`` (V, 3), a fragment more than ``max_thickness_m`` thick (`thickness`)
+    whose mean colour is ``max_color_delta`` or more (CIE76) from its target's voxels
+    within twice ``max_gap_m`` of it stays apart."""
     from scipy.spatial import cKDTree
 
     seg = np.asarray(seg_of_voxel, dtype=np.int64)
@@ -76,9 +90,68 @@ def join_fragments(
         f = seg[v]
         if d < best[f]:
             best[f], target[f] = d, rest_seg[k]
+    if voxel_lab is not None and np.isfinite(max_thickness_m):
+        target = _apart_by_colour(seg, voxel_centroids, voxel_lab, target, max_thickness_m, max_color_delta, max_gap_m)
     joined = target >= 0
     out[joined[seg]] = target[seg[joined[seg]]]
     return dense_labels(out)
+
+
+def _apart_by_colour(
+    seg: np.ndarray,
+    centroids: np.ndarray,
+    voxel_lab: np.ndarray,
+    target: np.ndarray,
+    max_thickness_m: float,
+    max_color_delta: float,
+    max_gap_m: float,
+) -> np.ndarray:
+    """``target`` with -1 for each joining fragment thicker than ``max_thickness_m``
+    whose mean colour differs by ``max_color_delta`` or more from that of its target's
+    voxels within 2 ``max_gap_m`` of it (the object's side it would join: a printed
+    box's other faces say nothing)."""
+    from scipy.spatial import cKDTree
+
+    n_seg = target.size
+    thick = (target >= 0) & (thickness(seg, centroids, n_seg, target >= 0) > max_thickness_m)
+    out = target.copy()
+    for f in np.flatnonzero(thick).tolist():
+        mine = seg == f
+        theirs = np.flatnonzero(seg == target[f])
+        d, _ = cKDTree(centroids[mine]).query(centroids[theirs], distance_upper_bound=2 * max_gap_m)
+        near = theirs[np.isfinite(d)]
+        if near.size == 0:
+            continue
+        delta = float(np.linalg.norm(voxel_lab[mine].mean(axis=0) - voxel_lab[near].mean(axis=0)))
+        if delta >= max_color_delta:
+            out[f] = -1
+    return out
+
+
+def thickness(seg: np.ndarray, centroids: np.ndarray, n_seg: int, which: np.ndarray) -> np.ndarray:
+    """(n_seg,) RMS distance (m) of each segment's voxels from their best-fitting plane
+    (the square root of their covariance's smallest eigenvalue), for the segments
+    ``which`` flags; the others 0."""
+    out = np.zeros(n_seg)
+    picked = which[seg]
+    s = seg[picked]
+    p = centroids[picked]
+    count = np.bincount(s, minlength=n_seg).astype(np.float64)
+    rows = np.flatnonzero(which & (count > 0))
+    if rows.size == 0:
+        return out
+    mean = np.zeros((n_seg, 3))
+    for k in range(3):
+        mean[:, k] = np.bincount(s, weights=p[:, k], minlength=n_seg)
+    mean[rows] /= count[rows, None]
+    c = p - mean[s]  # about each segment's own mean: no cancellation far from the camera
+    cov = np.zeros((n_seg, 3, 3))
+    for i in range(3):
+        for j in range(i, 3):
+            cov[:, i, j] = cov[:, j, i] = np.bincount(s, weights=c[:, i] * c[:, j], minlength=n_seg)
+    cov[rows] /= count[rows, None, None]
+    out[rows] = np.sqrt(np.maximum(np.linalg.eigvalsh(cov[rows])[:, 0], 0.0))
+    return out
 
 
 def _near_cells(centroids: np.ndarray, seeds: np.ndarray, reach_m: float) -> np.ndarray:

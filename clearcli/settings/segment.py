@@ -287,6 +287,15 @@ class SegmentSettings(Section):
     # tin it stands on is left (uois_image_0002)
     learned_join: bool = param(False)
     learned_join_min_p: float = param(0.7, gt=0.5, lt=1)
+    # a fragment (fragment_join_m) more than this thick (m, RMS off its best plane)
+    # whose colour differs by color_split_delta or more from its target's near it stays
+    # an object. Of the segments fragments.py joined on the 45 mOSD learn frames and
+    # the foreign choose frames, the strips of a face are at most 0.9 mm thick (their
+    # colour may differ by up to 50: mixed pixels at an edge); the small objects it
+    # joined to a neighbour (a ball, a red plastic piece, a deodorant in a bin: merged)
+    # 2.1 mm or more, 35-108 apart in colour. The rendered families' strips of a
+    # cylinder's side are 2.0-2.7 mm thick but of their object's colour (within 3.1)
+    fragment_max_thickness_m: float = param(0.0015, ge=0, le=0.1)
     # --- 3e. objects lying flat (ours; flat.py) -----------------------------------------
     # markers, pens, cutlery: 1-2 cm high, inside the table's depth noise; found by
     # colour on organized frames with colour. A candidate differs from the table's median
