@@ -64,12 +64,46 @@ DEFERRED_MODULES = frozenset({"numpy.f2py", "numpy.testing", "numpy.polynomial",
 # ~25 ms with this (issue 39; sums of -X importtime minima over 8-10 runs; callgrind:
 # 8 % fewer instructions for the whole plan). A package whose code ran is the very
 # module it would have been (the same objects; only when its code runs differs).
-DEFERRED_PACKAGES = frozenset({"scipy.linalg", "scipy.sparse", "scipy.spatial", "scipy.special"})
+# scipy.ndimage's code (its array-API wrappers and all of its modules, ~15 ms of a cold
+# `clear plan` on a loaded machine) runs only where a name of it is used:
+# clearcli/perception/raster.py imports the two C modules it calls without it.
+DEFERRED_PACKAGES = frozenset(
+    {"numpy.ma", "scipy.linalg", "scipy.ndimage", "scipy.sparse", "scipy.spatial", "scipy.special"}
+)
 # Names a deferred package gives from the module that defines them, its own code not run
 # (the same object its code would give: it imports them from there); any other name
 # runs the package's code. clear uses only these of scipy.spatial.
 PACKAGE_SHORTCUTS: dict[str, dict[str, str]] = {
     "scipy.spatial": {"cKDTree": "_ckdtree", "ConvexHull": "_qhull", "Delaunay": "_qhull", "QhullError": "_qhull"},
+}
+
+
+def _is_masked(x: Any) -> bool:
+    """numpy.ma.is_masked without numpy.ma's code: ``getmask(x)`` is ``x._mask``, or
+    ``nomask`` (so False) for what has none, as every array but a masked one; a masked
+    one (or anything with a ``_mask``) gets numpy.ma's own answer."""
+    if not hasattr(x, "_mask"):
+        return False
+    answer: bool = importlib.import_module("numpy.ma.core").is_masked(x)
+    return answer
+
+
+def _is_masked_array(x: Any) -> bool:
+    """numpy.ma.isMaskedArray without numpy.ma's code: ``isinstance(x, MaskedArray)``,
+    and no masked array exists before numpy.ma.core has run (it defines the class)."""
+    core = sys.modules.get("numpy.ma.core")
+    return core is not None and bool(core.isMaskedArray(x))
+
+
+# numpy.ma (masked arrays) is a deferred package too: clear makes no masked array, but
+# NumPy asks numpy.ma of every array np.unique is given (is_masked) and of np.median's
+# NaN check (isMaskedArray), and numpy.ma's code (its core module: ~6 ms of a cold
+# `clear plan` on a loaded machine) ran for that alone. Names a deferred package answers
+# with a function of clear's while its code has not run, giving that function's answer
+# exactly (not bound: once its code ran, the name is the package's own); any other name
+# runs the package's code.
+STAND_INS: dict[str, dict[str, Callable[..., Any]]] = {
+    "numpy.ma": {"is_masked": _is_masked, "isMaskedArray": _is_masked_array}
 }
 _PACKAGE_LOCK = _thread.RLock()  # one thread runs a package's code; the others wait for it
 
@@ -87,6 +121,9 @@ class _DeferredPackage(ModuleType):
                     # its code is running (in this thread: the lock is held) and has not
                     # defined the name yet, as any module part-way through its code
                     raise AttributeError(f"partially initialised module {self.__name__!r} has no attribute {name!r}")
+                stand_in = STAND_INS.get(self.__name__, {}).get(name)
+                if stand_in is not None:
+                    return stand_in
                 module = PACKAGE_SHORTCUTS.get(self.__name__, {}).get(name)
                 if module is not None:
                     try:

@@ -39,9 +39,14 @@ def _report():
 atexit.register(_report)
 """.replace("DEFERRED", repr(sorted(DEFERRED_MODULES | DEFERRED_PACKAGES)))
 
-# what a command leaves unrun: NumPy's tooling, pydoc and SciPy's subpackages imported
-# and not run; scipy.spatial.transform not even imported (scipy.spatial's code imports it)
-_UNRUN = {**dict.fromkeys(DEFERRED_MODULES | DEFERRED_PACKAGES, "deferred"), "scipy.spatial.transform": "absent"}
+# what a command leaves unrun: NumPy's tooling, pydoc, numpy.ma and SciPy's subpackages
+# imported and not run; scipy.spatial.transform not even imported (scipy.spatial's code
+# imports it), nor scipy.special (scipy.ndimage's code imported it)
+_UNRUN = {
+    **dict.fromkeys(DEFERRED_MODULES | DEFERRED_PACKAGES, "deferred"),
+    "scipy.spatial.transform": "absent",
+    "scipy.special": "absent",
+}
 
 
 def test_segment_leaves_numpy_tooling_unrun(tmp_path: Path) -> None:
@@ -224,11 +229,19 @@ def test_a_command_imports_only_what_it_runs(tmp_path: Path, command: str) -> No
         assert {"clearcli.planning.backtrack", "clearcli.robot.wam_kinematics"} <= stages
         # the suction kind is registered, its model only imported for a tool with a cup
         assert "clearcli.predicates.grasps.suction" in modules and "clearcli.geometry.suction" not in modules
-    # SciPy: the tree's and the hull's modules (and the LAPACK table the hull loads), no
-    # more of scipy.spatial, scipy.sparse, scipy.linalg or scipy.special (clearcli/startup.py
-    # DEFERRED_PACKAGES: ~35 ms of a cold plan on a quiet machine)
-    scipy = {m for m in modules if m.startswith(tuple(DEFERRED_PACKAGES))}
-    assert scipy == DEFERRED_PACKAGES | {"scipy.spatial._ckdtree", "scipy.spatial._qhull", "scipy.linalg.cython_lapack"}
+    # SciPy: the tree's and the hull's modules (and the LAPACK table the hull loads), the
+    # two C modules of scipy.ndimage clearcli/perception/raster.py calls, no more of
+    # scipy.spatial, scipy.sparse, scipy.linalg, scipy.ndimage (its array-API layer) or
+    # scipy.special (clearcli/startup.py DEFERRED_PACKAGES: ~35 ms of a cold plan on a
+    # quiet machine); numpy.ma imported, its code (numpy.ma.core) not run
+    deferred = {m for m in modules if any(m == p or m.startswith(p + ".") for p in DEFERRED_PACKAGES)}
+    assert deferred == (DEFERRED_PACKAGES - {"scipy.special"}) | {
+        "scipy.spatial._ckdtree",
+        "scipy.spatial._qhull",
+        "scipy.linalg.cython_lapack",
+        "scipy.ndimage._ni_label",
+        "scipy.ndimage._nd_image",
+    }
 
 
 @pytest.mark.parametrize("command", ["segment", "plan"])
