@@ -114,3 +114,31 @@ print(int(cKDTree([[0.0], [2.0]]).query([[1.4]])[1][0]))
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO, timeout=120)
     assert res.returncode == 0, res.stderr
     assert res.stdout.strip() == "1"
+
+
+_MASKED = """
+import json, sys
+import numpy as np
+class Masked:  # not a masked array, but what numpy.ma.getmask reads
+    def __init__(self, mask):
+        self._mask = mask
+a = np.array([3.0, 1.0, np.nan, 1.0])
+before = [np.unique(a[[0, 1, 3]]).tolist(), float(np.median([4.0, 1.0, 2.0])), bool(np.isnan(np.median(a)))]
+ran_before = "numpy.ma.core" in sys.modules
+asks = [np.ma.is_masked(x) for x in (a, [1, 2], "a string", 5, Masked(np.array([False, True])), Masked(np.array([False])))]
+asks.append(np.ma.isMaskedArray(a))
+m = np.ma.masked_array([1.0, 2.0], mask=[False, True])  # a name not a stand-in: numpy.ma's code runs
+asks += [np.ma.is_masked(m), np.ma.isMaskedArray(m), np.ma.is_masked(a), np.ma.isMaskedArray(a)]
+print(json.dumps({"before": before, "ran_before": ran_before, "asks": asks, "type": type(sys.modules["numpy.ma"]).__name__}))
+"""
+
+
+def test_numpy_ma_answers_without_its_code_what_it_answers_with_it() -> None:
+    hooked = _run("from clearcli.startup import lighten_imports\nlighten_imports()\n" + _MASKED)
+    plain = _run(_MASKED)
+    # NumPy's np.unique and np.median asked numpy.ma, and its code did not run for that
+    assert (hooked.pop("ran_before"), plain.pop("ran_before")) == (False, True)
+    assert hooked == plain
+    assert hooked["before"] == [[1.0, 3.0], 2.0, True]
+    assert hooked["asks"] == [False, False, False, False, True, False, False, True, True, False, False]
+    assert hooked["type"] == "module"  # its code ran at masked_array
