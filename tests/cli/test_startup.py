@@ -6,6 +6,7 @@ them still gets them; `clear --help` is printed from its recording, identical to
 from __future__ import annotations
 
 import json
+import marshal
 import os
 import subprocess
 import sys
@@ -261,3 +262,39 @@ def test_text_to_a_pipe_does_not_import_rich(tmp_path: Path, command: str) -> No
     modules = set(json.loads(report.read_text()))
     assert "clearcli.console" in modules
     assert not {m for m in modules if m == "rich" or m.startswith("rich.")}
+
+
+_COMPILED_HOOK = """
+import atexit, json, os, sys
+
+def _report():
+    cached = getattr(sys.modules.get("dataclasses"), "exec", None)
+    with open(os.environ["CLEAR_TEST_REPORT"], "w") as out:
+        json.dump(None if cached is None else [cached.new, len(cached.used)], out)
+
+atexit.register(_report)
+"""
+
+
+def test_plan_keeps_its_dataclasses_code_for_the_next_call(tmp_path: Path) -> None:
+    """Issue 39: the methods dataclasses generate (~500 in a plan, most of their cost to
+    compile) are compiled by the first `clear plan` of a user and kept in their cache
+    (clearcli/startup.py `_cache_dataclass_code`); the next call compiles none, and prints
+    the same."""
+    report = tmp_path / "compiled.json"
+    env = hooked_env(tmp_path, _COMPILED_HOOK)
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
+    env.update(XDG_CACHE_HOME=str(tmp_path / "cache"), CLEAR_TEST_REPORT=str(report))
+    runs = []
+    for _ in range(2):
+        res = run_clear("plan", FIXTURES / "isolated_box.pcd", "--json", timeout=180, env=env)
+        assert res.returncode in (0, 10), res.stderr
+        doc = json.loads(res.stdout)
+        doc.pop("timings_s")
+        runs.append((doc, json.loads(report.read_text())))
+    (first, (new_1, used_1)), (again, (new_2, used_2)) = runs
+    assert first == again
+    assert new_1 == used_1 > 300 and (new_2, used_2) == (0, used_1)
+    assert [p.name for p in (tmp_path / "cache" / "clear").iterdir()] == [
+        f"dataclass-code.{sys.implementation.cache_tag}.m{marshal.version}.v1"
+    ]
