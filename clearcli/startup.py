@@ -4,9 +4,11 @@ fresh interpreter (spawned) that does not run `main`.
 
 `single_threaded_numerics` sets the numeric libraries' thread pools to one thread;
 `lighten_imports` defers NumPy's and SciPy's modules clear never uses, runs SciPy's
-subpackages' own code only where a name of theirs is used, and keeps SciPy from parsing
-docstrings (issue 39). Both only change what a process loads and how fast,
-never a result. Standard library only: this runs before anything heavy is imported.
+subpackages' (and numpy.ma's) own code only where a name of theirs is used, keeps SciPy
+from parsing docstrings, and has dataclasses run the code it compiled for a class in an
+earlier process, kept in the user's cache directory (issue 39). Both only change what a
+process loads and how fast, never a result. Standard library only: this runs before
+anything heavy is imported.
 """
 
 from __future__ import annotations
@@ -269,7 +271,7 @@ def lighten_imports() -> None:
 # new; a file that cannot be read or decoded is as none (recompiled, then replaced).
 # As with .pyc files, none is written when Python is told not to (PYTHONDONTWRITEBYTECODE).
 _CODE_CACHE_FORMAT = 1
-_CODE_CACHE_MAX = 4000  # texts kept at most: past it, a rewrite keeps this process's only
+_CODE_CACHE_MAX = 2000  # texts kept at most (~1 ms to read 500): past it, a rewrite keeps this process's only
 
 
 def _code_cache_path() -> str | None:
