@@ -4,17 +4,21 @@ fresh interpreter (spawned) that does not run `main`.
 
 `single_threaded_numerics` sets the numeric libraries' thread pools to one thread;
 `lighten_imports` defers NumPy's and SciPy's modules clear never uses, runs SciPy's
-subpackages' own code only where a name of theirs is used, and keeps SciPy from parsing
-docstrings (issue 39). Both only change what a process loads and how fast,
-never a result. Standard library only: this runs before anything heavy is imported.
+subpackages' (and numpy.ma's) own code only where a name of theirs is used, keeps SciPy
+from parsing docstrings, and has dataclasses run the code it compiled for a class in an
+earlier process, kept in the user's cache directory (issue 39). Both only change what a
+process loads and how fast, never a result. Standard library only: this runs before
+anything heavy is imported.
 """
 
 from __future__ import annotations
 
 import _thread
+import atexit
 import importlib
 import importlib.machinery
 import importlib.util
+import marshal
 import os
 import sys
 from collections.abc import Callable
@@ -64,12 +68,46 @@ DEFERRED_MODULES = frozenset({"numpy.f2py", "numpy.testing", "numpy.polynomial",
 # ~25 ms with this (issue 39; sums of -X importtime minima over 8-10 runs; callgrind:
 # 8 % fewer instructions for the whole plan). A package whose code ran is the very
 # module it would have been (the same objects; only when its code runs differs).
-DEFERRED_PACKAGES = frozenset({"scipy.linalg", "scipy.sparse", "scipy.spatial", "scipy.special"})
+# scipy.ndimage's code (its array-API wrappers and all of its modules, ~15 ms of a cold
+# `clear plan` on a loaded machine) runs only where a name of it is used:
+# clearcli/perception/raster.py imports the two C modules it calls without it.
+DEFERRED_PACKAGES = frozenset(
+    {"numpy.ma", "scipy.linalg", "scipy.ndimage", "scipy.sparse", "scipy.spatial", "scipy.special"}
+)
 # Names a deferred package gives from the module that defines them, its own code not run
 # (the same object its code would give: it imports them from there); any other name
 # runs the package's code. clear uses only these of scipy.spatial.
 PACKAGE_SHORTCUTS: dict[str, dict[str, str]] = {
     "scipy.spatial": {"cKDTree": "_ckdtree", "ConvexHull": "_qhull", "Delaunay": "_qhull", "QhullError": "_qhull"},
+}
+
+
+def _is_masked(x: Any) -> bool:
+    """numpy.ma.is_masked without numpy.ma's code: ``getmask(x)`` is ``x._mask``, or
+    ``nomask`` (so False) for what has none, as every array but a masked one; a masked
+    one (or anything with a ``_mask``) gets numpy.ma's own answer."""
+    if not hasattr(x, "_mask"):
+        return False
+    answer: bool = importlib.import_module("numpy.ma.core").is_masked(x)
+    return answer
+
+
+def _is_masked_array(x: Any) -> bool:
+    """numpy.ma.isMaskedArray without numpy.ma's code: ``isinstance(x, MaskedArray)``,
+    and no masked array exists before numpy.ma.core has run (it defines the class)."""
+    core = sys.modules.get("numpy.ma.core")
+    return core is not None and bool(core.isMaskedArray(x))
+
+
+# numpy.ma (masked arrays) is a deferred package too: clear makes no masked array, but
+# NumPy asks numpy.ma of every array np.unique is given (is_masked) and of np.median's
+# NaN check (isMaskedArray), and numpy.ma's code (its core module: ~6 ms of a cold
+# `clear plan` on a loaded machine) ran for that alone. Names a deferred package answers
+# with a function of clear's while its code has not run, giving that function's answer
+# exactly (not bound: once its code ran, the name is the package's own); any other name
+# runs the package's code.
+STAND_INS: dict[str, dict[str, Callable[..., Any]]] = {
+    "numpy.ma": {"is_masked": _is_masked, "isMaskedArray": _is_masked_array}
 }
 _PACKAGE_LOCK = _thread.RLock()  # one thread runs a package's code; the others wait for it
 
@@ -87,6 +125,9 @@ class _DeferredPackage(ModuleType):
                     # its code is running (in this thread: the lock is held) and has not
                     # defined the name yet, as any module part-way through its code
                     raise AttributeError(f"partially initialised module {self.__name__!r} has no attribute {name!r}")
+                stand_in = STAND_INS.get(self.__name__, {}).get(name)
+                if stand_in is not None:
+                    return stand_in
                 module = PACKAGE_SHORTCUTS.get(self.__name__, {}).get(name)
                 if module is not None:
                     try:
@@ -166,10 +207,6 @@ def _keep_scipy_docstrings(module: ModuleType) -> None:
         setattr(module, "FunctionDoc", _DocstringKept)  # noqa: B010  (a module mypy does not know)
 
 
-# Modules patched right after their own code ran, before anything uses them.
-PATCHED_MODULES: dict[str, Callable[[ModuleType], None]] = {"scipy._lib._array_api": _keep_scipy_docstrings}
-
-
 class _PatchedAfterExec:
     """A module's own loader, then ``patch`` on the module it ran; anything else asked of
     the loader (get_source, resource readers ...) goes to its own."""
@@ -217,3 +254,103 @@ class _LighterImports:
 def lighten_imports() -> None:
     if not any(isinstance(finder, _LighterImports) for finder in sys.meta_path):
         sys.meta_path.insert(0, _LighterImports())
+
+
+# Dataclasses' generated methods, compiled once per user (issue 39). The dataclass
+# decorator writes each class's __init__, __repr__, __eq__, __hash__, __setattr__ ... as
+# source text and compiles it with `exec` when the class is defined: ~500 texts in a
+# `clear plan`, and compiling them was ~90 % of the ~100 ms its dataclasses took on a
+# loaded machine. `_cache_dataclass_code` gives the dataclasses module an `exec` (its
+# globals' name shadows the builtin) that runs, for a text it compiled before, the code
+# compiled then: the same text compiled the same way (file "<string>", no future
+# features inherited: as dataclasses' own exec compiles it) is the same code, so the
+# classes are the very ones they were. The code is kept in one file under the user's
+# cache directory, by a digest of its text, for this Python's bytecode (cache_tag and
+# marshal's version in its name); written whole to a temporary file and renamed (a
+# reader sees the old file or the new one), rewritten at exit only when some text was
+# new; a file that cannot be read or decoded is as none (recompiled, then replaced).
+# As with .pyc files, none is written when Python is told not to (PYTHONDONTWRITEBYTECODE).
+_CODE_CACHE_FORMAT = 1
+_CODE_CACHE_MAX = 2000  # texts kept at most (~1 ms to read 500): past it, a rewrite keeps this process's only
+
+
+def _code_cache_path() -> str | None:
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    tag = sys.implementation.cache_tag
+    if not base or base.startswith("~") or tag is None:
+        return None
+    name = f"dataclass-code.{tag}.m{marshal.version}.v{_CODE_CACHE_FORMAT}"
+    return os.path.join(base, "clear", name)
+
+
+class _CachedExec:
+    """dataclasses' `exec`: source text it compiled before runs as the code compiled
+    then; anything else is the builtin's."""
+
+    def __init__(self, path: str) -> None:
+        self.path = path
+        self.codes: dict[bytes, Any] = {}
+        self.used: set[bytes] = set()
+        self.new = 0
+        self._builtin_exec = exec
+        try:
+            with open(path, "rb") as f:
+                loaded = marshal.load(f)
+            if isinstance(loaded, dict):
+                self.codes = {k: v for k, v in loaded.items() if isinstance(k, bytes) and _is_code(v)}
+        except Exception:  # none yet, unreadable, truncated, not marshal's: as none
+            self.codes = {}
+
+    def __call__(self, source: Any, globals: Any = None, locals: Any = None, /) -> None:  # noqa: A002
+        if not isinstance(source, str):
+            self._builtin_exec(source, globals, locals)
+            return
+        import _blake2  # noqa: PLC0415  (an extension module: only where a dataclass is made)
+
+        key = _blake2.blake2b(source.encode("utf-8"), digest_size=20).digest()
+        code = self.codes.get(key)
+        if code is None:
+            # as exec compiles a string in dataclasses' frame: no future feature of ours
+            code = compile(source, "<string>", "exec", dont_inherit=True)
+            self.codes[key] = code
+            self.new += 1
+        self.used.add(key)
+        self._builtin_exec(code, globals, locals)
+
+    def save(self) -> None:
+        if not self.new or sys.dont_write_bytecode:
+            return
+        keep = self.codes
+        if len(keep) > _CODE_CACHE_MAX:
+            keep = {k: v for k, v in keep.items() if k in self.used}
+        tmp = f"{self.path}.{os.getpid()}.tmp"
+        try:
+            os.makedirs(os.path.dirname(self.path), exist_ok=True)
+            with open(tmp, "wb") as f:
+                marshal.dump(keep, f)
+            os.replace(tmp, self.path)
+        except OSError:  # a read-only or full disk: the next process compiles them again
+            try:
+                os.unlink(tmp)
+            except OSError:
+                pass
+
+
+def _is_code(value: Any) -> bool:
+    return type(value).__name__ == "code"
+
+
+def _cache_dataclass_code(module: ModuleType) -> None:
+    path = _code_cache_path()
+    if path is None or isinstance(getattr(module, "exec", None), _CachedExec):
+        return
+    cached = _CachedExec(path)
+    setattr(module, "exec", cached)  # noqa: B010  (shadows the builtin in its module)
+    atexit.register(cached.save)
+
+
+# Modules patched right after their own code ran, before anything uses them.
+PATCHED_MODULES: dict[str, Callable[[ModuleType], None]] = {
+    "scipy._lib._array_api": _keep_scipy_docstrings,
+    "dataclasses": _cache_dataclass_code,
+}

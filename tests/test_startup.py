@@ -7,8 +7,10 @@ Each case in a fresh interpreter (the hook changes how that process imports)."""
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
+from pathlib import Path
 
 from helpers import REPO
 
@@ -55,12 +57,14 @@ def test_scipy_spatial_gives_its_tree_and_hull_without_running_its_code() -> Non
     hooked = _run("from clearcli.startup import lighten_imports\nlighten_imports()\n" + _USE)
     plain = _run(_USE)
     # with the hook, none of the packages' own code ran for the tree and the hull (the
-    # hull's module imports scipy.linalg's LAPACK table; scipy.special is not imported)
-    unrun = ["scipy.linalg", "scipy.sparse", "scipy.spatial"]
+    # hull's module imports scipy.linalg's LAPACK table; scipy.special is not imported;
+    # numpy.ma is, by NumPy, which asks it whether an array is masked)
+    unrun = ["numpy.ma", "scipy.linalg", "scipy.sparse", "scipy.spatial"]
     assert hooked.pop("unrun_before") == unrun and plain.pop("unrun_before") == []
     # a name that is not a shortcut ran scipy.spatial's code (and, through it, the
-    # others': scipy.spatial.distance imports scipy.linalg and scipy.special)
-    assert hooked.pop("unrun_after") == ["scipy.sparse"] and plain.pop("unrun_after") == []
+    # others': scipy.spatial.distance imports scipy.linalg and scipy.special; numpy.ma's
+    # code runs at the first name of it that is not a stand-in)
+    assert hooked.pop("unrun_after") == ["numpy.ma", "scipy.sparse"] and plain.pop("unrun_after") == []
     # the same results and the same namespace as a plain import
     assert hooked == plain
     assert hooked["query"] == [[[0.223606797750, 0.5]], [[2, 4]]]  # (1,1): sqrt(0.1^2+0.2^2); centre: sqrt(0.4^2+0.3^2)
@@ -112,3 +116,130 @@ print(int(cKDTree([[0.0], [2.0]]).query([[1.4]])[1][0]))
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO, timeout=120)
     assert res.returncode == 0, res.stderr
     assert res.stdout.strip() == "1"
+
+
+_MASKED = """
+import json, sys
+import numpy as np
+class Masked:  # not a masked array, but what numpy.ma.getmask reads
+    def __init__(self, mask):
+        self._mask = mask
+a = np.array([3.0, 1.0, np.nan, 1.0])
+before = [np.unique(a[[0, 1, 3]]).tolist(), float(np.median([4.0, 1.0, 2.0])), bool(np.isnan(np.median(a)))]
+ran_before = "numpy.ma.core" in sys.modules
+asks = [np.ma.is_masked(x) for x in (a, [1, 2], "a string", 5, Masked(np.array([False, True])), Masked(np.array([False])))]
+asks.append(np.ma.isMaskedArray(a))
+m = np.ma.masked_array([1.0, 2.0], mask=[False, True])  # a name not a stand-in: numpy.ma's code runs
+asks += [np.ma.is_masked(m), np.ma.isMaskedArray(m), np.ma.is_masked(a), np.ma.isMaskedArray(a)]
+print(json.dumps({"before": before, "ran_before": ran_before, "asks": asks, "type": type(sys.modules["numpy.ma"]).__name__}))
+"""
+
+
+def test_numpy_ma_answers_without_its_code_what_it_answers_with_it() -> None:
+    hooked = _run("from clearcli.startup import lighten_imports\nlighten_imports()\n" + _MASKED)
+    plain = _run(_MASKED)
+    # NumPy's np.unique and np.median asked numpy.ma, and its code did not run for that
+    assert (hooked.pop("ran_before"), plain.pop("ran_before")) == (False, True)
+    assert hooked == plain
+    assert hooked["before"] == [[1.0, 3.0], 2.0, True]
+    assert hooked["asks"] == [False, False, False, False, True, False, False, True, True, False, False]
+    assert hooked["type"] == "module"  # its code ran at masked_array
+
+
+# clearcli/startup.py's cache of dataclasses' generated methods: the classes made with it
+# (from source compiled now, or from code the cache file kept) are the classes made
+# without it, down to their methods' code and annotations.
+_DATACLASSES = """
+import json, sys
+HOOK
+import dataclasses
+from dataclasses import dataclass, field
+
+@dataclass(frozen=True)
+class Pose:
+    x_m: float
+    name: str = "o1"
+    tags: tuple[str, ...] = field(default_factory=tuple)
+
+@dataclass(order=True)
+class Count:
+    n: int = 0
+
+def code(f):
+    c = f.__code__
+    return [c.co_code.hex(), repr(c.co_consts), c.co_names, c.co_varnames, c.co_filename, c.co_flags]
+
+p = Pose(1.5)
+try:
+    p.x_m = 2.0
+    frozen = "no"
+except dataclasses.FrozenInstanceError:
+    frozen = "FrozenInstanceError"
+cached = getattr(dataclasses, "exec", None)
+print(json.dumps({
+    "values": [repr(p), p == Pose(1.5, "o1", ()), hash(p) == hash(Pose(1.5)), frozen, Count(1) < Count(2), repr(Count())],
+    "annotations": [repr(Pose.__init__.__annotations__), repr(Count.__init__.__annotations__)],
+    "code": [code(getattr(c, m)) for c in (Pose, Count) for m in ("__init__", "__repr__", "__eq__", "__setattr__", "__lt__")
+             if m in vars(c)],
+    "compiled": None if cached is None else [cached.new, len(cached.used)],
+}))
+"""
+_HOOKED = "from clearcli.startup import lighten_imports; lighten_imports()"
+
+
+def _dataclasses_run(tmp_path: Path, hooked: bool, **env: str) -> dict:
+    code = _DATACLASSES.replace("HOOK", _HOOKED if hooked else "")
+    child = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+    child.update(XDG_CACHE_HOME=str(tmp_path), **env)
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO, env=child, timeout=120)
+    assert res.returncode == 0, res.stderr
+    out: dict = json.loads(res.stdout)
+    return out
+
+
+def _cache_file(tmp_path: Path) -> Path:
+    files = list((tmp_path / "clear").glob("dataclass-code.*"))
+    assert len(files) == 1, files
+    return files[0]
+
+
+def test_dataclasses_made_from_cached_code_are_the_same(tmp_path: Path) -> None:
+    plain = _dataclasses_run(tmp_path, hooked=False)
+    assert plain.pop("compiled") is None and not (tmp_path / "clear").exists()
+    first = _dataclasses_run(tmp_path, hooked=True)
+    # every generated method compiled once, then kept: Pose's __init__, __repr__, __eq__,
+    # __hash__, __setattr__, __delattr__; Count's __init__, __repr__, __eq__ and 4 orderings
+    assert first.pop("compiled") == [13, 13]
+    assert _cache_file(tmp_path).stat().st_size > 0
+    again = _dataclasses_run(tmp_path, hooked=True)
+    assert again.pop("compiled") == [0, 13]  # nothing compiled: all from the cache file
+    assert first == again == plain
+    assert plain["values"] == [
+        "Pose(x_m=1.5, name='o1', tags=())",
+        True,
+        True,
+        "FrozenInstanceError",
+        True,
+        "Count(n=0)",
+    ]
+    assert "'x_m': 'float'" not in plain["annotations"][0]  # the types themselves: no future feature of startup.py's
+
+
+def test_a_corrupt_cache_file_is_as_none_and_replaced(tmp_path: Path) -> None:
+    _dataclasses_run(tmp_path, hooked=True)
+    path = _cache_file(tmp_path)
+    good = path.read_bytes()
+    path.write_bytes(good[: len(good) // 2])  # cut short, as by a crash mid-write of another writer
+    plain = _dataclasses_run(tmp_path / "plain", hooked=False)
+    plain.pop("compiled")
+    hooked = _dataclasses_run(tmp_path, hooked=True)
+    assert hooked.pop("compiled") == [13, 13] and hooked == plain
+    assert path.read_bytes() == good  # rewritten whole
+    path.write_bytes(b"not marshal at all")
+    assert _dataclasses_run(tmp_path, hooked=True).pop("compiled") == [13, 13]
+
+
+def test_no_cache_file_when_python_writes_no_bytecode(tmp_path: Path) -> None:
+    out = _dataclasses_run(tmp_path, hooked=True, PYTHONDONTWRITEBYTECODE="1")
+    assert out.pop("compiled") == [13, 13]
+    assert not (tmp_path / "clear").exists()

@@ -92,6 +92,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from clearcli.perception.graph import components
+from clearcli.perception.raster import dilate_square
 
 _BORDER_M = 0.02  # a segment's points this near the prism's side touch it
 _GOES_ON_M = 0.02  # points beyond the side within this of those continue the segment
@@ -436,8 +437,6 @@ def support_around(
     ring around it (the square `_RING_PX` pixels out) in no segment count, how many of
     those are the support's). ``state``: for pixel indices, (do they count: seen, at about
     the support's level (`AROUND_LEVEL_M`); are they the support's)."""
-    from scipy.ndimage import maximum_filter1d
-
     rows, cols = shape
     in_any = np.zeros(rows * cols, dtype=bool)
     for idx in indices:
@@ -448,10 +447,9 @@ def support_around(
         r, c = np.divmod(idx, cols)
         r0, r1 = max(int(r.min()) - _RING_PX, 0), min(int(r.max()) + _RING_PX + 1, rows)
         c0, c1 = max(int(c.min()) - _RING_PX, 0), min(int(c.max()) + _RING_PX + 1, cols)
-        own = np.zeros((r1 - r0, c1 - c0), dtype=np.uint8)
-        own[r - r0, c - c0] = 1
-        grown = maximum_filter1d(maximum_filter1d(own, 2 * _RING_PX + 1, axis=0), 2 * _RING_PX + 1, axis=1)
-        ring = (grown > 0) & ~in_any_2d[r0:r1, c0:c1]
+        own = np.zeros((r1 - r0, c1 - c0), dtype=bool)
+        own[r - r0, c - c0] = True
+        ring = dilate_square(own, _RING_PX) & ~in_any_2d[r0:r1, c0:c1]
         rr, cc = np.nonzero(ring)
         rings.append((rr + r0) * cols + (cc + c0))
     # every ring's pixels in one call of ``state`` (elementwise: the same answer per pixel)

@@ -33,6 +33,8 @@ from collections.abc import Callable
 
 import numpy as np
 
+from clearcli.perception.raster import boxes, dilate_square, label_8
+
 # a candidate keeps this far (pixels) from every object found
 _CLEARANCE_PX = 6
 # the ring of table pixels a candidate's relief is measured against (pixels out)
@@ -162,8 +164,6 @@ def flat_objects(
     no object kept; ``object_pixels``: the objects'; all flat indices into the organized
     ``points`` / ``colors`` of ``shape``. ``height_of(points) -> heights`` above the table;
     ``pixel_area_m2(flat indices) -> m^2`` the visible area of a set of pixels."""
-    from scipy import ndimage
-
     height, width = shape
     if table_pixels.size < 100:
         return []
@@ -175,7 +175,7 @@ def flat_objects(
     if not cand.any():
         return []
     grid = cand.reshape(height, width)
-    comps, n = ndimage.label(grid, structure=np.ones((3, 3), dtype=bool))
+    comps, n = label_8(grid)
     sizes = np.bincount(comps.ravel(), minlength=n + 1)
     taken: np.ndarray = np.zeros(height * width, dtype=bool)  # flat, then (height, width)
     taken[object_pixels] = True
@@ -184,21 +184,18 @@ def flat_objects(
     is_table[table_pixels] = True
     is_table = is_table.reshape(height, width)
     found: list[np.ndarray] = []
-    square = np.ones((3, 3), dtype=bool)
-    boxes = ndimage.find_objects(comps)
+    comp_boxes = boxes(comps, n)
     for k in (np.flatnonzero(sizes[1:] >= _MIN_PIXELS) + 1).tolist():  # most are specks: not even looked at
-        box = boxes[k - 1]
+        box = comp_boxes[k - 1]
         if box is None:
             continue
         pad = _RING_OUTER_PX + 1
         v0, v1 = max(0, box[0].start - pad), min(height, box[0].stop + pad)
         u0, u1 = max(0, box[1].start - pad), min(width, box[1].stop + pad)
         mine = comps[v0:v1, u0:u1] == k
-        if (ndimage.binary_dilation(mine, square, iterations=_CLEARANCE_PX) & taken[v0:v1, u0:u1]).any():
+        if (dilate_square(mine, _CLEARANCE_PX) & taken[v0:v1, u0:u1]).any():
             continue
-        ring = ndimage.binary_dilation(mine, square, iterations=_RING_OUTER_PX) & ~ndimage.binary_dilation(
-            mine, square, iterations=_RING_INNER_PX
-        )
+        ring = dilate_square(mine, _RING_OUTER_PX) & ~dilate_square(mine, _RING_INNER_PX)
         ring &= is_table[v0:v1, u0:u1] & ~grid[v0:v1, u0:u1]
         if ring.sum() < _MIN_PIXELS:
             continue

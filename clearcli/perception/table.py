@@ -17,6 +17,7 @@ import numpy as np
 
 from clearcli.errors import SceneError
 from clearcli.perception.graph import components
+from clearcli.perception.raster import dilate_square, label_8
 from clearcli.perception.support import Surface, choose, standing_on
 from clearcli.perception.types import PlaneVerdict, TablePlane
 from clearcli.settings.segment import SegmentSettings
@@ -396,20 +397,6 @@ def _label_grid(grid: np.ndarray) -> tuple[np.ndarray, int]:
     return labels, int(n)
 
 
-def _dilate(mask: np.ndarray, steps: int) -> np.ndarray:
-    """``mask`` dilated ``steps`` times by a 3x3 square (ndimage.binary_dilation's
-    ``iterations``), i.e. every cell within Chebyshev distance ``steps`` of a set cell:
-    a box sum over (2 steps + 1) cells along each axis, by cumulative sums."""
-    out = mask.astype(np.int32)
-    width = 2 * steps + 1
-    for axis in (0, 1):
-        pad = [(0, 0), (0, 0)]
-        pad[axis] = (steps + 1, steps)
-        c = np.cumsum(np.pad(out, pad), axis=axis, dtype=np.int32)
-        out = c[width:] - c[:-width] if axis == 0 else c[:, width:] - c[:, :-width]
-    return out > 0
-
-
 def largest_component(points_2d: np.ndarray, cell_m: float, join_gap_m: float = 0.0) -> tuple[np.ndarray, float]:
     """Mask of the points in the largest 8-connected piece of the occupied grid cells,
     together with every other piece within ``join_gap_m`` of it (objects standing on a
@@ -438,7 +425,7 @@ def largest_component(points_2d: np.ndarray, cell_m: float, join_gap_m: float = 
     chosen[best] = True
     steps = int(round(join_gap_m / cell_m))
     if steps > 0 and n > 1:
-        near = _dilate(labels == best, steps)
+        near = dilate_square(labels == best, steps)
         touched = np.unique(labels[near])
         touched = touched[(touched > 0) & (sizes[touched] >= 4)]  # not specks
         chosen[touched] = True
@@ -718,8 +705,6 @@ def beyond_the_edge(
     ``_EDGE_MIN_CELLS`` see through and at least ``_EDGE_RATIO`` times as many see
     through as see something nearer. Pieces smaller than ``_EDGE_MIN_PIECE_PX`` are left
     alone (noise)."""
-    from scipy import ndimage
-
     height, width = shape
     drop = np.zeros(table_pixels.shape[0], dtype=bool)
     if table_pixels.size == 0:
@@ -742,7 +727,7 @@ def beyond_the_edge(
             jump = ~(np.abs(a - b) <= rel * np.minimum(a, b))
             cut[: height - dv, : width - du] |= jump
             cut[dv:, du:] |= jump
-    pieces, n = ndimage.label(is_table & ~cut, structure=np.ones((3, 3), dtype=bool))
+    pieces, n = label_8(is_table & ~cut)
     if n < 2:
         return drop, ~drop
     sizes = np.bincount(pieces.ravel(), minlength=n + 1)

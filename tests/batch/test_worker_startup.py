@@ -54,8 +54,11 @@ def test_batch_workers_start_light(tmp_path: Path) -> None:
         assert state.pop("scipy") is True, "the worker did not import SciPy: nothing was checked"
         assert state.pop("scipy_docs") == "_DocstringKept"
         assert state.pop("env") == dict.fromkeys(SINGLE_THREADED, "1")
-        # scipy.spatial.transform: not imported, scipy.spatial's code (which imports it) not run
+        # scipy.spatial.transform: not imported, scipy.spatial's code (which imports it) not
+        # run; nor scipy.special, which scipy.ndimage's code imported (clearcli/perception/
+        # raster.py calls its C functions without it)
         assert state == {
             **dict.fromkeys(DEFERRED_MODULES | DEFERRED_PACKAGES, "deferred"),
             "scipy.spatial.transform": "absent",
+            "scipy.special": "absent",
         }

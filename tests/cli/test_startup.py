@@ -6,6 +6,7 @@ them still gets them; `clear --help` is printed from its recording, identical to
 from __future__ import annotations
 
 import json
+import marshal
 import os
 import subprocess
 import sys
@@ -39,9 +40,14 @@ def _report():
 atexit.register(_report)
 """.replace("DEFERRED", repr(sorted(DEFERRED_MODULES | DEFERRED_PACKAGES)))
 
-# what a command leaves unrun: NumPy's tooling, pydoc and SciPy's subpackages imported
-# and not run; scipy.spatial.transform not even imported (scipy.spatial's code imports it)
-_UNRUN = {**dict.fromkeys(DEFERRED_MODULES | DEFERRED_PACKAGES, "deferred"), "scipy.spatial.transform": "absent"}
+# what a command leaves unrun: NumPy's tooling, pydoc, numpy.ma and SciPy's subpackages
+# imported and not run; scipy.spatial.transform not even imported (scipy.spatial's code
+# imports it), nor scipy.special (scipy.ndimage's code imported it)
+_UNRUN = {
+    **dict.fromkeys(DEFERRED_MODULES | DEFERRED_PACKAGES, "deferred"),
+    "scipy.spatial.transform": "absent",
+    "scipy.special": "absent",
+}
 
 
 def test_segment_leaves_numpy_tooling_unrun(tmp_path: Path) -> None:
@@ -224,11 +230,19 @@ def test_a_command_imports_only_what_it_runs(tmp_path: Path, command: str) -> No
         assert {"clearcli.planning.backtrack", "clearcli.robot.wam_kinematics"} <= stages
         # the suction kind is registered, its model only imported for a tool with a cup
         assert "clearcli.predicates.grasps.suction" in modules and "clearcli.geometry.suction" not in modules
-    # SciPy: the tree's and the hull's modules (and the LAPACK table the hull loads), no
-    # more of scipy.spatial, scipy.sparse, scipy.linalg or scipy.special (clearcli/startup.py
-    # DEFERRED_PACKAGES: ~35 ms of a cold plan on a quiet machine)
-    scipy = {m for m in modules if m.startswith(tuple(DEFERRED_PACKAGES))}
-    assert scipy == DEFERRED_PACKAGES | {"scipy.spatial._ckdtree", "scipy.spatial._qhull", "scipy.linalg.cython_lapack"}
+    # SciPy: the tree's and the hull's modules (and the LAPACK table the hull loads), the
+    # two C modules of scipy.ndimage clearcli/perception/raster.py calls, no more of
+    # scipy.spatial, scipy.sparse, scipy.linalg, scipy.ndimage (its array-API layer) or
+    # scipy.special (clearcli/startup.py DEFERRED_PACKAGES: ~35 ms of a cold plan on a
+    # quiet machine); numpy.ma imported, its code (numpy.ma.core) not run
+    deferred = {m for m in modules if any(m == p or m.startswith(p + ".") for p in DEFERRED_PACKAGES)}
+    assert deferred == (DEFERRED_PACKAGES - {"scipy.special"}) | {
+        "scipy.spatial._ckdtree",
+        "scipy.spatial._qhull",
+        "scipy.linalg.cython_lapack",
+        "scipy.ndimage._ni_label",
+        "scipy.ndimage._nd_image",
+    }
 
 
 @pytest.mark.parametrize("command", ["segment", "plan"])
@@ -248,3 +262,39 @@ def test_text_to_a_pipe_does_not_import_rich(tmp_path: Path, command: str) -> No
     modules = set(json.loads(report.read_text()))
     assert "clearcli.console" in modules
     assert not {m for m in modules if m == "rich" or m.startswith("rich.")}
+
+
+_COMPILED_HOOK = """
+import atexit, json, os, sys
+
+def _report():
+    cached = getattr(sys.modules.get("dataclasses"), "exec", None)
+    with open(os.environ["CLEAR_TEST_REPORT"], "w") as out:
+        json.dump(None if cached is None else [cached.new, len(cached.used)], out)
+
+atexit.register(_report)
+"""
+
+
+def test_plan_keeps_its_dataclasses_code_for_the_next_call(tmp_path: Path) -> None:
+    """Issue 39: the methods dataclasses generate (~500 in a plan, most of their cost to
+    compile) are compiled by the first `clear plan` of a user and kept in their cache
+    (clearcli/startup.py `_cache_dataclass_code`); the next call compiles none, and prints
+    the same."""
+    report = tmp_path / "compiled.json"
+    env = hooked_env(tmp_path, _COMPILED_HOOK)
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
+    env.update(XDG_CACHE_HOME=str(tmp_path / "cache"), CLEAR_TEST_REPORT=str(report))
+    runs = []
+    for _ in range(2):
+        res = run_clear("plan", FIXTURES / "isolated_box.pcd", "--json", timeout=180, env=env)
+        assert res.returncode in (0, 10), res.stderr
+        doc = json.loads(res.stdout)
+        doc.pop("timings_s")
+        runs.append((doc, json.loads(report.read_text())))
+    (first, (new_1, used_1)), (again, (new_2, used_2)) = runs
+    assert first == again
+    assert new_1 == used_1 > 300 and (new_2, used_2) == (0, used_1)
+    assert [p.name for p in (tmp_path / "cache" / "clear").iterdir()] == [
+        f"dataclass-code.{sys.implementation.cache_tag}.m{marshal.version}.v1"
+    ]

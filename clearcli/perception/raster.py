@@ -1,0 +1,83 @@
+"""2D bool rasters (an organized frame's pixels): their 8-connected pieces, the pieces'
+boxes, and dilation by a square, as scipy.ndimage gives them, without importing
+scipy.ndimage's package (issue 39).
+
+Importing scipy.ndimage runs its array-API layer (a wrapper per function for CuPy and
+JAX) and all of its modules: ~15 ms of a cold `clear plan` on a loaded machine, for two
+C functions clear calls on NumPy arrays. `label_8` and `boxes` call those C functions
+(scipy.ndimage._ni_label, ._nd_image, with what scipy.ndimage.label and find_objects do
+around them); clearcli/startup.py defers scipy.ndimage's package code
+(DEFERRED_PACKAGES), so importing them runs none of it. A SciPy that moved them gets
+the public functions. `dilate_square` is NumPy's: a box sum, the same cells as
+binary_dilation by a 3x3 square (or maximum_filter1d along both axes) to any depth.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+_SQUARE = np.ones((3, 3), dtype=bool)  # 8-connectivity
+
+
+def _ndimage_c() -> tuple[Any, Any] | None:
+    """(scipy.ndimage._ni_label, scipy.ndimage._nd_image), or None if SciPy moved them.
+    `import a.b.c` binds the submodule itself: no attribute of the deferred package is
+    asked for (a `from scipy.ndimage import _ni_label` would run its code)."""
+    try:
+        import scipy.ndimage._nd_image
+        import scipy.ndimage._ni_label
+    except ImportError:
+        return None
+    ni_label = scipy.ndimage._ni_label
+    nd_image = scipy.ndimage._nd_image
+    if not hasattr(ni_label, "_label") or not hasattr(nd_image, "find_objects"):
+        return None
+    return ni_label, nd_image
+
+
+def label_8(grid: np.ndarray) -> tuple[np.ndarray, int]:
+    """8-connected pieces of the 2D bool ``grid``: (labels (H, W) int32, n), 0 off the
+    grid's cells, 1..n in raster order of each piece's first cell: scipy.ndimage.label
+    with a 3x3 square structure, what it does for a 2D array of fewer than 2^31 cells."""
+    c = _ndimage_c()
+    if c is None or grid.ndim != 2 or grid.size >= 2**31 - 2:
+        from scipy import ndimage
+
+        labels, n = ndimage.label(grid, structure=_SQUARE)
+        return labels, int(n)
+    out = np.empty(grid.shape, dtype=np.int32)
+    if grid.size == 0:
+        return out, 0
+    return out, int(c[0]._label(np.asarray(grid), _SQUARE, out))
+
+
+def boxes(labels: np.ndarray, n: int) -> list[tuple[slice, ...] | None]:
+    """Per label 1..``n`` of ``labels`` (`label_8`'s), the slices of its bounding box, None
+    for a label with no cell: scipy.ndimage.find_objects(labels, n)."""
+    c = _ndimage_c()
+    if c is None:
+        from scipy import ndimage
+
+        found: list[tuple[slice, ...] | None] = ndimage.find_objects(labels, n)
+        return found
+    if n < 1:  # find_objects takes the array's maximum then: none of label_8's
+        n = int(labels.max()) if labels.size else 0
+    found = c[1].find_objects(np.asarray(labels), n)
+    return found
+
+
+def dilate_square(mask: np.ndarray, steps: int) -> np.ndarray:
+    """The 2D bool ``mask`` dilated ``steps`` times by a 3x3 square (binary_dilation's
+    ``iterations``, nothing beyond the raster's edge), i.e. every cell within Chebyshev
+    distance ``steps`` of a set cell: a box sum over (2 steps + 1) cells along each axis,
+    by cumulative sums."""
+    out = mask.astype(np.int32)
+    width = 2 * steps + 1
+    for axis in (0, 1):
+        pad = [(0, 0), (0, 0)]
+        pad[axis] = (steps + 1, steps)
+        c = np.cumsum(np.pad(out, pad), axis=axis, dtype=np.int32)
+        out = c[width:] - c[:-width] if axis == 0 else c[:, width:] - c[:, :-width]
+    return out > 0
