@@ -279,7 +279,9 @@ def _code_cache_path() -> str | None:
     tag = sys.implementation.cache_tag
     if not base or base.startswith("~") or tag is None:
         return None
-    name = f"dataclass-code.{tag}.m{marshal.version}.v{_CODE_CACHE_FORMAT}"
+    # the bytecode's magic number too: it can change between releases of one minor version
+    magic = importlib.util.MAGIC_NUMBER.hex()
+    name = f"dataclass-code.{tag}.{magic}.m{marshal.version}.v{_CODE_CACHE_FORMAT}"
     return os.path.join(base, "clear", name)
 
 

@@ -5,6 +5,7 @@ them still gets them; `clear --help` is printed from its recording, identical to
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import marshal
 import os
@@ -296,5 +297,5 @@ def test_plan_keeps_its_dataclasses_code_for_the_next_call(tmp_path: Path) -> No
     assert first == again
     assert new_1 == used_1 > 300 and (new_2, used_2) == (0, used_1)
     assert [p.name for p in (tmp_path / "cache" / "clear").iterdir()] == [
-        f"dataclass-code.{sys.implementation.cache_tag}.m{marshal.version}.v1"
+        f"dataclass-code.{sys.implementation.cache_tag}.{importlib.util.MAGIC_NUMBER.hex()}.m{marshal.version}.v1"
     ]
