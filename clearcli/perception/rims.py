@@ -90,6 +90,8 @@ def _near_another_segment(
     ``reach_m`` lie in the same or neighbouring cells, so every pair of two segments'
     voxels within ``reach_m`` has both ends here: the pairs search needs only these
     (the same pairs across segments, a fraction of the voxels on a cluttered table)."""
+    if not reach_m > 0.0:  # rim_contact_m = 0: no two voxels touch, and no grid of 0 m cells
+        return np.zeros(seg_of_voxel.shape[0], dtype=bool)
     cell = np.floor(voxel_centroids / (1.01 * reach_m)).astype(np.int64)  # 1 %: floor's rounding
     cell -= cell.min(axis=0) - 1  # one empty layer around so offsets never wrap
     dims = cell.max(axis=0) + 2

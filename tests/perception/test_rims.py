@@ -90,3 +90,16 @@ def test_near_another_segment_holds_every_pair_across_segments() -> None:
         assert near[across].all()
         if trial % 5 == 0:  # one segment: no voxel has another near
             assert not near.any()
+
+
+def test_a_reach_of_zero_keeps_no_voxel_and_warns_nothing() -> None:
+    # rim_contact_m = 0 is a valid setting: no two distinct voxels touch; it divided by zero
+    import warnings
+
+    from clearcli.perception.rims import _near_another_segment
+
+    pts = np.random.default_rng(0).uniform(0, 0.2, (50, 3))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        near = _near_another_segment(np.arange(50) % 3, pts, 0.0, 3)
+    assert near.shape == (50,) and not near.any()
