@@ -42,7 +42,7 @@ from clearcli.perception.exclude import (
     support_around,
 )
 from clearcli.perception.filters import clean_mask
-from clearcli.perception.flat import differs_from, flat_objects, support_colour
+from clearcli.perception.flat import differing_shares, flat_objects, support_colour
 from clearcli.perception.lccp import lccp_segments
 from clearcli.perception.openings import RIM_MAX_POINTS, Opening, TableEdge, rim_of, seen_edges
 from clearcli.perception.refine import STAGES, refine
@@ -233,8 +233,10 @@ def _flat_objects(
     fit: TableFit,
     settings: SegmentSettings,
     size: SegmentSize,
+    support: tuple[np.ndarray, float] | None = None,
 ) -> tuple[np.ndarray, list[SegmentedObject]]:
-    """(table indices without the flat objects' points, the flat objects): flat.py."""
+    """(table indices without the flat objects' points, the flat objects): flat.py;
+    ``support``: `support_colour` of ``table_idx`` when the caller has it."""
     assert frame.colors is not None and frame.shape is not None  # an organized frame's, with usable colour
     taken = np.concatenate([o.indices for o in objects]) if objects else np.zeros(0, dtype=np.int64)
     loose = np.setdiff1d(obj_idx, taken, assume_unique=True)
@@ -257,6 +259,7 @@ def _flat_objects(
         settings.flat_min_relief_m,
         settings.min_object_area_m2,
         settings.flat_max_area_m2,
+        support,
     )
     if not found:
         return table_idx, []
@@ -300,6 +303,8 @@ class _Work:
     openings: tuple[Opening, ...] = ()
     table_edges: tuple[TableEdge, ...] = ()
     excluded: list[Excluded] = field(default_factory=list)
+    # flat.support_colour of the table's pixels: (those pixels, CIELAB centre, threshold)
+    support_rgb: tuple[np.ndarray, np.ndarray, float] | None = None
 
 
 def _filter(w: _Work) -> None:
@@ -420,7 +425,15 @@ def _flat(w: _Work) -> None:
     w.table_idx = w.idx[w.table_mask]
     if w.color_used and w.settings.flat_objects and w.organized:
         assert w.fit is not None and w.size is not None  # the table's and the voxels' steps ran
-        w.table_idx, found = _flat_objects(w.frame, w.table_idx, w.obj_idx, w.objects, w.fit, w.settings, w.size)
+        assert w.frame.colors is not None and w.frame.shape is not None  # colour used on a pixel grid
+        support = None
+        if w.table_idx.size >= 100:  # flat_objects's and _off_colour's own condition
+            # worked out once: _off_colour reads it again when no flat object changed the table
+            support = support_colour(w.frame.colors, w.frame.shape, w.table_idx, w.settings.flat_min_color_delta)
+            w.support_rgb = (w.table_idx, *support)
+        w.table_idx, found = _flat_objects(
+            w.frame, w.table_idx, w.obj_idx, w.objects, w.fit, w.settings, w.size, support
+        )
         w.objects.extend(found)
 
 
@@ -484,8 +497,11 @@ def _off_colour(w: _Work) -> list[float] | None:
     colors, shape = w.frame.colors, w.frame.shape
     if not (w.color_used and w.organized) or colors is None or shape is None or w.table_idx.size < 100:
         return None
-    centre, threshold = support_colour(colors, shape, w.table_idx, w.settings.flat_min_color_delta)
-    return [float(differs_from(colors[o.indices], centre, threshold).mean()) for o in w.objects]
+    if w.support_rgb is not None and w.support_rgb[0] is w.table_idx:  # _flat's, of these very pixels
+        centre, threshold = w.support_rgb[1], w.support_rgb[2]
+    else:
+        centre, threshold = support_colour(colors, shape, w.table_idx, w.settings.flat_min_color_delta)
+    return differing_shares(colors, [o.indices for o in w.objects], centre, threshold)
 
 
 def _support_around(w: _Work) -> list[tuple[int, int]]:
