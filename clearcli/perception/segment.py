@@ -176,7 +176,7 @@ def _without_what_lies_beyond(
     drop, solid = beyond_the_edge(frame.points, frame.shape, idx[on_table], fit.plane, settings)
     if not drop.any():
         return fit, table_mask, prism_mask, 0.0
-    kept = pts[on_table[solid]]
+    kept = np.take(pts, on_table[solid], axis=0)  # rows by index: take is faster than a[idx]
     kept = kept[fit.inside(kept)]  # the new hull lies within the old one
     if kept.shape[0] < 3:
         return fit, table_mask, prism_mask, 0.0
@@ -317,7 +317,7 @@ def _filter(w: _Work) -> None:
         if not np.isfinite(points).all(axis=1).any():
             raise SceneError(f"{where}the frame has no finite points (all NaN)")
         raise SceneError(f"{where}no table: no points are left after outlier removal")
-    w.pts = points[w.idx].astype(np.float64)
+    w.pts = np.take(points, w.idx, axis=0).astype(np.float64)  # rows by index: take is faster than a[idx]
 
 
 def _table(w: _Work) -> None:
@@ -344,7 +344,7 @@ def _voxels(w: _Work) -> None:
         return
     # the supervoxels read colour only where it is usable (not all black, saturated or flat)
     colors = w.frame.colors if (w.color_used and w.settings.color_importance > 0) else None
-    colors = colors[w.obj_idx] if colors is not None else None
+    colors = np.take(colors, w.obj_idx, axis=0) if colors is not None else None  # take: several times faster
     w.vox = voxelize(w.obj_pts, w.size.voxel_m, colors)
 
 
@@ -449,8 +449,9 @@ def _exclude(w: _Work) -> None:
     rng2 = w.range2 if w.range2 is not None else np.zeros(pts.shape[0])
     low = settings.prism_min_height_m + settings.prism_noise_per_m2 * rng2
     above = np.flatnonzero(~w.prism_mask & ~w.table_mask & (h > low) & (h <= settings.prism_max_height_m))
-    out_sel = above[~fit.inside(pts[above], settings.hull_margin_m)]
-    outside = pts[out_sel]
+    # rows by index: take is faster than a[idx] (several times on uint8, half again on floats)
+    out_sel = above[~fit.inside(np.take(pts, above, axis=0), settings.hull_margin_m)]
+    outside = np.take(pts, out_sel, axis=0)
     # how far what lies outside reaches beyond the outline, along the pixel grid
     reach = reach_beyond(
         outside,
@@ -459,9 +460,10 @@ def _exclude(w: _Work) -> None:
         beyond_outline(fit.to_2d(outside), fit.polygon_2d),
     )
     below = np.flatnonzero(~w.table_mask & (h < -low))
-    outside_below = pts[below[~fit.inside(pts[below], settings.hull_margin_m)]]
+    below_pts = np.take(pts, below, axis=0)
+    outside_below = below_pts[~fit.inside(below_pts, settings.hull_margin_m)]
     on_table = np.flatnonzero(w.table_mask)
-    support = pts[on_table[:: max(1, on_table.size // 50000)]]  # no copy of every table point first
+    support = np.take(pts, on_table[:: max(1, on_table.size // 50000)], axis=0)  # no copy of every table point first
     rests = settings.prism_min_height_m + settings.plane_distance_m
 
     def rests_m(p: np.ndarray) -> float:
@@ -481,7 +483,7 @@ def _exclude(w: _Work) -> None:
         reach,
         at_image_border([o.indices for o in w.objects], w.frame.shape) if w.organized else None,
         _support_around(w) if w.organized else None,
-        below=pts[below],
+        below=below_pts,
         off_colour=_off_colour(w),
     )
     if not verdicts:
