@@ -149,7 +149,7 @@ def differing_shares(colors: np.ndarray, groups: list[np.ndarray], centre: np.nd
     alone; per group it cost two lookup tables of 2^18 entries each, issue 39)."""
     if not groups:
         return []
-    differs = _far_from(colors[np.concatenate(groups)], centre, threshold)
+    differs = _far_from(np.take(colors, np.concatenate(groups), axis=0), centre, threshold)
     # counts by cumulative sums (exact integers); count / size is the mean's float64 division
     ends = np.cumsum([g.size for g in groups])
     counts = np.concatenate([[0], np.cumsum(differs, dtype=np.int64)])
@@ -185,7 +185,7 @@ def flat_objects(
         return []
     centre, threshold = support_colour(colors, shape, table_pixels, min_color_delta) if support is None else support
     free = np.concatenate([table_pixels, loose_pixels])
-    differs = _far_from(colors[free], centre, threshold)
+    differs = _far_from(np.take(colors, free, axis=0), centre, threshold)  # take: several times faster than a[idx]
     cand = np.zeros(height * width, dtype=bool)
     cand[free[differs]] = True
     if not cand.any():
