@@ -577,7 +577,8 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
         idx = np.flatnonzero(remaining)
         if idx.size < 50:
             break
-        n, d = ransac_plane(sample[idx], dist, settings.ransac_iterations, rng)
+        # rows by index: take is faster than a[idx]
+        n, d = ransac_plane(np.take(sample, idx, axis=0), dist, settings.ransac_iterations, rng)
         on_plane = np.abs(sample @ n + d) <= dist
         inl = np.flatnonzero(on_plane & remaining)
         remaining &= ~on_plane
@@ -852,7 +853,7 @@ def beyond_the_edge(
     # coordinates once (a row's product does not depend on the rows around it: the same
     # bits as projecting each piece's rows apart), taken per piece in raster order
     piece_of = np.take(pieces.ravel(), table_pixels)
-    on_table = points.reshape(-1, 3)[table_pixels].astype(np.float64)
+    on_table = np.take(points.reshape(-1, 3), table_pixels, axis=0).astype(np.float64)  # take: faster than a[idx]
     table_u, table_v = (on_table @ a for a in basis)
 
     def cells(k: int) -> np.ndarray:
