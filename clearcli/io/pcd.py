@@ -30,7 +30,7 @@ import numpy as np
 from clearcli.errors import InputError, OutputError
 from clearcli.files import atomic_path
 from clearcli.io.frames import Frame, labels_to_write
-from clearcli.io.pointfields import frame_from_records, pack_rgb_float
+from clearcli.io.pointfields import frame_from_columns, pack_rgb_float
 from clearcli.io.sniff import PCD_HEADER_KEYS, open_input
 
 # A PCD header is ten short lines; anything without DATA in the first 64 KiB is not a PCD.
@@ -243,7 +243,8 @@ def _record_dtype(meta: PcdHeader) -> np.dtype:
     return np.dtype({"names": names, "formats": formats})
 
 
-def _decode_data(fp: BinaryIO, path: Path, meta: PcdHeader, dtype: np.dtype, data_bytes: int) -> np.ndarray:
+def _decode_data(fp: BinaryIO, path: Path, meta: PcdHeader, dtype: np.dtype, data_bytes: int) -> dict[str, np.ndarray]:
+    """The point data's fields by name, as columns ((N,) or (N, count)), in the header's order."""
     import lzf
 
     n = int(meta.points)
@@ -257,14 +258,14 @@ def _decode_data(fp: BinaryIO, path: Path, meta: PcdHeader, dtype: np.dtype, dat
             raise InputError(f"{path}: bad ASCII point data ({first[:120]})") from None
         if records.shape[0] != n:
             raise InputError(f"{path}: the header declares {n} points but the ASCII data has {records.shape[0]} rows")
-        return records
+        return _columns(records)
     if encoding == "binary":
         if data_bytes < need:
             raise InputError(
                 f"{path}: truncated PCD: the header declares {n} points of {dtype.itemsize} bytes "
                 f"({need} bytes) but the data holds {data_bytes}"
             )
-        return np.frombuffer(fp.read(need), dtype=dtype, count=n)
+        return _columns(np.frombuffer(fp.read(need), dtype=dtype, count=n))
     # binary_compressed: sizes, then an LZF block holding each field's column in turn.
     head = fp.read(8)
     if len(head) < 8:
@@ -281,14 +282,16 @@ def _decode_data(fp: BinaryIO, path: Path, meta: PcdHeader, dtype: np.dtype, dat
             f"the file has {max(data_bytes - 8, 0)}"
         )
     if n == 0:
-        return np.empty(0, dtype=dtype)
+        return _columns(np.empty(0, dtype=dtype))
     try:
         raw = lzf.decompress(fp.read(compressed_size), uncompressed_size)
     except Exception as exc:
         raise InputError(f"{path}: corrupt PCD: the compressed data cannot be unpacked ({exc})") from None
     if raw is None or len(raw) != uncompressed_size:
         raise InputError(f"{path}: corrupt PCD: the compressed data unpacks to the wrong size")
-    records = np.empty(n, dtype=dtype)
+    # each field's column read where it lies in the unpacked bytes (a view: the frame copies
+    # what it keeps), not written into a record array first and read back out of it
+    columns = {}
     offset = 0
     fields = dtype.fields
     for name in dtype.names or ():
@@ -297,9 +300,13 @@ def _decode_data(fp: BinaryIO, path: Path, meta: PcdHeader, dtype: np.dtype, dat
         block = field.itemsize * n
         base = field.base if field.shape else field
         column = np.frombuffer(raw, dtype=base, count=block // base.itemsize, offset=offset)
-        records[name] = column.reshape((n, *field.shape))
+        columns[name] = column.reshape((n, *field.shape))
         offset += block
-    return records
+    return columns
+
+
+def _columns(records: np.ndarray) -> dict[str, np.ndarray]:
+    return {name: records[name] for name in records.dtype.names or ()}
 
 
 def read_pcd(path: Path) -> Frame:
@@ -319,17 +326,17 @@ def read_pcd(path: Path) -> Frame:
             lines, data_offset = _read_header_lines(fp, path)
             meta = _parse_metadata(lines, path)
             dtype = _record_dtype(meta)
-            records = _decode_data(fp, path, meta, dtype, size - data_offset)
+            columns = _decode_data(fp, path, meta, dtype, size - data_offset)
         except OSError as exc:
             raise InputError(f"{path}: cannot read ({exc.strerror})") from None
-    names = [n for n in (records.dtype.names or ()) if not n.startswith("_pad")]
+    names = [n for n in columns if not n.startswith("_pad")]
     if not {"x", "y", "z"} <= set(names):
         raise InputError(
             f"{path}: the cloud has no x/y/z fields (fields: {' '.join(names) or 'none'}); clear needs 3-D points"
         )
     shape = (int(meta.height), int(meta.width)) if meta.height > 1 else None
-    skip = tuple(n for n in records.dtype.names or () if n.startswith("_pad"))
-    return frame_from_records(records, shape, source=str(path), skip=skip)
+    skip = tuple(n for n in columns if n.startswith("_pad"))
+    return frame_from_columns(columns, shape, source=str(path), skip=skip)
 
 
 def write_pcd(path: Path, frame: Frame, labels: np.ndarray | None = None) -> None:

@@ -143,9 +143,18 @@ def records_from_blob(
     return np.ascontiguousarray(rows).reshape(-1).view(dtype)
 
 
-def _column(records: np.ndarray, name: str) -> np.ndarray:
-    col = records[name]
+def _column(col: np.ndarray) -> np.ndarray:
+    """A field's column as the frame keeps it: contiguous, native byte order, its own
+    writable array (a column read straight from a file's bytes is copied)."""
     # Native byte order so that later arithmetic and comparisons are cheap and unsurprising.
+    if not col.dtype.isnative:
+        col = col.astype(col.dtype.newbyteorder("="))
+    col = np.ascontiguousarray(col)
+    return col if col.flags.writeable else col.copy()
+
+
+def _native(col: np.ndarray) -> np.ndarray:
+    """A column in native byte order, contiguous (unpack_rgb reads it and keeps nothing)."""
     if not col.dtype.isnative:
         col = col.astype(col.dtype.newbyteorder("="))
     return np.ascontiguousarray(col)
@@ -167,32 +176,47 @@ def frame_from_records(
     -> Frame.fields under its own name with its own dtype ((N,) or (N, count)).
     The caller has checked that x, y and z exist.
     """
-    names = list(records.dtype.names or ())
-    n = records.shape[0]
+    columns = {name: records[name] for name in records.dtype.names or ()}
+    return frame_from_columns(columns, shape, stamp_s=stamp_s, frame_id=frame_id, source=source, skip=skip)
+
+
+def frame_from_columns(
+    columns: dict[str, np.ndarray],
+    shape: tuple[int, int] | None,
+    *,
+    stamp_s: float = 0.0,
+    frame_id: str = "",
+    source: str = "",
+    skip: tuple[str, ...] = (),
+) -> Frame:
+    """`frame_from_records` of the fields given as columns, (N,) or (N, count) each, in
+    the records' order (a compressed PCD holds them so: no record array between, issue 39)."""
+    names = list(columns)
+    n = columns["x"].shape[0]
     points = np.empty((n, 3), dtype=np.float32)
     # a float64 coordinate beyond float32's range becomes inf, an invalid point as NaN is,
     # without numpy's overflow warning (damaged or absurd data, not a sensor's)
     with np.errstate(over="ignore"):
         for axis, name in enumerate(("x", "y", "z")):
-            points[:, axis] = records[name]
+            points[:, axis] = columns[name]
     consumed = {"x", "y", "z", *skip}
     colors: np.ndarray | None = None
     for name in _PACKED_COLOUR_FIELDS:
-        if name in names and records.dtype[name].itemsize == 4 and records.dtype[name].shape == ():
-            colors = unpack_rgb(_column(records, name))
+        if name in names and columns[name].ndim == 1 and columns[name].dtype.itemsize == 4:
+            colors = unpack_rgb(_native(columns[name]))
             consumed.add(name)
             break
     if colors is None:
         for triple in _CHANNEL_COLOUR_FIELDS:
-            if all(c in names and records.dtype[c] == np.uint8 for c in triple):
-                colors = np.stack([records[c] for c in triple], axis=1)
+            if all(c in names and columns[c].ndim == 1 and columns[c].dtype == np.uint8 for c in triple):
+                colors = np.stack([columns[c] for c in triple], axis=1)
                 consumed.update(triple)
                 if triple == ("red", "green", "blue"):
                     consumed.add("alpha")
                 else:
                     consumed.add("a")
                 break
-    fields = {name: _column(records, name) for name in names if name not in consumed}
+    fields = {name: _column(columns[name]) for name in names if name not in consumed}
     return Frame(
         points=points,
         colors=colors,

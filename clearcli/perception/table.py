@@ -317,23 +317,110 @@ def inside_convex_raster(
     """`inside_convex` looked up in a raster of the polygon (cells of ``cell_m``): exact
     to within a cell near the boundary, and an order of magnitude faster for the
     hundreds of thousands of table points than testing every hull edge."""
+    return _inside_raster_xy(points_2d[:, 0], points_2d[:, 1], polygon_2d, margin_m, cell_m, points_2d)
+
+
+def _inside_raster_xy(
+    x: np.ndarray,
+    y: np.ndarray,
+    polygon_2d: np.ndarray,
+    margin_m: float,
+    cell_m: float,
+    points_2d: np.ndarray | None = None,
+) -> np.ndarray:
+    """`inside_convex_raster` of the points (x, y) given as two columns (``points_2d``:
+    them as one (N, 2) array when the caller has it; the exact test needs it)."""
     lo = polygon_2d.min(axis=0) - margin_m - cell_m
     hi = polygon_2d.max(axis=0) + margin_m + cell_m
     dims = np.ceil((hi - lo) / cell_m).astype(np.int64)
-    if dims[0] * dims[1] > 2_000_000 or points_2d.shape[0] < dims[0] * dims[1] // 4:
-        return inside_convex(points_2d, polygon_2d, margin_m)
+    if dims[0] * dims[1] > 2_000_000 or x.shape[0] < dims[0] * dims[1] // 4:
+        return inside_convex(np.stack([x, y], axis=1) if points_2d is None else points_2d, polygon_2d, margin_m)
+    grid = _raster(polygon_2d, margin_m, cell_m, lo, dims)
+    # a point off the raster clipped into its border of outside cells; clipped before the
+    # cast too: a point 1e38 m away (a damaged cloud) has a cell index no int64 holds
+    # (and after it, for NaN's integer)
+    cx = np.clip(np.floor(np.clip((x - lo[0]) / cell_m, -1.0, float(dims[0]))).astype(np.int64), -1, dims[0]) + 1
+    cy = np.clip(np.floor(np.clip((y - lo[1]) / cell_m, -1.0, float(dims[1]))).astype(np.int64), -1, dims[1]) + 1
+    cx *= dims[1] + 2
+    cx += cy
+    return np.take(grid, cx)  # one flat lookup
+
+
+def _raster(polygon_2d: np.ndarray, margin_m: float, cell_m: float, lo: np.ndarray, dims: np.ndarray) -> np.ndarray:
+    """(dims + 2 flattened,) bool: `inside_convex` of the centres of the (dims[0], dims[1])
+    cells of ``cell_m`` from ``lo``, with a border of one cell that is outside all round
+    (rows of dims[1] + 2)."""
     gx = lo[0] + (np.arange(dims[0]) + 0.5) * cell_m
     gy = lo[1] + (np.arange(dims[1]) + 0.5) * cell_m
-    centers = np.stack(np.meshgrid(gx, gy, indexing="ij"), axis=-1).reshape(-1, 2)
-    grid = inside_convex(centers, polygon_2d, margin_m).reshape(dims[0], dims[1])
-    # clipped to one cell beyond the raster before the cast: a point 1e38 m away (a
-    # damaged cloud) has a cell index no int64 holds; off the raster either way
-    cx = np.floor(np.clip((points_2d[:, 0] - lo[0]) / cell_m, -1.0, float(dims[0]))).astype(np.int64)
-    cy = np.floor(np.clip((points_2d[:, 1] - lo[1]) / cell_m, -1.0, float(dims[1]))).astype(np.int64)
-    ok = (cx >= 0) & (cx < dims[0]) & (cy >= 0) & (cy < dims[1])
-    # one flat lookup, a point off the raster at a cell past its end that is outside
-    cell = np.where(ok, cx * dims[1] + cy, dims[0] * dims[1])
-    return np.take(np.append(grid.ravel(), False), cell)
+    grid = np.zeros((dims[0] + 2, dims[1] + 2), dtype=bool)
+    runs = _inside_runs(gx, gy, polygon_2d, margin_m)
+    if runs is not None:
+        first, stop = runs
+        j = np.arange(dims[1])
+        grid[1:-1, 1:-1] = (j >= first[:, None]) & (j < stop[:, None])
+    else:
+        centers = np.stack(np.meshgrid(gx, gy, indexing="ij"), axis=-1).reshape(-1, 2)
+        grid[1:-1, 1:-1] = inside_convex(centers, polygon_2d, margin_m).reshape(dims[0], dims[1])
+    return grid.ravel()
+
+
+# _inside_runs(): a cell is judged without the exact test when its centre lies farther
+# than this share of the coordinates' size from every edge's line (the test's rounding
+# is ~1e-16 of it)
+_RUN_TOLERANCE = 1e-9
+
+
+def _inside_runs(
+    gx: np.ndarray, gy: np.ndarray, polygon_2d: np.ndarray, margin_m: float
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """`inside_convex` of the grid of centres (gx[i], gy[j]) (both increasing) as one run
+    of j per i: (first, stop) (len(gx),) each, cell (i, j) inside when first[i] <= j <
+    stop[i], the very verdicts of the exact test; None when some centre lies too near an
+    edge's line to tell them without it (then every centre is tested).
+
+    The polygon is convex: per edge, the centres of a column inside it are those on one
+    side of one row (gy[j] * b, b the edge normal's second component, is monotonic in
+    j), found by a binary search each, and the runs of all edges intersect. A centre is
+    counted only when it is more than `_RUN_TOLERANCE` (relative) off the edge's line on
+    both the run's bounds; that holds when the run it is certainly inside is the run it
+    may be inside. Per column tens of binary searches replace the test of every cell
+    against every edge (issue 39: most of a raster's time)."""
+    if polygon_2d.dtype != np.float64 or not (np.isfinite(gx).all() and np.isfinite(gy).all()):
+        return None
+    # the exact test's normals and limits (inside_convex), computed as it does
+    edges = np.roll(polygon_2d, -1, axis=0) - polygon_2d
+    out_normals = np.stack([edges[:, 1], -edges[:, 0]], axis=1)
+    out_normals /= np.maximum(np.linalg.norm(out_normals, axis=1, keepdims=True), 1e-12)
+    limits = np.einsum("ij,ij->i", out_normals, polygon_2d) + margin_m
+    if not (np.isfinite(out_normals).all() and np.isfinite(limits).all()):
+        return None
+    nx, ny = gx.shape[0], gy.shape[0]
+    sure_lo, sure_hi = np.zeros(nx, dtype=np.int64), np.full(nx, ny, dtype=np.int64)
+    may_lo, may_hi = sure_lo.copy(), sure_hi.copy()
+    big_x, big_y = float(np.abs(gx).max()), float(np.abs(gy).max())
+    for (a, b), limit in zip(out_normals.tolist(), limits.tolist(), strict=True):
+        tol = _RUN_TOLERANCE * (big_x * abs(a) + big_y * abs(b) + abs(limit)) + 1e-15
+        room = limit - gx * a  # inside: gy[j] * b <= room, to within rounding
+        if b > 0.0:
+            along = gy * b  # non-decreasing
+            np.minimum(sure_hi, np.searchsorted(along, room - tol, side="right"), out=sure_hi)
+            np.minimum(may_hi, np.searchsorted(along, room + tol, side="right"), out=may_hi)
+        elif b < 0.0:
+            along = gy * -b  # non-decreasing: inside is -gy[j] b >= -room
+            np.maximum(sure_lo, np.searchsorted(along, tol - room, side="left"), out=sure_lo)
+            np.maximum(may_lo, np.searchsorted(along, -room - tol, side="left"), out=may_lo)
+        else:  # the whole column on one side
+            if bool(((room > -tol) & (room <= tol)).any()):
+                return None
+            out = room <= -tol
+            sure_hi[out] = 0
+            may_hi[out] = 0
+    sure_empty = sure_lo >= sure_hi
+    may_empty = may_lo >= may_hi
+    same = (sure_empty & may_empty) | ((sure_lo == may_lo) & (sure_hi == may_hi))
+    if not bool(same.all()):
+        return None
+    return np.where(sure_empty, 0, sure_lo), np.where(sure_empty, 0, sure_hi)
 
 
 def _packed(*cells: np.ndarray) -> tuple[list[np.ndarray], np.ndarray, int]:
@@ -477,7 +564,8 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
         idx = np.flatnonzero(remaining)
         if idx.size < 50:
             break
-        n, d = ransac_plane(sample[idx], dist, settings.ransac_iterations, rng)
+        # rows by index: take is faster than a[idx]
+        n, d = ransac_plane(np.take(sample, idx, axis=0), dist, settings.ransac_iterations, rng)
         on_plane = np.abs(sample @ n + d) <= dist
         inl = np.flatnonzero(on_plane & remaining)
         remaining &= ~on_plane
@@ -670,8 +758,12 @@ def table_and_prism(
     # one matrix-vector product per in-plane axis over all the points, then the
     # candidates' entries: a row's product does not depend on the rows around it (the
     # same bits as projecting a copy of the candidates' rows, which cost several times more)
-    xy = np.stack([np.take(points @ a, cand) for a in fit.basis], axis=1) - fit.origin @ fit.basis.T
-    ins = inside_convex_raster(xy, fit.polygon_2d, settings.hull_margin_m)
+    # (in two columns: the raster reads them so, and stacking them cost as much as the projection)
+    x, y = (np.take(points @ a, cand) for a in fit.basis)
+    ox, oy = (fit.origin @ fit.basis.T).tolist()
+    x -= ox
+    y -= oy
+    ins = _inside_raster_xy(x, y, fit.polygon_2d, settings.hull_margin_m, 0.005)
     table = np.zeros(points.shape[0], dtype=bool)
     prism = np.zeros(points.shape[0], dtype=bool)
     table[cand[ins & near[cand]]] = True
@@ -746,7 +838,7 @@ def beyond_the_edge(
     # coordinates once (a row's product does not depend on the rows around it: the same
     # bits as projecting each piece's rows apart), taken per piece in raster order
     piece_of = np.take(pieces.ravel(), table_pixels)
-    on_table = points.reshape(-1, 3)[table_pixels].astype(np.float64)
+    on_table = np.take(points.reshape(-1, 3), table_pixels, axis=0).astype(np.float64)  # take: faster than a[idx]
     table_u, table_v = (on_table @ a for a in basis)
 
     def cells(k: int) -> np.ndarray:

@@ -338,3 +338,56 @@ def test_reading_a_pcd_imports_neither_pypcd4_nor_pydantic() -> None:
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]"
+
+
+def test_compressed_fields_read_as_columns_are_the_records_frame(tmp_path: Path) -> None:
+    """Issue 39: a binary_compressed PCD's fields are read as columns of the unpacked
+    bytes (no record array between); the frame is frame_from_records' of the same
+    records, bit for bit: points, colour, a field of count 3, a padding field skipped,
+    the label its own writable array."""
+    import lzf
+
+    from clearcli.io.pointfields import frame_from_records
+
+    gen = np.random.default_rng(2)
+    height, width = 3, 4
+    n = height * width
+    dtype = np.dtype(
+        [
+            ("x", "<f4"),
+            ("y", "<f4"),
+            ("z", "<f4"),
+            ("rgb", "<u4"),
+            ("_pad3", "u1"),
+            ("normal", "<f4", (3,)),
+            ("label", "<u4"),
+        ]
+    )
+    records = np.zeros(n, dtype=dtype)
+    for name in ("x", "y", "z"):
+        records[name] = gen.normal(size=n).astype(np.float32)
+    records["x"][5] = np.nan
+    records["rgb"] = gen.integers(0, 1 << 24, n)
+    records["_pad3"] = 7
+    records["normal"] = gen.normal(size=(n, 3)).astype(np.float32)
+    records["label"] = gen.integers(0, 100, n)
+    raw = b"".join(np.ascontiguousarray(records[name]).tobytes() for name in dtype.names or ())
+    header = (
+        "VERSION 0.7\nFIELDS x y z rgb _ normal label\nSIZE 4 4 4 4 1 4 4\nTYPE F F F U U F U\n"
+        f"COUNT 1 1 1 1 1 3 1\nWIDTH {width}\nHEIGHT {height}\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS {n}\n"
+        "DATA binary_compressed\n"
+    )
+    packed = lzf.compress(raw, 2 * len(raw) + 64)  # random floats do not shrink
+    path = tmp_path / "columns.pcd"
+    path.write_bytes(header.encode() + struct.pack("<II", len(packed), len(raw)) + packed)
+    got = read_pcd(path)
+    want = frame_from_records(records, (height, width), source=str(path), skip=("_pad3",))
+    assert got.points.tobytes() == want.points.tobytes() and got.points.dtype == np.float32
+    assert got.colors is not None and want.colors is not None
+    assert np.array_equal(got.colors, want.colors) and got.colors.flags.writeable
+    assert list(got.fields) == list(want.fields) == ["normal", "label"]
+    for name, column in got.fields.items():
+        assert column.dtype == want.fields[name].dtype and column.shape == want.fields[name].shape
+        assert column.tobytes() == want.fields[name].tobytes()
+        assert column.flags.writeable and column.flags.c_contiguous  # its own array, not the file's bytes
+    assert got.fields["normal"].shape == (n, 3) and got.shape == (height, width)

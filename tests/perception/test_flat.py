@@ -40,3 +40,25 @@ def test_the_rows_filled_as_met_are_the_whole_tables_bit_for_bit() -> None:
     table, filled = _lab_cache()
     assert filled.all()
     assert np.array_equal(table.view(np.uint32), _lab_table().view(np.uint32))
+
+
+def test_differing_shares_are_each_groups_own_mean_bit_for_bit() -> None:
+    """Issue 39: every object's off-colour share from one `_far_from` over all their
+    pixels is ``differs_from(colors[group]).mean()`` of the group alone, as a float."""
+    from clearcli.perception.flat import differing_shares, differs_from
+
+    gen = np.random.default_rng(11)
+    palette = gen.integers(0, 256, size=(12, 3), dtype=np.uint8)
+    # half the pixels the table's colour, half scattered over the palette
+    colors = palette[np.where(gen.random(5000) < 0.5, 0, gen.integers(0, 12, 5000))]
+    centre = lab_of(palette[:1])[0]
+    # sizes 1 to thousands, a group of one repeated pixel, groups sharing pixels, in any order
+    groups = [gen.choice(5000, size=n, replace=False) for n in (1, 2, 3, 7, 333, 4999)]
+    groups += [np.full(9, 17), groups[4][::-1].copy()]
+    for threshold in (5.0, 20.0):
+        got = differing_shares(colors, groups, centre, threshold)
+        want = [float(differs_from(colors[g], centre, threshold).mean()) for g in groups]
+        assert got == want
+        assert all(type(v) is float for v in got)
+        assert 0.0 < got[5] < 1.0  # a mixed group, not all or nothing
+    assert differing_shares(colors, [], centre, 20.0) == []

@@ -332,3 +332,73 @@ def test_raster_lookup_of_a_point_no_int64_cell_holds_is_outside_without_a_warni
         warnings.simplefilter("error")
         got = inside_convex_raster(np.concatenate([inside, far]), square)
     assert got[:20000].all() and not got[20000:].any()
+
+
+def _centres_tested(gx: np.ndarray, gy: np.ndarray, polygon: np.ndarray, margin_m: float) -> np.ndarray:
+    from clearcli.perception.table import inside_convex
+
+    centres = np.stack(np.meshgrid(gx, gy, indexing="ij"), axis=-1).reshape(-1, 2)
+    return inside_convex(centres, polygon, margin_m).reshape(gx.size, gy.size)
+
+
+def _runs_grid(runs: tuple[np.ndarray, np.ndarray], n: int) -> np.ndarray:
+    first, stop = runs
+    j = np.arange(n)
+    return (j >= first[:, None]) & (j < stop[:, None])
+
+
+def test_inside_runs_are_every_centres_exact_test() -> None:
+    """Issue 39: the raster's cells found as one run per column are inside_convex of every
+    centre, bit for bit, on hulls of random clouds, grown and shrunk (a shrunk thin hull
+    leaves columns empty), and on the mOSD-sized raster of a table."""
+    from clearcli.perception.table import _inside_runs, convex_hull_2d
+
+    gen = np.random.default_rng(3)
+    cell = 0.005
+    tried = 0
+    for n_pts, scale, margin in ((5, 0.3, 0.0), (40, 0.8, 0.02), (2000, 1.2, -0.01), (300, 0.05, 0.0), (50, 0.6, -0.2)):
+        for _ in range(4):
+            pts = gen.normal(size=(n_pts, 2)) * scale * np.array([1.0, gen.uniform(0.05, 1.0)]) + gen.normal(size=2)
+            poly = convex_hull_2d(pts)
+            lo = poly.min(axis=0) - abs(margin) - cell
+            dims = np.ceil((poly.max(axis=0) + abs(margin) + cell - lo) / cell).astype(np.int64)
+            gx = lo[0] + (np.arange(dims[0]) + 0.5) * cell
+            gy = lo[1] + (np.arange(dims[1]) + 0.5) * cell
+            runs = _inside_runs(gx, gy, poly, margin)
+            assert runs is not None  # random edges pass no centre within 1e-9
+            want = _centres_tested(gx, gy, poly, margin)
+            assert np.array_equal(_runs_grid(runs, gy.size), want)
+            tried += int(want.any()) + int((~want).any())
+    assert tried >= 30  # inside and outside cells in (nearly) every case
+
+
+def test_inside_runs_refuse_centres_on_an_edge() -> None:
+    """A square whose sides pass through cell centres (axis-parallel edges, b = 0 among
+    them): those centres are the exact test's, and the raster that inside_convex_raster
+    reads is still every centre's verdict."""
+    from clearcli.perception.table import _inside_runs, _raster
+
+    square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    g = np.arange(-4, 205) * 0.005 + 0.0  # 0.0 and 1.0 are centres
+    assert _inside_runs(g, g, square, 0.0) is None
+    # a slanted top edge (x + 2 y = 2, normal's b > 0) through centres such as (0.5, 0.75),
+    # its vertices and the other edges off every centre
+    top = np.array([[0.0013, 0.0021], [1.0013, 0.49935], [0.0013, 0.99935]])
+    assert _inside_runs(g, g, top, 0.0) is None
+    flipped = top * np.array([1.0, -1.0]) + np.array([0.0, 1.0])  # the same edge at the bottom (b < 0)
+    assert _inside_runs(g, g, flipped[::-1].copy(), 0.0) is None
+    assert _inside_runs(g, g, top + 0.0007, 0.0) is not None  # moved off the centres
+    # turned a little and moved off the centres: none on an edge, the runs hold
+    tilt = square @ np.array([[np.cos(0.1), np.sin(0.1)], [-np.sin(0.1), np.cos(0.1)]]) + np.array([0.0012, 0.0031])
+    runs = _inside_runs(g, g, tilt, 0.0)
+    assert runs is not None and np.array_equal(_runs_grid(runs, g.size), _centres_tested(g, g, tilt, 0.0))
+    lo = np.array([-0.0225, -0.0225])  # so that the centres are g again
+    dims = np.array([g.size, g.size])
+    grid = _raster(square, 0.0, 0.005, lo, dims).reshape(g.size + 2, g.size + 2)
+    assert np.array_equal(
+        grid[1:-1, 1:-1],
+        _centres_tested(
+            lo[0] + (np.arange(g.size) + 0.5) * 0.005, lo[1] + (np.arange(g.size) + 0.5) * 0.005, square, 0.0
+        ),
+    )
+    assert not grid[0].any() and not grid[-1].any() and not grid[:, 0].any() and not grid[:, -1].any()
