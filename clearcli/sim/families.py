@@ -515,6 +515,22 @@ def arm_entering(seed: int) -> Scene:
     return make_scene(f"arm_entering({seed})", [*placed, upper, fore])
 
 
+def _desk_beyond(
+    rng: np.random.Generator, table: Table, gap_m: float, rise_m: float, n_lo: int, n_hi: int
+) -> tuple[Box, float, list[SceneObject]]:
+    """A 1 m x 40 cm desk ``gap_m`` beyond the table's far edge, its top ``rise_m`` above
+    the table's, its centre's y, and n_lo..n_hi-1 small things to stand on it (drawn from
+    ``rng``; ids after FURNITURE_ID)."""
+    depth_m = 0.40
+    y0 = table.size_y_m / 2 + gap_m + depth_m / 2
+    desk = Box(FURNITURE_ID, 1.0, depth_m, round(rise_m + 0.7, 4), 0.0, round(y0, 4), 0.0, -0.7)
+    on_desk = [
+        replace(_small(rng, FURNITURE_ID + 1 + i), object_id=FURNITURE_ID + 1 + i)
+        for i in range(int(rng.integers(n_lo, n_hi)))
+    ]
+    return desk, y0, on_desk
+
+
 def desk_behind(seed: int) -> Scene:
     """3-5 objects on the table and, beyond its far edge (1-5 cm gap), a second desk 8-20 cm
     higher with 2-3 things on it."""
@@ -522,13 +538,7 @@ def desk_behind(seed: int) -> Scene:
     table = Table()
     gap = float(rng.uniform(0.01, 0.05))
     rise = float(rng.uniform(0.08, 0.20))
-    depth = 0.40
-    y0 = table.size_y_m / 2 + gap + depth / 2
-    desk = Box(FURNITURE_ID, 1.0, depth, round(rise + 0.7, 4), 0.0, round(y0, 4), 0.0, -0.7)
-    on_desk = [
-        replace(_small(rng, FURNITURE_ID + 1 + i), object_id=FURNITURE_ID + 1 + i)
-        for i in range(int(rng.integers(2, 4)))
-    ]
+    desk, y0, on_desk = _desk_beyond(rng, table, gap, rise, 2, 4)
     objs = [_small(rng, i) for i in range(int(rng.integers(3, 6)))]
     return make_scene(
         f"desk_behind({seed})",
@@ -628,13 +638,7 @@ def desk_level_behind(seed: int) -> Scene:
     objs = [o for o in desk_behind(seed).objects if o.object_id < FURNITURE_ID]
     gap = float(rng.uniform(0.02, 0.06))
     rise = float(rng.uniform(-0.01, 0.01))
-    depth = 0.40
-    y0 = table.size_y_m / 2 + gap + depth / 2
-    desk = Box(FURNITURE_ID, 1.0, depth, round(rise + 0.7, 4), 0.0, round(y0, 4), 0.0, -0.7)
-    on_desk = [
-        replace(_small(rng, FURNITURE_ID + 1 + i), object_id=FURNITURE_ID + 1 + i)
-        for i in range(int(rng.integers(3, 6)))
-    ]
+    desk, y0, on_desk = _desk_beyond(rng, table, gap, rise, 3, 6)
     return make_scene(
         f"desk_level_behind({seed})",
         [*objs, desk, *_spread(rng, on_desk, 0.45, 0.15, round(rise, 4), 0.0, y0)],
