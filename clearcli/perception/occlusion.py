@@ -8,7 +8,9 @@ out as two segments (mOSD's "occluded objects" frames). Two segments are joined 
   pieces), the closest such pair at most ``occlusion_max_gap_m`` apart,
 - and the camera cannot see the gap: along the straight line between those two patches
   the measured depth is in front of the line (something hides it) at most pixels that
-  have depth, and almost never behind it (which would mean we see through the gap).
+  have depth, and almost never behind it (which would mean we see through the gap),
+- and what hides it stands in front of it by ``occlusion_min_depth_ratio`` of the gap:
+  a solid object cutting another in two, not a flat package lying across a bin's clutter.
 Needs an organized frame (the depth image); the camera's intrinsics are estimated from
 the frame itself (pixel coordinates against x/z, y/z).
 """
