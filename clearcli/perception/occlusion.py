@@ -8,7 +8,9 @@ out as two segments (mOSD's "occluded objects" frames). Two segments are joined 
   pieces), the closest such pair at most ``occlusion_max_gap_m`` apart,
 - and the camera cannot see the gap: along the straight line between those two patches
   the measured depth is in front of the line (something hides it) at most pixels that
-  have depth, and almost never behind it (which would mean we see through the gap).
+  have depth, and almost never behind it (which would mean we see through the gap),
+- and what hides it stands in front of it by ``occlusion_min_depth_ratio`` of the gap:
+  a solid object cutting another in two, not a flat package lying across a bin's clutter.
 Needs an organized frame (the depth image); the camera's intrinsics are estimated from
 the frame itself (pixel coordinates against x/z, y/z).
 """
@@ -60,9 +62,12 @@ def _hidden_line(
     depth: np.ndarray,
     intr: tuple[float, float, float, float],
     voxel_m: float,
+    min_depth_ratio: float = 0.0,
 ) -> bool:
     """Does the camera not see the straight line from ``pa`` to ``pb`` (the gap between
-    two patches): in front of it at most pixels with depth, almost never behind it?"""
+    two patches): in front of it at most pixels with depth, almost never behind it, and
+    what hides it stands in front of it by at least ``min_depth_ratio`` of the gap (the
+    median over the hidden pixels: a solid object, not a flat sheet lying over)?"""
     fx, fy, cx, cy = intr
     h, w = depth.shape
     n_s = max(3, int(gap / (0.5 * voxel_m)))
@@ -85,11 +90,14 @@ def _hidden_line(
     # the pixels that have depth, and want most of them
     measured = np.isfinite(z_meas)
     n_meas = int(measured.sum())
-    return bool(
+    if not (
         n_meas >= 0.5 * measured.size
         and hidden.sum() >= _MIN_HIDDEN * n_meas
         and seen_through.sum() <= _MAX_SEEN_THROUGH * n_meas
-    )
+    ):
+        return False
+    # hidden.sum() >= 0.7 * n_meas >= 0.35 * t.size > 0 here
+    return bool(np.median((line[:, 2] - z_meas)[hidden]) >= min_depth_ratio * gap)
 
 
 def merge_occluded(seg_of_sv: np.ndarray, ctx: RefineContext) -> np.ndarray:
@@ -109,6 +117,7 @@ def merge_occluded(seg_of_sv: np.ndarray, ctx: RefineContext) -> np.ndarray:
     assert shape is not None  # a stage on the pixel grid: refine() runs it on organized frames only
     sv_centroids, sv_normals, sv_edges, sv_height = sv.centroids, sv.normals, sv.edges, ctx.sv_height
     max_gap_m, voxel_m = ctx.settings.occlusion_max_gap_m, ctx.size.voxel_m
+    min_depth_ratio = ctx.settings.occlusion_min_depth_ratio
     intr = estimate_intrinsics(frame_points, shape)
     n_seg = int(seg_of_sv.max()) + 1 if seg_of_sv.size else 0
     if intr is None or n_seg < 2:
@@ -181,7 +190,7 @@ def merge_occluded(seg_of_sv: np.ndarray, ctx: RefineContext) -> np.ndarray:
             flat_ok = np.flatnonzero(ok.ravel())
             closest = flat_ok[np.argsort(dist.ravel()[flat_ok], kind="stable")[:_LINES]]
             if any(
-                _hidden_line(xa[i], xb[j], float(dist[i, j]), depth, (fx, fy, cx, cy), voxel_m)
+                _hidden_line(xa[i], xb[j], float(dist[i, j]), depth, (fx, fy, cx, cy), voxel_m, min_depth_ratio)
                 for i, j in zip(*np.unravel_index(closest, dist.shape))
             ):
                 parent[root(b)] = root(a)

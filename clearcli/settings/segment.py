@@ -232,6 +232,13 @@ class SegmentSettings(Section):
     # surfaces continue each other (organized frames only; see occlusion.py)
     occlusion_merge: bool = param(True)
     occlusion_max_gap_m: float = param(0.25, ge=0, le=2)
+    # the hider must stand in front of the gap line by at least this share of the gap
+    # (median over the hidden samples, along the camera's depth): a solid object cutting
+    # another in two is about as deep as it is wide; a flat package lying over a bin's
+    # clutter rises little over a long span. 0.4: between 0.21 (the most, three wrong
+    # joins under a package in gqcnn_phoxi_dexnet4_0) and 0.72 (the least, the right
+    # joins on mOSD and the choose frames)
+    occlusion_min_depth_ratio: float = param(0.4, ge=0, le=10)
     # join a container's inner wall to its outer wall: segments that come within
     # rim_contact_m of each other only within rim_tolerance_m of the top of both (the
     # rim; see rims.py)
