@@ -275,9 +275,12 @@ _CODE_CACHE_MAX = 2000  # texts kept at most (~1 ms to read 500): past it, a rew
 
 
 def _code_cache_path() -> str | None:
-    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    # a relative XDG_CACHE_HOME is ignored, as the XDG spec says: it would put the file in
+    # whatever folder clear runs in
+    xdg = os.environ.get("XDG_CACHE_HOME", "")
+    base = xdg if os.path.isabs(xdg) else os.path.join(os.path.expanduser("~"), ".cache")
     tag = sys.implementation.cache_tag
-    if not base or base.startswith("~") or tag is None:
+    if not os.path.isabs(base) or tag is None:  # no home ("~" unexpanded): no cache
         return None
     # the bytecode's magic number too: it can change between releases of one minor version
     magic = importlib.util.MAGIC_NUMBER.hex()

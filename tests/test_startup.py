@@ -12,6 +12,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
 from helpers import REPO
 
 from clearcli.startup import DEFERRED_PACKAGES, PACKAGE_SHORTCUTS
@@ -243,3 +244,16 @@ def test_no_cache_file_when_python_writes_no_bytecode(tmp_path: Path) -> None:
     out = _dataclasses_run(tmp_path, hooked=True, PYTHONDONTWRITEBYTECODE="1")
     assert out.pop("compiled") == [13, 13]
     assert not (tmp_path / "clear").exists()
+
+
+def test_the_cache_lives_under_an_absolute_cache_home_only(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    # a relative XDG_CACHE_HOME would put the file in the folder clear runs in: ignored
+    from clearcli import startup
+
+    monkeypatch.setenv("HOME", str(tmp_path / "home"))
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    assert str(startup._code_cache_path()).startswith(str(tmp_path / "xdg" / "clear" / "dataclass-code."))
+    monkeypatch.setenv("XDG_CACHE_HOME", "cache")
+    assert str(startup._code_cache_path()).startswith(str(tmp_path / "home" / ".cache" / "clear" / "dataclass-code."))
+    monkeypatch.delenv("XDG_CACHE_HOME")
+    assert str(startup._code_cache_path()).startswith(str(tmp_path / "home" / ".cache" / "clear"))
