@@ -196,9 +196,13 @@ def frame_from_columns(
     points = np.empty((n, 3), dtype=np.float32)
     # a float64 coordinate beyond float32's range becomes inf, an invalid point as NaN is,
     # without numpy's overflow warning (damaged or absurd data, not a sensor's)
-    with np.errstate(over="ignore"):
+    with np.errstate(over="ignore", invalid="ignore"):
         for axis, name in enumerate(("x", "y", "z")):
             points[:, axis] = columns[name]
+        # a NaN whose bits a damaged file made a signalling one would raise numpy's
+        # "invalid value" warning at the first cast or sum downstream: times 1 makes it a
+        # quiet NaN and leaves every other value as it is, bit for bit (-0.0 and inf too)
+        np.multiply(points, np.float32(1.0), out=points)
     consumed = {"x", "y", "z", *skip}
     colors: np.ndarray | None = None
     for name in _PACKED_COLOUR_FIELDS:

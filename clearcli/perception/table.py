@@ -332,9 +332,13 @@ def _inside_raster_xy(
     them as one (N, 2) array when the caller has it; the exact test needs it)."""
     lo = polygon_2d.min(axis=0) - margin_m - cell_m
     hi = polygon_2d.max(axis=0) + margin_m + cell_m
-    dims = np.ceil((hi - lo) / cell_m).astype(np.int64)
-    if dims[0] * dims[1] > 2_000_000 or x.shape[0] < dims[0] * dims[1] // 4:
+    span = np.ceil((hi - lo) / cell_m)
+    # the cell count in floats: a hull from a damaged cloud (coordinates of 4e9 m) has
+    # more cells than an int64 product holds, and a wrapped product passed the test
+    n_cells = float(span[0]) * float(span[1])
+    if not n_cells <= 2_000_000 or x.shape[0] < n_cells // 4:
         return inside_convex(np.stack([x, y], axis=1) if points_2d is None else points_2d, polygon_2d, margin_m)
+    dims = span.astype(np.int64)
     grid = _raster(polygon_2d, margin_m, cell_m, lo, dims)
     # a point off the raster clipped into its border of outside cells; clipped before the
     # cast too: a point 1e38 m away (a damaged cloud) has a cell index no int64 holds

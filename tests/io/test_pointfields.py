@@ -71,3 +71,22 @@ def test_float64_coordinates_beyond_float32_become_inf_without_a_warning() -> No
         frame = frame_from_records(records, None)
     assert frame.points[0].tolist() == [1.0, 0.0, 1.0]
     assert frame.points[1, 0] == np.inf and frame.points[2, 0] == -np.inf
+
+
+def test_a_signalling_nan_becomes_a_quiet_one_and_every_other_value_keeps_its_bits() -> None:
+    # a flipped byte can make a signalling NaN, which raised numpy's "invalid value"
+    # warning at the first cast downstream (the openings step's float64 copy)
+    import warnings
+
+    from clearcli.io.pointfields import frame_from_columns
+
+    snan = np.array([0x7FA00000], dtype=np.uint32).view(np.float32)[0]
+    values = np.array([snan, -0.0, np.inf, 1e-45, 3.0e38, np.nan], dtype=np.float32)
+    columns = {"x": values, "y": values.copy(), "z": np.ones(6, dtype=np.float32)}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        frame = frame_from_columns(columns, None)
+        as_double = frame.points.astype(np.float64)  # warned on the signalling NaN
+    bits = frame.points[:, 0].view(np.uint32)
+    assert bits[0] & 0x00400000 and np.isnan(as_double[0, 0])  # quiet now
+    assert (bits[1:] == values[1:].view(np.uint32)).all()  # the rest bit for bit

@@ -402,3 +402,17 @@ def test_inside_runs_refuse_centres_on_an_edge() -> None:
         ),
     )
     assert not grid[0].any() and not grid[-1].any() and not grid[:, 0].any() and not grid[:, -1].any()
+
+
+def test_raster_of_a_hull_more_cells_wide_than_an_int64_product_holds() -> None:
+    # a hull from coordinates of 4e9 m (a PCD whose x/y/z are uint32): its cell count
+    # wrapped round in int64, passed the size test and the raster took all memory
+    import warnings
+
+    from clearcli.perception.table import inside_convex_raster
+
+    huge = np.array([[0.0, 0.0], [4e9, 0.0], [4e9, 4e9], [0.0, 4e9]])
+    points = np.array([[2e9, 2e9], [5e9, 1.0]])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert inside_convex_raster(points, huge).tolist() == [True, False]
