@@ -21,6 +21,7 @@ import math
 import os
 import re
 import struct
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import BinaryIO
@@ -252,7 +253,10 @@ def _decode_data(fp: BinaryIO, path: Path, meta: PcdHeader, dtype: np.dtype, dat
     encoding = meta.data
     if encoding == "ascii":
         try:
-            records = np.loadtxt(fp, dtype=dtype, ndmin=1, comments="#")
+            with warnings.catch_warnings():
+                # no rows at all: numpy warns beside returning none; the count check says it
+                warnings.simplefilter("ignore", UserWarning)
+                records = np.loadtxt(fp, dtype=dtype, ndmin=1, comments="#")
         except Exception as exc:
             first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
             raise InputError(f"{path}: bad ASCII point data ({first[:120]})") from None

@@ -899,7 +899,13 @@ def _pinhole_of(pts: np.ndarray, finite: np.ndarray) -> Callable[[np.ndarray], t
     pick = np.linspace(0, flat.size - 1, 2000).astype(np.int64)
     rows, cols = np.divmod(flat[pick], pts.shape[1])
     p = pts[rows, cols].astype(np.float64)
-    x, y = p[:, 0] / p[:, 2], p[:, 1] / p[:, 2]
+    with np.errstate(over="ignore", invalid="ignore"):
+        x, y = p[:, 0] / p[:, 2], p[:, 1] / p[:, 2]
+    ok = np.isfinite(x) & np.isfinite(y)
+    if not ok.all():  # a damaged cloud (x or y infinite where z is not): no SVD of inf
+        if int(ok.sum()) < 100:
+            return None
+        x, y, rows, cols = x[ok], y[ok], rows[ok], cols[ok]
     fu, *_ = np.linalg.lstsq(np.column_stack([x, np.ones_like(x)]), cols.astype(np.float64), rcond=None)
     fv, *_ = np.linalg.lstsq(np.column_stack([y, np.ones_like(y)]), rows.astype(np.float64), rcond=None)
     err = max(np.abs(fu[0] * x + fu[1] - cols).max(), np.abs(fv[0] * y + fv[1] - rows).max())

@@ -74,9 +74,13 @@ def checked_urdf(urdf: Path) -> str:
     link (one line, exit 3, before any frame is read). Continuous joints come back as
     revolute ones over CONTINUOUS_RANGE_RAD (the generic IK needs bounds to draw its
     starts from and to clip to)."""
-    if urdf.is_dir():
+    try:
+        is_dir, is_file = urdf.is_dir(), urdf.is_file()
+    except OSError as exc:  # a name too long for the file system, a permission on the way
+        raise SettingsError(f"{urdf}: URDF file cannot be read ({exc.strerror or exc}; [robot] urdf)") from None
+    if is_dir:
         raise SettingsError(f"{urdf}: a folder, not a URDF file ([robot] urdf)")
-    if not urdf.is_file():
+    if not is_file:
         raise SettingsError(f"{urdf}: URDF file not found ([robot] urdf)")
     try:
         data = urdf.read_bytes()

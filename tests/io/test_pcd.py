@@ -391,3 +391,13 @@ def test_compressed_fields_read_as_columns_are_the_records_frame(tmp_path: Path)
         assert column.tobytes() == want.fields[name].tobytes()
         assert column.flags.writeable and column.flags.c_contiguous  # its own array, not the file's bytes
     assert got.fields["normal"].shape == (n, 3) and got.shape == (height, width)
+
+
+def test_an_ascii_pcd_without_rows_is_one_error_and_no_numpy_warning(tmp_path: Path) -> None:
+    import warnings
+
+    path = tmp_path / "empty_rows.pcd"
+    path.write_bytes(_header(d="ascii"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        _one_line_error(path, "0 rows")

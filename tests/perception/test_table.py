@@ -416,3 +416,19 @@ def test_raster_of_a_hull_more_cells_wide_than_an_int64_product_holds() -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert inside_convex_raster(points, huge).tolist() == [True, False]
+
+
+def test_the_pinhole_fit_skips_points_whose_x_or_y_is_infinite() -> None:
+    # a damaged cloud: y = -inf where z is finite reached the least squares ("SVD did
+    # not converge", an internal error); the fit now uses the other points
+    from clearcli.perception.table import _pinhole_of
+
+    h, w = 48, 64
+    v, u = np.mgrid[0:h, 0:w].astype(np.float64)
+    z = np.full((h, w), 1.5)
+    pts = np.stack([(u - 31.5) / 60.0 * z, (v - 23.5) / 60.0 * z, z], axis=-1)
+    pts[::3, ::5, 1] = -np.inf
+    pixel = _pinhole_of(pts, np.isfinite(pts[..., 2]))
+    assert pixel is not None
+    cols, rows = pixel(np.array([[0.01, 0.01, 1.0], [0.26, -0.13, 1.0]]))  # off the .5 boundaries
+    assert cols.tolist() == [32, 47] and rows.tolist() == [24, 16]

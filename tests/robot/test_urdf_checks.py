@@ -256,3 +256,13 @@ def test_a_joint_origin_hundreds_of_metres_away_is_one_line_exit_3(tmp_path: Pat
     urdf = _panda_with(tmp_path, "far", 'origin xyz="0.0825 0 0"', f'origin xyz="{xyz}"')
     line = _refused("--set", f"robot.urdf={urdf}")
     assert "'panda_joint4'" in line and f'<origin xyz="{xyz}">' in line and "more than 100 m from its parent" in line
+
+
+def test_a_urdf_name_too_long_for_the_file_system_is_bad_settings_not_a_write_error() -> None:
+    # the check's is_dir() raised ENAMETOOLONG, which the CLI took for a failed write to
+    # stdout (exit 8, "cannot write the results to stdout")
+    from clearcli.errors import SettingsError
+    from clearcli.robot.urdf_joints import checked_urdf
+
+    with pytest.raises(SettingsError, match="cannot be read"):
+        checked_urdf(Path("a" * 5000))
