@@ -16,7 +16,6 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from clearcli.errors import SceneError
-from clearcli.perception.graph import components
 from clearcli.perception.raster import dilate_square, label_8
 from clearcli.perception.support import Surface, choose, standing_on
 from clearcli.perception.types import PlaneVerdict, TablePlane
@@ -456,38 +455,6 @@ def unique_cells(cells: np.ndarray) -> np.ndarray:
     return np.stack([keys // span + lo[0], keys % span + lo[1]], axis=1)
 
 
-def _label_grid(grid: np.ndarray) -> tuple[np.ndarray, int]:
-    """8-connected components of a 2D bool grid: (labels (H, W), n), 0 off the grid's
-    cells, 1..n numbered in raster order of each component's first cell, as
-    scipy.ndimage.label numbers them (this replaces ndimage.label and binary_dilation:
-    importing scipy.ndimage cost more than everything they did here)."""
-    h, w = grid.shape
-    flat = np.flatnonzero(grid)  # raster order
-    m = flat.size
-    labels = np.zeros(grid.shape, dtype=np.int32)
-    if m == 0:
-        return labels, 0
-    ids = np.full((h + 2, w + 2), -1, dtype=np.int32)  # cell -> node, -1 empty, a border of -1
-    inner = ids[1:-1, 1:-1]
-    inner[grid] = np.arange(m, dtype=np.int32)
-    src: list[np.ndarray] = []
-    dst: list[np.ndarray] = []
-    for dy, dx in ((0, 1), (1, -1), (1, 0), (1, 1)):  # each neighbouring pair once
-        nbr = ids[1 + dy : h + 1 + dy, 1 + dx : w + 1 + dx]
-        hit = (inner >= 0) & (nbr >= 0)
-        src.append(inner[hit])
-        dst.append(nbr[hit])
-    a, b = np.concatenate(src), np.concatenate(dst)
-    comp = components(m, np.stack([a, b], axis=1))
-    n = int(comp.max()) + 1
-    first = np.full(n, m, dtype=np.int64)
-    np.minimum.at(first, comp, np.arange(m))
-    rank = np.empty(n, dtype=np.int32)
-    rank[np.argsort(first)] = np.arange(1, n + 1, dtype=np.int32)
-    labels.ravel()[flat] = rank[comp]
-    return labels, int(n)
-
-
 def largest_component(points_2d: np.ndarray, cell_m: float, join_gap_m: float = 0.0) -> tuple[np.ndarray, float]:
     """Mask of the points in the largest 8-connected piece of the occupied grid cells,
     together with every other piece within ``join_gap_m`` of it (objects standing on a
@@ -506,7 +473,7 @@ def largest_component(points_2d: np.ndarray, cell_m: float, join_gap_m: float = 
     dims = np.array([cells[:, k].max() for k in (0, 1)]) + 1
     grid = np.zeros(dims, dtype=bool)
     grid[cells[:, 0], cells[:, 1]] = True
-    labels, n = _label_grid(grid)
+    labels, n = label_8(grid)
     if n == 0:
         return np.zeros(points_2d.shape[0], dtype=bool), 0.0
     sizes = np.bincount(labels.ravel())

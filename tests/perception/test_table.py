@@ -196,7 +196,7 @@ def test_label_grid_numbers_as_ndimage() -> None:
     (the runs along the rows joined by a running count give the same pieces)."""
     from scipy import ndimage
 
-    from clearcli.perception.table import _label_grid
+    from clearcli.perception.raster import label_8 as _label_grid
 
     gen = np.random.default_rng(11)
     for trial in range(40):
