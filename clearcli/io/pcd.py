@@ -31,7 +31,7 @@ import numpy as np
 from clearcli.errors import InputError, OutputError
 from clearcli.files import atomic_path
 from clearcli.io.frames import Frame, labels_to_write
-from clearcli.io.pointfields import frame_from_columns, pack_rgb_float
+from clearcli.io.pointfields import frame_from_columns, pack_rgb_float, record_columns
 from clearcli.io.sniff import PCD_HEADER_KEYS, open_input
 
 # A PCD header is ten short lines; anything without DATA in the first 64 KiB is not a PCD.
@@ -262,14 +262,14 @@ def _decode_data(fp: BinaryIO, path: Path, meta: PcdHeader, dtype: np.dtype, dat
             raise InputError(f"{path}: bad ASCII point data ({first[:120]})") from None
         if records.shape[0] != n:
             raise InputError(f"{path}: the header declares {n} points but the ASCII data has {records.shape[0]} rows")
-        return _columns(records)
+        return record_columns(records)
     if encoding == "binary":
         if data_bytes < need:
             raise InputError(
                 f"{path}: truncated PCD: the header declares {n} points of {dtype.itemsize} bytes "
                 f"({need} bytes) but the data holds {data_bytes}"
             )
-        return _columns(np.frombuffer(fp.read(need), dtype=dtype, count=n))
+        return record_columns(np.frombuffer(fp.read(need), dtype=dtype, count=n))
     # binary_compressed: sizes, then an LZF block holding each field's column in turn.
     head = fp.read(8)
     if len(head) < 8:
@@ -286,7 +286,7 @@ def _decode_data(fp: BinaryIO, path: Path, meta: PcdHeader, dtype: np.dtype, dat
             f"the file has {max(data_bytes - 8, 0)}"
         )
     if n == 0:
-        return _columns(np.empty(0, dtype=dtype))
+        return record_columns(np.empty(0, dtype=dtype))
     try:
         raw = lzf.decompress(fp.read(compressed_size), uncompressed_size)
     except Exception as exc:
@@ -307,10 +307,6 @@ def _decode_data(fp: BinaryIO, path: Path, meta: PcdHeader, dtype: np.dtype, dat
         columns[name] = column.reshape((n, *field.shape))
         offset += block
     return columns
-
-
-def _columns(records: np.ndarray) -> dict[str, np.ndarray]:
-    return {name: records[name] for name in records.dtype.names or ()}
 
 
 def read_pcd(path: Path) -> Frame:

@@ -176,8 +176,14 @@ def frame_from_records(
     -> Frame.fields under its own name with its own dtype ((N,) or (N, count)).
     The caller has checked that x, y and z exist.
     """
-    columns = {name: records[name] for name in records.dtype.names or ()}
-    return frame_from_columns(columns, shape, stamp_s=stamp_s, frame_id=frame_id, source=source, skip=skip)
+    return frame_from_columns(
+        record_columns(records), shape, stamp_s=stamp_s, frame_id=frame_id, source=source, skip=skip
+    )
+
+
+def record_columns(records: np.ndarray) -> dict[str, np.ndarray]:
+    """A structured record array's fields by name, as columns (views), in its order."""
+    return {name: records[name] for name in records.dtype.names or ()}
 
 
 def frame_from_columns(
