@@ -32,7 +32,7 @@ import dataclasses
 
 import numpy as np
 
-from clearcli.perception.graph import components, run_components
+from clearcli.perception.graph import components
 from clearcli.perception.supervoxels import VoxelCloud
 
 # 4 of the 8 neighbour offsets (row, column): each undirected pixel pair found once; the
@@ -46,43 +46,84 @@ def pixel_pieces(points: np.ndarray, shape: tuple[int, int], point_index: np.nda
     ranges differ by at most ``rel`` times the nearer one.
 
     With ``point_index`` in raster order (as the stages pass it) a pixel joined to the
-    next in its row is the next point: `run_components` joins such runs by a running
-    count and the pairs between rows once per pair of runs (a tenth of the pixel pairs
-    on an mOSD frame, several times faster); the pieces are numbered as `components`
-    numbers them, in order of their first point."""
+    next in its row is the next point: such runs are numbered by a running count and
+    the pairs between rows go to `components` once per pair of runs (as `run_components`
+    does; a tenth of the pixel pairs on an mOSD frame). The ranges are compared on an
+    image of them (NaN off the set, which compares False), so no pair's ranges are
+    gathered; the pieces are numbered as `components` numbers them, in order of their
+    first point."""
     m = point_index.shape[0]
-    # the pairs lie within the set's bounding box: the image of the points' numbers (-1
-    # elsewhere) over that box only, the pairs in the same raster order over a fraction
-    # of the pixels
+    # the pairs lie within the set's bounding box: images over that box only, the pairs
+    # in the same raster order over a fraction of the pixels
     row, col = np.divmod(point_index, shape[1])
     top, left = (int(row.min()), int(col.min())) if m else (0, 0)
     height, width = (int(row.max()) + 1 - top, int(col.max()) + 1 - left) if m else (0, 0)
-    where = np.full(height * width, -1, dtype=np.int64)
-    where[(row - top) * width + (col - left)] = np.arange(m)
-    img = where.reshape(height, width)
+    at = (row - top) * width + (col - left)
     # rows by index: take is several times faster than a[idx]
     p = np.take(points, point_index, axis=0).astype(np.float64)
     # np.linalg.norm(p, axis=1)'s sums in its order, a fifth of its time (no (M, 3) squares)
     rng = np.sqrt((p[:, 0] * p[:, 0] + p[:, 1] * p[:, 1]) + p[:, 2] * p[:, 2])
+    if not (m > 1 and bool((point_index[1:] > point_index[:-1]).all())):
+        return _every_pair_pieces(at, rng, height, width, rel)
+    rng_img = np.full(height * width, np.nan)
+    rng_img[at] = rng
+    r = rng_img.reshape(height, width)
 
-    def pairs(dv: int, du: int) -> tuple[np.ndarray, np.ndarray]:
+    def near(dv: int, du: int) -> np.ndarray:
+        """(height - dv, width - |du|) bool: the pixel and the one (dv, du) from it are
+        both in the set with near ranges (NaN compares False)."""
+        ra = r[: height - dv, max(0, -du) : width - max(0, du)]
+        rb = r[dv:, max(0, du) : width - max(0, -du)]
+        return np.abs(ra - rb) <= rel * np.minimum(ra, rb)
+
+    # raster order: a pixel joined to the one before it in its row is the point before
+    joined_img = np.zeros((height, width), dtype=bool)
+    joined_img[:, 1:] = near(*_PIXEL_OFFSETS[0])
+    start = ~np.take(joined_img.reshape(-1), at)
+    start[0] = True  # the first point has none before it
+    run = np.cumsum(start) - 1
+    run_img = np.zeros(height * width, dtype=np.int64)  # off the set: never read (near is False)
+    run_img[at] = run
+    runs = run_img.reshape(height, width)
+    ra_parts, rb_parts = [], []
+    for dv, du in _PIXEL_OFFSETS[1:]:
+        hit = near(dv, du)
+        xs_a, xs_b = slice(max(0, -du), width - max(0, du)), slice(max(0, du), width - max(0, -du))
+        # a pair whose two pixels are each joined to the one before in their row, where
+        # the pair before it was near too, joins the same two runs: left out here, where
+        # it costs a byte a pixel, not gathered (the pieces depend only on what is joined)
+        hit[:, 1:] &= ~(hit[:, :-1] & joined_img[: height - dv, xs_a][:, 1:] & joined_img[dv:, xs_b][:, 1:])
+        ra_parts.append(runs[: height - dv, xs_a][hit])
+        rb_parts.append(runs[dv:, xs_b][hit])
+    ra, rb = np.concatenate(ra_parts), np.concatenate(rb_parts)
+    # one pair per pair of runs next to each other in the list (run_components' rule)
+    if ra.size > 1:
+        new = np.empty(ra.size, dtype=bool)
+        new[0] = True
+        np.not_equal(ra[1:], ra[:-1], out=new[1:])
+        new[1:] |= rb[1:] != rb[:-1]
+        ra, rb = np.compress(new, ra), np.compress(new, rb)
+    return components(int(run[-1]) + 1, np.stack([ra, rb], axis=1))[run]
+
+
+def _every_pair_pieces(at: np.ndarray, rng: np.ndarray, height: int, width: int, rel: float) -> np.ndarray:
+    """`pixel_pieces` of points out of raster order: every near pixel pair an edge.
+    ``at``: each point's flat pixel in the (height, width) box, ``rng``: its range."""
+    m = at.shape[0]
+    where = np.full(height * width, -1, dtype=np.int64)
+    where[at] = np.arange(m)
+    img = where.reshape(height, width)
+
+    def pairs(dv: int, du: int) -> np.ndarray:
         a = img[: height - dv, max(0, -du) : width - max(0, du)].ravel()
         b = img[dv:, max(0, du) : width - max(0, -du)].ravel()
         both = (a >= 0) & (b >= 0)
         a, b = a[both], b[both]
         ra, rb = rng[a], rng[b]
         near = np.abs(ra - rb) <= rel * np.minimum(ra, rb)
-        return a[near], b[near]
+        return np.stack((a[near], b[near]), axis=1)
 
-    if m > 1 and bool((point_index[1:] > point_index[:-1]).all()):
-        # raster order: a pixel joined to the next in its row is the next point
-        _, b = pairs(*_PIXEL_OFFSETS[0])
-        joined = np.zeros(m, dtype=bool)
-        joined[b] = True
-        rest = [np.stack(pairs(dv, du), axis=1) for dv, du in _PIXEL_OFFSETS[1:]]
-        return run_components(joined, np.concatenate(rest))
-    every = [np.stack(pairs(dv, du), axis=1) for dv, du in _PIXEL_OFFSETS]
-    return components(m, np.concatenate(every))
+    return components(m, np.concatenate([pairs(dv, du) for dv, du in _PIXEL_OFFSETS]))
 
 
 def _voxel_piece(point_voxel: np.ndarray, point_piece: np.ndarray, n_voxels: int) -> np.ndarray:
@@ -113,11 +154,16 @@ def _most_counted(row: np.ndarray, col: np.ndarray, count: np.ndarray) -> tuple[
 def _join_small(piece: np.ndarray, large: np.ndarray, edges: np.ndarray) -> np.ndarray:
     """A voxel of a small piece (stray pixels at a silhouette) joins the large piece most
     of its adjacent voxels are in: it would otherwise bridge the cut it stands in."""
-    both = np.concatenate([edges, edges[:, ::-1]])
-    want = ~large[piece[both[:, 0]]] & large[piece[both[:, 1]]]
-    if not want.any():
+    # each adjacency both ways, (small, large) pairs only, without the (2E, 2) copy
+    e0, e1 = edges[:, 0], edges[:, 1]
+    pa, pb = piece[e0], piece[e1]
+    la, lb = large[pa], large[pb]
+    fwd, bwd = ~la & lb, la & ~lb
+    if not (fwd.any() or bwd.any()):
         return piece
-    v, p = both[want, 0], piece[both[want, 1]]
+    # the order of the pairs is np.unique's to choose: the same keys and counts
+    v = np.concatenate((np.compress(fwd, e0), np.compress(bwd, e1)))
+    p = np.concatenate((np.compress(fwd, pb), np.compress(bwd, pa)))
     n_pieces = int(piece.max()) + 1
     uniq, count = np.unique(v * n_pieces + p, return_counts=True)
     vv, pp = _most_counted(uniq // n_pieces, uniq % n_pieces, count)
