@@ -140,3 +140,78 @@ def test_voxel_pieces_on_a_cluttered_frame_are_the_lexsort_rule_s() -> None:
     assert np.array_equal(got[0], got[2]) and np.array_equal(got[1], got[3])
     # a real comparison: voxels of several pieces, small pieces joined to large ones
     assert np.unique(got[0]).size > 5 and not np.array_equal(got[0], got[1])
+
+
+def _join_small_both_ways(piece: np.ndarray, large: np.ndarray, edges_: np.ndarray) -> np.ndarray:
+    """The rule _join_small keeps, as first written: every adjacency both ways, stacked."""
+    from clearcli.perception.edges import _most_counted
+
+    both = np.concatenate([edges_, edges_[:, ::-1]])
+    want = ~large[piece[both[:, 0]]] & large[piece[both[:, 1]]]
+    if not want.any():
+        return piece
+    v, p = both[want, 0], piece[both[want, 1]]
+    n_pieces = int(piece.max()) + 1
+    uniq, count = np.unique(v * n_pieces + p, return_counts=True)
+    vv, pp = _most_counted(uniq // n_pieces, uniq % n_pieces, count)
+    out = piece.copy()
+    out[vv] = pp
+    return out
+
+
+def test_join_small_by_hand() -> None:
+    from clearcli.perception.edges import _join_small
+
+    # voxel 2 is piece 1 (small) alone; pieces 0 (voxels 0, 1) and 2 (voxels 3, 4) are large
+    piece = np.array([0, 0, 1, 2, 2])
+    large = np.array([True, False, True])
+    # the small voxel second in one adjacency, first in two: 1 vote for piece 0, 2 for piece 2
+    edges_ = np.array([[0, 2], [2, 3], [2, 4]])
+    assert _join_small(piece, large, edges_).tolist() == [0, 0, 2, 2, 2]
+    # 2 votes each (both of them second in their adjacency): the lower piece
+    edges_ = np.array([[0, 2], [1, 2], [3, 2], [2, 4]])
+    assert _join_small(piece, large, edges_).tolist() == [0, 0, 0, 2, 2]
+    # no small piece touches a large one: the pieces as they were
+    assert _join_small(piece, large, np.array([[0, 1], [3, 4]])).tolist() == piece.tolist()
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_join_small_is_the_rule_both_ways(seed: int) -> None:
+    from clearcli.perception.edges import _join_small
+
+    gen = np.random.default_rng(200 + seed)
+    n_vox, n_pieces = 60, 8
+    piece = gen.integers(0, n_pieces, size=n_vox)
+    large = gen.random(n_pieces) < 0.5
+    edges_ = gen.integers(0, n_vox, size=(150, 2))
+    got, want = _join_small(piece, large, edges_), _join_small_both_ways(piece, large, edges_)
+    assert got.tolist() == want.tolist()
+    assert not np.array_equal(got, piece)  # a real comparison: some voxel joined
+
+
+def test_pixel_pieces_on_a_cluttered_frame_are_every_pair_s() -> None:
+    # mOSD test55 (16 objects): the pieces of the object points against the definition
+    # (every near 8-neighbour pair an edge), in float64 as pixel_pieces measures ranges
+    from helpers import shared_path
+
+    from clearcli.io.read import read_frame
+    from clearcli.perception import edges
+    from clearcli.perception.segment import segment
+    from clearcli.settings.segment import SegmentSettings
+
+    frame = read_frame(shared_path("mosd/test/test55.pcd"))
+    seen: list[tuple[Any, ...]] = []
+    real = edges.cut_depth_edges
+
+    def record(*args: Any) -> Any:
+        seen.append(args)
+        return real(*args)
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr("clearcli.perception.segment.cut_depth_edges", record)
+        segment(frame, SegmentSettings())
+    _, points, shape, point_index, rel, _ = seen[0]
+    got = pixel_pieces(points, shape, point_index, rel)
+    want = _every_pair(points.astype(np.float64), shape, point_index, rel)
+    assert np.array_equal(got, want)
+    assert np.unique(got).size > 16  # the objects and the pieces the depth edges cut
