@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from clearcli.perception.context import RefineContext
+from clearcli.perception.context import RefineContext, by_label
 from clearcli.perception.lccp import join_pairs
 
 _MIN_RADIUS_M = 0.015
@@ -154,7 +154,7 @@ def merge_rings(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
     np.maximum.at(top, seg_of_voxel, voxel_height)
     # each segment's voxels in index order (what a mask over all voxels gives), from one
     # sort: no pass over every voxel per segment
-    order = np.argsort(seg_of_voxel, kind="stable")
+    order = by_label(seg_of_voxel, n_seg)
     bounds = np.searchsorted(seg_of_voxel[order], np.arange(n_seg + 1))
     # the segments holding a wall supervoxel: a segment without one faces nowhere
     has_wall = np.bincount(seg_of_voxel, weights=sv_is_wall[voxel_label], minlength=n_seg) > 0

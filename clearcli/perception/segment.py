@@ -31,7 +31,7 @@ import numpy as np
 from clearcli.errors import SceneError
 from clearcli.io.frames import Frame
 from clearcli.perception.clock import Clock
-from clearcli.perception.context import RefineContext
+from clearcli.perception.context import RefineContext, by_label
 from clearcli.perception.edges import cut_depth_edges
 from clearcli.perception.exclude import (
     AROUND_LEVEL_M,
@@ -403,7 +403,7 @@ def _objects(w: _Work) -> None:
     ok = size.holds_object_area(seg_voxels) & (seg_points >= settings.min_object_points)
     kept = np.flatnonzero(ok)
     kept = kept[np.argsort(-seg_points[kept], kind="stable")]  # largest first
-    order = np.argsort(seg_of_point, kind="stable")
+    order = by_label(seg_of_point, n_seg)  # a stable argsort (by radix: 100k points on a cluttered table)
     bounds = np.searchsorted(seg_of_point[order], np.arange(n_seg + 1))
     rests = settings.prism_min_height_m + settings.plane_distance_m
     # the points' squared ranges from the table's step (einsum's sums are the same per row

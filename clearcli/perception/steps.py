@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from clearcli.perception.context import RefineContext
+from clearcli.perception.context import RefineContext, by_label
 from clearcli.perception.graph import dense_labels
 from clearcli.perception.lccp import rejoin_pieces
 
@@ -146,7 +146,7 @@ def step_splits(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
         cut_round = False
         # each segment's voxels in index order (what a mask over all voxels gave), from
         # one sort; a split this round relabels only the segment being split
-        by_seg = np.argsort(seg, kind="stable")
+        by_seg = by_label(seg, next_label)
         sorted_seg = seg[by_seg]
         starts = np.flatnonzero(np.r_[True, sorted_seg[1:] != sorted_seg[:-1]])
         ends = np.append(starts[1:], seg.size)
