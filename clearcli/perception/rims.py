@@ -59,18 +59,20 @@ def merge_rims(
         return seg_of_voxel
     # only voxels with another segment in their cells' neighbourhood can touch one
     near = np.flatnonzero(_near_another_segment(seg_of_voxel, voxel_centroids, contact_m, n_seg))
-    voxel_edges = near[cKDTree(voxel_centroids[near]).query_pairs(contact_m, output_type="ndarray")]
-    if voxel_edges.shape[0] == 0:
+    pairs = cKDTree(voxel_centroids[near]).query_pairs(contact_m, output_type="ndarray")
+    if pairs.shape[0] == 0:
         return seg_of_voxel
-    a, b = seg_of_voxel[voxel_edges[:, 0]], seg_of_voxel[voxel_edges[:, 1]]
-    cross = a != b
-    if not cross.any():
+    # nine in ten pairs lie within one segment: they are dropped on the near voxels'
+    # own numbering, and only the pairs across segments mapped to the frame's voxels
+    seg_near = seg_of_voxel[near]
+    a, b = seg_near[pairs[:, 0]], seg_near[pairs[:, 1]]
+    cross = np.flatnonzero(a != b)
+    if cross.size == 0:
         return seg_of_voxel
     top = np.full(n_seg, -np.inf)
     np.maximum.at(top, seg_of_voxel, voxel_height)
     ea, eb = a[cross], b[cross]
-    # rows by a mask: np.compress, several times faster than boolean indexing of rows
-    edges_cross = np.compress(cross, voxel_edges, axis=0)
+    edges_cross = near[pairs[cross]]
     ha, hb = voxel_height[edges_cross[:, 0]], voxel_height[edges_cross[:, 1]]
     h_contact = 0.5 * (ha + hb)
     lo, hi = np.minimum(ea, eb), np.maximum(ea, eb)
