@@ -21,6 +21,15 @@ from clearcli.perception.types import TablePlane
 from clearcli.settings.segment import SegmentSettings
 
 
+def by_label(labels: np.ndarray, n_labels: int) -> np.ndarray:
+    """(N,) the indices ordered by their label (0..n_labels-1), each label's in index
+    order: ``np.argsort(labels, kind="stable")``, of int16 labels when they fit (NumPy
+    sorts those by radix, the same order in about half the time of int64's merge sort)."""
+    if 0 < n_labels <= np.iinfo(np.int16).max:
+        return np.argsort(labels.astype(np.int16), kind="stable")
+    return np.argsort(labels, kind="stable")
+
+
 @dataclass(frozen=True)
 class RefineContext:
     """Everything a refinement stage reads: what LCCP ran on, and what several stages
@@ -104,7 +113,7 @@ class RefineContext:
     def voxels_by_sv(self) -> np.ndarray:
         """(V,) the voxels ordered by supervoxel, each one's in index order (a stable
         argsort of ``sv.voxel_label``; `cuts.seam_rise` of three stages reads it)."""
-        return np.argsort(self.sv.voxel_label, kind="stable")
+        return by_label(self.sv.voxel_label, self.sv.centroids.shape[0])
 
     @cached_property
     def first_voxel(self) -> np.ndarray:

@@ -23,6 +23,10 @@ import numpy as np
 from clearcli.perception.context import RefineContext
 from clearcli.perception.graph import dense_labels
 
+# _near_cells' grid as a dense array up to this many cells (1 MB of flags); a wider
+# cloud's cells are looked up by np.isin instead
+_MAX_GRID_CELLS = 1_000_000
+
 
 def rejoin_fragments(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
     """The stage: `join_fragments` on the frame's voxels; a fragment is smaller than
@@ -163,5 +167,12 @@ def _near_cells(centroids: np.ndarray, seeds: np.ndarray, reach_m: float) -> np.
     dims = cell.max(axis=0) + 2
     packed = (cell[:, 0] * dims[1] + cell[:, 1]) * dims[2] + cell[:, 2]
     step = np.array([(dx * dims[1] + dy) * dims[2] + dz for dx in (-1, 0, 1) for dy in (-1, 0, 1) for dz in (-1, 0, 1)])
-    near = np.unique(np.unique(packed[seeds])[:, None] + step[None, :])
-    return np.isin(packed, near)
+    near = np.unique(packed[seeds])[:, None] + step[None, :]
+    n_cells = int(np.prod(dims))
+    if n_cells <= _MAX_GRID_CELLS:
+        # a table's grid is small: the near cells marked in a dense grid and read by
+        # index, not np.isin's sort of every voxel's cell
+        marked = np.zeros(n_cells, dtype=bool)
+        marked[near.ravel()] = True
+        return marked[packed]
+    return np.isin(packed, np.unique(near))

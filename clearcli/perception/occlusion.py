@@ -118,11 +118,9 @@ def merge_occluded(seg_of_sv: np.ndarray, ctx: RefineContext) -> np.ndarray:
     sv_centroids, sv_normals, sv_edges, sv_height = sv.centroids, sv.normals, sv.edges, ctx.sv_height
     max_gap_m, voxel_m = ctx.settings.occlusion_max_gap_m, ctx.size.voxel_m
     min_depth_ratio = ctx.settings.occlusion_min_depth_ratio
-    intr = estimate_intrinsics(frame_points, shape)
     n_seg = int(seg_of_sv.max()) + 1 if seg_of_sv.size else 0
-    if intr is None or n_seg < 2:
+    if n_seg < 2:
         return seg_of_sv
-    fx, fy, cx, cy = intr
     h, w = shape
     depth = frame_points[:, 2].reshape(h, w)
     seg_voxels = np.bincount(seg_of_sv, weights=sv.n_voxels, minlength=n_seg)
@@ -163,6 +161,9 @@ def merge_occluded(seg_of_sv: np.ndarray, ctx: RefineContext) -> np.ndarray:
         np.abs(top_c[:, None] - top_c[None, :]) <= _TOP_TOL_M
     )
     cand_list = cand.tolist()
+    # the camera's intrinsics are read from the frame only for a pair that gets as far as
+    # a gap line (most frames' pairs end at the tests before); None: nothing is joined
+    intr: tuple[float, float, float, float] | None = None
     for ia, a in enumerate(cand_list):
         for ib in np.flatnonzero(maybe[ia, ia + 1 :]).tolist():
             b = cand_list[ia + 1 + ib]
@@ -187,10 +188,14 @@ def merge_occluded(seg_of_sv: np.ndarray, ctx: RefineContext) -> np.ndarray:
             # the closest few such pairs each give a line; one the camera cannot see
             # through is enough (the closest alone turned on which of two nearly
             # coplanar patches won by a fraction of a millimetre)
+            if intr is None:
+                intr = estimate_intrinsics(frame_points, shape)
+                if intr is None:
+                    return seg_of_sv  # not a pinhole image: as before any join
             flat_ok = np.flatnonzero(ok.ravel())
             closest = flat_ok[np.argsort(dist.ravel()[flat_ok], kind="stable")[:_LINES]]
             if any(
-                _hidden_line(xa[i], xb[j], float(dist[i, j]), depth, (fx, fy, cx, cy), voxel_m, min_depth_ratio)
+                _hidden_line(xa[i], xb[j], float(dist[i, j]), depth, intr, voxel_m, min_depth_ratio)
                 for i, j in zip(*np.unravel_index(closest, dist.shape))
             ):
                 parent[root(b)] = root(a)

@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from clearcli.perception.context import RefineContext
+from clearcli.perception.context import RefineContext, by_label
 from clearcli.perception.lccp import join_pairs
 
 _MIN_RADIUS_M = 0.015
@@ -152,45 +152,67 @@ def merge_rings(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
     sizes = np.bincount(seg_of_voxel, minlength=n_seg)
     top = np.full(n_seg, -np.inf)
     np.maximum.at(top, seg_of_voxel, voxel_height)
-    cand = [s for s in range(n_seg) if sizes[s] >= min_voxels]
     # each segment's voxels in index order (what a mask over all voxels gives), from one
     # sort: no pass over every voxel per segment
-    order = np.argsort(seg_of_voxel, kind="stable")
+    order = by_label(seg_of_voxel, n_seg)
     bounds = np.searchsorted(seg_of_voxel[order], np.arange(n_seg + 1))
+    # the segments holding a wall supervoxel: a segment without one faces nowhere
+    has_wall = np.bincount(seg_of_voxel, weights=sv_is_wall[voxel_label], minlength=n_seg) > 0
+    cand = np.flatnonzero((sizes >= min_voxels) & has_wall)
+    if cand.size < 2:
+        return seg_of_voxel
+    # the segments' boxes in the plane, all at once: minima and maxima are exact in any
+    # order, so each is what xy.min(axis=0) over the segment's voxels gives
+    # (reduceat over the non-empty segments' starts: each run ends where the next starts)
+    xy_sorted = voxel_xy[order]
+    filled = np.flatnonzero(sizes > 0)
+    at = np.searchsorted(filled, cand)
+    lo_all = np.minimum.reduceat(xy_sorted, bounds[filled], axis=0)[at]
+    hi_all = np.maximum.reduceat(xy_sorted, bounds[filled], axis=0)[at]
+    # the pairs (i < j, in the order the loop took them) whose tops lie within the
+    # tolerance (exact) and whose boxes in the plane lie within a diameter (with a
+    # margin here; each survivor is tested again below as before)
+    top_c = top[cand]
+    gap_c = np.maximum(
+        0.0, np.maximum(lo_all[:, None, :] - hi_all[None, :, :], lo_all[None, :, :] - hi_all[:, None, :])
+    )
+    maybe = (np.abs(top_c[:, None] - top_c[None, :]) <= tolerance_m) & (
+        np.sqrt((gap_c**2).sum(axis=2)) <= max_radius_m * (1 + 1e-6) + 1e-9
+    )
+    pair_i, pair_j = np.nonzero(np.triu(maybe, k=1))  # row-major: (a, b) as the loop went
     band: dict[int, np.ndarray] = {}
     walls: dict[int, np.ndarray] = {}
-    lo: dict[int, np.ndarray] = {}
-    hi: dict[int, np.ndarray] = {}
-    for s in cand:
+
+    def prepare(s: int) -> None:
+        # a segment's rim band and wall supervoxels, once, when one of its pairs is tried
+        if s in band:
+            return
         members = order[bounds[s] : bounds[s + 1]]
         band[s] = voxel_xy[members[voxel_height[members] >= top[s] - tolerance_m]]
         svs = np.unique(voxel_label[members])
         walls[s] = svs[sv_is_wall[svs]]
-        xy = voxel_xy[members]
-        lo[s], hi[s] = xy.min(axis=0), xy.max(axis=0)
+
     joined: list[tuple[int, int]] = []
-    for i, a in enumerate(cand):
-        for b in cand[i + 1 :]:
-            if abs(top[a] - top[b]) > tolerance_m:
-                continue
-            # the two must lie on one rim: their boxes in the plane within a diameter
-            gap = np.maximum(0.0, np.maximum(lo[a] - hi[b], lo[b] - hi[a]))
-            if float(np.linalg.norm(gap)) > max_radius_m:
-                continue
-            wa, wb = walls[a], walls[b]
-            if wa.size == 0 or wb.size == 0:
-                continue
-            if ring_pair(
-                band[a],
-                band[b],
-                sv_normals_xy[wa],
-                sv_xy[wa],
-                sv_normals_xy[wb],
-                sv_xy[wb],
-                max_radius_m,
-                settings.ring_max_residual,
-                settings.ring_min_cover_deg,
-                settings.ring_max_off_share,
-            ):
-                joined.append((a, b))
+    for i, j in zip(pair_i.tolist(), pair_j.tolist(), strict=True):
+        a, b = int(cand[i]), int(cand[j])
+        # the two must lie on one rim: their boxes in the plane within a diameter
+        gap = np.maximum(0.0, np.maximum(lo_all[i] - hi_all[j], lo_all[j] - hi_all[i]))
+        if float(np.linalg.norm(gap)) > max_radius_m:
+            continue
+        prepare(a)
+        prepare(b)
+        wa, wb = walls[a], walls[b]
+        if ring_pair(
+            band[a],
+            band[b],
+            sv_normals_xy[wa],
+            sv_xy[wa],
+            sv_normals_xy[wb],
+            sv_xy[wb],
+            max_radius_m,
+            settings.ring_max_residual,
+            settings.ring_min_cover_deg,
+            settings.ring_max_off_share,
+        ):
+            joined.append((a, b))
     return join_pairs(seg_of_voxel, joined, n_seg)

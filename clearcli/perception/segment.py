@@ -31,7 +31,7 @@ import numpy as np
 from clearcli.errors import SceneError
 from clearcli.io.frames import Frame
 from clearcli.perception.clock import Clock
-from clearcli.perception.context import RefineContext
+from clearcli.perception.context import RefineContext, by_label
 from clearcli.perception.edges import cut_depth_edges
 from clearcli.perception.exclude import (
     AROUND_LEVEL_M,
@@ -142,11 +142,22 @@ def table_aligned_box(
     return center, axes, extents
 
 
+def _row_mean(points: np.ndarray) -> np.ndarray:
+    """``points.mean(axis=0)`` of (N, 3) float64 points, bit for bit: NumPy sums the rows
+    of a C-ordered (N, 3) array one after another, and einsum's "ij->j" makes the same
+    additions in the same order in a third of the time (a cluttered table's objects:
+    100k points). Other layouts (columns contiguous: NumPy sums each pairwise) and
+    dtypes take the mean itself."""
+    if points.dtype != np.float64 or points.ndim != 2 or points.shape[0] == 0 or not points.flags.c_contiguous:
+        return np.asarray(points.mean(axis=0))
+    return np.einsum("ij->j", points) / points.shape[0]
+
+
 def make_object(
     frame_indices: np.ndarray, points: np.ndarray, table: TablePlane, rests_below_m: float
 ) -> SegmentedObject:
     center, axes, extents = table_aligned_box(points, table, rests_below_m)
-    centroid = points.mean(axis=0)
+    centroid = _row_mean(points)
     return SegmentedObject(
         indices=frame_indices.astype(np.int64),
         centroid=centroid,
@@ -403,7 +414,7 @@ def _objects(w: _Work) -> None:
     ok = size.holds_object_area(seg_voxels) & (seg_points >= settings.min_object_points)
     kept = np.flatnonzero(ok)
     kept = kept[np.argsort(-seg_points[kept], kind="stable")]  # largest first
-    order = np.argsort(seg_of_point, kind="stable")
+    order = by_label(seg_of_point, n_seg)  # a stable argsort (by radix: 100k points on a cluttered table)
     bounds = np.searchsorted(seg_of_point[order], np.arange(n_seg + 1))
     rests = settings.prism_min_height_m + settings.plane_distance_m
     # the points' squared ranges from the table's step (einsum's sums are the same per row

@@ -104,9 +104,31 @@ def separate_stacks(seg_of_sv: np.ndarray, ctx: RefineContext) -> np.ndarray:
     # back to supervoxels, each to the segment of most of its voxels: the patch at the
     # upper object's foot, mostly lower top, stays with the lower object
     n_seg = int(seg_of_voxel.max()) + 1
-    votes = np.zeros((sv.centroids.shape[0], n_seg), dtype=np.int64)
-    np.add.at(votes, (sv.voxel_label, seg_of_voxel), 1)
+    n_sv = sv.centroids.shape[0]
+    # the (supervoxel, segment) counts by one bincount of a joint key, not np.add.at
+    votes = np.bincount(sv.voxel_label * n_seg + seg_of_voxel, minlength=n_sv * n_seg).reshape(n_sv, n_seg)
     return dense_labels(votes.argmax(axis=1))
+
+
+def _may_split(seg: np.ndarray, ctx: RefineContext) -> np.ndarray:
+    """(G,) bool: segments whose top patches lie at two levels or more (`_levels`), for
+    all segments at once: the others cannot split. Each patch's mean height is the sum
+    `stack_splits` works out (the same voxels added in the same index order, one
+    bincount over every segment's top voxels), so the test is its own, exactly."""
+    n_seg = int(seg.max()) + 1
+    tops = np.flatnonzero(ctx.voxel_is_top)
+    if tops.size < 2:
+        return np.zeros(n_seg, dtype=bool)
+    n_sv = ctx.sv.centroids.shape[0]
+    key, patch = np.unique(seg[tops] * n_sv + ctx.sv.voxel_label[tops], return_inverse=True)
+    h_patch = np.bincount(patch, weights=ctx.voxel_height[tops]) / np.bincount(patch)
+    seg_of_patch = key // n_sv
+    order = np.lexsort((h_patch, seg_of_patch))  # by segment, then height
+    s_sorted, h_sorted = seg_of_patch[order], h_patch[order]
+    step = (s_sorted[1:] == s_sorted[:-1]) & (np.diff(h_sorted) >= ctx.settings.step_min_m)
+    out = np.zeros(n_seg, dtype=bool)
+    out[s_sorted[1:][step]] = True
+    return out
 
 
 def stack_splits(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
@@ -126,8 +148,14 @@ def stack_splits(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
     edges_in = np.compress(same, voxel_edges, axis=0)
     next_label = int(seg.max()) + 1
     pending = np.unique(seg).tolist()
+    # a segment with one level of tops is never split, nor changed by another's split
+    # (a split relabels voxels of the segment split): those are skipped without a pass
+    # over the frame's voxels each, most of a cluttered table's segments
+    may_split = _may_split(seg, ctx)
     while pending:
         s = pending.pop()
+        if s < may_split.size and not may_split[s]:
+            continue
         members = seg == s
         tops = np.flatnonzero(members & top)
         if tops.size < 2:
@@ -181,8 +209,11 @@ def join_supports(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
     top = ctx.voxel_is_top
     a, b = seg[voxel_edges[:, 0]], seg[voxel_edges[:, 1]]
     cross = a != b
-    pairs = np.unique(np.stack([np.minimum(a[cross], b[cross]), np.maximum(a[cross], b[cross])], 1), axis=0)
-    touching = {(int(x), int(y)) for x, y in pairs.tolist()}
+    a, b = a[cross], b[cross]
+    # the touching pairs (lower, higher) distinct by one integer key each (np.unique of
+    # rows sorts a structured view, several times slower)
+    key = np.unique(np.minimum(a, b) * n_seg + np.maximum(a, b))
+    touching = set(zip((key // n_seg).tolist(), (key % n_seg).tolist(), strict=True))
     neighbours: dict[int, set[int]] = {}
     for x, y in touching:
         neighbours.setdefault(x, set()).add(y)
@@ -194,18 +225,18 @@ def join_supports(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
 
     for upper in range(n_seg):
         h = foot[upper]
-        if not np.isfinite(h) or h <= settings.standing_max_m:
-            continue  # stands on the table
-        near = [
-            s
-            for s in sorted(neighbours.get(upper, ()))
-            if int((top & (seg == s) & (np.abs(voxel_height - h) <= settings.step_min_m)).sum()) >= min_level_vox
-        ]
+        if not np.isfinite(h) or h <= settings.standing_max_m or upper not in neighbours:
+            continue  # stands on the table, or touches nothing
+        # the top voxels at the foot's height, counted for every segment at once (one
+        # pass over the voxels per upper object, not one per neighbour)
+        at_foot = top & (np.abs(voxel_height - h) <= settings.step_min_m)
+        at_foot_vox = np.bincount(seg[at_foot], minlength=n_seg)
+        near = [s for s in sorted(neighbours[upper]) if int(at_foot_vox[s]) >= min_level_vox]
         for i, s1 in enumerate(near):
             for s2 in near[i + 1 :]:
                 if (s1, s2) not in touching:
                     continue
-                level = top & np.isin(seg, (s1, s2)) & (np.abs(voxel_height - h) <= settings.step_min_m)
+                level = at_foot & np.isin(seg, (s1, s2))
                 inside = _inside_hull(np.compress(seg == upper, xy, axis=0), xy[level], ctx.size.voxel_m)
                 if inside.mean() >= _MIN_INSIDE:
                     joined.append((s1, s2))

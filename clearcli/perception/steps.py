@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from clearcli.perception.context import RefineContext
+from clearcli.perception.context import RefineContext, by_label
 from clearcli.perception.graph import dense_labels
 from clearcli.perception.lccp import rejoin_pieces
 
@@ -88,6 +88,43 @@ def best_separating_line(xy: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray,
     return normal, offset, int(errs[d, kk])
 
 
+def _may_step(seg: np.ndarray, ctx: RefineContext, min_top_vox: float) -> np.ndarray:
+    """(G,) bool: the segments whose top patches, ordered by height, have a gap of at
+    least ``step_min_m`` with ``min_top_vox`` top voxels below it and above it, for all
+    segments at once: only those can split. Each patch's mean height is the sum
+    `step_splits` works out (the same voxels added in the same index order, one
+    bincount over every segment's top voxels); below a gap of more than 0 lie the
+    patches not higher, in any order of equal heights: the test is its own, exactly."""
+    n_seg = int(seg.max()) + 1
+    tops = np.flatnonzero(ctx.voxel_is_top)
+    out = np.zeros(n_seg, dtype=bool)
+    if tops.size < 2:
+        return out
+    n_sv = ctx.sv.centroids.shape[0]
+    key, patch = np.unique(seg[tops] * n_sv + ctx.sv.voxel_label[tops], return_inverse=True)
+    n_vox = np.bincount(patch)
+    h = np.bincount(patch, weights=ctx.voxel_height[tops]) / n_vox
+    seg_of_patch = key // n_sv
+    order = np.lexsort((h, seg_of_patch))  # by segment, then height
+    s_sorted, h_sorted, n_sorted = seg_of_patch[order], h[order], n_vox[order]
+    total = np.bincount(seg_of_patch, weights=n_vox, minlength=n_seg)[s_sorted]
+    # top voxels up to each patch within its segment: a running count, less the counts
+    # of the segments before (integers: exact in float64)
+    run = np.cumsum(n_sorted)
+    first = np.r_[True, s_sorted[1:] != s_sorted[:-1]]
+    before = (run - n_sorted)[first]
+    below = run - np.repeat(before, np.diff(np.r_[np.flatnonzero(first), s_sorted.size]))
+    gap = np.diff(h_sorted)
+    ok = (
+        (s_sorted[1:] == s_sorted[:-1])
+        & (gap >= ctx.settings.step_min_m)
+        & (below[:-1] >= min_top_vox)
+        & (total[:-1] - below[:-1] >= min_top_vox)
+    )
+    out[s_sorted[1:][ok]] = True
+    return out
+
+
 def step_splits(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
     """The stage: (V,) segment of every voxel after splitting at steps between tops,
     0..G-1.
@@ -109,11 +146,16 @@ def step_splits(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
         cut_round = False
         # each segment's voxels in index order (what a mask over all voxels gave), from
         # one sort; a split this round relabels only the segment being split
-        by_seg = np.argsort(seg, kind="stable")
+        by_seg = by_label(seg, next_label)
         sorted_seg = seg[by_seg]
         starts = np.flatnonzero(np.r_[True, sorted_seg[1:] != sorted_seg[:-1]])
         ends = np.append(starts[1:], seg.size)
+        # segments that cannot split are skipped (with a step of 0, equal heights
+        # would leave which patch is below to argsort's order: all are tried then)
+        may_step = _may_step(seg, ctx, min_top_vox) if settings.step_min_m > 0 else None
         for a, b in zip(starts.tolist(), ends.tolist(), strict=True):
+            if may_step is not None and not may_step[sorted_seg[a]]:
+                continue
             members = by_seg[a:b]
             tops = members[top[members]]
             if tops.size < 2:

@@ -244,12 +244,21 @@ def rebuild_vessels(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
     band_vox = band_vox[np.argsort(seg[band_vox], kind="stable")]
     band_bounds = np.searchsorted(seg[band_vox], np.arange(n_seg + 1))
     band_of = {s: band_vox[band_bounds[s] : band_bounds[s + 1]] for s in cand}
+    # which candidates may share a group, all pairs at once: tops within the tolerance
+    # (exact) and middles within a diameter (with a margin; each is tested again below)
+    cand_arr = np.asarray(cand, dtype=np.int64)
+    mid_c = mid[cand_arr]
+    d_mid = np.sqrt((mid_c[:, None, 0] - mid_c[None, :, 0]) ** 2 + (mid_c[:, None, 1] - mid_c[None, :, 1]) ** 2)
+    may_group = (np.abs(top[cand_arr][:, None] - top[cand_arr][None, :]) <= tolerance_m) & (
+        d_mid <= 2 * max_radius_m * (1 + 1e-6) + 1e-9
+    )
+    row_of = {k: i for i, k in enumerate(cand)}
     for s in sorted(cand, key=lambda k: -top[k]):
         if s in done:
             continue
         group = [
             k
-            for k in cand
+            for k in cand_arr[may_group[row_of[s]]].tolist()
             if k not in done
             and abs(top[k] - top[s]) <= tolerance_m
             and np.linalg.norm(mid[k] - mid[s]) <= 2 * max_radius_m

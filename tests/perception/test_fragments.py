@@ -174,3 +174,23 @@ def test_a_ball_beside_a_box_on_a_real_frame_stays_apart() -> None:
     assert verdicts["green ball"] == "right"
     verdicts, _, _ = judged("gqcnn_primesense_2", fragment_max_thickness_m=0.1)
     assert verdicts["green ball"] == "merged"
+
+
+def test_near_cells_by_a_dense_grid_and_by_isin_agree(monkeypatch: pytest.MonkeyPatch) -> None:
+    """`_near_cells` marks a small grid densely and looks a wide one's cells up with
+    np.isin: the same voxels. By hand: reach 1 cm (cells 1.01 cm), the seed at x = 0;
+    x = 1.5 cm is the next cell (kept), x = 2.5 cm two cells on (not), and x = 0.5 cm
+    the seed's own cell."""
+    from clearcli.perception import fragments
+
+    pts = np.array([[0.0, 0, 0], [0.015, 0, 0], [0.025, 0, 0], [0.005, 0, 0]])
+    expected = [True, True, False, True]
+    assert fragments._near_cells(pts, np.array([0]), 0.01).tolist() == expected
+    rng = np.random.default_rng(2)
+    clouds = [(pts, np.array([0]))] + [
+        (rng.uniform(0, 0.3, (500, 3)), rng.choice(500, 20, replace=False)) for _ in range(8)
+    ]
+    dense = [fragments._near_cells(p, seeds, 0.01) for p, seeds in clouds]
+    monkeypatch.setattr(fragments, "_MAX_GRID_CELLS", 0)  # every grid looked up with np.isin
+    for (p, seeds), near in zip(clouds, dense, strict=True):
+        assert np.array_equal(fragments._near_cells(p, seeds, 0.01), near)

@@ -103,3 +103,23 @@ def test_a_reach_of_zero_keeps_no_voxel_and_warns_nothing() -> None:
         warnings.simplefilter("error")
         near = _near_another_segment(np.arange(50) % 3, pts, 0.0, 3)
     assert near.shape == (50,) and not near.any()
+
+
+def test_the_dense_grid_and_the_searched_cells_keep_the_same_voxels(monkeypatch: pytest.MonkeyPatch) -> None:
+    """`_near_another_segment` reads a small grid as a dense array and searches a wide
+    one's cells: the same voxels either way. By hand first: reach 1 cm (cells 1.01 cm),
+    voxels of segment 0 at x = 0 and 5 cm, of segment 1 at x = 1.5 cm (the neighbouring
+    cell of the first) and 10 cm (beside nothing of segment 0)."""
+    from clearcli.perception import rims
+
+    pts = np.array([[0.0, 0, 0], [0.05, 0, 0], [0.015, 0, 0], [0.10, 0, 0]])
+    seg = np.array([0, 0, 1, 1])
+    expected = np.array([True, False, True, False])
+    assert np.array_equal(rims._near_another_segment(seg, pts, 0.01, 2), expected)
+    rng = np.random.default_rng(5)
+    clouds = [(pts, seg)] + [(rng.uniform(0, 0.3, (800, 3)), rng.integers(0, 6, 800)) for _ in range(10)]
+    dense = [rims._near_another_segment(s, p, 0.01, int(s.max()) + 1) for p, s in clouds]
+    monkeypatch.setattr(rims, "_MAX_GRID_CELLS", 0)  # every grid searched
+    for (p, s), near in zip(clouds, dense, strict=True):
+        assert np.array_equal(rims._near_another_segment(s, p, 0.01, int(s.max()) + 1), near)
+    assert dense[0].tolist() == expected.tolist()

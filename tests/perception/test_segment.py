@@ -348,3 +348,21 @@ def test_unorganized_cloud_finds_the_objects(seed: int) -> None:
         assert isinstance(box, Box)
         assert sorted(obj.obb_extents[:2]) == pytest.approx(sorted([box.size_x_m, box.size_y_m]), abs=0.01)
         assert obj.obb_extents[2] == pytest.approx(box.size_z_m, abs=0.01)
+
+
+def test_row_mean_is_numpys_mean_bit_for_bit() -> None:
+    """`_row_mean` (einsum's sum of the rows) is ``mean(axis=0)`` to the last bit, on
+    sizes around NumPy's block and buffer lengths, C-ordered, Fortran-ordered (the
+    mean itself then), strided and float32."""
+    from clearcli.perception.segment import _row_mean
+
+    # by hand: (1 + 2 + 4) / 3, (0.1 + 0.2 + 0.3) / 3 with its rounding, -1
+    p = np.array([[1.0, 0.1, -1.0], [2.0, 0.2, -1.0], [4.0, 0.3, -1.0]])
+    assert _row_mean(p).tolist() == [7.0 / 3.0, ((0.1 + 0.2) + 0.3) / 3, -1.0]
+    rng = np.random.default_rng(7)
+    for n in (1, 2, 3, 7, 8, 9, 16, 17, 127, 128, 129, 8191, 8192, 8193, 65537):
+        for scale in (1e-3, 1.0, 1e3):
+            q = rng.normal(size=(n, 3)) * scale + rng.normal(size=3)
+            for arr in (q, np.asfortranarray(q), q[::2], q.astype(np.float32)):
+                if arr.shape[0]:
+                    assert np.array_equal(_row_mean(arr), arr.mean(axis=0))

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 from dataclasses import replace
+from types import SimpleNamespace
+from typing import Any
 
 import numpy as np
 import pytest
@@ -62,3 +64,59 @@ def test_step_split_separates_flush_boxes_of_different_heights(seed: int) -> Non
     )
     frame = render(same, seed=seed)
     assert score(segment(frame, S).labels(), frame.fields["label"]).n_pred == 1
+
+
+def _ctx(patch_of_voxel: list[int], height: list[float], step_min_m: float = 0.02) -> Any:
+    """What `_may_step` reads of a RefineContext: each top voxel's supervoxel (its top
+    patch) and height, and the step (every voxel a top one)."""
+    n_sv = max(patch_of_voxel) + 1
+    return SimpleNamespace(
+        sv=SimpleNamespace(voxel_label=np.asarray(patch_of_voxel), centroids=np.zeros((n_sv, 3))),
+        voxel_height=np.asarray(height, dtype=np.float64),
+        voxel_is_top=np.ones(len(patch_of_voxel), dtype=bool),
+        settings=SimpleNamespace(step_min_m=step_min_m),
+    )
+
+
+def test_may_step_wants_a_step_with_enough_top_on_either_side() -> None:
+    from clearcli.perception.steps import _may_step
+
+    # segment 0: 10 voxels at 5 cm and 10 at 10 cm: a step with 10 on each side;
+    # segment 1: 10 at 5 cm and 3 at 10 cm: 3 above it; segment 2: 4 at 5 cm, 4 at
+    # 6 cm (1 cm apart: no step) and 4 at 10 cm: 8 below the step, 4 above it
+    seg = np.repeat([0, 0, 1, 1, 2, 2, 2], [10, 10, 10, 3, 4, 4, 4])
+    patch = np.repeat([0, 1, 2, 3, 4, 5, 6], [10, 10, 10, 3, 4, 4, 4])
+    height = np.repeat([0.05, 0.10, 0.05, 0.10, 0.05, 0.06, 0.10], [10, 10, 10, 3, 4, 4, 4])
+    ctx = _ctx(patch.tolist(), height.tolist())
+    assert _may_step(seg, ctx, 5).tolist() == [True, False, False]
+    assert _may_step(seg, ctx, 4).tolist() == [True, False, True]
+    assert _may_step(seg, ctx, 3).tolist() == [True, True, True]
+
+
+def test_may_step_is_the_test_of_each_segment_on_random_tops() -> None:
+    """For all segments at once, the test `step_splits` makes of each: its patch means
+    sorted, a gap of step_min_m with min_top_vox on either side (heights on a 5 mm grid:
+    equal heights and gaps of exactly the step too)."""
+    from clearcli.perception.graph import dense_labels
+    from clearcli.perception.steps import _may_step
+
+    rng = np.random.default_rng(6)
+    for trial in range(40):
+        n = 150
+        seg, patch = rng.integers(0, 6, n), rng.integers(0, 30, n)
+        height = rng.integers(0, 12, n) * 0.005
+        ctx = _ctx(patch.tolist(), height.tolist(), step_min_m=0.01)
+        min_vox = 1 + trial % 12
+        got = _may_step(seg, ctx, min_vox)
+        for s in range(int(seg.max()) + 1):
+            tops = np.flatnonzero(seg == s)
+            want = False
+            if tops.size >= 2:
+                p = dense_labels(patch[tops])
+                n_vox = np.bincount(p)
+                h = np.bincount(p, weights=height[tops]) / n_vox
+                order = np.argsort(h)
+                below = np.cumsum(n_vox[order])[:-1]
+                ok = (np.diff(h[order]) >= 0.01) & (below >= min_vox) & (tops.size - below >= min_vox)
+                want = bool(ok.any())
+            assert bool(got[s]) == want
