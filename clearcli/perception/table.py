@@ -832,7 +832,10 @@ def beyond_the_edge(
     pieces, n = label_8(is_table & ~cut)
     if n < 2:
         return drop, ~drop
-    sizes = np.bincount(pieces.ravel(), minlength=n + 1)
+    # each table point's piece (0: on a jump): the pieces lie on the table's pixels only, so
+    # their sizes are counted over those, not over the whole image
+    piece_of = np.take(pieces.ravel(), table_pixels)
+    sizes = np.bincount(piece_of, minlength=n + 1)
     sizes[0] = 0
     main = int(sizes.argmax())
     others = [k for k in range(1, n + 1) if k != main and sizes[k] >= _EDGE_MIN_PIECE_PX]
@@ -844,17 +847,26 @@ def beyond_the_edge(
     basis = plane_basis(plane.normal)
     origin = -plane.offset * plane.normal
     cell = settings.table_cell_m
-    # the pieces lie on the table's pixels only: each table point's piece, and its plane
-    # coordinates once (a row's product does not depend on the rows around it: the same
-    # bits as projecting each piece's rows apart), taken per piece in raster order
-    piece_of = np.take(pieces.ravel(), table_pixels)
+    # each table point's plane coordinates once (a row's product does not depend on the
+    # rows around it: the same bits as projecting each piece's rows apart), taken per
+    # piece in raster order
     on_table = np.take(points.reshape(-1, 3), table_pixels, axis=0).astype(np.float64)  # take: faster than a[idx]
     table_u, table_v = (on_table @ a for a in basis)
 
+    ou, ov = (origin @ basis.T).tolist()
+
     def cells(k: int) -> np.ndarray:
+        # column by column, in place: the same operations on each element as on the
+        # stacked (N, 2) rows, without their temporaries
         mine = piece_of == k
-        xy = np.stack([np.compress(mine, table_u), np.compress(mine, table_v)], axis=1) - origin @ basis.T
-        return unique_cells(np.floor(xy / cell).astype(np.int64))
+        columns = []
+        for coordinate, offset in ((table_u, ou), (table_v, ov)):
+            c = np.compress(mine, coordinate)
+            c -= offset
+            c /= cell
+            np.floor(c, out=c)
+            columns.append(c)
+        return unique_cells(np.stack(columns, axis=1).astype(np.int64))
 
     main_cells = cells(main)
     main_hull = convex_hull_2d((main_cells + 0.5) * cell)
