@@ -8,8 +8,9 @@ C functions clear calls on NumPy arrays. `label_8` and `boxes` call those C func
 (scipy.ndimage._ni_label, ._nd_image, with what scipy.ndimage.label and find_objects do
 around them); clearcli/startup.py defers scipy.ndimage's package code
 (DEFERRED_PACKAGES), so importing them runs none of it. A SciPy that moved them gets
-the public functions. `dilate_square` is NumPy's: a box sum, the same cells as
-binary_dilation by a 3x3 square (or maximum_filter1d along both axes) to any depth.
+the public functions. `dilate_square` is NumPy's: ORs of shifted copies, the same
+cells as binary_dilation by a 3x3 square (or maximum_filter1d along both axes) to any
+depth.
 """
 
 from __future__ import annotations
@@ -71,13 +72,43 @@ def boxes(labels: np.ndarray, n: int) -> list[tuple[slice, ...] | None]:
 def dilate_square(mask: np.ndarray, steps: int) -> np.ndarray:
     """The 2D bool ``mask`` dilated ``steps`` times by a 3x3 square (binary_dilation's
     ``iterations``, nothing beyond the raster's edge), i.e. every cell within Chebyshev
-    distance ``steps`` of a set cell: a box sum over (2 steps + 1) cells along each axis,
-    by cumulative sums."""
-    out = mask.astype(np.int32)
-    width = 2 * steps + 1
+    distance ``steps`` of a set cell: along each axis in turn, a cell is set when one
+    within ``steps`` of it is. Each axis by ORs of shifted bool copies, the reach
+    doubling each time (a handful of byte-wide passes; the box sum by int32 cumulative
+    sums it replaced cost 2-25 times more, issue 39)."""
+    out = np.asarray(mask, dtype=bool)
+    if steps <= 0:
+        return out.copy()
     for axis in (0, 1):
-        pad = [(0, 0), (0, 0)]
-        pad[axis] = (steps + 1, steps)
-        c = np.cumsum(np.pad(out, pad), axis=axis, dtype=np.int32)
-        out = c[width:] - c[:-width] if axis == 0 else c[:, width:] - c[:, :-width]
-    return out > 0
+        n = out.shape[axis]
+        # ahead: each cell ORed with the (up to) `steps` cells after it along the axis
+        ahead = _reach_ahead(out, min(steps, max(n - 1, 0)), axis)
+        # a cell within `steps` of a set cell: ahead of itself, or ahead of the cell
+        # `steps` before it (the first cell's, for the cells nearer the start than that)
+        r = min(steps, n)
+        out = ahead.copy()
+        if axis == 0:
+            if n > r:
+                out[r:] |= ahead[:-r]
+            out[1:r] |= ahead[:1]
+        else:
+            if n > r:
+                out[:, r:] |= ahead[:, :-r]
+            out[:, 1:r] |= ahead[:, :1]
+    return out
+
+
+def _reach_ahead(mask: np.ndarray, steps: int, axis: int) -> np.ndarray:
+    """``mask`` (2D bool) with each cell ORed with the ``steps`` cells after it along
+    ``axis`` (fewer at the raster's end): a reach of 1, 2, 4, ... cells in turn, the
+    last step only what is left."""
+    out = mask.copy()
+    covered = 1  # cells each entry holds the OR of
+    while covered < steps + 1:
+        shift = min(covered, steps + 1 - covered)
+        if axis == 0:
+            out[:-shift] |= out[shift:]  # overlapping in place: NumPy reads a copy first
+        else:
+            out[:, :-shift] |= out[:, shift:]
+        covered += shift
+    return out

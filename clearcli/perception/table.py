@@ -11,7 +11,7 @@ itself a plane, and a book's hull holds little.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -61,6 +61,8 @@ _EDGE_RATIO = 2.0
 # not more than this far (m) inside the octagon of extreme points (rounding is 1e-16 m)
 _HULL_FILTER_FROM = 64
 _HULL_INSIDE_M = 1e-9
+# inside_convex_raster(): its cells (m)
+_RASTER_CELL_M = 0.005
 
 
 @dataclass(frozen=True, eq=False)
@@ -72,6 +74,10 @@ class TableFit:
     camera_is_origin: bool  # the cloud is in a camera frame (sensor at the origin, above the table)
     # every plane RANSAC found and what became of it (the chosen one first), for --json
     planes: tuple[PlaneVerdict, ...] = ()
+    # the rasters of its polygon drawn so far (`_raster`, by margin and cell size): the
+    # table's stage and _exclude test points against the same grown hull three times a
+    # frame. Not an argument: a fit made from this one by `replace` draws its own.
+    rasters: dict[tuple[float, float], np.ndarray] = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @property
     def polygon(self) -> np.ndarray:
@@ -82,7 +88,9 @@ class TableFit:
         return project(points, self.basis) - self.origin @ self.basis.T
 
     def inside(self, points: np.ndarray, margin_m: float = 0.0) -> np.ndarray:
-        return inside_convex_raster(self.to_2d(points), self.polygon_2d, margin_m)
+        """`inside_convex_raster` of the points in the plane's coordinates."""
+        xy = self.to_2d(points)
+        return _inside_raster_xy(xy[:, 0], xy[:, 1], self.polygon_2d, margin_m, _RASTER_CELL_M, xy, self.rasters)
 
 
 def _tuple(v: np.ndarray) -> tuple[float, float, float]:
@@ -292,6 +300,12 @@ def convex_hull_2d(points_2d: np.ndarray) -> np.ndarray:
     return points_2d[vertices]
 
 
+def mirrored_hull(polygon_2d: np.ndarray) -> np.ndarray:
+    """The counter-clockwise hull (K, 2) of the points whose hull is ``polygon_2d`` with
+    their x negated: its vertices mirrored, read backwards."""
+    return polygon_2d[::-1] * np.array([-1.0, 1.0])
+
+
 def polygon_area(polygon_2d: np.ndarray) -> float:
     """Area (m^2) of a simple polygon (K, 2) (the shoelace formula)."""
     x, y = polygon_2d[:, 0], polygon_2d[:, 1]
@@ -311,7 +325,7 @@ def inside_convex(points_2d: np.ndarray, polygon_2d: np.ndarray, margin_m: float
 
 
 def inside_convex_raster(
-    points_2d: np.ndarray, polygon_2d: np.ndarray, margin_m: float = 0.0, cell_m: float = 0.005
+    points_2d: np.ndarray, polygon_2d: np.ndarray, margin_m: float = 0.0, cell_m: float = _RASTER_CELL_M
 ) -> np.ndarray:
     """`inside_convex` looked up in a raster of the polygon (cells of ``cell_m``): exact
     to within a cell near the boundary, and an order of magnitude faster for the
@@ -326,9 +340,11 @@ def _inside_raster_xy(
     margin_m: float,
     cell_m: float,
     points_2d: np.ndarray | None = None,
+    rasters: dict[tuple[float, float], np.ndarray] | None = None,
 ) -> np.ndarray:
     """`inside_convex_raster` of the points (x, y) given as two columns (``points_2d``:
-    them as one (N, 2) array when the caller has it; the exact test needs it)."""
+    them as one (N, 2) array when the caller has it; the exact test needs it).
+    ``rasters``: the polygon's rasters drawn before, by (margin, cell), to read and add to."""
     lo = polygon_2d.min(axis=0) - margin_m - cell_m
     hi = polygon_2d.max(axis=0) + margin_m + cell_m
     span = np.ceil((hi - lo) / cell_m)
@@ -338,7 +354,11 @@ def _inside_raster_xy(
     if not n_cells <= 2_000_000 or x.shape[0] < n_cells // 4:
         return inside_convex(np.stack([x, y], axis=1) if points_2d is None else points_2d, polygon_2d, margin_m)
     dims = span.astype(np.int64)
-    grid = _raster(polygon_2d, margin_m, cell_m, lo, dims)
+    grid = None if rasters is None else rasters.get((margin_m, cell_m))
+    if grid is None:
+        grid = _raster(polygon_2d, margin_m, cell_m, lo, dims)
+        if rasters is not None:
+            rasters[(margin_m, cell_m)] = grid
     # a point off the raster clipped into its border of outside cells; clipped before the
     # cast too: a point 1e38 m away (a damaged cloud) has a cell index no int64 holds
     # (and after it, for NaN's integer)
@@ -523,7 +543,9 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
         raise SceneError(f"{where}no table: only {points.shape[0]} usable points in the frame")
     rng = np.random.default_rng(0)  # fixed: the same frame always gives the same table
     step = max(1, points.shape[0] // _RANSAC_SAMPLE)
-    sample = points[::step]
+    # a contiguous copy of the regular subsample: the row gathers, masks and products on
+    # it below (a dozen a frame) cost 2-3 times as much on the strided view
+    sample = np.ascontiguousarray(points[::step])
     dist = settings.plane_distance_m
 
     candidates: list[_Candidate] = []
@@ -610,7 +632,19 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
             continue
         basis = plane_basis(n)
         origin = -d * n
-        poly = convex_hull_2d(project(members, basis) - origin @ basis.T)
+        turned_poly = None
+        if camera_is_origin and d < 0:
+            # turned towards the camera below: its hull is wanted in the turned plane's axes,
+            # and the one in these is its mirror image (u turns to -u exactly, v stays: the
+            # same points with x negated, bit for bit), read backwards to run counter-
+            # clockwise: the same directed edges as Qhull's of these, so the same test
+            # below; one hull of the members, not two
+            turned_n, turned_d = -n, -d  # what the turn below makes them
+            turned_basis = plane_basis(turned_n)
+            turned_poly = convex_hull_2d(project(members, turned_basis) - (-turned_d * turned_n) @ turned_basis.T)
+            poly = mirrored_hull(turned_poly)
+        else:
+            poly = convex_hull_2d(project(members, basis) - origin @ basis.T)
         h = loose @ n + d
         # depth noise grows with the square of the range: far off-plane points are
         # noise of the plane itself, not things standing on it
@@ -627,7 +661,7 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
             # the hull again in the turned plane's axes (unturned, it is the one above)
             basis = plane_basis(n)
             origin = -d * n
-            poly = convex_hull_2d(project(members, basis) - origin @ basis.T)
+            poly = convex_hull_2d(project(members, basis) - origin @ basis.T) if turned_poly is None else turned_poly
         fit = TableFit(TablePlane(normal=n, offset=float(d)), poly, origin, basis, camera_is_origin)
         # noise lies on both sides of a plane, objects on one: score the difference
         key = (abs(above - below), c.area_m2)
@@ -734,12 +768,10 @@ def table_and_prism(
     ox, oy = (fit.origin @ fit.basis.T).tolist()
     x -= ox
     y -= oy
-    ins = _inside_raster_xy(x, y, fit.polygon_2d, settings.hull_margin_m, 0.005)
-    table = np.zeros(points.shape[0], dtype=bool)
-    prism = np.zeros(points.shape[0], dtype=bool)
-    table[cand[ins & near[cand]]] = True
-    prism[cand[ins & band[cand]]] = True
-    return table, prism, h
+    inside = np.zeros(points.shape[0], dtype=bool)
+    inside[cand] = _inside_raster_xy(x, y, fit.polygon_2d, settings.hull_margin_m, _RASTER_CELL_M, None, fit.rasters)
+    # near and band lie within cand: two whole-array ands, not a gather and a scatter each
+    return inside & near, inside & band, h
 
 
 def beyond_the_edge(
@@ -774,8 +806,9 @@ def beyond_the_edge(
         return drop, ~drop
     pts = points.reshape(height, width, 3)
     # depth along the optical axis (NaN where none): a jump in it is a jump in range
-    # to within the pixel's angle off the axis, and it costs no square roots
-    rng = pts[..., 2]
+    # to within the pixel's angle off the axis, and it costs no square roots (a
+    # contiguous copy: the passes below over a strided view cost twice as much)
+    rng = np.ascontiguousarray(pts[..., 2])
     is_table: np.ndarray = np.zeros(height * width, dtype=bool)  # flat, then (height, width)
     is_table[table_pixels] = True
     is_table = is_table.reshape(height, width)
@@ -787,13 +820,22 @@ def beyond_the_edge(
         for dv, du in ((0, 1), (1, 0)):
             a = rng[: height - dv, : width - du]
             b = rng[dv:, du:]
-            jump = ~(np.abs(a - b) <= rel * np.minimum(a, b))
+            # ~(|a - b| <= rel min(a, b)) (NaN: a jump), in place: no temporary per operation
+            diff = np.subtract(a, b)
+            np.abs(diff, out=diff)
+            limit = np.minimum(a, b)
+            limit *= rel
+            jump = np.less_equal(diff, limit)
+            np.logical_not(jump, out=jump)
             cut[: height - dv, : width - du] |= jump
             cut[dv:, du:] |= jump
     pieces, n = label_8(is_table & ~cut)
     if n < 2:
         return drop, ~drop
-    sizes = np.bincount(pieces.ravel(), minlength=n + 1)
+    # each table point's piece (0: on a jump): the pieces lie on the table's pixels only, so
+    # their sizes are counted over those, not over the whole image
+    piece_of = np.take(pieces.ravel(), table_pixels)
+    sizes = np.bincount(piece_of, minlength=n + 1)
     sizes[0] = 0
     main = int(sizes.argmax())
     others = [k for k in range(1, n + 1) if k != main and sizes[k] >= _EDGE_MIN_PIECE_PX]
@@ -805,17 +847,26 @@ def beyond_the_edge(
     basis = plane_basis(plane.normal)
     origin = -plane.offset * plane.normal
     cell = settings.table_cell_m
-    # the pieces lie on the table's pixels only: each table point's piece, and its plane
-    # coordinates once (a row's product does not depend on the rows around it: the same
-    # bits as projecting each piece's rows apart), taken per piece in raster order
-    piece_of = np.take(pieces.ravel(), table_pixels)
+    # each table point's plane coordinates once (a row's product does not depend on the
+    # rows around it: the same bits as projecting each piece's rows apart), taken per
+    # piece in raster order
     on_table = np.take(points.reshape(-1, 3), table_pixels, axis=0).astype(np.float64)  # take: faster than a[idx]
     table_u, table_v = (on_table @ a for a in basis)
 
+    ou, ov = (origin @ basis.T).tolist()
+
     def cells(k: int) -> np.ndarray:
+        # column by column, in place: the same operations on each element as on the
+        # stacked (N, 2) rows, without their temporaries
         mine = piece_of == k
-        xy = np.stack([np.compress(mine, table_u), np.compress(mine, table_v)], axis=1) - origin @ basis.T
-        return unique_cells(np.floor(xy / cell).astype(np.int64))
+        columns = []
+        for coordinate, offset in ((table_u, ou), (table_v, ov)):
+            c = np.compress(mine, coordinate)
+            c -= offset
+            c /= cell
+            np.floor(c, out=c)
+            columns.append(c)
+        return unique_cells(np.stack(columns, axis=1).astype(np.int64))
 
     main_cells = cells(main)
     main_hull = convex_hull_2d((main_cells + 0.5) * cell)

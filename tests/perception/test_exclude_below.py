@@ -79,3 +79,40 @@ def test_the_floor_under_the_table_is_no_face_going_on(monkeypatch: pytest.Monke
     wide = segment(frame, ON)
     taken = [e for e in wide.excluded if "goes on below" in e.reason and np.mean(truth[e.indices] >= 10) > 0.95]
     assert taken, [e.reason for e in wide.excluded]
+
+
+@pytest.mark.parametrize(("below_x_m", "goes_on"), [(0.457, True), (0.462, False)])
+def test_what_goes_on_below_outside_the_outline_is_found_among_a_far_floors_points(
+    below_x_m: float, goes_on: bool
+) -> None:
+    # z-up, the prism's side at x = 0.43: a flat thing resting on the support (z = 12 mm)
+    # from x = 0.36 to 0.44, 21 points a column along y; below the support's level outside,
+    # a line of points at z = 5 mm along its end, and a far floor of 3000 points at -0.7 m.
+    # Its edge column x = 0.44 is sqrt(17^2 + 7^2) = 18.4 mm from the line at x = 0.457
+    # (within the 20 mm reach: 21 points touch, at least 15 do: it goes on below), 22.1 mm
+    # from the line at 0.462 (none does); the next column (x = 0.436) 22.1 mm from 0.457.
+    from clearcli.perception.exclude import not_standing
+
+    xs, ys = np.meshgrid(np.arange(0.36, 0.44 + 1e-9, 0.004), np.arange(-0.04, 0.04 + 1e-9, 0.004))
+    thing = np.column_stack([xs.ravel(), ys.ravel(), np.full(xs.size, 0.012)])
+    line_y = np.arange(-0.04, 0.04 + 1e-9, 0.004)
+    line = np.column_stack([np.full(line_y.size, below_x_m), line_y, np.full(line_y.size, 0.005)])
+    rng = np.random.default_rng(4)
+    floor = np.column_stack([rng.uniform(-1.0, 1.0, (3000, 2)), np.full(3000, -0.7)])
+    gx, gy = np.meshgrid(np.arange(-0.4, 0.4 + 1e-9, 0.01), np.arange(-0.3, 0.3 + 1e-9, 0.01))
+    support = np.column_stack([gx.ravel(), gy.ravel(), np.zeros(gx.size)])
+    found = not_standing(
+        [thing],
+        np.zeros((0, 3)),
+        np.vstack([floor, line]),
+        support,
+        lambda p: p[:, 2],
+        lambda p: p[:, :2],
+        lambda p: (np.abs(p[:, 0]) <= 0.43) & (np.abs(p[:, 1]) <= 0.33),
+        lambda p: 0.013,
+    )
+    reasons = [v.reason for v in found]
+    if goes_on:
+        assert len(reasons) == 1 and "goes on below the support's level outside its outline (21 of" in reasons[0]
+    else:
+        assert reasons == []

@@ -62,3 +62,26 @@ def test_differing_shares_are_each_groups_own_mean_bit_for_bit() -> None:
         assert all(type(v) is float for v in got)
         assert 0.0 < got[5] < 1.0  # a mixed group, not all or nothing
     assert differing_shares(colors, [], centre, 20.0) == []
+
+
+def test_support_colour_samples_the_table_pixels_on_the_image_lattice() -> None:
+    # 200 x 100 pixels: every 2nd pixel of the image is on the lattice. The table's pixels
+    # on it are grey (120, 120, 120), those off it a strong red: the centre is grey's
+    # CIELAB, the spread 0 (the threshold the minimum); a table of only off-lattice pixels
+    # has no sample but its one lattice pixel
+    from clearcli.perception.flat import support_colour
+
+    shape = (200, 100)
+    colors = np.zeros((200 * 100, 3), dtype=np.uint8)
+    colors[0::2] = (120, 120, 120)
+    colors[1::2] = (230, 20, 20)
+    table = np.arange(4000, 16000)  # lattice and off-lattice pixels alike
+    centre, threshold = support_colour(colors, shape, table, 20.0)
+    assert np.array_equal(centre, lab_of(np.array([[120, 120, 120]], dtype=np.uint8))[0])
+    assert threshold == 20.0
+    odd = np.append(np.arange(4001, 16000, 2), 16000)  # off the lattice, but 16000
+    centre, _ = support_colour(colors, shape, odd, 20.0)
+    assert np.array_equal(centre, lab_of(np.array([[120, 120, 120]], dtype=np.uint8))[0])
+    # unordered pixels: the same sample
+    shuffled = np.random.default_rng(2).permutation(table)
+    assert np.array_equal(support_colour(colors, shape, shuffled, 20.0)[0], centre)

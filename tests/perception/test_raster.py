@@ -89,3 +89,36 @@ def test_dilate_square_by_hand() -> None:
     assert np.array_equal(got, want)
     # 4 steps: rows 0-4 of columns 0-4 from one corner, of columns 1-5 from the other
     assert raster.dilate_square(mask, 4).all() and raster.dilate_square(mask, 2).sum() == 9 + 9
+
+
+def test_dilate_square_on_thin_and_small_rasters_and_long_reaches() -> None:
+    # the doubling reach on rasters thinner than the steps (a row, a column, one cell,
+    # none) and reaches that are no power of two, against maximum filters along both axes
+    rng = np.random.default_rng(7)
+    shapes = [(1, 1), (1, 9), (9, 1), (2, 3), (0, 4), (4, 0), (7, 13), (31, 17), (64, 5)]
+    for shape in shapes:
+        for share in (0.02, 0.2):
+            grid = rng.random(shape) < share
+            for steps in (1, 2, 3, 5, 6, 7, 12, 25, 40):
+                got = raster.dilate_square(grid, steps)
+                assert got.shape == grid.shape and got.dtype == bool
+                if grid.size == 0:
+                    continue
+                size = 2 * steps + 1
+                grown = ndimage.maximum_filter1d(
+                    ndimage.maximum_filter1d(grid.astype(np.uint8), size, axis=0, mode="constant"),
+                    size,
+                    axis=1,
+                    mode="constant",
+                )
+                assert np.array_equal(got, grown > 0), (shape, share, steps)
+
+
+def test_dilate_square_reaches_exactly_steps_cells() -> None:
+    # one cell in the middle of a 1 x 41 row: 5 steps set columns 15-25, no more
+    row = np.zeros((1, 41), dtype=bool)
+    row[0, 20] = True
+    got = raster.dilate_square(row, 5)
+    assert np.flatnonzero(got[0]).tolist() == list(range(15, 26))
+    # and the input is left alone
+    assert int(row.sum()) == 1

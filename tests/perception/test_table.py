@@ -432,3 +432,101 @@ def test_the_pinhole_fit_skips_points_whose_x_or_y_is_infinite() -> None:
     assert pixel is not None
     cols, rows = pixel(np.array([[0.01, 0.01, 1.0], [0.26, -0.13, 1.0]]))  # off the .5 boundaries
     assert cols.tolist() == [32, 47] and rows.tolist() == [24, 16]
+
+
+def _cyclic(rows: np.ndarray) -> list[tuple[float, float]]:
+    """A polygon's vertices as a list that starts at its smallest (x, y): equal for the same
+    cycle read from any start."""
+    pairs = [(float(x), float(y)) for x, y in rows]
+    k = pairs.index(min(pairs))
+    return pairs[k:] + pairs[:k]
+
+
+def test_the_hull_in_turned_axes_is_the_mirror_of_the_hull_read_backwards() -> None:
+    # find_table takes a camera frame's hull once, in the turned plane's axes, and the one in
+    # the unturned axes as its mirror image (x negated) read backwards: the same directed
+    # edges as Qhull's own hull of the unturned points, so the same points inside it
+    from clearcli.perception.table import convex_hull_2d, inside_convex, mirrored_hull, plane_basis, project
+
+    rng = np.random.default_rng(11)
+    for trial in range(40):
+        normal = rng.normal(size=3)
+        normal /= np.linalg.norm(normal)
+        d = float(rng.uniform(-1.5, -0.3))
+        members = rng.normal(size=(int(rng.integers(50, 3000)), 3)) * [0.4, 0.3, 0.2]
+        members -= np.outer(members @ normal + d, normal)  # onto the plane
+        if trial % 3 == 0:  # a grid: many points on the hull's sides
+            members = np.round(members, 2)
+        basis, origin = plane_basis(normal), -d * normal
+        turned_n, turned_d = -normal, -d
+        turned_basis = plane_basis(turned_n)
+        mine = project(members, basis) - origin @ basis.T
+        turned = project(members, turned_basis) - (-turned_d * turned_n) @ turned_basis.T
+        assert np.array_equal(turned, mine * [-1.0, 1.0])  # u turns to -u exactly, v stays
+        qhulls = convex_hull_2d(mine)
+        mirrored = mirrored_hull(convex_hull_2d(turned))
+        assert _cyclic(mirrored) == _cyclic(qhulls)
+        probes = rng.normal(size=(2000, 2)) * 0.5
+        assert np.array_equal(inside_convex(probes, mirrored, -0.02), inside_convex(probes, qhulls, -0.02))
+    # by hand: the unit square's hull turned is the square at x in [-1, 0], and read back
+    square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0], [0.5, 0.5]])
+    back = mirrored_hull(convex_hull_2d(square * [-1.0, 1.0]))
+    assert _cyclic(back) == [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)]
+
+
+def test_table_and_prism_masks_by_hand() -> None:
+    # a z-up unit square (no camera at the origin: the prism's floor is flat), hull margin
+    # 5 cm: on the plane inside is table, 1 cm to 2 m above inside is prism, the rest neither
+    from clearcli.perception.table import TableFit, table_and_prism
+    from clearcli.perception.types import TablePlane
+
+    square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    basis = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    fit = TableFit(TablePlane(np.array([0.0, 0.0, 1.0]), 0.0), square, np.zeros(3), basis, False)
+    probes = [
+        ((0.5, 0.5, 0.0), True, False),  # on the table
+        ((1.04, 0.5, 0.005), True, False),  # within the margin, within plane distance
+        ((0.5, 0.5, 0.05), False, True),  # standing on it
+        ((-0.04, 0.2, 1.5), False, True),  # within the margin, high up
+        ((0.5, 0.5, 2.5), False, False),  # above the prism
+        ((0.5, 0.5, -0.05), False, False),  # below the table
+        ((1.2, 0.5, 0.0), False, False),  # on the plane beyond the margin
+        ((1.2, 0.5, 0.3), False, False),  # above the plane beyond the margin
+    ]
+    # many copies of each, so that the raster lookup (not the exact test) decides
+    pts = np.repeat(np.array([p for p, _, _ in probes]), 20000, axis=0)
+    table, prism, h = table_and_prism(pts, fit, S)
+    assert np.array_equal(h, pts[:, 2])
+    for k, (_, on, over) in enumerate(probes):
+        rows = slice(k * 20000, (k + 1) * 20000)
+        assert table[rows].all() == on and table[rows].any() == on, k
+        assert prism[rows].all() == over and prism[rows].any() == over, k
+
+
+def test_a_fits_rasters_are_drawn_once_per_margin_and_not_passed_on_by_replace() -> None:
+    from clearcli.perception.table import TableFit, inside_convex_raster
+    from clearcli.perception.types import TablePlane
+
+    square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    basis = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    fit = TableFit(TablePlane(np.array([0.0, 0.0, 1.0]), 0.0), square, np.zeros(3), basis, False)
+    rng = np.random.default_rng(5)
+    pts = np.column_stack([rng.uniform(-0.3, 1.3, (200000, 2)), np.zeros(200000)])
+    first = fit.inside(pts, 0.05)
+    assert list(fit.rasters) == [(0.05, 0.005)]
+    drawn = fit.rasters[(0.05, 0.005)]
+    again = fit.inside(pts[::-1], 0.05)
+    assert fit.rasters[(0.05, 0.005)] is drawn  # read, not drawn again
+    assert np.array_equal(again, first[::-1])
+    assert np.array_equal(first, inside_convex_raster(pts[:, :2], square, 0.05))
+    # by hand: the square grown by 5 cm holds the points within it (cells of 5 mm)
+    xy = pts[:, :2]
+    sure_in = ((xy > -0.045) & (xy < 1.045)).all(axis=1)
+    sure_out = ((xy < -0.055) | (xy > 1.055)).any(axis=1)
+    assert first[sure_in].all() and not first[sure_out].any()
+    fit.inside(pts, 0.0)
+    assert sorted(fit.rasters) == [(0.0, 0.005), (0.05, 0.005)]
+    # a fit with another polygon draws its own
+    smaller = replace(fit, polygon_2d=square * 0.5)
+    assert smaller.rasters == {}
+    assert not smaller.inside(np.array([[0.8, 0.8, 0.0]] * 200000), 0.05).any()
