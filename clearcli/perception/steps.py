@@ -22,6 +22,8 @@ Per segment (every round, every segment):
 4. every voxel of the segment goes to the side of the plane it is on (voxels, not
    supervoxels: a patch may straddle the seam); pieces are connected components, small
    ones rejoin a neighbour (LCCP's rule).
+A step also needs one of its two tops to be the top of its side (`_ledges_only`,
+``step_max_over_top_m``): a rough, rounded object shows level patches on its flanks.
 """
 
 from __future__ import annotations
@@ -125,6 +127,25 @@ def _may_step(seg: np.ndarray, ctx: RefineContext, min_top_vox: float) -> np.nda
     return out
 
 
+def _ledges_only(
+    voxel_height: np.ndarray,
+    members: np.ndarray,
+    side: np.ndarray,
+    tops: np.ndarray,
+    is_upper: np.ndarray,
+    max_over_m: float,
+) -> bool:
+    """Neither top is the top of its side of the line: each side's voxels (their 95th
+    percentile of height) stand more than ``max_over_m`` above that side's top patches'
+    mean height. Two objects' tops are the tops of their sides; the level patches on the
+    flanks of one rounded, rough object (a loofah, a plush toy) are ledges with more of
+    the object above them on both sides."""
+    h_tops = voxel_height[tops]
+    over_upper = np.percentile(voxel_height[members[side]], 95) - h_tops[is_upper].mean()
+    over_lower = np.percentile(voxel_height[members[~side]], 95) - h_tops[~is_upper].mean()
+    return bool(min(over_upper, over_lower) > max_over_m)
+
+
 def step_splits(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
     """The stage: (V,) segment of every voxel after splitting at steps between tops,
     0..G-1.
@@ -185,6 +206,8 @@ def step_splits(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
                 continue
             side = xy[members] @ normal2 > offset
             if min(int(side.sum()), int((~side).sum())) < min_side_vox:
+                continue
+            if _ledges_only(voxel_height, members, side, tops, is_upper, settings.step_max_over_top_m):
                 continue
             seg[members[side]] = next_label
             next_label += 1

@@ -207,6 +207,15 @@ class SegmentSettings(Section):
     step_min_m: float = param(0.008, gt=0, le=0.1)
     # share of the smaller top's voxels a separating line may leave on the wrong side
     step_max_error: float = param(0.03, ge=0, le=0.5)
+    # a top is the top of its side: a step needs one of its two tops with its side of
+    # the line (95th percentile of its voxels' heights) at most this (m) above it
+    # (issue 37). A textured, rounded object (gqcnn_primesense_4's loofah) has level
+    # patches on its flanks: ledges with 24.0 and 45.8 mm of it above them. Of the steps
+    # that split two objects the less one is at most 5.0 mm on the foreign choose frames,
+    # 1.5 mm on the families' choose seeds 0-19 (none reaches this on the mOSD learn
+    # frames); 20 mm lies between, with 4 mm to the loofah and 8.7 mm to the highest other
+    # (11.3 mm, a mug's and its marker's segment, uois_image_0006)
+    step_max_over_top_m: float = param(0.02, gt=0, le=1)
     # --- 3b'''. stacks (ours; see stacks.py) -------------------------------------------
     # split off an object standing on a lower top of its segment: a top step_min_m or
     # more above a top of at least min_object_area_m2, standing inside it

@@ -40,6 +40,34 @@ def test_best_separating_line_by_hand() -> None:
     assert errors >= 9  # half the disk, or most of the ring
 
 
+def test_ledges_only_by_hand() -> None:
+    """A step needs one top to be the top of its side: two boxes' tops are; a rough,
+    rounded object's level patches on its flanks are ledges on both sides."""
+    from clearcli.perception.steps import _ledges_only
+
+    # 20 voxels a side, the upper side (the first 20) at 100 mm but for its top patch
+    # (voxels 0-3) at 100 mm too; the lower side at 60 mm, its top patch (20-23) at 60
+    two_boxes = np.r_[np.full(20, 0.100), np.full(20, 0.060)]
+    side = np.r_[np.ones(20, bool), np.zeros(20, bool)]
+    members = np.arange(40)
+    tops = np.r_[0:4, 20:24]
+    is_upper = np.r_[np.ones(4, bool), np.zeros(4, bool)]
+    assert not _ledges_only(two_boxes, members, side, tops, is_upper, 0.02)
+    # a loofah: the same patches are ledges at 60 and 20 mm, the rest of each side
+    # rising to 90 and 50 mm: its 95th percentile 30 mm above either ledge
+    blob = np.r_[np.full(4, 0.060), np.linspace(0.06, 0.09, 16), np.full(4, 0.020), np.linspace(0.02, 0.05, 16)]
+    assert _ledges_only(blob, members, side, tops, is_upper, 0.02)
+    # the 95th percentile of the upper side's 20: position 0.95 x 19 = 18.05 of them
+    # sorted, 88 mm + 0.05 x 2 mm = 88.1 mm, 28.1 mm above its ledge; the lower side's
+    # alike, 40 mm lower
+    assert not _ledges_only(blob, members, side, tops, is_upper, 0.0282)
+    assert _ledges_only(blob, members, side, tops, is_upper, 0.0280)
+    # one side's top is its top (the lower one's, a box beside a rounded object): a step
+    flank = blob.copy()
+    flank[20:] = 0.020
+    assert not _ledges_only(flank, members, side, tops, is_upper, 0.02)
+
+
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_step_split_separates_flush_boxes_of_different_heights(seed: int) -> None:
     """Two boxes of the same footprint width, face to face along x, fronts and backs
