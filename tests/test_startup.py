@@ -257,3 +257,49 @@ def test_the_cache_lives_under_an_absolute_cache_home_only(monkeypatch: pytest.M
     assert str(startup._code_cache_path()).startswith(str(tmp_path / "home" / ".cache" / "clear" / "dataclass-code."))
     monkeypatch.delenv("XDG_CACHE_HOME")
     assert str(startup._code_cache_path()).startswith(str(tmp_path / "home" / ".cache" / "clear"))
+
+
+# scipy._lib._util (clearcli/startup.py DEFERRED_CODE_MODULES): the tree's module takes
+# `copy_if_needed` from it at its import; the value is given without the module's code
+# (and SciPy's array-API layer it imports), any other name runs that code.
+_UTIL = """
+import json, sys
+PATCH
+import numpy as np
+from scipy.spatial import cKDTree
+util = sys.modules["scipy._lib._util"]
+before = [type(util).__name__, "scipy._lib._array_api" in sys.modules, hasattr(util, "__path__")]
+from scipy._lib._util import copy_if_needed
+dist, idx = cKDTree([[0.0, 0.0], [3.0, 4.0]]).query([[3.0, 3.0]])
+given = [type(util).__name__, copy_if_needed]
+rng = util.check_random_state(7)  # not a stand-in: its code runs
+print(json.dumps({
+    "before": before,
+    "given": given,
+    "after": [type(util).__name__, util.copy_if_needed, "scipy._lib._array_api" in sys.modules, type(rng).__name__],
+    "query": [dist.tolist(), idx.tolist()],
+}))
+"""
+
+
+def test_scipy_util_gives_the_trees_one_name_without_its_code() -> None:
+    hook = "from clearcli.startup import lighten_imports\nlighten_imports()"
+    hooked = _run(_UTIL.replace("PATCH", hook))
+    plain = _run(_UTIL.replace("PATCH", ""))
+    assert hooked["before"] == ["_DeferredPackage", False, False] and plain["before"] == ["module", True, False]
+    assert hooked["given"] == ["_DeferredPackage", None] and plain["given"] == ["module", None]  # NumPy 2: None
+    assert hooked["after"] == plain["after"] == ["module", None, True, "RandomState"]
+    assert hooked["query"] == plain["query"] == [[1.0], [1]]  # (3,3) to (3,4): 1
+
+
+def test_scipy_util_runs_its_code_where_clear_cannot_tell_its_value() -> None:
+    # an older NumPy: only the module's own code can tell copy_if_needed (stand-in says _MISSING)
+    code = _UTIL.replace(
+        "PATCH",
+        "from clearcli import startup\n"
+        "startup.VALUE_STAND_INS['scipy._lib._util']['copy_if_needed'] = lambda: startup._MISSING\n"
+        "startup.lighten_imports()",
+    )
+    out = _run(code)
+    assert out["before"] == ["module", True, False]  # the tree's import ran it
+    assert out["given"] == ["module", None] and out["after"] == ["module", None, True, "RandomState"]
