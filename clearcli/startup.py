@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import _thread
 import atexit
+import gc
 import importlib
 import importlib.machinery
 import importlib.util
@@ -399,3 +400,34 @@ PATCHED_MODULES: dict[str, Callable[[ModuleType], None]] = {
     "scipy._lib._array_api": _keep_scipy_docstrings,
     "dataclasses": _cache_dataclass_code,
 }
+
+
+# Python's cyclic garbage collector while a frame command loads its libraries (issue 39).
+# Loading typer, NumPy, SciPy and clear's modules makes ~100 000 objects (modules,
+# classes, functions), all kept to the end; the collector ran ~80 times over them in a
+# cold `clear plan` (~14 ms of CPU on a loaded machine), finding nothing to free (a whole
+# plan leaves no cyclic garbage at all). `pause_collection` stops it until the command
+# reads its frame (`resume_collection`, from clearcli/pipeline.py `read`, or a batch's
+# parent before its run): what was made until then is moved out of the collector's sight
+# (gc.freeze: never scanned again, as objects that live as long as the process), and the
+# collector runs as before on what the work makes. Only in a process that has not loaded
+# NumPy yet (a fresh `clear`): a test or a program calling `main` again is left alone.
+_collection_paused = False
+
+
+def pause_collection() -> None:
+    global _collection_paused
+    if gc.isenabled() and "numpy" not in sys.modules:
+        gc.disable()
+        _collection_paused = True
+
+
+def resume_collection(freeze: bool = True) -> None:
+    """The collector back on after `pause_collection` (else nothing): with ``freeze``, what
+    exists now is never scanned again."""
+    global _collection_paused
+    if _collection_paused:
+        _collection_paused = False
+        if freeze:
+            gc.freeze()
+        gc.enable()

@@ -303,3 +303,43 @@ def test_scipy_util_runs_its_code_where_clear_cannot_tell_its_value() -> None:
     out = _run(code)
     assert out["before"] == ["module", True, False]  # the tree's import ran it
     assert out["given"] == ["module", None] and out["after"] == ["module", None, True, "RandomState"]
+
+
+# The garbage collector while a frame command loads its libraries (clearcli/startup.py
+# pause_collection): off, then on again with what was made until then frozen.
+def gc_threshold_0() -> int:
+    import gc
+
+    return gc.get_threshold()[0]
+
+
+_COLLECTION = """
+import gc, json, sys
+from clearcli import startup
+startup.pause_collection()
+paused = [gc.isenabled(), startup._collection_paused]
+junk = [[] for _ in range(1000)]
+for a in junk:
+    a.append(a)  # cycles, not freed while the collector is off
+made = gc.get_count()[0]
+startup.resume_collection(freeze=FREEZE)
+resumed = [gc.isenabled(), gc.get_freeze_count() > 1000, startup._collection_paused]
+del junk
+import numpy  # a process with NumPy loaded (a test, a program): left alone
+startup.pause_collection()
+again = [gc.isenabled(), startup._collection_paused]
+startup.resume_collection()
+print(json.dumps({"paused": paused, "made": made, "resumed": resumed, "again": again, "frozen": gc.get_freeze_count() > 1000}))
+"""
+
+
+@pytest.mark.parametrize("freeze", [True, False])
+def test_collection_is_paused_until_resumed_and_then_frozen(freeze: bool) -> None:
+    out = _run(_COLLECTION.replace("FREEZE", str(freeze)))
+    assert out["paused"] == [False, True]
+    # the 1000 lists counted since the pause: a running collector would have reset the
+    # count at its threshold (700) and collected
+    assert out["made"] >= 1000 > gc_threshold_0()
+    assert out["resumed"] == [True, freeze, False]
+    assert out["again"] == [True, False]  # NumPy loaded: not paused
+    assert out["frozen"] is freeze

@@ -308,3 +308,59 @@ def test_plan_keeps_its_dataclasses_code_for_the_next_call(tmp_path: Path) -> No
     assert [p.name for p in (tmp_path / "cache" / "clear").iterdir()] == [
         f"dataclass-code.{sys.implementation.cache_tag}.{importlib.util.MAGIC_NUMBER.hex()}.m{marshal.version}.v1"
     ]
+
+
+_COLLECTOR_HOOK = """
+import atexit, gc, json, os, sys
+runs = []
+# per collection: after main's start (typer is imported after it), after the frame's read
+# (the PCD reader's module loads then)
+gc.callbacks.append(
+    lambda phase, info: phase == "stop" and runs.append(("typer" in sys.modules, "clearcli.io.pcd" in sys.modules))
+)
+atexit.register(lambda: json.dump(
+    {"enabled": gc.isenabled(), "frozen": gc.get_freeze_count(), "numpy_frozen": "numpy" in sys.modules,
+     "before_read": runs.count((True, False)), "after_read": runs.count((True, True))},
+    open(os.environ["CLEAR_TEST_REPORT"], "w")))
+"""
+
+
+@pytest.mark.parametrize(
+    ("args", "frozen"),
+    [
+        (("plan", FIXTURES / "isolated_box.pcd"), True),
+        (("segment", FIXTURES / "isolated_box.pcd", "--json"), True),
+        (("plan", "--help"), False),  # no frame read: the collector back on as it was
+        (("info", FIXTURES / "isolated_box.pcd"), False),  # not a frame command of issue 39's
+    ],
+)
+def test_a_frame_command_loads_its_libraries_without_the_collector(
+    tmp_path: Path, args: tuple[object, ...], frozen: bool
+) -> None:
+    """Issue 39: the collector scanned start-up's ~100 000 objects ~80 times in a cold
+    `clear plan` (~14 ms), freeing nothing; a frame command pauses it until it reads its
+    frame (clearcli/startup.py pause_collection), then freezes what it loaded."""
+    report = tmp_path / "gc.json"
+    env = hooked_env(tmp_path, _COLLECTOR_HOOK)
+    env["CLEAR_TEST_REPORT"] = str(report)
+    res = run_clear(*args, timeout=180, env=env)
+    assert res.returncode in (0, 10), res.stderr
+    state = json.loads(report.read_text())
+    assert state["enabled"] is True
+    if frozen:
+        # no collection from main's start until the frame was read
+        assert state["before_read"] == 0 and state["after_read"] > 0
+        assert state["frozen"] > 10_000 and state["numpy_frozen"] is True
+    else:
+        assert state["frozen"] == 0 and state["before_read"] > 0
+
+
+def test_a_batchs_parent_turns_the_collector_back_on(tmp_path: Path) -> None:
+    report = tmp_path / "gc.json"
+    env = hooked_env(tmp_path, _COLLECTOR_HOOK)
+    env["CLEAR_TEST_REPORT"] = str(report)
+    frames = [FIXTURES / "isolated_box.pcd", FIXTURES / "two_touching_boxes.pcd"]
+    res = run_clear("segment", *frames, "--json", "--jobs", "1", timeout=180, env=env)
+    assert res.returncode == 0, res.stderr
+    state = json.loads(report.read_text())
+    assert state["enabled"] is True and state["frozen"] > 10_000  # resumed before its run
