@@ -193,6 +193,9 @@ def _quiet_stdout() -> None:
 # the same); the names are kept here too, where the tests and benchmarks/startup.py read them.
 _single_threaded_numerics = startup.single_threaded_numerics
 _lighten_imports = startup.lighten_imports
+# The frame commands whose start-up runs without the garbage collector until they read
+# their frame (clearcli/startup.py `pause_collection`).
+COLLECTION_PAUSED = frozenset({"segment", "predicates", "plan"})
 
 
 def main() -> None:
@@ -205,6 +208,8 @@ def main() -> None:
         sys.exit(EXIT_MEMORY)
     _single_threaded_numerics()  # first: before any import of NumPy
     _lighten_imports()  # before anything imports NumPy or SciPy
+    if _command_named(sys.argv[1:]) in COLLECTION_PAUSED:
+        startup.pause_collection()  # until the frame is read (clearcli/startup.py)
     if len(sys.argv) == 1 and Path(sys.argv[0]).name == "clear" and sys.stdout.isatty() and sys.stdin.isatty():
         _run_terminal_clear()
         return
@@ -212,6 +217,7 @@ def main() -> None:
     try:
         _main()
     finally:
+        startup.resume_collection(freeze=False)  # no frame read (--help, an error): as it was
         interrupts.finish()  # a signal during the interpreter's exit: 130/143 at once, no traceback
 
 

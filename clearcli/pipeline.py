@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
+from clearcli import startup
 from clearcli.errors import ClearError, InputError, NoPlanError, SceneError
 from clearcli.io.frames import Frame
 from clearcli.io.read import read_frame
@@ -255,6 +256,7 @@ def read(
     path: Any, topic: str | None = None, index: int = 0, settings: Settings | None = None, color: Any = None
 ) -> Frame:
     """Frame ``index`` of ``path``; ``settings`` ([images]) and ``color`` serve depth images."""
+    startup.resume_collection()  # the libraries are loaded: the collector on for the work
     return read_frame(path, topic, index, settings.images if settings is not None else None, color)
 
 

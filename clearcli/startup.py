@@ -4,9 +4,9 @@ fresh interpreter (spawned) that does not run `main`.
 
 `single_threaded_numerics` sets the numeric libraries' thread pools to one thread;
 `lighten_imports` defers NumPy's and SciPy's modules clear never uses, runs SciPy's
-subpackages' (and numpy.ma's) own code only where a name of theirs is used, keeps SciPy
-from parsing docstrings, and has dataclasses run the code it compiled for a class in an
-earlier process, kept in the user's cache directory (issue 39). Both only change what a
+subpackages' (and numpy.ma's, and SciPy's utilities') own code only where a name of theirs
+is used, keeps SciPy from parsing docstrings, and has dataclasses run the code it compiled
+for a class in an earlier process, kept in the user's cache directory (issue 39). Both only change what a
 process loads and how fast, never a result. Standard library only: this runs before
 anything heavy is imported.
 """
@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import _thread
 import atexit
+import gc
 import importlib
 import importlib.machinery
 import importlib.util
@@ -109,6 +110,29 @@ def _is_masked_array(x: Any) -> bool:
 STAND_INS: dict[str, dict[str, Callable[..., Any]]] = {
     "numpy.ma": {"is_masked": _is_masked, "isMaskedArray": _is_masked_array}
 }
+
+
+def _copy_if_needed() -> Any:
+    """scipy._lib._util.copy_if_needed without its module's code: None on a NumPy whose
+    version is 2.0.0 or later, as that code decides it (by the same comparison); on an
+    older NumPy (a test of np.array's keywords there) `_MISSING`: its code runs."""
+    import numpy as np  # noqa: PLC0415  (imported by now: SciPy's modules import it first)
+
+    return None if np.lib.NumpyVersion(np.__version__) >= "2.0.0" else _MISSING
+
+
+# Modules, not packages, whose own code is deferred as a package's is (DEFERRED_PACKAGES):
+# it runs at the first use of a name it defines that VALUE_STAND_INS does not give.
+# scipy.spatial's tree (scipy.spatial._ckdtree, a Cython module) imports one name of
+# SciPy's utilities at its import, `copy_if_needed` (None on NumPy 2); those utilities'
+# module imports SciPy's whole array-API layer (scipy._lib._array_api: array_api_compat's
+# copy of NumPy's namespace, array_api_extra, the docstring parser), ~20-30 ms of CPU of a
+# cold `clear plan` that no function clear calls uses (issue 39).
+DEFERRED_CODE_MODULES = frozenset({"scipy._lib._util"})
+# Names such a module (or a deferred package) gives while its code has not run: the value
+# its code would bind (the same object), from a function of clear's that computes it,
+# or `_MISSING` when only its code can tell (then it runs).
+VALUE_STAND_INS: dict[str, dict[str, Callable[[], Any]]] = {"scipy._lib._util": {"copy_if_needed": _copy_if_needed}}
 _PACKAGE_LOCK = _thread.RLock()  # one thread runs a package's code; the others wait for it
 
 
@@ -125,9 +149,19 @@ class _DeferredPackage(ModuleType):
                     # its code is running (in this thread: the lock is held) and has not
                     # defined the name yet, as any module part-way through its code
                     raise AttributeError(f"partially initialised module {self.__name__!r} has no attribute {name!r}")
+                if name == "__path__":
+                    # a module, not a package (DEFERRED_CODE_MODULES): it has none, with its
+                    # code run or not (the import system asks, for `from module import name`)
+                    raise AttributeError(f"module {self.__name__!r} has no attribute '__path__'")
                 stand_in = STAND_INS.get(self.__name__, {}).get(name)
                 if stand_in is not None:
                     return stand_in
+                value_of = VALUE_STAND_INS.get(self.__name__, {}).get(name)
+                if value_of is not None:
+                    value = value_of()
+                    if value is not _MISSING:
+                        setattr(self, name, value)  # kept: its code, when it runs, binds the same value
+                        return value
                 module = PACKAGE_SHORTCUTS.get(self.__name__, {}).get(name)
                 if module is not None:
                     try:
@@ -234,13 +268,20 @@ class _LighterImports:
     to import.)"""
 
     def find_spec(self, fullname: str, path: Any = None, target: Any = None) -> importlib.machinery.ModuleSpec | None:
-        if fullname not in DEFERRED_MODULES and fullname not in DEFERRED_PACKAGES and fullname not in PATCHED_MODULES:
+        if (
+            fullname not in DEFERRED_MODULES
+            and fullname not in DEFERRED_PACKAGES
+            and fullname not in DEFERRED_CODE_MODULES
+            and fullname not in PATCHED_MODULES
+        ):
             return None
         spec = importlib.machinery.PathFinder.find_spec(fullname, path)
         if spec is None or spec.loader is None or not hasattr(spec.loader, "exec_module"):
             return spec
         if fullname in DEFERRED_MODULES:
             spec.loader = importlib.util.LazyLoader(spec.loader)
+        elif fullname in DEFERRED_CODE_MODULES:
+            spec.loader = _DeferredLoader(spec.loader)  # type: ignore[assignment]  # a Loader by its methods
         elif fullname in DEFERRED_PACKAGES:
             if spec.submodule_search_locations is None:
                 return spec  # not a package: nothing to import without its code
@@ -299,8 +340,10 @@ class _CachedExec:
         self.new = 0
         self._builtin_exec = exec
         try:
+            # read whole, then decoded: marshal.load(f) reads the file piece by piece, one
+            # call per object (~10 ms for a plan's ~500 texts; this ~1 ms, the same objects)
             with open(path, "rb") as f:
-                loaded = marshal.load(f)
+                loaded = marshal.loads(f.read())
             if isinstance(loaded, dict):
                 self.codes = {k: v for k, v in loaded.items() if isinstance(k, bytes) and _is_code(v)}
         except Exception:  # none yet, unreadable, truncated, not marshal's: as none
@@ -359,3 +402,34 @@ PATCHED_MODULES: dict[str, Callable[[ModuleType], None]] = {
     "scipy._lib._array_api": _keep_scipy_docstrings,
     "dataclasses": _cache_dataclass_code,
 }
+
+
+# Python's cyclic garbage collector while a frame command loads its libraries (issue 39).
+# Loading typer, NumPy, SciPy and clear's modules makes ~100 000 objects (modules,
+# classes, functions), all kept to the end; the collector ran ~80 times over them in a
+# cold `clear plan` (~14 ms of CPU on a loaded machine), finding nothing to free (a whole
+# plan leaves no cyclic garbage at all). `pause_collection` stops it until the command
+# reads its frame (`resume_collection`, from clearcli/pipeline.py `read`, or a batch's
+# parent before its run): what was made until then is moved out of the collector's sight
+# (gc.freeze: never scanned again, as objects that live as long as the process), and the
+# collector runs as before on what the work makes. Only in a process that has not loaded
+# NumPy yet (a fresh `clear`): a test or a program calling `main` again is left alone.
+_collection_paused = False
+
+
+def pause_collection() -> None:
+    global _collection_paused
+    if gc.isenabled() and "numpy" not in sys.modules:
+        gc.disable()
+        _collection_paused = True
+
+
+def resume_collection(freeze: bool = True) -> None:
+    """The collector back on after `pause_collection` (else nothing): with ``freeze``, what
+    exists now is never scanned again."""
+    global _collection_paused
+    if _collection_paused:
+        _collection_paused = False
+        if freeze:
+            gc.freeze()
+        gc.enable()

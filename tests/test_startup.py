@@ -257,3 +257,126 @@ def test_the_cache_lives_under_an_absolute_cache_home_only(monkeypatch: pytest.M
     assert str(startup._code_cache_path()).startswith(str(tmp_path / "home" / ".cache" / "clear" / "dataclass-code."))
     monkeypatch.delenv("XDG_CACHE_HOME")
     assert str(startup._code_cache_path()).startswith(str(tmp_path / "home" / ".cache" / "clear"))
+
+
+# scipy._lib._util (clearcli/startup.py DEFERRED_CODE_MODULES): the tree's module takes
+# `copy_if_needed` from it at its import; the value is given without the module's code
+# (and SciPy's array-API layer it imports), any other name runs that code.
+_UTIL = """
+import json, sys
+PATCH
+import numpy as np
+from scipy.spatial import cKDTree
+util = sys.modules["scipy._lib._util"]
+before = [type(util).__name__, "scipy._lib._array_api" in sys.modules, hasattr(util, "__path__")]
+from scipy._lib._util import copy_if_needed
+dist, idx = cKDTree([[0.0, 0.0], [3.0, 4.0]]).query([[3.0, 3.0]])
+given = [type(util).__name__, copy_if_needed]
+rng = util.check_random_state(7)  # not a stand-in: its code runs
+print(json.dumps({
+    "before": before,
+    "given": given,
+    "after": [type(util).__name__, util.copy_if_needed, "scipy._lib._array_api" in sys.modules, type(rng).__name__],
+    "query": [dist.tolist(), idx.tolist()],
+}))
+"""
+
+
+def test_scipy_util_gives_the_trees_one_name_without_its_code() -> None:
+    hook = "from clearcli.startup import lighten_imports\nlighten_imports()"
+    hooked = _run(_UTIL.replace("PATCH", hook))
+    plain = _run(_UTIL.replace("PATCH", ""))
+    assert hooked["before"] == ["_DeferredPackage", False, False] and plain["before"] == ["module", True, False]
+    assert hooked["given"] == ["_DeferredPackage", None] and plain["given"] == ["module", None]  # NumPy 2: None
+    assert hooked["after"] == plain["after"] == ["module", None, True, "RandomState"]
+    assert hooked["query"] == plain["query"] == [[1.0], [1]]  # (3,3) to (3,4): 1
+
+
+def test_scipy_util_runs_its_code_where_clear_cannot_tell_its_value() -> None:
+    # an older NumPy: only the module's own code can tell copy_if_needed (stand-in says _MISSING)
+    code = _UTIL.replace(
+        "PATCH",
+        "from clearcli import startup\n"
+        "startup.VALUE_STAND_INS['scipy._lib._util']['copy_if_needed'] = lambda: startup._MISSING\n"
+        "startup.lighten_imports()",
+    )
+    out = _run(code)
+    assert out["before"] == ["module", True, False]  # the tree's import ran it
+    assert out["given"] == ["module", None] and out["after"] == ["module", None, True, "RandomState"]
+
+
+# The garbage collector while a frame command loads its libraries (clearcli/startup.py
+# pause_collection): off, then on again with what was made until then frozen.
+def gc_threshold_0() -> int:
+    import gc
+
+    return gc.get_threshold()[0]
+
+
+_COLLECTION = """
+import gc, json, sys
+from clearcli import startup
+startup.pause_collection()
+paused = [gc.isenabled(), startup._collection_paused]
+junk = [[] for _ in range(1000)]
+for a in junk:
+    a.append(a)  # cycles, not freed while the collector is off
+made = gc.get_count()[0]
+startup.resume_collection(freeze=FREEZE)
+resumed = [gc.isenabled(), gc.get_freeze_count() > 1000, startup._collection_paused]
+del junk
+import numpy  # a process with NumPy loaded (a test, a program): left alone
+startup.pause_collection()
+again = [gc.isenabled(), startup._collection_paused]
+startup.resume_collection()
+print(json.dumps({"paused": paused, "made": made, "resumed": resumed, "again": again, "frozen": gc.get_freeze_count() > 1000}))
+"""
+
+
+@pytest.mark.parametrize("freeze", [True, False])
+def test_collection_is_paused_until_resumed_and_then_frozen(freeze: bool) -> None:
+    out = _run(_COLLECTION.replace("FREEZE", str(freeze)))
+    assert out["paused"] == [False, True]
+    # the 1000 lists counted since the pause: a running collector would have reset the
+    # count at its threshold (700) and collected
+    assert out["made"] >= 1000 > gc_threshold_0()
+    assert out["resumed"] == [True, freeze, False]
+    assert out["again"] == [True, False]  # NumPy loaded: not paused
+    assert out["frozen"] is freeze
+
+
+def test_the_cache_file_is_read_whole_in_one_call(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    # marshal.load(file) reads a file one small piece per object: ~10 ms for a plan's ~500
+    # texts, against ~1 ms for one read then marshal.loads (issue 39); the same codes
+    import builtins
+    import marshal
+
+    from clearcli import startup
+
+    texts = [f"def f{k}(self):\n    return self.x + {k}\n" for k in range(50)]
+    codes = {str(k).encode(): compile(t, "<string>", "exec", dont_inherit=True) for k, t in enumerate(texts)}
+    path = tmp_path / "cache"
+    path.write_bytes(marshal.dumps(codes))
+    reads: list[str] = []
+    real_open = builtins.open
+
+    class Counted:
+        def __init__(self, f):  # type: ignore[no-untyped-def]
+            self._f = f
+
+        def __enter__(self):  # type: ignore[no-untyped-def]
+            return self
+
+        def __exit__(self, *exc):  # type: ignore[no-untyped-def]
+            self._f.close()
+
+        def __getattr__(self, name):  # type: ignore[no-untyped-def]
+            if name in ("read", "readinto", "readline", "peek"):
+                reads.append(name)
+            return getattr(self._f, name)
+
+    monkeypatch.setattr(builtins, "open", lambda *a, **k: Counted(real_open(*a, **k)))
+    cached = startup._CachedExec(str(path))
+    monkeypatch.setattr(builtins, "open", real_open)
+    assert reads == ["read"]
+    assert sorted(cached.codes) == sorted(codes) and all(cached.codes[k] == codes[k] for k in codes)

@@ -13,7 +13,7 @@ from typing import Annotated, Any
 
 import typer
 
-from clearcli import interrupts
+from clearcli import interrupts, startup
 from clearcli import settings as clear_settings
 from clearcli.errors import InputError
 from clearcli.files import exists
@@ -289,6 +289,8 @@ def batch_options(outputs: tuple[str, ...]) -> Callable[[Callable[..., Any]], Ca
             batch = Batch(**{n: kwargs.pop(n) for n, _, _ in declared})
             if not batch.wanted(kwargs.get("inputs", args[0] if args else ())):
                 interrupts.release()  # one frame: Ctrl-C from here on; a batch releases in its run
+            else:
+                startup.resume_collection()  # a batch's parent reads no frame (clearcli/startup.py)
             return fn(*args, batch=batch, **kwargs)
 
         # attributes set on a function: valid Python (inspect.signature reads __signature__),

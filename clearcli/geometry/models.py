@@ -17,7 +17,6 @@ square, where the PCA points anywhere (push directions 30-45 degrees off the fac
 
 from __future__ import annotations
 
-import logging
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -27,8 +26,6 @@ from clearcli.perception.types import TablePlane
 
 if TYPE_CHECKING:
     from clearcli.settings.geometry import PredicateSettings
-
-log = logging.getLogger(__name__)
 
 
 def _apply(T: np.ndarray, points: np.ndarray) -> np.ndarray:

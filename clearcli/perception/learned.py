@@ -27,7 +27,6 @@ from __future__ import annotations
 import dataclasses
 import functools
 import json
-from importlib import resources
 from typing import Any
 
 import numpy as np
@@ -112,6 +111,10 @@ class JoinModel:
 @functools.cache
 def load_model() -> JoinModel:
     """The shipped model (read once a process)."""
+    # importlib.resources (~1 ms, and the modules it imports) only where the model is read:
+    # [segment] learned_join is off by default, and a plan reads no other package data
+    from importlib import resources  # noqa: PLC0415
+
     text = (resources.files("clearcli") / MODEL_RESOURCE).read_text(encoding="utf-8")
     return JoinModel.from_dict(json.loads(text))
 

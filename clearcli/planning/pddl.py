@@ -17,7 +17,6 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
 from functools import lru_cache
-from importlib import resources
 
 from clearcli.errors import InputError
 from clearcli.planning.types import Action
@@ -60,6 +59,10 @@ _PUSH_COST_VAR = "      (not (ik_unfeasible_grasp ?o))\n      (increase (total-c
 
 @lru_cache(maxsize=1)
 def _domain_file() -> str:
+    # importlib.resources only here: a plan compiles its SAS task without the domain's
+    # text, which only --domain, --problem and `clear domain` read (issue 39)
+    from importlib import resources  # noqa: PLC0415
+
     try:
         return (resources.files("clearcli") / DOMAIN_RESOURCE).read_text(encoding="utf-8")
     except (FileNotFoundError, OSError) as exc:  # a broken installation

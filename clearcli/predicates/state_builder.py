@@ -9,7 +9,6 @@ with a warning (logger ``clearcli.predicates``) and listed in ``SymbolicState.sk
 from __future__ import annotations
 
 import dataclasses
-import logging
 import time
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
@@ -39,7 +38,16 @@ from clearcli.settings import Settings
 from clearcli.settings.kinds import tool_of as kind_tool
 from clearcli.settings.profiles import tools_of
 
-log = logging.getLogger("clearcli.predicates")
+LOGGER = "clearcli.predicates"  # where a segment left out is reported
+
+
+def _warn(message: str, *args: object) -> None:
+    """A warning on LOGGER. logging (and the string module it imports) is imported here,
+    for a segment left out, not by every `clear plan`: no other module of a plan imports
+    it (issue 39: ~2-4 ms of a cold plan)."""
+    import logging  # noqa: PLC0415  (see above)
+
+    logging.getLogger(LOGGER).warning(message, *args)
 
 
 def compute_state(
@@ -80,7 +88,7 @@ def compute_state(
                 raise DegenerateObject("no finite points")
             geoms.append(build_from_columns(cols, k, ps))
         except DegenerateObject as exc:
-            log.warning("segment %d left out: %s", k, exc)
+            _warn("segment %d left out: %s", k, exc)
             skipped.append((k, str(exc)))
     # stable names by position, not by segmentation order
     if geoms:

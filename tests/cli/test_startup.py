@@ -19,7 +19,7 @@ from helpers.batch import hooked_env
 
 from clearcli.cli import DEFERRED_MODULES, render_root_help
 from clearcli.commands import registry, root_help
-from clearcli.startup import DEFERRED_PACKAGES
+from clearcli.startup import DEFERRED_CODE_MODULES, DEFERRED_PACKAGES
 
 # In the child before clear's main: at exit, which deferred modules ran their code.
 _HOOK = """
@@ -33,19 +33,21 @@ def _report():
         lazy = type(module) is importlib.util._LazyModule or type(module).__name__ == "_DeferredPackage"
         state[name] = "absent" if module is None else "deferred" if lazy else "loaded"
     state["scipy"] = "scipy" in sys.modules
-    array_api = sys.modules.get("scipy._lib._array_api")
-    state["scipy_docs"] = getattr(getattr(array_api, "FunctionDoc", None), "__name__", None)
+    state["scipy_array_api"] = "scipy._lib._array_api" in sys.modules
     with open(os.environ["CLEAR_TEST_REPORT"], "w") as out:
         json.dump(state, out)
 
 atexit.register(_report)
-""".replace("DEFERRED", repr(sorted(DEFERRED_MODULES | DEFERRED_PACKAGES)))
+""".replace("DEFERRED", repr(sorted(DEFERRED_MODULES | DEFERRED_PACKAGES | DEFERRED_CODE_MODULES)))
 
-# what a command leaves unrun: NumPy's tooling, pydoc, numpy.ma and SciPy's subpackages
-# imported and not run; scipy.spatial.transform not even imported (scipy.spatial's code
-# imports it), nor scipy.special (scipy.ndimage's code imported it)
+# what a command leaves unrun: numpy.ma, SciPy's subpackages and SciPy's utilities
+# (scipy._lib._util, whose one name the tree imports is given without its code) imported
+# and not run; SciPy's array-API layer, which imported NumPy's tooling and pydoc, not
+# imported at all (scipy._lib._util's code imports it), nor scipy.spatial.transform
+# (scipy.spatial's code imports it) or scipy.special (scipy.ndimage's code imported it)
 _UNRUN = {
-    **dict.fromkeys(DEFERRED_MODULES | DEFERRED_PACKAGES, "deferred"),
+    **dict.fromkeys(DEFERRED_PACKAGES | DEFERRED_CODE_MODULES, "deferred"),
+    **dict.fromkeys(DEFERRED_MODULES, "absent"),
     "scipy.spatial.transform": "absent",
     "scipy.special": "absent",
 }
@@ -60,7 +62,7 @@ def test_segment_leaves_numpy_tooling_unrun(tmp_path: Path) -> None:
     assert json.loads(res.stdout)["schema"] == "clear.segmentation"
     state = json.loads(report.read_text())
     assert state.pop("scipy") is True, "segment did not import SciPy: nothing was checked"
-    assert state.pop("scipy_docs") == "_DocstringKept"  # SciPy's docstrings left unparsed
+    assert state.pop("scipy_array_api") is False  # issue 39: ~20-30 ms of CPU of a cold plan
     assert state == _UNRUN
 
 
@@ -224,6 +226,10 @@ def test_a_command_imports_only_what_it_runs(tmp_path: Path, command: str) -> No
     assert "clearcli.perception.segment" in modules and "clearcli.io.pcd" in modules  # it did run
     heavy = {"pypcd4", "pydantic", "pinocchio", "coal"}
     assert not {m.split(".")[0] for m in modules} & heavy
+    # logging only where a segment is left out (clearcli/predicates/state_builder.py),
+    # importlib.resources only where package data is read (the PDDL domain's text for
+    # --domain/--problem, the learned join's model: off by default)
+    assert "logging" not in modules and "importlib.resources" not in modules
     stages = {m for m in modules if m.startswith(("clearcli.planning", "clearcli.predicates", "clearcli.robot"))}
     if command == "segment":
         assert stages == set()
@@ -236,6 +242,9 @@ def test_a_command_imports_only_what_it_runs(tmp_path: Path, command: str) -> No
     # scipy.spatial, scipy.sparse, scipy.linalg, scipy.ndimage (its array-API layer) or
     # scipy.special (clearcli/startup.py DEFERRED_PACKAGES: ~35 ms of a cold plan on a
     # quiet machine); numpy.ma imported, its code (numpy.ma.core) not run
+    # nor SciPy's array-API layer (scipy._lib._util's code imports it, and the tree takes
+    # one name of that module: clearcli/startup.py DEFERRED_CODE_MODULES)
+    assert "scipy._lib._util" in modules and "scipy._lib._array_api" not in modules
     deferred = {m for m in modules if any(m == p or m.startswith(p + ".") for p in DEFERRED_PACKAGES)}
     assert deferred == (DEFERRED_PACKAGES - {"scipy.special"}) | {
         "scipy.spatial._ckdtree",
@@ -299,3 +308,59 @@ def test_plan_keeps_its_dataclasses_code_for_the_next_call(tmp_path: Path) -> No
     assert [p.name for p in (tmp_path / "cache" / "clear").iterdir()] == [
         f"dataclass-code.{sys.implementation.cache_tag}.{importlib.util.MAGIC_NUMBER.hex()}.m{marshal.version}.v1"
     ]
+
+
+_COLLECTOR_HOOK = """
+import atexit, gc, json, os, sys
+runs = []
+# per collection: after main's start (typer is imported after it), after the frame's read
+# (the PCD reader's module loads then)
+gc.callbacks.append(
+    lambda phase, info: phase == "stop" and runs.append(("typer" in sys.modules, "clearcli.io.pcd" in sys.modules))
+)
+atexit.register(lambda: json.dump(
+    {"enabled": gc.isenabled(), "frozen": gc.get_freeze_count(), "numpy_frozen": "numpy" in sys.modules,
+     "before_read": runs.count((True, False)), "after_read": runs.count((True, True))},
+    open(os.environ["CLEAR_TEST_REPORT"], "w")))
+"""
+
+
+@pytest.mark.parametrize(
+    ("args", "frozen"),
+    [
+        (("plan", FIXTURES / "isolated_box.pcd"), True),
+        (("segment", FIXTURES / "isolated_box.pcd", "--json"), True),
+        (("plan", "--help"), False),  # no frame read: the collector back on as it was
+        (("info", FIXTURES / "isolated_box.pcd"), False),  # not a frame command of issue 39's
+    ],
+)
+def test_a_frame_command_loads_its_libraries_without_the_collector(
+    tmp_path: Path, args: tuple[object, ...], frozen: bool
+) -> None:
+    """Issue 39: the collector scanned start-up's ~100 000 objects ~80 times in a cold
+    `clear plan` (~14 ms), freeing nothing; a frame command pauses it until it reads its
+    frame (clearcli/startup.py pause_collection), then freezes what it loaded."""
+    report = tmp_path / "gc.json"
+    env = hooked_env(tmp_path, _COLLECTOR_HOOK)
+    env["CLEAR_TEST_REPORT"] = str(report)
+    res = run_clear(*args, timeout=180, env=env)
+    assert res.returncode in (0, 10), res.stderr
+    state = json.loads(report.read_text())
+    assert state["enabled"] is True
+    if frozen:
+        # no collection from main's start until the frame was read
+        assert state["before_read"] == 0 and state["after_read"] > 0
+        assert state["frozen"] > 10_000 and state["numpy_frozen"] is True
+    else:
+        assert state["frozen"] == 0 and state["before_read"] > 0
+
+
+def test_a_batchs_parent_turns_the_collector_back_on(tmp_path: Path) -> None:
+    report = tmp_path / "gc.json"
+    env = hooked_env(tmp_path, _COLLECTOR_HOOK)
+    env["CLEAR_TEST_REPORT"] = str(report)
+    frames = [FIXTURES / "isolated_box.pcd", FIXTURES / "two_touching_boxes.pcd"]
+    res = run_clear("segment", *frames, "--json", "--jobs", "1", timeout=180, env=env)
+    assert res.returncode == 0, res.stderr
+    state = json.loads(report.read_text())
+    assert state["enabled"] is True and state["frozen"] > 10_000  # resumed before its run

@@ -286,3 +286,28 @@ def test_push_lookahead_refuses_a_push_after_which_no_grasp_has_a_motion() -> No
 def test_gripper_opening_text() -> None:
     assert gripper_opening_text(0.093, 0.07, 0.03) == "0.093 m wide across the grasp; the gripper opens to 0.070 m"
     assert gripper_opening_text(0.02, 0.07, 0.03) == "0.020 m wide across the grasp; the gripper closes to 0.030 m"
+
+
+def test_poses_go_to_the_base_frame_moved_by_the_shift_bit_for_bit() -> None:
+    # the base 1 m along the camera's x, the camera turned 90 deg about z: a pose at the
+    # camera's origin, moved 0.1 m along the camera's x, is at (1, 0.1, 0) in the base
+    T_base_camera = np.array([[0.0, -1.0, 0.0, 1.0], [1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0, 0, 0, 1.0]])
+    checker = IKActionChecker(_two_boxes(), T_base_camera, PointArm(), None)
+    turned = np.eye(4)
+    turned[:3, :3] = [[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]]  # 90 deg about x
+    turned[:3, 3] = [0.0, 0.2, 0.3]
+    poses = (np.eye(4), turned.astype(np.float32))
+    shift = np.array([0.1, 0.0, 0.0])
+    base = checker._to_base(poses, shift)
+    assert len(base) == 2 and all(T.shape == (4, 4) and T.dtype == np.float64 for T in base)
+    assert np.allclose(base[0][:3, 3], [1.0, 0.1, 0.0], atol=1e-12)
+    assert np.allclose(base[1][:3, 3], [0.8, 0.1, 0.3], atol=1e-7)  # camera (0.1, 0.2, 0.3) -> (1 - 0.2, 0.1, 0.3)
+    assert np.allclose(base[1][:3, :3], T_base_camera[:3, :3] @ turned[:3, :3], atol=1e-7)
+    # the same numbers, bit for bit, as one product per pose (what the plan's IK cache keys on)
+    rng = np.random.default_rng(3)
+    many = tuple(rng.normal(size=(4, 4)) for _ in range(5))
+    for T, got in zip(many, checker._to_base(many, shift)):
+        one = np.array(T, dtype=float)
+        one[:3, 3] += shift
+        assert (T_base_camera @ one).tobytes() == got.tobytes()
+    assert poses[0][0, 3] == 0.0 and checker._to_base((), shift) == ()  # inputs left as they were; none: none
