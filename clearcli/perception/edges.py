@@ -47,8 +47,8 @@ def pixel_pieces(points: np.ndarray, shape: tuple[int, int], point_index: np.nda
 
     With ``point_index`` in raster order (as the stages pass it) a pixel joined to the
     next in its row is the next point: such runs are numbered by a running count and
-    the pairs between rows go to `components` once per pair of runs (as `run_components`
-    does; a tenth of the pixel pairs on an mOSD frame). The ranges are compared on an
+    the pairs between rows go to `components` once per pair of runs next to each other
+    in their list (a tenth of the pixel pairs on an mOSD frame). The ranges are compared on an
     image of them (NaN off the set, which compares False), so no pair's ranges are
     gathered; the pieces are numbered as `components` numbers them, in order of their
     first point."""
@@ -96,7 +96,8 @@ def pixel_pieces(points: np.ndarray, shape: tuple[int, int], point_index: np.nda
         ra_parts.append(runs[: height - dv, xs_a][hit])
         rb_parts.append(runs[dv:, xs_b][hit])
     ra, rb = np.concatenate(ra_parts), np.concatenate(rb_parts)
-    # one pair per pair of runs next to each other in the list (run_components' rule)
+    # one pair per pair of runs next to each other in the list: pairs along a row come
+    # one after the other, so a repeat of the pair before it adds no join
     if ra.size > 1:
         new = np.empty(ra.size, dtype=bool)
         new[0] = True

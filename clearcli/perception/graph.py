@@ -66,35 +66,6 @@ def components(n: int, edges: np.ndarray) -> np.ndarray:
     return dense_labels(root)
 
 
-def run_components(joined_to_previous: np.ndarray, edges: np.ndarray) -> np.ndarray:
-    """`components` of a graph whose nodes form runs: node i is joined to node i - 1
-    where ``joined_to_previous[i]`` ((n,) bool; the pixels or cells of a grid in raster
-    order, joined along their rows), plus ``edges`` ((E, 2), the other joins, listed so
-    that joins between the same two runs mostly come one after the other, as a pass
-    along the rows lists them).
-
-    The runs are numbered by a running count and only one edge per pair of runs next to
-    each other in ``edges`` goes on to `components`: on an image's pixels a tenth of the
-    joins, several times faster. Runs are numbered in node order, so a component's
-    lowest run holds its lowest node: the labels are those of `components` on every
-    join."""
-    n = joined_to_previous.shape[0]
-    if n == 0:
-        return np.zeros(0, dtype=np.int64)
-    start = ~joined_to_previous
-    start[0] = True  # the first node has none before it
-    run = np.cumsum(start) - 1
-    e = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
-    ra, rb = run[e[:, 0]], run[e[:, 1]]
-    if ra.size > 1:
-        new = np.empty(ra.size, dtype=bool)
-        new[0] = True
-        np.not_equal(ra[1:], ra[:-1], out=new[1:])
-        new[1:] |= rb[1:] != rb[:-1]
-        ra, rb = ra[new], rb[new]
-    return components(int(run[-1]) + 1, np.stack([ra, rb], axis=1))[run]
-
-
 class ApartSets:
     """Disjoint sets of ``n`` nodes joined a pair at a time, where some pairs must never
     end in one set: the greedy joins of colors.py (pieces of one colour) and learned.py

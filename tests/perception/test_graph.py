@@ -62,23 +62,6 @@ def test_pixel_grid_matches_csgraph() -> None:
     assert np.array_equal(components(h * w, edges), _scipy(h * w, edges))
 
 
-@pytest.mark.parametrize("seed", range(20))
-def test_runs_give_the_labels_of_every_join(seed: int) -> None:
-    from clearcli.perception.graph import run_components
-
-    gen = np.random.default_rng(100 + seed)
-    n = int(gen.integers(1, 300))
-    joined = gen.random(n) < 0.6
-    joined[0] = bool(seed % 2)  # the first node has none before it: ignored either way
-    other = gen.integers(0, n, size=(int(gen.integers(0, 200)), 2))
-    chain = np.flatnonzero(joined[1:]) + 1
-    every = np.concatenate([other, np.stack([chain - 1, chain], axis=1)])
-    got = run_components(joined, other)
-    assert got.tolist() == components(n, every).tolist()
-    assert got.tolist() == _scipy(n, every).tolist()
-    assert run_components(np.zeros(0, dtype=bool), np.zeros((0, 2), dtype=np.int64)).size == 0
-
-
 # ------------------------------------------------------------------ labels numbered densely
 def test_dense_labels_number_labels_as_unique_does() -> None:
     """`dense_labels` numbers labels by counting (no sort): the inverse np.unique gives,
