@@ -20,6 +20,13 @@ the table's noise with it. Depth alone cannot tell; colour can, where the frame 
    frames: -5 to +0.9 mm); a marker has (2.2 mm for a black marker a metre away, more
    for nearer or thicker ones). Its visible area must lie between min_object_area_m2
    and ``flat_max_area_m2`` (a flat object, not a tablecloth's border).
+4. Its points are where its depth is: the pixels within `_GROW_PX` of the candidate (none
+   within `_CLEARANCE_PX` of an object) that stand ``grow_min_m`` or more above the ring,
+   joined over 8 neighbours to such a pixel of the candidate. A RealSense's depth is
+   registered a few pixels beside its colour; the colour's pixels off the depth are the
+   table's points, and the marker's raised points lie beside its colour. When the
+   raised pixels are under half or over twice the candidate's (a far marker smoothed flat;
+   a larger thing's foot rising round it), the candidate keeps its colour's pixels.
 
 Organized frames with colour only: the ring and the joining need the pixel grid. On
 the 45 mOSD learn frames no candidate far from the objects exists; results there are
@@ -42,6 +49,16 @@ _RING_INNER_PX = 3
 _RING_OUTER_PX = 8
 # a candidate of fewer pixels is noise
 _MIN_PIXELS = 30
+# an object's raised pixels are looked for this far (pixels) round its colour: a
+# RealSense's depth lies up to ~8 pixels beside its colour (uois_image_0006's markers)
+_GROW_PX = 8
+# the raised pixels replace the candidate's when they are at least this share of it; a
+# far marker whose relief the depth smooths below grow_min_m keeps its colour's pixels
+_RAISED_MIN_SHARE = 0.5
+# ... and at most this many times as many: a larger thing's foot of the table's colour
+# rises round a small candidate (uois_image_0000: a white bowl's side in its shadow, 3.3
+# times its colour's pixels; the markers' depth 1.3 times theirs), and keeps its colour's
+_RAISED_MAX_RATIO = 2.0
 
 
 def cielab(rgb: np.ndarray) -> np.ndarray:
@@ -158,6 +175,29 @@ def differing_shares(colors: np.ndarray, groups: list[np.ndarray], centre: np.nd
     return [int(counts[e] - counts[e - g.size]) / g.size for e, g in zip(ends.tolist(), groups, strict=True)]
 
 
+def _raised(
+    window: np.ndarray,
+    mine: np.ndarray,
+    near: np.ndarray,
+    height_of: Callable[[np.ndarray], np.ndarray],
+    base_m: float,
+    grow_min_m: float,
+) -> np.ndarray:
+    """(h, w) bool of a ``window`` of the pixel grid ((h, w, 3) points): the pixels within
+    `_GROW_PX` of the candidate ``mine`` that stand ``grow_min_m`` or more above the table
+    around it (``base_m``), joined over 8 neighbours to such a pixel of the candidate
+    (module doc, 4.); none ``near`` an object (within `_CLEARANCE_PX`: its depth smears
+    over the table beside it)."""
+    zone = dilate_square(mine, _GROW_PX) & ~near & np.isfinite(window).all(axis=2)
+    rows, cols = np.nonzero(zone)
+    up = np.zeros_like(zone)
+    up[rows, cols] = height_of(window[rows, cols]) - base_m >= grow_min_m
+    comps, _ = label_8(up)
+    seeds = np.unique(comps[mine & up])
+    up = np.isin(comps, seeds[seeds > 0])
+    return up
+
+
 def flat_objects(
     points: np.ndarray,
     colors: np.ndarray,
@@ -171,6 +211,7 @@ def flat_objects(
     min_relief_m: float,
     min_area_m2: float,
     max_area_m2: float,
+    grow_min_m: float,
     support: tuple[np.ndarray, float] | None = None,
 ) -> list[np.ndarray]:
     """Flat pixel indices of each object found lying flat on the table (module doc).
@@ -201,15 +242,17 @@ def flat_objects(
     is_table = is_table.reshape(height, width)
     found: list[np.ndarray] = []
     comp_boxes = boxes(comps, n)
+    grid_points = points.reshape(height, width, 3)
     for k in (np.flatnonzero(sizes[1:] >= _MIN_PIXELS) + 1).tolist():  # most are specks: not even looked at
         box = comp_boxes[k - 1]
         if box is None:
             continue
-        pad = _RING_OUTER_PX + 1
+        pad = _RING_OUTER_PX + _GROW_PX + 1
         v0, v1 = max(0, box[0].start - pad), min(height, box[0].stop + pad)
         u0, u1 = max(0, box[1].start - pad), min(width, box[1].stop + pad)
         mine = comps[v0:v1, u0:u1] == k
-        if (dilate_square(mine, _CLEARANCE_PX) & taken[v0:v1, u0:u1]).any():
+        near = dilate_square(taken[v0:v1, u0:u1], _CLEARANCE_PX)
+        if (mine & near).any():
             continue
         ring = dilate_square(mine, _RING_OUTER_PX) & ~dilate_square(mine, _RING_INNER_PX)
         ring &= is_table[v0:v1, u0:u1] & ~grid[v0:v1, u0:u1]
@@ -219,9 +262,14 @@ def flat_objects(
         inside = (rows + v0) * width + (cols + u0)
         rows, cols = np.nonzero(ring)
         around = (rows + v0) * width + (cols + u0)
-        relief = float(np.median(height_of(points[inside])) - np.median(height_of(points[around])))
+        base = float(np.median(height_of(points[around])))
+        relief = float(np.median(height_of(points[inside])) - base)
         if relief < min_relief_m:
             continue
+        raised = _raised(grid_points[v0:v1, u0:u1], mine, near, height_of, base, grow_min_m)
+        rows, cols = np.nonzero(raised)
+        if _RAISED_MIN_SHARE * inside.size <= rows.size <= _RAISED_MAX_RATIO * inside.size:
+            inside = (rows + v0) * width + (cols + u0)
         area = pixel_area_m2(inside)
         if min_area_m2 <= area <= max_area_m2:
             found.append(inside)

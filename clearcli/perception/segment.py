@@ -259,6 +259,7 @@ def _flat_objects(
         settings.flat_min_relief_m,
         settings.min_object_area_m2,
         settings.flat_max_area_m2,
+        settings.flat_grow_min_m,
         support,
     )
     if not found:
