@@ -13,7 +13,9 @@ the table's noise with it. Depth alone cannot tell; colour can, where the frame 
    a cloth's pattern).
 2. Such pixels, joined over 8 neighbours, are a candidate when the candidate keeps
    ``_CLEARANCE_PX`` pixels away from every object found (a candidate touching an
-   object is its foot, its shadow or its reflection on the table).
+   object is its foot, its shadow or its reflection on the table), or all but
+   ``_NEAR_MAX_SHARE`` of it does: then it is judged on those pixels alone (a marker
+   lying against a box).
 3. A candidate is an object when it stands above the table around it: its median height
    is at least ``flat_min_relief_m`` above the median of a ring of table pixels around
    it (3 to 8 pixels out). A print, a stain or a shadow has no relief (on the choose
@@ -44,6 +46,11 @@ from clearcli.perception.raster import boxes, dilate_square, label_8
 
 # a candidate keeps this far (pixels) from every object found
 _CLEARANCE_PX = 6
+# ... or is judged on its pixels beyond that when they are all but this share of it: a
+# marker lying against an object (uois_image_0006's green one, 5 % of its pixels within
+# reach of a container) is one, an object's foot or shadow beside it (uois_image_0000's
+# bowls, gqcnn_primesense_0's clamp: 17-34 %) is not
+_NEAR_MAX_SHARE = 0.1
 # the ring of table pixels a candidate's relief is measured against (pixels out)
 _RING_INNER_PX = 3
 _RING_OUTER_PX = 8
@@ -252,10 +259,12 @@ def flat_objects(
         u0, u1 = max(0, box[1].start - pad), min(width, box[1].stop + pad)
         mine = comps[v0:v1, u0:u1] == k
         near = dilate_square(taken[v0:v1, u0:u1], _CLEARANCE_PX)
-        if (mine & near).any():
+        n_mine = int(np.count_nonzero(mine))
+        mine &= ~near
+        if np.count_nonzero(mine) < max(_MIN_PIXELS, (1.0 - _NEAR_MAX_SHARE) * n_mine):
             continue
         ring = dilate_square(mine, _RING_OUTER_PX) & ~dilate_square(mine, _RING_INNER_PX)
-        ring &= is_table[v0:v1, u0:u1] & ~grid[v0:v1, u0:u1]
+        ring &= is_table[v0:v1, u0:u1] & ~grid[v0:v1, u0:u1] & ~near
         if ring.sum() < _MIN_PIXELS:
             continue
         rows, cols = np.nonzero(mine)
