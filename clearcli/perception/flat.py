@@ -29,6 +29,7 @@ the table's noise with it. Depth alone cannot tell; colour can, where the frame 
    table's points, and the marker's raised points lie beside its colour. When the
    raised pixels are under half or over twice the candidate's (a far marker smoothed flat;
    a larger thing's foot rising round it), the candidate keeps its colour's pixels.
+   Whether it is an object at all is judged on its colour's pixels (3.).
 
 Organized frames with colour only: the ring and the joining need the pixel grid. On
 the 45 mOSD learn frames no candidate far from the objects exists; results there are
@@ -275,11 +276,13 @@ def flat_objects(
         relief = float(np.median(height_of(points[inside])) - base)
         if relief < min_relief_m:
             continue
+        # found or not by its colour's pixels (their area; the depth smeared round a
+        # notebook took thin_flat(4)'s over flat_max_area_m2), its points where its depth is
+        if not min_area_m2 <= pixel_area_m2(inside) <= max_area_m2:
+            continue
         raised = _raised(grid_points[v0:v1, u0:u1], mine, near, height_of, base, grow_min_m)
         rows, cols = np.nonzero(raised)
         if _RAISED_MIN_SHARE * inside.size <= rows.size <= _RAISED_MAX_RATIO * inside.size:
             inside = (rows + v0) * width + (cols + u0)
-        area = pixel_area_m2(inside)
-        if min_area_m2 <= area <= max_area_m2:
-            found.append(inside)
+        found.append(inside)
     return found
