@@ -15,7 +15,9 @@ _TABLE_RGB = (200, 180, 150)  # light wood
 _MARKER_RGB = (20, 20, 20)  # black: dE ~70 from the wood
 
 
-def _scene(colour_rows: slice, raised_rows: slice, taken_cols: slice | None) -> list[np.ndarray]:
+def _scene(
+    colour_rows: slice, raised_rows: slice, taken_cols: slice | None, max_area_m2: float = 0.02
+) -> list[np.ndarray]:
     """A black strip of colour at ``colour_rows``, columns 30-50; its depth 8 mm up at
     ``raised_rows`` (the sensor's depth registered beside its colour); an object taken
     at ``taken_cols``, rows 20-40; flat_objects's answer."""
@@ -40,7 +42,7 @@ def _scene(colour_rows: slice, raised_rows: slice, taken_cols: slice | None) -> 
         20.0,
         0.0015,
         5e-5,
-        0.02,
+        max_area_m2,
         0.0025,
     )
 
@@ -133,3 +135,11 @@ def test_differing_shares_are_each_groups_own_mean_bit_for_bit() -> None:
         assert all(type(v) is float for v in got)
         assert 0.0 < got[5] < 1.0  # a mixed group, not all or nothing
     assert differing_shares(colors, [], centre, 20.0) == []
+
+
+def test_a_flat_object_is_found_on_its_colours_area() -> None:
+    # colour rows 28-32 (105 mm^2), depth 8 mm up on rows 28-36 (189): the largest flat
+    # object 150 mm^2. Judged on its colour it is one, and its points are the raised rows
+    (found,) = _scene(slice(28, 33), slice(28, 37), None, max_area_m2=150e-6)
+    assert np.array_equal(found, _strip(slice(28, 37), slice(30, 51)))
+    assert _scene(slice(28, 33), slice(28, 37), None, max_area_m2=100e-6) == []
