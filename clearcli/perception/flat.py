@@ -30,6 +30,10 @@ the table's noise with it. Depth alone cannot tell; colour can, where the frame 
    raised pixels are under half or over twice the candidate's (a far marker smoothed flat;
    a larger thing's foot rising round it), the candidate keeps its colour's pixels.
    Whether it is an object at all is judged on its colour's pixels (3.).
+5. A candidate too near an object (2.) that touches only that object, has its colour
+   (`_FOOT_MAX_DE`) and stands up from the table round it (3.'s relief) is that object's
+   foot: the part of a box or a notebook a centimetre or two high that the prism's lower
+   bound cut off. It joins the object.
 
 Organized frames with colour only: the ring and the joining need the pixel grid. On
 the 45 mOSD learn frames no candidate far from the objects exists; results there are
@@ -39,7 +43,8 @@ unchanged.
 from __future__ import annotations
 
 import functools
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -52,6 +57,12 @@ _CLEARANCE_PX = 6
 # reach of a container) is one, an object's foot or shadow beside it (uois_image_0000's
 # bowls, gqcnn_primesense_0's clamp: 17-34 %) is not
 _NEAR_MAX_SHARE = 0.1
+# a candidate held by one object (touching it within this many pixels) of that object's
+# colour (median CIELAB within this dE of its median) and standing up from the table round
+# it is that object's foot below the prism: thin_flat's notebooks and boxes 0-8.2 apart,
+# a colour_split_delta (25) apart is two objects
+_FOOT_TOUCH_PX = 2
+_FOOT_MAX_DE = 15.0
 # the ring of table pixels a candidate's relief is measured against (pixels out)
 _RING_INNER_PX = 3
 _RING_OUTER_PX = 8
@@ -183,6 +194,41 @@ def differing_shares(colors: np.ndarray, groups: list[np.ndarray], centre: np.nd
     return [int(counts[e] - counts[e - g.size]) / g.size for e, g in zip(ends.tolist(), groups, strict=True)]
 
 
+@dataclass(frozen=True)
+class FlatFinds:
+    """What `flat_objects` found: the objects lying flat (flat pixel indices each), and the
+    feet of objects found before (their index in ``object_sizes`` -> the foot's pixels)."""
+
+    objects: list[np.ndarray]
+    feet: dict[int, np.ndarray]
+
+
+def _foot_of(
+    whole: np.ndarray,
+    owner_window: np.ndarray,
+    near: np.ndarray,
+    v0: int,
+    u0: int,
+    width: int,
+    object_pixels: np.ndarray,
+    owner: np.ndarray,
+    colors: np.ndarray,
+) -> int | None:  # owner: (height * width,) each pixel's object, -1 none
+    """The one object a candidate (``whole``, in a window at row ``v0``, column ``u0`` of
+    the grid ``width`` wide) touches (within 2 pixels) and whose colour it has (median
+    CIELAB within `_FOOT_MAX_DE` of the object's), or None (module doc, 5.)."""
+    touched = np.unique(owner_window[dilate_square(whole, _FOOT_TOUCH_PX) & near])
+    touched = touched[touched >= 0]
+    if touched.size != 1:
+        return None
+    j = int(touched[0])
+    rows, cols = np.nonzero(whole)
+    mine_lab = np.median(lab_of(colors[(rows + v0) * width + (cols + u0)]), axis=0)
+    theirs = object_pixels[owner[object_pixels] == j]
+    their_lab = np.median(lab_of(colors[theirs]), axis=0)
+    return j if float(np.linalg.norm(mine_lab - their_lab)) < _FOOT_MAX_DE else None
+
+
 def _raised(
     window: np.ndarray,
     mine: np.ndarray,
@@ -221,24 +267,28 @@ def flat_objects(
     max_area_m2: float,
     grow_min_m: float,
     support: tuple[np.ndarray, float] | None = None,
-) -> list[np.ndarray]:
+    object_sizes: Sequence[int] = (),
+) -> FlatFinds:
     """Flat pixel indices of each object found lying flat on the table (module doc).
 
     ``table_pixels``: the table's points; ``loose_pixels``: points above the table that
     no object kept; ``object_pixels``: the objects'; all flat indices into the organized
     ``points`` / ``colors`` of ``shape``. ``height_of(points) -> heights`` above the table;
     ``pixel_area_m2(flat indices) -> m^2`` the visible area of a set of pixels.
-    ``support``: `support_colour` of ``table_pixels`` when the caller has it already."""
+    ``support``: `support_colour` of ``table_pixels`` when the caller has it already.
+    ``object_sizes``: the objects' pixel counts, in the order their pixels are in
+    ``object_pixels``; when given, an object's foot below the prism is found (module
+    doc, 5.)."""
     height, width = shape
     if table_pixels.size < 100:
-        return []
+        return FlatFinds([], {})
     centre, threshold = support_colour(colors, shape, table_pixels, min_color_delta) if support is None else support
     free = np.concatenate([table_pixels, loose_pixels])
     differs = _far_from(np.take(colors, free, axis=0), centre, threshold)  # take: several times faster than a[idx]
     cand = np.zeros(height * width, dtype=bool)
     cand[free[differs]] = True
     if not cand.any():
-        return []
+        return FlatFinds([], {})
     grid = cand.reshape(height, width)
     comps, n = label_8(grid)
     sizes = np.bincount(comps.ravel(), minlength=n + 1)
@@ -251,6 +301,11 @@ def flat_objects(
     found: list[np.ndarray] = []
     comp_boxes = boxes(comps, n)
     grid_points = points.reshape(height, width, 3)
+    owner_flat = np.full(height * width, -1, dtype=np.int64)  # each pixel's object
+    if len(object_sizes):
+        owner_flat[object_pixels] = np.repeat(np.arange(len(object_sizes)), object_sizes)
+    owner = owner_flat.reshape(height, width)
+    feet: dict[int, list[np.ndarray]] = {}
     for k in (np.flatnonzero(sizes[1:] >= _MIN_PIXELS) + 1).tolist():  # most are specks: not even looked at
         box = comp_boxes[k - 1]
         if box is None:
@@ -263,6 +318,19 @@ def flat_objects(
         n_mine = int(np.count_nonzero(mine))
         mine &= ~near
         if np.count_nonzero(mine) < max(_MIN_PIXELS, (1.0 - _NEAR_MAX_SHARE) * n_mine):
+            if len(object_sizes):
+                whole = comps[v0:v1, u0:u1] == k
+                j = _foot_of(whole, owner[v0:v1, u0:u1], near, v0, u0, width, object_pixels, owner_flat, colors)
+                if j is not None:
+                    rows, cols = np.nonzero(whole)
+                    pixels = (rows + v0) * width + (cols + u0)
+                    ring = dilate_square(whole, _RING_OUTER_PX) & ~dilate_square(whole, _RING_INNER_PX)
+                    ring &= is_table[v0:v1, u0:u1] & ~grid[v0:v1, u0:u1] & ~near
+                    rows, cols = np.nonzero(ring)
+                    if rows.size >= _MIN_PIXELS:
+                        base = float(np.median(height_of(points[(rows + v0) * width + (cols + u0)])))
+                        if float(np.median(height_of(points[pixels]))) - base >= min_relief_m:
+                            feet.setdefault(j, []).append(pixels)
             continue
         ring = dilate_square(mine, _RING_OUTER_PX) & ~dilate_square(mine, _RING_INNER_PX)
         ring &= is_table[v0:v1, u0:u1] & ~grid[v0:v1, u0:u1] & ~near
@@ -285,4 +353,4 @@ def flat_objects(
         if _RAISED_MIN_SHARE * inside.size <= rows.size <= _RAISED_MAX_RATIO * inside.size:
             inside = (rows + v0) * width + (cols + u0)
         found.append(inside)
-    return found
+    return FlatFinds(found, {j: np.concatenate(parts) for j, parts in sorted(feet.items())})

@@ -235,8 +235,9 @@ def _flat_objects(
     size: SegmentSize,
     support: tuple[np.ndarray, float] | None = None,
 ) -> tuple[np.ndarray, list[SegmentedObject]]:
-    """(table indices without the flat objects' points, the flat objects): flat.py;
-    ``support``: `support_colour` of ``table_idx`` when the caller has it."""
+    """(table indices without the flat objects' and the feet's points, the objects with
+    their feet and then the flat objects): flat.py; ``support``: `support_colour` of
+    ``table_idx`` when the caller has it."""
     assert frame.colors is not None and frame.shape is not None  # an organized frame's, with usable colour
     taken = np.concatenate([o.indices for o in objects]) if objects else np.zeros(0, dtype=np.int64)
     loose = np.setdiff1d(obj_idx, taken, assume_unique=True)
@@ -246,7 +247,7 @@ def _flat_objects(
         xy = project(frame.points[pixels].astype(np.float64), fit.basis)
         return float(unique_cells(np.floor(xy / cell).astype(np.int64)).shape[0]) * cell * cell
 
-    found = flat_objects(
+    finds = flat_objects(
         frame.points,
         frame.colors,
         frame.shape,
@@ -261,14 +262,23 @@ def _flat_objects(
         settings.flat_max_area_m2,
         settings.flat_grow_min_m,
         support,
+        [o.indices.size for o in objects] if settings.flat_feet else (),
     )
+    found = finds.objects
+    objects = list(objects)
+    for j, foot in finds.feet.items():
+        foot = np.setdiff1d(foot, objects[j].indices)
+        table_idx = np.setdiff1d(table_idx, foot, assume_unique=True)
+        grown = np.concatenate([objects[j].indices, foot])
+        # its foot stands on the table: the box reaches down to it
+        objects[j] = make_object(grown, frame.points[grown].astype(np.float64), fit.plane, np.inf)
     if not found:
-        return table_idx, []
+        return table_idx, objects
     pixels = np.concatenate(found)
     table_idx = np.setdiff1d(table_idx, pixels, assume_unique=True)
     # lying on the table: the box reaches down to it
     made = [make_object(f, frame.points[f].astype(np.float64), fit.plane, np.inf) for f in found]
-    return table_idx, made
+    return table_idx, objects + made
 
 
 def _empty() -> np.ndarray:
@@ -432,10 +442,9 @@ def _flat(w: _Work) -> None:
             # worked out once: _off_colour reads it again when no flat object changed the table
             support = support_colour(w.frame.colors, w.frame.shape, w.table_idx, w.settings.flat_min_color_delta)
             w.support_rgb = (w.table_idx, *support)
-        w.table_idx, found = _flat_objects(
+        w.table_idx, w.objects = _flat_objects(
             w.frame, w.table_idx, w.obj_idx, w.objects, w.fit, w.settings, w.size, support
         )
-        w.objects.extend(found)
 
 
 def _exclude(w: _Work) -> None:

@@ -44,7 +44,7 @@ def _scene(
         5e-5,
         max_area_m2,
         0.0025,
-    )
+    ).objects
 
 
 def _strip(rows: slice, cols: slice) -> np.ndarray:
