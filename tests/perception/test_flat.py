@@ -143,3 +143,47 @@ def test_a_flat_object_is_found_on_its_colours_area() -> None:
     (found,) = _scene(slice(28, 33), slice(28, 37), None, max_area_m2=150e-6)
     assert np.array_equal(found, _strip(slice(28, 37), slice(30, 51)))
     assert _scene(slice(28, 33), slice(28, 37), None, max_area_m2=100e-6) == []
+
+
+def _foot_scene(object_rgb: tuple[int, int, int], feet: bool = True) -> dict[int, np.ndarray]:
+    """A black strip, rows 28-32, columns 30-55, 8 mm up, touching an object (its pixels
+    taken: rows 20-40, columns 56-63) of ``object_rgb``: flat_objects's feet."""
+    v, u = np.mgrid[0:_H, 0:_W]
+    z = np.zeros((_H, _W))
+    z[28:33, 30:56] = 0.008
+    z[20:41, 56:64] = 0.05
+    points = np.stack([u * 0.001, v * 0.001, z], axis=2).reshape(-1, 3).astype(np.float32)
+    colors = np.tile(np.array(_TABLE_RGB, dtype=np.uint8), (_H, _W, 1))
+    colors[28:33, 30:56] = _MARKER_RGB
+    colors[20:41, 56:64] = object_rgb
+    taken = np.zeros((_H, _W), dtype=bool)
+    taken[20:41, 56:64] = True
+    object_pixels = np.flatnonzero(taken.ravel())
+    finds = flat_objects(
+        points,
+        colors.reshape(-1, 3),
+        (_H, _W),
+        np.flatnonzero(~taken.ravel()),
+        np.zeros(0, dtype=np.int64),
+        object_pixels,
+        lambda p: p[:, 2].astype(np.float64),
+        lambda pixels: pixels.size * 1e-6,
+        20.0,
+        0.0015,
+        5e-5,
+        0.02,
+        0.0025,
+        object_sizes=[object_pixels.size] if feet else (),
+    )
+    assert finds.objects == []  # 6 of its 26 columns within the clearance: no flat object
+    return finds.feet
+
+
+def test_an_objects_foot_below_the_prism_joins_it() -> None:
+    # the strip touches the object and has its colour: the object's foot, all of it
+    feet = _foot_scene(_MARKER_RGB)
+    assert list(feet) == [0]
+    assert np.array_equal(feet[0], _strip(slice(28, 33), slice(30, 56)))
+    # of another colour (red: dE ~60 from black) it is no foot; nor without the objects' sizes
+    assert _foot_scene((200, 30, 30)) == {}
+    assert _foot_scene(_MARKER_RGB, feet=False) == {}
