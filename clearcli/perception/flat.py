@@ -57,6 +57,10 @@ _CLEARANCE_PX = 6
 # reach of a container) is one, an object's foot or shadow beside it (uois_image_0000's
 # bowls, gqcnn_primesense_0's clamp: 17-34 %) is not
 _NEAR_MAX_SHARE = 0.1
+# and it shows at least this many times the smallest object's area beyond the clearance:
+# the markers 3.2 times; gqcnn_phoxi_dexnet4_0 has a patch beside an object at 0.98-1.0
+# times, which a micrometre flipped
+_NEAR_MIN_AREA_FACTOR = 2.0
 # a candidate held by one object (touching it within this many pixels) of that object's
 # colour (median CIELAB within this dE of its median) and standing up from the table round
 # it is that object's foot below the prism: thin_flat's notebooks and boxes 0-8.2 apart,
@@ -346,7 +350,8 @@ def flat_objects(
             continue
         # found or not by its colour's pixels (their area; the depth smeared round a
         # notebook took thin_flat(4)'s over flat_max_area_m2), its points where its depth is
-        if not min_area_m2 <= pixel_area_m2(inside) <= max_area_m2:
+        least_m2 = min_area_m2 * (_NEAR_MIN_AREA_FACTOR if np.count_nonzero(mine) < n_mine else 1.0)
+        if not least_m2 <= pixel_area_m2(inside) <= max_area_m2:
             continue
         raised = _raised(grid_points[v0:v1, u0:u1], mine, near, height_of, base, grow_min_m)
         rows, cols = np.nonzero(raised)

@@ -41,7 +41,7 @@ def _scene(
         lambda pixels: pixels.size * 1e-6,
         20.0,
         0.0015,
-        5e-5,
+        4e-5,
         max_area_m2,
         0.0025,
     ).objects
@@ -170,7 +170,7 @@ def _foot_scene(object_rgb: tuple[int, int, int], feet: bool = True) -> dict[int
         lambda pixels: pixels.size * 1e-6,
         20.0,
         0.0015,
-        5e-5,
+        4e-5,
         0.02,
         0.0025,
         object_sizes=[object_pixels.size] if feet else (),
