@@ -325,11 +325,11 @@ class SegmentSettings(Section):
     # ones are under half or over twice as many (flat.py)
     flat_grow_min_m: float = param(0.0025, ge=0, le=0.05)
     # a candidate too near an object, touching only it, of its colour and standing up
-    # from the table is that object's foot the prism cut off, and joins it (flat.py, 5.).
-    # support.py (choose seeds) thin_flat right 107 -> 124 of 176 over the four sensors,
-    # raised_surface stereo 19 -> 22 of 26 (one more spurious, 12); the families' seeds
-    # 1000-1019 mean IoU up 0.02-0.07 each, F1 no worse; mOSD learn IoU 0.954 -> 0.956;
-    # foreign choose unchanged
+    # from the table is that object's foot the prism cut off, and joins it after the
+    # exclusions (flat.py, 5.). support.py (choose seeds) thin_flat right 107 -> 124 of
+    # 176 over the four sensors, the rest unchanged; the families' seeds 1000-1019 mean
+    # IoU up 0.02-0.07 each, F1 no worse; mOSD learn IoU 0.954 -> 0.956 (F1 the same);
+    # foreign choose right unchanged
     flat_feet: bool = param(True)
     # --- 4. final filter ----------------------------------------------------------------
     # smallest object kept, as visible surface area (m^2, counted in occupied voxels) so
