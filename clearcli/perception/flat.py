@@ -13,13 +13,27 @@ the table's noise with it. Depth alone cannot tell; colour can, where the frame 
    a cloth's pattern).
 2. Such pixels, joined over 8 neighbours, are a candidate when the candidate keeps
    ``_CLEARANCE_PX`` pixels away from every object found (a candidate touching an
-   object is its foot, its shadow or its reflection on the table).
+   object is its foot, its shadow or its reflection on the table), or all but
+   ``_NEAR_MAX_SHARE`` of it does: then it is judged on those pixels alone (a marker
+   lying against a box).
 3. A candidate is an object when it stands above the table around it: its median height
    is at least ``flat_min_relief_m`` above the median of a ring of table pixels around
    it (3 to 8 pixels out). A print, a stain or a shadow has no relief (on the choose
    frames: -5 to +0.9 mm); a marker has (2.2 mm for a black marker a metre away, more
    for nearer or thicker ones). Its visible area must lie between min_object_area_m2
    and ``flat_max_area_m2`` (a flat object, not a tablecloth's border).
+4. Its points are where its depth is: the pixels within `_GROW_PX` of the candidate (none
+   within `_CLEARANCE_PX` of an object) that stand ``grow_min_m`` or more above the ring,
+   joined over 8 neighbours to such a pixel of the candidate. A RealSense's depth is
+   registered a few pixels beside its colour; the colour's pixels off the depth are the
+   table's points, and the marker's raised points lie beside its colour. When the
+   raised pixels are under half or over twice the candidate's (a far marker smoothed flat;
+   a larger thing's foot rising round it), the candidate keeps its colour's pixels.
+   Whether it is an object at all is judged on its colour's pixels (3.).
+5. A candidate too near an object (2.) that touches only that object, has its colour
+   (`_FOOT_MAX_DE`) and stands up from the table round it (3.'s relief) is that object's
+   foot: the part of a box or a notebook a centimetre or two high that the prism's lower
+   bound cut off. It joins the object.
 
 Organized frames with colour only: the ring and the joining need the pixel grid. On
 the 45 mOSD learn frames no candidate far from the objects exists; results there are
@@ -29,7 +43,8 @@ unchanged.
 from __future__ import annotations
 
 import functools
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -37,11 +52,36 @@ from clearcli.perception.raster import boxes, dilate_square, label_8
 
 # a candidate keeps this far (pixels) from every object found
 _CLEARANCE_PX = 6
+# ... or is judged on its pixels beyond that when they are all but this share of it: a
+# marker lying against an object (uois_image_0006's green one, 5 % of its pixels within
+# reach of a container) is one, an object's foot or shadow beside it (uois_image_0000's
+# bowls, gqcnn_primesense_0's clamp: 17-34 %) is not
+_NEAR_MAX_SHARE = 0.1
+# and it shows at least this many times the smallest object's area beyond the clearance:
+# the markers 3.2 times; gqcnn_phoxi_dexnet4_0 has a patch beside an object at 0.98-1.0
+# times, which a micrometre flipped
+_NEAR_MIN_AREA_FACTOR = 2.0
+# a candidate held by one object (touching it within this many pixels) of that object's
+# colour (median CIELAB within this dE of its median) and standing up from the table round
+# it is that object's foot below the prism: thin_flat's notebooks and boxes 0-8.2 apart,
+# a colour_split_delta (25) apart is two objects
+_FOOT_TOUCH_PX = 2
+_FOOT_MAX_DE = 15.0
 # the ring of table pixels a candidate's relief is measured against (pixels out)
 _RING_INNER_PX = 3
 _RING_OUTER_PX = 8
 # a candidate of fewer pixels is noise
 _MIN_PIXELS = 30
+# an object's raised pixels are looked for this far (pixels) round its colour: a
+# RealSense's depth lies up to ~8 pixels beside its colour (uois_image_0006's markers)
+_GROW_PX = 8
+# the raised pixels replace the candidate's when they are at least this share of it; a
+# far marker whose relief the depth smooths below grow_min_m keeps its colour's pixels
+_RAISED_MIN_SHARE = 0.5
+# ... and at most this many times as many: a larger thing's foot of the table's colour
+# rises round a small candidate (uois_image_0000: a white bowl's side in its shadow, 3.3
+# times its colour's pixels; the markers' depth 1.3 times theirs), and keeps its colour's
+_RAISED_MAX_RATIO = 2.0
 
 
 def cielab(rgb: np.ndarray) -> np.ndarray:
@@ -162,6 +202,64 @@ def differing_shares(colors: np.ndarray, groups: list[np.ndarray], centre: np.nd
     return [int(counts[e] - counts[e - g.size]) / g.size for e, g in zip(ends.tolist(), groups, strict=True)]
 
 
+@dataclass(frozen=True)
+class FlatFinds:
+    """What `flat_objects` found: the objects lying flat (flat pixel indices each), and the
+    feet of objects found before (their index in ``object_sizes`` -> the foot's pixels)."""
+
+    objects: list[np.ndarray]
+    feet: dict[int, np.ndarray]
+
+
+def _foot_of(
+    whole: np.ndarray,
+    owner_window: np.ndarray,
+    near: np.ndarray,
+    v0: int,
+    u0: int,
+    width: int,
+    object_pixels: np.ndarray,
+    owner: np.ndarray,
+    colors: np.ndarray,
+) -> int | None:  # owner: (height * width,) each pixel's object, -1 none
+    """The one object a candidate (``whole``, in a window at row ``v0``, column ``u0`` of
+    the grid ``width`` wide) touches (within 2 pixels) and whose colour it has (median
+    CIELAB within `_FOOT_MAX_DE` of the object's), or None (module doc, 5.)."""
+    touched = np.unique(owner_window[dilate_square(whole, _FOOT_TOUCH_PX) & near])
+    touched = touched[touched >= 0]
+    if touched.size != 1:
+        return None
+    j = int(touched[0])
+    rows, cols = np.nonzero(whole)
+    mine_lab = np.median(lab_of(colors[(rows + v0) * width + (cols + u0)]), axis=0)
+    theirs = object_pixels[owner[object_pixels] == j]
+    their_lab = np.median(lab_of(colors[theirs]), axis=0)
+    return j if float(np.linalg.norm(mine_lab - their_lab)) < _FOOT_MAX_DE else None
+
+
+def _raised(
+    window: np.ndarray,
+    mine: np.ndarray,
+    near: np.ndarray,
+    height_of: Callable[[np.ndarray], np.ndarray],
+    base_m: float,
+    grow_min_m: float,
+) -> np.ndarray:
+    """(h, w) bool of a ``window`` of the pixel grid ((h, w, 3) points): the pixels within
+    `_GROW_PX` of the candidate ``mine`` that stand ``grow_min_m`` or more above the table
+    around it (``base_m``), joined over 8 neighbours to such a pixel of the candidate
+    (module doc, 4.); none ``near`` an object (within `_CLEARANCE_PX`: its depth smears
+    over the table beside it)."""
+    zone = dilate_square(mine, _GROW_PX) & ~near & np.isfinite(window).all(axis=2)
+    rows, cols = np.nonzero(zone)
+    up = np.zeros_like(zone)
+    up[rows, cols] = height_of(window[rows, cols]) - base_m >= grow_min_m
+    comps, _ = label_8(up)
+    seeds = np.unique(comps[mine & up])
+    up = np.isin(comps, seeds[seeds > 0])
+    return up
+
+
 def flat_objects(
     points: np.ndarray,
     colors: np.ndarray,
@@ -175,25 +273,30 @@ def flat_objects(
     min_relief_m: float,
     min_area_m2: float,
     max_area_m2: float,
+    grow_min_m: float,
     support: tuple[np.ndarray, float] | None = None,
-) -> list[np.ndarray]:
+    object_sizes: Sequence[int] = (),
+) -> FlatFinds:
     """Flat pixel indices of each object found lying flat on the table (module doc).
 
     ``table_pixels``: the table's points; ``loose_pixels``: points above the table that
     no object kept; ``object_pixels``: the objects'; all flat indices into the organized
     ``points`` / ``colors`` of ``shape``. ``height_of(points) -> heights`` above the table;
     ``pixel_area_m2(flat indices) -> m^2`` the visible area of a set of pixels.
-    ``support``: `support_colour` of ``table_pixels`` when the caller has it already."""
+    ``support``: `support_colour` of ``table_pixels`` when the caller has it already.
+    ``object_sizes``: the objects' pixel counts, in the order their pixels are in
+    ``object_pixels``; when given, an object's foot below the prism is found (module
+    doc, 5.)."""
     height, width = shape
     if table_pixels.size < 100:
-        return []
+        return FlatFinds([], {})
     centre, threshold = support_colour(colors, shape, table_pixels, min_color_delta) if support is None else support
     free = np.concatenate([table_pixels, loose_pixels])
     differs = _far_from(np.take(colors, free, axis=0), centre, threshold)  # take: several times faster than a[idx]
     cand = np.zeros(height * width, dtype=bool)
     cand[free[differs]] = True
     if not cand.any():
-        return []
+        return FlatFinds([], {})
     grid = cand.reshape(height, width)
     comps, n = label_8(grid)
     # each piece's size from the candidate pixels' labels (every labelled pixel is one):
@@ -201,39 +304,73 @@ def flat_objects(
     sizes = np.bincount(np.take(comps.ravel(), np.flatnonzero(cand)), minlength=n + 1)
     big = (np.flatnonzero(sizes[1:] >= _MIN_PIXELS) + 1).tolist()  # most are specks: not even looked at
     if not big:
-        return []
+        return FlatFinds([], {})
     taken: np.ndarray = np.zeros(height * width, dtype=bool)  # flat, then (height, width)
     taken[object_pixels] = True
     taken = taken.reshape(height, width)
     table_once: list[np.ndarray] = []  # the table's pixels as a mask, the first time a ring is looked at
+
+    def is_table() -> np.ndarray:
+        if not table_once:
+            mask = np.zeros(height * width, dtype=bool)
+            mask[table_pixels] = True
+            table_once.append(mask.reshape(height, width))
+        return table_once[0]
+
     found: list[np.ndarray] = []
     comp_boxes = boxes(comps, n)
+    grid_points = points.reshape(height, width, 3)
+    owner_flat = np.full(height * width, -1, dtype=np.int64)  # each pixel's object
+    if len(object_sizes):
+        owner_flat[object_pixels] = np.repeat(np.arange(len(object_sizes)), object_sizes)
+    owner = owner_flat.reshape(height, width)
+    feet: dict[int, list[np.ndarray]] = {}
     for k in big:
         box = comp_boxes[k - 1]
         if box is None:
             continue
-        pad = _RING_OUTER_PX + 1
+        pad = _RING_OUTER_PX + _GROW_PX + 1
         v0, v1 = max(0, box[0].start - pad), min(height, box[0].stop + pad)
         u0, u1 = max(0, box[1].start - pad), min(width, box[1].stop + pad)
         mine = comps[v0:v1, u0:u1] == k
-        if (dilate_square(mine, _CLEARANCE_PX) & taken[v0:v1, u0:u1]).any():
+        near = dilate_square(taken[v0:v1, u0:u1], _CLEARANCE_PX)
+        n_mine = int(np.count_nonzero(mine))
+        mine &= ~near
+        if np.count_nonzero(mine) < max(_MIN_PIXELS, (1.0 - _NEAR_MAX_SHARE) * n_mine):
+            if len(object_sizes):
+                whole = comps[v0:v1, u0:u1] == k
+                j = _foot_of(whole, owner[v0:v1, u0:u1], near, v0, u0, width, object_pixels, owner_flat, colors)
+                if j is not None:
+                    rows, cols = np.nonzero(whole)
+                    pixels = (rows + v0) * width + (cols + u0)
+                    ring = dilate_square(whole, _RING_OUTER_PX) & ~dilate_square(whole, _RING_INNER_PX)
+                    ring &= is_table()[v0:v1, u0:u1] & ~grid[v0:v1, u0:u1] & ~near
+                    rows, cols = np.nonzero(ring)
+                    if rows.size >= _MIN_PIXELS:
+                        base = float(np.median(height_of(points[(rows + v0) * width + (cols + u0)])))
+                        if float(np.median(height_of(points[pixels]))) - base >= min_relief_m:
+                            feet.setdefault(j, []).append(pixels)
             continue
-        if not table_once:
-            is_table = np.zeros(height * width, dtype=bool)
-            is_table[table_pixels] = True
-            table_once.append(is_table.reshape(height, width))
         ring = dilate_square(mine, _RING_OUTER_PX) & ~dilate_square(mine, _RING_INNER_PX)
-        ring &= table_once[0][v0:v1, u0:u1] & ~grid[v0:v1, u0:u1]
+        ring &= is_table()[v0:v1, u0:u1] & ~grid[v0:v1, u0:u1] & ~near
         if ring.sum() < _MIN_PIXELS:
             continue
         rows, cols = np.nonzero(mine)
         inside = (rows + v0) * width + (cols + u0)
         rows, cols = np.nonzero(ring)
         around = (rows + v0) * width + (cols + u0)
-        relief = float(np.median(height_of(points[inside])) - np.median(height_of(points[around])))
+        base = float(np.median(height_of(points[around])))
+        relief = float(np.median(height_of(points[inside])) - base)
         if relief < min_relief_m:
             continue
-        area = pixel_area_m2(inside)
-        if min_area_m2 <= area <= max_area_m2:
-            found.append(inside)
-    return found
+        # found or not by its colour's pixels (their area; the depth smeared round a
+        # notebook took thin_flat(4)'s over flat_max_area_m2), its points where its depth is
+        least_m2 = min_area_m2 * (_NEAR_MIN_AREA_FACTOR if np.count_nonzero(mine) < n_mine else 1.0)
+        if not least_m2 <= pixel_area_m2(inside) <= max_area_m2:
+            continue
+        raised = _raised(grid_points[v0:v1, u0:u1], mine, near, height_of, base, grow_min_m)
+        rows, cols = np.nonzero(raised)
+        if _RAISED_MIN_SHARE * inside.size <= rows.size <= _RAISED_MAX_RATIO * inside.size:
+            inside = (rows + v0) * width + (cols + u0)
+        found.append(inside)
+    return FlatFinds(found, {j: np.concatenate(parts) for j, parts in sorted(feet.items())})

@@ -245,9 +245,10 @@ def _flat_objects(
     settings: SegmentSettings,
     size: SegmentSize,
     support: tuple[np.ndarray, float] | None = None,
-) -> tuple[np.ndarray, list[SegmentedObject]]:
-    """(table indices without the flat objects' points, the flat objects): flat.py;
-    ``support``: `support_colour` of ``table_idx`` when the caller has it."""
+) -> tuple[np.ndarray, list[SegmentedObject], list[tuple[SegmentedObject, np.ndarray]]]:
+    """(table indices without the flat objects' points, the flat objects, the feet of
+    ``objects``: (object, the foot's pixels) each): flat.py; ``support``:
+    `support_colour` of ``table_idx`` when the caller has it."""
     assert frame.colors is not None and frame.shape is not None  # an organized frame's, with usable colour
     taken = np.concatenate([o.indices for o in objects]) if objects else np.zeros(0, dtype=np.int64)
     loose = np.setdiff1d(obj_idx, taken, assume_unique=True)
@@ -257,7 +258,7 @@ def _flat_objects(
         xy = project(frame.points[pixels].astype(np.float64), fit.basis)
         return float(unique_cells(np.floor(xy / cell).astype(np.int64)).shape[0]) * cell * cell
 
-    found = flat_objects(
+    finds = flat_objects(
         frame.points,
         frame.colors,
         frame.shape,
@@ -270,15 +271,37 @@ def _flat_objects(
         settings.flat_min_relief_m,
         settings.min_object_area_m2,
         settings.flat_max_area_m2,
+        settings.flat_grow_min_m,
         support,
+        [o.indices.size for o in objects] if settings.flat_feet else (),
     )
+    found = finds.objects
+    feet = [(objects[j], foot) for j, foot in finds.feet.items()]
     if not found:
-        return table_idx, []
+        return table_idx, [], feet
     pixels = np.concatenate(found)
     table_idx = np.setdiff1d(table_idx, pixels, assume_unique=True)
     # lying on the table: the box reaches down to it
     made = [make_object(f, frame.points[f].astype(np.float64), fit.plane, np.inf) for f in found]
-    return table_idx, made
+    return table_idx, made, feet
+
+
+def _with_feet(w: _Work) -> None:
+    """5. the feet `_flat` found joined to their objects, if these were kept (flat.py,
+    5.): after `_exclude`, which judges each object as the prism cut it."""
+    fit = w.fit
+    if not w.feet or fit is None:
+        return
+    feet = {id(obj): foot for obj, foot in w.feet}
+    for k, obj in enumerate(w.objects):
+        foot = feet.get(id(obj))
+        if foot is None:
+            continue
+        foot = np.setdiff1d(foot, obj.indices)
+        w.table_idx = np.setdiff1d(w.table_idx, foot, assume_unique=True)
+        grown = np.concatenate([obj.indices, foot])
+        # its foot stands on the table: the box reaches down to it
+        w.objects[k] = make_object(grown, w.frame.points[grown].astype(np.float64), fit.plane, np.inf)
 
 
 def _empty() -> np.ndarray:
@@ -314,6 +337,8 @@ class _Work:
     openings: tuple[Opening, ...] = ()
     table_edges: tuple[TableEdge, ...] = ()
     excluded: list[Excluded] = field(default_factory=list)
+    # flat.py's feet of the objects: (object, the foot's pixels), joined after _exclude
+    feet: list[tuple[SegmentedObject, np.ndarray]] = field(default_factory=list)
     # flat.support_colour of the table's pixels: (those pixels, CIELAB centre, threshold)
     support_rgb: tuple[np.ndarray, np.ndarray, float] | None = None
 
@@ -442,7 +467,7 @@ def _flat(w: _Work) -> None:
             # worked out once: _off_colour reads it again when no flat object changed the table
             support = support_colour(w.frame.colors, w.frame.shape, w.table_idx, w.settings.flat_min_color_delta)
             w.support_rgb = (w.table_idx, *support)
-        w.table_idx, found = _flat_objects(
+        w.table_idx, found, w.feet = _flat_objects(
             w.frame, w.table_idx, w.obj_idx, w.objects, w.fit, w.settings, w.size, support
         )
         w.objects.extend(found)
@@ -569,6 +594,7 @@ STEPS: tuple[Step, ...] = (
     Step("objects", _objects, above_table=True),
     Step("flat", _flat),
     Step("exclude", _exclude),
+    Step("flat", _with_feet),
     Step("openings", _openings),
 )
 STAGE_NAMES = tuple(st.name for st in STAGES)

@@ -81,13 +81,30 @@ def test_a_flat_marker_is_found() -> None:
         scores = [(np.isin(o.indices, marker).mean(), np.isin(marker, o.indices).mean()) for o in seg.objects]
         return max(scores, key=lambda s: s[0] * s[1])
 
-    _, _, seg = judged("uois_image_0006")
+    # the object's points are where its depth stands up, beside the colour (flat.py, 4.):
+    # most of them within the polygon, and the polygon's depth-cut label exactly right
+    verdicts, _, seg = judged("uois_image_0006")
     inside, covered = best(seg)
-    assert inside >= 0.9 and covered >= 0.6
+    assert inside >= 0.5 and covered >= 0.5
+    assert verdicts["black marker"] == "right"
+    # the green marker lies against the blue container: 5 % of its pixels within the
+    # clearance, judged on the rest (flat.py, 2.)
+    assert verdicts["green marker"] == "right"
     assert seg.color_used and "flat objects" in seg.color_note
     _, _, seg = judged("uois_image_0006", flat_objects=False)
     inside, covered = best(seg)
     assert covered < 0.1
+
+
+def test_a_flat_markers_points_are_where_its_depth_stands_up() -> None:
+    # uois_image_0006's black marker: its colour lies ~6 px beside its raised depth. On
+    # the colour's pixels alone (no pixel is 5 cm above the table: the raised pixels are
+    # never half the candidate's) the object takes the table's points beside the marker
+    # and only 0.63 of the marker's labelled (depth-cut) points: IoU 0.42, missed
+    verdicts, _, _ = judged("uois_image_0006", flat_grow_min_m=0.05)
+    assert verdicts["black marker"] == "missed"
+    verdicts, _, _ = judged("uois_image_0006")
+    assert verdicts["black marker"] == "right"
 
 
 def test_a_bowl_with_a_can_in_it_is_two_objects() -> None:
