@@ -107,9 +107,9 @@ def test_most_counted_by_hand() -> None:
     assert rows.tolist() == [0, 2, 7] and cols.tolist() == [1, 0, 2]
 
 
-def test_voxel_pieces_on_a_cluttered_frame_are_the_lexsort_rule_s() -> None:
-    # mOSD test55 (16 objects): each voxel's piece and the small pieces' joins, against
-    # those the lexsort rule chose
+@pytest.fixture(scope="module")
+def test55_edge_cut() -> tuple[Any, ...]:
+    """The arguments `segment` passes to cut_depth_edges on mOSD test55 (16 objects)."""
     from helpers import shared_path
 
     from clearcli.io.read import read_frame
@@ -128,7 +128,15 @@ def test_voxel_pieces_on_a_cluttered_frame_are_the_lexsort_rule_s() -> None:
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr("clearcli.perception.segment.cut_depth_edges", record)
         segment(frame, SegmentSettings())
-    vox, points, shape, point_index, rel, min_piece = seen[0]
+    return seen[0]
+
+
+def test_voxel_pieces_on_a_cluttered_frame_are_the_lexsort_rule_s(test55_edge_cut: tuple[Any, ...]) -> None:
+    # mOSD test55 (16 objects): each voxel's piece and the small pieces' joins, against
+    # those the lexsort rule chose
+    from clearcli.perception import edges
+
+    vox, points, shape, point_index, rel, min_piece = test55_edge_cut
     point_piece = pixel_pieces(points, shape, point_index, rel)
     got: list[np.ndarray] = []
     for rule in (edges._most_counted, _most_counted_by_lexsort):
@@ -189,28 +197,10 @@ def test_join_small_is_the_rule_both_ways(seed: int) -> None:
     assert not np.array_equal(got, piece)  # a real comparison: some voxel joined
 
 
-def test_pixel_pieces_on_a_cluttered_frame_are_every_pair_s() -> None:
+def test_pixel_pieces_on_a_cluttered_frame_are_every_pair_s(test55_edge_cut: tuple[Any, ...]) -> None:
     # mOSD test55 (16 objects): the pieces of the object points against the definition
     # (every near 8-neighbour pair an edge), in float64 as pixel_pieces measures ranges
-    from helpers import shared_path
-
-    from clearcli.io.read import read_frame
-    from clearcli.perception import edges
-    from clearcli.perception.segment import segment
-    from clearcli.settings.segment import SegmentSettings
-
-    frame = read_frame(shared_path("mosd/test/test55.pcd"))
-    seen: list[tuple[Any, ...]] = []
-    real = edges.cut_depth_edges
-
-    def record(*args: Any) -> Any:
-        seen.append(args)
-        return real(*args)
-
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setattr("clearcli.perception.segment.cut_depth_edges", record)
-        segment(frame, SegmentSettings())
-    _, points, shape, point_index, rel, _ = seen[0]
+    _, points, shape, point_index, rel, _ = test55_edge_cut
     got = pixel_pieces(points, shape, point_index, rel)
     want = _every_pair(points.astype(np.float64), shape, point_index, rel)
     assert np.array_equal(got, want)
