@@ -127,24 +127,31 @@ def _lab_cache() -> tuple[np.ndarray, np.ndarray]:
 def _lab_rows(keys: np.ndarray) -> np.ndarray:
     """(N, 3) float32: the rows ``keys`` of `_lab_table`, those not met before computed now."""
     table, filled = _lab_cache()
-    new = np.unique(keys[~filled[keys]])
+    # take: gathers several times faster than a[idx]
+    new = np.unique(np.compress(~np.take(filled, keys), keys))
     if new.size:
         centres = np.stack([new >> 12, (new >> 6) & 63, new & 63], axis=1) * 4 + 2
         table[new] = cielab(centres.astype(np.uint8)).astype(np.float32)
         filled[new] = True
-    return table[keys]
+    return np.take(table, keys, axis=0)
 
 
 def lab_of(rgb: np.ndarray) -> np.ndarray:
     """(N, 3) uint8 sRGB -> (N, 3) CIELAB, looked up (see _lab_table)."""
-    q = (rgb >> 2).astype(np.int64)
-    return _lab_rows((q[:, 0] << 12) | (q[:, 1] << 6) | q[:, 2])
+    return _lab_rows(_lab_keys(rgb))
 
 
 def _lab_keys(rgb: np.ndarray) -> np.ndarray:
     """(N,) row of each colour in `_lab_table`."""
-    q = [(rgb[:, c] >> 2).astype(np.int32) for c in range(3)]
-    return (q[0] << 12) | (q[1] << 6) | q[2]
+    # one shift of the bytes, then the key built in place: a column at a time cast and
+    # shifted apart cost ten times more (strided columns, five temporaries; issue 39)
+    q = rgb >> 2
+    key = q[:, 0].astype(np.int32)
+    key <<= 6
+    key |= q[:, 1]
+    key <<= 6
+    key |= q[:, 2]
+    return key
 
 
 def _far_from(rgb: np.ndarray, centre: np.ndarray, threshold: float) -> np.ndarray:
@@ -158,7 +165,7 @@ def _far_from(rgb: np.ndarray, centre: np.ndarray, threshold: float) -> np.ndarr
     diff = _lab_rows(used) - centre.astype(np.float32)
     d2 = np.zeros(seen.shape[0], dtype=np.float32)
     d2[used] = np.einsum("ij,ij->i", diff, diff)
-    return d2[key] > threshold * threshold
+    return np.take(d2, key) > threshold * threshold
 
 
 def support_colour(
@@ -221,19 +228,25 @@ def _foot_of(
     object_pixels: np.ndarray,
     owner: np.ndarray,
     colors: np.ndarray,
+    object_lab: dict[int, np.ndarray],
 ) -> int | None:  # owner: (height * width,) each pixel's object, -1 none
     """The one object a candidate (``whole``, in a window at row ``v0``, column ``u0`` of
     the grid ``width`` wide) touches (within 2 pixels) and whose colour it has (median
-    CIELAB within `_FOOT_MAX_DE` of the object's), or None (module doc, 5.)."""
+    CIELAB within `_FOOT_MAX_DE` of the object's), or None (module doc, 5.).
+    ``object_lab``: the objects' median colours worked out so far, filled here (an
+    object's median over all its pixels cost most of the flat step when several
+    candidates touched it, issue 39)."""
     touched = np.unique(owner_window[dilate_square(whole, _FOOT_TOUCH_PX) & near])
     touched = touched[touched >= 0]
     if touched.size != 1:
         return None
     j = int(touched[0])
     rows, cols = np.nonzero(whole)
-    mine_lab = np.median(lab_of(colors[(rows + v0) * width + (cols + u0)]), axis=0)
-    theirs = object_pixels[owner[object_pixels] == j]
-    their_lab = np.median(lab_of(colors[theirs]), axis=0)
+    mine_lab = np.median(lab_of(np.take(colors, (rows + v0) * width + (cols + u0), axis=0)), axis=0)
+    their_lab = object_lab.get(j)
+    if their_lab is None:
+        theirs = np.compress(np.take(owner, object_pixels) == j, object_pixels)
+        their_lab = object_lab[j] = np.median(lab_of(np.take(colors, theirs, axis=0)), axis=0)
     return j if float(np.linalg.norm(mine_lab - their_lab)) < _FOOT_MAX_DE else None
 
 
@@ -320,11 +333,17 @@ def flat_objects(
     found: list[np.ndarray] = []
     comp_boxes = boxes(comps, n)
     grid_points = points.reshape(height, width, 3)
-    owner_flat = np.full(height * width, -1, dtype=np.int64)  # each pixel's object
-    if len(object_sizes):
-        owner_flat[object_pixels] = np.repeat(np.arange(len(object_sizes)), object_sizes)
-    owner = owner_flat.reshape(height, width)
+    owner_once: list[np.ndarray] = []  # each pixel's object (-1 none), the first time a foot is looked for
+
+    def owner() -> np.ndarray:
+        if not owner_once:
+            flat = np.full(height * width, -1, dtype=np.int64)
+            flat[object_pixels] = np.repeat(np.arange(len(object_sizes)), object_sizes)
+            owner_once.append(flat)
+        return owner_once[0]
+
     feet: dict[int, list[np.ndarray]] = {}
+    object_lab: dict[int, np.ndarray] = {}  # _foot_of's, each object's once
     for k in big:
         box = comp_boxes[k - 1]
         if box is None:
@@ -332,14 +351,24 @@ def flat_objects(
         pad = _RING_OUTER_PX + _GROW_PX + 1
         v0, v1 = max(0, box[0].start - pad), min(height, box[0].stop + pad)
         u0, u1 = max(0, box[1].start - pad), min(width, box[1].stop + pad)
-        mine = comps[v0:v1, u0:u1] == k
+        whole = comps[v0:v1, u0:u1] == k
         near = dilate_square(taken[v0:v1, u0:u1], _CLEARANCE_PX)
-        n_mine = int(np.count_nonzero(mine))
-        mine &= ~near
+        n_mine = int(np.count_nonzero(whole))
+        mine = whole & ~near
         if np.count_nonzero(mine) < max(_MIN_PIXELS, (1.0 - _NEAR_MAX_SHARE) * n_mine):
             if len(object_sizes):
-                whole = comps[v0:v1, u0:u1] == k
-                j = _foot_of(whole, owner[v0:v1, u0:u1], near, v0, u0, width, object_pixels, owner_flat, colors)
+                j = _foot_of(
+                    whole,
+                    owner().reshape(height, width)[v0:v1, u0:u1],
+                    near,
+                    v0,
+                    u0,
+                    width,
+                    object_pixels,
+                    owner(),
+                    colors,
+                    object_lab,
+                )
                 if j is not None:
                     rows, cols = np.nonzero(whole)
                     pixels = (rows + v0) * width + (cols + u0)

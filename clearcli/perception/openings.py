@@ -145,7 +145,7 @@ def rim_of(points_camera: np.ndarray, plane: TablePlane) -> Opening:
     if len(p) > RIM_MAX_POINTS:  # an even sample: a rim is a shape, not a count
         p = p[:: -(-len(p) // RIM_MAX_POINTS)]
     p = np.asarray(p, dtype=float)
-    p = p[finite_mask(p)]
+    p = np.compress(finite_mask(p), p, axis=0)  # rows by a mask: compress is several times faster
     if len(p) < 30:
         return Opening(None, "too few points to see a rim")
     e1, e2, n = _table_axes(plane)
@@ -171,7 +171,7 @@ def rim_of(points_camera: np.ndarray, plane: TablePlane) -> Opening:
     if arc < RIM_MIN_ARC_DEG:
         return Opening(None, f"its rim is seen over {arc:.0f} deg only (hidden)")
     # the rim's upper face: an annulus as wide as the wall
-    rt = np.linalg.norm(xy[h >= top - 0.0025] - centre, axis=1)
+    rt = np.linalg.norm(np.compress(h >= top - 0.0025, xy, axis=0) - centre, axis=1)
     wall = _quantile(rt, 0.9) - _quantile(rt, 0.1) if len(rt) >= 8 else float("nan")
     # inside: below the rim and within the wall's middle (the far inner wall, the floor;
     # the near outer wall lies outside it)

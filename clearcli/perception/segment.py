@@ -486,7 +486,7 @@ def _exclude(w: _Work) -> None:
     low = settings.prism_min_height_m + settings.prism_noise_per_m2 * rng2
     above = np.flatnonzero(~w.prism_mask & ~w.table_mask & (h > low) & (h <= settings.prism_max_height_m))
     # rows by index: take is faster than a[idx] (several times on uint8, half again on floats)
-    out_sel = above[~fit.inside(np.take(pts, above, axis=0), settings.hull_margin_m)]
+    out_sel = np.compress(~fit.inside(np.take(pts, above, axis=0), settings.hull_margin_m), above)
     outside = np.take(pts, out_sel, axis=0)
     # how far what lies outside reaches beyond the outline, along the pixel grid
     reach = reach_beyond(
@@ -497,7 +497,7 @@ def _exclude(w: _Work) -> None:
     )
     below = np.flatnonzero(~w.table_mask & (h < -low))
     below_pts = np.take(pts, below, axis=0)
-    outside_below = below_pts[~fit.inside(below_pts, settings.hull_margin_m)]
+    outside_below = np.compress(~fit.inside(below_pts, settings.hull_margin_m), below_pts, axis=0)  # rows by a mask
     on_table = np.flatnonzero(w.table_mask)
     support = np.take(pts, on_table[:: max(1, on_table.size // 50000)], axis=0)  # no copy of every table point first
     rests = settings.prism_min_height_m + settings.plane_distance_m
@@ -555,8 +555,11 @@ def _support_around(w: _Work) -> list[tuple[int, int]]:
         kept = w.idx[j] == pixels
         jk = j[kept]
         counts, support = np.zeros(pixels.size, dtype=bool), np.zeros(pixels.size, dtype=bool)
-        counts[kept] = ~w.prism_mask[jk] & (np.abs(fit.plane.height_of(w.pts[jk])) <= AROUND_LEVEL_M)
-        support[kept] = w.table_mask[jk]
+        # gathers by take: several times faster than a[idx]
+        counts[kept] = ~np.take(w.prism_mask, jk) & (
+            np.abs(fit.plane.height_of(np.take(w.pts, jk, axis=0))) <= AROUND_LEVEL_M
+        )
+        support[kept] = np.take(w.table_mask, jk)
         return counts, support
 
     return support_around([o.indices for o in w.objects], shape, state)

@@ -230,3 +230,59 @@ def test_thin_things_lying_on_a_table_keep_their_feet() -> None:
     off = exact_report(segment(frame, replace(SegmentSettings(), flat_feet=False)).labels(), truth).verdicts
     assert (on[3], on[4]) == ("right", "right")
     assert (off[3], off[4]) == ("missed", "missed")
+
+
+def test_colour_keys_pack_the_top_six_bits_of_each_channel() -> None:
+    from clearcli.perception.flat import _lab_keys
+
+    # worked by hand: (4, 8, 12) >> 2 = (1, 2, 3) -> 1 * 4096 + 2 * 64 + 3; the low two
+    # bits of each channel dropped: (7, 11, 15) is the same bin
+    rgb = np.array([[0, 0, 0], [4, 8, 12], [7, 11, 15], [255, 255, 255], [3, 7, 11]], dtype=np.uint8)
+    assert _lab_keys(rgb).tolist() == [0, 4227, 4227, 262143, 66]
+    gen = np.random.default_rng(3)
+    rgb = gen.integers(0, 256, size=(5000, 3), dtype=np.uint8)
+    want = [(int(r) // 4) * 4096 + (int(g) // 4) * 64 + int(b) // 4 for r, g, b in rgb]
+    assert _lab_keys(rgb).tolist() == want
+    # lab_of reads the very rows of those keys
+    from clearcli.perception.flat import _lab_table
+
+    assert np.array_equal(lab_of(rgb).view(np.uint32), _lab_table()[want].view(np.uint32))
+
+
+def test_two_candidates_touching_one_object_are_judged_on_its_own_colour() -> None:
+    # a red strip (rows 22-26) and a black one (rows 28-32), both 8 mm up, touch one black
+    # object (rows 20-40, columns 56-63); the object's colour is worked out once, for the
+    # red strip (first in raster order), and the black strip is judged against it too:
+    # only the black one is its foot
+    v, u = np.mgrid[0:_H, 0:_W]
+    z = np.zeros((_H, _W))
+    z[22:27, 30:56] = 0.008
+    z[28:33, 30:56] = 0.008
+    z[20:41, 56:64] = 0.05
+    points = np.stack([u * 0.001, v * 0.001, z], axis=2).reshape(-1, 3).astype(np.float32)
+    colors = np.tile(np.array(_TABLE_RGB, dtype=np.uint8), (_H, _W, 1))
+    colors[22:27, 30:56] = (200, 30, 30)
+    colors[28:33, 30:56] = _MARKER_RGB
+    colors[20:41, 56:64] = _MARKER_RGB
+    taken = np.zeros((_H, _W), dtype=bool)
+    taken[20:41, 56:64] = True
+    object_pixels = np.flatnonzero(taken.ravel())
+    finds = flat_objects(
+        points,
+        colors.reshape(-1, 3),
+        (_H, _W),
+        np.flatnonzero(~taken.ravel()),
+        np.zeros(0, dtype=np.int64),
+        object_pixels,
+        lambda p: p[:, 2].astype(np.float64),
+        lambda pixels: pixels.size * 1e-6,
+        20.0,
+        0.0015,
+        4e-5,
+        0.02,
+        0.0025,
+        object_sizes=[object_pixels.size],
+    )
+    assert finds.objects == []
+    assert list(finds.feet) == [0]
+    assert np.array_equal(finds.feet[0], _strip(slice(28, 33), slice(30, 56)))
