@@ -59,20 +59,38 @@ def merge_rims(
         return seg_of_voxel
     # only voxels with another segment in their cells' neighbourhood can touch one
     near = np.flatnonzero(_near_another_segment(seg_of_voxel, voxel_centroids, contact_m, n_seg))
-    pairs = cKDTree(voxel_centroids[near]).query_pairs(contact_m, output_type="ndarray")
-    if pairs.shape[0] == 0:
+    if near.size == 0:
         return seg_of_voxel
-    # nine in ten pairs lie within one segment: they are dropped on the near voxels'
-    # own numbering, and only the pairs across segments mapped to the frame's voxels
+    # the pairs across segments, searched between each two segments' trees: nine in ten
+    # pairs of one search over all near voxels lay within one segment. The same pairs
+    # (both searches keep a distance <= contact_m); their order does not matter below
+    # (counts per pair of segments)
     seg_near = seg_of_voxel[near]
-    a, b = seg_near[pairs[:, 0]], seg_near[pairs[:, 1]]
-    cross = np.flatnonzero(a != b)
-    if cross.size == 0:
+    by_seg = near[np.argsort(seg_near, kind="stable")]
+    bounds = np.searchsorted(seg_of_voxel[by_seg], np.arange(n_seg + 1))
+    present = np.flatnonzero(bounds[1:] > bounds[:-1])
+    pts = voxel_centroids[by_seg]
+    lo_box = np.minimum.reduceat(pts, bounds[present], axis=0)
+    hi_box = np.maximum.reduceat(pts, bounds[present], axis=0)
+    # the two segments' boxes within contact_m (with a margin: the search decides)
+    gap = np.maximum(0.0, np.maximum(lo_box[:, None, :] - hi_box[None, :, :], lo_box[None, :, :] - hi_box[:, None, :]))
+    close = np.sqrt((gap**2).sum(axis=2)) <= contact_m * (1 + 1e-6) + 1e-9
+    trees: dict[int, cKDTree] = {}
+    found = []
+    for i, j in zip(*np.nonzero(np.triu(close, k=1)), strict=True):
+        sa, sb = int(present[i]), int(present[j])
+        for s in (sa, sb):
+            if s not in trees:
+                trees[s] = cKDTree(pts[bounds[s] : bounds[s + 1]])
+        m = trees[sa].sparse_distance_matrix(trees[sb], contact_m, output_type="ndarray")
+        if m.size:
+            found.append(np.stack([by_seg[bounds[sa] + m["i"]], by_seg[bounds[sb] + m["j"]]], axis=1))
+    if not found:
         return seg_of_voxel
+    edges_cross = np.concatenate(found)
+    ea, eb = seg_of_voxel[edges_cross[:, 0]], seg_of_voxel[edges_cross[:, 1]]
     top = np.full(n_seg, -np.inf)
     np.maximum.at(top, seg_of_voxel, voxel_height)
-    ea, eb = a[cross], b[cross]
-    edges_cross = near[pairs[cross]]
     ha, hb = voxel_height[edges_cross[:, 0]], voxel_height[edges_cross[:, 1]]
     h_contact = 0.5 * (ha + hb)
     lo, hi = np.minimum(ea, eb), np.maximum(ea, eb)

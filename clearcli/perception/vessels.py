@@ -222,7 +222,6 @@ def rebuild_vessels(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
     seg = np.asarray(seg_of_voxel, dtype=np.int64).copy()
     if seg.size == 0:
         return seg
-    rng = np.random.default_rng(0)  # the same frame, the same segments
     n_seg = int(seg.max()) + 1
     sizes = np.bincount(seg, minlength=n_seg)
     top = np.full(n_seg, -np.inf)
@@ -253,6 +252,13 @@ def rebuild_vessels(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
         d_mid <= 2 * max_radius_m * (1 + 1e-6) + 1e-9
     )
     row_of = {k: i for i, k in enumerate(cand)}
+    # a group's circle is drawn from a generator seeded by its own segments (integers:
+    # the same under a micrometre's move), not one shared in order: a group met again
+    # (each of its segments starts it in turn) has the same circle, and fails again the
+    # same way while no segment has changed since (``n_changes``)
+    rims_of: dict[tuple[int, ...], tuple[np.ndarray, float, np.ndarray] | None] = {}
+    failed_at: dict[tuple[int, ...], int] = {}
+    n_changes = 0
     for s in sorted(cand, key=lambda k: -top[k]):
         if s in done:
             continue
@@ -263,8 +269,14 @@ def rebuild_vessels(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
             and abs(top[k] - top[s]) <= tolerance_m
             and np.linalg.norm(mid[k] - mid[s]) <= 2 * max_radius_m
         ]
+        key = tuple(group)
+        if failed_at.get(key, -1) == n_changes:
+            continue
+        failed_at[key] = n_changes  # until it gets as far as changing segments below
         band = np.concatenate([band_of[k] for k in group])
-        found = find_rim(voxel_xy[band], max_radius_m, rng)
+        if key not in rims_of:
+            rims_of[key] = find_rim(voxel_xy[band], max_radius_m, np.random.default_rng([0, *group]))
+        found = rims_of[key]
         if found is None:
             continue
         centre, radius, on_rim = found
@@ -308,7 +320,7 @@ def rebuild_vessels(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
             if sure_wall.size >= _K and sure_in.size >= _K and unsure.size:
                 shell[sure_wall] = True
                 shell[sure_in] = False
-                shell[unsure] = _by_colour(voxel_lab, sure_wall, sure_in, unsure, rng)
+                shell[unsure] = _by_colour(voxel_lab, sure_wall, sure_in, unsure, np.random.default_rng([1, *group]))
         share = np.bincount(seg[shell])
         touched = np.flatnonzero(share >= 3)
         # the rim's own segments are this container's whatever follows (a second
@@ -319,6 +331,7 @@ def rebuild_vessels(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
             continue  # one segment holds the whole wall already
         vessel = next_label
         next_label += 1
+        n_changes += 1
         for k in touched.tolist():
             members = seg == k
             rest = members & ~shell

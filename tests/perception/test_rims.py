@@ -123,3 +123,20 @@ def test_the_dense_grid_and_the_searched_cells_keep_the_same_voxels(monkeypatch:
     for (p, s), near in zip(clouds, dense, strict=True):
         assert np.array_equal(rims._near_another_segment(s, p, 0.01, int(s.max()) + 1), near)
     assert dense[0].tolist() == expected.tolist()
+
+
+@pytest.mark.parametrize("gap_m, joined", [(0.018, True), (0.022, False)])
+def test_walls_apart_across_a_diagonal_touch_within_the_contact_distance(gap_m: float, joined: bool) -> None:
+    # a short wall beyond a taller one's top edge, apart across a diagonal of x and z:
+    # their boxes are apart on two axes, so the pairs across the two segments are found
+    # only if the boxes are judged by their distance in 3-D (18 mm: within contact_m =
+    # 20 mm, near both tops with a 3 cm tolerance, a rim; 22 mm: nothing touches)
+    from clearcli.perception.rims import merge_rims
+
+    step = gap_m / np.sqrt(2.0)  # the nearest edges step apart in x and in z
+    a = _column(0.0, 0.0, 0.10)
+    b = _column(step, 0.10 + step, 0.11 + step)
+    cent = np.vstack([a, b])
+    seg = np.repeat([0, 1], [len(a), len(b)])
+    out = merge_rims(seg, cent, cent[:, 2], tolerance_m=0.03, contact_m=0.02)
+    assert (out.max() == 0) == joined

@@ -153,3 +153,34 @@ def test_two_bowls_side_by_side_are_each_rebuilt() -> None:
     assert np.unique(out).size == 2
     assert np.unique(out[first]).size == 1 and np.unique(out[second]).size == 1
     assert out[first][0] != out[second][0]
+
+
+def test_a_groups_circle_is_drawn_by_its_own_generator_once(monkeypatch: pytest.MonkeyPatch) -> None:
+    # two closed cans side by side are one group (tops level, 6.8 cm apart): each of the
+    # two starts it in turn, and it fails (no wall faces a centre). Its circle is fitted
+    # once, from a generator that does not depend on what was fitted before it: a taller
+    # can far off, fitted first, leaves it the same draws
+    import clearcli.perception.vessels as vessels
+
+    calls: list[tuple[int, dict]] = []
+    real = vessels.find_rim
+
+    def spy(band_xy: np.ndarray, max_radius_m: float, rng: np.random.Generator):
+        calls.append((band_xy.shape[0], rng.bit_generator.state))
+        return real(band_xy, max_radius_m, rng)
+
+    monkeypatch.setattr(vessels, "find_rim", spy)
+    a = _wall(lambda z: 0.033, 0.0, 0.11, 180, 360, outward=True, centre=CENTRE)
+    b = _wall(lambda z: 0.033, 0.0, 0.11, 180, 360, outward=True, centre=CENTRE + [0.068, 0.0])
+    cans = [(a[0], a[1], True, 0), (b[0], b[1], True, 1)]
+    seg, out = _rebuild(cans)
+    assert np.array_equal(seg, out)
+    assert len(calls) == 1  # not once for each can
+    alone = calls[0]
+    calls.clear()
+    tall = _wall(lambda z: 0.033, 0.0, 0.2, 180, 360, outward=True, centre=CENTRE + [0.5, 0.0])
+    seg, out = _rebuild([(tall[0], tall[1], True, 2), *cans])
+    assert np.array_equal(seg, out)
+    # the tall can first (its top is highest), with a band of its own, then the cans'
+    assert len(calls) == 2 and calls[0][0] >= 10 and calls[1][0] == alone[0]
+    assert calls[1][1] == alone[1]
