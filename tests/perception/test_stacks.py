@@ -131,3 +131,21 @@ def test_a_can_on_a_tin_of_its_diameter_is_split_off_above_the_tins_crescent() -
     floor = _disc(0.0, 0.034, 0.01, 0.0, 360.0)
     _, out = _stack_splits([wall, (rim, up(rim)), (floor, up(floor))])
     assert np.unique(out).size == 1
+
+
+def test_a_lying_torch_whose_head_stands_above_its_handle_stays_whole() -> None:
+    # a handle 15 cm long and 3 cm high, its head a 5 cm cube at one end: the head lies
+    # within the hull of everything up to the handle's top (its own lower sides) and the
+    # handle's top outside the head, but reaches 10 cm beyond it, no crescent hugging it
+    def face(x0: float, x1: float, y0: float, y1: float, z0: float, z1: float, normal: list[float]):
+        g = [np.arange(a, b + 1e-9, STEP_M) if b > a else np.array([a]) for a, b in ((x0, x1), (y0, y1), (z0, z1))]
+        p = np.stack(np.meshgrid(*g, indexing="ij"), axis=-1).reshape(-1, 3)
+        return p, np.tile(normal, (p.shape[0], 1))
+
+    handle_top = face(0.0, 0.15, 0.0, 0.03, 0.03, 0.03, [0.0, 0.0, 1.0])
+    handle_side = face(0.0, 0.15, 0.0, 0.0, 0.0, 0.026, [0.0, -1.0, 0.0])
+    head_side = face(0.154, 0.2, -0.01, -0.01, 0.0, 0.05, [0.0, -1.0, 0.0])
+    head_end = face(0.202, 0.202, -0.006, 0.03, 0.0, 0.05, [1.0, 0.0, 0.0])  # its far end, seen too
+    head_top = face(0.154, 0.2, -0.006, 0.03, 0.052, 0.052, [0.0, 0.0, 1.0])
+    _, out = _stack_splits([handle_top, handle_side, head_side, head_end, head_top])
+    assert np.unique(out).size == 1
