@@ -59,6 +59,11 @@ _MIN_OUTSIDE = 0.9
 # top beside a taller part of one object, reaches farther: 0.44 within 5 cm on
 # gqcnn_primesense_0, the tin's crescent 0.97 within 3 cm, all within 5)
 _HUG_M = 0.04
+# ... and the lower top is a crescent, not a whole face: its voxels' area at most this
+# share of the lower body's hull (0.26 for the tin; a lower box beside a taller one
+# shows its whole top, 0.76 in fixtures/two_touching_boxes.pcd; the rule above takes a
+# true stack on a whole lower top)
+_MAX_CRESCENT = 0.4
 
 
 def _levels(h: np.ndarray, min_step_m: float) -> np.ndarray:
@@ -82,6 +87,16 @@ def _inside_hull(xy: np.ndarray, hull_xy: np.ndarray, slack_m: float) -> np.ndar
     # hull.equations rows (a, b, c): a x + b y + c <= 0 inside, (a, b) a unit normal
     signed = xy @ hull.equations[:, :2].T + hull.equations[:, 2]
     return (signed <= slack_m).all(axis=1)
+
+
+def _hull_area(xy: np.ndarray) -> float:
+    """The area of the convex hull of ``xy`` (N, 2) in m^2, 0 when there is none."""
+    from scipy.spatial import ConvexHull, QhullError
+
+    try:
+        return float(ConvexHull(xy).volume)  # a 2D hull's "volume" is its area
+    except (QhullError, ValueError):
+        return 0.0
 
 
 class _Reach:
@@ -211,6 +226,7 @@ def stack_splits(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
                     in_body.mean() >= _MIN_IN_BODY
                     and crescent_out.mean() >= _MIN_OUTSIDE
                     and _inside_hull(lower_xy, cand_xy, _HUG_M).mean() >= _MIN_OUTSIDE
+                    and level_vox[lo] * ctx.size.voxel_m**2 <= _MAX_CRESCENT * _hull_area(np.compress(body, xy, axis=0))
                 ):
                     split = cand
                     break
