@@ -17,7 +17,9 @@ For every group of segments whose tops lie within ``rim_tolerance_m`` of each ot
    kept when its inliers go at least ``_MIN_COVER_DEG`` round the centre, no top face
    fills the circle at the rim's height, and some of the walls inside it face its centre
    (an opening: a can's or a box's walls all face away from any centre; two boxes whose
-   edges lie on one circle fill it with their tops);
+   edges lie on one circle fill it with their tops); when the group gives no circle,
+   once more without the other member holding the most band voxels (a drill's top
+   beside a bowl, more voxels than its rim, draws RANSAC to an arc that is no rim);
 2. the wall's distance from the axis per 1 cm of height (the largest distances within
    the rim's circle at that height: the wall is the outermost thing inside it), made
    to widen upwards (bowls, cups and mugs do; a vase that narrows is not a container
@@ -277,6 +279,18 @@ def rebuild_vessels(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
         if key not in rims_of:
             rims_of[key] = find_rim(voxel_xy[band], max_radius_m, np.random.default_rng([0, *group]))
         found = rims_of[key]
+        if found is None and len(group) >= 2:
+            # another object's top at the rim's height (a drill beside a bowl) may hold
+            # more of the band than the rim does and outvote it: once more without the
+            # other member holding the most band voxels (a group of its own: its own
+            # generator, its circle kept like any group's)
+            drop = max((k for k in group if k != s), key=lambda k: band_of[k].size)
+            group = [k for k in group if k != drop]
+            band = np.concatenate([band_of[k] for k in group])
+            key = tuple(group)
+            if key not in rims_of:
+                rims_of[key] = find_rim(voxel_xy[band], max_radius_m, np.random.default_rng([0, *group]))
+            found = rims_of[key]
         if found is None:
             continue
         centre, radius, on_rim = found
