@@ -145,6 +145,11 @@ class SegmentSettings(Section):
     smoothness_check: bool = param(True)
     smoothness_threshold: float = param(0.1, ge=0, le=1)
     sanity_criterion: bool = param(True)
+    # an adjacency between supervoxels whose mean colours differ by at least
+    # lccp_color_delta (CIE76 dE; 0 turns it off) is concave beyond
+    # lccp_color_tolerance_deg rather than concavity_tolerance_deg (lccp.py)
+    lccp_color_delta: float = param(0.0, ge=0, le=200)
+    lccp_color_tolerance_deg: float = param(10.0, ge=0, le=90)
     min_segment_supervoxels: int = param(5, ge=0, le=1000)
     # ... except a small segment standing on the table (its lowest voxel within
     # standing_max_m of it) with a top face of its own, higher or lower by step_min_m
