@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+
 import numpy as np
 import pytest
 from helpers.segment import S
@@ -67,5 +68,5 @@ def test_lccp_colour_cue_cuts_shallow_seams_between_colours(slope: float, two_co
     seg = lccp_segments(sv, cue, sv_lab=lab)
     assert int(seg.max()) + 1 == n_segments
     # off, or without colour, the tolerance alone decides: one segment
-    assert int(lccp_segments(sv, S, sv_lab=lab).max()) == 0
+    assert int(lccp_segments(sv, dataclasses.replace(S, lccp_color_delta=0.0), sv_lab=lab).max()) == 0
     assert int(lccp_segments(sv, cue).max()) == 0
