@@ -33,9 +33,15 @@ def _angle_deg(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
 
 
-def convex_edges(sv: Supervoxels, settings: SegmentSettings, size: SegmentSize | None = None) -> np.ndarray:
+def convex_edges(
+    sv: Supervoxels,
+    settings: SegmentSettings,
+    size: SegmentSize | None = None,
+    sv_lab: np.ndarray | None = None,
+) -> np.ndarray:
     """(A,) bool: which supervoxel adjacencies are convex (may be merged). ``size``: the
-    frame's seed and voxel (`SegmentSize.of(settings)` when None)."""
+    frame's seed and voxel (`SegmentSize.of(settings)` when None); ``sv_lab`` (S, 3):
+    each supervoxel's CIELAB colour, when the frame's colour is usable."""
     e = sv.edges
     if e.shape[0] == 0:
         return np.zeros(0, dtype=bool)
@@ -52,7 +58,15 @@ def convex_edges(sv: Supervoxels, settings: SegmentSettings, size: SegmentSize |
         p2 = np.abs(np.einsum("ij,ij->i", -d, n2))
         ok &= np.minimum(p1, p2) <= expected + settings.smoothness_threshold * size.voxel_m
     convex = _angle_deg(d, n1) - _angle_deg(d, n2) <= 0
-    is_convex = convex | (normal_angle < settings.concavity_tolerance_deg)
+    tolerance_deg = np.full(e.shape[0], settings.concavity_tolerance_deg)
+    if sv_lab is not None and settings.lccp_color_delta > 0:
+        # two touching objects of different colours often meet in a shallow concave
+        # seam the tolerance accepts (a tin against a box); one object's concave
+        # patches (a mug's inside, a bowl) are mostly of one colour, and a print on a
+        # flat face is neither concave nor convex, so only a small tolerance there
+        differ = np.linalg.norm(sv_lab[e[:, 0]] - sv_lab[e[:, 1]], axis=1) >= settings.lccp_color_delta
+        tolerance_deg[differ] = min(settings.lccp_color_tolerance_deg, settings.concavity_tolerance_deg)
+    is_convex = convex | (normal_angle < tolerance_deg)
     if settings.sanity_criterion:
         inter = _angle_deg(ncross, d)
         min_inter = np.minimum(inter, 180.0 - inter)
@@ -68,9 +82,10 @@ def lccp_segments(
     sv_high_m: np.ndarray | None = None,
     up: np.ndarray | None = None,
     size: SegmentSize | None = None,
+    sv_lab: np.ndarray | None = None,
 ) -> np.ndarray:
     """(S,) segment index of every supervoxel, 0..G-1; ``size``: the frame's sizes
-    (`SegmentSize.of(settings)` when None).
+    (`SegmentSize.of(settings)` when None); ``sv_lab``: as for `convex_edges`.
 
     With ``sv_low_m`` and ``sv_high_m`` (S,), the heights above the table of each
     supervoxel's lowest and highest voxel, and ``up``, the table's normal: a small
@@ -84,7 +99,7 @@ def lccp_segments(
     if n_sv == 0:
         return np.zeros(0, dtype=np.int64)
     size = size if size is not None else SegmentSize.of(settings)
-    convex = convex_edges(sv, settings, size)
+    convex = convex_edges(sv, settings, size, sv_lab)
     e = np.compress(convex, sv.edges, axis=0)  # rows by a mask: compress is several times faster
     seg = components(n_sv, e)
     # "small" also by area: the connectivity step of the supervoxels can leave a small

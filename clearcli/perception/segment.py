@@ -42,7 +42,7 @@ from clearcli.perception.exclude import (
     support_around,
 )
 from clearcli.perception.filters import clean_mask
-from clearcli.perception.flat import differing_shares, flat_objects, support_colour
+from clearcli.perception.flat import differing_shares, flat_objects, group_lab, support_colour
 from clearcli.perception.lccp import lccp_segments
 from clearcli.perception.openings import RIM_MAX_POINTS, Opening, TableEdge, rim_of, seen_edges
 from clearcli.perception.refine import STAGES, refine
@@ -414,7 +414,13 @@ def _lccp(w: _Work) -> None:
     np.minimum.at(sv_low, sv.voxel_label, voxel_h)
     sv_high = np.full(sv.centroids.shape[0], -np.inf)
     np.maximum.at(sv_high, sv.voxel_label, voxel_h)
-    seg_of_sv = lccp_segments(sv, w.settings, sv_low, sv_high, plane.normal, w.size)
+    sv_lab = None
+    if w.color_used and w.settings.lccp_color_delta > 0:
+        assert w.frame.colors is not None  # colour used
+        sv_lab = group_lab(
+            sv.voxel_label[vox.point_voxel], np.take(w.frame.colors, w.obj_idx, axis=0), sv.centroids.shape[0]
+        )
+    seg_of_sv = lccp_segments(sv, w.settings, sv_low, sv_high, plane.normal, w.size, sv_lab)
     w.seg_of_voxel = seg_of_sv[sv.voxel_label]
 
 
