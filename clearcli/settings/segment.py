@@ -350,8 +350,13 @@ class SegmentSettings(Section):
     # exclusions (flat.py, 5.). support.py (choose seeds) thin_flat right 107 -> 124 of
     # 176 over the four sensors, the rest unchanged; the families' seeds 1000-1019 mean
     # IoU up 0.02-0.07 each, F1 no worse; mOSD learn IoU 0.954 -> 0.956 (F1 the same);
-    # foreign choose right unchanged
-    flat_feet: bool = param(True)
+    # foreign choose right unchanged. OFF by default: on the 50 mOSD frames 22 objects
+    # gain a foot, mean IoU 0.904 -> 0.915, but a foot's few points beyond the object
+    # (depth mixed at its lower edge) widen some boxes by 7-20 mm (learn7's box 0.071 ->
+    # 0.081 m across, its truth 0.071: the WAM then calls it too wide to grasp and the
+    # frame's complete plan becomes partial); on once a foot's points are held to the
+    # object's own outline
+    flat_feet: bool = param(False)
     # --- 4. final filter ----------------------------------------------------------------
     # smallest object kept, as visible surface area (m^2, counted in occupied voxels) so
     # that a far object is not dropped for being sampled sparsely. 10 cm^2 ~ 40 voxels:

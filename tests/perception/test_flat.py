@@ -226,7 +226,7 @@ def test_thin_things_lying_on_a_table_keep_their_feet() -> None:
 
     frame = support_frame("thin_flat", 5)
     truth = np.asarray(frame.fields["label"])
-    on = exact_report(segment(frame, SegmentSettings()).labels(), truth).verdicts
+    on = exact_report(segment(frame, replace(SegmentSettings(), flat_feet=True)).labels(), truth).verdicts
     off = exact_report(segment(frame, replace(SegmentSettings(), flat_feet=False)).labels(), truth).verdicts
     assert (on[3], on[4]) == ("right", "right")
     assert (off[3], off[4]) == ("missed", "missed")

@@ -57,8 +57,8 @@ def test_two_boxes_merged_end_to_end_are_taken_after_one_failed_grasp(seed: int)
     splits them): the centred grasp closes on both at their seam and takes nothing. The
     next grasp tries an end first ([plan] regrasp_off_centre) and takes one box: three
     actions. Without it the same grasp is retried until it counts as infeasible, then
-    pushed and retried (7 or more actions, or the budget: seed 1's first push parts the
-    boxes since their segment reaches down to the table, flat.py's feet)."""
+    pushed and retried (7 or more actions, or the budget: on one seed a push parts the
+    boxes after the first retries)."""
     from clearcli.pipeline import Pipeline
     from clearcli.replay.session import ReplayOptions, Session
     from clearcli.sim.episode import Episode
