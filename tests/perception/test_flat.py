@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from clearcli.perception.flat import _far_from, flat_objects, lab_of
+from clearcli.perception.flat import FlatFinds, _far_from, flat_objects, lab_of
 
 # a 60 x 80 pixel grid seen from above: a point's z is its height above the table, a
 # pixel 1 mm^2 (1e-6 m^2 each: a 5 x 21 strip shows 105e-6)
@@ -30,21 +30,7 @@ def _scene(
     taken = np.zeros((_H, _W), dtype=bool)
     if taken_cols is not None:
         taken[20:41, taken_cols] = True
-    return flat_objects(
-        points,
-        colors.reshape(-1, 3),
-        (_H, _W),
-        np.flatnonzero(~taken.ravel()),
-        np.zeros(0, dtype=np.int64),
-        np.flatnonzero(taken.ravel()),
-        lambda p: p[:, 2].astype(np.float64),
-        lambda pixels: pixels.size * 1e-6,
-        20.0,
-        0.0015,
-        4e-5,
-        max_area_m2,
-        0.0025,
-    ).objects
+    return _flat_finds(points, colors, taken, feet=False, max_area_m2=max_area_m2).objects
 
 
 def _strip(rows: slice, cols: slice) -> np.ndarray:
@@ -168,6 +154,31 @@ def test_a_flat_object_is_found_on_its_colours_area() -> None:
     assert _scene(slice(28, 33), slice(28, 37), None, max_area_m2=100e-6) == []
 
 
+def _flat_finds(
+    points: np.ndarray, colors: np.ndarray, taken: np.ndarray, feet: bool = True, max_area_m2: float = 0.02
+) -> FlatFinds:
+    """flat_objects on a (_H, _W) scene of 1 mm pixels whose one object (if any) holds the
+    pixels ``taken``: heights are z, a pixel is 1 mm^2; feet looked for unless ``feet`` is
+    False."""
+    object_pixels = np.flatnonzero(taken.ravel())
+    return flat_objects(
+        points,
+        colors.reshape(-1, 3),
+        (_H, _W),
+        np.flatnonzero(~taken.ravel()),
+        np.zeros(0, dtype=np.int64),
+        object_pixels,
+        lambda p: p[:, 2].astype(np.float64),
+        lambda pixels: pixels.size * 1e-6,
+        20.0,
+        0.0015,
+        4e-5,
+        max_area_m2,
+        0.0025,
+        object_sizes=[object_pixels.size] if feet else (),
+    )
+
+
 def _foot_scene(object_rgb: tuple[int, int, int], feet: bool = True) -> dict[int, np.ndarray]:
     """A black strip, rows 28-32, columns 30-55, 8 mm up, touching an object (its pixels
     taken: rows 20-40, columns 56-63) of ``object_rgb``: flat_objects's feet."""
@@ -181,23 +192,7 @@ def _foot_scene(object_rgb: tuple[int, int, int], feet: bool = True) -> dict[int
     colors[20:41, 56:64] = object_rgb
     taken = np.zeros((_H, _W), dtype=bool)
     taken[20:41, 56:64] = True
-    object_pixels = np.flatnonzero(taken.ravel())
-    finds = flat_objects(
-        points,
-        colors.reshape(-1, 3),
-        (_H, _W),
-        np.flatnonzero(~taken.ravel()),
-        np.zeros(0, dtype=np.int64),
-        object_pixels,
-        lambda p: p[:, 2].astype(np.float64),
-        lambda pixels: pixels.size * 1e-6,
-        20.0,
-        0.0015,
-        4e-5,
-        0.02,
-        0.0025,
-        object_sizes=[object_pixels.size] if feet else (),
-    )
+    finds = _flat_finds(points, colors, taken, feet)
     assert finds.objects == []  # 6 of its 26 columns within the clearance: no flat object
     return finds.feet
 
@@ -266,23 +261,7 @@ def test_two_candidates_touching_one_object_are_judged_on_its_own_colour() -> No
     colors[20:41, 56:64] = _MARKER_RGB
     taken = np.zeros((_H, _W), dtype=bool)
     taken[20:41, 56:64] = True
-    object_pixels = np.flatnonzero(taken.ravel())
-    finds = flat_objects(
-        points,
-        colors.reshape(-1, 3),
-        (_H, _W),
-        np.flatnonzero(~taken.ravel()),
-        np.zeros(0, dtype=np.int64),
-        object_pixels,
-        lambda p: p[:, 2].astype(np.float64),
-        lambda pixels: pixels.size * 1e-6,
-        20.0,
-        0.0015,
-        4e-5,
-        0.02,
-        0.0025,
-        object_sizes=[object_pixels.size],
-    )
+    finds = _flat_finds(points, colors, taken)
     assert finds.objects == []
     assert list(finds.feet) == [0]
     assert np.array_equal(finds.feet[0], _strip(slice(28, 33), slice(30, 56)))
