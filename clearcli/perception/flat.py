@@ -273,6 +273,30 @@ def _raised(
     return up
 
 
+def _relief(
+    region: np.ndarray,
+    ring_may: np.ndarray,
+    v0: int,
+    u0: int,
+    width: int,
+    points: np.ndarray,
+    height_of: Callable[[np.ndarray], np.ndarray],
+) -> tuple[np.ndarray, float, float] | None:
+    """(the flat pixel indices of ``region``, the table's height round it, its relief
+    above that) for a candidate or a foot (module doc, 3.): ``region`` is a window at
+    row ``v0``, column ``u0`` of the grid ``width`` wide; the ring `_RING_INNER_PX` to
+    `_RING_OUTER_PX` pixels out, where ``ring_may`` (the table's pixels no candidate or
+    object's reach holds), is measured; None when it holds under `_MIN_PIXELS`."""
+    ring = dilate_square(region, _RING_OUTER_PX) & ~dilate_square(region, _RING_INNER_PX) & ring_may
+    rows, cols = np.nonzero(ring)
+    if rows.size < _MIN_PIXELS:
+        return None
+    base = float(np.median(height_of(points[(rows + v0) * width + (cols + u0)])))
+    rows, cols = np.nonzero(region)
+    pixels = (rows + v0) * width + (cols + u0)
+    return pixels, base, float(np.median(height_of(points[pixels]))) - base
+
+
 def flat_objects(
     points: np.ndarray,
     colors: np.ndarray,
@@ -370,28 +394,18 @@ def flat_objects(
                     object_lab,
                 )
                 if j is not None:
-                    rows, cols = np.nonzero(whole)
-                    pixels = (rows + v0) * width + (cols + u0)
-                    ring = dilate_square(whole, _RING_OUTER_PX) & ~dilate_square(whole, _RING_INNER_PX)
-                    ring &= is_table()[v0:v1, u0:u1] & ~grid[v0:v1, u0:u1] & ~near
-                    rows, cols = np.nonzero(ring)
-                    if rows.size >= _MIN_PIXELS:
-                        base = float(np.median(height_of(points[(rows + v0) * width + (cols + u0)])))
-                        if float(np.median(height_of(points[pixels]))) - base >= min_relief_m:
-                            feet.setdefault(j, []).append(pixels)
+                    measured = _relief(
+                        whole, is_table()[v0:v1, u0:u1] & ~grid[v0:v1, u0:u1] & ~near, v0, u0, width, points, height_of
+                    )
+                    if measured is not None and measured[2] >= min_relief_m:
+                        feet.setdefault(j, []).append(measured[0])
             continue
-        ring = dilate_square(mine, _RING_OUTER_PX) & ~dilate_square(mine, _RING_INNER_PX)
-        ring &= is_table()[v0:v1, u0:u1] & ~grid[v0:v1, u0:u1] & ~near
-        if ring.sum() < _MIN_PIXELS:
+        measured = _relief(
+            mine, is_table()[v0:v1, u0:u1] & ~grid[v0:v1, u0:u1] & ~near, v0, u0, width, points, height_of
+        )
+        if measured is None or measured[2] < min_relief_m:
             continue
-        rows, cols = np.nonzero(mine)
-        inside = (rows + v0) * width + (cols + u0)
-        rows, cols = np.nonzero(ring)
-        around = (rows + v0) * width + (cols + u0)
-        base = float(np.median(height_of(points[around])))
-        relief = float(np.median(height_of(points[inside])) - base)
-        if relief < min_relief_m:
-            continue
+        inside, base, _ = measured
         # found or not by its colour's pixels (their area; the depth smeared round a
         # notebook took thin_flat(4)'s over flat_max_area_m2), its points where its depth is
         least_m2 = min_area_m2 * (_NEAR_MIN_AREA_FACTOR if np.count_nonzero(mine) < n_mine else 1.0)
