@@ -21,6 +21,23 @@ from clearcli.perception.types import TablePlane
 from clearcli.settings.segment import SegmentSettings
 
 
+def top_patches(seg: np.ndarray, ctx: RefineContext) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Every top patch (a segment's top voxels in one supervoxel), ordered by segment,
+    then by height: (its segment, its mean height, its top voxels) each, as `stacks` and
+    `steps` work them out per segment (the same voxels added in the same index order, one
+    bincount over every segment's top voxels). Empty under two top voxels."""
+    tops = np.flatnonzero(ctx.voxel_is_top)
+    if tops.size < 2:
+        return np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0, dtype=np.int64)
+    n_sv = ctx.sv.centroids.shape[0]
+    key, patch = np.unique(seg[tops] * n_sv + ctx.sv.voxel_label[tops], return_inverse=True)
+    n_vox = np.bincount(patch)
+    h = np.bincount(patch, weights=ctx.voxel_height[tops]) / n_vox
+    seg_of_patch = key // n_sv
+    order = np.lexsort((h, seg_of_patch))  # by segment, then height
+    return seg_of_patch[order], h[order], n_vox[order]
+
+
 def by_label(labels: np.ndarray, n_labels: int) -> np.ndarray:
     """(N,) the indices ordered by their label (0..n_labels-1), each label's in index
     order: ``np.argsort(labels, kind="stable")``, of int16 labels when they fit (NumPy

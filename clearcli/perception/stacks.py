@@ -41,7 +41,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from clearcli.perception.context import RefineContext
+from clearcli.perception.context import RefineContext, top_patches
 from clearcli.perception.graph import components, dense_labels
 from clearcli.perception.lccp import join_pairs
 
@@ -140,18 +140,9 @@ def separate_stacks(seg_of_sv: np.ndarray, ctx: RefineContext) -> np.ndarray:
 def _may_split(seg: np.ndarray, ctx: RefineContext) -> np.ndarray:
     """(G,) bool: segments whose top patches lie at two levels or more (`_levels`), for
     all segments at once: the others cannot split. Each patch's mean height is the sum
-    `stack_splits` works out (the same voxels added in the same index order, one
-    bincount over every segment's top voxels), so the test is its own, exactly."""
+    `stack_splits` works out (`context.top_patches`), so the test is its own, exactly."""
     n_seg = int(seg.max()) + 1
-    tops = np.flatnonzero(ctx.voxel_is_top)
-    if tops.size < 2:
-        return np.zeros(n_seg, dtype=bool)
-    n_sv = ctx.sv.centroids.shape[0]
-    key, patch = np.unique(seg[tops] * n_sv + ctx.sv.voxel_label[tops], return_inverse=True)
-    h_patch = np.bincount(patch, weights=ctx.voxel_height[tops]) / np.bincount(patch)
-    seg_of_patch = key // n_sv
-    order = np.lexsort((h_patch, seg_of_patch))  # by segment, then height
-    s_sorted, h_sorted = seg_of_patch[order], h_patch[order]
+    s_sorted, h_sorted, _ = top_patches(seg, ctx)
     step = (s_sorted[1:] == s_sorted[:-1]) & (np.diff(h_sorted) >= ctx.settings.step_min_m)
     out = np.zeros(n_seg, dtype=bool)
     out[s_sorted[1:][step]] = True

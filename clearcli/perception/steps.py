@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from clearcli.perception.context import RefineContext, by_label
+from clearcli.perception.context import RefineContext, by_label, top_patches
 from clearcli.perception.graph import dense_labels
 from clearcli.perception.lccp import rejoin_pieces
 
@@ -94,22 +94,14 @@ def _may_step(seg: np.ndarray, ctx: RefineContext, min_top_vox: float) -> np.nda
     """(G,) bool: the segments whose top patches, ordered by height, have a gap of at
     least ``step_min_m`` with ``min_top_vox`` top voxels below it and above it, for all
     segments at once: only those can split. Each patch's mean height is the sum
-    `step_splits` works out (the same voxels added in the same index order, one
-    bincount over every segment's top voxels); below a gap of more than 0 lie the
+    `step_splits` works out (`context.top_patches`); below a gap of more than 0 lie the
     patches not higher, in any order of equal heights: the test is its own, exactly."""
     n_seg = int(seg.max()) + 1
-    tops = np.flatnonzero(ctx.voxel_is_top)
     out = np.zeros(n_seg, dtype=bool)
-    if tops.size < 2:
+    s_sorted, h_sorted, n_sorted = top_patches(seg, ctx)
+    if s_sorted.size == 0:
         return out
-    n_sv = ctx.sv.centroids.shape[0]
-    key, patch = np.unique(seg[tops] * n_sv + ctx.sv.voxel_label[tops], return_inverse=True)
-    n_vox = np.bincount(patch)
-    h = np.bincount(patch, weights=ctx.voxel_height[tops]) / n_vox
-    seg_of_patch = key // n_sv
-    order = np.lexsort((h, seg_of_patch))  # by segment, then height
-    s_sorted, h_sorted, n_sorted = seg_of_patch[order], h[order], n_vox[order]
-    total = np.bincount(seg_of_patch, weights=n_vox, minlength=n_seg)[s_sorted]
+    total = np.bincount(s_sorted, weights=n_sorted, minlength=n_seg)[s_sorted]  # integers: exact in any order
     # top voxels up to each patch within its segment: a running count, less the counts
     # of the segments before (integers: exact in float64)
     run = np.cumsum(n_sorted)
