@@ -421,10 +421,10 @@ def supervoxel_labels(
     voxel_lab = cielab(vox.colors) / 100.0 if (vox.colors is not None and settings.color_importance > 0) else None
     seed_lab = voxel_lab[seed_vox] if voxel_lab is not None else None
     k = min(8, seed_pos.shape[0])
-    labels = np.full(n_vox, -1, dtype=np.int64)
     voxel_nrm = tuple(normals[:, j, None] for j in range(3))
     rows = np.arange(n_vox) * k  # each voxel's first place in the flat (V, k) arrays
-    for _ in range(max(1, settings.supervoxel_iterations)):
+    n_iterations = max(1, settings.supervoxel_iterations)
+    for iteration in range(n_iterations):
         n_s = seed_pos.shape[0]
         dist, nb = cKDTree(seed_pos).query(cent, k=k, distance_upper_bound=1.5 * seed_m)
         if k == 1:
@@ -447,6 +447,8 @@ def supervoxel_labels(
             cost = cost + settings.color_importance * np.linalg.norm(voxel_lab[:, None, :] - seed_lab[nb_safe], axis=2)
         picked = np.take(nb, rows + np.argmin(cost, axis=1))  # nb[row, argmin] of the flat (V * k) array
         labels = np.where(picked < n_s, picked, -1)
+        if iteration == n_iterations - 1:
+            break  # the last assignment is the answer: seeds moved after it would serve none
         # move the seeds to the mean of their voxels
         used = labels >= 0
         every = bool(used.all())

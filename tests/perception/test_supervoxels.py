@@ -144,6 +144,33 @@ def test_a_faint_colour_difference_moves_no_voxel() -> None:
     np.testing.assert_array_equal(labels_c, labels_0)
 
 
+@pytest.mark.parametrize("iterations", [1, 2, 3])
+def test_seeds_move_between_assignments_only(monkeypatch: pytest.MonkeyPatch, iterations: int) -> None:
+    # the seeds move to their voxels' means (positions and normals: two _seed_sums, a
+    # third for colour) after every assignment but the last, whose labels are the answer
+    import dataclasses
+
+    from clearcli.perception import supervoxels
+    from clearcli.settings.segment import SegmentSettings
+
+    settings = dataclasses.replace(SegmentSettings(), color_importance=0.0, supervoxel_iterations=iterations)
+    x, y = np.meshgrid(np.arange(0.0005, 0.12, 0.001), np.arange(0.0005, 0.06, 0.001), indexing="ij")
+    vox = supervoxels.voxelize(np.stack([x.ravel(), y.ravel(), np.full(x.size, 1.0)], axis=1), settings.voxel_m)
+    normals = supervoxels.voxel_normals(vox.centroids, settings.normal_radius_m, np.zeros(3))
+    sums = supervoxels._seed_sums
+    calls: list[int] = []
+
+    def counted(values: np.ndarray, lab: np.ndarray, used: np.ndarray | None, n_seeds: int) -> np.ndarray:
+        calls.append(n_seeds)
+        return sums(values, lab, used, n_seeds)
+
+    monkeypatch.setattr(supervoxels, "_seed_sums", counted)
+    labels = supervoxels.supervoxel_labels(vox, normals, settings)
+    assert len(calls) == 2 * (iterations - 1)
+    # a 12 x 6 cm patch on 3 cm seed cells: 4 x 2 cells, each a seed and a supervoxel
+    assert int(labels.max()) + 1 == 8
+
+
 def test_radius_knn_by_hand() -> None:
     from clearcli.perception.supervoxels import radius_knn
 
