@@ -1,12 +1,13 @@
 """Segmentation under rounding-sized changes: which frames flip, and where the flip starts.
 
     .venv/bin/python benchmarks/stability.py [--sets mosd,uois,fixtures] [--amplitude-um 1]
-        [--seeds 1] [--noise-seeds 3] [--no-noise] [--frames NAME,...]
+        [--seeds 1] [--noise-seeds 3] [--no-noise] [--frames NAME,...] [--float32]
 
 Every frame is segmented as read and again with every coordinate moved by a uniform
 random amount in [-a, +a] (``--amplitude-um``, 1 micrometre by default: far below any
 sensor's noise; float32 rounding of millimetre depth is about 0.1 micrometre), the
-perturbation drawn from a fixed seed. Both runs go through `segment`'s steps one at a
+perturbation drawn from a fixed seed (``--float32``: the points stored as float32 first,
+and the moved copy rounded to float32 as well). Both runs go through `segment`'s steps one at a
 time (clearcli.perception.segment.STEPS, the refinements of refine.STAGES one by one), and
 after each step the state is compared as partitions of the frame's points:
 
@@ -31,6 +32,7 @@ frame; the share of the objects of the unperturbed frame kept at IoU >= 0.9.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 import time
 from collections.abc import Callable, Iterator
@@ -241,6 +243,11 @@ def main() -> None:
     parser.add_argument("--no-noise", action="store_true")
     parser.add_argument("--frames", default="", help="only frames whose file name is in this list")
     parser.add_argument("--quiet", action="store_true", help="print only the frames that differ")
+    parser.add_argument(
+        "--float32",
+        action="store_true",
+        help="store every frame's points as float32 first (a float64 frame rounded as a float32 file would hold it)",
+    )
     args = parser.parse_args()
     settings = SegmentSettings()
     sets = frame_sets()
@@ -259,6 +266,8 @@ def main() -> None:
         print(f"{set_name} ({len(paths)} frames), +-{args.amplitude_um:g} um:")
         for path in paths:
             frame = read_frame(path)
+            if args.float32:
+                frame = dataclasses.replace(frame, points=frame.points.astype(np.float32))
             t0 = time.perf_counter()
             try:
                 base = seg_mod.segment(frame, settings)
