@@ -1,12 +1,13 @@
 """Segmentation under rounding-sized changes: which frames flip, and where the flip starts.
 
     .venv/bin/python benchmarks/stability.py [--sets mosd,uois,fixtures] [--amplitude-um 1]
-        [--seeds 1] [--noise-seeds 3] [--no-noise] [--frames NAME,...]
+        [--seeds 1] [--noise-seeds 3] [--no-noise] [--frames NAME,...] [--float32]
 
 Every frame is segmented as read and again with every coordinate moved by a uniform
 random amount in [-a, +a] (``--amplitude-um``, 1 micrometre by default: far below any
 sensor's noise; float32 rounding of millimetre depth is about 0.1 micrometre), the
-perturbation drawn from a fixed seed. Both runs go through `segment`'s steps one at a
+perturbation drawn from a fixed seed (``--float32``: the points stored as float32 first,
+and the moved copy rounded to float32 as well). Both runs go through `segment`'s steps one at a
 time (clearcli.perception.segment.STEPS, the refinements of refine.STAGES one by one), and
 after each step the state is compared as partitions of the frame's points:
 
@@ -31,6 +32,7 @@ frame; the share of the objects of the unperturbed frame kept at IoU >= 0.9.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 import time
 from collections.abc import Callable, Iterator
@@ -48,6 +50,7 @@ from clearcli.perception import segment as seg_mod  # noqa: E402
 from clearcli.perception.clock import Clock  # noqa: E402
 from clearcli.perception.context import RefineContext  # noqa: E402
 from clearcli.perception.refine import STAGES, refine  # noqa: E402
+from clearcli.perception.size import SegmentSize  # noqa: E402
 from clearcli.perception.stability import (  # noqa: E402
     KEPT_IOU,
     MATCH_IOU,
@@ -56,6 +59,7 @@ from clearcli.perception.stability import (  # noqa: E402
     same_objects,
     sensor_noise,
 )
+from clearcli.perception.supervoxels import Supervoxels  # noqa: E402
 from clearcli.settings.segment import SegmentSettings  # noqa: E402
 
 SHARED = REPO.parent / "shared" / "data"
@@ -232,6 +236,84 @@ def voxel_difference(frame: Frame, other: Frame, settings: SegmentSettings) -> s
     )
 
 
+def _lccp_tests(sv: Supervoxels, settings: SegmentSettings, size: SegmentSize) -> dict[str, np.ndarray]:
+    """Per supervoxel adjacency, each of lccp.convex_edges' tests as a margin (>= 0 passes, in
+    its own unit: metres for smoothness, degrees for the rest): "smoothness" (the offset along
+    the normals under its allowance), "convexity" (angle(d, n2) - angle(d, n1)), "tolerance"
+    (the concavity tolerance minus the normals' angle), "sanity" (the angle of d to n1 x n2 over
+    its threshold); and "facing" (n1 . n2: the sign flips when one normal's orientation does)."""
+    from clearcli.perception.lccp import _angle_deg
+
+    e = sv.edges
+    n1, n2 = sv.normals[e[:, 0]], sv.normals[e[:, 1]]
+    d = sv.centroids[e[:, 0]] - sv.centroids[e[:, 1]]
+    normal_angle = _angle_deg(n1, n2)
+    ncross = np.cross(n1, n2)
+    offset = np.minimum(np.abs(np.einsum("ij,ij->i", d, n1)), np.abs(np.einsum("ij,ij->i", d, n2)))
+    inter = _angle_deg(ncross, d)
+    return {
+        "smoothness": np.linalg.norm(ncross, axis=1) * size.seed_m
+        + settings.smoothness_threshold * size.voxel_m
+        - offset,
+        "convexity": _angle_deg(d, n2) - _angle_deg(d, n1),
+        "tolerance": settings.concavity_tolerance_deg - normal_angle,
+        "sanity": np.minimum(inter, 180.0 - inter) - 60.0 / (1.0 + np.exp(-0.25 * (normal_angle - 25.0))),
+        "facing": np.einsum("ij,ij->i", n1, n2),
+    }
+
+
+def lccp_difference(frame: Frame, other: Frame, settings: SegmentSettings) -> str:
+    """Which of LCCP's tests changed its answer (issue 37): the supervoxels of both runs
+    matched by their voxels' cells (IoU >= 0.7), and on the adjacencies both runs have, the
+    tests whose margin changed sign, with the least margin each had before."""
+    from clearcli.perception.resolution import WorkingGrid
+    from clearcli.perception.supervoxels import grid_cells
+
+    runs = []
+    for f in (frame, other):
+        f = WorkingGrid.of(f, settings, None).frame
+        organized = f.is_organized and f.shape is not None and f.shape[0] * f.shape[1] == f.n_points
+        w = seg_mod._Work(f, settings, organized, Clock())
+        for step in seg_mod.STEPS:
+            if step.above_table and w.vox is None:
+                return "no voxels"
+            step.run(w)
+            if step.run is seg_mod._supervoxels:
+                break
+        assert w.vox is not None and w.sv is not None and w.size is not None
+        voxel_cells = grid_cells(w.vox.centroids, w.size.voxel_m)
+        groups: dict[int, set[tuple[int, ...]]] = {}
+        for cell, label in zip(map(tuple, voxel_cells.tolist()), w.sv.voxel_label.tolist()):
+            groups.setdefault(label, set()).add(cell)
+        runs.append((groups, w.sv, _lccp_tests(w.sv, settings, w.size)))
+    (ga, sva, ta), (gb, svb, tb) = runs
+    owner_b = {cell: label for label, cells in gb.items() for cell in cells}
+    partner: dict[int, int] = {}
+    for label, cells in ga.items():
+        hits: dict[int, int] = {}
+        for cell in cells:
+            if cell in owner_b:
+                hits[owner_b[cell]] = hits.get(owner_b[cell], 0) + 1
+        if hits:
+            best = max(hits, key=lambda k: hits[k])
+            if hits[best] / (len(cells) + len(gb[best]) - hits[best]) >= 0.7:
+                partner[label] = best
+    row_b = {(int(a), int(b)): i for i, (a, b) in enumerate(svb.edges.tolist())}
+    flips: dict[str, list[float]] = {name: [] for name in ta}
+    for i, (a, b) in enumerate(sva.edges.tolist()):
+        if a not in partner or b not in partner:
+            continue
+        j = row_b.get((min(partner[a], partner[b]), max(partner[a], partner[b])))
+        if j is None:
+            continue
+        for name in ta:
+            if (ta[name][i] >= 0) != (tb[name][j] >= 0):
+                flips[name].append(abs(float(ta[name][i])))
+    changed = len(ga) - len(partner)
+    said = ", ".join(f"{name} {len(m)} (least {min(m):.3g})" for name, m in flips.items() if m) or "none"
+    return f"supervoxels without a partner {changed}; LCCP tests that changed answer on shared adjacencies: {said}"
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--sets", default="mosd,uois,fixtures")
@@ -241,6 +323,11 @@ def main() -> None:
     parser.add_argument("--no-noise", action="store_true")
     parser.add_argument("--frames", default="", help="only frames whose file name is in this list")
     parser.add_argument("--quiet", action="store_true", help="print only the frames that differ")
+    parser.add_argument(
+        "--float32",
+        action="store_true",
+        help="store every frame's points as float32 first (a float64 frame rounded as a float32 file would hold it)",
+    )
     args = parser.parse_args()
     settings = SegmentSettings()
     sets = frame_sets()
@@ -259,6 +346,8 @@ def main() -> None:
         print(f"{set_name} ({len(paths)} frames), +-{args.amplitude_um:g} um:")
         for path in paths:
             frame = read_frame(path)
+            if args.float32:
+                frame = dataclasses.replace(frame, points=frame.points.astype(np.float32))
             t0 = time.perf_counter()
             try:
                 base = seg_mod.segment(frame, settings)
@@ -302,6 +391,7 @@ def main() -> None:
                 )
                 print(f"      groups unmatched/points moved: {chain}")
                 print(f"      {voxel_difference(frame, other, settings)}")
+                print(f"      {lccp_difference(frame, other, settings)}")
             if not args.no_noise:
                 for s in range(args.noise_seeds):
                     try:
