@@ -33,7 +33,9 @@ the table's noise with it. Depth alone cannot tell; colour can, where the frame 
 5. A candidate too near an object (2.) that touches only that object, has its colour
    (`_FOOT_MAX_DE`) and stands up from the table round it (3.'s relief) is that object's
    foot: the part of a box or a notebook a centimetre or two high that the prism's lower
-   bound cut off. It joins the object.
+   bound cut off. It joins the object, but only its points within ``flat_foot_reach_m``
+   (across the table) of the object's own (`within_reach`): the foot stands under the
+   faces seen above it, and its points farther out are depth mixed at the lower edge.
 
 Organized frames with colour only: the ring and the joining need the pixel grid. On
 the 45 mOSD learn frames no candidate far from the objects exists; results there are
@@ -216,6 +218,20 @@ class FlatFinds:
 
     objects: list[np.ndarray]
     feet: dict[int, np.ndarray]
+
+
+def within_reach(object_xy: np.ndarray, foot_xy: np.ndarray, reach_m: float) -> np.ndarray:
+    """(F,) bool: the foot's points (``foot_xy`` (F, 2), on the table's plane, m) within
+    ``reach_m`` of one of the object's own points (``object_xy`` (M, 2)): a foot is the
+    lower part of the faces seen above it, so it stands under the object's own outline;
+    a point farther out is depth mixed between the object and the table in front of its
+    lower edge (module doc, 5.). Any width of the object grows by at most twice the reach."""
+    from scipy.spatial import cKDTree
+
+    if not foot_xy.shape[0] or not object_xy.shape[0]:
+        return np.zeros(foot_xy.shape[0], dtype=bool)
+    gap_m, _ = cKDTree(object_xy).query(foot_xy, k=1, distance_upper_bound=reach_m)
+    return np.asarray(gap_m <= reach_m)
 
 
 def _foot_of(

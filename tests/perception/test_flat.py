@@ -265,3 +265,49 @@ def test_two_candidates_touching_one_object_are_judged_on_its_own_colour() -> No
     assert finds.objects == []
     assert list(finds.feet) == [0]
     assert np.array_equal(finds.feet[0], _strip(slice(28, 33), slice(30, 56)))
+
+
+def test_a_foots_points_are_held_within_reach_of_its_objects_own() -> None:
+    from clearcli.perception.flat import within_reach
+
+    # the object's points: a 1 mm lattice over x, y in 0..10 mm
+    gx, gy = np.meshgrid(np.arange(11) * 0.001, np.arange(11) * 0.001)
+    object_xy = np.stack([gx.ravel(), gy.ravel()], axis=1)
+    # worked by hand, to the nearest lattice point: (5, 5) inside 0; (11.3, 5) 1.3 mm;
+    # (11.6, 5) 1.6 mm; (11, 11) 1.414 mm (a diagonal); (12, 12) 2.83 mm; (-1.49, 0) 1.49 mm
+    foot_xy = np.array([[5, 5], [11.3, 5], [11.6, 5], [11, 11], [12, 12], [-1.49, 0]]) * 0.001
+    assert within_reach(object_xy, foot_xy, 0.0015).tolist() == [True, True, False, True, False, True]
+    assert within_reach(object_xy, foot_xy, 0.0014).tolist() == [True, True, False, False, False, False]
+    assert within_reach(object_xy, foot_xy, 0.003).tolist() == [True] * 6
+    assert within_reach(object_xy, np.zeros((0, 2)), 0.0015).shape == (0,)
+    assert within_reach(np.zeros((0, 2)), foot_xy, 0.0015).tolist() == [False] * 6
+
+
+def test_a_foot_held_to_its_objects_outline_leaves_its_box_as_wide_as_the_object() -> None:
+    # mOSD learn7: a box 0.0710 m across (its labelled points' box too) gains a foot; unheld,
+    # the foot's few points of depth mixed at its lower edge, out in front of it, widened
+    # its box to 0.0810 m (the WAM then called it too wide to grasp)
+    from dataclasses import replace
+
+    from helpers import shared_path
+
+    from clearcli.io.read import read_frame
+    from clearcli.perception.segment import segment
+    from clearcli.settings.segment import SegmentSettings
+
+    frame = read_frame(shared_path("mosd/learn/learn7.pcd"))
+    box_id = np.asarray(frame.fields["label"]).astype(np.int64) // 10  # mOSD: the box is object 2
+
+    def the_box(settings: SegmentSettings) -> tuple[int, float]:
+        # the object holding most of the box's points: (its points, its width across the table)
+        objects = segment(frame, settings).objects
+        best = max(objects, key=lambda o: int(np.count_nonzero(box_id[o.indices] == 2)))
+        return best.n_points, float(best.obb_extents[1])
+
+    off = the_box(replace(SegmentSettings(), flat_feet=False))
+    held = the_box(SegmentSettings())
+    unheld = the_box(replace(SegmentSettings(), flat_foot_reach_m=0.05))
+    assert held[0] > off[0] + 400  # the foot joined: ~480 points
+    assert abs(off[1] - 0.0710) < 0.0005
+    assert abs(held[1] - off[1]) < 0.0005
+    assert unheld[1] > off[1] + 0.008
