@@ -20,7 +20,10 @@ the table's noise with it. Depth alone cannot tell; colour can, where the frame 
    is at least ``flat_min_relief_m`` above the median of a ring of table pixels around
    it (3 to 8 pixels out). A print, a stain or a shadow has no relief (on the choose
    frames: -5 to +0.9 mm); a marker has (2.2 mm for a black marker a metre away, more
-   for nearer or thicker ones). Its visible area must lie between min_object_area_m2
+   for nearer or thicker ones). The table round it returns depth: where a fifth of the
+   ring has none, the candidate is the table seen through a transparent thing lying on
+   it (a clear cup: the sensor loses the rays it bends), its colour the glass's, its
+   depth the table's: no flat object. Its visible area must lie between min_object_area_m2
    and ``flat_max_area_m2`` (a flat object, not a tablecloth's border).
 4. Its points are where its depth is: the pixels within `_GROW_PX` of the candidate (none
    within `_CLEARANCE_PX` of an object) that stand ``grow_min_m`` or more above the ring,
@@ -33,7 +36,9 @@ the table's noise with it. Depth alone cannot tell; colour can, where the frame 
 5. A candidate too near an object (2.) that touches only that object, has its colour
    (`_FOOT_MAX_DE`) and stands up from the table round it (3.'s relief) is that object's
    foot: the part of a box or a notebook a centimetre or two high that the prism's lower
-   bound cut off. It joins the object.
+   bound cut off. It joins the object, but only its points within ``flat_foot_reach_m``
+   (across the table) of the object's own (`within_reach`): the foot stands under the
+   faces seen above it, and its points farther out are depth mixed at the lower edge.
 
 Organized frames with colour only: the ring and the joining need the pixel grid. On
 the 45 mOSD learn frames no candidate far from the objects exists; results there are
@@ -82,6 +87,12 @@ _RAISED_MIN_SHARE = 0.5
 # rises round a small candidate (uois_image_0000: a white bowl's side in its shadow, 3.3
 # times its colour's pixels; the markers' depth 1.3 times theirs), and keeps its colour's
 _RAISED_MAX_RATIO = 2.0
+# a candidate with more than this share of the ring round it (`_RING_INNER_PX` to
+# `_RING_OUTER_PX` out) without depth is the table seen through a transparent thing, no
+# flat object (module doc, 3.): the lying clear cups of cleargrasp_000000130 0.40-0.48;
+# the flat objects found on the foreign choose frames, mOSD learn and the support
+# families' choose seeds (Kinect and RealSense renders) 0.00-0.03
+_RING_MAX_NO_DEPTH_SHARE = 0.2
 
 
 def cielab(rgb: np.ndarray) -> np.ndarray:
@@ -218,6 +229,20 @@ class FlatFinds:
     feet: dict[int, np.ndarray]
 
 
+def within_reach(object_xy: np.ndarray, foot_xy: np.ndarray, reach_m: float) -> np.ndarray:
+    """(F,) bool: the foot's points (``foot_xy`` (F, 2), on the table's plane, m) within
+    ``reach_m`` of one of the object's own points (``object_xy`` (M, 2)): a foot is the
+    lower part of the faces seen above it, so it stands under the object's own outline;
+    a point farther out is depth mixed between the object and the table in front of its
+    lower edge (module doc, 5.). Any width of the object grows by at most twice the reach."""
+    from scipy.spatial import cKDTree
+
+    if not foot_xy.shape[0] or not object_xy.shape[0]:
+        return np.zeros(foot_xy.shape[0], dtype=bool)
+    gap_m, _ = cKDTree(object_xy).query(foot_xy, k=1, distance_upper_bound=reach_m)
+    return np.asarray(gap_m <= reach_m)
+
+
 def _foot_of(
     whole: np.ndarray,
     owner_window: np.ndarray,
@@ -295,6 +320,18 @@ def _relief(
     rows, cols = np.nonzero(region)
     pixels = (rows + v0) * width + (cols + u0)
     return pixels, base, float(np.median(height_of(points[pixels]))) - base
+
+
+def _no_depth_share(region: np.ndarray, window: np.ndarray) -> float:
+    """The share of the ring round ``region`` (`_RING_INNER_PX` to `_RING_OUTER_PX`
+    pixels out, in a ``window`` of the pixel grid: (h, w, 3) points) whose pixels have no
+    depth (module doc, 3.)."""
+    ring = dilate_square(region, _RING_OUTER_PX) & ~dilate_square(region, _RING_INNER_PX)
+    n_ring = int(np.count_nonzero(ring))
+    if not n_ring:
+        return 0.0
+    rows, cols = np.nonzero(ring)
+    return 1.0 - int(np.count_nonzero(np.isfinite(window[rows, cols]).all(axis=1))) / n_ring
 
 
 def flat_objects(
@@ -404,6 +441,8 @@ def flat_objects(
             mine, is_table()[v0:v1, u0:u1] & ~grid[v0:v1, u0:u1] & ~near, v0, u0, width, points, height_of
         )
         if measured is None or measured[2] < min_relief_m:
+            continue
+        if _no_depth_share(mine, grid_points[v0:v1, u0:u1]) > _RING_MAX_NO_DEPTH_SHARE:
             continue
         inside, base, _ = measured
         # found or not by its colour's pixels (their area; the depth smeared round a

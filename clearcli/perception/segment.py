@@ -42,7 +42,7 @@ from clearcli.perception.exclude import (
     support_around,
 )
 from clearcli.perception.filters import clean_mask
-from clearcli.perception.flat import differing_shares, flat_objects, group_lab, support_colour
+from clearcli.perception.flat import differing_shares, flat_objects, group_lab, support_colour, within_reach
 from clearcli.perception.lccp import lccp_segments
 from clearcli.perception.openings import RIM_MAX_POINTS, Opening, TableEdge, rim_of, seen_edges
 from clearcli.perception.refine import STAGES, refine
@@ -298,6 +298,15 @@ def _with_feet(w: _Work) -> None:
         if foot is None:
             continue
         foot = np.setdiff1d(foot, obj.indices)
+        # held to the object's own outline: a foot's mixed points beyond it widened the box
+        inside = within_reach(
+            project(w.frame.points[obj.indices].astype(np.float64), fit.basis),
+            project(w.frame.points[foot].astype(np.float64), fit.basis),
+            w.settings.flat_foot_reach_m,
+        )
+        foot = foot[inside]
+        if not foot.size:
+            continue
         w.table_idx = np.setdiff1d(w.table_idx, foot, assume_unique=True)
         grown = np.concatenate([obj.indices, foot])
         # its foot stands on the table: the box reaches down to it
