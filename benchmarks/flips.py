@@ -8,7 +8,8 @@ this traces every one, so a flip that starts in a later stage is not hidden behi
 supervoxel flip of the same frame under another seed. Per flip: frame, seed, object
 counts, the first step whose groups differ (stability.first_difference: a group of at
 least 30 points without a partner at IoU >= 0.95), the points that changed group there
-and at the end, and the whole chain.
+and at the end, and the whole chain
+(groups unmatched/points moved per step; a merge of two groups moves no point).
 
 Sets: stability.py's (points moved by uniform noise in [-a, +a] per coordinate), and
 "rgbd": the RealSense depth PNGs of ../shared/data/rgbd/uois read by clear's RGB-D
@@ -128,7 +129,9 @@ def main() -> None:
                 f"{name} ({groups} groups, {points} points); at the end {steps[-1][1]} groups, {steps[-1][2]} points",
                 flush=True,
             )
-            print("    " + ", ".join(f"{n} {u}/{m}" for n, u, m in steps if m), flush=True)
+            # a merge moves no point out of its group's best partner (the merged group holds it
+            # all): a step with groups unmatched is shown with 0 points moved too
+            print("    " + ", ".join(f"{n} {u}/{m}" for n, u, m in steps if m or u), flush=True)
     print(f"+-{args.amplitude_um:g} um: {flips} flips in {runs} runs (seeds {args.seeds})")
     if starts:
         print("first differing step:", ", ".join(f"{k} {v}" for k, v in sorted(starts.items())))
