@@ -559,10 +559,10 @@ def _along_the_edge(mid: np.ndarray, normal: np.ndarray, length: float, support_
 
 
 def _walls(
-    xy_each: list[np.ndarray], h_each: list[np.ndarray], verdicts: dict[int, str], support_xy: Callable[[], np.ndarray]
+    xy_each: list[np.ndarray], h_each: list[np.ndarray], verdicts: dict[int, str], support_xy: np.ndarray
 ) -> dict[int, tuple[np.ndarray, np.ndarray, float, float, float]]:
     """Add to ``verdicts`` the walls among the objects (each one's in-plane points
-    ``xy_each``, heights ``h_each``; `_WALL_FACE_M`, `_WALL_SPAN`: ``support_xy`` gives the
+    ``xy_each``, heights ``h_each``; `_WALL_FACE_M`, `_WALL_SPAN`: ``support_xy``, the
     support's in-plane points), and the flat pieces lying in a wall's face (the
     segmentation cut a wall's foot or its trim apart from it: thin, and all within
     `_FACE_THIN_M` of the wall's line). Returns the faces found (`_face`), by object."""
@@ -586,7 +586,7 @@ def _walls(
             )
             walls.append((mid, normal))
             continue
-        span = _along_the_edge(mid, normal, length, support_xy())
+        span = _along_the_edge(mid, normal, length, support_xy)
         if span >= _WALL_SPAN:
             verdicts[k] = (
                 f"a wall: one flat face {length:.2f} m long and {tall:.2f} m high ({thick * 100:.1f} cm across) rising "
@@ -706,7 +706,7 @@ def not_standing(
     objects: list[np.ndarray],
     outside: np.ndarray,
     outside_below: np.ndarray,
-    support_pts: np.ndarray,
+    support_xy: np.ndarray,
     height: Callable[[np.ndarray], np.ndarray],
     to_2d: Callable[[np.ndarray], np.ndarray],
     inside_side: Callable[[np.ndarray], np.ndarray],
@@ -721,10 +721,10 @@ def not_standing(
     support, and why.
 
     ``outside``: points above the support's plane beyond the prism's side,
-    ``outside_below``: those below it; ``support_pts``:
-    the support's own points; ``height``: height above its plane; ``to_2d``: in-plane
-    coordinates; ``inside_side``: (N,) bool, the points farther than `_BORDER_M` inside
-    the prism's side; ``rests_m``: for an object's points, the height below which it
+    ``outside_below``: those below it; ``support_xy``:
+    the support's own points, in-plane (the caller has them so); ``height``: height above
+    its plane; ``to_2d``: in-plane coordinates; ``inside_side``: for in-plane points (N, 2),
+    (N,) bool, those farther than `_BORDER_M` inside the prism's side; ``rests_m``: for an object's points, the height below which it
     rests on the support (grows with range); ``outside_reach``: for each of ``outside``,
     how far its part reaches beyond the outline (`reach_beyond`; None: not known);
     ``at_border``: per object, (M,) bool, its points at the image's border (None: the
@@ -749,7 +749,7 @@ def not_standing(
     rests = [rests_m(p) for p in objects]
     # the points on the prism's side (not farther than `_BORDER_M` inside it), and for
     # each, whether it touches what lies outside above the support, below it
-    edge_rows = np.flatnonzero(~inside_side(every))
+    edge_rows = np.flatnonzero(~inside_side(xy_all))  # in-plane: projected once, above
     edge_bounds = np.searchsorted(edge_rows, bounds)
     edge = np.take(every, edge_rows, axis=0)  # take: faster than a[idx]
     out_tree = cKDTree(outside) if outside.shape[0] else None
@@ -815,14 +815,6 @@ def not_standing(
                 f"stands beyond the support's edge: it goes on below the support's level outside its "
                 f"outline ({down} of its points touch such points): a desk, a shelf, furniture behind"
             )
-    support_xy_once: list[np.ndarray] = []
-
-    def support_xy() -> np.ndarray:
-        """The support's in-plane points, projected the first time they are needed."""
-        if not support_xy_once:
-            support_xy_once.append(to_2d(support_pts) if support_pts.shape[0] else np.zeros((0, 2)))
-        return support_xy_once[0]
-
     faces = _walls(xy_each, h_each, verdicts, support_xy)
     if below is not None:
         below_once: list[np.ndarray] = []
@@ -846,9 +838,9 @@ def not_standing(
     # hangs: decided after the two rules above, so what lies beneath counts only when it
     # is itself an object (not an arm's or a shelf's part), whatever the objects' order
     standing = [k for k in range(len(objects)) if k not in verdicts]
-    lifted = [k for k in standing if lows[k] > rests[k] + _HANG_M] if support_pts.shape[0] else []
+    lifted = [k for k in standing if lows[k] > rests[k] + _HANG_M] if support_xy.shape[0] else []
     if lifted:
-        support_cells = _cells(support_xy())
+        support_cells = _cells(support_xy)
         boxes = _Boxes(
             np.minimum.reduceat(every, bounds[:-1], axis=0),
             np.maximum.reduceat(every, bounds[:-1], axis=0),

@@ -50,11 +50,13 @@ from clearcli.perception.resolution import WorkingGrid
 from clearcli.perception.size import SegmentSize
 from clearcli.perception.supervoxels import Supervoxels, VoxelCloud, compute_supervoxels, voxelize
 from clearcli.perception.table import (
+    Lift,
     TableFit,
     beyond_the_edge,
     convex_hull_2d,
     find_table,
     hull_vertices,
+    lift,
     polygon_area,
     project,
     squared_range,
@@ -176,11 +178,12 @@ def _without_what_lies_beyond(
     table_mask: np.ndarray,
     prism_mask: np.ndarray,
     settings: SegmentSettings,
-    range2: np.ndarray | None,
+    lifted: Lift,
 ) -> tuple[TableFit, np.ndarray, np.ndarray, float]:
     """The table without the pieces of its plane seen beyond its own edge (table.py,
     `beyond_the_edge`): its hull drawn again round the rest, and the prism with it, so
-    that a chair's back standing over a seat in the table's plane is no object.
+    that a chair's back standing over a seat in the table's plane is no object (the
+    same plane: ``lifted``, the points' `lift`, serves the new hull too).
     Returns (fit, table mask, prism mask, area of the plane dropped in m^2)."""
     assert frame.shape is not None  # an organized frame's only
     on_table = np.flatnonzero(table_mask)
@@ -193,7 +196,7 @@ def _without_what_lies_beyond(
         return fit, table_mask, prism_mask, 0.0
     before = polygon_area(fit.polygon_2d)
     fit = dataclasses.replace(fit, polygon_2d=convex_hull_2d(fit.to_2d(kept)))
-    table_mask, prism_mask, _ = table_and_prism(pts, fit, settings, range2)
+    table_mask, prism_mask, _ = table_and_prism(pts, fit, settings, lifted=lifted)
     table_mask[on_table[drop]] = False
     return fit, table_mask, prism_mask, max(0.0, before - polygon_area(fit.polygon_2d))
 
@@ -323,6 +326,7 @@ class _Work:
     prism_mask: np.ndarray = field(default_factory=_empty)  # (K,) above it, inside its hull
     heights: np.ndarray = field(default_factory=_empty)  # (K,) height above the table's plane
     range2: np.ndarray | None = None  # (K,) squared range from the sensor (a camera frame's only)
+    lifted: Lift | None = None  # the table's plane against the kept points (table.lift)
     beyond_m2: float = 0.0
     obj_idx: np.ndarray = field(default_factory=_empty)  # (M,) frame index of the points above the table
     obj_pts: np.ndarray = field(default_factory=_empty)  # (M, 3)
@@ -361,10 +365,12 @@ def _table(w: _Work) -> None:
     fit = find_table(w.pts, w.settings, w.organized, w.frame.source)
     # heights and squared ranges of the kept points: the table's stage and _exclude read them
     w.range2 = squared_range(w.pts) if fit.camera_is_origin else None
-    table_mask, prism_mask, w.heights = table_and_prism(w.pts, fit, w.settings, w.range2)
+    # the plane against the points once: a hull drawn anew and _exclude read it again
+    w.lifted = lift(w.pts, fit, w.settings, w.range2)
+    table_mask, prism_mask, w.heights = table_and_prism(w.pts, fit, w.settings, lifted=w.lifted)
     if w.organized and w.settings.beyond_edge_check:
         fit, table_mask, prism_mask, w.beyond_m2 = _without_what_lies_beyond(
-            w.frame, w.idx, w.pts, fit, table_mask, prism_mask, w.settings, w.range2
+            w.frame, w.idx, w.pts, fit, table_mask, prism_mask, w.settings, w.lifted
         )
     w.fit, w.table_mask, w.prism_mask = fit, table_mask, prism_mask
 
@@ -492,20 +498,22 @@ def _exclude(w: _Work) -> None:
     low = settings.prism_min_height_m + settings.prism_noise_per_m2 * rng2
     above = np.flatnonzero(~w.prism_mask & ~w.table_mask & (h > low) & (h <= settings.prism_max_height_m))
     # rows by index: take is faster than a[idx] (several times on uint8, half again on floats)
-    out_sel = np.compress(~fit.inside(np.take(pts, above, axis=0), settings.hull_margin_m), above)
+    above_xy = _in_plane(w, above)
+    out = ~fit.inside_2d(above_xy, settings.hull_margin_m)
+    out_sel = np.compress(out, above)
     outside = np.take(pts, out_sel, axis=0)
     # how far what lies outside reaches beyond the outline, along the pixel grid
     reach = reach_beyond(
         outside,
         w.idx[out_sel] if w.organized else None,
         w.frame.shape[1] if w.organized and w.frame.shape is not None else 0,
-        beyond_outline(fit.to_2d(outside), fit.polygon_2d),
+        beyond_outline(np.compress(out, above_xy, axis=0), fit.polygon_2d),
     )
     below = np.flatnonzero(~w.table_mask & (h < -low))
     below_pts = np.take(pts, below, axis=0)
     outside_below = np.compress(~fit.inside(below_pts, settings.hull_margin_m), below_pts, axis=0)  # rows by a mask
     on_table = np.flatnonzero(w.table_mask)
-    support = np.take(pts, on_table[:: max(1, on_table.size // 50000)], axis=0)  # no copy of every table point first
+    support_xy = _in_plane(w, on_table[:: max(1, on_table.size // 50000)])  # no copy of every table point first
     rests = settings.prism_min_height_m + settings.plane_distance_m
 
     def rests_m(p: np.ndarray) -> float:
@@ -517,10 +525,10 @@ def _exclude(w: _Work) -> None:
         [np.take(w.frame.points, o.indices, axis=0).astype(np.float64) for o in w.objects],  # take: faster than a[idx]
         outside,
         outside_below,
-        support,
+        support_xy,
         fit.plane.height_of,
         fit.to_2d,
-        lambda p: fit.inside(p, settings.hull_margin_m - 0.02),
+        lambda xy: fit.inside_2d(xy, settings.hull_margin_m - 0.02),
         rests_m,
         reach,
         at_image_border([o.indices for o in w.objects], w.frame.shape) if w.organized else None,
@@ -533,6 +541,19 @@ def _exclude(w: _Work) -> None:
     gone = {v.index: v.reason for v in verdicts}
     w.excluded = [Excluded(o.indices, o.centroid, gone[k]) for k, o in enumerate(w.objects) if k in gone]
     w.objects = [o for k, o in enumerate(w.objects) if k not in gone]
+
+
+def _in_plane(w: _Work, rows: np.ndarray) -> np.ndarray:
+    """(N, 2) ``fit.to_2d`` of the kept points ``rows`` (sorted): read from the table
+    step's `Lift` when they are all among its candidates (what lies above the support,
+    its own points: the same bits), projected otherwise."""
+    fit, lifted = w.fit, w.lifted
+    assert fit is not None  # the table's step ran
+    if lifted is not None and lifted.serves(fit) and lifted.cand.size:
+        at = np.minimum(np.searchsorted(lifted.cand, rows), lifted.cand.size - 1)
+        if np.array_equal(np.take(lifted.cand, at), rows):
+            return np.stack([np.take(lifted.x, at), np.take(lifted.y, at)], axis=1)
+    return fit.to_2d(np.take(w.pts, rows, axis=0))  # rows by index: take is faster than a[idx]
 
 
 def _off_colour(w: _Work) -> list[float] | None:

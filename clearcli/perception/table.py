@@ -89,7 +89,11 @@ class TableFit:
 
     def inside(self, points: np.ndarray, margin_m: float = 0.0) -> np.ndarray:
         """`inside_convex_raster` of the points in the plane's coordinates."""
-        xy = self.to_2d(points)
+        return self.inside_2d(self.to_2d(points), margin_m)
+
+    def inside_2d(self, xy: np.ndarray, margin_m: float = 0.0) -> np.ndarray:
+        """`inside` of points given in the plane's coordinates (``to_2d``'s (N, 2)), for
+        a caller that has them already."""
         return _inside_raster_xy(xy[:, 0], xy[:, 1], self.polygon_2d, margin_m, _RASTER_CELL_M, xy, self.rasters)
 
 
@@ -743,16 +747,32 @@ def squared_range(points: np.ndarray) -> np.ndarray:
     return np.einsum("ij,ij->i", points, points)
 
 
-def table_and_prism(
-    points: np.ndarray, fit: TableFit, settings: SegmentSettings, range2: np.ndarray | None = None
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Stage 2b: (table mask, prism mask, heights) over ``points`` (M, 3).
+@dataclass(frozen=True, eq=False)
+class Lift:
+    """The part of `table_and_prism` that reads the fit's plane and in-plane axes but not
+    its hull: worked out once a frame and read again when the hull is drawn anew (the
+    table without what lies beyond its edge: the same plane, basis and origin) and by
+    the exclusion step (what lies above the support outside the prism is among the
+    candidates, with its in-plane coordinates)."""
 
-    Table: within plane distance and inside the hull grown by ``hull_margin_m``. Prism:
-    between the prism heights (the lower one growing with range, as depth noise does)
-    and inside the grown hull. ``range2``: `squared_range` of ``points`` when the
-    caller has it already.
-    """
+    heights: np.ndarray  # (M,) height of each point above the plane
+    near: np.ndarray  # (M,) bool: within the plane distance
+    band: np.ndarray  # (M,) bool: between the prism's heights (its floor growing with range)
+    cand: np.ndarray  # (C,) sorted indices of the points near or in the band
+    x: np.ndarray  # (C,) the candidates' in-plane coordinates: ``fit.to_2d``'s columns, the same bits
+    y: np.ndarray
+    basis: np.ndarray  # the fit's basis and origin they were taken in
+    origin: np.ndarray
+
+    def serves(self, fit: TableFit) -> bool:
+        """Were these values taken in ``fit``'s plane coordinates (a fit `replace` made
+        from the same one, only its hull drawn anew)?"""
+        return self.basis is fit.basis and self.origin is fit.origin
+
+
+def lift(points: np.ndarray, fit: TableFit, settings: SegmentSettings, range2: np.ndarray | None = None) -> Lift:
+    """`Lift` of ``points`` (M, 3) against ``fit`` (``range2``: their `squared_range`,
+    when the caller has it)."""
     h = fit.plane.height_of(points)
     near = np.abs(h) <= settings.plane_distance_m
     min_h: float | np.ndarray = settings.prism_min_height_m
@@ -768,10 +788,32 @@ def table_and_prism(
     ox, oy = (fit.origin @ fit.basis.T).tolist()
     x -= ox
     y -= oy
+    return Lift(h, near, band, cand, x, y, fit.basis, fit.origin)
+
+
+def table_and_prism(
+    points: np.ndarray,
+    fit: TableFit,
+    settings: SegmentSettings,
+    range2: np.ndarray | None = None,
+    lifted: Lift | None = None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Stage 2b: (table mask, prism mask, heights) over ``points`` (M, 3).
+
+    Table: within plane distance and inside the hull grown by ``hull_margin_m``. Prism:
+    between the prism heights (the lower one growing with range, as depth noise does)
+    and inside the grown hull. ``range2``: `squared_range` of ``points`` when the
+    caller has it already; ``lifted``: their `lift` against ``fit`` (or a fit of the
+    same plane coordinates) when the caller has it: only the hull is read anew.
+    """
+    if lifted is None or not lifted.serves(fit):
+        lifted = lift(points, fit, settings, range2)
     inside = np.zeros(points.shape[0], dtype=bool)
-    inside[cand] = _inside_raster_xy(x, y, fit.polygon_2d, settings.hull_margin_m, _RASTER_CELL_M, None, fit.rasters)
+    inside[lifted.cand] = _inside_raster_xy(
+        lifted.x, lifted.y, fit.polygon_2d, settings.hull_margin_m, _RASTER_CELL_M, None, fit.rasters
+    )
     # near and band lie within cand: two whole-array ands, not a gather and a scatter each
-    return inside & near, inside & band, h
+    return inside & lifted.near, inside & lifted.band, lifted.heights
 
 
 def beyond_the_edge(

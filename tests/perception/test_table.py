@@ -503,6 +503,38 @@ def test_table_and_prism_masks_by_hand() -> None:
         assert prism[rows].all() == over and prism[rows].any() == over, k
 
 
+def test_a_lift_serves_a_hull_drawn_anew_on_the_same_plane_and_no_other_plane() -> None:
+    # the table without what lies beyond its edge keeps its plane and draws a smaller hull:
+    # the masks from the lift of the first fit are the masks worked out from scratch
+    from clearcli.perception.table import TableFit, lift, table_and_prism
+    from clearcli.perception.types import TablePlane
+
+    square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    basis = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    fit = TableFit(TablePlane(np.array([0.0, 0.0, 1.0]), 0.0), square, np.zeros(3), basis, False)
+    rng = np.random.default_rng(8)
+    pts = np.column_stack([rng.uniform(-0.3, 1.3, (50000, 2)), rng.uniform(-0.1, 0.5, 50000)])
+    lifted = lift(pts, fit, S)
+    # the candidates: within plane distance (1 cm) or 1 cm to 2 m up; their plane coordinates
+    want = np.flatnonzero((np.abs(pts[:, 2]) <= 0.01) | (pts[:, 2] >= 0.01))
+    assert np.array_equal(lifted.cand, want)
+    assert np.array_equal(lifted.x, pts[want, 0]) and np.array_equal(lifted.y, pts[want, 1])
+    smaller = replace(fit, polygon_2d=square * 0.5)
+    assert lifted.serves(smaller)
+    table, prism, h = table_and_prism(pts, smaller, S, lifted=lifted)
+    assert h is lifted.heights
+    for got, fresh in zip((table, prism), table_and_prism(pts, smaller, S)[:2], strict=True):
+        assert np.array_equal(got, fresh)
+    # by hand: nothing beyond the smaller square grown by 5 cm (cells of 5 mm) is table
+    assert not table[(pts[:, :2] > 0.56).any(axis=1)].any()
+    assert table[(pts[:, :2] < 0.44).all(axis=1) & (pts[:, :2] > 0.01).all(axis=1) & (np.abs(pts[:, 2]) <= 0.01)].all()
+    # a fit of another plane (lifted 20 cm) is not served: its own heights are taken
+    raised = TableFit(TablePlane(np.array([0.0, 0.0, 1.0]), -0.2), square, np.array([0.0, 0.0, 0.2]), basis, False)
+    assert not lifted.serves(raised)
+    _, _, h_raised = table_and_prism(pts, raised, S, lifted=lifted)
+    assert np.allclose(h_raised, pts[:, 2] - 0.2)
+
+
 def test_a_fits_rasters_are_drawn_once_per_margin_and_not_passed_on_by_replace() -> None:
     from clearcli.perception.table import TableFit, inside_convex_raster
     from clearcli.perception.types import TablePlane
