@@ -496,9 +496,7 @@ def _exclude(w: _Work) -> None:
     h = w.heights  # fit.plane.height_of(pts): the hull changed after the table's stage, not the plane
     rng2 = w.range2 if w.range2 is not None else np.zeros(pts.shape[0])
     low = settings.prism_min_height_m + settings.prism_noise_per_m2 * rng2
-    above = np.flatnonzero(~w.prism_mask & ~w.table_mask & (h > low) & (h <= settings.prism_max_height_m))
-    # rows by index: take is faster than a[idx] (several times on uint8, half again on floats)
-    above_xy = _in_plane(w, above)
+    above, above_xy = _in_plane(w, ~w.prism_mask & ~w.table_mask & (h > low) & (h <= settings.prism_max_height_m))
     out = ~fit.inside_2d(above_xy, settings.hull_margin_m)
     out_sel = np.compress(out, above)
     outside = np.take(pts, out_sel, axis=0)
@@ -512,8 +510,8 @@ def _exclude(w: _Work) -> None:
     below = np.flatnonzero(~w.table_mask & (h < -low))
     below_pts = np.take(pts, below, axis=0)
     outside_below = np.compress(~fit.inside(below_pts, settings.hull_margin_m), below_pts, axis=0)  # rows by a mask
-    on_table = np.flatnonzero(w.table_mask)
-    support_xy = _in_plane(w, on_table[:: max(1, on_table.size // 50000)])  # no copy of every table point first
+    # an even sample of the table's points: no copy of every one first
+    _, support_xy = _in_plane(w, w.table_mask, max(1, int(np.count_nonzero(w.table_mask)) // 50000))
     rests = settings.prism_min_height_m + settings.plane_distance_m
 
     def rests_m(p: np.ndarray) -> float:
@@ -543,17 +541,19 @@ def _exclude(w: _Work) -> None:
     w.objects = [o for k, o in enumerate(w.objects) if k not in gone]
 
 
-def _in_plane(w: _Work, rows: np.ndarray) -> np.ndarray:
-    """(N, 2) ``fit.to_2d`` of the kept points ``rows`` (sorted): read from the table
-    step's `Lift` when they are all among its candidates (what lies above the support,
-    its own points: the same bits), projected otherwise."""
+def _in_plane(w: _Work, mask: np.ndarray, step: int = 1) -> tuple[np.ndarray, np.ndarray]:
+    """(the kept points in ``mask`` (every ``step``-th), their (N, 2) ``fit.to_2d``): read
+    from the table step's `Lift` when they are all among its candidates (what lies above
+    the support, its own points: the same bits), projected otherwise."""
     fit, lifted = w.fit, w.lifted
     assert fit is not None  # the table's step ran
-    if lifted is not None and lifted.serves(fit) and lifted.cand.size:
-        at = np.minimum(np.searchsorted(lifted.cand, rows), lifted.cand.size - 1)
-        if np.array_equal(np.take(lifted.cand, at), rows):
-            return np.stack([np.take(lifted.x, at), np.take(lifted.y, at)], axis=1)
-    return fit.to_2d(np.take(w.pts, rows, axis=0))  # rows by index: take is faster than a[idx]
+    if lifted is not None and lifted.serves(fit):
+        on_cand = np.take(mask, lifted.cand)
+        if np.count_nonzero(on_cand) == np.count_nonzero(mask):
+            at = np.flatnonzero(on_cand)[::step]
+            return np.take(lifted.cand, at), np.stack([np.take(lifted.x, at), np.take(lifted.y, at)], axis=1)
+    rows = np.flatnonzero(mask)[::step]
+    return rows, fit.to_2d(np.take(w.pts, rows, axis=0))  # rows by index: take is faster than a[idx]
 
 
 def _off_colour(w: _Work) -> list[float] | None:

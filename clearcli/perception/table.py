@@ -883,7 +883,7 @@ def beyond_the_edge(
     others = [k for k in range(1, n + 1) if k != main and sizes[k] >= _EDGE_MIN_PIECE_PX]
     if not others:
         return drop, ~drop
-    camera = _pinhole_of(pts, np.isfinite(rng))
+    camera = _pinhole_of(pts, rng)
     if camera is None:
         return drop, ~drop
     basis = plane_basis(plane.normal)
@@ -910,12 +910,15 @@ def beyond_the_edge(
             columns.append(c)
         return unique_cells(np.stack(columns, axis=1).astype(np.int64))
 
-    main_cells = cells(main)
-    main_hull = convex_hull_2d((main_cells + 0.5) * cell)
+    main_hull = convex_hull_2d(_rim_cells(cells(main), cell))
     gone: list[int] = []
     for k in others:
         own = cells(k)
-        both = convex_hull_2d((np.vstack([main_cells, own]) + 0.5) * cell)
+        own_rim = _rim_cells(own, cell)
+        # the joint hull from the main piece's hull vertices (its cells' centres, the same
+        # floats) and the piece's cells: the same hull as of every cell of both, without
+        # the main piece's thousands of cells sifted again for each piece
+        both = convex_hull_2d(np.vstack([main_hull, own_rim]))
         lo = np.floor(both.min(axis=0) / cell).astype(np.int64)
         hi = np.ceil(both.max(axis=0) / cell).astype(np.int64)
         gx, gy = np.meshgrid(np.arange(lo[0], hi[0] + 1), np.arange(lo[1], hi[1] + 1), indexing="ij")
@@ -937,7 +940,7 @@ def beyond_the_edge(
                 # what hides a look and stands over the other piece itself (clutter on a
                 # bench behind) is that piece's load: it tells nothing of table in between
                 over = pts[v[ok][hidden], u[ok][hidden]].astype(np.float64) @ basis.T - origin @ basis.T
-                hidden[np.flatnonzero(hidden)[inside_convex(over, convex_hull_2d((own + 0.5) * cell), -cell)]] = False
+                hidden[np.flatnonzero(hidden)[inside_convex(over, convex_hull_2d(own_rim), -cell)]] = False
             nearer = int(hidden.sum())
             # farther than the plane: nothing stands there. A pixel with no depth tells
             # nothing (a shadow behind an object is one too)
@@ -948,12 +951,29 @@ def beyond_the_edge(
     return dropped, (piece_of == main) | np.isin(piece_of, others) & ~dropped
 
 
-def _pinhole_of(pts: np.ndarray, finite: np.ndarray) -> Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]] | None:
+def _rim_cells(cells: np.ndarray, cell_m: float) -> np.ndarray:
+    """The centres of the grid ``cells`` (distinct rows in `unique_cells`'s order, not
+    empty) that can lie on their hull: the lowest and highest of each column, and every
+    cell of the first and last columns. A cell between two of its own column (the same
+    x, to the bit) lies inside the hull unless that column is an extreme one, where it
+    lies on the hull's side: the same hull from a few hundred cells, not thousands."""
+    u = cells[:, 0]
+    edge = np.empty(u.size, dtype=bool)  # the first or the last of its column
+    edge[0] = True
+    np.not_equal(u[1:], u[:-1], out=edge[1:])
+    edge[:-1] |= edge[1:].copy()
+    edge[-1] = True
+    edge |= (u == u[0]) | (u == u[-1])
+    return (np.compress(edge, cells, axis=0) + 0.5) * cell_m  # rows by a mask: compress is faster
+
+
+def _pinhole_of(pts: np.ndarray, depth: np.ndarray) -> Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]] | None:
     """The pixel of a point, as a function of (N, 3) points -> (columns, rows), fitted to
     an organized cloud's own points (column = fx X/Z + cx, row = fy Y/Z + cy, least
     squares on a sample); None when the cloud is not a pinhole image (a fit off by more
-    than a pixel)."""
-    flat = np.flatnonzero(finite & (pts[..., 2] > 0))  # np.nonzero's pixels in its order, as one array
+    than a pixel). ``depth``: the points' z, (height, width), contiguous (the caller's
+    copy: a strided pass over the cloud's third column cost several times more)."""
+    flat = np.flatnonzero(np.isfinite(depth) & (depth > 0))  # np.nonzero's pixels in its order, as one array
     if flat.size < 100:
         return None
     pick = np.linspace(0, flat.size - 1, 2000).astype(np.int64)

@@ -428,7 +428,7 @@ def test_the_pinhole_fit_skips_points_whose_x_or_y_is_infinite() -> None:
     z = np.full((h, w), 1.5)
     pts = np.stack([(u - 31.5) / 60.0 * z, (v - 23.5) / 60.0 * z, z], axis=-1)
     pts[::3, ::5, 1] = -np.inf
-    pixel = _pinhole_of(pts, np.isfinite(pts[..., 2]))
+    pixel = _pinhole_of(pts, pts[..., 2])
     assert pixel is not None
     cols, rows = pixel(np.array([[0.01, 0.01, 1.0], [0.26, -0.13, 1.0]]))  # off the .5 boundaries
     assert cols.tolist() == [32, 47] and rows.tolist() == [24, 16]
@@ -562,3 +562,28 @@ def test_a_fits_rasters_are_drawn_once_per_margin_and_not_passed_on_by_replace()
     smaller = replace(fit, polygon_2d=square * 0.5)
     assert smaller.rasters == {}
     assert not smaller.inside(np.array([[0.8, 0.8, 0.0]] * 200000), 0.05).any()
+
+
+def test_rim_cells_keep_each_columns_ends_and_the_outer_columns_whole() -> None:
+    # by hand: columns 0..3 of rows 0..4 (a 4 x 5 block) and a cell sticking out at (2, 7):
+    # the first and last columns whole, the middle ones their lowest and highest cells
+    from clearcli.perception.table import _rim_cells, convex_hull_2d, unique_cells
+
+    block = [(u, v) for u in range(4) for v in range(5)] + [(2, 7)]
+    cells = unique_cells(np.array(block, dtype=np.int64))
+    rim = _rim_cells(cells, 0.01)
+    kept = sorted((int(round(x / 0.01 - 0.5)), int(round(y / 0.01 - 0.5))) for x, y in rim)
+    want = [(0, v) for v in range(5)] + [(1, 0), (1, 4), (2, 0), (2, 7)] + [(3, v) for v in range(5)]
+    assert kept == sorted(want)
+    # the same hull, to the bit and in the same order, as from every cell's centre
+    assert np.array_equal(convex_hull_2d(rim), convex_hull_2d((cells + 0.5) * 0.01))
+    # a random piece of the table's grid: the same hull from a fraction of the cells
+    rng = np.random.default_rng(3)
+    xy = rng.normal(0.0, 0.2, (20000, 2))
+    cells = unique_cells(np.floor(xy / 0.01).astype(np.int64))
+    rim = _rim_cells(cells, 0.01)
+    assert rim.shape[0] < cells.shape[0] // 3
+    assert np.array_equal(convex_hull_2d(rim), convex_hull_2d((cells + 0.5) * 0.01))
+    # one column: every cell of it
+    line = unique_cells(np.array([[5, v] for v in range(6)], dtype=np.int64))
+    assert _rim_cells(line, 0.01).shape[0] == 6
