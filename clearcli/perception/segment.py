@@ -39,6 +39,7 @@ from clearcli.perception.exclude import (
     beyond_outline,
     not_standing,
     reach_beyond,
+    row_mean,
     support_around,
 )
 from clearcli.perception.filters import clean_mask
@@ -144,22 +145,11 @@ def table_aligned_box(
     return center, axes, extents
 
 
-def _row_mean(points: np.ndarray) -> np.ndarray:
-    """``points.mean(axis=0)`` of (N, 3) float64 points, bit for bit: NumPy sums the rows
-    of a C-ordered (N, 3) array one after another, and einsum's "ij->j" makes the same
-    additions in the same order in a third of the time (a cluttered table's objects:
-    100k points). Other layouts (columns contiguous: NumPy sums each pairwise) and
-    dtypes take the mean itself."""
-    if points.dtype != np.float64 or points.ndim != 2 or points.shape[0] == 0 or not points.flags.c_contiguous:
-        return np.asarray(points.mean(axis=0))
-    return np.einsum("ij->j", points) / points.shape[0]
-
-
 def make_object(
     frame_indices: np.ndarray, points: np.ndarray, table: TablePlane, rests_below_m: float
 ) -> SegmentedObject:
     center, axes, extents = table_aligned_box(points, table, rests_below_m)
-    centroid = _row_mean(points)
+    centroid = row_mean(points)
     return SegmentedObject(
         indices=frame_indices.astype(np.int64),
         centroid=centroid,
