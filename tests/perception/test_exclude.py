@@ -170,3 +170,18 @@ def test_boxes_column_by_column_are_the_row_reductions() -> None:
     pts = np.array([[0.0, 0.0, 0.0], [1.0, 1.0, 1.0], [1.0, 2.0, 1.0], [-0.5, 0.5, 0.5]])
     assert exclude._near_box(pts, np.zeros(3), np.ones(3)).tolist() == [[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]]
     assert [v.tolist() for v in exclude._lo_hi(pts)] == [[-0.5, 0.0, 0.0], [1.0, 2.0, 1.0]]
+
+
+def test_cells_are_the_sorted_packed_keys_by_mark_or_by_sort() -> None:
+    from clearcli.perception import exclude
+
+    # by hand: cells (0, 0) twice, (0, 1), (-1, 2) (1 cm cells), as column << 32 | row + 2^31
+    xy = np.array([[0.001, 0.002], [0.009, 0.001], [0.005, 0.015], [-0.005, 0.025]])
+    want = [(-1 << 32) + 2 + (1 << 31), (1 << 31), 1 + (1 << 31)]
+    assert exclude._cells(xy).tolist() == want
+    # a dense support (marks) and a sparse spread (sort): np.unique's keys either way
+    rng = np.random.default_rng(2)
+    for spread in (0.05, 50.0):
+        pts = rng.normal(0.3, spread, (20000, 2))
+        c = np.floor(pts / 0.01).astype(np.int64)
+        assert np.array_equal(exclude._cells(pts), np.unique(c[:, 0] * (1 << 32) + (c[:, 1] + (1 << 31))))
