@@ -356,8 +356,29 @@ def _rests_on_another(k: int, objects: list[np.ndarray], h_each: list[np.ndarray
     bottom = _near_box(bottom, near_lo - _TOUCH_M, near_hi + _TOUCH_M)
     # a tree for one query: neither balanced nor compacted (several times faster to build;
     # the nearest distance found is the same)
-    d, _ = cKDTree(near, balanced_tree=False, compact_nodes=False).query(bottom, distance_upper_bound=_TOUCH_M)
-    return bool(np.isfinite(d).sum() >= 5)
+    return _reached(cKDTree(near, balanced_tree=False, compact_nodes=False), bottom, _TOUCH_M, 5)
+
+
+# _reached(): the points are queried this many at a time
+_QUERY_CHUNK = 512
+
+
+def _reached(tree: object, points: np.ndarray, reach_m: float, need: int) -> bool:
+    """Do at least ``need`` of ``points`` have a point of ``tree`` (a cKDTree) within
+    ``reach_m`` (a nearest-neighbour query's distance finite)? Queried in chunks that
+    stop once ``need`` are found: each point's answer is its own, so the count so far is
+    the whole query's count of those rows (the query was most of the time of the tests
+    of stacked objects, and they mostly touch early)."""
+    from scipy.spatial import cKDTree
+
+    assert isinstance(tree, cKDTree)
+    found = 0
+    for start in range(0, points.shape[0], _QUERY_CHUNK):
+        d, _ = tree.query(points[start : start + _QUERY_CHUNK], distance_upper_bound=reach_m)
+        found += int(np.isfinite(d).sum())
+        if found >= need:
+            return True
+    return False
 
 
 def _on_what_is_beneath(
@@ -390,8 +411,7 @@ def _on_what_is_beneath(
     if not own.shape[0]:
         return False
     # (a tree for one query: see _rests_on_another)
-    d, _ = cKDTree(own, balanced_tree=False, compact_nodes=False).query(near, distance_upper_bound=_CELL_M)
-    return bool(np.isfinite(d).sum() >= _GOES_ON_MIN)
+    return _reached(cKDTree(own, balanced_tree=False, compact_nodes=False), near, _CELL_M, _GOES_ON_MIN)
 
 
 def _held_from(p: np.ndarray, out_tree: object, excluded: list[np.ndarray]) -> str:
