@@ -39,6 +39,7 @@ from clearcli.perception.exclude import (
     beyond_outline,
     not_standing,
     reach_beyond,
+    row_mean,
     support_around,
 )
 from clearcli.perception.filters import clean_mask
@@ -50,11 +51,13 @@ from clearcli.perception.resolution import WorkingGrid
 from clearcli.perception.size import SegmentSize
 from clearcli.perception.supervoxels import Supervoxels, VoxelCloud, compute_supervoxels, voxelize
 from clearcli.perception.table import (
+    Lift,
     TableFit,
     beyond_the_edge,
     convex_hull_2d,
     find_table,
     hull_vertices,
+    lift,
     polygon_area,
     project,
     squared_range,
@@ -142,22 +145,11 @@ def table_aligned_box(
     return center, axes, extents
 
 
-def _row_mean(points: np.ndarray) -> np.ndarray:
-    """``points.mean(axis=0)`` of (N, 3) float64 points, bit for bit: NumPy sums the rows
-    of a C-ordered (N, 3) array one after another, and einsum's "ij->j" makes the same
-    additions in the same order in a third of the time (a cluttered table's objects:
-    100k points). Other layouts (columns contiguous: NumPy sums each pairwise) and
-    dtypes take the mean itself."""
-    if points.dtype != np.float64 or points.ndim != 2 or points.shape[0] == 0 or not points.flags.c_contiguous:
-        return np.asarray(points.mean(axis=0))
-    return np.einsum("ij->j", points) / points.shape[0]
-
-
 def make_object(
     frame_indices: np.ndarray, points: np.ndarray, table: TablePlane, rests_below_m: float
 ) -> SegmentedObject:
     center, axes, extents = table_aligned_box(points, table, rests_below_m)
-    centroid = _row_mean(points)
+    centroid = row_mean(points)
     return SegmentedObject(
         indices=frame_indices.astype(np.int64),
         centroid=centroid,
@@ -176,11 +168,12 @@ def _without_what_lies_beyond(
     table_mask: np.ndarray,
     prism_mask: np.ndarray,
     settings: SegmentSettings,
-    range2: np.ndarray | None,
+    lifted: Lift,
 ) -> tuple[TableFit, np.ndarray, np.ndarray, float]:
     """The table without the pieces of its plane seen beyond its own edge (table.py,
     `beyond_the_edge`): its hull drawn again round the rest, and the prism with it, so
-    that a chair's back standing over a seat in the table's plane is no object.
+    that a chair's back standing over a seat in the table's plane is no object (the
+    same plane: ``lifted``, the points' `lift`, serves the new hull too).
     Returns (fit, table mask, prism mask, area of the plane dropped in m^2)."""
     assert frame.shape is not None  # an organized frame's only
     on_table = np.flatnonzero(table_mask)
@@ -193,7 +186,7 @@ def _without_what_lies_beyond(
         return fit, table_mask, prism_mask, 0.0
     before = polygon_area(fit.polygon_2d)
     fit = dataclasses.replace(fit, polygon_2d=convex_hull_2d(fit.to_2d(kept)))
-    table_mask, prism_mask, _ = table_and_prism(pts, fit, settings, range2)
+    table_mask, prism_mask, _ = table_and_prism(pts, fit, settings, lifted=lifted)
     table_mask[on_table[drop]] = False
     return fit, table_mask, prism_mask, max(0.0, before - polygon_area(fit.polygon_2d))
 
@@ -332,6 +325,7 @@ class _Work:
     prism_mask: np.ndarray = field(default_factory=_empty)  # (K,) above it, inside its hull
     heights: np.ndarray = field(default_factory=_empty)  # (K,) height above the table's plane
     range2: np.ndarray | None = None  # (K,) squared range from the sensor (a camera frame's only)
+    lifted: Lift | None = None  # the table's plane against the kept points (table.lift)
     beyond_m2: float = 0.0
     obj_idx: np.ndarray = field(default_factory=_empty)  # (M,) frame index of the points above the table
     obj_pts: np.ndarray = field(default_factory=_empty)  # (M, 3)
@@ -370,10 +364,12 @@ def _table(w: _Work) -> None:
     fit = find_table(w.pts, w.settings, w.organized, w.frame.source)
     # heights and squared ranges of the kept points: the table's stage and _exclude read them
     w.range2 = squared_range(w.pts) if fit.camera_is_origin else None
-    table_mask, prism_mask, w.heights = table_and_prism(w.pts, fit, w.settings, w.range2)
+    # the plane against the points once: a hull drawn anew and _exclude read it again
+    w.lifted = lift(w.pts, fit, w.settings, w.range2)
+    table_mask, prism_mask, w.heights = table_and_prism(w.pts, fit, w.settings, lifted=w.lifted)
     if w.organized and w.settings.beyond_edge_check:
         fit, table_mask, prism_mask, w.beyond_m2 = _without_what_lies_beyond(
-            w.frame, w.idx, w.pts, fit, table_mask, prism_mask, w.settings, w.range2
+            w.frame, w.idx, w.pts, fit, table_mask, prism_mask, w.settings, w.lifted
         )
     w.fit, w.table_mask, w.prism_mask = fit, table_mask, prism_mask
 
@@ -499,22 +495,22 @@ def _exclude(w: _Work) -> None:
     h = w.heights  # fit.plane.height_of(pts): the hull changed after the table's stage, not the plane
     rng2 = w.range2 if w.range2 is not None else np.zeros(pts.shape[0])
     low = settings.prism_min_height_m + settings.prism_noise_per_m2 * rng2
-    above = np.flatnonzero(~w.prism_mask & ~w.table_mask & (h > low) & (h <= settings.prism_max_height_m))
-    # rows by index: take is faster than a[idx] (several times on uint8, half again on floats)
-    out_sel = np.compress(~fit.inside(np.take(pts, above, axis=0), settings.hull_margin_m), above)
+    above, above_xy = _in_plane(w, ~w.prism_mask & ~w.table_mask & (h > low) & (h <= settings.prism_max_height_m))
+    out = ~fit.inside_2d(above_xy, settings.hull_margin_m)
+    out_sel = np.compress(out, above)
     outside = np.take(pts, out_sel, axis=0)
     # how far what lies outside reaches beyond the outline, along the pixel grid
     reach = reach_beyond(
         outside,
         w.idx[out_sel] if w.organized else None,
         w.frame.shape[1] if w.organized and w.frame.shape is not None else 0,
-        beyond_outline(fit.to_2d(outside), fit.polygon_2d),
+        beyond_outline(np.compress(out, above_xy, axis=0), fit.polygon_2d),
     )
     below = np.flatnonzero(~w.table_mask & (h < -low))
     below_pts = np.take(pts, below, axis=0)
     outside_below = np.compress(~fit.inside(below_pts, settings.hull_margin_m), below_pts, axis=0)  # rows by a mask
-    on_table = np.flatnonzero(w.table_mask)
-    support = np.take(pts, on_table[:: max(1, on_table.size // 50000)], axis=0)  # no copy of every table point first
+    # an even sample of the table's points: no copy of every one first
+    _, support_xy = _in_plane(w, w.table_mask, max(1, int(np.count_nonzero(w.table_mask)) // 50000))
     rests = settings.prism_min_height_m + settings.plane_distance_m
 
     def rests_m(p: np.ndarray) -> float:
@@ -526,10 +522,10 @@ def _exclude(w: _Work) -> None:
         [np.take(w.frame.points, o.indices, axis=0).astype(np.float64) for o in w.objects],  # take: faster than a[idx]
         outside,
         outside_below,
-        support,
+        support_xy,
         fit.plane.height_of,
         fit.to_2d,
-        lambda p: fit.inside(p, settings.hull_margin_m - 0.02),
+        lambda xy: fit.inside_2d(xy, settings.hull_margin_m - 0.02),
         rests_m,
         reach,
         at_image_border([o.indices for o in w.objects], w.frame.shape) if w.organized else None,
@@ -542,6 +538,21 @@ def _exclude(w: _Work) -> None:
     gone = {v.index: v.reason for v in verdicts}
     w.excluded = [Excluded(o.indices, o.centroid, gone[k]) for k, o in enumerate(w.objects) if k in gone]
     w.objects = [o for k, o in enumerate(w.objects) if k not in gone]
+
+
+def _in_plane(w: _Work, mask: np.ndarray, step: int = 1) -> tuple[np.ndarray, np.ndarray]:
+    """(the kept points in ``mask`` (every ``step``-th), their (N, 2) ``fit.to_2d``): read
+    from the table step's `Lift` when they are all among its candidates (what lies above
+    the support, its own points: the same bits), projected otherwise."""
+    fit, lifted = w.fit, w.lifted
+    assert fit is not None  # the table's step ran
+    if lifted is not None and lifted.serves(fit):
+        on_cand = np.take(mask, lifted.cand)
+        if np.count_nonzero(on_cand) == np.count_nonzero(mask):
+            at = np.flatnonzero(on_cand)[::step]
+            return np.take(lifted.cand, at), np.stack([np.take(lifted.x, at), np.take(lifted.y, at)], axis=1)
+    rows = np.flatnonzero(mask)[::step]
+    return rows, fit.to_2d(np.take(w.pts, rows, axis=0))  # rows by index: take is faster than a[idx]
 
 
 def _off_colour(w: _Work) -> list[float] | None:
@@ -566,14 +577,18 @@ def _support_around(w: _Work) -> list[tuple[int, int]]:
     assert fit is not None and shape is not None  # the table's step ran; organized
 
     def state(pixels: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        j = np.minimum(np.searchsorted(w.idx, pixels), w.idx.size - 1)  # w.idx is sorted
-        kept = w.idx[j] == pixels
+        # each pixel's kept point (-1: none) from a map of the frame's pixels: the rings'
+        # pixels come in no order, and binary searches of them in w.idx cost several
+        # times more than writing the map
+        kept_at = np.full(w.frame.n_points, -1, dtype=np.int32)  # int32: a frame's pixels fit, half the writes
+        kept_at[w.idx] = np.arange(w.idx.size, dtype=np.int32)
+        j = np.take(kept_at, pixels)
+        kept = j >= 0
         jk = j[kept]
         counts, support = np.zeros(pixels.size, dtype=bool), np.zeros(pixels.size, dtype=bool)
-        # gathers by take: several times faster than a[idx]
-        counts[kept] = ~np.take(w.prism_mask, jk) & (
-            np.abs(fit.plane.height_of(np.take(w.pts, jk, axis=0))) <= AROUND_LEVEL_M
-        )
+        # gathers by take: several times faster than a[idx]; the heights the table's step
+        # took (the same plane: a row's product does not depend on the rows around it)
+        counts[kept] = ~np.take(w.prism_mask, jk) & (np.abs(np.take(w.heights, jk)) <= AROUND_LEVEL_M)
         support[kept] = np.take(w.table_mask, jk)
         return counts, support
 

@@ -62,20 +62,29 @@ class Surface:
     def height(self, points: np.ndarray) -> np.ndarray:
         return points @ self.normal + self.offset
 
+    def to_2d(self, points: np.ndarray) -> np.ndarray:
+        """(N, 2) the points in its plane's coordinates."""
+        return np.stack([points @ a for a in self.basis], axis=1) - self.origin @ self.basis.T
+
     def inside(self, points: np.ndarray, margin_m: float) -> np.ndarray:
-        xy = np.stack([points @ a for a in self.basis], axis=1) - self.origin @ self.basis.T
-        return _inside_convex(xy, self.polygon_2d, margin_m)
+        return _inside_convex(self.to_2d(points), self.polygon_2d, margin_m)
 
 
-def _inside_convex(xy: np.ndarray, poly: np.ndarray, margin_m: float) -> np.ndarray:
+def _inside_convex(xy: np.ndarray, poly: np.ndarray, *margins_m: float) -> np.ndarray:
+    """(N,) bool: the points ``xy`` inside the counter-clockwise ``poly`` grown by the
+    margin; given several margins, (len(margins), N), one row each: every edge's
+    distances worked out once for all of them (the same comparisons as one call each)."""
     edges = np.roll(poly, -1, axis=0) - poly
     out = np.stack([edges[:, 1], -edges[:, 0]], axis=1)
     out /= np.maximum(np.linalg.norm(out, axis=1, keepdims=True), 1e-12)
-    limits = np.einsum("ij,ij->i", out, poly) + margin_m
-    ok = np.ones(xy.shape[0], dtype=bool)
+    base = np.einsum("ij,ij->i", out, poly)
+    limits = [base + m for m in margins_m]
+    ok = np.ones((len(margins_m), xy.shape[0]), dtype=bool)
     for k in range(poly.shape[0]):
-        ok &= xy @ out[k] <= limits[k]
-    return ok
+        d = xy @ out[k]
+        for row, limit in zip(ok, limits, strict=True):
+            row &= d <= limit[k]
+    return ok[0] if len(margins_m) == 1 else ok
 
 
 @dataclass(frozen=True)
@@ -128,14 +137,18 @@ def standing_on(s: Surface, loose: np.ndarray, band_m: np.ndarray) -> np.ndarray
     return out
 
 
-def walled_sectors(s: Surface, every: np.ndarray) -> int:
+def walled_sectors(s: Surface, every: np.ndarray, every_xy: np.ndarray | None = None) -> int:
     """In how many of `_SECTORS` sectors around the middle of ``s``'s outline a wall rises
-    at its edge: see `_WALL_IN_M`."""
-    band = s.inside(every, _WALL_OUT_M) & ~s.inside(every, -_WALL_IN_M)
+    at its edge: see `_WALL_IN_M`. ``every_xy``: ``s.to_2d(every)``, when the caller has it."""
+    if every_xy is None:
+        every_xy = s.to_2d(every)
+    outer, inner = _inside_convex(every_xy, s.polygon_2d, _WALL_OUT_M, -_WALL_IN_M)
+    band = outer & ~inner
     pts = every[band]
     if not pts.shape[0]:
         return 0
-    xy = np.stack([pts @ a for a in s.basis], axis=1) - s.origin @ s.basis.T
+    # the band's rows of the projection (a row's product does not depend on the rows around it)
+    xy = every_xy[band]
     mid = s.polygon_2d.mean(axis=0)
     ang = np.arctan2(xy[:, 1] - mid[1], xy[:, 0] - mid[0])
     sector = np.minimum((ang + np.pi) * (_SECTORS / (2 * np.pi)), _SECTORS - 1).astype(np.int64)
@@ -144,11 +157,14 @@ def walled_sectors(s: Surface, every: np.ndarray) -> int:
     return int(((n > 0) & (up >= _WALL_SHARE * n)).sum())
 
 
-def _below_seen_share(s: Surface, every: np.ndarray, rise: float, half_m: float) -> float:
+def _below_seen_share(
+    s: Surface, every: np.ndarray, rise: float, half_m: float, every_xy: np.ndarray | None = None
+) -> float:
     """Of ``every`` point inside ``s``'s outline (off its edge band) at the level of ``s``
     or of the surface ``rise`` below it (within ``half_m`` of either), the share at the
-    lower level: the lower surface seen through, or beneath, the upper one's outline."""
-    inner = every[s.inside(every, -_EDGE_IN_M)]
+    lower level: the lower surface seen through, or beneath, the upper one's outline.
+    ``every_xy``: ``s.to_2d(every)``, when the caller has it."""
+    inner = every[_inside_convex(s.to_2d(every) if every_xy is None else every_xy, s.polygon_2d, -_EDGE_IN_M)]
     if not inner.shape[0]:
         return 0.0
     h = s.height(inner)
@@ -192,7 +208,8 @@ def choose(
         n_on = int(on.sum())
         if n_on < min_points:
             continue
-        walled = walled_sectors(s, every)
+        every_xy = s.to_2d(every)  # once: the walls' band and the levels seen within read it
+        walled = walled_sectors(s, every, every_xy)
         if walled >= _WALLED_MIN:
             # a bowl's inside holds what is in the bowl, which stands on the bowl, and the
             # bowl on the surface below
@@ -202,7 +219,7 @@ def choose(
             )
             continue
         if rise <= _MAT_MAX_M:
-            seen = _below_seen_share(s, every, rise, rise / 2)
+            seen = _below_seen_share(s, every, rise, rise / 2, every_xy)
             if seen > mat_seen_max_share:
                 concave[k] = (
                     f"no mat: the plane below shows within its outline ({seen:.0%} of the points at the two levels "
@@ -227,7 +244,7 @@ def choose(
         body = int(s.inside(every[idx], _BODY_OUT_M).sum()) if idx.size else 0
         if body < min_points:
             continue
-        seen = _below_seen_share(s, every, rise, _MAT_MAX_M / 2)
+        seen = _below_seen_share(s, every, rise, _MAT_MAX_M / 2, every_xy)
         if seen > raised_seen_max_share:
             concave[k] = (
                 f"no raised surface: the plane below goes on beneath it ({seen:.0%} of the points at the two "

@@ -89,7 +89,11 @@ class TableFit:
 
     def inside(self, points: np.ndarray, margin_m: float = 0.0) -> np.ndarray:
         """`inside_convex_raster` of the points in the plane's coordinates."""
-        xy = self.to_2d(points)
+        return self.inside_2d(self.to_2d(points), margin_m)
+
+    def inside_2d(self, xy: np.ndarray, margin_m: float = 0.0) -> np.ndarray:
+        """`inside` of points given in the plane's coordinates (``to_2d``'s (N, 2)), for
+        a caller that has them already."""
         return _inside_raster_xy(xy[:, 0], xy[:, 1], self.polygon_2d, margin_m, _RASTER_CELL_M, xy, self.rasters)
 
 
@@ -743,16 +747,32 @@ def squared_range(points: np.ndarray) -> np.ndarray:
     return np.einsum("ij,ij->i", points, points)
 
 
-def table_and_prism(
-    points: np.ndarray, fit: TableFit, settings: SegmentSettings, range2: np.ndarray | None = None
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Stage 2b: (table mask, prism mask, heights) over ``points`` (M, 3).
+@dataclass(frozen=True, eq=False)
+class Lift:
+    """The part of `table_and_prism` that reads the fit's plane and in-plane axes but not
+    its hull: worked out once a frame and read again when the hull is drawn anew (the
+    table without what lies beyond its edge: the same plane, basis and origin) and by
+    the exclusion step (what lies above the support outside the prism is among the
+    candidates, with its in-plane coordinates)."""
 
-    Table: within plane distance and inside the hull grown by ``hull_margin_m``. Prism:
-    between the prism heights (the lower one growing with range, as depth noise does)
-    and inside the grown hull. ``range2``: `squared_range` of ``points`` when the
-    caller has it already.
-    """
+    heights: np.ndarray  # (M,) height of each point above the plane
+    near: np.ndarray  # (M,) bool: within the plane distance
+    band: np.ndarray  # (M,) bool: between the prism's heights (its floor growing with range)
+    cand: np.ndarray  # (C,) sorted indices of the points near or in the band
+    x: np.ndarray  # (C,) the candidates' in-plane coordinates: ``fit.to_2d``'s columns, the same bits
+    y: np.ndarray
+    basis: np.ndarray  # the fit's basis and origin they were taken in
+    origin: np.ndarray
+
+    def serves(self, fit: TableFit) -> bool:
+        """Were these values taken in ``fit``'s plane coordinates (a fit `replace` made
+        from the same one, only its hull drawn anew)?"""
+        return self.basis is fit.basis and self.origin is fit.origin
+
+
+def lift(points: np.ndarray, fit: TableFit, settings: SegmentSettings, range2: np.ndarray | None = None) -> Lift:
+    """`Lift` of ``points`` (M, 3) against ``fit`` (``range2``: their `squared_range`,
+    when the caller has it)."""
     h = fit.plane.height_of(points)
     near = np.abs(h) <= settings.plane_distance_m
     min_h: float | np.ndarray = settings.prism_min_height_m
@@ -768,10 +788,32 @@ def table_and_prism(
     ox, oy = (fit.origin @ fit.basis.T).tolist()
     x -= ox
     y -= oy
+    return Lift(h, near, band, cand, x, y, fit.basis, fit.origin)
+
+
+def table_and_prism(
+    points: np.ndarray,
+    fit: TableFit,
+    settings: SegmentSettings,
+    range2: np.ndarray | None = None,
+    lifted: Lift | None = None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Stage 2b: (table mask, prism mask, heights) over ``points`` (M, 3).
+
+    Table: within plane distance and inside the hull grown by ``hull_margin_m``. Prism:
+    between the prism heights (the lower one growing with range, as depth noise does)
+    and inside the grown hull. ``range2``: `squared_range` of ``points`` when the
+    caller has it already; ``lifted``: their `lift` against ``fit`` (or a fit of the
+    same plane coordinates) when the caller has it: only the hull is read anew.
+    """
+    if lifted is None or not lifted.serves(fit):
+        lifted = lift(points, fit, settings, range2)
     inside = np.zeros(points.shape[0], dtype=bool)
-    inside[cand] = _inside_raster_xy(x, y, fit.polygon_2d, settings.hull_margin_m, _RASTER_CELL_M, None, fit.rasters)
+    inside[lifted.cand] = _inside_raster_xy(
+        lifted.x, lifted.y, fit.polygon_2d, settings.hull_margin_m, _RASTER_CELL_M, None, fit.rasters
+    )
     # near and band lie within cand: two whole-array ands, not a gather and a scatter each
-    return inside & near, inside & band, h
+    return inside & lifted.near, inside & lifted.band, lifted.heights
 
 
 def beyond_the_edge(
@@ -841,7 +883,7 @@ def beyond_the_edge(
     others = [k for k in range(1, n + 1) if k != main and sizes[k] >= _EDGE_MIN_PIECE_PX]
     if not others:
         return drop, ~drop
-    camera = _pinhole_of(pts, np.isfinite(rng))
+    camera = _pinhole_of(pts, rng)
     if camera is None:
         return drop, ~drop
     basis = plane_basis(plane.normal)
@@ -868,12 +910,15 @@ def beyond_the_edge(
             columns.append(c)
         return unique_cells(np.stack(columns, axis=1).astype(np.int64))
 
-    main_cells = cells(main)
-    main_hull = convex_hull_2d((main_cells + 0.5) * cell)
+    main_hull = convex_hull_2d(_rim_cells(cells(main), cell))
     gone: list[int] = []
     for k in others:
         own = cells(k)
-        both = convex_hull_2d((np.vstack([main_cells, own]) + 0.5) * cell)
+        own_rim = _rim_cells(own, cell)
+        # the joint hull from the main piece's hull vertices (its cells' centres, the same
+        # floats) and the piece's cells: the same hull as of every cell of both, without
+        # the main piece's thousands of cells sifted again for each piece
+        both = convex_hull_2d(np.vstack([main_hull, own_rim]))
         lo = np.floor(both.min(axis=0) / cell).astype(np.int64)
         hi = np.ceil(both.max(axis=0) / cell).astype(np.int64)
         gx, gy = np.meshgrid(np.arange(lo[0], hi[0] + 1), np.arange(lo[1], hi[1] + 1), indexing="ij")
@@ -895,7 +940,7 @@ def beyond_the_edge(
                 # what hides a look and stands over the other piece itself (clutter on a
                 # bench behind) is that piece's load: it tells nothing of table in between
                 over = pts[v[ok][hidden], u[ok][hidden]].astype(np.float64) @ basis.T - origin @ basis.T
-                hidden[np.flatnonzero(hidden)[inside_convex(over, convex_hull_2d((own + 0.5) * cell), -cell)]] = False
+                hidden[np.flatnonzero(hidden)[inside_convex(over, convex_hull_2d(own_rim), -cell)]] = False
             nearer = int(hidden.sum())
             # farther than the plane: nothing stands there. A pixel with no depth tells
             # nothing (a shadow behind an object is one too)
@@ -906,12 +951,29 @@ def beyond_the_edge(
     return dropped, (piece_of == main) | np.isin(piece_of, others) & ~dropped
 
 
-def _pinhole_of(pts: np.ndarray, finite: np.ndarray) -> Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]] | None:
+def _rim_cells(cells: np.ndarray, cell_m: float) -> np.ndarray:
+    """The centres of the grid ``cells`` (distinct rows in `unique_cells`'s order, not
+    empty) that can lie on their hull: the lowest and highest of each column, and every
+    cell of the first and last columns. A cell between two of its own column (the same
+    x, to the bit) lies inside the hull unless that column is an extreme one, where it
+    lies on the hull's side: the same hull from a few hundred cells, not thousands."""
+    u = cells[:, 0]
+    edge = np.empty(u.size, dtype=bool)  # the first or the last of its column
+    edge[0] = True
+    np.not_equal(u[1:], u[:-1], out=edge[1:])
+    edge[:-1] |= edge[1:].copy()
+    edge[-1] = True
+    edge |= (u == u[0]) | (u == u[-1])
+    return (np.compress(edge, cells, axis=0) + 0.5) * cell_m  # rows by a mask: compress is faster
+
+
+def _pinhole_of(pts: np.ndarray, depth: np.ndarray) -> Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]] | None:
     """The pixel of a point, as a function of (N, 3) points -> (columns, rows), fitted to
     an organized cloud's own points (column = fx X/Z + cx, row = fy Y/Z + cy, least
     squares on a sample); None when the cloud is not a pinhole image (a fit off by more
-    than a pixel)."""
-    flat = np.flatnonzero(finite & (pts[..., 2] > 0))  # np.nonzero's pixels in its order, as one array
+    than a pixel). ``depth``: the points' z, (height, width), contiguous (the caller's
+    copy: a strided pass over the cloud's third column cost several times more)."""
+    flat = np.flatnonzero(np.isfinite(depth) & (depth > 0))  # np.nonzero's pixels in its order, as one array
     if flat.size < 100:
         return None
     pick = np.linspace(0, flat.size - 1, 2000).astype(np.int64)

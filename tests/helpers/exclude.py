@@ -22,7 +22,7 @@ def flat_support_verdicts(
         objects,
         none if outside is None else outside,
         none,
-        support,
+        support[:, :2],  # in-plane: the support lies in z = 0
         lambda p: p[:, 2],
         lambda p: p[:, :2],
         lambda p: np.ones(p.shape[0], dtype=bool),

@@ -170,3 +170,35 @@ def test_boxes_column_by_column_are_the_row_reductions() -> None:
     pts = np.array([[0.0, 0.0, 0.0], [1.0, 1.0, 1.0], [1.0, 2.0, 1.0], [-0.5, 0.5, 0.5]])
     assert exclude._near_box(pts, np.zeros(3), np.ones(3)).tolist() == [[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]]
     assert [v.tolist() for v in exclude._lo_hi(pts)] == [[-0.5, 0.0, 0.0], [1.0, 2.0, 1.0]]
+
+
+def test_cells_are_the_sorted_packed_keys_by_mark_or_by_sort() -> None:
+    from clearcli.perception import exclude
+
+    # by hand: cells (0, 0) twice, (0, 1), (-1, 2) (1 cm cells), as column << 32 | row + 2^31
+    xy = np.array([[0.001, 0.002], [0.009, 0.001], [0.005, 0.015], [-0.005, 0.025]])
+    want = [(-1 << 32) + 2 + (1 << 31), (1 << 31), 1 + (1 << 31)]
+    assert exclude._cells(xy).tolist() == want
+    # a dense support (marks) and a sparse spread (sort): np.unique's keys either way
+    rng = np.random.default_rng(2)
+    for spread in (0.05, 50.0):
+        pts = rng.normal(0.3, spread, (20000, 2))
+        c = np.floor(pts / 0.01).astype(np.int64)
+        assert np.array_equal(exclude._cells(pts), np.unique(c[:, 0] * (1 << 32) + (c[:, 1] + (1 << 31))))
+
+
+def test_reached_counts_the_points_within_reach_across_chunks() -> None:
+    from scipy.spatial import cKDTree
+
+    from clearcli.perception import exclude
+
+    # by hand: a tree of one point at the origin; 1200 points 5 cm away and, last (past two
+    # chunks of 512), 7 points 1 cm away: 7 within 1.5 cm, none more
+    tree = cKDTree(np.zeros((1, 3)))
+    far = np.tile([0.05, 0.0, 0.0], (1200, 1))
+    near = np.tile([0.0, 0.01, 0.0], (7, 1))
+    pts = np.vstack([far, near])
+    assert exclude._reached(tree, pts, 0.015, 7)
+    assert not exclude._reached(tree, pts, 0.015, 8)
+    assert exclude._reached(tree, pts, 0.06, 1207) and not exclude._reached(tree, pts, 0.06, 1208)
+    assert not exclude._reached(tree, np.zeros((0, 3)), 0.015, 1)

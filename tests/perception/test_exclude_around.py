@@ -65,7 +65,7 @@ def _verdicts(around: list[tuple[int, int]] | None) -> list[str]:
         objs,
         np.zeros((0, 3)),
         np.zeros((0, 3)),
-        support,
+        support[:, :2],  # in-plane: the support lies in z = 0
         lambda p: p[:, 2],
         lambda p: p[:, :2],
         lambda p: np.ones(p.shape[0], dtype=bool),

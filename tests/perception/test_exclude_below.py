@@ -105,7 +105,7 @@ def test_what_goes_on_below_outside_the_outline_is_found_among_a_far_floors_poin
         [thing],
         np.zeros((0, 3)),
         np.vstack([floor, line]),
-        support,
+        support[:, :2],  # in-plane: the support lies in z = 0
         lambda p: p[:, 2],
         lambda p: p[:, :2],
         lambda p: (np.abs(p[:, 0]) <= 0.43) & (np.abs(p[:, 1]) <= 0.33),

@@ -93,7 +93,7 @@ def test_what_the_border_cuts_above_its_own_base_stands(arm_m: float, excluded: 
         [p],
         none,
         none,
-        support,
+        support[:, :2],  # in-plane: the support lies in z = 0
         lambda q: q[:, 2],
         lambda q: q[:, :2],
         lambda q: np.ones(q.shape[0], dtype=bool),

@@ -42,7 +42,7 @@ def _verdicts(objects: list[np.ndarray]) -> list[str]:
         objects,
         none,
         none,
-        support,
+        support[:, :2],  # in-plane: the support lies in z = 0
         lambda p: p[:, 2],
         lambda p: p[:, :2],
         lambda p: (np.abs(p[:, 0]) <= HALF_X_M + SIDE_M) & (np.abs(p[:, 1]) <= EDGE_M + SIDE_M),

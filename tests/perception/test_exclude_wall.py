@@ -81,7 +81,7 @@ def test_an_object_seen_front_on_is_no_wall() -> None:
     table = np.stack(np.meshgrid(g, np.arange(-0.5, 0.0, 0.01)), -1).reshape(-1, 2)
     verdicts: dict[int, str] = {}
     objects = [face, wall + [0.0, 0.5, 0.0]]
-    exclude._walls([to_2d(p) for p in objects], [height(p) for p in objects], verdicts, lambda: table)
+    exclude._walls([to_2d(p) for p in objects], [height(p) for p in objects], verdicts, table)
     assert list(verdicts) == [1] and verdicts[1].startswith("a wall"), verdicts
 
 

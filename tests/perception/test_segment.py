@@ -351,10 +351,10 @@ def test_unorganized_cloud_finds_the_objects(seed: int) -> None:
 
 
 def test_row_mean_is_numpys_mean_bit_for_bit() -> None:
-    """`_row_mean` (einsum's sum of the rows) is ``mean(axis=0)`` to the last bit, on
+    """`row_mean` (exclude.py; einsum's sum of the rows) is ``mean(axis=0)`` to the last bit, on
     sizes around NumPy's block and buffer lengths, C-ordered, Fortran-ordered (the
     mean itself then), strided and float32."""
-    from clearcli.perception.segment import _row_mean
+    from clearcli.perception.exclude import row_mean as _row_mean
 
     # by hand: (1 + 2 + 4) / 3, (0.1 + 0.2 + 0.3) / 3 with its rounding, -1
     p = np.array([[1.0, 0.1, -1.0], [2.0, 0.2, -1.0], [4.0, 0.3, -1.0]])
@@ -363,6 +363,7 @@ def test_row_mean_is_numpys_mean_bit_for_bit() -> None:
     for n in (1, 2, 3, 7, 8, 9, 16, 17, 127, 128, 129, 8191, 8192, 8193, 65537):
         for scale in (1e-3, 1.0, 1e3):
             q = rng.normal(size=(n, 3)) * scale + rng.normal(size=3)
-            for arr in (q, np.asfortranarray(q), q[::2], q.astype(np.float32)):
+            # (and two columns: the footprints `_face` averages)
+            for arr in (q, np.asfortranarray(q), q[::2], q.astype(np.float32), np.ascontiguousarray(q[:, :2])):
                 if arr.shape[0]:
                     assert np.array_equal(_row_mean(arr), arr.mean(axis=0))

@@ -208,3 +208,23 @@ def test_a_shelf_over_the_table_is_no_raised_surface() -> None:
     seg_off = segment(frame, dataclasses.replace(ON, raised_below_seen_max_share=1.0))
     assert "raised surface" in next(v.why for v in seg_off.support if v.chosen)
     assert exact_report(seg_off.labels(), frame.fields["label"]).missed == 5
+
+
+def test_inside_convex_of_several_margins_is_one_call_each() -> None:
+    # by hand: the unit square grown by 1 cm and shrunk by 3 cm (walled_sectors' band)
+    square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    xy = np.array([[0.5, 0.5], [0.98, 0.5], [1.005, 0.5], [1.02, 0.5]])
+    outer, inner = support._inside_convex(xy, square, 0.01, -0.03)
+    assert outer.tolist() == [True, True, True, False]
+    assert inner.tolist() == [True, False, False, False]
+    # the same verdicts, to the point, as one call per margin (a polygon of many edges,
+    # points on both sides of each grown outline)
+    rng = np.random.default_rng(11)
+    angles = np.sort(rng.uniform(0, 2 * np.pi, 40))
+    poly = np.stack([np.cos(angles), np.sin(angles)], axis=1) * 0.4
+    pts = rng.uniform(-0.5, 0.5, (20000, 2))
+    both = support._inside_convex(pts, poly, 0.01, -0.03)
+    assert both.shape == (2, 20000)
+    assert np.array_equal(both[0], support._inside_convex(pts, poly, 0.01))
+    assert np.array_equal(both[1], support._inside_convex(pts, poly, -0.03))
+    assert 0 < both[1].sum() < both[0].sum() < 20000

@@ -428,7 +428,7 @@ def test_the_pinhole_fit_skips_points_whose_x_or_y_is_infinite() -> None:
     z = np.full((h, w), 1.5)
     pts = np.stack([(u - 31.5) / 60.0 * z, (v - 23.5) / 60.0 * z, z], axis=-1)
     pts[::3, ::5, 1] = -np.inf
-    pixel = _pinhole_of(pts, np.isfinite(pts[..., 2]))
+    pixel = _pinhole_of(pts, pts[..., 2])
     assert pixel is not None
     cols, rows = pixel(np.array([[0.01, 0.01, 1.0], [0.26, -0.13, 1.0]]))  # off the .5 boundaries
     assert cols.tolist() == [32, 47] and rows.tolist() == [24, 16]
@@ -503,6 +503,38 @@ def test_table_and_prism_masks_by_hand() -> None:
         assert prism[rows].all() == over and prism[rows].any() == over, k
 
 
+def test_a_lift_serves_a_hull_drawn_anew_on_the_same_plane_and_no_other_plane() -> None:
+    # the table without what lies beyond its edge keeps its plane and draws a smaller hull:
+    # the masks from the lift of the first fit are the masks worked out from scratch
+    from clearcli.perception.table import TableFit, lift, table_and_prism
+    from clearcli.perception.types import TablePlane
+
+    square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    basis = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    fit = TableFit(TablePlane(np.array([0.0, 0.0, 1.0]), 0.0), square, np.zeros(3), basis, False)
+    rng = np.random.default_rng(8)
+    pts = np.column_stack([rng.uniform(-0.3, 1.3, (50000, 2)), rng.uniform(-0.1, 0.5, 50000)])
+    lifted = lift(pts, fit, S)
+    # the candidates: within plane distance (1 cm) or 1 cm to 2 m up; their plane coordinates
+    want = np.flatnonzero((np.abs(pts[:, 2]) <= 0.01) | (pts[:, 2] >= 0.01))
+    assert np.array_equal(lifted.cand, want)
+    assert np.array_equal(lifted.x, pts[want, 0]) and np.array_equal(lifted.y, pts[want, 1])
+    smaller = replace(fit, polygon_2d=square * 0.5)
+    assert lifted.serves(smaller)
+    table, prism, h = table_and_prism(pts, smaller, S, lifted=lifted)
+    assert h is lifted.heights
+    for got, fresh in zip((table, prism), table_and_prism(pts, smaller, S)[:2], strict=True):
+        assert np.array_equal(got, fresh)
+    # by hand: nothing beyond the smaller square grown by 5 cm (cells of 5 mm) is table
+    assert not table[(pts[:, :2] > 0.56).any(axis=1)].any()
+    assert table[(pts[:, :2] < 0.44).all(axis=1) & (pts[:, :2] > 0.01).all(axis=1) & (np.abs(pts[:, 2]) <= 0.01)].all()
+    # a fit of another plane (lifted 20 cm) is not served: its own heights are taken
+    raised = TableFit(TablePlane(np.array([0.0, 0.0, 1.0]), -0.2), square, np.array([0.0, 0.0, 0.2]), basis, False)
+    assert not lifted.serves(raised)
+    _, _, h_raised = table_and_prism(pts, raised, S, lifted=lifted)
+    assert np.allclose(h_raised, pts[:, 2] - 0.2)
+
+
 def test_a_fits_rasters_are_drawn_once_per_margin_and_not_passed_on_by_replace() -> None:
     from clearcli.perception.table import TableFit, inside_convex_raster
     from clearcli.perception.types import TablePlane
@@ -530,3 +562,28 @@ def test_a_fits_rasters_are_drawn_once_per_margin_and_not_passed_on_by_replace()
     smaller = replace(fit, polygon_2d=square * 0.5)
     assert smaller.rasters == {}
     assert not smaller.inside(np.array([[0.8, 0.8, 0.0]] * 200000), 0.05).any()
+
+
+def test_rim_cells_keep_each_columns_ends_and_the_outer_columns_whole() -> None:
+    # by hand: columns 0..3 of rows 0..4 (a 4 x 5 block) and a cell sticking out at (2, 7):
+    # the first and last columns whole, the middle ones their lowest and highest cells
+    from clearcli.perception.table import _rim_cells, convex_hull_2d, unique_cells
+
+    block = [(u, v) for u in range(4) for v in range(5)] + [(2, 7)]
+    cells = unique_cells(np.array(block, dtype=np.int64))
+    rim = _rim_cells(cells, 0.01)
+    kept = sorted((int(round(x / 0.01 - 0.5)), int(round(y / 0.01 - 0.5))) for x, y in rim)
+    want = [(0, v) for v in range(5)] + [(1, 0), (1, 4), (2, 0), (2, 7)] + [(3, v) for v in range(5)]
+    assert kept == sorted(want)
+    # the same hull, to the bit and in the same order, as from every cell's centre
+    assert np.array_equal(convex_hull_2d(rim), convex_hull_2d((cells + 0.5) * 0.01))
+    # a random piece of the table's grid: the same hull from a fraction of the cells
+    rng = np.random.default_rng(3)
+    xy = rng.normal(0.0, 0.2, (20000, 2))
+    cells = unique_cells(np.floor(xy / 0.01).astype(np.int64))
+    rim = _rim_cells(cells, 0.01)
+    assert rim.shape[0] < cells.shape[0] // 3
+    assert np.array_equal(convex_hull_2d(rim), convex_hull_2d((cells + 0.5) * 0.01))
+    # one column: every cell of it
+    line = unique_cells(np.array([[5, v] for v in range(6)], dtype=np.int64))
+    assert _rim_cells(line, 0.01).shape[0] == 6
