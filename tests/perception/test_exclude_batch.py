@@ -43,3 +43,27 @@ def test_faces_finds_the_thin_footprints_with_their_sizes() -> None:
     assert abs(length - 0.384) < 1e-3  # the 2nd to 98th of 0.4 m
     assert abs(tall - 0.192) < 1e-3  # the 2nd to 98th of 0.2 m
     assert exclude._faces([line], [h_line], []) == {}
+
+
+def test_reached_samples_every_chunk_across_all_the_points() -> None:
+    """`_reached` queries every n-th point per chunk: of 1207 points (3 chunks of at most
+    512), the 7 within reach come last, at rows 1200-1206, and rows 1200, 1203 and 1206
+    fall in the first chunk (rows 0, 3, 6, ...): one query finds 3 of them; the count
+    over every chunk is the whole query's (7 and not 8)."""
+    from scipy.spatial import cKDTree
+
+    class Counting(cKDTree):  # type: ignore[misc]
+        calls = 0
+
+        def query(self, x, *args, **kwargs):  # type: ignore[no-untyped-def]
+            Counting.calls += 1
+            return super().query(x, *args, **kwargs)
+
+    tree = Counting(np.zeros((1, 3)))
+    pts = np.vstack([np.tile([0.05, 0.0, 0.0], (1200, 1)), np.tile([0.0, 0.01, 0.0], (7, 1))])
+    assert exclude._reached(tree, pts, 0.015, 3)
+    assert Counting.calls == 1
+    Counting.calls = 0
+    assert exclude._reached(tree, pts, 0.015, 4)
+    assert Counting.calls == 2  # rows 1201 and 1204 in the second chunk
+    assert exclude._reached(tree, pts, 0.015, 7) and not exclude._reached(tree, pts, 0.015, 8)
