@@ -253,7 +253,7 @@ def row_mean(points: np.ndarray) -> np.ndarray:
     """``points.mean(axis=0)`` of (N, 3) float64 points, bit for bit: NumPy sums the rows
     of a C-ordered (N, 3) array one after another, and einsum's "ij->j" makes the same
     additions in the same order in a third of the time (a cluttered table's objects:
-    100k points; per segment, the footprints and rays `_face` and `_veil` average). Other layouts (columns contiguous: NumPy sums each pairwise) and
+    100k points; per segment, the footprints and rays `_faces` and `_veil` average). Other layouts (columns contiguous: NumPy sums each pairwise) and
     dtypes take the mean itself."""
     if points.dtype != np.float64 or points.ndim != 2 or points.shape[0] == 0 or not points.flags.c_contiguous:
         return np.asarray(points.mean(axis=0))
@@ -354,6 +354,8 @@ def _rests_on_another(k: int, objects: list[np.ndarray], h_each: list[np.ndarray
     # only the bottom's points within the others' box (grown) can touch them
     near_lo, near_hi = _lo_hi(near)
     bottom = _near_box(bottom, near_lo - _TOUCH_M, near_hi + _TOUCH_M)
+    if bottom.shape[0] < 5:  # too few to touch: no tree to build
+        return False
     # a tree for one query: neither balanced nor compacted (several times faster to build;
     # the nearest distance found is the same)
     return _reached(cKDTree(near, balanced_tree=False, compact_nodes=False), bottom, _TOUCH_M, 5)
@@ -368,13 +370,20 @@ def _reached(tree: object, points: np.ndarray, reach_m: float, need: int) -> boo
     ``reach_m`` (a nearest-neighbour query's distance finite)? Queried in chunks that
     stop once ``need`` are found: each point's answer is its own, so the count so far is
     the whole query's count of those rows (the query was most of the time of the tests
-    of stacked objects, and they mostly touch early)."""
+    of stacked objects, and they mostly touch early).
+
+    A chunk takes every n-th point (n chunks: each point in one of them), not a run of
+    them: the points come in the pixels' order, and where they touch is one patch of
+    the image, which a run may reach only in its last chunk (mOSD test57: a bottom of
+    9519 points queried to nearly its end, ten times the time) while every chunk of a
+    stride samples all of it. The count, and so the answer, is the same."""
     from scipy.spatial import cKDTree
 
     assert isinstance(tree, cKDTree)
     found = 0
-    for start in range(0, points.shape[0], _QUERY_CHUNK):
-        d, _ = tree.query(points[start : start + _QUERY_CHUNK], distance_upper_bound=reach_m)
+    n_chunks = -(-points.shape[0] // _QUERY_CHUNK)
+    for start in range(n_chunks):
+        d, _ = tree.query(points[start::n_chunks], distance_upper_bound=reach_m)
         found += int(np.isfinite(d).sum())
         if found >= need:
             return True
@@ -408,7 +417,7 @@ def _on_what_is_beneath(
     # the rounding): the same answer from a smaller tree
     near_lo, near_hi = _lo_hi(near)
     own = _near_box(xy, near_lo - 2 * _CELL_M, near_hi + 2 * _CELL_M)
-    if not own.shape[0]:
+    if not own.shape[0] or near.shape[0] < _GOES_ON_MIN:  # nothing near, or too little to reach it
         return False
     # (a tree for one query: see _rests_on_another)
     return _reached(cKDTree(own, balanced_tree=False, compact_nodes=False), near, _CELL_M, _GOES_ON_MIN)
@@ -452,11 +461,13 @@ def at_image_border(indices: list[np.ndarray], shape: tuple[int, int] | None) ->
     if shape is None:
         return None
     rows, cols = shape
-    out = []
-    for idx in indices:
-        r, c = np.divmod(idx, cols)
-        out.append((r < _BORDER_PX) | (r >= rows - _BORDER_PX) | (c < _BORDER_PX) | (c >= cols - _BORDER_PX))
-    return out
+    if not indices:
+        return []
+    # every object's pixels at once (integers: the same answer per pixel), split back
+    every = np.concatenate(indices)
+    r, c = np.divmod(every, cols)
+    border = (r < _BORDER_PX) | (r >= rows - _BORDER_PX) | (c < _BORDER_PX) | (c >= cols - _BORDER_PX)
+    return np.split(border, np.cumsum([idx.size for idx in indices])[:-1])
 
 
 def support_around(
@@ -554,21 +565,33 @@ def _median(values: np.ndarray) -> float:
     return float((part[half - 1] + part[half]) / 2)
 
 
-def _face(xy: np.ndarray, h: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, float, float] | None:
-    """The in-plane footprint ``xy`` of a segment (heights ``h``) as a face: (its middle,
-    the unit normal of its footprint's line, its thickness across that line, its length
-    along it, its height); percentiles, not extremes, so a few stray points do not count.
-    None when it is thicker than a face (`_FACE_THIN_M`): neither a wall nor a piece of one."""
-    mid = row_mean(xy)
-    c = xy - mid
-    _, vecs = np.linalg.eigh(c.T @ c)
-    across_5, across_95 = _percentiles(c @ vecs[:, 0], (5, 95))
-    thick = float(across_95 - across_5)
-    if thick > _FACE_THIN_M:
-        return None
-    along_2, along_98 = _percentiles(c @ vecs[:, 1], (2, 98))
-    h_2, h_98 = _percentiles(h, (2, 98))
-    return mid, vecs[:, 0], thick, float(along_98 - along_2), float(h_98 - h_2)
+def _faces(
+    xy_each: list[np.ndarray], h_each: list[np.ndarray], ks: list[int]
+) -> dict[int, tuple[np.ndarray, np.ndarray, float, float, float]]:
+    """The in-plane footprints ``xy_each[k]`` of the segments ``ks`` (heights ``h_each[k]``)
+    that are faces, by segment: (its middle, the unit normal of its footprint's line, its
+    thickness across that line, its length along it, its height); percentiles, not
+    extremes, so a few stray points do not count. A segment thicker than a face
+    (`_FACE_THIN_M`) is none: neither a wall nor a piece of one.
+
+    The footprints' (2, 2) scatter matrices are decomposed in one call for all segments:
+    NumPy's eigh runs LAPACK on each matrix of a stack in turn, so each one's vectors are
+    those of a call of its own (a call's overhead was most of the time, per segment)."""
+    if not ks:
+        return {}
+    mids = [row_mean(xy_each[k]) for k in ks]
+    cs = [xy_each[k] - mid for k, mid in zip(ks, mids, strict=True)]
+    _, vecs_each = np.linalg.eigh(np.stack([c.T @ c for c in cs]))
+    faces = {}
+    for k, mid, c, vecs in zip(ks, mids, cs, vecs_each, strict=True):
+        across_5, across_95 = _percentiles(c @ vecs[:, 0], (5, 95))
+        thick = float(across_95 - across_5)
+        if thick > _FACE_THIN_M:
+            continue
+        along_2, along_98 = _percentiles(c @ vecs[:, 1], (2, 98))
+        h_2, h_98 = _percentiles(h_each[k], (2, 98))
+        faces[k] = (mid, vecs[:, 0], thick, float(along_98 - along_2), float(h_98 - h_2))
+    return faces
 
 
 def _along_the_edge(mid: np.ndarray, normal: np.ndarray, length: float, support_xy: np.ndarray) -> float:
@@ -596,14 +619,10 @@ def _walls(
     ``xy_each``, heights ``h_each``; `_WALL_FACE_M`, `_WALL_SPAN`: ``support_xy``, the
     support's in-plane points), and the flat pieces lying in a wall's face (the
     segmentation cut a wall's foot or its trim apart from it: thin, and all within
-    `_FACE_THIN_M` of the wall's line). Returns the faces found (`_face`), by object."""
-    faces = {}
-    for k, (xy, h) in enumerate(zip(xy_each, h_each, strict=True)):
-        if k in verdicts or xy.shape[0] < _GOES_ON_MIN:
-            continue
-        face = _face(xy, h)
-        if face is not None:
-            faces[k] = face
+    `_FACE_THIN_M` of the wall's line). Returns the faces found (`_faces`), by object."""
+    faces = _faces(
+        xy_each, h_each, [k for k, xy in enumerate(xy_each) if k not in verdicts and xy.shape[0] >= _GOES_ON_MIN]
+    )
     walls = []
     for k, (mid, normal, thick, length, tall) in faces.items():
         size = float(np.hypot(length, tall))

@@ -367,3 +367,35 @@ def test_row_mean_is_numpys_mean_bit_for_bit() -> None:
             for arr in (q, np.asfortranarray(q), q[::2], q.astype(np.float32), np.ascontiguousarray(q[:, :2])):
                 if arr.shape[0]:
                     assert np.array_equal(_row_mean(arr), arr.mean(axis=0))
+
+
+def test_make_objects_are_make_object_s_one_by_one_bit_for_bit() -> None:
+    """`make_objects` (every object's box and axes, the scatter matrices decomposed in one
+    call) gives each object what its own calls give: the box of `table_aligned_box`, the
+    centroid of `row_mean`, the axes of `principal_axes`, to the last bit; one point: the
+    identity as axes."""
+    from clearcli.perception.exclude import row_mean
+    from clearcli.perception.segment import make_objects, principal_axes, table_aligned_box
+    from clearcli.perception.types import TablePlane
+
+    rng = np.random.default_rng(7)
+    n = np.array([0.1, -0.7, -0.5])
+    table = TablePlane(n / np.linalg.norm(n), 0.8)
+    found = [
+        (np.arange(k, k + m), rng.normal(size=(m, 3)) * rng.uniform(0.01, 0.2, size=3) + rng.normal(size=3), r)
+        for k, (m, r) in enumerate([(300, 0.02), (1, 0.02), (57, np.inf), (2, 0.0), (1000, 0.01)])
+    ]
+    made = make_objects(found, table)
+    assert len(made) == len(found)
+    for (idx, p, rests), obj in zip(found, made, strict=True):
+        center, axes, extents = table_aligned_box(p, table, rests)
+        assert obj.indices.dtype == np.int64 and obj.indices.tolist() == idx.tolist()
+        assert np.array_equal(obj.centroid, row_mean(p))
+        assert np.array_equal(obj.obb_center, center)
+        assert np.array_equal(obj.obb_axes, axes)
+        assert np.array_equal(obj.obb_extents, extents)
+        assert np.array_equal(obj.principal_axes, principal_axes(p, row_mean(p)))
+    assert np.array_equal(made[1].principal_axes, np.eye(3))  # one point: no direction
+    # the box axes: the third is the table's normal; the first two in its plane
+    assert np.allclose(made[0].obb_axes[2], table.normal)
+    assert abs(float(made[0].obb_axes[0] @ table.normal)) < 1e-12
