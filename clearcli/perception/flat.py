@@ -239,7 +239,16 @@ def within_reach(object_xy: np.ndarray, foot_xy: np.ndarray, reach_m: float) -> 
 
     if not foot_xy.shape[0] or not object_xy.shape[0]:
         return np.zeros(foot_xy.shape[0], dtype=bool)
-    gap_m, _ = cKDTree(object_xy).query(foot_xy, k=1, distance_upper_bound=reach_m)
+    # only the object's points within reach of the foot's box can be within reach of a
+    # foot point, and a tree built unbalanced finds the same nearest for less (issue 39:
+    # the tree over a large object's every point was most of the feet's cost)
+    pad_m = reach_m * 1.001 + 1e-9  # a hair wider than the reach: rounding keeps no point out
+    lo, hi = foot_xy.min(axis=0) - pad_m, foot_xy.max(axis=0) + pad_m
+    near = np.flatnonzero(np.all((object_xy >= lo) & (object_xy <= hi), axis=1))
+    if not near.size:
+        return np.zeros(foot_xy.shape[0], dtype=bool)
+    tree = cKDTree(object_xy[near], balanced_tree=False, compact_nodes=False)
+    gap_m, _ = tree.query(foot_xy, k=1, distance_upper_bound=reach_m)
     return np.asarray(gap_m <= reach_m)
 
 

@@ -284,6 +284,27 @@ def test_a_foots_points_are_held_within_reach_of_its_objects_own() -> None:
     assert within_reach(np.zeros((0, 2)), foot_xy, 0.0015).tolist() == [False] * 6
 
 
+def test_within_reach_answers_as_one_tree_over_every_object_point() -> None:
+    # within_reach builds its tree over the object's points near the foot's box only: the
+    # answers must be those of a tree over all of them, points at the reach exactly too
+    from scipy.spatial import cKDTree
+
+    from clearcli.perception.flat import within_reach
+
+    rng = np.random.default_rng(3)
+    for case in range(300):
+        object_xy = rng.uniform(0, 0.05, (int(rng.integers(1, 300)), 2)) + rng.uniform(-1, 1, 2)
+        # a foot over a corner of the object (its box cuts the object's) or round all of it
+        corner = 0.02 if case % 2 else 0.06
+        foot_xy = object_xy.min(axis=0) - 0.005 + rng.uniform(0, corner, (int(rng.integers(1, 200)), 2))
+        reach_m = float(rng.choice([0.0, 0.0005, 0.002, 0.01]))
+        if case % 3 == 0:  # some foot points at the reach exactly along x
+            n = min(len(foot_xy), len(object_xy))
+            foot_xy[:n] = object_xy[:n] - np.array([reach_m, 0.0])
+        gap_m = cKDTree(object_xy).query(foot_xy, k=1, distance_upper_bound=reach_m)[0]
+        assert within_reach(object_xy, foot_xy, reach_m).tolist() == (gap_m <= reach_m).tolist()
+
+
 def test_a_foot_held_to_its_objects_outline_leaves_its_box_as_wide_as_the_object() -> None:
     # mOSD learn7: a box 0.0710 m across (its labelled points' box too) gains a foot; unheld,
     # the foot's few points of depth mixed at its lower edge, out in front of it, widened
