@@ -37,6 +37,7 @@ import sys
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -190,25 +191,37 @@ def first_difference(frame: Frame, other: Frame, settings: SegmentSettings) -> l
     return out
 
 
+def _run_until(frame: Frame, settings: SegmentSettings, through_supervoxels: bool) -> Any:
+    """`segment`'s work on ``frame`` up to the supervoxels (``through_supervoxels``: with
+    them), or None when no voxel stands above the table."""
+    from clearcli.perception.resolution import WorkingGrid
+
+    f = WorkingGrid.of(frame, settings, None).frame
+    organized = f.is_organized and f.shape is not None and f.shape[0] * f.shape[1] == f.n_points
+    w = seg_mod._Work(f, settings, organized, Clock())
+    for step in seg_mod.STEPS:
+        if step.run is seg_mod._supervoxels and not through_supervoxels:
+            break
+        if step.above_table and w.vox is None:
+            return None
+        step.run(w)
+        if step.run is seg_mod._supervoxels:
+            break
+    return w
+
+
 def voxel_difference(frame: Frame, other: Frame, settings: SegmentSettings) -> str:
     """Where a supervoxel flip starts (issue 37): the voxels one run has and the other
     not (with their point counts), the voxels whose point count changed, how far the
     voxel normals of the voxels both have turned, and how many of those voxels changed
     supervoxel (the most voxels of each supervoxel of the first run kept together)."""
-    from clearcli.perception.resolution import WorkingGrid
     from clearcli.perception.supervoxels import grid_cells, supervoxel_labels, voxel_normals
 
     runs = []
     for f in (frame, other):
-        f = WorkingGrid.of(f, settings, None).frame
-        organized = f.is_organized and f.shape is not None and f.shape[0] * f.shape[1] == f.n_points
-        w = seg_mod._Work(f, settings, organized, Clock())
-        for step in seg_mod.STEPS:
-            if step.run is seg_mod._supervoxels:
-                break
-            if step.above_table and w.vox is None:
-                return "no voxels"
-            step.run(w)
+        w = _run_until(f, settings, through_supervoxels=False)
+        if w is None:
+            return "no voxels"
         assert w.vox is not None and w.size is not None and w.fit is not None
         viewpoint = np.zeros(3) if w.fit.camera_is_origin else w.fit.polygon.mean(axis=0) + w.fit.plane.normal
         normals = voxel_normals(w.vox.centroids, w.size.normal_radius_m, viewpoint)
@@ -266,20 +279,13 @@ def lccp_difference(frame: Frame, other: Frame, settings: SegmentSettings) -> st
     """Which of LCCP's tests changed its answer (issue 37): the supervoxels of both runs
     matched by their voxels' cells (IoU >= 0.7), and on the adjacencies both runs have, the
     tests whose margin changed sign, with the least margin each had before."""
-    from clearcli.perception.resolution import WorkingGrid
     from clearcli.perception.supervoxels import grid_cells
 
     runs = []
     for f in (frame, other):
-        f = WorkingGrid.of(f, settings, None).frame
-        organized = f.is_organized and f.shape is not None and f.shape[0] * f.shape[1] == f.n_points
-        w = seg_mod._Work(f, settings, organized, Clock())
-        for step in seg_mod.STEPS:
-            if step.above_table and w.vox is None:
-                return "no voxels"
-            step.run(w)
-            if step.run is seg_mod._supervoxels:
-                break
+        w = _run_until(f, settings, through_supervoxels=True)
+        if w is None:
+            return "no voxels"
         assert w.vox is not None and w.sv is not None and w.size is not None
         voxel_cells = grid_cells(w.vox.centroids, w.size.voxel_m)
         groups: dict[int, set[tuple[int, ...]]] = {}

@@ -4,23 +4,18 @@ each frame is in the part it says (choose or report)."""
 
 from __future__ import annotations
 
-import importlib.util
 import tomllib
 from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers import REPO, shared_path
+from helpers import REPO, load_script, shared_path
 
 LABELS = sorted((REPO / "benchmarks" / "foreign").glob("*.toml"))
 
 
 def _tool():
-    spec = importlib.util.spec_from_file_location("foreign", REPO / "benchmarks" / "foreign.py")
-    module = importlib.util.module_from_spec(spec)
-    assert spec.loader is not None
-    spec.loader.exec_module(module)
-    return module
+    return load_script("benchmarks/foreign.py")
 
 
 def test_there_is_a_choose_part_and_a_report_part() -> None:

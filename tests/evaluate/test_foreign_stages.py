@@ -3,19 +3,13 @@ by one give what refine.refine gives, and no frame of the report part is looked 
 
 from __future__ import annotations
 
-import importlib.util
-
 import numpy as np
 import pytest
-from helpers import REPO
+from helpers import load_script
 
 
 def _tool():
-    spec = importlib.util.spec_from_file_location("foreign_stages", REPO / "benchmarks" / "foreign_stages.py")
-    module = importlib.util.module_from_spec(spec)
-    assert spec.loader is not None
-    spec.loader.exec_module(module)
-    return module
+    return load_script("benchmarks/foreign_stages.py")
 
 
 def test_pieces_name_the_segments_with_a_tenth_and_whose_they_are() -> None:

@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import functools
+import importlib.util
 import os
 import subprocess
 import sys
 from pathlib import Path
+from types import ModuleType
 from typing import Any
 
 import pytest
@@ -14,6 +17,18 @@ REPO = Path(__file__).resolve().parents[2]
 SHARED = Path(os.environ.get("CLEAR_SHARED", REPO.parent / "shared")).resolve()
 SHARED_DATA = SHARED / "data"
 FIXTURES = REPO / "fixtures"
+
+
+@functools.cache
+def load_script(relative: str) -> ModuleType:
+    """A script of the repository that is no package (``benchmarks/foreign.py``,
+    ``training/join.py``) as a module, loaded once by its path."""
+    path = REPO / relative
+    spec = importlib.util.spec_from_file_location(path.stem + "_script", path)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
 
 
 def shared_path(relative: str) -> Path:

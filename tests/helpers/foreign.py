@@ -4,21 +4,16 @@ benchmarks/foreign.py): a frame segmented with some settings, judged object by o
 from __future__ import annotations
 
 import functools
-import importlib.util
 import tomllib
 from types import ModuleType
 
-from helpers import REPO, shared_path
+from helpers import REPO, load_script, shared_path
 
 
 @functools.cache
 def tool() -> ModuleType:
     """benchmarks/foreign.py as a module (it is a script, not part of the package)."""
-    spec = importlib.util.spec_from_file_location("foreign", REPO / "benchmarks" / "foreign.py")
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_script("benchmarks/foreign.py")
 
 
 @functools.cache

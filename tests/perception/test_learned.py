@@ -2,23 +2,18 @@
 
 from __future__ import annotations
 
-import importlib.util
 import json
 from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers import REPO, shared_path
+from helpers import REPO, load_script, shared_path
 
 from clearcli.perception import learned
 
 
 def _training():  # training/join.py, loaded by path (training is no package)
-    spec = importlib.util.spec_from_file_location("join_training", REPO / "training" / "join.py")
-    assert spec is not None and spec.loader is not None
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_script("training/join.py")
 
 
 def test_the_shipped_model_loads_and_carries_its_version() -> None:

@@ -2,11 +2,9 @@
 
 from __future__ import annotations
 
-import importlib.util
-
 import numpy as np
 import pytest
-from helpers import REPO, shared_path
+from helpers import load_script, shared_path
 
 from clearcli.perception import learned, seams
 
@@ -56,11 +54,7 @@ def test_joins_go_most_convex_first_and_never_chain_two_segments_apart() -> None
 
 
 def _foreign():  # benchmarks/foreign.py, loaded by path (benchmarks is no package)
-    spec = importlib.util.spec_from_file_location("foreign_bench", REPO / "benchmarks" / "foreign.py")
-    assert spec is not None and spec.loader is not None
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_script("benchmarks/foreign.py")
 
 
 @pytest.mark.parametrize(
