@@ -77,18 +77,6 @@ _SATURATED = 250
 _FLAT_COLOR = 2
 
 
-def principal_axes(points: np.ndarray, mean: np.ndarray | None = None) -> np.ndarray:
-    """(3, 3) rows: unit PCA axes, largest variance first, right-handed. ``mean``: the
-    points' ``mean(axis=0)`` when the caller has it already."""
-    if points.shape[0] < 2:
-        return np.eye(3)
-    c = points - (points.mean(axis=0) if mean is None else mean)
-    _, vecs = np.linalg.eigh(c.T @ c)
-    axes = vecs[:, ::-1].T.copy()
-    axes[2] = cross3(axes[0], axes[1])
-    return axes
-
-
 def in_plane_axes(table: TablePlane) -> tuple[np.ndarray, np.ndarray]:
     """Two unit vectors (u, v) spanning ``table``'s plane, (u, v, normal) right-handed."""
     n = table.normal
@@ -178,8 +166,9 @@ def make_objects(found: list[tuple[np.ndarray, np.ndarray, float]], table: Table
     many = [k for k, (_, p, _) in enumerate(found) if p.shape[0] >= 2]
     vecs_each: dict[int, np.ndarray] = {}
     if many:
-        # c.T @ c of one array c, as principal_axes has it: NumPy computes that product as a
-        # symmetric one (syrk), whose last bits differ from a product of two arrays
+        # c.T @ c of one array c (unit PCA axes, largest variance first, right-handed):
+        # NumPy computes that product as a symmetric one (syrk), whose last bits differ
+        # from a product of two arrays
         scatter = [_scatter(found[k][1] - centroids[k]) for k in many]
         vecs_each = dict(zip(many, np.linalg.eigh(np.stack(scatter))[1], strict=True))
     out = []
