@@ -306,13 +306,15 @@ class SegmentSettings(Section):
     seam_join_min_convex: float = param(0.7, gt=0, le=1)
     # join touching segments a learned model (perception/learned.py, trained by
     # training/join.py) finds one object with at least this probability, plus a margin.
-    # OFF: on at 0.7, foreign choose 44 -> 45 of 89 right (3 splits joined, 2 merges
-    # made; those frames are in its training data), mOSD learn 0.997 either way, test-5
-    # 0.941 -> 0.954 (test55's object cut in two joined); but with each frame held out
-    # of the fit, the foreign frames' pairs at 0.7 are 3 joined right, 3 wrong. At 0.9
-    # nothing on the choose part changes. With seam_join on (it makes two of those three
-    # joins by rule), on at 0.7 is 46 -> 45: only the wrong join of a soup can and the
-    # tin it stands on is left (uois_image_0002)
+    # OFF: model join-2 (841 pairs of today's stages, 117 one object; only 10 of those are
+    # pairs on the foreign frames as they are). With each frame held out of the fit, the
+    # foreign frames' own pairs at 0.7 are 1 joined right, 1 wrong, at 0.8 and 0.9 none;
+    # the choose part segmented frame by frame with a model fitted without that frame
+    # (training/join.py heldout) is 59 of 89 right, merged 6 at 0.7 and 0.8 (unchanged),
+    # 58, merged 14 at 0.6. Fitted on all (those frames in its training data) on at 0.7:
+    # choose 59 -> 60, merged 6; mOSD learn 0.997 either way, test-5 0.941 -> 0.954
+    # (test55's object cut in two joined). The cues do not tell a noisy object's two
+    # halves (a plush tiger, a bowl, a brick) from a can and the tin under it
     learned_join: bool = param(False)
     learned_join_min_p: float = param(0.7, gt=0.5, lt=1)
     # a fragment (fragment_join_m) more than this thick (m, RMS off its best plane)

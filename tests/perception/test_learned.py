@@ -18,7 +18,7 @@ def _training():  # training/join.py, loaded by path (training is no package)
 
 def test_the_shipped_model_loads_and_carries_its_version() -> None:
     model = learned.load_model()
-    assert model.version.startswith("join-1 ")
+    assert model.version.startswith("join-2 ")
     assert model.weights.shape == model.mean.shape == model.scale.shape == (len(learned.FEATURES),)
     assert np.all(model.scale > 0)
     path = REPO / "clearcli" / learned.MODEL_RESOURCE
@@ -124,3 +124,27 @@ def test_pair_features_are_finite_and_in_sorted_pairs() -> None:
     assert np.all(np.diff(keys) > 0)
     assert np.isfinite(feats.x).all()
     assert feats.x[:, learned.FEATURES.index("gap_mm")].max() <= learned.GAP_M * 1000 + 1e-9
+
+
+def test_a_frame_the_segmenter_refuses_gives_no_pairs() -> None:
+    """A noisy copy may lose its table: extraction skips it (and says so), it does
+    not stop (the segmenter raises a ClearError on these points: no plane in them)."""
+    from clearcli.errors import ClearError
+    from clearcli.io.frames import Frame
+    from clearcli.perception.segment import segment
+    from clearcli.settings.segment import SegmentSettings
+
+    rng = np.random.default_rng(0)
+    frame = Frame(points=rng.uniform(-0.01, 0.01, size=(50, 3)).astype(np.float32) + np.float32(1.0))
+    with pytest.raises(ClearError):
+        segment(frame, SegmentSettings(learned_join=False))
+    assert _training()._pair_rows(frame, np.zeros(50, dtype=np.int64)) is None
+
+
+def test_the_pairs_file_carries_each_pairs_purity() -> None:
+    """Each row's lesser purity of its two segments (the share of a segment's points its
+    own object holds) is a share, and pairs of mixed segments are there to be seen."""
+    frames, x, y, purity = _training().read_pairs(with_purity=True)
+    assert purity.shape == y.shape and x.shape == (y.size, len(learned.FEATURES))
+    assert np.all((purity > 0) & (purity <= 1))
+    assert np.any(purity < 0.6) and np.any(purity == 1)
