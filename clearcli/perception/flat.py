@@ -260,6 +260,7 @@ def _foot_of(
     u0: int,
     width: int,
     object_pixels: np.ndarray,
+    object_bounds: np.ndarray,
     owner: np.ndarray,
     colors: np.ndarray,
     object_lab: dict[int, np.ndarray],
@@ -269,7 +270,8 @@ def _foot_of(
     CIELAB within `_FOOT_MAX_DE` of the object's), or None (module doc, 5.).
     ``object_lab``: the objects' median colours worked out so far, filled here (an
     object's median over all its pixels cost most of the flat step when several
-    candidates touched it, issue 39)."""
+    candidates touched it, issue 39); ``object_bounds``: where each object's pixels
+    start in ``object_pixels`` (and the last ends)."""
     touched = np.unique(owner_window[dilate_square(whole, _FOOT_TOUCH_PX) & near])
     touched = touched[touched >= 0]
     if touched.size != 1:
@@ -279,7 +281,12 @@ def _foot_of(
     mine_lab = np.median(lab_of(np.take(colors, (rows + v0) * width + (cols + u0), axis=0)), axis=0)
     their_lab = object_lab.get(j)
     if their_lab is None:
-        theirs = np.compress(np.take(owner, object_pixels) == j, object_pixels)
+        # the pixels ``owner`` gives to j, in their order in ``object_pixels``: its own
+        # rows there when no later object took one of them (objects share no pixel), read
+        # without a pass over every object's pixels (issue 39: one pass per object touched)
+        theirs = object_pixels[object_bounds[j] : object_bounds[j + 1]]
+        if not np.all(np.take(owner, theirs) == j):
+            theirs = np.compress(np.take(owner, object_pixels) == j, object_pixels)
         their_lab = object_lab[j] = np.median(lab_of(np.take(colors, theirs, axis=0)), axis=0)
     return j if float(np.linalg.norm(mine_lab - their_lab)) < _FOOT_MAX_DE else None
 
@@ -412,6 +419,7 @@ def flat_objects(
             owner_once.append(flat)
         return owner_once[0]
 
+    object_bounds = np.concatenate([[0], np.cumsum(np.asarray(object_sizes, dtype=np.int64))])
     feet: dict[int, list[np.ndarray]] = {}
     object_lab: dict[int, np.ndarray] = {}  # _foot_of's, each object's once
     for k in big:
@@ -435,6 +443,7 @@ def flat_objects(
                     u0,
                     width,
                     object_pixels,
+                    object_bounds,
                     owner(),
                     colors,
                     object_lab,

@@ -326,7 +326,11 @@ def _with_feet(w: _Work) -> None:
         foot = feet.get(id(obj))
         if foot is None:
             continue
-        foot = np.setdiff1d(foot, obj.indices)
+        # np.setdiff1d(foot, obj.indices): the same sorted unique pixels, the object's own
+        # looked up in a table of its pixel range instead of sorted with the foot's (the
+        # sort of a large object's every index was a third of the step, issue 39)
+        foot = np.unique(foot)
+        foot = foot[np.isin(foot, obj.indices, invert=True, kind="table")]
         # held to the object's own outline: a foot's mixed points beyond it widened the box
         inside = within_reach(
             project(w.frame.points[obj.indices].astype(np.float64), fit.basis),
