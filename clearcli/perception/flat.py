@@ -48,6 +48,7 @@ unchanged.
 from __future__ import annotations
 
 import functools
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
@@ -234,22 +235,95 @@ def within_reach(object_xy: np.ndarray, foot_xy: np.ndarray, reach_m: float) -> 
     ``reach_m`` of one of the object's own points (``object_xy`` (M, 2)): a foot is the
     lower part of the faces seen above it, so it stands under the object's own outline;
     a point farther out is depth mixed between the object and the table in front of its
-    lower edge (module doc, 5.). Any width of the object grows by at most twice the reach."""
+    lower edge (module doc, 5.). Any width of the object grows by at most twice the reach.
+
+    A nearest-neighbour query's answer (its distance within the reach), worked out in two
+    parts (issue 39: the tree over a large object's points along a long foot was most of
+    the feet's cost): a foot point sharing a cell of side the reach over sqrt(2) (a hair
+    less) with an object's point is within reach (in a cell, two points are less than its
+    diagonal apart, rounding included: the hair); only the others are queried, against
+    the object's points in their cell of side a hair more than the reach or the 8 around
+    it (a point within reach lies there: its offset along each axis is under one cell),
+    the same nearest within reach as among all the points."""
     from scipy.spatial import cKDTree
 
+    out = np.zeros(foot_xy.shape[0], dtype=bool)
     if not foot_xy.shape[0] or not object_xy.shape[0]:
-        return np.zeros(foot_xy.shape[0], dtype=bool)
+        return out
     # only the object's points within reach of the foot's box can be within reach of a
-    # foot point, and a tree built unbalanced finds the same nearest for less (issue 39:
-    # the tree over a large object's every point was most of the feet's cost)
+    # foot point, and a tree built unbalanced finds the same nearest for less
     pad_m = reach_m * 1.001 + 1e-9  # a hair wider than the reach: rounding keeps no point out
     lo, hi = foot_xy.min(axis=0) - pad_m, foot_xy.max(axis=0) + pad_m
-    near = np.flatnonzero(np.all((object_xy >= lo) & (object_xy <= hi), axis=1))
-    if not near.size:
-        return np.zeros(foot_xy.shape[0], dtype=bool)
-    tree = cKDTree(object_xy[near], balanced_tree=False, compact_nodes=False)
-    gap_m, _ = tree.query(foot_xy, k=1, distance_upper_bound=reach_m)
-    return np.asarray(gap_m <= reach_m)
+    near_xy = np.compress(np.all((object_xy >= lo) & (object_xy <= hi), axis=1), object_xy, axis=0)
+    if not near_xy.shape[0]:
+        return out
+    shared = _same_cell(near_xy, foot_xy, lo, hi, reach_m / math.sqrt(2.0) / 1.001)
+    if shared is not None:
+        out = shared
+    rest = np.flatnonzero(~out)
+    if not rest.size:
+        return out
+    rest_xy = np.take(foot_xy, rest, axis=0)
+    around = _cells_around(rest_xy, near_xy, lo, hi, pad_m)
+    if around is not None:
+        near_xy = np.compress(around, near_xy, axis=0)
+    if not near_xy.shape[0]:
+        return out
+    tree = cKDTree(near_xy, balanced_tree=False, compact_nodes=False)
+    gap_m, _ = tree.query(rest_xy, k=1, distance_upper_bound=reach_m)
+    out[rest] = gap_m <= reach_m
+    return out
+
+
+# `_cell_of` rasters a foot's box in at most this many cells (a reach near 0 would make
+# the raster unbounded: then the cells are not used, every point is queried)
+_CELLS_MAX = 1 << 22
+
+
+def _cell_of(xy: np.ndarray, lo: np.ndarray, hi: np.ndarray, cell_m: float) -> tuple[np.ndarray, int, int] | None:
+    """(each point's cell as one index, the raster's row and column counts) in a raster of cells of
+    side ``cell_m`` from ``lo`` over the box to ``hi`` (the points lie in it), one cell of
+    margin round it; None when the raster would be too large or a point falls off it."""
+    if not cell_m > 0.0:
+        return None
+    n0, n1 = (int(k) + 3 for k in np.floor((hi - lo) / cell_m))
+    if n0 * n1 > _CELLS_MAX:
+        return None
+    ij = np.floor((xy - lo) / cell_m).astype(np.int64) + 1
+    if ij.shape[0] and (int(ij.min()) < 1 or int(ij[:, 0].max()) > n0 - 2 or int(ij[:, 1].max()) > n1 - 2):
+        return None
+    return ij[:, 0] * n1 + ij[:, 1], n0, n1
+
+
+def _same_cell(
+    object_xy: np.ndarray, foot_xy: np.ndarray, lo: np.ndarray, hi: np.ndarray, cell_m: float
+) -> np.ndarray | None:
+    """(F,) bool: the foot's points in a cell of side ``cell_m`` holding one of the
+    object's points (all in the box ``lo``, ``hi``); None: not worked out."""
+    objects = _cell_of(object_xy, lo, hi, cell_m)
+    feet = _cell_of(foot_xy, lo, hi, cell_m)
+    if objects is None or feet is None:
+        return None
+    held = np.zeros(objects[1] * objects[2], dtype=bool)
+    held[objects[0]] = True
+    return np.take(held, feet[0])
+
+
+def _cells_around(
+    foot_xy: np.ndarray, object_xy: np.ndarray, lo: np.ndarray, hi: np.ndarray, cell_m: float
+) -> np.ndarray | None:
+    """(M,) bool: the object's points in the cell (of side ``cell_m``) of one of the foot's
+    points or in one of the 8 around it (all in the box ``lo``, ``hi``); None: not worked out."""
+    objects = _cell_of(object_xy, lo, hi, cell_m)
+    feet = _cell_of(foot_xy, lo, hi, cell_m)
+    if objects is None or feet is None:
+        return None
+    n1 = objects[2]
+    held = np.zeros(objects[1] * n1, dtype=bool)
+    # the foot's cells and their 8 neighbours (the margin keeps every one on the raster)
+    for d in (-n1 - 1, -n1, -n1 + 1, -1, 0, 1, n1 - 1, n1, n1 + 1):
+        held[feet[0] + d] = True
+    return np.take(held, objects[0])
 
 
 def _foot_of(
@@ -414,8 +488,9 @@ def flat_objects(
 
     def owner() -> np.ndarray:
         if not owner_once:
-            flat = np.full(height * width, -1, dtype=np.int64)
-            flat[object_pixels] = np.repeat(np.arange(len(object_sizes)), object_sizes)
+            # int32: an object's number fits, and the map is half the bytes to fill
+            flat = np.full(height * width, -1, dtype=np.int32)
+            flat[object_pixels] = np.repeat(np.arange(len(object_sizes), dtype=np.int32), object_sizes)
             owner_once.append(flat)
         return owner_once[0]
 
