@@ -424,6 +424,27 @@ def _no_depth_share(region: np.ndarray, window: np.ndarray) -> float:
     return 1.0 - int(np.count_nonzero(np.isfinite(window[rows, cols]).all(axis=1))) / n_ring
 
 
+def _pieces(grid: np.ndarray, pixels: np.ndarray) -> tuple[np.ndarray, int, list[tuple[slice, ...] | None]]:
+    """`label_8` of the (H, W) bool ``grid`` and the pieces' `boxes`, worked out on the box
+    of its set cells (``pixels``: their flat indices, none outside the grid): the same
+    pieces, numbered alike (in raster order of their first cells, which the box keeps),
+    and their boxes moved back to the grid's rows and columns. The candidates of a
+    frame lie on the table's part of the image (a tenth to three quarters of it on the
+    mOSD and RealSense frames): the labelling and the boxes read only that (issue 39)."""
+    width = grid.shape[1]
+    rows = pixels // width
+    cols = pixels - rows * width
+    r0, r1, c0, c1 = int(rows.min()), int(rows.max()) + 1, int(cols.min()), int(cols.max()) + 1
+    part, n = label_8(np.ascontiguousarray(grid[r0:r1, c0:c1]))
+    labels = np.zeros(grid.shape, dtype=part.dtype)
+    labels[r0:r1, c0:c1] = part
+    moved: list[tuple[slice, ...] | None] = [
+        None if b is None else (slice(b[0].start + r0, b[0].stop + r0), slice(b[1].start + c0, b[1].stop + c0))
+        for b in boxes(part, n)
+    ]
+    return labels, n, moved
+
+
 def flat_objects(
     points: np.ndarray,
     colors: np.ndarray,
@@ -458,14 +479,15 @@ def flat_objects(
     free = np.concatenate([table_pixels, loose_pixels])
     differs = _far_from(np.take(colors, free, axis=0), centre, threshold)  # take: several times faster than a[idx]
     cand = np.zeros(height * width, dtype=bool)
-    cand[free[differs]] = True
-    if not cand.any():
+    cand_pixels = np.compress(differs, free)
+    if not cand_pixels.size:
         return FlatFinds([], {})
+    cand[cand_pixels] = True
     grid = cand.reshape(height, width)
-    comps, n = label_8(grid)
+    comps, n, comp_boxes = _pieces(grid, cand_pixels)
     # each piece's size from the candidate pixels' labels (every labelled pixel is one):
     # not a count over the whole image (sizes[0], the background, is not read)
-    sizes = np.bincount(np.take(comps.ravel(), np.flatnonzero(cand)), minlength=n + 1)
+    sizes = np.bincount(np.take(comps.ravel(), cand_pixels), minlength=n + 1)
     big = (np.flatnonzero(sizes[1:] >= _MIN_PIXELS) + 1).tolist()  # most are specks: not even looked at
     if not big:
         return FlatFinds([], {})
@@ -482,7 +504,6 @@ def flat_objects(
         return table_once[0]
 
     found: list[np.ndarray] = []
-    comp_boxes = boxes(comps, n)
     grid_points = points.reshape(height, width, 3)
     owner_once: list[np.ndarray] = []  # each pixel's object (-1 none), the first time a foot is looked for
 

@@ -416,3 +416,29 @@ def test_clear_cups_lying_on_a_table_are_no_flat_objects(monkeypatch: pytest.Mon
     monkeypatch.setattr(flat, "_RING_MAX_NO_DEPTH_SHARE", 1.0)
     _, report, _ = judged("cleargrasp_000000130")
     assert report.spurious == 2
+
+
+def test_pieces_on_the_candidates_box_are_the_whole_grids() -> None:
+    # _pieces labels only the box of the set cells: the labels, their numbers and the
+    # pieces' boxes must be those of label_8 and boxes over the whole grid, pieces at
+    # the box's and the grid's edges too
+    from clearcli.perception.flat import _pieces
+    from clearcli.perception.raster import boxes, label_8
+
+    rng = np.random.default_rng(7)
+    for case in range(100):
+        grid = np.zeros((60, 80), dtype=bool)
+        r0, c0 = int(rng.integers(0, 50)), int(rng.integers(0, 70))
+        r1, c1 = int(rng.integers(r0 + 1, 61)), int(rng.integers(c0 + 1, 81))
+        grid[r0:r1, c0:c1] = rng.random((r1 - r0, c1 - c0)) < rng.uniform(0.05, 0.6)
+        if case % 4 == 0:
+            grid[-1, -1] = grid[0, 0] = True  # the grid's corners
+        pixels = np.flatnonzero(grid)
+        if not pixels.size:
+            continue
+        rng.shuffle(pixels)  # in no order
+        labels, n, found = _pieces(grid, pixels)
+        want, want_n = label_8(grid)
+        assert n == want_n
+        assert np.array_equal(labels, want)
+        assert found == boxes(want, want_n)
