@@ -406,10 +406,11 @@ def _relief(
     rows, cols = np.nonzero(ring)
     if rows.size < _MIN_PIXELS:
         return None
-    base = float(np.median(height_of(points[(rows + v0) * width + (cols + u0)])))
+    # rows by index: take gathers several times faster than a[idx] (per candidate and foot)
+    base = float(np.median(height_of(np.take(points, (rows + v0) * width + (cols + u0), axis=0))))
     rows, cols = np.nonzero(region)
     pixels = (rows + v0) * width + (cols + u0)
-    return pixels, base, float(np.median(height_of(points[pixels]))) - base
+    return pixels, base, float(np.median(height_of(np.take(points, pixels, axis=0)))) - base
 
 
 def _no_depth_share(region: np.ndarray, window: np.ndarray) -> float:
