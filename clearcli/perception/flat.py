@@ -48,6 +48,7 @@ unchanged.
 from __future__ import annotations
 
 import functools
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
@@ -234,22 +235,95 @@ def within_reach(object_xy: np.ndarray, foot_xy: np.ndarray, reach_m: float) -> 
     ``reach_m`` of one of the object's own points (``object_xy`` (M, 2)): a foot is the
     lower part of the faces seen above it, so it stands under the object's own outline;
     a point farther out is depth mixed between the object and the table in front of its
-    lower edge (module doc, 5.). Any width of the object grows by at most twice the reach."""
+    lower edge (module doc, 5.). Any width of the object grows by at most twice the reach.
+
+    A nearest-neighbour query's answer (its distance within the reach), worked out in two
+    parts (issue 39: the tree over a large object's points along a long foot was most of
+    the feet's cost): a foot point sharing a cell of side the reach over sqrt(2) (a hair
+    less) with an object's point is within reach (in a cell, two points are less than its
+    diagonal apart, rounding included: the hair); only the others are queried, against
+    the object's points in their cell of side a hair more than the reach or the 8 around
+    it (a point within reach lies there: its offset along each axis is under one cell),
+    the same nearest within reach as among all the points."""
     from scipy.spatial import cKDTree
 
+    out = np.zeros(foot_xy.shape[0], dtype=bool)
     if not foot_xy.shape[0] or not object_xy.shape[0]:
-        return np.zeros(foot_xy.shape[0], dtype=bool)
+        return out
     # only the object's points within reach of the foot's box can be within reach of a
-    # foot point, and a tree built unbalanced finds the same nearest for less (issue 39:
-    # the tree over a large object's every point was most of the feet's cost)
+    # foot point, and a tree built unbalanced finds the same nearest for less
     pad_m = reach_m * 1.001 + 1e-9  # a hair wider than the reach: rounding keeps no point out
     lo, hi = foot_xy.min(axis=0) - pad_m, foot_xy.max(axis=0) + pad_m
-    near = np.flatnonzero(np.all((object_xy >= lo) & (object_xy <= hi), axis=1))
-    if not near.size:
-        return np.zeros(foot_xy.shape[0], dtype=bool)
-    tree = cKDTree(object_xy[near], balanced_tree=False, compact_nodes=False)
-    gap_m, _ = tree.query(foot_xy, k=1, distance_upper_bound=reach_m)
-    return np.asarray(gap_m <= reach_m)
+    near_xy = np.compress(np.all((object_xy >= lo) & (object_xy <= hi), axis=1), object_xy, axis=0)
+    if not near_xy.shape[0]:
+        return out
+    shared = _same_cell(near_xy, foot_xy, lo, hi, reach_m / math.sqrt(2.0) / 1.001)
+    if shared is not None:
+        out = shared
+    rest = np.flatnonzero(~out)
+    if not rest.size:
+        return out
+    rest_xy = np.take(foot_xy, rest, axis=0)
+    around = _cells_around(rest_xy, near_xy, lo, hi, pad_m)
+    if around is not None:
+        near_xy = np.compress(around, near_xy, axis=0)
+    if not near_xy.shape[0]:
+        return out
+    tree = cKDTree(near_xy, balanced_tree=False, compact_nodes=False)
+    gap_m, _ = tree.query(rest_xy, k=1, distance_upper_bound=reach_m)
+    out[rest] = gap_m <= reach_m
+    return out
+
+
+# `_cell_of` rasters a foot's box in at most this many cells (a reach near 0 would make
+# the raster unbounded: then the cells are not used, every point is queried)
+_CELLS_MAX = 1 << 22
+
+
+def _cell_of(xy: np.ndarray, lo: np.ndarray, hi: np.ndarray, cell_m: float) -> tuple[np.ndarray, int, int] | None:
+    """(each point's cell as one index, the raster's row and column counts) in a raster of cells of
+    side ``cell_m`` from ``lo`` over the box to ``hi`` (the points lie in it), one cell of
+    margin round it; None when the raster would be too large or a point falls off it."""
+    if not cell_m > 0.0:
+        return None
+    n0, n1 = (int(k) + 3 for k in np.floor((hi - lo) / cell_m))
+    if n0 * n1 > _CELLS_MAX:
+        return None
+    ij = np.floor((xy - lo) / cell_m).astype(np.int64) + 1
+    if ij.shape[0] and (int(ij.min()) < 1 or int(ij[:, 0].max()) > n0 - 2 or int(ij[:, 1].max()) > n1 - 2):
+        return None
+    return ij[:, 0] * n1 + ij[:, 1], n0, n1
+
+
+def _same_cell(
+    object_xy: np.ndarray, foot_xy: np.ndarray, lo: np.ndarray, hi: np.ndarray, cell_m: float
+) -> np.ndarray | None:
+    """(F,) bool: the foot's points in a cell of side ``cell_m`` holding one of the
+    object's points (all in the box ``lo``, ``hi``); None: not worked out."""
+    objects = _cell_of(object_xy, lo, hi, cell_m)
+    feet = _cell_of(foot_xy, lo, hi, cell_m)
+    if objects is None or feet is None:
+        return None
+    held = np.zeros(objects[1] * objects[2], dtype=bool)
+    held[objects[0]] = True
+    return np.take(held, feet[0])
+
+
+def _cells_around(
+    foot_xy: np.ndarray, object_xy: np.ndarray, lo: np.ndarray, hi: np.ndarray, cell_m: float
+) -> np.ndarray | None:
+    """(M,) bool: the object's points in the cell (of side ``cell_m``) of one of the foot's
+    points or in one of the 8 around it (all in the box ``lo``, ``hi``); None: not worked out."""
+    objects = _cell_of(object_xy, lo, hi, cell_m)
+    feet = _cell_of(foot_xy, lo, hi, cell_m)
+    if objects is None or feet is None:
+        return None
+    n1 = objects[2]
+    held = np.zeros(objects[1] * n1, dtype=bool)
+    # the foot's cells and their 8 neighbours (the margin keeps every one on the raster)
+    for d in (-n1 - 1, -n1, -n1 + 1, -1, 0, 1, n1 - 1, n1, n1 + 1):
+        held[feet[0] + d] = True
+    return np.take(held, objects[0])
 
 
 def _foot_of(
@@ -260,6 +334,7 @@ def _foot_of(
     u0: int,
     width: int,
     object_pixels: np.ndarray,
+    object_bounds: np.ndarray,
     owner: np.ndarray,
     colors: np.ndarray,
     object_lab: dict[int, np.ndarray],
@@ -269,7 +344,8 @@ def _foot_of(
     CIELAB within `_FOOT_MAX_DE` of the object's), or None (module doc, 5.).
     ``object_lab``: the objects' median colours worked out so far, filled here (an
     object's median over all its pixels cost most of the flat step when several
-    candidates touched it, issue 39)."""
+    candidates touched it, issue 39); ``object_bounds``: where each object's pixels
+    start in ``object_pixels`` (and the last ends)."""
     touched = np.unique(owner_window[dilate_square(whole, _FOOT_TOUCH_PX) & near])
     touched = touched[touched >= 0]
     if touched.size != 1:
@@ -279,7 +355,12 @@ def _foot_of(
     mine_lab = np.median(lab_of(np.take(colors, (rows + v0) * width + (cols + u0), axis=0)), axis=0)
     their_lab = object_lab.get(j)
     if their_lab is None:
-        theirs = np.compress(np.take(owner, object_pixels) == j, object_pixels)
+        # the pixels ``owner`` gives to j, in their order in ``object_pixels``: its own
+        # rows there when no later object took one of them (objects share no pixel), read
+        # without a pass over every object's pixels (issue 39: one pass per object touched)
+        theirs = object_pixels[object_bounds[j] : object_bounds[j + 1]]
+        if not np.all(np.take(owner, theirs) == j):
+            theirs = np.compress(np.take(owner, object_pixels) == j, object_pixels)
         their_lab = object_lab[j] = np.median(lab_of(np.take(colors, theirs, axis=0)), axis=0)
     return j if float(np.linalg.norm(mine_lab - their_lab)) < _FOOT_MAX_DE else None
 
@@ -325,10 +406,11 @@ def _relief(
     rows, cols = np.nonzero(ring)
     if rows.size < _MIN_PIXELS:
         return None
-    base = float(np.median(height_of(points[(rows + v0) * width + (cols + u0)])))
+    # rows by index: take gathers several times faster than a[idx] (per candidate and foot)
+    base = float(np.median(height_of(np.take(points, (rows + v0) * width + (cols + u0), axis=0))))
     rows, cols = np.nonzero(region)
     pixels = (rows + v0) * width + (cols + u0)
-    return pixels, base, float(np.median(height_of(points[pixels]))) - base
+    return pixels, base, float(np.median(height_of(np.take(points, pixels, axis=0)))) - base
 
 
 def _no_depth_share(region: np.ndarray, window: np.ndarray) -> float:
@@ -341,6 +423,27 @@ def _no_depth_share(region: np.ndarray, window: np.ndarray) -> float:
         return 0.0
     rows, cols = np.nonzero(ring)
     return 1.0 - int(np.count_nonzero(np.isfinite(window[rows, cols]).all(axis=1))) / n_ring
+
+
+def _pieces(grid: np.ndarray, pixels: np.ndarray) -> tuple[np.ndarray, int, list[tuple[slice, ...] | None]]:
+    """`label_8` of the (H, W) bool ``grid`` and the pieces' `boxes`, worked out on the box
+    of its set cells (``pixels``: their flat indices, none outside the grid): the same
+    pieces, numbered alike (in raster order of their first cells, which the box keeps),
+    and their boxes moved back to the grid's rows and columns. The candidates of a
+    frame lie on the table's part of the image (a tenth to three quarters of it on the
+    mOSD and RealSense frames): the labelling and the boxes read only that (issue 39)."""
+    width = grid.shape[1]
+    rows = pixels // width
+    cols = pixels - rows * width
+    r0, r1, c0, c1 = int(rows.min()), int(rows.max()) + 1, int(cols.min()), int(cols.max()) + 1
+    part, n = label_8(np.ascontiguousarray(grid[r0:r1, c0:c1]))
+    labels = np.zeros(grid.shape, dtype=part.dtype)
+    labels[r0:r1, c0:c1] = part
+    moved: list[tuple[slice, ...] | None] = [
+        None if b is None else (slice(b[0].start + r0, b[0].stop + r0), slice(b[1].start + c0, b[1].stop + c0))
+        for b in boxes(part, n)
+    ]
+    return labels, n, moved
 
 
 def flat_objects(
@@ -377,14 +480,15 @@ def flat_objects(
     free = np.concatenate([table_pixels, loose_pixels])
     differs = _far_from(np.take(colors, free, axis=0), centre, threshold)  # take: several times faster than a[idx]
     cand = np.zeros(height * width, dtype=bool)
-    cand[free[differs]] = True
-    if not cand.any():
+    cand_pixels = np.compress(differs, free)
+    if not cand_pixels.size:
         return FlatFinds([], {})
+    cand[cand_pixels] = True
     grid = cand.reshape(height, width)
-    comps, n = label_8(grid)
+    comps, n, comp_boxes = _pieces(grid, cand_pixels)
     # each piece's size from the candidate pixels' labels (every labelled pixel is one):
     # not a count over the whole image (sizes[0], the background, is not read)
-    sizes = np.bincount(np.take(comps.ravel(), np.flatnonzero(cand)), minlength=n + 1)
+    sizes = np.bincount(np.take(comps.ravel(), cand_pixels), minlength=n + 1)
     big = (np.flatnonzero(sizes[1:] >= _MIN_PIXELS) + 1).tolist()  # most are specks: not even looked at
     if not big:
         return FlatFinds([], {})
@@ -401,17 +505,18 @@ def flat_objects(
         return table_once[0]
 
     found: list[np.ndarray] = []
-    comp_boxes = boxes(comps, n)
     grid_points = points.reshape(height, width, 3)
     owner_once: list[np.ndarray] = []  # each pixel's object (-1 none), the first time a foot is looked for
 
     def owner() -> np.ndarray:
         if not owner_once:
-            flat = np.full(height * width, -1, dtype=np.int64)
-            flat[object_pixels] = np.repeat(np.arange(len(object_sizes)), object_sizes)
+            # int32: an object's number fits, and the map is half the bytes to fill
+            flat = np.full(height * width, -1, dtype=np.int32)
+            flat[object_pixels] = np.repeat(np.arange(len(object_sizes), dtype=np.int32), object_sizes)
             owner_once.append(flat)
         return owner_once[0]
 
+    object_bounds = np.concatenate([[0], np.cumsum(np.asarray(object_sizes, dtype=np.int64))])
     feet: dict[int, list[np.ndarray]] = {}
     object_lab: dict[int, np.ndarray] = {}  # _foot_of's, each object's once
     for k in big:
@@ -435,6 +540,7 @@ def flat_objects(
                     u0,
                     width,
                     object_pixels,
+                    object_bounds,
                     owner(),
                     colors,
                     object_lab,

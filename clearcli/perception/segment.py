@@ -326,21 +326,25 @@ def _with_feet(w: _Work) -> None:
         foot = feet.get(id(obj))
         if foot is None:
             continue
-        foot = np.setdiff1d(foot, obj.indices)
+        # np.setdiff1d(foot, obj.indices): the same sorted unique pixels, the object's own
+        # looked up in a table of its pixel range instead of sorted with the foot's (the
+        # sort of a large object's every index was a third of the step, issue 39)
+        foot = np.unique(foot)
+        foot = foot[np.isin(foot, obj.indices, invert=True, kind="table")]
+        # the points gathered once, by take (several times faster than a[idx]): the
+        # grown object's are the object's and the foot's kept ones, in that order
+        obj_pts = np.take(w.frame.points, obj.indices, axis=0).astype(np.float64)
+        foot_pts = np.take(w.frame.points, foot, axis=0).astype(np.float64)
         # held to the object's own outline: a foot's mixed points beyond it widened the box
-        inside = within_reach(
-            project(w.frame.points[obj.indices].astype(np.float64), fit.basis),
-            project(w.frame.points[foot].astype(np.float64), fit.basis),
-            w.settings.flat_foot_reach_m,
-        )
-        foot = foot[inside]
+        inside = within_reach(project(obj_pts, fit.basis), project(foot_pts, fit.basis), w.settings.flat_foot_reach_m)
+        foot = np.compress(inside, foot)
         if not foot.size:
             continue
         taken.append(foot)
         grown = np.concatenate([obj.indices, foot])
         # its foot stands on the table: the box reaches down to it
         grown_at.append(k)
-        found.append((grown, w.frame.points[grown].astype(np.float64), np.inf))
+        found.append((grown, np.concatenate([obj_pts, np.compress(inside, foot_pts, axis=0)]), np.inf))
     if not found:
         return
     # one cut by all the feet: the same indices in the same order as a cut per foot

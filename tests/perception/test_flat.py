@@ -305,6 +305,33 @@ def test_within_reach_answers_as_one_tree_over_every_object_point() -> None:
         assert within_reach(object_xy, foot_xy, reach_m).tolist() == (gap_m <= reach_m).tolist()
 
 
+def test_within_reach_answers_as_one_tree_where_foot_and_object_interleave() -> None:
+    # a foot under its object's faces (mOSD test46: 1723 points, 1000 of them sharing a
+    # cell of side reach / sqrt(2) with an object's point): those are decided by their
+    # cell, the others queried against the object's points in the cells around theirs;
+    # every answer must be a tree's over all the object's points, points a rounding away
+    # from the reach and from the cells' sides too
+    from scipy.spatial import cKDTree
+
+    from clearcli.perception.flat import within_reach
+
+    rng = np.random.default_rng(39)
+    for case in range(200):
+        reach_m = float(rng.choice([0.0005, 0.0015, 0.002, 0.004]))
+        # a pixel-like lattice of 1-2 mm, jittered, and a foot on and around it
+        step_m = float(rng.uniform(0.001, 0.002))
+        gx, gy = np.meshgrid(np.arange(30) * step_m, np.arange(20) * step_m)
+        object_xy = np.stack([gx.ravel(), gy.ravel()], axis=1) + rng.normal(0, 0.0003, (600, 2))
+        object_xy = object_xy[rng.random(600) < 0.7] + rng.uniform(-2, 2, 2)
+        foot_xy = object_xy[rng.integers(0, object_xy.shape[0], 300)] + rng.normal(0, reach_m, (300, 2))
+        if case % 2:  # at the reach exactly, along a diagonal and along x
+            foot_xy[:50] = object_xy[:50] + reach_m * np.array([np.sqrt(0.5), np.sqrt(0.5)])
+            foot_xy[50:100] = object_xy[50:100] + np.array([reach_m, 0.0])
+        gap_m = cKDTree(object_xy).query(foot_xy, k=1, distance_upper_bound=reach_m)[0]
+        got = within_reach(object_xy, foot_xy, reach_m)
+        assert got.tolist() == (gap_m <= reach_m).tolist()
+
+
 def test_a_foot_held_to_its_objects_outline_leaves_its_box_as_wide_as_the_object() -> None:
     # mOSD learn7: a box 0.0710 m across (its labelled points' box too) gains a foot; unheld,
     # the foot's few points of depth mixed at its lower edge, out in front of it, widened
@@ -389,3 +416,29 @@ def test_clear_cups_lying_on_a_table_are_no_flat_objects(monkeypatch: pytest.Mon
     monkeypatch.setattr(flat, "_RING_MAX_NO_DEPTH_SHARE", 1.0)
     _, report, _ = judged("cleargrasp_000000130")
     assert report.spurious == 2
+
+
+def test_pieces_on_the_candidates_box_are_the_whole_grids() -> None:
+    # _pieces labels only the box of the set cells: the labels, their numbers and the
+    # pieces' boxes must be those of label_8 and boxes over the whole grid, pieces at
+    # the box's and the grid's edges too
+    from clearcli.perception.flat import _pieces
+    from clearcli.perception.raster import boxes, label_8
+
+    rng = np.random.default_rng(7)
+    for case in range(100):
+        grid = np.zeros((60, 80), dtype=bool)
+        r0, c0 = int(rng.integers(0, 50)), int(rng.integers(0, 70))
+        r1, c1 = int(rng.integers(r0 + 1, 61)), int(rng.integers(c0 + 1, 81))
+        grid[r0:r1, c0:c1] = rng.random((r1 - r0, c1 - c0)) < rng.uniform(0.05, 0.6)
+        if case % 4 == 0:
+            grid[-1, -1] = grid[0, 0] = True  # the grid's corners
+        pixels = np.flatnonzero(grid)
+        if not pixels.size:
+            continue
+        rng.shuffle(pixels)  # in no order
+        labels, n, found = _pieces(grid, pixels)
+        want, want_n = label_8(grid)
+        assert n == want_n
+        assert np.array_equal(labels, want)
+        assert found == boxes(want, want_n)
