@@ -140,3 +140,20 @@ def test_walls_apart_across_a_diagonal_touch_within_the_contact_distance(gap_m: 
     seg = np.repeat([0, 1], [len(a), len(b)])
     out = merge_rims(seg, cent, cent[:, 2], tolerance_m=0.03, contact_m=0.02)
     assert (out.max() == 0) == joined
+
+
+def test_near_another_segment_is_its_definition_voxel_by_voxel() -> None:
+    """Against the definition, one voxel at a time (no grid arrays): a voxel is kept when
+    a voxel of another segment lies in its cell or one of the 26 around it (cells of
+    1.01 x the reach, by floor). Random clouds of few and many segments."""
+    from clearcli.perception.rims import _near_another_segment
+
+    rng = np.random.default_rng(11)
+    for n_seg in (2, 5, 40):
+        pts = rng.uniform(-0.2, 0.3, (300, 3))
+        seg = rng.integers(0, n_seg, 300)
+        cell = np.floor(pts / (1.01 * 0.02)).astype(np.int64)
+        expected = [
+            bool(((np.abs(cell - cell[i]).max(axis=1) <= 1) & (seg != seg[i])).any()) for i in range(pts.shape[0])
+        ]
+        assert _near_another_segment(seg, pts, 0.02, n_seg).tolist() == expected
