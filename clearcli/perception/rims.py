@@ -69,7 +69,7 @@ def merge_rims(
     by_seg = near[np.argsort(seg_near, kind="stable")]
     bounds = np.searchsorted(seg_of_voxel[by_seg], np.arange(n_seg + 1))
     present = np.flatnonzero(bounds[1:] > bounds[:-1])
-    pts = voxel_centroids[by_seg]
+    pts = np.take(voxel_centroids, by_seg, axis=0)  # rows by index: take is several times faster than a[idx]
     lo_box = np.minimum.reduceat(pts, bounds[present], axis=0)
     hi_box = np.maximum.reduceat(pts, bounds[present], axis=0)
     # the two segments' boxes within contact_m (with a margin: the search decides)

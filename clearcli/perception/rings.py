@@ -188,7 +188,7 @@ def merge_rings(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
     # the segments' boxes in the plane, all at once: minima and maxima are exact in any
     # order, so each is what xy.min(axis=0) over the segment's voxels gives
     # (reduceat over the non-empty segments' starts: each run ends where the next starts)
-    xy_sorted = voxel_xy[order]
+    xy_sorted = np.take(voxel_xy, order, axis=0)  # rows by index: take is several times faster than a[idx]
     filled = np.flatnonzero(sizes > 0)
     at = np.searchsorted(filled, cand)
     lo_all = np.minimum.reduceat(xy_sorted, bounds[filled], axis=0)[at]
