@@ -68,9 +68,9 @@ def supervoxel_lab(sv: Supervoxels, point_voxel: np.ndarray, colors: np.ndarray)
 def split_by_colour(seg_of_sv: np.ndarray, ctx: RefineContext) -> np.ndarray:
     """The stage (supervoxel level): `color_splits` with the frame's colour, or the
     segments as they are without usable colour."""
-    if ctx.point_colors is None:
+    lab = ctx.sv_lab  # `supervoxel_lab` of the frame's points
+    if lab is None:
         return seg_of_sv
-    lab = supervoxel_lab(ctx.sv, ctx.vox.point_voxel, ctx.point_colors)
     s = ctx.settings
     return color_splits(
         seg_of_sv,

@@ -13,7 +13,7 @@ from functools import cached_property
 import numpy as np
 
 from clearcli.io.frames import Frame
-from clearcli.perception.flat import group_lab
+from clearcli.perception.flat import cielab
 from clearcli.perception.size import SegmentSize
 from clearcli.perception.supervoxels import Supervoxels, VoxelCloud
 from clearcli.perception.table import plane_basis
@@ -45,6 +45,12 @@ def by_label(labels: np.ndarray, n_labels: int) -> np.ndarray:
     if 0 < n_labels <= np.iinfo(np.int16).max:
         return np.argsort(labels.astype(np.int16), kind="stable")
     return np.argsort(labels, kind="stable")
+
+
+def _mean_lab(sums: np.ndarray, counts: np.ndarray) -> np.ndarray:
+    """(G, 3) CIELAB of each group's mean colour from its RGB sums (G, 3) and point
+    counts (G,): `flat.group_lab`'s arithmetic (an empty group counts one point)."""
+    return cielab(np.clip(sums / np.maximum(counts, 1)[:, None], 0, 255).round().astype(np.uint8))
 
 
 @dataclass(frozen=True)
@@ -117,14 +123,44 @@ class RefineContext:
         """(M, 3) RGB of the points above the table, or None without usable colour."""
         if not self.color_used or self.point_index is None or self.frame.colors is None:
             return None
-        return self.frame.colors[self.point_index]
+        return np.take(self.frame.colors, self.point_index, axis=0)  # rows by index: take is faster than a[idx]
+
+    @cached_property
+    def voxel_rgb_sum(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """((V, 3) each voxel's points' RGB summed, (V,) its point count), or None without
+        usable colour: one pass over the points for both `voxel_lab` and `sv_lab` (sums
+        of integers, exact in float64 in any order: a supervoxel's sum over its voxels'
+        sums is its sum over its points)."""
+        colors = self.point_colors
+        if colors is None:
+            return None
+        n_vox = self.vox.centroids.shape[0]
+        pv = self.vox.point_voxel
+        sums = np.stack(
+            [np.bincount(pv, weights=colors[:, c].astype(np.float64), minlength=n_vox) for c in range(3)], axis=1
+        )
+        return sums, np.bincount(pv, minlength=n_vox)
 
     @cached_property
     def voxel_lab(self) -> np.ndarray | None:
-        """(V, 3) CIELAB of each voxel's mean colour, or None without usable colour."""
-        if self.point_colors is None:
+        """(V, 3) CIELAB of each voxel's mean colour, or None without usable colour
+        (`flat.group_lab` of the points by voxel: the same numbers)."""
+        if self.voxel_rgb_sum is None:
             return None
-        return group_lab(self.vox.point_voxel, self.point_colors, self.vox.centroids.shape[0])
+        sums, counts = self.voxel_rgb_sum
+        return _mean_lab(sums, counts)
+
+    @cached_property
+    def sv_lab(self) -> np.ndarray | None:
+        """(S, 3) CIELAB of each supervoxel's mean colour, or None without usable colour
+        (`flat.group_lab` of the points by supervoxel: the same numbers, from the voxels'
+        exact sums instead of a second pass over the points)."""
+        if self.voxel_rgb_sum is None:
+            return None
+        sums, counts = self.voxel_rgb_sum
+        n_sv, label = self.sv.centroids.shape[0], self.sv.voxel_label
+        sv_sums = np.stack([np.bincount(label, weights=sums[:, c], minlength=n_sv) for c in range(3)], axis=1)
+        return _mean_lab(sv_sums, np.bincount(label, weights=counts, minlength=n_sv))
 
     @cached_property
     def voxels_by_sv(self) -> np.ndarray:

@@ -101,7 +101,13 @@ def seam_rise(
         k = np.repeat(np.arange(edges.shape[0]), reps)
         offset = np.arange(int(reps.sum())) - np.repeat(np.cumsum(reps) - reps, reps)
         v = order[start[i][k] + offset]
-        dist = np.einsum("ij,ij->i", voxel_centroids[v] - sv.centroids[j][k], sv.normals[j][k])
+        jk = j[k]
+        # rows by index: np.take is several times faster than a[idx] (the same rows)
+        dist = np.einsum(
+            "ij,ij->i",
+            np.take(voxel_centroids, v, axis=0) - np.take(sv.centroids, jk, axis=0),
+            np.take(sv.normals, jk, axis=0),
+        )
         np.maximum.at(out, k, dist)
     return out
 

@@ -128,7 +128,29 @@ def _every_pair_pieces(at: np.ndarray, rng: np.ndarray, height: int, width: int,
 
 
 def _voxel_piece(point_voxel: np.ndarray, point_piece: np.ndarray, n_voxels: int) -> np.ndarray:
-    """(V,) the piece most of each voxel's points are in (ties: the lower piece)."""
+    """(V,) the piece most of each voxel's points are in (ties: the lower piece).
+
+    Most voxels' points all lie in one piece (a voxel inside one surface): those read
+    it from their lowest and highest piece (`np.minimum.at` / `np.maximum.at`, no
+    sort); only the voxels of two pieces or more (along a depth edge) count their
+    points' pieces (`_counted_piece`, on their points alone)."""
+    if point_voxel.size == 0:
+        return np.zeros(n_voxels, dtype=np.int64)
+    n_pieces = int(point_piece.max()) + 1
+    lo = np.full(n_voxels, n_pieces, dtype=np.int64)  # a voxel without points: none (0 below)
+    hi = np.full(n_voxels, -1, dtype=np.int64)
+    np.minimum.at(lo, point_voxel, point_piece)
+    np.maximum.at(hi, point_voxel, point_piece)
+    out = np.where(lo == hi, lo, 0)
+    mixed = lo < hi
+    if mixed.any():
+        sel = np.flatnonzero(mixed[point_voxel])
+        out[mixed] = _counted_piece(point_voxel[sel], point_piece[sel], n_voxels)[mixed]
+    return out
+
+
+def _counted_piece(point_voxel: np.ndarray, point_piece: np.ndarray, n_voxels: int) -> np.ndarray:
+    """`_voxel_piece` by counting every (voxel, piece) pair of the points (one sort)."""
     key = point_voxel.astype(np.int64) * (int(point_piece.max()) + 1) + point_piece
     uniq, count = np.unique(key, return_counts=True)
     n_pieces = int(point_piece.max()) + 1

@@ -137,8 +137,14 @@ def merge_occluded(seg_of_sv: np.ndarray, ctx: RefineContext) -> np.ndarray:
     order = np.argsort(seg_of_sv, kind="stable")
     bounds = np.searchsorted(seg_of_sv[order], np.arange(n_seg + 1))
     members = {int(s): order[bounds[s] : bounds[s + 1]] for s in cand}
-    lo = {s: sv_centroids[m].min(axis=0) for s, m in members.items()}
-    hi = {s: sv_centroids[m].max(axis=0) for s, m in members.items()}
+    # the candidates' boxes, all at once: minima and maxima are exact in any order, so
+    # each is what sv_centroids[members].min(axis=0) gives (reduceat over the non-empty
+    # segments' starts: each run ends where the next starts)
+    sorted_centroids = sv_centroids[order]
+    filled = np.flatnonzero(bounds[1:] > bounds[:-1])
+    at = np.searchsorted(filled, cand)
+    lo_c = np.minimum.reduceat(sorted_centroids, bounds[filled], axis=0)[at]
+    hi_c = np.maximum.reduceat(sorted_centroids, bounds[filled], axis=0)[at]
     cos_max = np.cos(np.radians(_MAX_ANGLE_DEG))
     parent = np.arange(n_seg)
 
@@ -150,9 +156,7 @@ def merge_occluded(seg_of_sv: np.ndarray, ctx: RefineContext) -> np.ndarray:
 
     # the pairs the loop below could join, found for all at once: the gap between their
     # boxes within max_gap_m (with a margin: the loop's own test decides, this only drops
-    # pairs far past it) and their tops within _TOP_TOL_M (maxima: exact, as the loop's)
-    lo_c = np.stack([lo[s] for s in cand.tolist()])
-    hi_c = np.stack([hi[s] for s in cand.tolist()])
+    # pairs far past it) and their tops within _TOP_TOL_M (the segments' highest supervoxels: exact)
     gap_c = np.maximum(0.0, np.maximum(lo_c[:, None, :] - hi_c[None, :, :], lo_c[None, :, :] - hi_c[:, None, :]))
     top = np.full(n_seg, -np.inf)
     np.maximum.at(top, seg_of_sv, sv_height)
@@ -166,13 +170,13 @@ def merge_occluded(seg_of_sv: np.ndarray, ctx: RefineContext) -> np.ndarray:
     intr: tuple[float, float, float, float] | None = None
     for ia, a in enumerate(cand_list):
         for ib in np.flatnonzero(maybe[ia, ia + 1 :]).tolist():
-            b = cand_list[ia + 1 + ib]
+            jb = ia + 1 + ib
+            b = cand_list[jb]
             if (a, b) in touching or root(a) == root(b):
                 continue
-            gap_box = np.maximum(0.0, np.maximum(lo[a] - hi[b], lo[b] - hi[a]))
+            # (their tops within _TOP_TOL_M: ``maybe`` tested it on the very maxima)
+            gap_box = np.maximum(0.0, np.maximum(lo_c[ia] - hi_c[jb], lo_c[jb] - hi_c[ia]))
             if np.linalg.norm(gap_box) > max_gap_m:
-                continue
-            if abs(sv_height[members[a]].max() - sv_height[members[b]].max()) > _TOP_TOL_M:
                 continue
             xa, na = sv_centroids[members[a]], sv_normals[members[a]]
             xb, nb = sv_centroids[members[b]], sv_normals[members[b]]

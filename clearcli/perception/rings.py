@@ -44,10 +44,24 @@ _TRIM = 2.0
 def fit_circle(xy: np.ndarray) -> tuple[np.ndarray, float]:
     """(centre (2,), radius) of the least-squares circle through ``xy`` (N, 2) (Kasa's
     algebraic fit: linear in the centre and r^2 - |c|^2)."""
+    return fit_circle_rows(*kasa_rows(xy))
+
+
+def kasa_rows(xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Kasa's linear system for the points ``xy`` (N, 2): the rows (2x, 2y, 1) (N, 3) and
+    the right-hand sides x^2 + y^2 (N,). A fit to a subset is `fit_circle_rows` of the
+    subset's rows: a refit loop builds them once, not once a refit."""
     a = np.empty((xy.shape[0], 3))  # the columns 2x, 2y, 1 (what column_stack built, without its copies)
     np.multiply(xy, 2.0, out=a[:, :2])
     a[:, 2] = 1.0
-    b = (xy**2).sum(axis=1)
+    # (xy**2).sum(axis=1)'s arithmetic by columns (a sum over a row of two is one
+    # addition of the two squares), without the (N, 2) temporary
+    x, y = xy[:, 0], xy[:, 1]
+    return a, x * x + y * y
+
+
+def fit_circle_rows(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, float]:
+    """`fit_circle` of the points whose `kasa_rows` are ``a`` (N, 3) and ``b`` (N,)."""
     sol, *_ = np.linalg.lstsq(a, b, rcond=None)
     centre = sol[:2]
     r2 = float(sol[2] + centre @ centre)
@@ -70,7 +84,8 @@ def fit_rim(
     """
     if xy.shape[0] < 3:
         return None
-    centre, radius = fit_circle(xy)
+    rows, sq = kasa_rows(xy)  # every fit below is to a subset of these rows
+    centre, radius = fit_circle_rows(rows, sq)
     inlier = np.ones(xy.shape[0], dtype=bool)
     x, y = xy[:, 0], xy[:, 1]
 
@@ -85,7 +100,7 @@ def fit_rim(
         inlier = resid <= _TRIM * max_residual * radius
         if inlier.sum() < 3:
             return None
-        centre, radius = fit_circle(np.compress(inlier, xy, axis=0))
+        centre, radius = fit_circle_rows(np.compress(inlier, rows, axis=0), np.compress(inlier, sq))
     resid = from_centre(centre) - radius
     inlier = np.abs(resid) <= _TRIM * max_residual * radius
     if not (_MIN_RADIUS_M <= radius <= max_radius_m) or inlier.mean() < 1.0 - max_off_share:
@@ -173,7 +188,7 @@ def merge_rings(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
     # the segments' boxes in the plane, all at once: minima and maxima are exact in any
     # order, so each is what xy.min(axis=0) over the segment's voxels gives
     # (reduceat over the non-empty segments' starts: each run ends where the next starts)
-    xy_sorted = voxel_xy[order]
+    xy_sorted = np.take(voxel_xy, order, axis=0)  # rows by index: take is several times faster than a[idx]
     filled = np.flatnonzero(sizes > 0)
     at = np.searchsorted(filled, cand)
     lo_all = np.minimum.reduceat(xy_sorted, bounds[filled], axis=0)[at]

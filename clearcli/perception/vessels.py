@@ -48,7 +48,7 @@ import numpy as np
 
 from clearcli.perception.context import RefineContext
 from clearcli.perception.graph import components, dense_labels
-from clearcli.perception.rings import cover_deg, facing_cos, fit_circle
+from clearcli.perception.rings import cover_deg, facing_cos, fit_circle_rows, kasa_rows
 
 _MIN_RADIUS_M = 0.02
 _RANSAC_ROUNDS = 200
@@ -160,8 +160,10 @@ def find_rim(
     # least squares on the inliers until they no longer change: the circle is then a
     # fixed point of the refit, not of the draws (which voxel the random indices pick
     # changes with the band's size: one voxel more, other draws, another first circle)
+    rows, sq = kasa_rows(band_xy)  # each refit's system: the inliers' rows of the band's
     for _ in range(_REFITS):
-        centre, radius = fit_circle(np.compress(inl, band_xy, axis=0))  # rows by a mask: compress is faster
+        # rows by a mask: compress is faster
+        centre, radius = fit_circle_rows(np.compress(inl, rows, axis=0), np.compress(inl, sq))
         if not (_MIN_RADIUS_M <= radius <= max_radius_m):
             return None
         again = on_circle(centre, radius)

@@ -205,3 +205,27 @@ def test_pixel_pieces_on_a_cluttered_frame_are_every_pair_s(test55_edge_cut: tup
     want = _every_pair(points.astype(np.float64), shape, point_index, rel)
     assert np.array_equal(got, want)
     assert np.unique(got).size > 16  # the objects and the pieces the depth edges cut
+
+
+def test_voxel_piece_reads_one_piece_voxels_without_counting(test55_edge_cut: tuple[Any, ...]) -> None:
+    """`_voxel_piece` (a voxel of one piece read from its lowest and highest, the rest
+    counted) is `_counted_piece` (every voxel counted): on mOSD test55 (every voxel's
+    points lie in one piece there: a depth edge lies between voxels), and on random
+    points with voxels of one piece, of several (ties too) and of none."""
+    from clearcli.perception.edges import _counted_piece, _voxel_piece
+
+    vox, points, shape, point_index, rel, _ = test55_edge_cut
+    point_piece = pixel_pieces(points, shape, point_index, rel)
+    got = _voxel_piece(vox.point_voxel, point_piece, vox.n_voxels)
+    assert np.array_equal(got, _counted_piece(vox.point_voxel, point_piece, vox.n_voxels))
+    assert np.unique(got).size > 5
+    rng = np.random.default_rng(4)
+    for n_pieces in (1, 2, 5, 300):
+        point_voxel = rng.integers(0, 200, 1000)  # voxels 200-209: no points
+        point_piece = np.where(point_voxel < 120, point_voxel % n_pieces, rng.integers(0, n_pieces, 1000))
+        if n_pieces > 1:  # a real comparison: voxels 120-199 of several pieces, most of them
+            assert np.unique(point_voxel * n_pieces + point_piece).size > 150
+        assert np.array_equal(
+            _voxel_piece(point_voxel, point_piece, 210), _counted_piece(point_voxel, point_piece, 210)
+        )
+    assert _voxel_piece(np.zeros(0, np.int64), np.zeros(0, np.int64), 3).tolist() == [0, 0, 0]

@@ -194,3 +194,17 @@ def test_near_cells_by_a_dense_grid_and_by_isin_agree(monkeypatch: pytest.Monkey
     monkeypatch.setattr(fragments, "_MAX_GRID_CELLS", 0)  # every grid looked up with np.isin
     for (p, seeds), near in zip(clouds, dense, strict=True):
         assert np.array_equal(fragments._near_cells(p, seeds, 0.01), near)
+
+
+def test_near_cells_is_its_definition_voxel_by_voxel() -> None:
+    """Against the definition, one voxel at a time: a voxel is kept when its cell (1.01 x
+    the reach, by floor) is a seed's cell or one of the 26 around it."""
+    from clearcli.perception.fragments import _near_cells
+
+    rng = np.random.default_rng(12)
+    for n_seeds in (1, 10, 100):
+        pts = rng.uniform(-0.2, 0.3, (300, 3))
+        seeds = rng.choice(300, n_seeds, replace=False)
+        cell = np.floor(pts / (1.01 * 0.02)).astype(np.int64)
+        expected = [bool((np.abs(cell[seeds] - cell[i]).max(axis=1) <= 1).any()) for i in range(pts.shape[0])]
+        assert _near_cells(pts, seeds, 0.02).tolist() == expected

@@ -140,3 +140,69 @@ def test_walls_apart_across_a_diagonal_touch_within_the_contact_distance(gap_m: 
     seg = np.repeat([0, 1], [len(a), len(b)])
     out = merge_rims(seg, cent, cent[:, 2], tolerance_m=0.03, contact_m=0.02)
     assert (out.max() == 0) == joined
+
+
+def test_near_another_segment_is_its_definition_voxel_by_voxel() -> None:
+    """Against the definition, one voxel at a time (no grid arrays): a voxel is kept when
+    a voxel of another segment lies in its cell or one of the 26 around it (cells of
+    1.01 x the reach, by floor). Random clouds of few and many segments."""
+    from clearcli.perception.rims import _near_another_segment
+
+    rng = np.random.default_rng(11)
+    for n_seg in (2, 5, 40):
+        pts = rng.uniform(-0.2, 0.3, (300, 3))
+        seg = rng.integers(0, n_seg, 300)
+        cell = np.floor(pts / (1.01 * 0.02)).astype(np.int64)
+        expected = [
+            bool(((np.abs(cell - cell[i]).max(axis=1) <= 1) & (seg != seg[i])).any()) for i in range(pts.shape[0])
+        ]
+        assert _near_another_segment(seg, pts, 0.02, n_seg).tolist() == expected
+
+
+def _merge_rims_by_every_pair(
+    seg: np.ndarray, pts: np.ndarray, height: np.ndarray, tolerance_m: float, contact_m: float, is_top: np.ndarray
+) -> np.ndarray:
+    """merge_rims' rule over every pair of voxels (a full distance matrix, no grid, no
+    trees): the oracle of its pairs search."""
+    from clearcli.perception.lccp import join_pairs
+
+    n_seg = int(seg.max()) + 1
+    d = np.linalg.norm(pts[:, None, :] - pts[None, :, :], axis=2)
+    i, j = np.nonzero(np.triu(d <= contact_m, k=1) & (seg[:, None] != seg[None, :]))
+    top = np.full(n_seg, -np.inf)
+    np.maximum.at(top, seg, height)
+    lo, hi = np.minimum(seg[i], seg[j]), np.maximum(seg[i], seg[j])
+    h = 0.5 * (height[i] + height[j])
+    at_top = (h >= top[lo] - tolerance_m) & (h >= top[hi] - tolerance_m) & ~(is_top[i] | is_top[j])
+    joined = []
+    for a, b in sorted(set(zip(lo.tolist(), hi.tolist(), strict=True))):
+        pair = (lo == a) & (hi == b)
+        if pair.sum() >= 5 and at_top[pair].sum() >= 0.9 * pair.sum():
+            joined.append((a, b))
+    return join_pairs(seg, np.asarray(joined, dtype=np.int64).reshape(-1, 2), n_seg)
+
+
+def test_merge_rims_joins_what_every_pair_of_voxels_says() -> None:
+    """On random clouds of 600 voxels in 3-8 segments side by side (slabs along x that
+    touch their neighbours), merge_rims (the grid, then a search between two segments'
+    trees) joins exactly what the rule over every pair of voxels joins: thin layers at
+    about one height touch at both tops (joined, but where top voxels spoil the
+    contact), tall walls touch all the way down (apart)."""
+    from clearcli.perception.rims import merge_rims
+
+    rng = np.random.default_rng(21)
+    n_joined = []
+    for trial in range(12):
+        n_seg = 3 + trial % 6
+        seg = rng.integers(0, n_seg, 600)
+        pts = np.column_stack([0.03 * seg + rng.uniform(0.0, 0.035, 600), rng.uniform(0.0, 0.1, 600), np.zeros(600)])
+        if trial % 2:
+            pts[:, 2] = rng.uniform(0.0, 0.1, 600)  # walls
+        else:
+            pts[:, 2] = 0.1 + 0.003 * seg + rng.uniform(0.0, 0.006, 600)  # layers, tops 0.106 + 0.003 s
+        is_top = rng.uniform(size=600) < 0.02 * (trial % 3)
+        got = merge_rims(seg, pts, pts[:, 2], 0.012, 0.01, voxel_is_top=is_top)
+        want = _merge_rims_by_every_pair(seg, pts, pts[:, 2], 0.012, 0.01, is_top)
+        assert np.array_equal(got, want)
+        n_joined.append(n_seg - (int(got.max()) + 1))
+    assert min(n_joined) == 0 and max(n_joined) >= 2
