@@ -20,8 +20,9 @@ pair is joined when, across its seam (the voxels of both within `learned.GAP_M`)
   two objects of one height side by side with a convex seam between them are told
   apart by colour, and colors.py keeps such pieces apart already.
 
-On the training pairs (training/join_pairs.csv: mOSD learn, the foreign choose frames,
-renders of the choose seeds, each with two noisier copies) the rule takes 5 pairs, all
+On the training pairs it was chosen on (training/join_pairs.csv as extracted before this
+stage existed, since re-extracted from today's stages: mOSD learn, the foreign choose
+frames, renders of the choose seeds, each with two noisier copies) the rule takes 5 pairs, all
 of one object (a spring clamp's two arms, a bracket's two halves, two faces of a render's
 box: convex 0.73-1.0, rising 1.5-3.5 mm); the nearest pairs of two objects it leaves
 have colours 28 dE apart, or a convex share of 0.65 (mOSD learn25 with 4 mm of extra
