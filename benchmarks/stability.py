@@ -224,7 +224,7 @@ def voxel_difference(frame: Frame, other: Frame, settings: SegmentSettings) -> s
             return "no voxels"
         assert w.vox is not None and w.size is not None and w.fit is not None
         viewpoint = np.zeros(3) if w.fit.camera_is_origin else w.fit.polygon.mean(axis=0) + w.fit.plane.normal
-        normals = stage_voxel_normals(w.vox, viewpoint, w.size)
+        normals = stage_voxel_normals(w.vox, viewpoint, settings, w.size)
         labels = supervoxel_labels(w.vox, normals, settings, w.size)
         # a voxel's cell from its centroid: the grid's cell of every point in it
         cells = grid_cells(w.vox.centroids, w.size.voxel_m)

@@ -367,31 +367,33 @@ def voxel_normals(centroids: np.ndarray, radius_m: float, viewpoint: np.ndarray,
     return orient_towards(normals, centroids, viewpoint)
 
 
-def weighted_voxel_normals(vox: VoxelCloud, radius_m: float, voxel_m: float, viewpoint: np.ndarray) -> np.ndarray:
+def weighted_voxel_normals(
+    vox: VoxelCloud, radius_m: float, voxel_m: float, viewpoint: np.ndarray, full_weight_points: int = 4
+) -> np.ndarray:
     """(V, 3) unit normals of the voxels, facing the viewpoint: the smallest
-    eigenvector of the covariance of the points of every voxel whose grid cell lies
-    within ``radius_m`` of the voxel's cell (cell centres ``voxel_m`` apart; itself
-    included), all of them, no cap.
+    eigenvector of the weighted covariance of the points of every voxel whose grid cell
+    lies within ``radius_m`` of the voxel's cell (cell centres ``voxel_m`` apart; itself
+    included), all of them, no cap on their number.
 
     The neighbourhood is a fixed stencil of cells, not the centroids within a radius of
     the voxel's centroid: a centroid moves when one of its points passes to a neighbour
     cell (a voxel of 3 points: by a millimetre), and a ball around a moving centre, or
-    centroids moving across its rim, took whole voxels in or out (issue 37). Each
-    voxel counts with its points, its scatter included (`VoxelCloud.scatter`), so the
-    fit is that of the points themselves: a point crossing a cell side inside the
-    stencil changes nothing, and one crossing its rim, or a voxel of one point that
-    appears or vanishes, weighs one point among the hundred or more, not one voxel among
-    thirty (the fit on the 30 nearest centroids turned normals by 5-13 degrees when a
-    one-point voxel came or went). Fewer than 3 voxels: +z before orienting, as
-    `voxel_normals`."""
+    centroids moving across its rim, took whole voxels in or out (issue 37). A voxel
+    weighs min(points, ``full_weight_points``) / ``full_weight_points``, its centroid
+    and its scatter (`VoxelCloud.scatter`) scaled alike, so a voxel of one point that
+    appears or vanishes moves the fit by a fraction of a voxel among the thirty or more
+    (the fit on the 30 nearest centroids turned normals by 5-13 degrees when one came or
+    went). Fewer than 3 voxels: +z before orienting, as `voxel_normals`."""
     from scipy.spatial import cKDTree
 
     cent = vox.centroids
     n = cent.shape[0]
     if n == 0:
         return np.zeros((0, 3))
-    scatter = vox.scatter if vox.scatter is not None else np.zeros((n, 6))
     counts = vox.counts.astype(np.float64)
+    weight = np.minimum(counts, float(full_weight_points)) / float(full_weight_points)
+    # each voxel's scatter, scaled as its weight scales its points
+    scatter = vox.scatter * (weight / counts)[:, None] if vox.scatter is not None else np.zeros((n, 6))
     # integer cell coordinates: their squared distances are whole numbers, so the
     # stencil's rim lies a whole 1e-6 cell from any of them
     radius_cells = radius_m / voxel_m + 1e-6
@@ -401,9 +403,9 @@ def weighted_voxel_normals(vox: VoxelCloud, radius_m: float, voxel_m: float, vie
     # (the covariance does not depend on the origin; near it, no cancellation)
     ends = np.concatenate((first, second))
     others = np.concatenate((second, first))
-    w = counts[others]
+    w = np.take(weight, others)
     o = [np.take(cent[:, a], others) - np.take(cent[:, a], ends) for a in range(3)]
-    total = counts + np.bincount(ends, weights=w, minlength=n)
+    total = weight + np.bincount(ends, weights=w, minlength=n)
     s1 = [np.bincount(ends, weights=w * o[a], minlength=n) / total for a in range(3)]
     cov = []
     for e, (a, b) in enumerate(_SCATTER_ENTRIES):
@@ -619,10 +621,14 @@ def supervoxel_stats(
     return Supervoxels(labels, mean, normals, cnt.astype(np.int64), pairs)
 
 
-def stage_voxel_normals(vox: VoxelCloud, viewpoint: np.ndarray, size: SegmentSize) -> np.ndarray:
+def stage_voxel_normals(
+    vox: VoxelCloud, viewpoint: np.ndarray, settings: SegmentSettings, size: SegmentSize
+) -> np.ndarray:
     """(V, 3) the voxel normals the stage uses (`weighted_voxel_normals`); also what
     benchmarks/stability.py compares between runs."""
-    return weighted_voxel_normals(vox, size.normal_radius_m, size.voxel_m, viewpoint)
+    return weighted_voxel_normals(
+        vox, size.normal_radius_m, size.voxel_m, viewpoint, settings.normal_full_weight_points
+    )
 
 
 def compute_supervoxels(
@@ -631,6 +637,6 @@ def compute_supervoxels(
     """Stage 3a: voxel normals, VCCS clustering, supervoxel centroids/normals/adjacency.
     ``size``: the frame's seed and normal radius (`SegmentSize.of(settings)` when None)."""
     size = size if size is not None else SegmentSize.of(settings)
-    normals = stage_voxel_normals(vox, viewpoint, size)
+    normals = stage_voxel_normals(vox, viewpoint, settings, size)
     labels = supervoxel_labels(vox, normals, settings, size)
     return supervoxel_stats(vox, normals, labels, viewpoint)
