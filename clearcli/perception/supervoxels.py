@@ -77,8 +77,9 @@ def _unique_inverse(keys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return uniq, np.repeat(run_inverse.astype(np.int64, copy=False), lengths)
 
 
-def voxelize(points: np.ndarray, voxel_m: float, colors: np.ndarray | None = None) -> VoxelCloud:
-    """Voxel grid of ``points`` (M, 3) and the voxel adjacency graph."""
+def voxelize(points: np.ndarray, voxel_m: float, colors: np.ndarray | None = None, scatter: bool = False) -> VoxelCloud:
+    """Voxel grid of ``points`` (M, 3) and the voxel adjacency graph; ``scatter``: also
+    each voxel's scatter of its points (`VoxelCloud.scatter`, for `weighted_voxel_normals`)."""
     # the cells of `grid_cells`, one coordinate at a time: reductions over axis 0 of an
     # (M, 3) array are several times slower than over a column; floor is monotonic, so
     # a column's lowest cell is the cell of its lowest float
@@ -107,11 +108,13 @@ def voxelize(points: np.ndarray, voxel_m: float, colors: np.ndarray | None = Non
     # the points' scatter in each voxel: with the counts and centroids it gives the exact
     # covariance of the points of any set of voxels (`voxel_normals`), so a point passing
     # from one voxel to a neighbour changes no fit over both (issue 37)
-    dev = [points[:, k] - np.take(cent[:, k], inverse) for k in range(3)]
-    scatter = np.stack(
-        [np.bincount(inverse, weights=dev[a] * dev[b], minlength=n_vox) for a, b in _SCATTER_ENTRIES], axis=1
-    )
-    return VoxelCloud(inverse, cent, counts, keys, vcol, _adjacency(uniq, dims), scatter)
+    scat = None
+    if scatter:
+        dev = [points[:, k] - np.take(cent[:, k], inverse) for k in range(3)]
+        scat = np.stack(
+            [np.bincount(inverse, weights=dev[a] * dev[b], minlength=n_vox) for a, b in _SCATTER_ENTRIES], axis=1
+        )
+    return VoxelCloud(inverse, cent, counts, keys, vcol, _adjacency(uniq, dims), scat)
 
 
 def _adjacency(uniq: np.ndarray, dims: list[int]) -> np.ndarray:
@@ -624,11 +627,14 @@ def supervoxel_stats(
 def stage_voxel_normals(
     vox: VoxelCloud, viewpoint: np.ndarray, settings: SegmentSettings, size: SegmentSize
 ) -> np.ndarray:
-    """(V, 3) the voxel normals the stage uses (`weighted_voxel_normals`); also what
+    """(V, 3) the voxel normals the stage uses: `voxel_normals` (the 30 nearest voxel
+    centroids), or with ``settings.normal_stencil`` `weighted_voxel_normals`; also what
     benchmarks/stability.py compares between runs."""
-    return weighted_voxel_normals(
-        vox, size.normal_radius_m, size.voxel_m, viewpoint, settings.normal_full_weight_points
-    )
+    if settings.normal_stencil:
+        return weighted_voxel_normals(
+            vox, size.normal_radius_m, size.voxel_m, viewpoint, settings.normal_full_weight_points
+        )
+    return voxel_normals(vox.centroids, size.normal_radius_m, viewpoint)
 
 
 def compute_supervoxels(
