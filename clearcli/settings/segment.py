@@ -135,8 +135,8 @@ class SegmentSettings(Section):
     # frames split 3 more) and the gap families lose renders (gap_10mm_across F1 0.757 ->
     # 0.638); objects kept under sensor noise: mOSD 97.2 -> 97.6 %, scenes 53.4 -> 56.0,
     # uois 70.6 -> 68.2, fixtures 88.9 -> 77.8. Stencils of 2-2.85 cells, caps of 2-4
-    # points or none, weights tapering with the cells' distance: all lost 4-5 on the
-    # foreign part (h3-voxel's report)
+    # points or none, weights tapering with the cells' distance: all lost 3-5 on the
+    # foreign part; the 15 mm ball around the centroid without the 30 cap, 7 (h3-voxel)
     normal_stencil: bool = param(False)
     # with normal_stencil: a voxel of this many points or more counts fully in its
     # neighbours' fits, one of fewer its points' share (a voxel of one point coming or
