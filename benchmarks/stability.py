@@ -215,7 +215,7 @@ def voxel_difference(frame: Frame, other: Frame, settings: SegmentSettings) -> s
     not (with their point counts), the voxels whose point count changed, how far the
     voxel normals of the voxels both have turned, and how many of those voxels changed
     supervoxel (the most voxels of each supervoxel of the first run kept together)."""
-    from clearcli.perception.supervoxels import grid_cells, supervoxel_labels, voxel_normals
+    from clearcli.perception.supervoxels import grid_cells, stage_voxel_normals, supervoxel_labels
 
     runs = []
     for f in (frame, other):
@@ -224,7 +224,7 @@ def voxel_difference(frame: Frame, other: Frame, settings: SegmentSettings) -> s
             return "no voxels"
         assert w.vox is not None and w.size is not None and w.fit is not None
         viewpoint = np.zeros(3) if w.fit.camera_is_origin else w.fit.polygon.mean(axis=0) + w.fit.plane.normal
-        normals = voxel_normals(w.vox.centroids, w.size.normal_radius_m, viewpoint)
+        normals = stage_voxel_normals(w.vox, viewpoint, settings, w.size)
         labels = supervoxel_labels(w.vox, normals, settings, w.size)
         # a voxel's cell from its centroid: the grid's cell of every point in it
         cells = grid_cells(w.vox.centroids, w.size.voxel_m)

@@ -433,7 +433,8 @@ def _voxels(w: _Work) -> None:
     # the supervoxels read colour only where it is usable (not all black, saturated or flat)
     colors = w.frame.colors if (w.color_used and w.settings.color_importance > 0) else None
     colors = np.take(colors, w.obj_idx, axis=0) if colors is not None else None  # take: several times faster
-    w.vox = voxelize(w.obj_pts, w.size.voxel_m, colors)
+    # the points' scatter per voxel only for the normals that read it (normal_stencil)
+    w.vox = voxelize(w.obj_pts, w.size.voxel_m, colors, scatter=w.settings.normal_stencil)
 
 
 def _depth_edges(w: _Work) -> None:

@@ -35,6 +35,8 @@ _HALF_OFFSETS = np.array(
 # 0.35 mm, a boundary lies 0.35 mm from any whole millimetre (0.15 from a half, 0.05
 # from a tenth), and a micrometre moves only the few points that are truly that close.
 GRID_SHIFT_M = 0.00035
+# the six distinct entries of a symmetric 3 x 3 matrix, in `VoxelCloud.scatter`'s order
+_SCATTER_ENTRIES = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))
 
 
 def grid_cells(points: np.ndarray, cell_m: float) -> np.ndarray:
@@ -51,6 +53,9 @@ class VoxelCloud:
     keys: np.ndarray  # (V, 3) integer grid coordinates
     colors: np.ndarray | None  # (V, 3) float mean RGB
     edges: np.ndarray  # (E, 2) adjacent voxel pairs (26-neighbourhood), i < j unordered
+    # (V, 6) each voxel's points' scatter about its centroid, sum of d d^T with d = p - c,
+    # entries (xx, xy, xz, yy, yz, zz), m^2; None: not computed (a hand-made cloud)
+    scatter: np.ndarray | None = None
 
     @property
     def n_voxels(self) -> int:
@@ -72,8 +77,9 @@ def _unique_inverse(keys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return uniq, np.repeat(run_inverse.astype(np.int64, copy=False), lengths)
 
 
-def voxelize(points: np.ndarray, voxel_m: float, colors: np.ndarray | None = None) -> VoxelCloud:
-    """Voxel grid of ``points`` (M, 3) and the voxel adjacency graph."""
+def voxelize(points: np.ndarray, voxel_m: float, colors: np.ndarray | None = None, scatter: bool = False) -> VoxelCloud:
+    """Voxel grid of ``points`` (M, 3) and the voxel adjacency graph; ``scatter``: also
+    each voxel's scatter of its points (`VoxelCloud.scatter`, for `weighted_voxel_normals`)."""
     # the cells of `grid_cells`, one coordinate at a time: reductions over axis 0 of an
     # (M, 3) array are several times slower than over a column; floor is monotonic, so
     # a column's lowest cell is the cell of its lowest float
@@ -99,7 +105,16 @@ def voxelize(points: np.ndarray, voxel_m: float, colors: np.ndarray | None = Non
             / counts[:, None]
         )
     keys = np.stack([uniq // (dims[1] * dims[2]), (uniq // dims[2]) % dims[1], uniq % dims[2]], axis=1)
-    return VoxelCloud(inverse, cent, counts, keys, vcol, _adjacency(uniq, dims))
+    # the points' scatter in each voxel: with the counts and centroids it gives the exact
+    # covariance of the points of any set of voxels (`voxel_normals`), so a point passing
+    # from one voxel to a neighbour changes no fit over both (issue 37)
+    scat = None
+    if scatter:
+        dev = [points[:, k] - np.take(cent[:, k], inverse) for k in range(3)]
+        scat = np.stack(
+            [np.bincount(inverse, weights=dev[a] * dev[b], minlength=n_vox) for a, b in _SCATTER_ENTRIES], axis=1
+        )
+    return VoxelCloud(inverse, cent, counts, keys, vcol, _adjacency(uniq, dims), scat)
 
 
 def _adjacency(uniq: np.ndarray, dims: list[int]) -> np.ndarray:
@@ -355,6 +370,56 @@ def voxel_normals(centroids: np.ndarray, radius_m: float, viewpoint: np.ndarray,
     return orient_towards(normals, centroids, viewpoint)
 
 
+def weighted_voxel_normals(
+    vox: VoxelCloud, radius_m: float, voxel_m: float, viewpoint: np.ndarray, full_weight_points: int = 4
+) -> np.ndarray:
+    """(V, 3) unit normals of the voxels, facing the viewpoint: the smallest
+    eigenvector of the weighted covariance of the points of every voxel whose grid cell
+    lies within ``radius_m`` of the voxel's cell (cell centres ``voxel_m`` apart; itself
+    included), all of them, no cap on their number.
+
+    The neighbourhood is a fixed stencil of cells, not the centroids within a radius of
+    the voxel's centroid: a centroid moves when one of its points passes to a neighbour
+    cell (a voxel of 3 points: by a millimetre), and a ball around a moving centre, or
+    centroids moving across its rim, took whole voxels in or out (issue 37). A voxel
+    weighs min(points, ``full_weight_points``) / ``full_weight_points``, its centroid
+    and its scatter (`VoxelCloud.scatter`) scaled alike, so a voxel of one point that
+    appears or vanishes moves the fit by a fraction of a voxel among the thirty or more
+    (the fit on the 30 nearest centroids turned normals by 5-13 degrees when one came or
+    went). Fewer than 3 voxels: +z before orienting, as `voxel_normals`."""
+    from scipy.spatial import cKDTree
+
+    cent = vox.centroids
+    n = cent.shape[0]
+    if n == 0:
+        return np.zeros((0, 3))
+    counts = vox.counts.astype(np.float64)
+    weight = np.minimum(counts, float(full_weight_points)) / float(full_weight_points)
+    # each voxel's scatter, scaled as its weight scales its points
+    scatter = vox.scatter * (weight / counts)[:, None] if vox.scatter is not None else np.zeros((n, 6))
+    # integer cell coordinates: their squared distances are whole numbers, so the
+    # stencil's rim lies a whole 1e-6 cell from any of them
+    radius_cells = radius_m / voxel_m + 1e-6
+    pairs = cKDTree(vox.keys.astype(np.float64)).query_pairs(radius_cells, output_type="ndarray")
+    first, second = pairs[:, 0], pairs[:, 1]
+    # each pair adds each voxel to the other's sums; offsets from the voxel's centroid
+    # (the covariance does not depend on the origin; near it, no cancellation)
+    ends = np.concatenate((first, second))
+    others = np.concatenate((second, first))
+    w = np.take(weight, others)
+    o = [np.take(cent[:, a], others) - np.take(cent[:, a], ends) for a in range(3)]
+    total = weight + np.bincount(ends, weights=w, minlength=n)
+    s1 = [np.bincount(ends, weights=w * o[a], minlength=n) / total for a in range(3)]
+    cov = []
+    for e, (a, b) in enumerate(_SCATTER_ENTRIES):
+        s2 = np.bincount(ends, weights=w * o[a] * o[b] + np.take(scatter[:, e], others), minlength=n)
+        cov.append((s2 + scatter[:, e]) / total - s1[a] * s1[b])
+    normals = _smallest_eigenvectors6(*cov)
+    n_nb = 1 + np.bincount(ends, minlength=n)
+    normals[n_nb < 3] = (0.0, 0.0, 1.0)
+    return orient_towards(normals, cent, viewpoint)
+
+
 def _pair_keys(pairs: np.ndarray, n: int) -> np.ndarray:
     """(P,) int64 key ``a * n + b`` of each row (a, b) of ``pairs``, ints in [0, n): the
     keys sort as the rows do (first column major), so ``np.unique`` on them gives the rows
@@ -559,12 +624,25 @@ def supervoxel_stats(
     return Supervoxels(labels, mean, normals, cnt.astype(np.int64), pairs)
 
 
+def stage_voxel_normals(
+    vox: VoxelCloud, viewpoint: np.ndarray, settings: SegmentSettings, size: SegmentSize
+) -> np.ndarray:
+    """(V, 3) the voxel normals the stage uses: `voxel_normals` (the 30 nearest voxel
+    centroids), or with ``settings.normal_stencil`` `weighted_voxel_normals`; also what
+    benchmarks/stability.py compares between runs."""
+    if settings.normal_stencil:
+        return weighted_voxel_normals(
+            vox, size.normal_radius_m, size.voxel_m, viewpoint, settings.normal_full_weight_points
+        )
+    return voxel_normals(vox.centroids, size.normal_radius_m, viewpoint)
+
+
 def compute_supervoxels(
     vox: VoxelCloud, viewpoint: np.ndarray, settings: SegmentSettings, size: SegmentSize | None = None
 ) -> Supervoxels:
     """Stage 3a: voxel normals, VCCS clustering, supervoxel centroids/normals/adjacency.
     ``size``: the frame's seed and normal radius (`SegmentSize.of(settings)` when None)."""
     size = size if size is not None else SegmentSize.of(settings)
-    normals = voxel_normals(vox.centroids, size.normal_radius_m, viewpoint)
+    normals = stage_voxel_normals(vox, viewpoint, settings, size)
     labels = supervoxel_labels(vox, normals, settings, size)
     return supervoxel_stats(vox, normals, labels, viewpoint)

@@ -82,6 +82,32 @@ def test_other_labs_frames_change_under_a_micrometre_only_where_known(where: str
     assert {line.split(":")[0] for line in changed} == _KNOWN_FLIPS & {p.name for p in paths}, changed
 
 
+# Frames allowed for choosing whose objects the default voxel normals change under
+# these perturbation seeds (benchmarks/flips.py, seeds 0-19: gqcnn_primesense_4 under 8
+# of 20, uois_image_0000 under 2), each flip starting at the supervoxels.
+_FLIPPING_SEEDS = {"gqcnn/gqcnn_primesense_4.pcd": (0, 4, 6, 8, 11), "uois_realsense/uois_image_0000.pcd": (5, 9)}
+
+
+@pytest.mark.parametrize("name", sorted(_FLIPPING_SEEDS))
+def test_stencil_normals_keep_the_objects_the_default_flips(name: str) -> None:
+    """With normal_stencil (supervoxels.weighted_voxel_normals: the points of a fixed
+    stencil of cells, a voxel weighing up to 4 points) the frames keep their objects
+    under the seeds that change them with the default normals (issue 37). Off by default:
+    it loses 4 of 89 objects on the foreign choose part (settings.segment)."""
+    from clearcli.io.read import read_frame
+    from clearcli.perception.segment import segment
+    from clearcli.perception.stability import perturbed, same_objects
+    from clearcli.settings.segment import SegmentSettings
+
+    settings = SegmentSettings(normal_stencil=True)
+    frame = read_frame(shared_path("scenes") / name)
+    before = segment(frame, settings)
+    changed = [
+        s for s in _FLIPPING_SEEDS[name] if not same_objects(before, segment(perturbed(frame, 1e-6, s), settings))
+    ]
+    assert changed == []
+
+
 def test_fixtures_keep_their_objects_under_a_micrometre() -> None:
     paths = sorted(FIXTURES.glob("*.pcd"))
     assert len(paths) >= 4

@@ -250,3 +250,59 @@ def test_thin_strips_take_the_closed_form(monkeypatch: pytest.MonkeyPatch) -> No
     got = supervoxels.smallest_eigenvectors(cov)
     assert calls == []
     assert np.abs(np.abs(np.einsum("ij,ij->i", got, want)) - 1.0).max() < 1e-9
+
+
+def test_weighted_normals_are_the_weighted_pca_of_the_stencils_points() -> None:
+    """Each voxel's normal: the smallest eigenvector of the covariance of the points of
+    the voxels whose cells lie within the radius of its cell, a voxel of n points
+    weighing min(n, 4) / 4 (each of its points min(n, 4) / (4 n)), by hand with eigh."""
+    from clearcli.perception.supervoxels import voxelize, weighted_voxel_normals
+
+    gen = np.random.default_rng(3)
+    # a bumpy sheet with sparse and dense patches: voxels of 1 to dozens of points
+    xy = gen.uniform(0.0, 0.03, (900, 2))
+    xy = np.concatenate([xy, gen.uniform(0.0, 0.008, (300, 2))])
+    pts = np.column_stack([xy, 0.5 + 0.3 * xy[:, 0] + 0.002 * np.sin(300 * xy[:, 1])])
+    vox = voxelize(pts, 0.005, scatter=True)
+    assert vox.counts.min() < 4 < vox.counts.max()
+    got = weighted_voxel_normals(vox, 0.011, 0.005, np.zeros(3), full_weight_points=4)
+    point_weight = np.minimum(vox.counts, 4) / 4 / vox.counts
+    for i in range(vox.n_voxels):
+        near = np.flatnonzero(((vox.keys - vox.keys[i]) ** 2).sum(axis=1) <= (0.011 / 0.005) ** 2)
+        mine = np.isin(vox.point_voxel, near)
+        w = point_weight[vox.point_voxel[mine]]
+        p = pts[mine]
+        mean = (w[:, None] * p).sum(axis=0) / w.sum()
+        cov = ((w[:, None] * (p - mean)).T @ (p - mean)) / w.sum()
+        want = np.linalg.eigh(cov)[1][:, 0]
+        if near.size >= 3:
+            assert abs(float(got[i] @ want)) > 1 - 1e-9
+    assert np.all(got[:, 2] < 0)  # facing the camera at the origin
+
+
+def test_a_voxel_of_one_point_coming_or_going_turns_no_normal_far() -> None:
+    """Issue 37: a point 3 mm off a tilted sheet (1 mm pitch) moved 1 um across a cell
+    side makes a voxel of its own or joins one of 4 or more points. On the 30 nearest
+    voxel centroids, each voxel weighing alike (the default), the normals around turned
+    by 3.9 degrees; with normal_stencil (weighted by their points, up to 4) by 0.8."""
+    from clearcli.perception.size import SegmentSize
+    from clearcli.perception.supervoxels import GRID_SHIFT_M, grid_cells, stage_voxel_normals, voxelize
+    from clearcli.settings.segment import SegmentSettings
+
+    settings = SegmentSettings(normal_stencil=True)
+    size = SegmentSize.of(settings)
+    g = np.arange(0.0, 0.04, 0.001)
+    x, y = np.meshgrid(g, g, indexing="ij")
+    sheet = np.stack([x.ravel(), y.ravel(), 0.6 + 0.2 * x.ravel()], axis=1)
+    side_x = 0.02 - GRID_SHIFT_M  # a cell side of the 5 mm grid
+    runs = []
+    for dx in (-0.5e-6, 0.5e-6):
+        stray = np.array([[side_x + dx, 0.0224, 0.6 + 0.2 * side_x + 0.003]])
+        vox = voxelize(np.concatenate([sheet, stray]), size.voxel_m, scatter=True)
+        cells = {tuple(c): i for i, c in enumerate(grid_cells(vox.centroids, size.voxel_m).tolist())}
+        runs.append((vox, cells, stage_voxel_normals(vox, np.zeros(3), settings, size)))
+    (va, ca, na), (vb, cb, nb) = runs
+    assert va.n_voxels == vb.n_voxels + 1 and va.counts.min() == 1  # a voxel of one point, then none
+    both = np.array([(i, cb[c]) for c, i in ca.items() if c in cb])
+    turn = np.degrees(np.arccos(np.clip(np.abs((na[both[:, 0]] * nb[both[:, 1]]).sum(axis=1)), 0.0, 1.0)))
+    assert 0.1 < turn.max() < 1.2
