@@ -374,8 +374,8 @@ def decisive_edges(frame: Frame, other: Frame, settings: SegmentSettings) -> lis
             partner[a] = (b, h / (size_a[a] + size_b[b] - h))
     tests_a = _lccp_tests(wa.sv, settings, wa.size)
     tests_b = _lccp_tests(wb.sv, settings, wb.size)
-    convex_a = convex_edges(wa.sv, settings, wa.size, lab_a)
-    convex_b = convex_edges(wb.sv, settings, wb.size, lab_b)
+    convex_a = convex_edges(wa.sv, settings, wa.size, lab_a, wa.vox)
+    convex_b = convex_edges(wb.sv, settings, wb.size, lab_b, wb.vox)
     seg_a = np.zeros(size_a.size, dtype=np.int64)
     seg_a[la] = wa.seg_of_voxel
     seg_b = np.zeros(size_b.size, dtype=np.int64)
