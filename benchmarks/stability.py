@@ -341,6 +341,14 @@ def _lccp_state(frame: Frame, settings: SegmentSettings) -> Any:
     return w, cells, sv_lab
 
 
+def _spread_ratio(centroids: np.ndarray) -> float:
+    """The second over the least eigenvalue of the scatter of a supervoxel's voxel
+    centroids (supervoxel_stats uses PCA's normal above 4)."""
+    d = centroids - centroids.mean(axis=0)
+    evals = np.linalg.eigvalsh(d.T @ d)
+    return float(evals[1] / max(evals[0], 1e-12))
+
+
 def decisive_edges(frame: Frame, other: Frame, settings: SegmentSettings) -> list[str]:
     """Where LCCP's answer changed (issue 37), with how near its threshold each test was.
 
@@ -351,7 +359,9 @@ def decisive_edges(frame: Frame, other: Frame, settings: SegmentSettings) -> lis
     changed. Per decisive edge: the supervoxels' sizes (voxels) and IoU with their partners
     (a supervoxel that lost or gained a voxel moves its centroid and normal: the margins
     then move by far more than the micrometre the points did), and each test of
-    `_lccp_tests` whose sign changed, its margin before -> after. The last line: the
+    `_lccp_tests` whose sign changed, its margin before -> after; per supervoxel of those
+    edges that changed, its voxels, the eigenvalue ratio that picks its normal's source,
+    and how far its normal turned. The last line: the
     supervoxels without a partner at IoU >= 0.95, and the least |margin before| of the
     tests that changed on decisive edges (a margin rule must reach that far to catch it)."""
     from clearcli.perception.lccp import convex_edges
@@ -401,9 +411,23 @@ def decisive_edges(frame: Frame, other: Frame, settings: SegmentSettings) -> lis
             f"edge {a}-{b} (voxels {size_a[a]},{size_a[b]}; IoU {iou_a:.2f},{iou_b:.2f}): convex "
             f"{bool(convex_a[i])} -> {bool(convex_b[j])}; " + ("; ".join(changed) or "colour only")
         )
+    # the supervoxels of the decisive edges that changed: their normal's source (supervoxel_stats
+    # takes the PCA normal when the second eigenvalue exceeds 4 x the first, else the mean voxel normal)
+    touched = sorted({int(x) for line in lines for x in line.split()[1].split("-")})
+    for s in touched:
+        pb, iou = partner[s]
+        if iou >= 1.0:
+            continue
+        ra, rb = _spread_ratio(wa.vox.centroids[la == s]), _spread_ratio(wb.vox.centroids[lb == pb])
+        turn = np.degrees(np.arccos(np.clip(abs(float(wa.sv.normals[s] @ wb.sv.normals[pb])), 0.0, 1.0)))
+        lines.append(
+            f"supervoxel {s}: {size_a[s]} -> {size_b[pb]} voxels, eigenvalue ratio {ra:.2f} -> {rb:.2f} (PCA normal "
+            f"over 4, mean voxel normal under), its normal turned {turn:.1f} deg"
+        )
     moved = sorted((int(s), int(size_a[s])) for s in range(size_a.size) if partner.get(s, (0, 0.0))[1] < 0.95)
+    n_edges = sum(line.startswith("edge") for line in lines)
     lines.append(
-        f"supervoxels (label, voxels) without a partner at IoU >= 0.95: {moved}; decisive edges {len(lines)}; "
+        f"supervoxels (label, voxels) without a partner at IoU >= 0.95: {moved}; decisive edges {n_edges}; "
         f"least |margin| before of a changed test: {least:.3g} (mm or deg)"
     )
     return lines
