@@ -1,7 +1,7 @@
 """Every micrometre flip, seed by seed, with the stage it starts at (issue 37).
 
     .venv/bin/python benchmarks/flips.py [--sets mosd,uois,fixtures,scenes,rgbd]
-        [--amplitude-um 1] [--seeds 0:10] [--with-report]
+        [--amplitude-um 1] [--seeds 0:10] [--with-report] [--margins]
 
 stability.py traces only the first perturbation seed that changes a frame's objects;
 this traces every one, so a flip that starts in a later stage is not hidden behind a
@@ -10,6 +10,11 @@ counts, the first step whose groups differ (stability.first_difference: a group 
 least 30 points without a partner at IoU >= 0.95), the points that changed group there
 and at the end, and the whole chain
 (groups unmatched/points moved per step; a merge of two groups moves no point).
+With --margins, per flip also LCCP's decisive edges (stability.decisive_edges): the
+adjacencies both runs have whose supervoxels end in one segment in one run and two in
+the other, each changed test's margin before -> after, and the supervoxels that lost or
+gained voxels (a margin rule at LCCP can only catch a flip whose margins moved less
+than the rule's band; one voxel more or less in a supervoxel moves them by far more).
 
 Sets: stability.py's (points moved by uniform noise in [-a, +a] per coordinate), and
 "rgbd": the RealSense depth PNGs of ../shared/data/rgbd/uois read by clear's RGB-D
@@ -91,6 +96,11 @@ def main() -> None:
     parser.add_argument("--amplitude-um", type=float, default=1.0)
     parser.add_argument("--seeds", default="0:10", help="perturbation seeds, first:last (last excluded)")
     parser.add_argument("--with-report", action="store_true", help="also the foreign report part's frames")
+    parser.add_argument(
+        "--margins",
+        action="store_true",
+        help="per flip, LCCP's decisive edges: each changed test's margin before -> after (stability.decisive_edges)",
+    )
     args = parser.parse_args()
     settings = SegmentSettings()
     amp = args.amplitude_um * 1e-6
@@ -132,6 +142,9 @@ def main() -> None:
             # a merge moves no point out of its group's best partner (the merged group holds it
             # all): a step with groups unmatched is shown with 0 points moved too
             print("    " + ", ".join(f"{n} {u}/{m}" for n, u, m in steps if m or u), flush=True)
+            if args.margins:
+                for line in sb.decisive_edges(frame, other, settings):
+                    print("      " + line, flush=True)
     print(f"+-{args.amplitude_um:g} um: {flips} flips in {runs} runs (seeds {args.seeds})")
     if starts:
         print("first differing step:", ", ".join(f"{k} {v}" for k, v in sorted(starts.items())))

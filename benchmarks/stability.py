@@ -320,6 +320,119 @@ def lccp_difference(frame: Frame, other: Frame, settings: SegmentSettings) -> st
     return f"supervoxels without a partner {changed}; LCCP tests that changed answer on shared adjacencies: {said}"
 
 
+def _lccp_state(frame: Frame, settings: SegmentSettings) -> Any:
+    """`segment`'s work on ``frame`` through LCCP (its segments in ``seg_of_voxel``), with
+    each voxel's cell and, when the frame's colour is used, each supervoxel's CIELAB
+    colour as `segment._lccp` works it out; None when no voxel stands above the table."""
+    from clearcli.perception.flat import group_lab
+    from clearcli.perception.supervoxels import grid_cells
+
+    w = _run_until(frame, settings, through_supervoxels=True)
+    if w is None:
+        return None
+    assert w.vox is not None and w.sv is not None and w.size is not None
+    seg_mod._lccp(w)
+    sv_lab = None
+    if w.color_used and settings.lccp_color_delta > 0:
+        assert w.frame.colors is not None
+        colors = np.take(w.frame.colors, w.obj_idx, axis=0)
+        sv_lab = group_lab(w.sv.voxel_label[w.vox.point_voxel], colors, w.sv.centroids.shape[0])
+    cells = [tuple(c) for c in grid_cells(w.vox.centroids, w.size.voxel_m).tolist()]
+    return w, cells, sv_lab
+
+
+def _spread_ratio(centroids: np.ndarray) -> float:
+    """The second over the least eigenvalue of the scatter of a supervoxel's voxel
+    centroids (supervoxel_stats uses PCA's normal above 4)."""
+    d = centroids - centroids.mean(axis=0)
+    evals = np.linalg.eigvalsh(d.T @ d)
+    return float(evals[1] / max(evals[0], 1e-12))
+
+
+def decisive_edges(frame: Frame, other: Frame, settings: SegmentSettings) -> list[str]:
+    """Where LCCP's answer changed (issue 37), with how near its threshold each test was.
+
+    The supervoxels of both runs are matched by their voxels' cells (each of ``frame``'s to
+    the one of ``other``'s holding most of its cells); on every adjacency both runs have, the
+    edge is "decisive" when its two supervoxels end in one LCCP segment in one run and in two
+    in the other, and its own convexity answer (`lccp.convex_edges`, colour included)
+    changed. Per decisive edge: the supervoxels' sizes (voxels) and IoU with their partners
+    (a supervoxel that lost or gained a voxel moves its centroid and normal: the margins
+    then move by far more than the micrometre the points did), and each test of
+    `_lccp_tests` whose sign changed, its margin before -> after; per supervoxel of those
+    edges that changed, its voxels, the eigenvalue ratio that picks its normal's source,
+    and how far its normal turned. The last line: the
+    supervoxels without a partner at IoU >= 0.95, and the least |margin before| of the
+    tests that changed on decisive edges (a margin rule must reach that far to catch it)."""
+    from clearcli.perception.lccp import convex_edges
+
+    runs = [_lccp_state(f, settings) for f in (frame, other)]
+    if runs[0] is None or runs[1] is None:
+        return ["no voxels"]
+    (wa, cells_a, lab_a), (wb, cells_b, lab_b) = runs
+    la, lb = wa.sv.voxel_label, wb.sv.voxel_label
+    owner_b = dict(zip(cells_b, lb.tolist(), strict=True))
+    size_a = np.bincount(la)
+    size_b = np.bincount(lb)
+    hits: dict[tuple[int, int], int] = {}
+    for cell, label in zip(cells_a, la.tolist(), strict=True):
+        if cell in owner_b:
+            hits[label, owner_b[cell]] = hits.get((label, owner_b[cell]), 0) + 1
+    partner: dict[int, tuple[int, float]] = {}
+    for (a, b), h in hits.items():
+        if a not in partner or h > hits[a, partner[a][0]]:
+            partner[a] = (b, h / (size_a[a] + size_b[b] - h))
+    tests_a = _lccp_tests(wa.sv, settings, wa.size)
+    tests_b = _lccp_tests(wb.sv, settings, wb.size)
+    convex_a = convex_edges(wa.sv, settings, wa.size, lab_a, wa.vox)
+    convex_b = convex_edges(wb.sv, settings, wb.size, lab_b, wb.vox)
+    seg_a = np.zeros(size_a.size, dtype=np.int64)
+    seg_a[la] = wa.seg_of_voxel
+    seg_b = np.zeros(size_b.size, dtype=np.int64)
+    seg_b[lb] = wb.seg_of_voxel
+    row_b = {(int(a), int(b)): i for i, (a, b) in enumerate(wb.sv.edges.tolist())}
+    unit = {"smoothness": 1e3}  # metres shown as mm; the angles in degrees
+    lines = []
+    least = np.inf
+    for i, (a, b) in enumerate(wa.sv.edges.tolist()):
+        if a not in partner or b not in partner:
+            continue
+        (pa, iou_a), (pb, iou_b) = partner[a], partner[b]
+        j = row_b.get((min(pa, pb), max(pa, pb)))
+        if j is None or (seg_a[a] == seg_a[b]) == (seg_b[pa] == seg_b[pb]) or convex_a[i] == convex_b[j]:
+            continue
+        changed = []
+        for name, before in tests_a.items():
+            if name != "facing" and (before[i] >= 0) != (tests_b[name][j] >= 0):
+                k = unit.get(name, 1.0)
+                changed.append(f"{name} {before[i] * k:+.3g} -> {tests_b[name][j] * k:+.3g}")
+                least = min(least, abs(float(before[i]) * k))
+        lines.append(
+            f"edge {a}-{b} (voxels {size_a[a]},{size_a[b]}; IoU {iou_a:.2f},{iou_b:.2f}): convex "
+            f"{bool(convex_a[i])} -> {bool(convex_b[j])}; " + ("; ".join(changed) or "colour only")
+        )
+    # the supervoxels of the decisive edges that changed: their normal's source (supervoxel_stats
+    # takes the PCA normal when the second eigenvalue exceeds 4 x the first, else the mean voxel normal)
+    touched = sorted({int(x) for line in lines for x in line.split()[1].split("-")})
+    for s in touched:
+        pb, iou = partner[s]
+        if iou >= 1.0:
+            continue
+        ra, rb = _spread_ratio(wa.vox.centroids[la == s]), _spread_ratio(wb.vox.centroids[lb == pb])
+        turn = np.degrees(np.arccos(np.clip(abs(float(wa.sv.normals[s] @ wb.sv.normals[pb])), 0.0, 1.0)))
+        lines.append(
+            f"supervoxel {s}: {size_a[s]} -> {size_b[pb]} voxels, eigenvalue ratio {ra:.2f} -> {rb:.2f} (PCA normal "
+            f"over 4, mean voxel normal under), its normal turned {turn:.1f} deg"
+        )
+    moved = sorted((int(s), int(size_a[s])) for s in range(size_a.size) if partner.get(s, (0, 0.0))[1] < 0.95)
+    n_edges = sum(line.startswith("edge") for line in lines)
+    lines.append(
+        f"supervoxels (label, voxels) without a partner at IoU >= 0.95: {moved}; decisive edges {n_edges}; "
+        f"least |margin| before of a changed test: {least:.3g} (mm or deg)"
+    )
+    return lines
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--sets", default="mosd,uois,fixtures")

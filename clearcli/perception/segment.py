@@ -473,7 +473,7 @@ def _lccp(w: _Work) -> None:
         sv_lab = group_lab(
             sv.voxel_label[vox.point_voxel], np.take(w.frame.colors, w.obj_idx, axis=0), sv.centroids.shape[0]
         )
-    seg_of_sv = lccp_segments(sv, w.settings, sv_low, sv_high, plane.normal, w.size, sv_lab)
+    seg_of_sv = lccp_segments(sv, w.settings, sv_low, sv_high, plane.normal, w.size, sv_lab, vox)
     w.seg_of_voxel = seg_of_sv[sv.voxel_label]
 
 

@@ -3,10 +3,14 @@
 from __future__ import annotations
 
 import dataclasses
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pytest
 from helpers.segment import S
+
+if TYPE_CHECKING:
+    from clearcli.perception.supervoxels import Supervoxels, VoxelCloud
 
 
 # ------------------------------------------------------------------ 3. supervoxels + LCCP
@@ -70,3 +74,79 @@ def test_lccp_colour_cue_cuts_shallow_seams_between_colours(slope: float, two_co
     # off, or without colour, the tolerance alone decides: one segment
     assert int(lccp_segments(sv, dataclasses.replace(S, lccp_color_delta=0.0), sv_lab=lab).max()) == 0
     assert int(lccp_segments(sv, cue).max()) == 0
+
+
+# ------------------------------------------------------------------ smoothness near its allowance
+def _two_patches(step_m: float) -> tuple[VoxelCloud, Supervoxels]:
+    """Two flat patches of 5 x 5 voxels facing +z side by side along x (A at x < 0, B at
+    x > 0), B raised by ``step_m`` where they touch; the voxels and the two supervoxels
+    (labels 0 and 1, normals +z, one adjacency), their centroids as the voxels give them."""
+    from clearcli.perception.size import SegmentSize
+    from clearcli.perception.supervoxels import Supervoxels, voxelize
+
+    voxel_m = SegmentSize.of(S).voxel_m
+    i, j = np.meshgrid(np.arange(-5, 5), np.arange(5), indexing="ij")
+    x = (i.ravel() + 0.5) * voxel_m
+    y = (j.ravel() + 0.5) * voxel_m
+    z = np.where(x > 0, step_m, 0.0)
+    vox = voxelize(np.stack([x, y, z], axis=1), voxel_m)
+    label = (vox.centroids[:, 0] > 0).astype(np.int64)
+    centroids = np.stack([vox.centroids[label == k].mean(axis=0) for k in (0, 1)])
+    sv = Supervoxels(
+        voxel_label=label,
+        centroids=centroids,
+        normals=np.array([[0.0, 0.0, 1.0], [0.0, 0.0, 1.0]]),
+        n_voxels=np.bincount(label),
+        edges=np.array([[0, 1]]),
+    )
+    return vox, sv
+
+
+def test_boundary_step_is_the_offset_where_the_patches_touch() -> None:
+    from clearcli.perception.lccp import boundary_steps_m
+
+    vox, sv = _two_patches(0.0002)
+    # every voxel pair across x = 0 (the 26-neighbourhood: 5 straight, 8 diagonal in y)
+    # is offset by the 0.2 mm step along the normals, which are parallel (no tilt)
+    assert boundary_steps_m(sv, vox, np.array([0])) == pytest.approx([0.0002], abs=1e-12)
+    assert boundary_steps_m(sv, vox, np.zeros(0, dtype=np.int64)).shape == (0,)
+
+
+@pytest.mark.parametrize("eps_m", [-1e-9, 1e-9])
+def test_smoothness_at_its_allowance_is_decided_where_the_patches_touch(eps_m: float) -> None:
+    """A pair whose centroids are offset along their normals by the allowance (here
+    smoothness_threshold * voxel: parallel normals) +- a nanometre: without the voxels
+    the answer flips with the sign of eps; with them it is the boundary's, a 0.2 mm step,
+    under the 0.5 mm allowance: smooth either way (issue 37: one voxel more or less in a
+    supervoxel moved such an offset by 0.33 mm on gqcnn_primesense_4)."""
+
+    from clearcli.perception.lccp import convex_edges
+    from clearcli.perception.size import SegmentSize
+
+    size = SegmentSize.of(S)
+    allowance_m = S.smoothness_threshold * size.voxel_m
+    vox, sv = _two_patches(0.0002)
+    # the centroids as another make-up of the supervoxels would put them: B's raised so
+    # that their offset is the allowance + eps
+    centroids = sv.centroids.copy()
+    centroids[1, 2] = centroids[0, 2] + allowance_m + eps_m
+    sv = dataclasses.replace(sv, centroids=centroids)
+    assert convex_edges(sv, S, size).tolist() == [eps_m < 0]
+    assert convex_edges(sv, S, size, vox=vox).tolist() == [True]
+
+
+@pytest.mark.parametrize("eps_m", [-1e-9, 1e-9])
+def test_a_real_step_at_the_allowance_stays_a_step(eps_m: float) -> None:
+    """The same pair with a 0.8 mm step where the patches touch: a step, whichever side
+    of the allowance the centroids' offset falls."""
+
+    from clearcli.perception.lccp import convex_edges
+    from clearcli.perception.size import SegmentSize
+
+    size = SegmentSize.of(S)
+    allowance_m = S.smoothness_threshold * size.voxel_m
+    vox, sv = _two_patches(0.0008)
+    centroids = sv.centroids.copy()
+    centroids[1, 2] = centroids[0, 2] + allowance_m + eps_m
+    sv = dataclasses.replace(sv, centroids=centroids)
+    assert convex_edges(sv, S, size, vox=vox).tolist() == [False]
