@@ -291,8 +291,11 @@ def radius_knn(points: np.ndarray, k: int, radius_m: float) -> np.ndarray:
     band_lo, band_hi = int(r2 * (1.0 - 1e-9) * scale), int(r2 * (1.0 + 1e-9) * scale)
     shift = n_bits + q_bits
     q <<= n_bits
-    # the keys of (first, second), (second, first) and (i, i), written in place
-    key = np.empty(2 * n_pairs + n, dtype=np.int64)
+    # the keys of (first, second), (second, first) and (i, i), written in place; k more
+    # after them, so that every row's window of k keys lies within the buffer
+    key_buf = np.empty(2 * n_pairs + n + k, dtype=np.int64)
+    key_buf[2 * n_pairs + n :] = 0
+    key = key_buf[: 2 * n_pairs + n]
     for part, (src, dst) in enumerate(((first, second), (second, first))):
         block = key[part * n_pairs : (part + 1) * n_pairs]
         np.left_shift(src, shift, out=block)
@@ -325,14 +328,13 @@ def radius_knn(points: np.ndarray, k: int, radius_m: float) -> np.ndarray:
     flagged_row = np.take(key, flagged) >> shift
     ask_tree = np.zeros(n, dtype=bool)
     ask_tree[flagged_row[flagged - np.take(at, flagged_row) <= k]] = True
-    # a row's neighbours: its keys before the band, the first k of them; n after
+    # a row's neighbours: its keys before the band, the first k of them; n after. Each
+    # row's window of k keys copied whole (a view of the windows, indexed by the rows'
+    # starts): no (N, k) array of positions to gather one key at a time
     n_near = per_row - np.bincount(np.take(key, far_at) >> shift, minlength=n)
-    places = np.arange(k)
-    rows_at = at[:, None] + places
-    np.minimum(rows_at, key.shape[0] - 1, out=rows_at)  # past the last row: read, then masked
-    nb = np.take(key, rows_at)
+    nb = np.lib.stride_tricks.sliding_window_view(key_buf, k)[at]
     nb &= (1 << n_bits) - 1
-    np.putmask(nb, places >= n_near[:, None], n)
+    np.putmask(nb, np.arange(k) >= n_near[:, None], n)  # past the band, or the row's end
     nb = nb.astype(np.intp, copy=False)
     asked = np.flatnonzero(ask_tree)
     if asked.size:
