@@ -291,9 +291,11 @@ def radius_knn(points: np.ndarray, k: int, radius_m: float) -> np.ndarray:
     band_lo, band_hi = int(r2 * (1.0 - 1e-9) * scale), int(r2 * (1.0 + 1e-9) * scale)
     shift = n_bits + q_bits
     q <<= n_bits
-    # the keys of (first, second), (second, first) and (i, i), written in place, and one
-    # past every row's end that reads as no neighbour
-    key = np.empty(2 * n_pairs + n + 1, dtype=np.int64)
+    # the keys of (first, second), (second, first) and (i, i), written in place; k more
+    # after them, so that every row's window of k keys lies within the buffer
+    key_buf = np.empty(2 * n_pairs + n + k, dtype=np.int64)
+    key_buf[2 * n_pairs + n :] = 0
+    key = key_buf[: 2 * n_pairs + n]
     for part, (src, dst) in enumerate(((first, second), (second, first))):
         block = key[part * n_pairs : (part + 1) * n_pairs]
         np.left_shift(src, shift, out=block)
@@ -303,31 +305,37 @@ def radius_knn(points: np.ndarray, k: int, radius_m: float) -> np.ndarray:
     selves = key[2 * n_pairs : 2 * n_pairs + n]
     np.left_shift(own, shift, out=selves)
     selves |= own
-    key[-1] = np.iinfo(np.int64).max
-    key[:-1].sort()
-    # each point's row of the sorted keys, read one place at a time for all points: the
-    # first k + 1 places of n rows, not every key of every row
+    key.sort()
     per_row = np.bincount(first, minlength=n)
     per_row += np.bincount(second, minlength=n)
     per_row += 1
-    at = np.cumsum(per_row) - per_row
-    end = at + per_row
+    at = np.cumsum(per_row) - per_row  # where each point's row of the sorted keys starts
+    # The tests on every key at once, and on a row's place only where one is met (a few
+    # hundred keys): a loop over the first k + 1 places of all rows, a dozen passes over
+    # n points each, cost a third more on a cluttered mOSD frame (issue 39).
+    # ``hi``: the key without the neighbour's bits, the point and the bucket; two keys in
+    # a row with the same are two of one point in one bucket (a tie), asked of the tree
+    # when the later one is among the point's first k + 1
+    hi = key >> n_bits
+    tie_at = np.flatnonzero(hi[1:] == hi[:-1])
+    tie_at += 1
+    bucket = hi
+    bucket &= top
+    # from the band on (one near the radius, or beyond it): the last keys of their rows
+    # (a row is sorted by bucket); one in the band among the first k + 1 is asked too
+    far_at = np.flatnonzero(bucket >= band_lo)
+    flagged = np.concatenate((tie_at, far_at[np.take(bucket, far_at) <= band_hi]))
+    flagged_row = np.take(key, flagged) >> shift
     ask_tree = np.zeros(n, dtype=bool)
-    nb_t = np.empty((k, n), dtype=np.intp)
-    before: np.ndarray | None = None
-    for place in range(k + 1):
-        in_row = at < end
-        here = np.take(key, np.where(in_row, at, key.shape[0] - 1))
-        bucket = (here >> n_bits) & top
-        # two of a point's first k + 1 in one bucket, or one near the radius: the tree decides
-        if before is not None:
-            ask_tree |= in_row & (bucket == before)
-        ask_tree |= in_row & (bucket >= band_lo) & (bucket <= band_hi)
-        if place < k:
-            nb_t[place] = np.where(in_row & (bucket < band_lo), here & ((1 << n_bits) - 1), n)
-        before = bucket
-        at += 1
-    nb = np.ascontiguousarray(nb_t.T)
+    ask_tree[flagged_row[flagged - np.take(at, flagged_row) <= k]] = True
+    # a row's neighbours: its keys before the band, the first k of them; n after. Each
+    # row's window of k keys copied whole (a view of the windows, indexed by the rows'
+    # starts): no (N, k) array of positions to gather one key at a time
+    n_near = per_row - np.bincount(np.take(key, far_at) >> shift, minlength=n)
+    nb = np.lib.stride_tricks.sliding_window_view(key_buf, k)[at]
+    nb &= (1 << n_bits) - 1
+    np.putmask(nb, np.arange(k) >= n_near[:, None], n)  # past the band, or the row's end
+    nb = nb.astype(np.intp, copy=False)
     asked = np.flatnonzero(ask_tree)
     if asked.size:
         nb[asked] = np.asarray(tree.query(points[asked], k=k, distance_upper_bound=radius_m)[1]).reshape(-1, k)

@@ -227,6 +227,64 @@ def test_radius_knn_at_the_radius() -> None:
             assert np.array_equal(radius_knn(pts, k, radius_m), want)
 
 
+def test_radius_knn_beyond_the_radius_on_many_points() -> None:
+    """Over 2^17 points the distances keep 27 bits or fewer, and a pair just beyond the
+    radius (the tree's pairs reach 1e-7 past it) falls in the last bucket, past the band
+    asked of the tree: it is no neighbour, as in the tree's query."""
+    from scipy.spatial import cKDTree
+
+    from clearcli.perception.supervoxels import radius_knn
+
+    radius_m = 0.005
+    gen = np.random.default_rng(3)
+    side = 52  # 52^3 = 140608 points 5 cm apart: no pairs but the ones placed below
+    pts = np.stack(np.meshgrid(*[np.arange(side) * 0.05] * 3, indexing="ij"), -1).reshape(-1, 3)
+    base = 2 * gen.choice(pts.shape[0] // 2, 2000, replace=False)
+    # its odd neighbour moved next to each of them along x: a few parts in 1e8 beyond or
+    # within the radius, or at half of it
+    gap_m = radius_m * np.concatenate((1.0 + gen.choice([-5e-8, 5e-8], 1000), np.full(1000, 0.5)))
+    pts[base + 1] = pts[base]
+    pts[base + 1, 0] += gap_m
+    want = cKDTree(pts).query(pts, k=3, distance_upper_bound=radius_m)[1]
+    assert np.array_equal(radius_knn(pts, 3, radius_m), want)
+    beyond = int(np.count_nonzero(want[base[:1000], 1] == pts.shape[0]))
+    assert 300 < beyond < 700  # about half of the first thousand beyond it
+
+
+def test_radius_knn_asks_the_tree_only_about_ties(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The tree's own k-nearest query is asked only about the points with two equal
+    distances among their first k + 1 (or one at the radius): none on points at random,
+    those with a tie on whole millimetres, no more than those with a near-tie (1e-9)."""
+    import scipy.spatial
+
+    from clearcli.perception.supervoxels import radius_knn
+
+    tree_type = scipy.spatial.cKDTree
+    asked: list[int] = []
+
+    class Counting(tree_type):  # type: ignore[misc, valid-type]
+        def query(self, x: np.ndarray, *args: object, **kwargs: object) -> object:
+            asked.append(int(np.asarray(x).shape[0]))
+            return super().query(x, *args, **kwargs)
+
+    monkeypatch.setattr(scipy.spatial, "cKDTree", Counting)
+    gen = np.random.default_rng(7)
+    pts = gen.uniform(0.0, 0.03, (2000, 3))
+    want = tree_type(pts).query(pts, k=30, distance_upper_bound=0.005)[1]
+    assert np.array_equal(radius_knn(pts, 30, 0.005), want)
+    assert sum(asked) == 0
+    pts = np.round(pts, 3)  # whole millimetres: equal distances, each point with some
+    dist = tree_type(pts).query(pts, k=31, distance_upper_bound=0.005)[0]
+    want = tree_type(pts).query(pts, k=30, distance_upper_bound=0.005)[1]
+    later, earlier = dist[:, 1:], dist[:, :-1]
+    tied = ((later == earlier) & np.isfinite(later)).any(axis=1)
+    with np.errstate(invalid="ignore"):  # inf - inf past the last neighbour: NaN, no near-tie
+        near_tied = ((later - earlier <= 1e-9 * later) & np.isfinite(later)).any(axis=1)
+    asked.clear()
+    assert np.array_equal(radius_knn(pts, 30, 0.005), want)
+    assert 1000 < int(tied.sum()) <= sum(asked) <= int(near_tied.sum())
+
+
 def test_thin_strips_take_the_closed_form(monkeypatch: pytest.MonkeyPatch) -> None:
     """A strip's covariance (largest eigenvalue far above the other two, the smallest
     well apart from the middle one) needs no eigh: its vector is eigh's within 1e-9."""
