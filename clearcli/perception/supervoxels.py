@@ -448,10 +448,16 @@ def _seed_sums(values: np.ndarray, lab: np.ndarray, used: np.ndarray | None, n_s
 
 
 def supervoxel_labels(
-    vox: VoxelCloud, normals: np.ndarray, settings: SegmentSettings, size: SegmentSize | None = None
+    vox: VoxelCloud,
+    normals: np.ndarray,
+    settings: SegmentSettings,
+    size: SegmentSize | None = None,
+    trace: list[np.ndarray] | None = None,
 ) -> np.ndarray:
     """(V,) supervoxel index of every voxel, 0..S-1 (``size``: the frame's seed;
-    `SegmentSize.of(settings)` when None)."""
+    `SegmentSize.of(settings)` when None). ``trace`` (benchmarks/stability.py): gets
+    the seed voxels (S,), then per assignment each voxel's seed (V,, -1 none) and its
+    cost margin to the runner-up (V,, inf when it has none)."""
     from scipy.spatial import cKDTree
 
     size = size if size is not None else SegmentSize.of(settings)
@@ -519,6 +525,14 @@ def supervoxel_labels(
             cost = cost + settings.color_importance * np.linalg.norm(voxel_lab[:, None, :] - seed_lab[nb_safe], axis=2)
         picked = np.take(nb, rows + np.argmin(cost, axis=1))  # nb[row, argmin] of the flat (V * k) array
         labels = np.where(picked < n_s, picked, -1)
+        if trace is not None:
+            if iteration == 0:
+                trace.append(seed_vox.copy())
+            two = (
+                np.partition(cost, 1, axis=1)[:, :2] if k > 1 else np.column_stack((cost[:, 0], np.full(n_vox, np.inf)))
+            )
+            with np.errstate(invalid="ignore"):  # inf - inf: a voxel with no seed
+                trace += [labels.copy(), two[:, 1] - two[:, 0]]
         if iteration == n_iterations - 1:
             break  # the last assignment is the answer: seeds moved after it would serve none
         # move the seeds to the mean of their voxels

@@ -306,3 +306,34 @@ def test_a_voxel_of_one_point_coming_or_going_turns_no_normal_far() -> None:
     both = np.array([(i, cb[c]) for c, i in ca.items() if c in cb])
     turn = np.degrees(np.arccos(np.clip(np.abs((na[both[:, 0]] * nb[both[:, 1]]).sum(axis=1)), 0.0, 1.0)))
     assert 0.1 < turn.max() < 1.2
+
+
+def test_the_trace_of_the_assignments_changes_nothing() -> None:
+    """supervoxel_labels' trace (benchmarks/stability.supervoxel_decisions): the seed
+    voxels, then per assignment each voxel's seed and its cost margin to the runner-up;
+    the labels are those without it. Two seeds on a flat strip of voxels, all normals
+    alike: the margin is the difference of the distances to the two / 3 cm, and inf
+    where the other seed lies 4.5 cm away or more (beyond the search)."""
+    from clearcli.perception.supervoxels import supervoxel_labels, voxelize
+    from clearcli.settings.segment import SegmentSettings
+
+    x = np.arange(0.0, 0.06, 0.001)
+    g = np.arange(0.0, 0.005, 0.001)
+    xx, yy = np.meshgrid(x, g, indexing="ij")
+    pts = np.stack([xx.ravel(), yy.ravel(), np.full(xx.size, 0.7)], axis=1)
+    vox = voxelize(pts, 0.005)
+    normals = np.tile([0.0, 0.0, -1.0], (vox.n_voxels, 1))
+    settings = SegmentSettings()
+    trace: list[np.ndarray] = []
+    labels = supervoxel_labels(vox, normals, settings, trace=trace)
+    assert np.array_equal(labels, supervoxel_labels(vox, normals, settings))
+    assert len(trace) == 1 + 2 * settings.supervoxel_iterations
+    seeds, first, margin = trace[0], trace[1], trace[2]
+    assert seeds.shape == (2,) and first.shape == margin.shape == (vox.n_voxels,)
+    assert set(first.tolist()) == {0, 1} and (margin >= 0).all()
+    d = np.linalg.norm(vox.centroids[:, None, :] - vox.centroids[seeds][None], axis=2) / 0.03
+    # the search's bound (1.5 seeds) leaves out 4.5 cm itself: the ends lie 1 and 8 cells
+    # from the seeds (cells 2 and 9 of 12, centroids 5 mm apart)
+    beyond = d.max(axis=1) > 1.5 - 1e-9
+    np.testing.assert_allclose(margin, np.where(beyond, np.inf, np.abs(d[:, 0] - d[:, 1])), atol=1e-12)
+    assert np.isinf(margin).sum() == 2  # the strip's two ends
