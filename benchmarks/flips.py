@@ -1,7 +1,7 @@
 """Every micrometre flip, seed by seed, with the stage it starts at (issue 37).
 
     .venv/bin/python benchmarks/flips.py [--sets mosd,uois,fixtures,scenes,rgbd]
-        [--amplitude-um 1] [--seeds 0:10] [--with-report] [--margins]
+        [--amplitude-um 1] [--seeds 0:10] [--with-report] [--margins] [--set KEY=VALUE]
 
 stability.py traces only the first perturbation seed that changes a frame's objects;
 this traces every one, so a flip that starts in a later stage is not hidden behind a
@@ -10,7 +10,10 @@ counts, the first step whose groups differ (stability.first_difference: a group 
 least 30 points without a partner at IoU >= 0.95), the points that changed group there
 and at the end, and the whole chain
 (groups unmatched/points moved per step; a merge of two groups moves no point).
-With --margins, per flip also LCCP's decisive edges (stability.decisive_edges): the
+With --margins, per flip also the supervoxel stage's first decisions that differ
+(stability.supervoxel_decisions: seed voxels that lost or gained points or whose normal
+turned, and per assignment the voxels that changed seed, nearest a tie first, with their
+cost margins), and LCCP's decisive edges (stability.decisive_edges): the
 adjacencies both runs have whose supervoxels end in one segment in one run and two in
 the other, each changed test's margin before -> after, and the supervoxels that lost or
 gained voxels (a margin rule at LCCP can only catch a flip whose margins moved less
@@ -101,8 +104,20 @@ def main() -> None:
         action="store_true",
         help="per flip, LCCP's decisive edges: each changed test's margin before -> after (stability.decisive_edges)",
     )
+    parser.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="a SegmentSettings field to try, e.g. --set supervoxel_share_cost=0.01",
+    )
     args = parser.parse_args()
     settings = SegmentSettings()
+    for item in args.set:
+        key, _, text = item.partition("=")
+        kind = type(getattr(settings, key))
+        value = text.lower() in ("1", "true", "yes") if kind is bool else kind(text)
+        settings = dataclasses.replace(settings, **{key: value})
     amp = args.amplitude_um * 1e-6
     first_seed, last_seed = (int(x) for x in args.seeds.split(":"))
     skip = set() if args.with_report else report_frames()
@@ -143,6 +158,8 @@ def main() -> None:
             # all): a step with groups unmatched is shown with 0 points moved too
             print("    " + ", ".join(f"{n} {u}/{m}" for n, u, m in steps if m or u), flush=True)
             if args.margins:
+                for line in sb.supervoxel_decisions(frame, other, settings):
+                    print("      " + line, flush=True)
                 for line in sb.decisive_edges(frame, other, settings):
                     print("      " + line, flush=True)
     print(f"+-{args.amplitude_um:g} um: {flips} flips in {runs} runs (seeds {args.seeds})")

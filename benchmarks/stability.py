@@ -249,6 +249,68 @@ def voxel_difference(frame: Frame, other: Frame, settings: SegmentSettings) -> s
     )
 
 
+def supervoxel_decisions(frame: Frame, other: Frame, settings: SegmentSettings, most: int = 8) -> list[str]:
+    """The supervoxel stage's first decisions that differ between two runs (issue 37),
+    each with its margin: the voxels both runs have are matched by their cells and the
+    seeds by their seed voxel's cell; then (1) the seed voxels that lost or gained points
+    (their centroid moved) or whose normal turned more than 0.5 degree (a seed's first
+    normal is its voxel's), and the seeds one run has and the other not; (2) per
+    assignment (`supervoxel_labels`' trace), the voxels whose seed changed, the ``most``
+    of them nearest a tie first: their points, the turn of their own normal and the cost
+    margin to the runner-up in each run (a margin of 1e-4 is 3 um of distance at the 3 cm
+    seed, or a fraction of a degree of normal)."""
+    from clearcli.perception.supervoxels import grid_cells, stage_voxel_normals, supervoxel_labels
+
+    runs = []
+    for f in (frame, other):
+        w = _run_until(f, settings, through_supervoxels=False)
+        if w is None:
+            return ["no voxels"]
+        assert w.vox is not None and w.size is not None and w.fit is not None
+        viewpoint = np.zeros(3) if w.fit.camera_is_origin else w.fit.polygon.mean(axis=0) + w.fit.plane.normal
+        normals = stage_voxel_normals(w.vox, viewpoint, settings, w.size)
+        trace: list[np.ndarray] = []
+        supervoxel_labels(w.vox, normals, settings, w.size, trace=trace)
+        cells = [tuple(c) for c in grid_cells(w.vox.centroids, w.size.voxel_m).tolist()]
+        runs.append((w.vox, normals, trace, cells))
+    (va, na, ta, ca), (vb, nb, tb, cb) = runs
+    row_b = {c: i for i, c in enumerate(cb)}
+    both = np.array([(i, row_b[c]) for i, c in enumerate(ca) if c in row_b], dtype=np.int64).reshape(-1, 2)
+    ia, ib = both[:, 0], both[:, 1]
+    turn = np.zeros(va.n_voxels)
+    turn[ia] = np.degrees(np.arccos(np.clip(np.abs(np.sum(na[ia] * nb[ib], axis=1)), 0.0, 1.0)))
+    seeds_a = {ca[v]: s for s, v in enumerate(ta[0].tolist())}
+    seeds_b = {cb[v]: s for s, v in enumerate(tb[0].tolist())}
+    lines = []
+    for cell, s in seeds_a.items():
+        if cell not in seeds_b:
+            lines.append(f"seed {s} (voxel {cell}) only before")
+            continue
+        v, u = int(ta[0][s]), int(tb[0][seeds_b[cell]])
+        moved = float(np.linalg.norm(va.centroids[v] - vb.centroids[u])) * 1e3
+        if va.counts[v] != vb.counts[u] or turn[v] > 0.5:
+            lines.append(
+                f"seed {s} (voxel {cell}): {va.counts[v]} -> {vb.counts[u]} points, moved {moved:.3f} mm, "
+                f"its normal turned {turn[v]:.2f} deg"
+            )
+    lines += [f"seed {s} (voxel {cell}) only after" for cell, s in seeds_b.items() if cell not in seeds_a]
+    # a seed's name in both runs: its seed voxel's cell (seeds without a partner: none)
+    name_a = np.array([hash(ca[v]) for v in ta[0].tolist()] + [0], dtype=np.int64)
+    name_b = np.array([hash(cb[v]) for v in tb[0].tolist()] + [0], dtype=np.int64)
+    for it in range(1, len(ta), 2):
+        la, ma, lb, mb = ta[it], ta[it + 1], tb[it], tb[it + 1]
+        changed = np.flatnonzero(name_a[la[ia]] != name_b[lb[ib]])
+        changed = changed[np.argsort(ma[ia[changed]], kind="stable")]
+        lines.append(f"assignment {it // 2 + 1}: {changed.size} voxels changed seed")
+        for j in changed[:most].tolist():
+            v, u = int(ia[j]), int(ib[j])
+            lines.append(
+                f"    voxel {ca[v]}: seed {la[v]} -> {lb[u]}, {va.counts[v]} -> {vb.counts[u]} points, normal "
+                f"turned {turn[v]:.2f} deg, cost margin {ma[v]:.3g} -> {mb[u]:.3g}"
+            )
+    return lines
+
+
 def _lccp_tests(sv: Supervoxels, settings: SegmentSettings, size: SegmentSize) -> dict[str, np.ndarray]:
     """Per supervoxel adjacency, each of lccp.convex_edges' tests as a margin (>= 0 passes, in
     its own unit: metres for smoothness, degrees for the rest): "smoothness" (the offset along

@@ -145,6 +145,26 @@ class SegmentSettings(Section):
     # seen faces and split mOSD learn41/42 (learn F1 0.988 against 0.997); caps of 2 and
     # 4 keep 0.997, 8 splits learn42
     normal_full_weight_points: int = param(4, ge=1, le=1000)
+    # a seed whose voxel's neighbourhood has its two least eigenvalues within this share
+    # of the least (a crease, a blob: its normal is ill-defined and turns by tens of
+    # degrees under a micrometre, issue 37) meets the first assignment with a normal
+    # tensor spread over both directions (supervoxels.seed_normal_tensors), continuous in
+    # the points; the others with their voxel's normal, as before. 0: off. Off because, at
+    # 1 (hE-flips), it mends the six known micrometre flips (gqcnn_primesense_4 seeds 4 6
+    # 11 18, uois_image_0000 seeds 5 9) but brings four on uois_image_0006 (scenes, uois,
+    # fixtures, seeds 0-19: 6 of 380 runs -> 4; mOSD seeds 0-3: 0 of 200 both; mOSD F1
+    # all/test 0.991/0.941 both), and loses 2 of 89 on the foreign choose part (59 -> 57:
+    # gqcnn_primesense_2's brown bracket and uois_image_0006's purple cup split) and
+    # renders of choose families (exactly right: small_against_tall 100 -> 99 %,
+    # gap_3mm_away 72 -> 71, gap_3mm_across 7 -> 6; gap_10mm_across 37 -> 40; the other
+    # eight the same). 0.5 mends none of the six; the tensors cost 2-3 ms a frame. Tried
+    # and not kept: the tensor for every seed, weights (lambda_0 / lambda_i) ** 2 (7 of
+    # 380; foreign 56 of 89); a seed's first normal the mean of its voxel's and its
+    # adjacent voxels' (15 flips in the first frames, run stopped); seeds moved by each
+    # voxel's softmax share of its candidate seeds (cost temperature 0.01) rather than by
+    # its argmin (gqcnn_primesense_0 flipped under 10 seeds, run stopped; 0.003 left
+    # uois_image_0000 seed 5 flipping)
+    seed_normal_spread: float = param(0.0, ge=0, le=10)
     # assignment/update rounds of the supervoxel clustering
     supervoxel_iterations: int = param(2, ge=1, le=50)
     # --- 3a'. depth discontinuities (ours, after PCL's OrganizedEdgeBase; edges.py) ---

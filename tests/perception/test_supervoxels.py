@@ -364,3 +364,123 @@ def test_a_voxel_of_one_point_coming_or_going_turns_no_normal_far() -> None:
     both = np.array([(i, cb[c]) for c, i in ca.items() if c in cb])
     turn = np.degrees(np.arccos(np.clip(np.abs((na[both[:, 0]] * nb[both[:, 1]]).sum(axis=1)), 0.0, 1.0)))
     assert 0.1 < turn.max() < 1.2
+
+
+def _star(variances: tuple[float, float, float]) -> np.ndarray:
+    """7 voxel centroids: the origin (the seed) and two on each axis at +-a_j, so that
+    the covariance of the 7 is diag(2 a_j^2 / 7): a_j^2 = 7 variance_j / 2."""
+    pts = [np.zeros(3)]
+    for j, var in enumerate(variances):
+        for sign in (-1.0, 1.0):
+            p = np.zeros(3)
+            p[j] = sign * np.sqrt(3.5 * var)
+            pts.append(p)
+    return np.array(pts)
+
+
+def test_seed_normal_tensors_by_hand() -> None:
+    """Covariance diag(4, 2, 1) u, spread 2: weights (1 - (4 - 1) / 2) ** 2 -> 0,
+    (1 - (2 - 1) / 2) ** 2 = 1/4 and 1, so T = diag(0, 1/4, 1); a voxel normal
+    (0, sin 60, cos 60) aligns by sqrt(3/4 * 1/4 + 1/4 * 1) = sqrt(0.4375) = 0.6614 (0.5
+    against e_z alone). Spread 1: the ratio 2 is out of reach, T = e_z e_z^T and the
+    seed is not spread. A flat patch: T = e_z e_z^T."""
+    from clearcli.perception.supervoxels import _tensor_alignment, seed_normal_tensors
+
+    u = 4e-6  # m^2: a_x = 7.5 mm, all 7 within 15 mm
+    t, spread = seed_normal_tensors(_star((4 * u, 2 * u, u)), np.array([0]), 0.015, 2.0)
+    # (xx, xy, xz, yy, yz, zz)
+    np.testing.assert_allclose(t[0], [0.0, 0.0, 0.0, 1 / 4, 0.0, 1.0], atol=1e-12)
+    assert spread.tolist() == [True]
+    n = (np.array([0.0]), np.array([np.sin(np.radians(60))]), np.array([np.cos(np.radians(60))]))
+    np.testing.assert_allclose(_tensor_alignment(t, np.array([0]), n), [np.sqrt(0.4375)], atol=1e-12)
+    t, spread = seed_normal_tensors(_star((4 * u, 2 * u, u)), np.array([0]), 0.015, 1.0)
+    np.testing.assert_allclose(t[0], [0.0, 0.0, 0.0, 0.0, 0.0, 1.0], atol=1e-12)
+    assert spread.tolist() == [False]
+
+    g = np.arange(-2, 3) * 0.002
+    x, y = np.meshgrid(g, g, indexing="ij")
+    flat = np.stack([x.ravel(), y.ravel(), np.full(25, 0.7)], axis=1)
+    centre = int(np.flatnonzero((x.ravel() == 0) & (y.ravel() == 0))[0])
+    t, spread = seed_normal_tensors(flat, np.array([centre]), 0.015, 1.0)
+    np.testing.assert_allclose(t[0], [0, 0, 0, 0, 0, 1], atol=1e-9)
+    assert spread.tolist() == [False]
+
+
+def test_seed_normal_tensor_is_continuous_where_the_normal_is_not() -> None:
+    """Issue 37 (gqcnn_primesense_4 perturbed: a seed's two least eigenvalues 1.48 and
+    1.74e-5 m^2, its normal turned 17 degrees): two neighbourhoods whose least variances
+    swap, 1 and 1.01 against 1.01 and 1 (and 5): the least eigenvector turns 90 degrees,
+    the tensor at spread 1 by its entries (1 - 0.01) ** 2 = 0.9801 and 1, 0.02 apart."""
+    from clearcli.perception.supervoxels import seed_normal_tensors, smallest_eigenvectors
+
+    u = 4e-6
+    a, b = _star((u, 1.01 * u, 5 * u)), _star((1.01 * u, u, 5 * u))
+    ta, tb = (seed_normal_tensors(p, np.array([0]), 0.015, 1.0)[0][0] for p in (a, b))
+    na, nb = (smallest_eigenvectors((p.T @ p / 7.0)[None])[0] for p in (a, b))
+    assert abs(float(na @ nb)) < 1e-9  # the normal: x, then y
+    np.testing.assert_allclose(ta, [1.0, 0.0, 0.0, 0.99**2, 0.0, 0.0], atol=1e-9)
+    np.testing.assert_allclose(tb, [0.99**2, 0.0, 0.0, 1.0, 0.0, 0.0], atol=1e-9)
+    assert np.abs(ta - tb).max() < 0.021
+
+
+def test_seed_normal_spread_serves_the_first_assignment_of_spread_seeds_only(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Off (0) no tensor is computed; on, the seeds of a flat slab (no crease) give the
+    same labels bit for bit, and those of a blob (every neighbourhood near isotropic)
+    meet their tensors in the first of 3 assignments only."""
+    from clearcli.perception import supervoxels
+    from clearcli.perception.supervoxels import supervoxel_labels, voxelize
+    from clearcli.settings.segment import SegmentSettings
+
+    calls: list[int] = []
+    alignment = supervoxels._tensor_alignment
+
+    def counted(seed_tensor: np.ndarray, nb: np.ndarray, voxel_nrm: tuple[np.ndarray, ...]) -> np.ndarray:
+        calls.append(nb.shape[0])
+        return alignment(seed_tensor, nb, voxel_nrm)
+
+    monkeypatch.setattr(supervoxels, "_tensor_alignment", counted)
+    rng = np.random.default_rng(0)
+    on = SegmentSettings(seed_normal_spread=1.0, supervoxel_iterations=3)
+    slab = voxelize(rng.uniform(0.0, 0.1, size=(20000, 3)) * (1.0, 1.0, 0.0) + (0.0, 0.0, 0.7), 0.005)
+    normals = np.tile([0.0, 0.0, -1.0], (slab.n_voxels, 1))
+    off_labels = supervoxel_labels(slab, normals, SegmentSettings(supervoxel_iterations=3))
+    assert np.array_equal(off_labels, supervoxel_labels(slab, normals, on))
+    assert calls == []
+    blob = voxelize(rng.uniform(0.0, 0.06, size=(20000, 3)) + (0.0, 0.0, 0.7), 0.005)
+    normals = rng.normal(size=(blob.n_voxels, 3))
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    supervoxel_labels(blob, normals, SegmentSettings(supervoxel_iterations=3))
+    assert calls == []
+    supervoxel_labels(blob, normals, on)
+    assert len(calls) == 1 and calls[0] > 0
+
+
+def test_the_trace_of_the_assignments_changes_nothing() -> None:
+    """supervoxel_labels' trace (benchmarks/stability.supervoxel_decisions): the seed
+    voxels, then per assignment each voxel's seed and its cost margin to the runner-up;
+    the labels are those without it. Two seeds on a flat strip of voxels, all normals
+    alike: the margin is the difference of the distances to the two / 3 cm, and inf
+    where the other seed lies 4.5 cm away or more (beyond the search)."""
+    from clearcli.perception.supervoxels import supervoxel_labels, voxelize
+    from clearcli.settings.segment import SegmentSettings
+
+    x = np.arange(0.0, 0.06, 0.001)
+    g = np.arange(0.0, 0.005, 0.001)
+    xx, yy = np.meshgrid(x, g, indexing="ij")
+    pts = np.stack([xx.ravel(), yy.ravel(), np.full(xx.size, 0.7)], axis=1)
+    vox = voxelize(pts, 0.005)
+    normals = np.tile([0.0, 0.0, -1.0], (vox.n_voxels, 1))
+    settings = SegmentSettings()
+    trace: list[np.ndarray] = []
+    labels = supervoxel_labels(vox, normals, settings, trace=trace)
+    assert np.array_equal(labels, supervoxel_labels(vox, normals, settings))
+    assert len(trace) == 1 + 2 * settings.supervoxel_iterations
+    seeds, first, margin = trace[0], trace[1], trace[2]
+    assert seeds.shape == (2,) and first.shape == margin.shape == (vox.n_voxels,)
+    assert set(first.tolist()) == {0, 1} and (margin >= 0).all()
+    d = np.linalg.norm(vox.centroids[:, None, :] - vox.centroids[seeds][None], axis=2) / 0.03
+    # the search's bound (1.5 seeds) leaves out 4.5 cm itself: the ends lie 1 and 8 cells
+    # from the seeds (cells 2 and 9 of 12, centroids 5 mm apart)
+    beyond = d.max(axis=1) > 1.5 - 1e-9
+    np.testing.assert_allclose(margin, np.where(beyond, np.inf, np.abs(d[:, 0] - d[:, 1])), atol=1e-12)
+    assert np.isinf(margin).sum() == 2  # the strip's two ends
