@@ -125,20 +125,39 @@ def fit_plane_lsq(points: np.ndarray) -> tuple[np.ndarray, float]:
 
 
 def ransac_plane(
-    points: np.ndarray, distance_m: float, iterations: int, rng: np.random.Generator
+    points: np.ndarray,
+    distance_m: float,
+    iterations: int,
+    rng: np.random.Generator,
+    usable: np.ndarray | None = None,
 ) -> tuple[np.ndarray, float]:
     """The plane with the most inliers among random triplets (scored on a subsample),
     refined by least squares on its inliers. Hypotheses are drawn in chunks and the
     search stops once enough were drawn to have hit an all-inlier triplet of the best
-    plane so far with probability 0.999 (at most ``iterations``)."""
+    plane so far with probability 0.999 (at most ``iterations``).
+
+    ``usable``: (N,) bool, the points the plane is sought among (all when None). Positions
+    are drawn over all of ``points`` and draws that land on an unusable point are dropped,
+    so that a point made unusable (or kept) changes only the draws that hit it, never the
+    others (drawing over the usable subset would shift every later draw); the early stop
+    and ``iterations`` count the valid hypotheses only, with at most 8 times ``iterations``
+    triplets drawn in all."""
     n_pts = points.shape[0]
-    ev = points[rng.integers(0, n_pts, size=min(_RANSAC_EVAL, n_pts))]
+    ev_at = rng.integers(0, n_pts, size=min(_RANSAC_EVAL, n_pts))
+    if usable is not None:
+        ev_at = ev_at[usable[ev_at]]
+    ev = points[ev_at]
     best_count, best_n, best_d = -1, None, 0.0
     drawn = 0
-    while drawn < iterations:
+    raw = 0
+    while drawn < iterations and raw < 8 * iterations:
         chunk = min(_RANSAC_CHUNK, iterations - drawn)
-        drawn += chunk
-        tri = points[rng.integers(0, n_pts, size=(chunk, 3))]
+        raw += chunk
+        at = rng.integers(0, n_pts, size=(chunk, 3))
+        if usable is not None:
+            at = at[usable[at].all(axis=1)]
+        drawn += at.shape[0]
+        tri = points[at]
         normals = cross3(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
         norm = np.linalg.norm(normals, axis=1)
         ok = norm > 1e-9
@@ -155,12 +174,12 @@ def ransac_plane(
         k = int(np.argmax(counts))
         if counts[k] > best_count:
             best_count, best_n, best_d = int(counts[k]), normals[k], float(offsets[k])
-        w = best_count / ev.shape[0]
+        w = best_count / max(ev.shape[0], 1)
         if w >= 1.0 or (w > 0 and drawn >= np.log(1e-3) / np.log(1.0 - w**3)):
             break
     if best_n is None:
         raise SceneError("no plane: the points are degenerate")
-    return _refined(points, best_n, best_d, distance_m)
+    return _refined(points if usable is None else points[usable], best_n, best_d, distance_m)
 
 
 def _refined(points: np.ndarray, n: np.ndarray, d: float, distance_m: float) -> tuple[np.ndarray, float]:
