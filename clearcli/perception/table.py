@@ -10,8 +10,10 @@ itself a plane, and a book's hull holds little.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
+from functools import lru_cache
 
 import numpy as np
 
@@ -125,20 +127,45 @@ def fit_plane_lsq(points: np.ndarray) -> tuple[np.ndarray, float]:
 
 
 def ransac_plane(
-    points: np.ndarray, distance_m: float, iterations: int, rng: np.random.Generator
+    points: np.ndarray,
+    distance_m: float,
+    iterations: int,
+    rng: np.random.Generator,
+    usable: np.ndarray | None = None,
 ) -> tuple[np.ndarray, float]:
     """The plane with the most inliers among random triplets (scored on a subsample),
     refined by least squares on its inliers. Hypotheses are drawn in chunks and the
     search stops once enough were drawn to have hit an all-inlier triplet of the best
-    plane so far with probability 0.999 (at most ``iterations``)."""
+    plane so far with probability 0.999 (at most ``iterations``).
+
+    ``usable``: (N,) bool, the points the plane is sought among (all when None). Every
+    position (of the scoring points and of the triplets) is drawn over all of ``points``,
+    as when all are usable, and a draw that lands on an unusable point is taken by
+    `_redirected` to the next usable point in a fixed scrambled order of the positions:
+    every draw is valid however few points remain, and a point made unusable (or kept)
+    changes only the draws that land on it or on the unusable points just before it in
+    that order, never the others (drawing over the usable subset shifted every later
+    draw: one point more or less left by an earlier plane changed the later planes,
+    issue 37). All usable: the same draws as without the mask, bit for bit."""
     n_pts = points.shape[0]
-    ev = points[rng.integers(0, n_pts, size=min(_RANSAC_EVAL, n_pts))]
+    redirect = None
+    if usable is not None and not bool(usable.all()):
+        if not bool(usable.any()):
+            raise SceneError("no plane: no usable points")
+        redirect = _redirection(usable)
+    ev_at = rng.integers(0, n_pts, size=min(_RANSAC_EVAL, n_pts))
+    if redirect is not None:
+        ev_at = _redirected(ev_at, *redirect)
+    ev = points[ev_at]
     best_count, best_n, best_d = -1, None, 0.0
     drawn = 0
     while drawn < iterations:
         chunk = min(_RANSAC_CHUNK, iterations - drawn)
         drawn += chunk
-        tri = points[rng.integers(0, n_pts, size=(chunk, 3))]
+        at = rng.integers(0, n_pts, size=(chunk, 3))
+        if redirect is not None:
+            at = _redirected(at, *redirect)
+        tri = points[at]
         normals = cross3(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
         norm = np.linalg.norm(normals, axis=1)
         ok = norm > 1e-9
@@ -155,12 +182,62 @@ def ransac_plane(
         k = int(np.argmax(counts))
         if counts[k] > best_count:
             best_count, best_n, best_d = int(counts[k]), normals[k], float(offsets[k])
-        w = best_count / ev.shape[0]
+        w = best_count / max(ev.shape[0], 1)
         if w >= 1.0 or (w > 0 and drawn >= np.log(1e-3) / np.log(1.0 - w**3)):
             break
     if best_n is None:
         raise SceneError("no plane: the points are degenerate")
+    if usable is not None and redirect is not None:
+        points = np.compress(usable, points, axis=0)  # rows by a mask: compress is faster
     return _refined(points, best_n, best_d, distance_m)
+
+
+# `_redirection`'s scrambled order: position i comes at rank (i * a) mod N, with the
+# multiplier a near N / golden ratio (made coprime to N), so that neighbours in the order
+# lie far apart in the points' own (raster) order. In raster order a removed surface
+# leaves runs of hundreds of unusable positions, and the one usable point after each
+# run would take all of its draws (RANSAC would draw little but the points at the
+# removed surface's edge); scrambled, the runs are short (about 1 / f - 1 positions
+# when a share f remains) and land on points all over the frame.
+_ORDER_MULT = 0.6180339887498949
+
+
+def _order_step(n: int) -> int:
+    """The multiplier of `_redirection`'s order for ``n`` positions: the integer nearest
+    ``_ORDER_MULT * n`` that is coprime to ``n`` (so that the order is a permutation)."""
+    a = max(1, round(_ORDER_MULT * n))
+    while math.gcd(a, n) != 1:
+        a += 1
+    return a
+
+
+@lru_cache(maxsize=8)
+def _positions_by_rank(n: int) -> np.ndarray:
+    """(n,) the position at each rank of `_redirection`'s order: rank r holds position
+    (r * a^-1) mod n. The same few sample sizes recur (a frame's planes all draw over its
+    RANSAC sample): kept, read-only."""
+    out = (np.arange(n, dtype=np.int64) * pow(_order_step(n), -1, n)) % n
+    out.flags.writeable = False
+    return out
+
+
+def _redirection(usable: np.ndarray) -> tuple[np.ndarray, np.ndarray, int, int]:
+    """What `_redirected` needs for ``usable`` (N,) bool, not all False: the ranks of the
+    usable positions in the scrambled order (sorted), the position at each of those
+    ranks, the multiplier and N. (Not a table of every position's destination: that is
+    two random gathers over all N, more than the few hundred draws a plane makes cost.)"""
+    n = usable.shape[0]
+    positions_by_rank = _positions_by_rank(n)
+    usable_ranks = np.flatnonzero(np.take(usable, positions_by_rank))  # sorted, without a sort
+    return usable_ranks, np.take(positions_by_rank, usable_ranks), _order_step(n), n
+
+
+def _redirected(at: np.ndarray, usable_ranks: np.ndarray, usable_at: np.ndarray, a: int, n: int) -> np.ndarray:
+    """Drawn positions ``at`` (any shape), each moved to the first usable position at or
+    after its own rank in the scrambled order (wrapping round): a usable one stays."""
+    k = np.searchsorted(usable_ranks, (at * a) % n)
+    k[k == usable_ranks.size] = 0
+    return np.take(usable_at, k)
 
 
 def _refined(points: np.ndarray, n: np.ndarray, d: float, distance_m: float) -> tuple[np.ndarray, float]:
@@ -561,8 +638,14 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
         idx = np.flatnonzero(remaining)
         if idx.size < 50:
             break
-        # rows by index: take is faster than a[idx]
-        n, d = ransac_plane(np.take(sample, idx, axis=0), dist, settings.ransac_iterations, rng)
+        if settings.ransac_fixed_draws:
+            # drawn over the whole sample, the points of earlier planes redirected to
+            # remaining ones (`ransac_plane`'s ``usable``): one point more or less left by
+            # an earlier plane changes only the draws that meet it, not every draw after it
+            n, d = ransac_plane(sample, dist, settings.ransac_iterations, rng, remaining)
+        else:
+            # rows by index: take is faster than a[idx]
+            n, d = ransac_plane(np.take(sample, idx, axis=0), dist, settings.ransac_iterations, rng)
         on_plane = np.abs(sample @ n + d) <= dist
         inl = np.flatnonzero(on_plane & remaining)
         remaining &= ~on_plane

@@ -39,6 +39,21 @@ class SegmentSettings(Section):
     # support surface is the one with the most object points standing on it
     plane_candidates: int = param(4, ge=1, le=20)
     ransac_iterations: int = param(300, ge=1, le=10000)
+    # the planes after the first drawn over the whole RANSAC sample, a draw on a point of
+    # an earlier plane redirected to a remaining one (table.ransac_plane's ``usable``), not
+    # over the remaining points alone: one point more or less left by an earlier plane (a
+    # micrometre's move) then changes only the draws that meet it, not every later draw
+    # (issue 37). Under +-1 micrometre (benchmarks/flips.py --table: 12 mOSD learn frames,
+    # the fixtures and the foreign choose frames, seeds 0-5, 162 runs) the points whose
+    # table-step class (table / on a rejected plane / neither) changed fall from 215434
+    # to 9549, the runs with over 100 of them from 26 to 1 (there the filter kept one
+    # point fewer, which shifts the RANSAC sample itself); mOSD F1 (0.991, test 0.941)
+    # and the foreign choose part (59 of 89) unchanged; the object flips of flips.py
+    # (seeds 0-19) are the same, none starts at the table. Off: it draws the later
+    # planes anew on every frame, and where the table is not the first plane found its
+    # plane moves (one uois frame: by about 1e-4, its objects' points and plans with it),
+    # so it changes outputs; turning it on is re-recording the goldens
+    ransac_fixed_draws: bool = param(False)
     # grid cell (m) used to find the largest connected piece of a plane's inliers
     table_cell_m: float = param(0.02, ge=0.002, le=0.2)
     # pieces of the table plane within this gap (m) of its largest piece are table too:
