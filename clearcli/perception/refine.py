@@ -24,6 +24,8 @@ The stages, in order:
   fragments  strips of a face seen edge-on, apart from their object (fragments.py) voxel level
   seams      touching pieces across a smooth, convex seam (seams.py)     voxel level
   learned    touching pieces a trained model finds one object (learned.py) voxel level
+  boundary   voxels on a boundary moved to the segment whose colour they have
+             (boundary.py)                                               voxel level
 Before the supervoxels, `edges.py` cuts the voxel adjacency at depth discontinuities
 of the pixel grid (stage "edges", organized frames only): it changes the graph every
 later step walks, so it runs on the voxels, not on segments.
@@ -38,7 +40,20 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from clearcli.perception import colors, cuts, fragments, learned, occlusion, rims, rings, seams, stacks, steps, vessels
+from clearcli.perception import (
+    boundary,
+    colors,
+    cuts,
+    fragments,
+    learned,
+    occlusion,
+    rims,
+    rings,
+    seams,
+    stacks,
+    steps,
+    vessels,
+)
 from clearcli.perception.clock import Clock
 from clearcli.perception.context import RefineContext
 from clearcli.settings.segment import SegmentSettings
@@ -69,6 +84,7 @@ STAGES: tuple[Stage, ...] = (
     Stage("fragments", lambda s: s.fragment_join_m > 0, fragments.rejoin_fragments),
     Stage("seams", lambda s: s.seam_join, seams.join_smooth_seams),
     Stage("learned", lambda s: s.learned_join, learned.join_learned),
+    Stage("boundary", lambda s: s.boundary_refine, boundary.move_boundary_voxels),
 )
 
 

@@ -31,6 +31,7 @@ def test_refinement_stages_run_from_one_list() -> None:
         "fragments",
         "seams",
         "learned",
+        "boundary",
     ]
     assert [s.name for s in STAGES if s.needs_grid] == ["occlusion"]
     frame = read_frame(FIXTURES / "clutter10.pcd")
