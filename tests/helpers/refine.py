@@ -20,9 +20,12 @@ def hand_context(
     voxel_edges: np.ndarray | None = None,
     normal: tuple[float, float, float] = (0.0, 0.0, 1.0),
     offset: float = 0.0,
+    rgb: np.ndarray | None = None,
+    color_used: bool = False,
 ) -> RefineContext:
-    """Each voxel one point of an unorganized frame; the table the plane ``normal . p +
-    offset = 0`` (by default z = 0, z up); the sizes those of ``settings``."""
+    """Each voxel one point of an unorganized frame, coloured ``rgb`` if given; the table
+    the plane ``normal . p + offset = 0`` (by default z = 0, z up); the sizes those of
+    ``settings``."""
     n = voxels.shape[0]
     edges = np.zeros((0, 2), dtype=np.int64) if voxel_edges is None else np.asarray(voxel_edges, dtype=np.int64)
     vox = VoxelCloud(
@@ -33,6 +36,7 @@ def hand_context(
         colors=None,
         edges=edges,
     )
-    frame = Frame(points=voxels.astype(np.float32), source="by hand")
+    colors = None if rgb is None else np.asarray(rgb, dtype=np.uint8)
+    frame = Frame(points=voxels.astype(np.float32), colors=colors, source="by hand")
     plane = TablePlane(normal=np.asarray(normal, dtype=np.float64), offset=offset)
-    return RefineContext(frame, False, vox, sv, plane, settings, SegmentSize.of(settings), np.arange(n), False)
+    return RefineContext(frame, False, vox, sv, plane, settings, SegmentSize.of(settings), np.arange(n), color_used)

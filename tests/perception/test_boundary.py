@@ -22,23 +22,13 @@ def _context(  # type: ignore[no-untyped-def]
     """A row of one-point voxels 5 mm apart along x, 5 cm above the table z = 0, each
     adjacent to the next, each its own supervoxel (normal up unless ``normals``),
     coloured ``rgb``."""
-    from clearcli.io.frames import Frame
-    from clearcli.perception.refine import RefineContext
-    from clearcli.perception.size import SegmentSize
-    from clearcli.perception.supervoxels import Supervoxels, VoxelCloud
-    from clearcli.perception.types import TablePlane
+    from helpers.refine import hand_context
+
+    from clearcli.perception.supervoxels import Supervoxels
 
     n = len(rgb)
     voxels = np.stack([0.005 * np.arange(n), np.zeros(n), np.full(n, 0.05)], axis=1)
     chain = np.stack([np.arange(n - 1), np.arange(1, n)], axis=1)
-    vox = VoxelCloud(
-        point_voxel=np.arange(n),
-        centroids=voxels,
-        counts=np.ones(n, dtype=np.int64),
-        keys=np.zeros((n, 3), dtype=np.int64),
-        colors=None,
-        edges=chain,
-    )
     sv = Supervoxels(
         voxel_label=np.arange(n),
         centroids=voxels.copy(),
@@ -46,9 +36,7 @@ def _context(  # type: ignore[no-untyped-def]
         n_voxels=np.ones(n, dtype=np.int64),
         edges=chain,
     )
-    frame = Frame(points=voxels.astype(np.float32), colors=np.array(rgb, dtype=np.uint8), source="by hand")
-    plane = TablePlane(normal=np.array([0.0, 0.0, 1.0]), offset=0.0)
-    return RefineContext(frame, False, vox, sv, plane, settings, SegmentSize.of(settings), np.arange(n), color_used)
+    return hand_context(voxels, sv, settings, voxel_edges=chain, rgb=np.array(rgb), color_used=color_used)
 
 
 def test_the_colours_the_stage_reads_are_those_worked_out_by_hand() -> None:

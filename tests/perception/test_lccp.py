@@ -112,6 +112,19 @@ def test_boundary_step_is_the_offset_where_the_patches_touch() -> None:
     assert boundary_steps_m(sv, vox, np.zeros(0, dtype=np.int64)).shape == (0,)
 
 
+def _at_allowance(step_m: float, eps_m: float) -> tuple[VoxelCloud, Supervoxels]:
+    """Two patches with ``step_m`` where they touch, their centroids moved as another
+    make-up of the supervoxels would put them: B's raised so that their offset along
+    the (parallel) normals is the smoothness allowance + ``eps_m``."""
+    from clearcli.perception.size import SegmentSize
+
+    allowance_m = S.smoothness_threshold * SegmentSize.of(S).voxel_m
+    vox, sv = _two_patches(step_m)
+    centroids = sv.centroids.copy()
+    centroids[1, 2] = centroids[0, 2] + allowance_m + eps_m
+    return vox, dataclasses.replace(sv, centroids=centroids)
+
+
 @pytest.mark.parametrize("eps_m", [-1e-9, 1e-9])
 def test_smoothness_at_its_allowance_is_decided_where_the_patches_touch(eps_m: float) -> None:
     """A pair whose centroids are offset along their normals by the allowance (here
@@ -123,16 +136,9 @@ def test_smoothness_at_its_allowance_is_decided_where_the_patches_touch(eps_m: f
     from clearcli.perception.lccp import convex_edges
     from clearcli.perception.size import SegmentSize
 
-    size = SegmentSize.of(S)
-    allowance_m = S.smoothness_threshold * size.voxel_m
-    vox, sv = _two_patches(0.0002)
-    # the centroids as another make-up of the supervoxels would put them: B's raised so
-    # that their offset is the allowance + eps
-    centroids = sv.centroids.copy()
-    centroids[1, 2] = centroids[0, 2] + allowance_m + eps_m
-    sv = dataclasses.replace(sv, centroids=centroids)
-    assert convex_edges(sv, S, size).tolist() == [eps_m < 0]
-    assert convex_edges(sv, S, size, vox=vox).tolist() == [True]
+    vox, sv = _at_allowance(0.0002, eps_m)
+    assert convex_edges(sv, S, SegmentSize.of(S)).tolist() == [eps_m < 0]
+    assert convex_edges(sv, S, SegmentSize.of(S), vox=vox).tolist() == [True]
 
 
 @pytest.mark.parametrize("eps_m", [-1e-9, 1e-9])
@@ -143,10 +149,5 @@ def test_a_real_step_at_the_allowance_stays_a_step(eps_m: float) -> None:
     from clearcli.perception.lccp import convex_edges
     from clearcli.perception.size import SegmentSize
 
-    size = SegmentSize.of(S)
-    allowance_m = S.smoothness_threshold * size.voxel_m
-    vox, sv = _two_patches(0.0008)
-    centroids = sv.centroids.copy()
-    centroids[1, 2] = centroids[0, 2] + allowance_m + eps_m
-    sv = dataclasses.replace(sv, centroids=centroids)
-    assert convex_edges(sv, S, size, vox=vox).tolist() == [False]
+    vox, sv = _at_allowance(0.0008, eps_m)
+    assert convex_edges(sv, S, SegmentSize.of(S), vox=vox).tolist() == [False]
