@@ -1,6 +1,6 @@
 """Paired A/B timing of `segment` per step: two checkouts of clearcli in one process.
 
-    .venv/bin/python benchmarks/ab.py OLD_TREE [NEW_TREE] [--runs 5] [--frames cluttered|all|NAME,...]
+    .venv/bin/python benchmarks/ab.py OLD_TREE [NEW_TREE] [--runs 5] [--frames cluttered|all|uois|NAME,...]
 
 OLD_TREE and NEW_TREE are checkouts (NEW_TREE defaults to this one). Both are imported
 into this process, each with its own `clearcli` modules (swapped in `sys.modules` round
@@ -16,7 +16,9 @@ fitted time at 3 and 15 objects, old and new. Each frame's objects and table are
 compared between the sides: any difference is reported (the change was to keep them).
 
 Frames: mOSD's 50 ("all"), or the cluttered 6 ("cluttered": those with 5 or more
-objects, benchmarks/pcl.py's "mosd_cluttered": learn33 and the 5 test frames).
+objects, benchmarks/pcl.py's "mosd_cluttered": learn33 and the 5 test frames), or the
+nine RealSense 640x480 frames ("uois", benchmarks/pcl.py's "realsense_640"; no ground
+truth: their object count is clear's, and the per-object fit reads it).
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent.parent
 DATA = HERE.parent / "shared" / "data" / "mosd"
+UOIS = HERE.parent / "shared" / "data" / "scenes" / "uois_realsense"
 
 
 class Side:
@@ -72,6 +75,9 @@ class Side:
 
 
 def truth_objects(frame: object) -> int:
+    """mOSD's ground-truth object count; -1 for a frame without labels."""
+    if "label" not in frame.fields:  # type: ignore[attr-defined]
+        return -1
     labels = frame.fields["label"]  # type: ignore[attr-defined]
     ids = np.unique(np.asarray(labels).astype(np.int64).ravel() // 10)
     return int((ids >= 1).sum())
@@ -101,6 +107,8 @@ def frame_paths(which: str) -> list[Path]:
         return learn + test
     if which == "cluttered":
         return [DATA / "learn" / "learn33.pcd"] + test
+    if which == "uois":
+        return sorted(UOIS.glob("uois_image_*.pcd"))
     return [p for p in learn + test if p.stem in which.split(",")]
 
 
@@ -139,6 +147,8 @@ def main() -> None:
                 for step, t in seg.timings_s.items():  # type: ignore[attr-defined]
                     best[k][step] = min(best[k].get(step, np.inf), t)
         diff = same(results[0], results[1])
+        if n_truth < 0:  # no labels: the object count clear finds (the same on both sides)
+            n_truth = len(results[0].objects)  # type: ignore[attr-defined]
         for step in best[0]:
             if step not in names:
                 names.append(step)
