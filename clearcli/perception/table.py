@@ -132,6 +132,7 @@ def ransac_plane(
     iterations: int,
     rng: np.random.Generator,
     usable: np.ndarray | None = None,
+    range2: np.ndarray | None = None,
 ) -> tuple[np.ndarray, float]:
     """The plane with the most inliers among random triplets (scored on a subsample),
     refined by least squares on its inliers. Hypotheses are drawn in chunks and the
@@ -146,7 +147,10 @@ def ransac_plane(
     changes only the draws that land on it or on the unusable points just before it in
     that order, never the others (drawing over the usable subset shifted every later
     draw: one point more or less left by an earlier plane changed the later planes,
-    issue 37). All usable: the same draws as without the mask, bit for bit."""
+    issue 37). All usable: the same draws as without the mask, bit for bit.
+
+    ``range2``: (N,) the points' `squared_range`, when the caller has it (`_refined`
+    reads their largest)."""
     n_pts = points.shape[0]
     redirect = None
     if usable is not None and not bool(usable.all()):
@@ -159,6 +163,10 @@ def ransac_plane(
     ev = points[ev_at]
     best_count, best_n, best_d = -1, None, 0.0
     drawn = 0
+    # each chunk's distances and verdicts in the same buffers (a fresh (E, K) array a
+    # chunk cost a third of the products' time, issue 39)
+    dist_buf = np.empty(ev.shape[0] * _RANSAC_CHUNK)
+    hit_buf = np.empty(ev.shape[0] * _RANSAC_CHUNK, dtype=bool)
     while drawn < iterations:
         chunk = min(_RANSAC_CHUNK, iterations - drawn)
         drawn += chunk
@@ -175,10 +183,13 @@ def ransac_plane(
         offsets = -np.einsum("ij,ij->i", normals, tri[ok, 0])
         # each hypothesis's inliers among the scoring points, in place (one (E, K) array:
         # the same sums, a few times faster than a temporary per operation)
-        dist = ev @ normals.T
+        dist = np.matmul(ev, normals.T, out=dist_buf[: ev.shape[0] * normals.shape[0]].reshape(ev.shape[0], -1))
         dist += offsets
         np.abs(dist, out=dist)
-        counts = np.count_nonzero(dist <= distance_m, axis=0)
+        hit = np.less_equal(dist, distance_m, out=hit_buf[: dist.size].reshape(dist.shape))
+        # down each column, the bools' bytes summed in uint16 (at most _RANSAC_EVAL):
+        # count_nonzero along an axis cast each one to intp first, at twice the cost
+        counts = hit.view(np.uint8).sum(axis=0, dtype=np.uint16)
         k = int(np.argmax(counts))
         if counts[k] > best_count:
             best_count, best_n, best_d = int(counts[k]), normals[k], float(offsets[k])
@@ -189,7 +200,8 @@ def ransac_plane(
         raise SceneError("no plane: the points are degenerate")
     if usable is not None and redirect is not None:
         points = np.compress(usable, points, axis=0)  # rows by a mask: compress is faster
-    return _refined(points, best_n, best_d, distance_m)
+        range2 = None if range2 is None else np.compress(usable, range2)
+    return _refined(points, best_n, best_d, distance_m, range2)
 
 
 # `_redirection`'s scrambled order: position i comes at rank (i * a) mod N, with the
@@ -240,7 +252,9 @@ def _redirected(at: np.ndarray, usable_ranks: np.ndarray, usable_at: np.ndarray,
     return np.take(usable_at, k)
 
 
-def _refined(points: np.ndarray, n: np.ndarray, d: float, distance_m: float) -> tuple[np.ndarray, float]:
+def _refined(
+    points: np.ndarray, n: np.ndarray, d: float, distance_m: float, range2: np.ndarray | None = None
+) -> tuple[np.ndarray, float]:
     """RANSAC's plane (n, d) refined: least squares on the inliers until they no longer
     change, so that the plane is a fixed point of the refit rather than of the draws
     (which points the random indices pick changes when one point more or less survives
@@ -251,10 +265,20 @@ def _refined(points: np.ndarray, n: np.ndarray, d: float, distance_m: float) -> 
     scatter matrix's smallest eigenvector, its sums kept up to date by the points that
     join or leave (a tenth of an SVD each). Where that plane could put a point on the
     other side of ``distance_m`` than the SVD's would (a point within `_moments_margin`
-    of it, or an ill-posed scatter), that refit and those after it are SVDs."""
-    inl = np.abs(points @ n + d) <= distance_m
+    of it, or an ill-posed scatter), that refit and those after it are SVDs.
+
+    ``range2``: the points' `squared_range` when the caller has it (their largest bounds
+    the rounding)."""
+    # each refit's distances, and their distances from distance_m, in two buffers, in
+    # place (the same floats; fresh temporaries cost as much as the arithmetic, issue 39)
+    dist, off = np.empty(points.shape[0]), np.empty(points.shape[0])
+    np.matmul(points, n, out=dist)
+    dist += d
+    inl = np.abs(dist, out=dist) <= distance_m
     fitted: np.ndarray | None = None  # the inliers of the last refit, when it was by moments
-    r2 = float(np.einsum("ij,ij->i", points, points).max()) if points.shape[0] else 0.0
+    if range2 is None:
+        range2 = squared_range(points)
+    r2 = float(range2.max()) if points.shape[0] else 0.0
     count = int(inl.sum())
     chosen = np.compress(inl, points, axis=0)  # rows by a mask: compress is several times faster
     s1, s2 = chosen.sum(axis=0), chosen.T @ chosen
@@ -267,8 +291,11 @@ def _refined(points: np.ndarray, n: np.ndarray, d: float, distance_m: float) -> 
             if plane is None:
                 exact = True
             else:
-                dist = np.abs(points @ plane[0] + plane[1])
-                if bool((np.abs(dist - distance_m) <= plane[2]).any()):
+                np.matmul(points, plane[0], out=dist)
+                dist += plane[1]
+                np.abs(dist, out=dist)
+                np.subtract(dist, distance_m, out=off)
+                if bool((np.abs(off, out=off) <= plane[2]).any()):
                     exact = True
         if exact:
             fitted = None
@@ -443,11 +470,27 @@ def _inside_raster_xy(
     # a point off the raster clipped into its border of outside cells; clipped before the
     # cast too: a point 1e38 m away (a damaged cloud) has a cell index no int64 holds
     # (and after it, for NaN's integer)
-    cx = np.clip(np.floor(np.clip((x - lo[0]) / cell_m, -1.0, float(dims[0]))).astype(np.int64), -1, dims[0]) + 1
-    cy = np.clip(np.floor(np.clip((y - lo[1]) / cell_m, -1.0, float(dims[1]))).astype(np.int64), -1, dims[1]) + 1
+    # the flat cell of each point, in floats and in place (a dozen fresh temporaries of
+    # the points' size were most of the lookup's time, issue 39): every value is a whole
+    # number below 2^53 there, so the same cell as in int64
+    cx, cy = _cell_of(x, lo[0], cell_m, dims[0]), _cell_of(y, lo[1], cell_m, dims[1])
     cx *= dims[1] + 2
     cx += cy
-    return np.take(grid, cx)  # one flat lookup
+    return np.take(grid, cx.astype(np.intp))  # one flat lookup
+
+
+def _cell_of(v: np.ndarray, lo: float, cell_m: float, n: int) -> np.ndarray:
+    """(N,) float: the raster row (or column) of each coordinate ``v``, 1..n, with 0 and
+    n + 1 the border of outside cells: a point off the raster is clipped into it, before
+    any cast (a point 1e38 m away, from a damaged cloud, has a cell index no int64
+    holds), and NaN's too: fmax / fmin take the number over a NaN."""
+    c = np.subtract(v, lo)
+    c /= cell_m
+    np.fmax(c, -1.0, out=c)
+    np.fmin(c, float(n), out=c)
+    np.floor(c, out=c)
+    c += 1.0
+    return c
 
 
 def _raster(polygon_2d: np.ndarray, margin_m: float, cell_m: float, lo: np.ndarray, dims: np.ndarray) -> np.ndarray:
@@ -627,6 +670,10 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
     # a contiguous copy of the regular subsample: the row gathers, masks and products on
     # it below (a dozen a frame) cost 2-3 times as much on the strided view
     sample = np.ascontiguousarray(points[::step])
+    # their squared ranges once: each RANSAC plane's refinement, the scoring's noise band
+    # and `choose` read them (a row's einsum does not depend on the rows around it: the
+    # same floats as of each subset taken apart)
+    sample_range2 = squared_range(sample)
     dist = settings.plane_distance_m
 
     candidates: list[_Candidate] = []
@@ -642,10 +689,12 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
             # drawn over the whole sample, the points of earlier planes redirected to
             # remaining ones (`ransac_plane`'s ``usable``): one point more or less left by
             # an earlier plane changes only the draws that meet it, not every draw after it
-            n, d = ransac_plane(sample, dist, settings.ransac_iterations, rng, remaining)
+            n, d = ransac_plane(sample, dist, settings.ransac_iterations, rng, remaining, sample_range2)
         else:
             # rows by index: take is faster than a[idx]
-            n, d = ransac_plane(np.take(sample, idx, axis=0), dist, settings.ransac_iterations, rng)
+            n, d = ransac_plane(
+                np.take(sample, idx, axis=0), dist, settings.ransac_iterations, rng, range2=np.take(sample_range2, idx)
+            )
         on_plane = np.abs(sample @ n + d) <= dist
         inl = np.flatnonzero(on_plane & remaining)
         remaining &= ~on_plane
@@ -696,7 +745,7 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
         any_plane |= c.on_plane
     # points on none of the candidate planes (rows by a mask: compress is several times faster)
     loose = np.compress(~any_plane, sample, axis=0)
-    loose_range2 = np.einsum("ij,ij->i", loose, loose)
+    loose_range2 = np.compress(~any_plane, sample_range2)
 
     best: tuple[tuple[int, float], TableFit, int, int] | None = None
     far: list[PlaneVerdict] = []
@@ -771,7 +820,7 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
         surfaces = [Surface(f.plane.normal, f.plane.offset, f.basis, f.origin, f.polygon_2d) for f, _, _ in scored]
         best_k = next(k for k, (f, _, _) in enumerate(scored) if f is fit)
         band_m = settings.prism_min_height_m + _NOISE_PER_M2 * loose_range2
-        every_band_m = settings.prism_min_height_m + _NOISE_PER_M2 * np.einsum("ij,ij->i", sample, sample)
+        every_band_m = settings.prism_min_height_m + _NOISE_PER_M2 * sample_range2
         choice = choose(
             surfaces,
             best_k,
@@ -857,17 +906,25 @@ def lift(points: np.ndarray, fit: TableFit, settings: SegmentSettings, range2: n
     """`Lift` of ``points`` (M, 3) against ``fit`` (``range2``: their `squared_range`,
     when the caller has it)."""
     h = fit.plane.height_of(points)
-    near = np.abs(h) <= settings.plane_distance_m
+    # one (M,) scratch array for |h|, the prism's floor and the two projections in turn:
+    # each fresh whole-frame temporary costs its pages' first touch too (issue 39)
+    scratch = np.abs(h)
+    near = scratch <= settings.plane_distance_m
     min_h: float | np.ndarray = settings.prism_min_height_m
     if fit.camera_is_origin and settings.prism_noise_per_m2 > 0:
-        min_h = min_h + settings.prism_noise_per_m2 * (squared_range(points) if range2 is None else range2)
-    band = (h >= min_h) & (h <= settings.prism_max_height_m)
-    cand = np.flatnonzero(near | band)
+        # min_h + noise * range2, in place (a product and a sum commute: the same floats)
+        np.multiply(squared_range(points) if range2 is None else range2, settings.prism_noise_per_m2, out=scratch)
+        scratch += min_h
+        min_h = scratch
+    band = h >= min_h
+    band &= h <= settings.prism_max_height_m
+    near_or_band = np.logical_or(near, band)
+    cand = np.flatnonzero(near_or_band)
     # one matrix-vector product per in-plane axis over all the points, then the
     # candidates' entries: a row's product does not depend on the rows around it (the
     # same bits as projecting a copy of the candidates' rows, which cost several times more)
     # (in two columns: the raster reads them so, and stacking them cost as much as the projection)
-    x, y = (np.take(points @ a, cand) for a in fit.basis)
+    x, y = (np.take(np.matmul(points, a, out=scratch), cand) for a in fit.basis)
     ox, oy = (fit.origin @ fit.basis.T).tolist()
     x -= ox
     y -= oy
@@ -941,20 +998,30 @@ def beyond_the_edge(
     # a table pixel with a jump to its right or lower neighbour belongs to no piece: both
     # sides of a jump are left out, so no 8-neighbour path crosses it
     cut = np.zeros_like(is_table)
+    # the two directions' differences, limits and jumps in the same three buffers: fresh
+    # frame-sized temporaries cost their pages' first touch as well (issue 39)
+    diff_buf, limit_buf = np.empty(height * width, dtype=rng.dtype), np.empty(height * width, dtype=rng.dtype)
+    jump_buf = np.empty(height * width, dtype=bool)
     with np.errstate(invalid="ignore"):
         for dv, du in ((0, 1), (1, 0)):
             a = rng[: height - dv, : width - du]
             b = rng[dv:, du:]
+            size = a.shape[0] * a.shape[1]
+            diff, limit = diff_buf[:size].reshape(a.shape), limit_buf[:size].reshape(a.shape)
+            jump = jump_buf[:size].reshape(a.shape)
             # ~(|a - b| <= rel min(a, b)) (NaN: a jump), in place: no temporary per operation
-            diff = np.subtract(a, b)
+            np.subtract(a, b, out=diff)
             np.abs(diff, out=diff)
-            limit = np.minimum(a, b)
+            np.minimum(a, b, out=limit)
             limit *= rel
-            jump = np.less_equal(diff, limit)
+            np.less_equal(diff, limit, out=jump)
             np.logical_not(jump, out=jump)
             cut[: height - dv, : width - du] |= jump
             cut[dv:, du:] |= jump
-    pieces, n = label_8(is_table & ~cut)
+    # the pieces' cells: table and not cut (in place: cut is not read again)
+    np.logical_not(cut, out=cut)
+    cut &= is_table
+    pieces, n = label_8(cut)
     if n < 2:
         return drop, ~drop
     # each table point's piece (0: on a jump): the pieces lie on the table's pixels only, so

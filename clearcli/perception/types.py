@@ -21,7 +21,9 @@ class TablePlane:
 
     def height_of(self, points: np.ndarray) -> np.ndarray:
         """Signed height (m) of points above the plane."""
-        return points @ self.normal + self.offset
+        h = points @ self.normal
+        h += self.offset  # in place: the same sum, without a second (N,) array
+        return h
 
     def project(self, points: np.ndarray) -> np.ndarray:
         """Orthogonal projection of points onto the plane."""
