@@ -118,9 +118,23 @@ def plane_basis(normal: np.ndarray) -> np.ndarray:
     return np.stack([u, v])
 
 
+def column_sums(rows: np.ndarray) -> np.ndarray:
+    """``rows.sum(axis=0)``, the same floats: each column summed row by row, in order.
+    For C-contiguous float64 rows by einsum, a fifth of the cost (the reduction along
+    axis 0 walks the rows a few entries at a time, issue 39). einsum starts from +0.0
+    where the reduction starts from the first row: the two differ only in the sign of
+    a sum that comes out zero, and such a column is summed again the reduction's way."""
+    if rows.ndim == 2 and rows.dtype == np.float64 and rows.flags.c_contiguous:
+        sums = np.einsum("ij->j", rows)
+        if sums.all():
+            return sums
+    return rows.sum(axis=0)
+
+
 def fit_plane_lsq(points: np.ndarray) -> tuple[np.ndarray, float]:
     """Least-squares plane (unit normal, offset) through points."""
-    c = points.mean(axis=0)
+    # mean(axis=0) is the column sums over the count, the same floats
+    c = column_sums(points) / points.shape[0] if points.shape[0] else points.mean(axis=0)
     _, _, vt = np.linalg.svd(points - c, full_matrices=False)
     n = vt[2]
     return n, float(-n @ c)
@@ -281,7 +295,7 @@ def _refined(
     r2 = float(range2.max()) if points.shape[0] else 0.0
     count = int(inl.sum())
     chosen = np.compress(inl, points, axis=0)  # rows by a mask: compress is several times faster
-    s1, s2 = chosen.sum(axis=0), chosen.T @ chosen
+    s1, s2 = column_sums(chosen), chosen.T @ chosen
     exact = False
     for _ in range(_REFITS):
         if count < 3:

@@ -263,6 +263,29 @@ def test_refits_by_moments_give_the_svd_refits_plane_bit_for_bit(monkeypatch: py
     assert len(calls) == 1
 
 
+def test_column_sums_are_the_reductions_floats() -> None:
+    """column_sums (einsum) gives sum(axis=0) to the bit, signs of zero included (a
+    column of -0.0, one all zero, a single row), and a mean over the count is mean(axis=0)."""
+    from clearcli.perception.table import column_sums
+
+    gen = np.random.default_rng(11)
+    for trial in range(80):
+        rows = gen.normal(size=(int(gen.integers(1, 20000)), 3)) * gen.uniform(0.01, 10.0) + gen.normal(size=3)
+        if trial % 5 == 1:
+            rows[:, trial % 3] = -0.0
+        if trial % 5 == 2:
+            rows[:, 1] = 0.0
+        if trial % 5 == 3:
+            rows = rows.astype(np.float32).astype(np.float64)  # a camera's floats
+        for got, want in (
+            (column_sums(rows), rows.sum(axis=0)),
+            (column_sums(rows) / rows.shape[0], rows.mean(axis=0)),
+        ):
+            assert np.array_equal(got, want) and np.array_equal(np.signbit(got), np.signbit(want))
+    strided = gen.normal(size=(1000, 6))[:, ::2]  # not contiguous: the reduction itself
+    assert np.array_equal(column_sums(strided), strided.sum(axis=0))
+
+
 def test_unique_cells_are_numpys_unique_rows() -> None:
     """The distinct cells in np.unique(axis=0)'s order, by marks over the keys' range
     (dense cells) and by a sort (sparse ones), negative indices included."""
