@@ -37,6 +37,7 @@ from clearcli.perception.exclude import (
     AROUND_LEVEL_M,
     at_image_border,
     beyond_outline,
+    near_the_objects,
     not_standing,
     reach_beyond,
     row_mean,
@@ -556,9 +557,18 @@ def _exclude(w: _Work) -> None:
         w.frame.shape[1] if w.organized and w.frame.shape is not None else 0,
         beyond_outline(np.compress(out, above_xy, axis=0), fit.polygon_2d),
     )
+    # every object's points gathered at once (take: faster than a[idx]), split back: the
+    # same rows per object, without a gather and a cast of its own each
+    sizes = [o.indices.size for o in w.objects]
+    every = np.take(w.frame.points, np.concatenate([o.indices for o in w.objects]), axis=0).astype(np.float64)
     below = np.flatnonzero(~w.table_mask & (h < -low))
     below_pts = np.take(pts, below, axis=0)
-    outside_below = np.compress(~fit.inside(below_pts, settings.hull_margin_m), below_pts, axis=0)  # rows by a mask
+    # beyond the outline: tested only on those not_standing reads (near the objects), as
+    # a part of them all (the same test, raster or exact, as theirs)
+    near_pts = near_the_objects(below_pts, every)
+    outside_below = np.compress(
+        ~fit.inside(near_pts, settings.hull_margin_m, of_n=below_pts.shape[0]), near_pts, axis=0
+    )  # rows by a mask
     # an even sample of the table's points: no copy of every one first
     _, support_xy = _in_plane(w, w.table_mask, max(1, int(np.count_nonzero(w.table_mask)) // 50000))
     rests = settings.prism_min_height_m + settings.plane_distance_m
@@ -569,7 +579,7 @@ def _exclude(w: _Work) -> None:
         return rests + settings.prism_noise_per_m2 * float(np.min(np.einsum("ij,ij->i", p, p)))
 
     verdicts = not_standing(
-        [np.take(w.frame.points, o.indices, axis=0).astype(np.float64) for o in w.objects],  # take: faster than a[idx]
+        np.split(every, np.cumsum(sizes)[:-1]),
         outside,
         outside_below,
         support_xy,

@@ -89,14 +89,17 @@ class TableFit:
     def to_2d(self, points: np.ndarray) -> np.ndarray:
         return project(points, self.basis) - self.origin @ self.basis.T
 
-    def inside(self, points: np.ndarray, margin_m: float = 0.0) -> np.ndarray:
-        """`inside_convex_raster` of the points in the plane's coordinates."""
-        return self.inside_2d(self.to_2d(points), margin_m)
+    def inside(self, points: np.ndarray, margin_m: float = 0.0, of_n: int | None = None) -> np.ndarray:
+        """`inside_convex_raster` of the points in the plane's coordinates. ``of_n``: the
+        points are a part of that many, and get the answers a test of them all gives (the
+        raster or the exact test is chosen by the count, and they differ within a cell of
+        the boundary)."""
+        return self.inside_2d(self.to_2d(points), margin_m, of_n)
 
-    def inside_2d(self, xy: np.ndarray, margin_m: float = 0.0) -> np.ndarray:
+    def inside_2d(self, xy: np.ndarray, margin_m: float = 0.0, of_n: int | None = None) -> np.ndarray:
         """`inside` of points given in the plane's coordinates (``to_2d``'s (N, 2)), for
         a caller that has them already."""
-        return _inside_raster_xy(xy[:, 0], xy[:, 1], self.polygon_2d, margin_m, _RASTER_CELL_M, xy, self.rasters)
+        return _inside_raster_xy(xy[:, 0], xy[:, 1], self.polygon_2d, margin_m, _RASTER_CELL_M, xy, self.rasters, of_n)
 
 
 def _tuple(v: np.ndarray) -> tuple[float, float, float]:
@@ -463,17 +466,19 @@ def _inside_raster_xy(
     cell_m: float,
     points_2d: np.ndarray | None = None,
     rasters: dict[tuple[float, float], np.ndarray] | None = None,
+    of_n: int | None = None,
 ) -> np.ndarray:
     """`inside_convex_raster` of the points (x, y) given as two columns (``points_2d``:
     them as one (N, 2) array when the caller has it; the exact test needs it).
-    ``rasters``: the polygon's rasters drawn before, by (margin, cell), to read and add to."""
+    ``rasters``: the polygon's rasters drawn before, by (margin, cell), to read and add to.
+    ``of_n``: the count the test is chosen for (`TableFit.inside`; None: these points')."""
     lo = polygon_2d.min(axis=0) - margin_m - cell_m
     hi = polygon_2d.max(axis=0) + margin_m + cell_m
     span = np.ceil((hi - lo) / cell_m)
     # the cell count in floats: a hull from a damaged cloud (coordinates of 4e9 m) has
     # more cells than an int64 product holds, and a wrapped product passed the test
     n_cells = float(span[0]) * float(span[1])
-    if not n_cells <= 2_000_000 or x.shape[0] < n_cells // 4:
+    if not n_cells <= 2_000_000 or (x.shape[0] if of_n is None else of_n) < n_cells // 4:
         return inside_convex(np.stack([x, y], axis=1) if points_2d is None else points_2d, polygon_2d, margin_m)
     dims = span.astype(np.int64)
     grid = None if rasters is None else rasters.get((margin_m, cell_m))
