@@ -72,9 +72,27 @@ def _unique_inverse(keys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return keys.copy(), np.zeros(0, dtype=np.int64)
     starts = np.flatnonzero(keys[1:] != keys[:-1]) + 1
     run_keys = np.concatenate((keys[:1], keys[starts]))
-    uniq, run_inverse = np.unique(run_keys, return_inverse=True)
     lengths = np.diff(np.concatenate(([0], starts, [m])))
-    return uniq, np.repeat(run_inverse.astype(np.int64, copy=False), lengths)
+    n_runs = run_keys.shape[0]
+    run_bits = max(1, (n_runs - 1).bit_length())
+    low, high = int(run_keys.min()), int(run_keys.max())
+    if low < 0 or high.bit_length() + run_bits > 62:
+        uniq, run_inverse = np.unique(run_keys, return_inverse=True)
+        return uniq, np.repeat(run_inverse.astype(np.int64, copy=False), lengths)
+    # np.unique's argsort, as one sort of the keys with each run's place in the low bits:
+    # the same arrays, a third less time (issue 39)
+    packed = np.left_shift(run_keys, run_bits)
+    packed |= np.arange(n_runs)
+    packed.sort()
+    sorted_keys = packed >> run_bits
+    first = np.empty(n_runs, dtype=bool)
+    first[0] = True
+    np.not_equal(sorted_keys[1:], sorted_keys[:-1], out=first[1:])
+    uniq = np.compress(first, sorted_keys)
+    packed &= (1 << run_bits) - 1
+    run_inverse = np.empty(n_runs, dtype=np.int64)
+    run_inverse[packed] = np.cumsum(first) - 1
+    return uniq, np.repeat(run_inverse, lengths)
 
 
 def voxelize(points: np.ndarray, voxel_m: float, colors: np.ndarray | None = None, scatter: bool = False) -> VoxelCloud:
@@ -83,11 +101,22 @@ def voxelize(points: np.ndarray, voxel_m: float, colors: np.ndarray | None = Non
     # the cells of `grid_cells`, one coordinate at a time: reductions over axis 0 of an
     # (M, 3) array are several times slower than over a column; floor is monotonic, so
     # a column's lowest cell is the cell of its lowest float
-    cols = [np.floor((points[:, k] + GRID_SHIFT_M) / voxel_m) for k in range(3)]
+    # (in place: the same operations, no fresh temporaries)
+    cols = []
+    for k in range(3):
+        col = points[:, k] + GRID_SHIFT_M
+        col /= voxel_m
+        cols.append(np.floor(col, out=col))
     lo = [int(c.min()) - 1 for c in cols]  # one empty layer around so offsets never wrap
-    keys_cols = [c.astype(np.int64) - low for c, low in zip(cols, lo)]
+    keys_cols = [c.astype(np.int64) for c in cols]
+    for c, low in zip(keys_cols, lo):
+        c -= low
     dims = [int(c.max()) + 2 for c in keys_cols]
-    packed = (keys_cols[0] * dims[1] + keys_cols[1]) * dims[2] + keys_cols[2]
+    packed = keys_cols[0]
+    packed *= dims[1]
+    packed += keys_cols[1]
+    packed *= dims[2]
+    packed += keys_cols[2]
     uniq, inverse = _unique_inverse(packed)
     n_vox = uniq.shape[0]
     counts = np.bincount(inverse, minlength=n_vox)
@@ -273,36 +302,51 @@ def radius_knn(points: np.ndarray, k: int, radius_m: float) -> np.ndarray:
     pairs = tree.query_pairs(radius_m * (1.0 + 1e-7), output_type="ndarray")
     n_pairs = pairs.shape[0]
     first, second = np.ascontiguousarray(pairs[:, 0]), np.ascontiguousarray(pairs[:, 1])
-    # the squared distances, in place: (dx dx + dy dy) + dz dz
-    d2 = np.zeros(n_pairs)
+    # Two buffers of 2 n_pairs + n int64 hold every array of n_pairs or more below: the
+    # keys (and a window of k after them, so that every row's window of k keys lies
+    # within the buffer), and ``work``: the squared distances and their scratch, then
+    # each key's (point, bucket). Fresh arrays cost their first touch of every page on
+    # top of the arithmetic: radius_knn 29.5 -> ~26 ms on test55 (issue 39).
+    n_keys = 2 * n_pairs + n
+    key_buf = np.empty(n_keys + k, dtype=np.int64)
+    key_buf[n_keys:] = 0
+    key = key_buf[:n_keys]
+    work = np.empty(n_keys, dtype=np.int64)
+    # the squared distances, in place: (dx dx + dy dy) + dz dz (the first square is
+    # 0 + dx dx's float)
+    d2, dj = work[:n_pairs].view(np.float64), work[n_pairs : 2 * n_pairs].view(np.float64)
+    other = key_buf[:n_pairs].view(np.float64)
     for j in range(3):
         col = np.ascontiguousarray(points[:, j])
-        dj = np.take(col, first)
-        dj -= np.take(col, second)
-        dj *= dj
-        d2 += dj
+        term = d2 if j == 0 else dj
+        np.take(col, first, out=term, mode="clip")  # indices in range: no clipping, no buffered copy
+        term -= np.take(col, second, out=other, mode="clip")
+        term *= term
+        if j:
+            d2 += dj
     r2 = radius_m * radius_m
     top = (1 << q_bits) - 1
     scale = float(top - 1) / r2
     # floor(d2 * scale) is monotonic in d2: distinct buckets order as the distances do
     d2 *= scale
     np.minimum(d2, float(top), out=d2)
-    q = d2.astype(np.int64)
+    # the buckets where the keys of (second, first) go, then those keys in place there
+    q = key[n_pairs : 2 * n_pairs]
+    np.copyto(q, d2, casting="unsafe")  # astype(np.int64)'s conversion
     band_lo, band_hi = int(r2 * (1.0 - 1e-9) * scale), int(r2 * (1.0 + 1e-9) * scale)
     shift = n_bits + q_bits
     q <<= n_bits
-    # the keys of (first, second), (second, first) and (i, i), written in place; k more
-    # after them, so that every row's window of k keys lies within the buffer
-    key_buf = np.empty(2 * n_pairs + n + k, dtype=np.int64)
-    key_buf[2 * n_pairs + n :] = 0
-    key = key_buf[: 2 * n_pairs + n]
-    for part, (src, dst) in enumerate(((first, second), (second, first))):
-        block = key[part * n_pairs : (part + 1) * n_pairs]
-        np.left_shift(src, shift, out=block)
-        block |= q
-        block |= dst
+    # the keys of (first, second), (second, first) and (i, i), written in place
+    block = key[:n_pairs]
+    np.left_shift(first, shift, out=block)
+    block |= q
+    block |= second
+    high = work[:n_pairs]  # the squared distances are spent
+    np.left_shift(second, shift, out=high)
+    q |= high
+    q |= first
     own = np.arange(n, dtype=np.int64)
-    selves = key[2 * n_pairs : 2 * n_pairs + n]
+    selves = key[2 * n_pairs : n_keys]
     np.left_shift(own, shift, out=selves)
     selves |= own
     key.sort()
@@ -316,7 +360,7 @@ def radius_knn(points: np.ndarray, k: int, radius_m: float) -> np.ndarray:
     # ``hi``: the key without the neighbour's bits, the point and the bucket; two keys in
     # a row with the same are two of one point in one bucket (a tie), asked of the tree
     # when the later one is among the point's first k + 1
-    hi = key >> n_bits
+    hi = np.right_shift(key, n_bits, out=work)
     tie_at = np.flatnonzero(hi[1:] == hi[:-1])
     tie_at += 1
     bucket = hi
@@ -434,6 +478,19 @@ def _pair_keys(pairs: np.ndarray, n: int) -> np.ndarray:
     of ``np.unique(pairs, axis=0)`` in its order, several times faster than its sort on
     rows; `_pairs_of` turns keys back into rows."""
     return pairs[:, 0].astype(np.int64) * n + pairs[:, 1]
+
+
+def _distinct(keys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``np.unique(keys, return_counts=True)`` of (P,) int64 ``keys`` by a sort and a
+    comparison of neighbours: NumPy 2.4's np.unique finds the distinct values through a
+    hash table, then sorts them, 3-4x the time of the sort on a frame's supervoxel
+    adjacency keys (31k keys on test55: 0.76 -> 0.18 ms, issue 39)."""
+    ordered = np.sort(keys)
+    first = np.empty(ordered.shape[0], dtype=bool)
+    first[:1] = True
+    np.not_equal(ordered[1:], ordered[:-1], out=first[1:])
+    starts = np.flatnonzero(first)
+    return np.take(ordered, starts), np.diff(starts, append=ordered.shape[0])
 
 
 def _pairs_of(keys: np.ndarray, n: int) -> np.ndarray:
@@ -561,6 +618,7 @@ def supervoxel_labels(
         if spread_out.any():
             spread = (tensors, np.append(spread_out, False))
     rows = np.arange(n_vox) * k  # each voxel's first place in the flat (V, k) arrays
+    seed_nrm_cols = tuple(np.empty((n_vox, k)) for _ in range(3))  # the seeds' normals, per pass
     n_iterations = max(1, settings.supervoxel_iterations)
     for iteration in range(n_iterations):
         n_s = seed_pos.shape[0]
@@ -572,13 +630,23 @@ def supervoxel_labels(
             dist, nb = dist[:, None], nb[:, None]
         # a missing neighbour has index n_s and distance inf: its cost is inf whatever the
         # rest (spatial_importance > 0), so no mask; it reads a zero normal appended at n_s
-        seed_nrm_cols = tuple(np.take(np.append(seed_nrm[:, j], 0.0), nb) for j in range(3))  # take: faster than [nb]
+        # take: faster than [nb]; into the same three (V, k) buffers each pass, and the dot
+        # product below in place in them: fresh (V, k) arrays cost their first touch of
+        # every page here, a fifth of the work outside the tree's query (issue 39)
+        for j in range(3):
+            np.take(np.append(seed_nrm[:, j], 0.0), nb, out=seed_nrm_cols[j], mode="clip")  # nb <= n_s: no clipping
         # spatial_importance * dist / seed_m + normal_importance * (1 - |n . n_s|), the
         # same operations in the same order, in place; the normals' dot products summed
-        # as einsum("vj,vkj->vk") sums them (_dot3)
+        # as einsum("vj,vkj->vk") sums them (_dot3: (x0 y0 + x2 y2) + x1 y1, each
+        # product the same float whichever factor comes first)
         cost = np.multiply(settings.spatial_importance, dist, out=dist)
         cost /= seed_m
-        normal_term = _dot3(voxel_nrm, seed_nrm_cols)
+        normal_term, nrm_y, nrm_z = seed_nrm_cols
+        normal_term *= voxel_nrm[0]
+        nrm_z *= voxel_nrm[2]
+        normal_term += nrm_z
+        nrm_y *= voxel_nrm[1]
+        normal_term += nrm_y
         np.abs(normal_term, out=normal_term)
         if iteration == 0 and spread is not None:
             # a crease's seed: the alignment with its tensor, every other pair as it was
@@ -649,7 +717,7 @@ def supervoxel_labels(
     pairs = np.compress(~main[pairs[:, 0]] & main[pairs[:, 1]], pairs, axis=0)
     target = np.arange(n_pieces)
     if pairs.shape[0]:
-        keys, cnt = np.unique(_pair_keys(pairs, n_pieces), return_counts=True)
+        keys, cnt = _distinct(_pair_keys(pairs, n_pieces))
         uniq = _pairs_of(keys, n_pieces)
         order = np.lexsort((-cnt, uniq[:, 0]))
         u = uniq[order]
@@ -709,7 +777,7 @@ def supervoxel_stats(
     la, lb = np.compress(cross, la), np.compress(cross, lb)
     # the keys of `_pair_keys` of the rows (min, max), without the rows
     keys = np.minimum(la, lb) * n_sv + np.maximum(la, lb)
-    pairs = _pairs_of(np.unique(keys), n_sv) if keys.shape[0] else np.zeros((0, 2), np.int64)
+    pairs = _pairs_of(_distinct(keys)[0], n_sv) if keys.shape[0] else np.zeros((0, 2), np.int64)
     return Supervoxels(labels, mean, normals, cnt.astype(np.int64), pairs)
 
 
