@@ -242,16 +242,23 @@ def color_state(frame: Frame, organized: bool, settings: SegmentSettings) -> tup
     if frame.colors.shape != (frame.n_points, 3):
         return False, f"the colour has {frame.colors.shape[0]} rows for {frame.n_points} points: geometry alone"
     step = max(1, frame.n_points // 20000)  # a sample judges the whole image
-    finite = np.isfinite(frame.points[::step]).all(axis=1)
-    rgb = np.compress(finite, frame.colors[::step], axis=0)  # rows by a mask: compress is faster
-    if rgb.size == 0:
+    # column by column: the same tests as over the (N, 3) rows (all finite, max, min,
+    # ptp), whose reductions along a row cost 4-5x more (1.4-1.9 -> 0.3 ms a 640x480
+    # frame, timed in the supervoxels step: issue 39)
+    points = frame.points[::step]
+    finite = np.isfinite(points[:, 0])
+    finite &= np.isfinite(points[:, 1])
+    finite &= np.isfinite(points[:, 2])
+    sample = frame.colors[::step]
+    rgb = [np.compress(finite, sample[:, j]) for j in range(3)]
+    if rgb[0].size == 0:
         return False, "no finite points"
-    brightest = rgb.max(axis=1)
-    if np.mean(brightest <= _BLACK) >= _BAD_SHARE:
+    if np.mean(np.maximum(np.maximum(rgb[0], rgb[1]), rgb[2]) <= _BLACK) >= _BAD_SHARE:
         return False, "the colour is all black: geometry alone"
-    if np.mean(rgb.min(axis=1) >= _SATURATED) >= _BAD_SHARE:
+    if np.mean(np.minimum(np.minimum(rgb[0], rgb[1]), rgb[2]) >= _SATURATED) >= _BAD_SHARE:
         return False, "the colour is all saturated (white): geometry alone"
-    if float(np.ptp(rgb.astype(np.int16), axis=0).max()) <= _FLAT_COLOR:
+    channels = [c.astype(np.int16) for c in rgb]
+    if max(int(c.max()) - int(c.min()) for c in channels) <= _FLAT_COLOR:
         return False, "the colour is one flat value: geometry alone"
     if not readers:
         return (

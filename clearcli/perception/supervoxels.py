@@ -152,7 +152,8 @@ def _adjacency(uniq: np.ndarray, dims: list[int]) -> np.ndarray:
 
     The keys are sorted with z fastest, so the three offsets (dx, dy, -1..1) of one
     (dx, dy) are consecutive keys: one binary search finds the first, and each of the
-    other two is the next key when the one before was present. 5 searches, not 13."""
+    other two is the next key when the one before was present. 4 searches, not 13: the
+    keys are distinct integers, so the first key from uniq[i] + 1 on is uniq[i + 1]."""
     n_vox = uniq.shape[0]
     if n_vox == 0:
         return np.zeros((0, 2), np.int64)
@@ -162,11 +163,11 @@ def _adjacency(uniq: np.ndarray, dims: list[int]) -> np.ndarray:
     for dx, dy in ((0, 0), (0, 1), (1, -1), (1, 0), (1, 1)):
         base = uniq + (dx * dims[1] + dy) * dims[2]
         dzs = (1,) if (dx, dy) == (0, 0) else (-1, 0, 1)
-        pos = np.searchsorted(uniq, base + dzs[0])
+        pos = np.arange(1, n_vox + 1) if (dx, dy) == (0, 0) else np.searchsorted(uniq, base + dzs[0])
         for dz in dzs:
-            hit = ext[pos] == base + dz
+            hit = np.take(ext, pos) == base + dz  # take: faster than [pos]
             src = np.flatnonzero(hit)
-            blocks[(dx, dy, dz)] = (src, pos[src])
+            blocks[(dx, dy, dz)] = (src, np.take(pos, src))
             pos = pos + hit  # the next key follows when this one was present
     ordered = [blocks[(int(o[0]), int(o[1]), int(o[2]))] for o in _HALF_OFFSETS]
     edges = np.empty((sum(src.shape[0] for src, _ in ordered), 2), dtype=np.int64)
