@@ -40,13 +40,16 @@ def estimate_intrinsics(points: np.ndarray, shape: tuple[int, int]) -> tuple[flo
         return None
     p = np.take(points, idx, axis=0).astype(np.float64)  # rows by index: take is faster than a[idx]
     ok = p[:, 2] > 1e-3
-    p, idx = np.compress(ok, p, axis=0), idx[ok]  # rows by a mask: compress is several times faster
+    if not ok.all():  # (most frames: every finite point lies in front; no copies then, issue 39)
+        p, idx = np.compress(ok, p, axis=0), idx[ok]  # rows by a mask: compress is several times faster
     if idx.size < 100:
         return None
     row, col = np.divmod(idx, w)
     out = []
     for coord, pix in ((p[:, 0] / p[:, 2], col), (p[:, 1] / p[:, 2], row)):
-        a = np.stack([coord, np.ones_like(coord)], axis=1)
+        a = np.empty((coord.size, 2))  # what np.stack([coord, ones]) built, without its copies
+        a[:, 0] = coord
+        a[:, 1] = 1.0
         sol, *_ = np.linalg.lstsq(a, pix.astype(np.float64), rcond=None)
         resid = pix - a @ sol
         if np.sqrt(np.mean(resid**2)) > 2.0:  # pixels: not a pinhole projection
