@@ -17,7 +17,7 @@ compared between the sides: any difference is reported (the change was to keep t
 
 Frames: mOSD's 50 ("all"), or the cluttered 6 ("cluttered": those with 5 or more
 objects, benchmarks/pcl.py's "mosd_cluttered": learn33 and the 5 test frames), or the
-nine RealSense 640x480 frames ("uois", benchmarks/pcl.py's "realsense_640"; no ground
+nine RealSense 640x480 frames ("uois", benchmarks/pcl.py's "realsense_640x480"; no ground
 truth: their object count is clear's, and the per-object fit reads it).
 """
 
