@@ -49,7 +49,6 @@ from clearcli.io.frames import Frame  # noqa: E402
 from clearcli.io.read import read_frame  # noqa: E402
 from clearcli.perception import segment as seg_mod  # noqa: E402
 from clearcli.perception.clock import Clock  # noqa: E402
-from clearcli.perception.context import RefineContext  # noqa: E402
 from clearcli.perception.refine import STAGES, refine  # noqa: E402
 from clearcli.perception.size import SegmentSize  # noqa: E402
 from clearcli.perception.stability import (  # noqa: E402
@@ -152,9 +151,8 @@ def trace(frame: Frame, settings: SegmentSettings) -> Iterator[tuple[str, np.nda
         if step.above_table and w.vox is None:
             continue
         if step.run is seg_mod._refine:
-            fit, vox, sv, size = w.fit, w.vox, w.sv, w.size
-            assert fit is not None and vox is not None and sv is not None and size is not None
-            ctx = RefineContext(w.frame, w.organized, vox, sv, fit.plane, settings, size, w.obj_idx, w.color_used)
+            ctx = w.ctx  # _lccp's, as _refine reads it
+            assert ctx is not None
             for stage in STAGES:
                 w.seg_of_voxel = refine(w.seg_of_voxel, ctx, None, (stage,))
                 yield stage.name, views["segments"]()

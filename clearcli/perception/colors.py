@@ -46,7 +46,7 @@ from clearcli.perception.context import RefineContext
 from clearcli.perception.cuts import seam_rise
 from clearcli.perception.flat import group_lab
 from clearcli.perception.graph import ApartSets
-from clearcli.perception.lccp import _angle_deg, join_pairs
+from clearcli.perception.lccp import EdgeShape, _angle_deg, join_pairs
 from clearcli.perception.supervoxels import Supervoxels
 
 # a convex crease (never cut by colour): normals this far apart
@@ -81,18 +81,25 @@ def split_by_colour(seg_of_sv: np.ndarray, ctx: RefineContext) -> np.ndarray:
         s.color_split_min_rise_m,
         ctx.size.min_object_voxels,
         ctx.voxels_by_sv,
+        ctx.sv_edge_shape,
     )
 
 
-def _pieces(seg_of_sv: np.ndarray, sv: Supervoxels, lab: np.ndarray, min_delta: float) -> tuple[np.ndarray, np.ndarray]:
-    """(piece of every supervoxel (S,), the colour cuts between two pieces (A,) bool)."""
+def _pieces(
+    seg_of_sv: np.ndarray, sv: Supervoxels, lab: np.ndarray, min_delta: float, shape: EdgeShape | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """(piece of every supervoxel (S,), the colour cuts between two pieces (A,) bool);
+    ``shape``: as for `color_splits`."""
     e = sv.edges
     a, b = e[:, 0], e[:, 1]
     same = seg_of_sv[a] == seg_of_sv[b]
-    n1, n2 = sv.normals[a], sv.normals[b]
-    d = sv.centroids[a] - sv.centroids[b]
-    convex = _angle_deg(d, n1) - _angle_deg(d, n2) <= 0
-    crease = convex & (_angle_deg(n1, n2) >= _CREASE_DEG)
+    if shape is not None:
+        convex, normal_angle = shape.convex, shape.normal_angle
+    else:
+        n1, n2 = sv.normals[a], sv.normals[b]
+        d = sv.centroids[a] - sv.centroids[b]
+        convex, normal_angle = _angle_deg(d, n1) - _angle_deg(d, n2) <= 0, _angle_deg(n1, n2)
+    crease = convex & (normal_angle >= _CREASE_DEG)
     cut = same & (np.linalg.norm(lab[a] - lab[b], axis=1) >= min_delta) & ~crease
     n_sv = seg_of_sv.shape[0]
     # rows by a mask: np.compress, several times faster than boolean indexing of rows
@@ -109,14 +116,17 @@ def color_splits(
     min_rise_m: float,
     min_voxels: int,
     voxels_by_sv: np.ndarray | None = None,
+    shape: EdgeShape | None = None,
 ) -> np.ndarray:
     """(S,) segment per supervoxel after the colour splits (module doc), 0..G-1;
     ``voxel_centroids`` (V, 3) of the voxels ``sv.voxel_label`` numbers;
-    ``voxels_by_sv``: as for `seam_rise`."""
+    ``voxels_by_sv``: as for `seam_rise`; ``shape``: `lccp.edge_shape` of ``sv``, when
+    the caller has it (`RefineContext.sv_edge_shape`: LCCP's convexity and normal
+    angles, the same numbers as worked out here; issue 39)."""
     e = sv.edges
     if e.shape[0] == 0:
         return seg_of_sv
-    piece, between = _pieces(seg_of_sv, sv, lab, min_delta)
+    piece, between = _pieces(seg_of_sv, sv, lab, min_delta, shape)
     if not between.any():
         return seg_of_sv
     n_piece = int(piece.max()) + 1

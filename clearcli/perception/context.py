@@ -2,7 +2,9 @@
 
 The stages (stacks.py, cuts.py, ... fragments.py, listed in refine.py) each take
 ``(segments, ctx)``; they import this module for its type, and refine.py imports them to
-list them, so the context lives here, apart from both.
+list them, so the context lives here, apart from both. segment.py makes it in LCCP's
+step, which reads its voxel heights and supervoxel colours first (the same numbers:
+worked out once a frame).
 """
 
 from __future__ import annotations
@@ -14,6 +16,7 @@ import numpy as np
 
 from clearcli.io.frames import Frame
 from clearcli.perception.flat import cielab
+from clearcli.perception.lccp import EdgeShape, edge_shape
 from clearcli.perception.size import SegmentSize
 from clearcli.perception.supervoxels import Supervoxels, VoxelCloud
 from clearcli.perception.table import plane_basis
@@ -130,7 +133,9 @@ class RefineContext:
         """((V, 3) each voxel's points' RGB summed, (V,) its point count), or None without
         usable colour: one pass over the points for both `voxel_lab` and `sv_lab` (sums
         of integers, exact in float64 in any order: a supervoxel's sum over its voxels'
-        sums is its sum over its points)."""
+        sums is its sum over its points). The count is ``vox.counts``, voxelize's
+        ``np.bincount`` of ``vox.point_voxel``: the same array, not counted again (issue
+        39: 0.03-0.10 ms a frame, 2-4 % of LCCP's step)."""
         colors = self.point_colors
         if colors is None:
             return None
@@ -139,7 +144,7 @@ class RefineContext:
         sums = np.stack(
             [np.bincount(pv, weights=colors[:, c].astype(np.float64), minlength=n_vox) for c in range(3)], axis=1
         )
-        return sums, np.bincount(pv, minlength=n_vox)
+        return sums, self.vox.counts
 
     @cached_property
     def voxel_lab(self) -> np.ndarray | None:
@@ -154,13 +159,24 @@ class RefineContext:
     def sv_lab(self) -> np.ndarray | None:
         """(S, 3) CIELAB of each supervoxel's mean colour, or None without usable colour
         (`flat.group_lab` of the points by supervoxel: the same numbers, from the voxels'
-        exact sums instead of a second pass over the points)."""
+        exact sums instead of a second pass over the points). LCCP's colour cue reads it
+        too (segment._lccp, in place of a group_lab pass of its own: issue 39, the colour
+        splits 62.3 -> 15.2 ms summed over mOSD's 50 frames with `sv_edge_shape`, LCCP's
+        step unchanged, by benchmarks/ab.py)."""
         if self.voxel_rgb_sum is None:
             return None
         sums, counts = self.voxel_rgb_sum
         n_sv, label = self.sv.centroids.shape[0], self.sv.voxel_label
         sv_sums = np.stack([np.bincount(label, weights=sums[:, c], minlength=n_sv) for c in range(3)], axis=1)
         return _mean_lab(sv_sums, np.bincount(label, weights=counts, minlength=n_sv))
+
+    @cached_property
+    def sv_edge_shape(self) -> EdgeShape:
+        """`lccp.edge_shape` of the supervoxel adjacencies: the angles LCCP's convexity
+        reads, and the planar cuts and the colour splits read again (the same ``sv``,
+        settings and sizes: the same numbers; issue 39: the planar cuts 45.7 -> 24.6 ms
+        summed over mOSD's 50 frames, by benchmarks/ab.py)."""
+        return edge_shape(self.sv, self.settings, self.size)
 
     @cached_property
     def voxels_by_sv(self) -> np.ndarray:

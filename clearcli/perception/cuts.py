@@ -43,7 +43,7 @@ from __future__ import annotations
 import numpy as np
 
 from clearcli.perception.context import RefineContext
-from clearcli.perception.lccp import _angle_deg, convex_edges, rejoin_pieces
+from clearcli.perception.lccp import EdgeShape, convex_edges, edge_shape, rejoin_pieces
 from clearcli.perception.size import SegmentSize
 from clearcli.perception.supervoxels import Supervoxels
 from clearcli.settings.segment import SegmentSettings
@@ -65,13 +65,15 @@ def concave_adjacencies(sv: Supervoxels, settings: SegmentSettings, size: Segmen
 
 
 def _convex_and_angle(
-    sv: Supervoxels, settings: SegmentSettings, size: SegmentSize | None
+    sv: Supervoxels, settings: SegmentSettings, size: SegmentSize | None, shape: EdgeShape | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
     """(A,) LCCP's merge verdict (`lccp.convex_edges`) and (A,) the angle (degrees)
     between the normals of each adjacency: a seam is what LCCP does not merge, a crease
-    what it does, each with its normals at least ``cut_concave_deg`` apart."""
-    e = sv.edges
-    return convex_edges(sv, settings, size), _angle_deg(sv.normals[e[:, 0]], sv.normals[e[:, 1]])
+    what it does, each with its normals at least ``cut_concave_deg`` apart. ``shape``:
+    `lccp.edge_shape` of these ``sv``, ``settings`` and ``size``, when the caller has it
+    (`RefineContext.sv_edge_shape`, LCCP's own: issue 39)."""
+    shape = shape if shape is not None else edge_shape(sv, settings, size)
+    return convex_edges(sv, settings, size, shape=shape), shape.normal_angle
 
 
 def seam_rise(
@@ -142,7 +144,7 @@ def planar_cuts(
     if e.shape[0] == 0 or seg.size == 0:
         return seg
     # `concave_adjacencies`, and the convex creases below, from one `convex_edges`
-    convex, angle = _convex_and_angle(sv, settings, size)
+    convex, angle = _convex_and_angle(sv, settings, size, ctx.sv_edge_shape)
     concave = ~convex & (angle >= settings.cut_concave_deg)
     if not concave.any():
         return seg

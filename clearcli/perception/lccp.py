@@ -24,6 +24,8 @@ Convexity of a connection (x1, n1) - (x2, n2), d = x1 - x2, alpha = angle(n1, n2
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from clearcli.perception.graph import components, dense_labels
@@ -84,34 +86,67 @@ def boundary_steps_m(sv: Supervoxels, vox: VoxelCloud, rows: np.ndarray) -> np.n
     return out
 
 
-def convex_edges(
-    sv: Supervoxels,
-    settings: SegmentSettings,
-    size: SegmentSize | None = None,
-    sv_lab: np.ndarray | None = None,
-    vox: VoxelCloud | None = None,
-) -> np.ndarray:
-    """(A,) bool: which supervoxel adjacencies are convex (may be merged). ``size``: the
-    frame's seed and voxel (`SegmentSize.of(settings)` when None); ``sv_lab`` (S, 3):
-    each supervoxel's CIELAB colour, when the frame's colour is usable; ``vox``: the
-    voxels ``sv`` was grown on, when at hand: the smoothness check of a pair near its
-    allowance is then decided at the pair's boundary (module docstring)."""
+@dataclass(frozen=True, eq=False)
+class EdgeShape:
+    """What `convex_edges` reads of each supervoxel adjacency's two patches before the
+    colour cue and the boundaries, for one ``sv``, ``settings`` and ``size``
+    (`edge_shape`): `RefineContext.sv_edge_shape` works it out once a frame for LCCP,
+    the planar cuts and the colour splits, which judge the same adjacencies (issue 39)."""
+
+    normal_angle: np.ndarray  # (A,) degrees between the two normals
+    convex: np.ndarray  # (A,) bool: angle(d, n1) - angle(d, n2) <= 0
+    offset_m: np.ndarray | None  # (A,) the smoothness check's offset less its allowance; None: the check is off
+    insane: np.ndarray | None  # (A,) bool: fails the sanity criterion; None: the criterion is off
+
+
+def edge_shape(sv: Supervoxels, settings: SegmentSettings, size: SegmentSize | None = None) -> EdgeShape:
+    """`EdgeShape` of ``sv.edges`` (``size``: as for `convex_edges`)."""
     e = sv.edges
-    if e.shape[0] == 0:
-        return np.zeros(0, dtype=bool)
     size = size if size is not None else SegmentSize.of(settings)
     x1, x2 = sv.centroids[e[:, 0]], sv.centroids[e[:, 1]]
     n1, n2 = sv.normals[e[:, 0]], sv.normals[e[:, 1]]
     d = x1 - x2  # target -> source, the reference direction
     normal_angle = _angle_deg(n1, n2)
     ncross = np.cross(n1, n2)
-    ok = np.ones(e.shape[0], dtype=bool)
+    offset_m = None
     if settings.smoothness_check:
         expected = np.linalg.norm(ncross, axis=1) * size.seed_m
         p1 = np.abs(np.einsum("ij,ij->i", d, n1))
         p2 = np.abs(np.einsum("ij,ij->i", -d, n2))
-        tolerance_m = settings.smoothness_threshold * size.voxel_m
         offset_m = np.minimum(p1, p2) - expected  # against the allowance: <= tolerance_m passes
+    convex = _angle_deg(d, n1) - _angle_deg(d, n2) <= 0
+    insane = None
+    if settings.sanity_criterion:
+        inter = _angle_deg(ncross, d)
+        min_inter = np.minimum(inter, 180.0 - inter)
+        thresh = 60.0 / (1.0 + np.exp(-0.25 * (normal_angle - 25.0)))
+        insane = min_inter < thresh
+    return EdgeShape(normal_angle, convex, offset_m, insane)
+
+
+def convex_edges(
+    sv: Supervoxels,
+    settings: SegmentSettings,
+    size: SegmentSize | None = None,
+    sv_lab: np.ndarray | None = None,
+    vox: VoxelCloud | None = None,
+    shape: EdgeShape | None = None,
+) -> np.ndarray:
+    """(A,) bool: which supervoxel adjacencies are convex (may be merged). ``size``: the
+    frame's seed and voxel (`SegmentSize.of(settings)` when None); ``sv_lab`` (S, 3):
+    each supervoxel's CIELAB colour, when the frame's colour is usable; ``vox``: the
+    voxels ``sv`` was grown on, when at hand: the smoothness check of a pair near its
+    allowance is then decided at the pair's boundary (module docstring); ``shape``:
+    `edge_shape` of these ``sv``, ``settings`` and ``size``, when the caller has it."""
+    e = sv.edges
+    if e.shape[0] == 0:
+        return np.zeros(0, dtype=bool)
+    size = size if size is not None else SegmentSize.of(settings)
+    shape = shape if shape is not None else edge_shape(sv, settings, size)
+    ok = np.ones(e.shape[0], dtype=bool)
+    if shape.offset_m is not None:
+        offset_m = shape.offset_m
+        tolerance_m = settings.smoothness_threshold * size.voxel_m
         smooth = offset_m <= tolerance_m
         if vox is not None and tolerance_m > 0:
             # near the allowance the centroids' offset is as much the supervoxels' make-up
@@ -121,7 +156,6 @@ def convex_edges(
             seen = ~np.isnan(step_m)
             smooth[near[seen]] = step_m[seen] <= tolerance_m
         ok &= smooth
-    convex = _angle_deg(d, n1) - _angle_deg(d, n2) <= 0
     tolerance_deg = np.full(e.shape[0], settings.concavity_tolerance_deg)
     if sv_lab is not None and settings.lccp_color_delta > 0:
         # two touching objects of different colours often meet in a shallow concave
@@ -130,12 +164,9 @@ def convex_edges(
         # flat face is neither concave nor convex, so only a small tolerance there
         differ = np.linalg.norm(sv_lab[e[:, 0]] - sv_lab[e[:, 1]], axis=1) >= settings.lccp_color_delta
         tolerance_deg[differ] = min(settings.lccp_color_tolerance_deg, settings.concavity_tolerance_deg)
-    is_convex = convex | (normal_angle < tolerance_deg)
-    if settings.sanity_criterion:
-        inter = _angle_deg(ncross, d)
-        min_inter = np.minimum(inter, 180.0 - inter)
-        thresh = 60.0 / (1.0 + np.exp(-0.25 * (normal_angle - 25.0)))
-        is_convex &= ~(min_inter < thresh)
+    is_convex = shape.convex | (shape.normal_angle < tolerance_deg)
+    if shape.insane is not None:
+        is_convex &= ~shape.insane
     return ok & is_convex
 
 
@@ -148,9 +179,11 @@ def lccp_segments(
     size: SegmentSize | None = None,
     sv_lab: np.ndarray | None = None,
     vox: VoxelCloud | None = None,
+    shape: EdgeShape | None = None,
 ) -> np.ndarray:
     """(S,) segment index of every supervoxel, 0..G-1; ``size``: the frame's sizes
-    (`SegmentSize.of(settings)` when None); ``sv_lab``, ``vox``: as for `convex_edges`.
+    (`SegmentSize.of(settings)` when None); ``sv_lab``, ``vox``, ``shape``: as for
+    `convex_edges`.
 
     With ``sv_low_m`` and ``sv_high_m`` (S,), the heights above the table of each
     supervoxel's lowest and highest voxel, and ``up``, the table's normal: a small
@@ -164,7 +197,7 @@ def lccp_segments(
     if n_sv == 0:
         return np.zeros(0, dtype=np.int64)
     size = size if size is not None else SegmentSize.of(settings)
-    convex = convex_edges(sv, settings, size, sv_lab, vox)
+    convex = convex_edges(sv, settings, size, sv_lab, vox, shape)
     e = np.compress(convex, sv.edges, axis=0)  # rows by a mask: compress is several times faster
     seg = components(n_sv, e)
     # "small" also by area: the connectivity step of the supervoxels can leave a small

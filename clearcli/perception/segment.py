@@ -44,7 +44,7 @@ from clearcli.perception.exclude import (
     support_around,
 )
 from clearcli.perception.filters import clean_mask
-from clearcli.perception.flat import differing_shares, flat_objects, group_lab, support_colour, within_reach
+from clearcli.perception.flat import differing_shares, flat_objects, support_colour, within_reach
 from clearcli.perception.lccp import lccp_segments
 from clearcli.perception.openings import RIM_MAX_POINTS, Opening, TableEdge, rim_of, seen_edges
 from clearcli.perception.refine import STAGES, refine
@@ -390,6 +390,7 @@ class _Work:
     vox: VoxelCloud | None = None  # None: too few points above the table to segment
     sv: Supervoxels | None = None
     seg_of_voxel: np.ndarray = field(default_factory=_empty)
+    ctx: RefineContext | None = None  # what LCCP and the refinements read (`_lccp` makes it)
     objects: list[SegmentedObject] = field(default_factory=list)
     table_idx: np.ndarray = field(default_factory=_empty)
     openings: tuple[Opening, ...] = ()
@@ -466,31 +467,31 @@ def _supervoxels(w: _Work) -> None:
 
 def _lccp(w: _Work) -> None:
     """3b. LCCP (lccp.py): a small segment standing on the table with a top of its own
-    is kept."""
-    fit, vox, sv = w.fit, w.vox, w.sv
-    assert fit is not None and vox is not None and sv is not None  # the steps before ran
+    is kept. The refinements' `RefineContext` is made here, before them: LCCP reads its
+    voxel heights and supervoxel colours, the very numbers the refinements read again
+    (the same plane and voxels; the same points, labels and `flat.group_lab` arithmetic),
+    worked out once (issue 39)."""
+    fit, vox, sv, size = w.fit, w.vox, w.sv, w.size
+    assert fit is not None and vox is not None and sv is not None and size is not None  # the steps before ran
     plane = fit.plane
-    voxel_h = plane.height_of(vox.centroids)
+    ctx = w.ctx = RefineContext(w.frame, w.organized, vox, sv, plane, w.settings, size, w.obj_idx, w.color_used)
+    voxel_h = ctx.voxel_height
     sv_low = np.full(sv.centroids.shape[0], np.inf)
     np.minimum.at(sv_low, sv.voxel_label, voxel_h)
     sv_high = np.full(sv.centroids.shape[0], -np.inf)
     np.maximum.at(sv_high, sv.voxel_label, voxel_h)
-    sv_lab = None
-    if w.color_used and w.settings.lccp_color_delta > 0:
-        assert w.frame.colors is not None  # colour used
-        sv_lab = group_lab(
-            sv.voxel_label[vox.point_voxel], np.take(w.frame.colors, w.obj_idx, axis=0), sv.centroids.shape[0]
-        )
-    seg_of_sv = lccp_segments(sv, w.settings, sv_low, sv_high, plane.normal, w.size, sv_lab, vox)
+    # group_lab of the points by supervoxel, as ctx.sv_lab sums them (None without usable
+    # colour): one pass over the points for LCCP, the colour splits and the voxels' colour
+    sv_lab = ctx.sv_lab if w.settings.lccp_color_delta > 0 else None
+    seg_of_sv = lccp_segments(sv, w.settings, sv_low, sv_high, plane.normal, size, sv_lab, vox, ctx.sv_edge_shape)
     w.seg_of_voxel = seg_of_sv[sv.voxel_label]
 
 
 def _refine(w: _Work) -> None:
-    """3c. the refinements after LCCP, each a stage of refine.STAGES timed by its name."""
-    fit, vox, sv, size = w.fit, w.vox, w.sv, w.size
-    assert fit is not None and vox is not None and sv is not None and size is not None  # the steps before ran
-    ctx = RefineContext(w.frame, w.organized, vox, sv, fit.plane, w.settings, size, w.obj_idx, w.color_used)
-    w.seg_of_voxel = refine(w.seg_of_voxel, ctx, w.clock)
+    """3c. the refinements after LCCP, each a stage of refine.STAGES timed by its name,
+    on `_lccp`'s context."""
+    assert w.ctx is not None  # LCCP's step ran
+    w.seg_of_voxel = refine(w.seg_of_voxel, w.ctx, w.clock)
 
 
 def _objects(w: _Work) -> None:

@@ -72,3 +72,48 @@ def test_no_usable_colour_gives_no_colours() -> None:
     off = replace(ctx, color_used=False)
     assert off.point_colors is None and off.voxel_rgb_sum is None
     assert off.voxel_lab is None and off.sv_lab is None
+
+
+def test_what_lccp_reads_of_the_context_is_what_it_worked_out_itself() -> None:
+    """segment._lccp reads the frame's `RefineContext` (issue 39): its supervoxel colours
+    are `flat.group_lab` of the points above the table by supervoxel (LCCP's own pass
+    before), and its `sv_edge_shape` gives LCCP's convexity, the planar cuts' and the
+    colour splits' angles bit for bit, on the committed cluttered fixture."""
+    from helpers import FIXTURES
+
+    from clearcli.io.read import read_frame
+    from clearcli.perception import colors, cuts
+    from clearcli.perception import segment as seg_mod
+    from clearcli.perception.clock import Clock
+    from clearcli.perception.flat import group_lab
+    from clearcli.perception.lccp import convex_edges
+    from clearcli.settings.segment import SegmentSettings
+
+    frame = read_frame(FIXTURES / "clutter10.pcd")
+    settings = SegmentSettings()
+    w = seg_mod._Work(frame, settings, frame.is_organized and frame.shape is not None, Clock())
+    for step in seg_mod.STEPS:
+        step.run(w)
+        if step.run is seg_mod._lccp:
+            break
+    ctx, vox, sv = w.ctx, w.vox, w.sv
+    assert ctx is not None and vox is not None and sv is not None and w.color_used
+    assert ctx.vox is vox and ctx.sv is sv and ctx.point_index is w.obj_idx
+    assert frame.colors is not None
+    own = group_lab(sv.voxel_label[vox.point_voxel], np.take(frame.colors, w.obj_idx, axis=0), sv.centroids.shape[0])
+    assert np.array_equal(ctx.sv_lab, own)
+    assert np.array_equal(ctx.vox.counts, np.bincount(vox.point_voxel, minlength=vox.n_voxels))
+    shape = ctx.sv_edge_shape
+    for lab, v in ((None, None), (own, vox)):
+        assert np.array_equal(
+            convex_edges(sv, settings, ctx.size, lab, v, shape), convex_edges(sv, settings, ctx.size, lab, v)
+        )
+    for a, b in zip(
+        cuts._convex_and_angle(sv, settings, ctx.size, shape),
+        cuts._convex_and_angle(sv, settings, ctx.size),
+        strict=True,
+    ):
+        assert np.array_equal(a, b)
+    seg = np.zeros(sv.centroids.shape[0], dtype=np.int64)
+    for a, b in zip(colors._pieces(seg, sv, own, 25.0, shape), colors._pieces(seg, sv, own, 25.0), strict=True):
+        assert np.array_equal(a, b)
