@@ -11,7 +11,10 @@
 Frames: uois_realsense (9), PCL's two tabletop frames, gqcnn (7: a YuMi cell's foam board,
 two PhoXi bins whose floor is the support) and cleargrasp_d435 (4, 1280x720, transparent
 objects); each source's frames sorted by name alternate choose, report, choose... (the
-uois and PCL frames were split before that rule, see their files).
+uois and PCL frames were split before that rule, see their files). Then PCL's
+grabber_sequence (3 consecutive Kinect frames of one floor scene, pcl_grabber_0..2: all
+report, near-duplicates split across the parts would leak) and the "industrial" table
+cloud (unorganized, z up, industrial_table: choose, that lab's only frame).
 
 Labels (benchmarks/foreign/<frame>.toml, written by hand for this project, one file per
 frame): the frame's path under ../shared/data, its part ("choose" or "report"), and per
@@ -24,6 +27,11 @@ pixels; `above_m` lowers the 8 mm for an object lying flat (a marker, 3 mm: the
 polygon must then be tight, the table's noise is a few millimetres); `fill = true` marks a container (a bowl), whose floor may stand less than 8 mm
 above the table: it takes what lies above the plane within its silhouette's convex hull.
 `--show` draws the resulting masks over the colour image to check them.
+
+An unorganized cloud already in a table frame, z up, has `frame_kind = "xy"` in its file:
+its polygons are in metres in the cloud's x-y plane, the support plane's normal is taken
+upwards (+z), the rest as above (`_load_xy`); `--grid`, `--show` and `--result` draw it from
+above.
 
 Per frame it prints the objects exactly right, merged, split and missed, the spurious
 segments (clearcli/evaluate/exact.py), object F1 at IoU >= 0.5 and the OSD/OCID Overlap
@@ -79,6 +87,8 @@ def load(name: str):  # -> (Frame, labels (N,) int64, spec dict)
 
     spec = tomllib.loads((LABELS / f"{name}.toml").read_text(encoding="utf-8"))
     frame = read_frame(DATA / spec["source"])
+    if spec.get("frame_kind", "pixels") == "xy":
+        return _load_xy(frame, spec)
     h, w = frame.shape
     v, u = np.mgrid[0:h, 0:w]
     pixels = np.column_stack([u.ravel(), v.ravel()]).astype(np.float64)
@@ -104,6 +114,39 @@ def load(name: str):  # -> (Frame, labels (N,) int64, spec dict)
     return frame, labels, spec
 
 
+def _load_xy(frame, spec: dict):  # -> (Frame, labels (N,) int64, spec dict)
+    """Labels of an unorganized cloud already in a table frame, z up (`frame_kind = "xy"`):
+    each polygon is in metres in the cloud's x-y plane, and an object's points are the
+    finite points inside it standing more than `above_m` (8 mm) above the support plane (a
+    RANSAC plane fitted to the finite points outside every polygon, its normal taken
+    upwards, +z); overlaps and `fill` (the convex hull in x-y) as for pixel labels."""
+    from matplotlib.path import Path as Polygon
+
+    from clearcli.io.frames import LABEL_TABLE, object_label
+
+    finite = np.isfinite(frame.points).all(axis=1)
+    points = np.nan_to_num(frame.points.astype(np.float64))
+    xy = points[:, :2]
+    inside = np.zeros((len(spec["object"]), frame.n_points), dtype=bool)
+    for k, obj in enumerate(spec["object"]):
+        inside[k] = Polygon(np.asarray(obj["polygon"], dtype=np.float64)).contains_points(xy)
+    n, d = _plane(points[finite & ~inside.any(axis=0)], np.random.default_rng(0))
+    if n[2] < 0:  # _plane turns the normal to the origin; here up is +z
+        n, d = -n, -d
+    height = np.where(finite, points @ n + d, -np.inf)
+    labels = np.zeros(frame.n_points, dtype=np.int64)
+    labels[finite & (np.abs(height) < 0.01)] = LABEL_TABLE
+    for k, obj in enumerate(spec["object"]):  # later objects take overlapping points
+        mask = inside[k] & finite & (height > float(obj.get("above_m", ABOVE_PLANE_M)))
+        if obj.get("fill") and mask.any():
+            from scipy.spatial import Delaunay
+
+            hull = Delaunay(xy[mask])
+            mask = inside[k] & finite & (height > 0.0) & (hull.find_simplex(xy) >= 0)
+        labels[mask] = object_label(k)
+    return frame, labels, spec
+
+
 def names(part: str) -> list[str]:
     out = []
     for p in sorted(LABELS.glob("*.toml")):
@@ -125,6 +168,12 @@ def show(name: str, out: Path) -> None:
     palette = matplotlib.colormaps["tab20"]
     objs = spec["object"]
     segments = [np.nonzero(labels == 10 * (k + 1))[0] for k in range(len(objs))]
+    if spec.get("frame_kind") == "xy":
+        texts = [f"{k} {obj['name']}\n{seg.size} pts" for k, (obj, seg) in enumerate(zip(objs, segments))]
+        colours = [palette(k % 20) for k in range(len(objs))]
+        title = f"{name}: {len(objs)} labelled objects, top down (dashed: polygons; coloured: the points taken)"
+        _top_down(frame, spec, segments, colours, texts, title, out)
+        return
     image = outlined(frame.colors, frame.shape, segments, [palette(k % 20) for k in range(len(objs))], width_px=2)
     fig, ax = plt.subplots(figsize=_figsize(*frame.shape), dpi=100)
     ax.imshow(image)
@@ -166,6 +215,15 @@ def result(name: str, out: Path) -> None:
     palette = matplotlib.colormaps["tab20"]
     segments = [np.asarray(o.indices) for o in seg.objects] + [np.asarray(e.indices) for e in seg.excluded]
     colours = [palette(k % 20) for k in range(len(seg.objects))] + [(0.5, 0.5, 0.5, 1.0)] * len(seg.excluded)
+    for k, e in enumerate(seg.excluded):
+        print(chr(ord("A") + k), e.reason)
+    if spec.get("frame_kind") == "xy":
+        texts = [str(k) for k in range(len(seg.objects))] + [chr(ord("A") + k) for k in range(len(seg.excluded))]
+        title = (
+            f"{name}: {len(seg.objects)} objects, {len(seg.excluded)} excluded (grey), top down (dashed: the labels)"
+        )
+        _top_down(frame, spec, segments, colours, texts, title, out)
+        return
     image = outlined(frame.colors, frame.shape, segments, colours, width_px=2)
     fig, ax = plt.subplots(figsize=_figsize(*frame.shape), dpi=100)
     ax.imshow(image)
@@ -178,10 +236,47 @@ def result(name: str, out: Path) -> None:
         ax.text(
             cols.mean(), rows.mean(), text, fontsize=9, color="white", bbox=dict(fc=colours[k], alpha=0.8, ec="none")
         )
-    for k, e in enumerate(seg.excluded):
-        print(chr(ord("A") + k), e.reason)
     _pixel_grid(ax, *frame.shape)
     ax.set_title(f"{name}: {len(seg.objects)} objects, {len(seg.excluded)} excluded (dashed: the labels)")
+    fig.tight_layout()
+    fig.savefig(out)
+    print(out)
+
+
+def _top_down(frame, spec: dict, segments, colours, texts, title: str, out: Path) -> None:
+    """An unorganized z-up cloud (`frame_kind = "xy"`) seen from above: every point in its
+    own colour, the given segments' points over it in theirs, the labels' x-y polygons
+    dashed, a 5 cm grid to read polygons off."""
+    import matplotlib.pyplot as plt
+
+    p = frame.points[np.isfinite(frame.points).all(axis=1)]
+    fig, ax = plt.subplots(figsize=(12.8, 9.6), dpi=100)
+    ax.scatter(p[:, 0], p[:, 1], c=frame.colors[np.isfinite(frame.points).all(axis=1)] / 255.0, s=3, linewidths=0)
+    for idx, colour, text in zip(segments, colours, texts):
+        if idx.size:
+            q = frame.points[idx]
+            ax.scatter(q[:, 0], q[:, 1], color=colour, s=5, linewidths=0)
+            ax.text(
+                *q[:, :2].mean(axis=0),
+                text,
+                fontsize=8,
+                color="white",
+                ha="center",
+                bbox=dict(fc=colour, alpha=0.8, ec="none"),
+            )
+    for obj in spec["object"]:
+        poly = np.asarray(obj["polygon"] + obj["polygon"][:1], dtype=float)
+        ax.plot(poly[:, 0], poly[:, 1], "--", color="black", lw=0.8)
+    ax.set_aspect("equal")
+    lo, hi = np.floor(p[:, :2].min(axis=0) / 0.05) * 0.05, np.ceil(p[:, :2].max(axis=0) / 0.05) * 0.05
+    ax.set_xticks(np.arange(lo[0], hi[0] + 0.01, 0.05))
+    ax.set_yticks(np.arange(lo[1], hi[1] + 0.01, 0.05))
+    ax.tick_params(labelsize=7)
+    ax.tick_params(axis="x", rotation=90)
+    ax.grid(True, lw=0.3)
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.set_title(title)
     fig.tight_layout()
     fig.savefig(out)
     print(out)
@@ -194,8 +289,9 @@ def _figsize(h: int, w: int) -> tuple[float, float]:
 
 
 def _unlabelled(name: str) -> Path:
-    """A frame without a label file yet, found by name under ../shared/data/scenes/*/."""
-    found = sorted((DATA / "scenes").glob(f"*/{name}.pcd"))
+    """A frame without a label file yet, found by name under ../shared/data/scenes/ (at any
+    depth: scenes/pcl/grabber_sequence/frame_....pcd)."""
+    found = sorted((DATA / "scenes").rglob(f"{name}.pcd"))
     if not found:
         raise SystemExit(f"no frame {name}.pcd under {DATA / 'scenes'}")
     return found[0]
@@ -224,6 +320,9 @@ def grid(name: str, out: Path) -> None:
     from clearcli.io.read import read_frame
 
     frame = read_frame(DATA / spec["source"] if spec else _unlabelled(name))
+    if frame.shape is None:  # unorganized (a z-up cloud in a table frame): from above
+        _top_down(frame, {"object": []}, [], [], [], f"{name}: top down", out)
+        return
     h, w = frame.shape
     fig, ax = plt.subplots(figsize=_figsize(h, w), dpi=100)
     ax.imshow(frame.colors.reshape(h, w, 3))
@@ -257,7 +356,9 @@ def report(part: str, sets: list[str] | None = None) -> None:
         wrong = ", ".join(f"{obj['name']}: {v}" for obj, v in zip(spec["object"], r.verdicts) if v != "right")
         print(
             f"{name:34s} {r.n_objects:4d} {r.right:5d} {r.merged:6d} {r.split:5d} {r.missed:6d} {r.spurious:5d}"
-            f" {s.f1:6.3f} {o.overlap_f:6.3f} {o.boundary_f:6.3f}" + (f"   [{wrong}]" if wrong else "")
+            f" {s.f1:6.3f} {o.overlap_f:6.3f} "
+            + (f"{o.boundary_f:6.3f}" if o.boundary_f is not None else f"{'-':>6s}")  # unorganized: no Boundary
+            + (f"   [{wrong}]" if wrong else "")
         )
     n = max(totals["objects"], 1)
     print(

@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from helpers import run_clear_as_user
+from helpers import run_clear_as_user, shared_path
 
 from clearcli.errors import EXIT_OK, EXIT_SCENE
 from clearcli.io.pcd import write_pcd
@@ -45,6 +45,21 @@ def test_no_support_surface_is_exit_4_in_one_line_naming_the_surfaces_considered
         lines = res.stderr.strip().splitlines()
         assert len(lines) == 1, res.stderr
         assert "surfaces considered:" in lines[0] and "m^2 at" in lines[0], lines[0]
+
+
+def test_an_office_without_a_table_is_exit_4_in_one_line_naming_the_plane_considered() -> None:
+    # PCL's office1.pcd (a real scan, ../shared/data/scenes/pcl): an office with no table in
+    # it, the negative case of the foreign frames (issue 37; not labelled). The best plane
+    # found has more points behind it than on it: no usable table, said in one line that
+    # names the plane and how far it is
+    src = shared_path("scenes/pcl/office1.pcd")
+    for command in ("segment", "plan"):
+        res = _clear(command, str(src))
+        assert res.returncode == EXIT_SCENE, (command, res.returncode, res.stderr)
+        lines = res.stderr.strip().splitlines()
+        assert len(lines) == 1, res.stderr
+        assert "office1.pcd" in lines[0] and "no usable table" in lines[0], lines[0]
+        assert "the best support plane (" in lines[0] and " m from the camera)" in lines[0], lines[0]
 
 
 def test_everything_excluded_is_an_empty_object_list_with_the_reasons(tmp_path: Path) -> None:
