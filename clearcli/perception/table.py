@@ -11,7 +11,7 @@ itself a plane, and a book's hull holds little.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from functools import lru_cache
 
@@ -674,6 +674,12 @@ def _residue(n: np.ndarray, inliers: np.ndarray, candidates: list[_Candidate]) -
     return False
 
 
+def _considered(planes: Sequence[PlaneVerdict]) -> str:
+    """The candidate planes for a one-line error, as a user can find them in the view:
+    each one's area and distance from the sensor's origin."""
+    return ", ".join(f"{v.area_m2:.3f} m^2 at {abs(v.offset_m):.2f} m" for v in planes)
+
+
 def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, source: str = "") -> TableFit:
     """Stage 2a: the support plane among up to ``plane_candidates`` RANSAC planes.
 
@@ -824,7 +830,7 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
         if best is None or key > best[0]:
             best = (key, fit, above, below)
     if best is None:
-        considered = ", ".join(f"{v.area_m2:.3f} m^2 at {abs(v.offset_m):.2f} m" for v in far)
+        considered = _considered(far)
         raise SceneError(
             f"{where}no table: every plane of table size is more than "
             f"{settings.table_max_distance_m} m from the camera (surfaces considered: {considered}); "
@@ -882,7 +888,7 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
         raise SceneError(
             f"{where}no usable table: the best support plane ({fit.plane.offset:.2f} m from the "
             "camera) has more points behind it than standing on it; the table is seen from "
-            "below, or there is no table in view"
+            f"below, or there is no table in view (surfaces considered: {_considered(fit.planes)})"
         )
     if organized and fit.camera_is_origin and fit.plane.normal[1] > 0.5:
         raise SceneError(

@@ -47,11 +47,11 @@ def test_no_support_surface_is_exit_4_in_one_line_naming_the_surfaces_considered
         assert "surfaces considered:" in lines[0] and "m^2 at" in lines[0], lines[0]
 
 
-def test_an_office_without_a_table_is_exit_4_in_one_line_naming_the_plane_considered() -> None:
+def test_an_office_without_a_table_is_exit_4_in_one_line_naming_the_surfaces_considered() -> None:
     # PCL's office1.pcd (a real scan, ../shared/data/scenes/pcl): an office with no table in
     # it, the negative case of the foreign frames (issue 37; not labelled). The best plane
     # found has more points behind it than on it: no usable table, said in one line that
-    # names the plane and how far it is
+    # names that plane, how far it is, and every surface considered
     src = shared_path("scenes/pcl/office1.pcd")
     for command in ("segment", "plan"):
         res = _clear(command, str(src))
@@ -60,6 +60,9 @@ def test_an_office_without_a_table_is_exit_4_in_one_line_naming_the_plane_consid
         assert len(lines) == 1, res.stderr
         assert "office1.pcd" in lines[0] and "no usable table" in lines[0], lines[0]
         assert "the best support plane (" in lines[0] and " m from the camera)" in lines[0], lines[0]
+        # and which surfaces were considered (issue 37's "Bad input"), the chosen one among them
+        considered = lines[0].split("(surfaces considered: ", 1)[1]
+        assert considered.endswith(")") and considered.count(" m^2 at ") >= 1, lines[0]
 
 
 def test_everything_excluded_is_an_empty_object_list_with_the_reasons(tmp_path: Path) -> None:
