@@ -15,7 +15,10 @@ set aside with the reason, for --json to list as ``excluded``.
   walls rising from its base to the cut, so its cut part stands over its base (mOSD has
   no such cut; uois_image_0002's tall box: 0.8 cm); an object lying at the border is cut
   at its resting height. An arm the sensor's inpainting joins to the table meets it only
-  along its silhouette, centimetres off (gqcnn's YuMi arms: 4.8 to 6.8 cm).
+  along its silhouette, centimetres off (gqcnn's YuMi arms: 4.8 to 6.8 cm). An
+  unorganized cloud has no image border: its edge is where it was cropped or the
+  sensor's view ended, the sides of its footprint's convex hull (`at_cloud_border`), and
+  the same rule reads it (``exclude_cloud_border``).
 - stands beyond the support's edge, on or as part of furniture: it touches a thing
   outside the support's outline (above its plane) that goes on `_FAR_BEYOND_M` or more
   beyond the outline, farther than any object the hull cuts can reach (a second desk
@@ -485,6 +488,30 @@ def at_image_border(indices: list[np.ndarray], shape: tuple[int, int] | None) ->
     return np.split(border, np.cumsum([idx.size for idx in indices])[:-1])
 
 
+def at_cloud_border(object_xy: list[np.ndarray], cloud_xy: np.ndarray, border_m: float) -> list[np.ndarray]:
+    """Per object (its points in the support's plane, ``object_xy``), which of them lie
+    within ``border_m`` of the edge of the cloud's footprint (``cloud_xy``: every point,
+    in-plane): an unorganized cloud's `at_image_border`. The footprint's edge is its
+    convex hull's: a cloud cropped to a box, or a sensor's view, ends in straight lines,
+    while the shadows objects cast (holes in the footprint, some open to its edge) lie
+    inside the hull and cut no object off (the footprint's own outline, holes filled,
+    took a tall box's back edge, where its shadow reached the cloud's far end, for a cut)."""
+    from scipy.spatial import ConvexHull, QhullError
+
+    if not object_xy:
+        return []
+    try:
+        eq = ConvexHull(cloud_xy).equations  # (F, 3): a x + b y + c <= 0 inside
+    except (QhullError, ValueError):  # all points on a line: no footprint to speak of
+        return [np.zeros(xy.shape[0], dtype=bool) for xy in object_xy]
+    out = []
+    for xy in object_xy:
+        # distance to the edge of a convex polygon: to the nearest of its sides' lines
+        depth = -(xy @ eq[:, :2].T + eq[:, 2]).max(axis=1)
+        out.append(depth <= border_m)
+    return out
+
+
 def support_around(
     indices: list[np.ndarray],
     shape: tuple[int, int],
@@ -519,9 +546,10 @@ def support_around(
     ]
 
 
-def _enters_over_border(border: np.ndarray, h: np.ndarray, rests: float, xy: np.ndarray) -> str:
+def _enters_over_border(border: np.ndarray, h: np.ndarray, rests: float, xy: np.ndarray, edge: str) -> str:
     """Why an object (its points' heights ``h``, in-plane ``xy``, which are at the image's
-    border ``border``) enters from beyond the image above the support, or "" when it does not."""
+    border ``border``; ``edge``: what that border is) enters from beyond it above the support,
+    or "" when it does not."""
     from scipy.spatial import cKDTree
 
     n_border = int(border.sum())
@@ -541,7 +569,7 @@ def _enters_over_border(border: np.ndarray, h: np.ndarray, rests: float, xy: np.
     else:
         where = "resting nowhere on the support"
     return (
-        f"reaches in from beyond the image's border above the support ({n_high} of its points at the border "
+        f"reaches in from beyond {edge} above the support ({n_high} of its points at the border "
         f"more than {_HANG_M:.2f} m above it, {where}): an arm, a hand, a cable"
     )
 
@@ -800,6 +828,7 @@ def not_standing(
     around: list[tuple[int, int]] | None = None,
     below: np.ndarray | None = None,
     off_colour: list[float] | None = None,
+    border_edge: str = "the image's border",
 ) -> list[Verdict]:
     """Which of ``objects`` (each an (M, 3) array of its points) do not stand on the
     support, and why.
@@ -812,8 +841,9 @@ def not_standing(
     (N,) bool, those farther than `_BORDER_M` inside the prism's side; ``rests_m``: for an object's points, the height below which it
     rests on the support (grows with range); ``outside_reach``: for each of ``outside``,
     how far its part reaches beyond the outline (`reach_beyond`; None: not known);
-    ``at_border``: per object, (M,) bool, its points at the image's border (None: the
-    frame has no pixel grid); ``around``: per object, `support_around`'s counts (None:
+    ``at_border``: per object, (M,) bool, its points at the image's border, or at an
+    unorganized cloud's edge (`at_cloud_border`), ``border_edge`` saying which (None: not
+    known); ``around``: per object, `support_around`'s counts (None:
     no pixel grid); ``below``: the points below the support's level, not the support's,
     inside the outline or not (None: not known, `_beneath_below` is not decided);
     ``off_colour``: per object, the share of its pixels whose colour differs from the
@@ -890,7 +920,7 @@ def not_standing(
             )
             continue
         if at_border is not None:
-            why = _enters_over_border(at_border[k], h_each[k], rests[k], xy_each[k])
+            why = _enters_over_border(at_border[k], h_each[k], rests[k], xy_each[k], border_edge)
             if why:
                 verdicts[k] = why
                 continue

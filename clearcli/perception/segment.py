@@ -35,6 +35,7 @@ from clearcli.perception.context import RefineContext, by_label
 from clearcli.perception.edges import cut_depth_edges
 from clearcli.perception.exclude import (
     AROUND_LEVEL_M,
+    at_cloud_border,
     at_image_border,
     beyond_outline,
     near_the_objects,
@@ -76,6 +77,9 @@ _BAD_SHARE = 0.98
 _BLACK = 8
 _SATURATED = 250
 _FLAT_COLOR = 2
+# an unorganized cloud's points this near its footprint's edge are at its border, at
+# least (exclude.at_cloud_border; as the image's border, `exclude._BORDER_PX` pixels)
+_CLOUD_BORDER_M = 0.01
 
 
 def in_plane_axes(table: TablePlane) -> tuple[np.ndarray, np.ndarray]:
@@ -596,16 +600,31 @@ def _exclude(w: _Work) -> None:
         lambda xy: fit.inside_2d(xy, settings.hull_margin_m - 0.02),
         rests_m,
         reach,
-        at_image_border([o.indices for o in w.objects], w.frame.shape) if w.organized else None,
+        at_image_border([o.indices for o in w.objects], w.frame.shape)
+        if w.organized
+        else _at_cloud_border(w, every, sizes)
+        if settings.exclude_cloud_border
+        else None,
         _support_around(w) if w.organized else None,
         below=below_pts,
         off_colour=_off_colour(w),
+        border_edge="the image's border" if w.organized else "the cloud's edge",
     )
     if not verdicts:
         return
     gone = {v.index: v.reason for v in verdicts}
     w.excluded = [Excluded(o.indices, o.centroid, gone[k]) for k, o in enumerate(w.objects) if k in gone]
     w.objects = [o for k, o in enumerate(w.objects) if k not in gone]
+
+
+def _at_cloud_border(w: _Work, every: np.ndarray, sizes: list[int]) -> list[np.ndarray]:
+    """`exclude.at_cloud_border` of the objects (``every``: their points, ``sizes`` each)
+    in an unorganized cloud: within twice the voxel's side (the voxel fitted to the
+    cloud's density), at least `_CLOUD_BORDER_M`, of its footprint's edge."""
+    fit, size = w.fit, w.size
+    assert fit is not None and size is not None  # the table's and the voxels' steps ran
+    border_m = max(_CLOUD_BORDER_M, 2.0 * size.voxel_m)
+    return at_cloud_border(np.split(fit.to_2d(every), np.cumsum(sizes)[:-1]), fit.to_2d(w.pts), border_m)
 
 
 def _in_plane(w: _Work, mask: np.ndarray, step: int = 1) -> tuple[np.ndarray, np.ndarray]:

@@ -83,6 +83,12 @@ class SegmentSettings(Section):
     # though the contact is hidden (mOSD test47's box laid across two others); with that,
     # on and off give the same F1 on every mOSD frame (learn 0.997, test-5 0.941)
     exclude_not_standing: bool = param(True)
+    # an unorganized cloud's outer edge (where it was cropped, or the sensor's view
+    # ended) is read as an image's border is: what is cut there high above the support,
+    # away from where it comes down to it, reaches in from beyond (exclude.at_cloud_border;
+    # the near edge's brackets of industrial_table.pcd, a foreign choose frame: spurious
+    # segments 8 -> 5, nothing right lost). Off: no border for an unorganized cloud
+    exclude_cloud_border: bool = param(True)
     # polygonal prism: heights above the table kept as object points. The lower bound
     # grows with the squared range (depth noise does: ~3 sigma of a Kinect's), so a
     # rough or far table surface does not turn into a carpet of small "objects".
