@@ -381,6 +381,8 @@ def _rests_on_another(k: int, objects: list[np.ndarray], h_each: list[np.ndarray
 
 # _reached(): the points are queried this many at a time
 _QUERY_CHUNK = 512
+_HULL_CHUNK = 1 << 22  # (points x hull sides) per block in at_cloud_border: 32 MB of floats
+_HULL_MAX_SIDES = 256  # at_cloud_border's footprint: more sides are read through fewer corners
 
 
 def _reached(tree: object, points: np.ndarray, reach_m: float, need: int) -> bool:
@@ -501,14 +503,29 @@ def at_cloud_border(object_xy: list[np.ndarray], cloud_xy: np.ndarray, border_m:
     if not object_xy:
         return []
     try:
-        eq = ConvexHull(cloud_xy).equations  # (F, 3): a x + b y + c <= 0 inside
+        hull = ConvexHull(cloud_xy)
     except (QhullError, ValueError):  # all points on a line: no footprint to speak of
         return [np.zeros(xy.shape[0], dtype=bool) for xy in object_xy]
+    eq = hull.equations  # (F, 3): a x + b y + c <= 0 inside
+    if eq.shape[0] > _HULL_MAX_SIDES:
+        # a footprint of many sides (a round one: thousands) is read through every k-th
+        # of its corners, an inscribed polygon: the cost stays (points x 256), and what
+        # lies between the two is within the arc's sagitta of the edge
+        corners = cloud_xy[hull.vertices[:: -(-hull.vertices.size // _HULL_MAX_SIDES)]]  # counter-clockwise
+        d = np.roll(corners, -1, axis=0) - corners
+        out_n = np.column_stack([d[:, 1], -d[:, 0]]) / np.hypot(d[:, 0], d[:, 1])[:, None]  # outward
+        eq = np.column_stack([out_n, -(out_n * corners).sum(axis=1)])
+    normals, offsets = eq[:, :2].T, eq[:, 2]
+    # rows at a time: (points x sides) at once could take hundreds of megabytes
+    step = max(1, _HULL_CHUNK // eq.shape[0])
     out = []
     for xy in object_xy:
-        # distance to the edge of a convex polygon: to the nearest of its sides' lines
-        depth = -(xy @ eq[:, :2].T + eq[:, 2]).max(axis=1)
-        out.append(depth <= border_m)
+        at = np.zeros(xy.shape[0], dtype=bool)
+        for i in range(0, xy.shape[0], step):
+            # distance to the edge of a convex polygon: to the nearest of its sides' lines
+            depth = -(xy[i : i + step] @ normals + offsets).max(axis=1)
+            at[i : i + step] = depth <= border_m
+        out.append(at)
     return out
 
 

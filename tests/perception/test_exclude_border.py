@@ -121,6 +121,16 @@ def test_the_cloud_edge_is_its_footprints_convex_hull() -> None:
     probe = np.array([[0.995, 0.3], [0.005, 0.7], [0.5, 0.992], [0.5, 0.3], [0.29, 0.5], [0.89, 0.5], [0.985, 0.5]])
     (at,) = exclude.at_cloud_border([probe], cloud, 0.01)
     assert at.tolist() == [True, True, True, False, False, False, False]
+    # a round footprint of 2000 sides is read through 250 of its corners (an inscribed
+    # polygon, cost bounded): on a 1 m radius the sagitta is 0.3 mm, so points 5 mm in
+    # are at its edge and points 15 mm in are not, at every angle
+    t = np.linspace(0.0, 2 * np.pi, 2000, endpoint=False)
+    rim = np.column_stack([np.cos(t), np.sin(t)])
+    disc = np.vstack([rim, 0.5 * rim])
+    a = np.linspace(0.0, 2 * np.pi, 97, endpoint=False) + 0.01
+    ring = np.column_stack([np.cos(a), np.sin(a)])
+    near, far = exclude.at_cloud_border([0.995 * ring, 0.985 * ring], disc, 0.01)
+    assert near.all() and not far.any()
     # on a line no footprint: nothing is at its edge
     (line,) = exclude.at_cloud_border([probe], np.column_stack([g, g]), 0.01)
     assert not line.any()
