@@ -636,7 +636,10 @@ def _faces(
     _, vecs_each = np.linalg.eigh(np.stack([c.T @ c for c in cs]))
     faces = {}
     for k, mid, c, vecs in zip(ks, mids, cs, vecs_each, strict=True):
-        across_5, across_95 = _percentiles(c @ vecs[:, 0], (5, 95))
+        across = c @ vecs[:, 0]
+        if _surely_wider(across, _FACE_THIN_M):
+            continue  # no face: the percentiles' partition is not needed to tell
+        across_5, across_95 = _percentiles(across, (5, 95))
         thick = float(across_95 - across_5)
         if thick > _FACE_THIN_M:
             continue
@@ -644,6 +647,28 @@ def _faces(
         h_2, h_98 = _percentiles(h_each[k], (2, 98))
         faces[k] = (mid, vecs[:, 0], thick, float(along_98 - along_2), float(h_98 - h_2))
     return faces
+
+
+# `_surely_wider`: a margin far above the rounding of a percentile's interpolation and of
+# its difference (the values are metres, under one: ulps of 1e-16)
+_WIDER_SLACK_M = 1e-6
+
+
+def _surely_wider(values: np.ndarray, width: float) -> bool:
+    """Is the spread of the 5th to the 95th percentile of centred ``values`` (`_percentiles`,
+    at least two) more than ``width``, told by two counts: at least the two order statistics
+    the 5th percentile lies between at or below -(``width`` / 2 + `_WIDER_SLACK_M`), and the
+    two of the 95th at or above +that. False says nothing (the partition must tell). Most
+    segments are no face, thicker than one on either side of their middle: their
+    percentiles were most of `_faces`' time (issue 39: _faces 2.3 -> 2.0 ms on test55 and
+    test57)."""
+    n = values.shape[0]
+    half = width / 2 + _WIDER_SLACK_M
+    low = math.floor((n - 1) * (5 / 100))  # the virtual indices as `_percentiles` takes them
+    high = math.floor((n - 1) * (95 / 100))
+    if high + 1 >= n:
+        return False
+    return int(np.count_nonzero(values <= -half)) >= low + 2 and int(np.count_nonzero(values >= half)) >= n - high
 
 
 def _along_the_edge(mid: np.ndarray, normal: np.ndarray, length: float, support_xy: np.ndarray) -> float:
