@@ -545,14 +545,23 @@ def support_around(
     in_any_2d = in_any.reshape(rows, cols)
     rings = []
     for idx in indices:
-        r, c = np.divmod(idx, cols)
-        r0, r1 = max(int(r.min()) - _RING_PX, 0), min(int(r.max()) + _RING_PX + 1, rows)
-        c0, c1 = max(int(c.min()) - _RING_PX, 0), min(int(c.max()) + _RING_PX + 1, cols)
-        own = np.zeros((r1 - r0, c1 - c0), dtype=bool)
-        own[r - r0, c - c0] = True
-        ring = dilate_square(own, _RING_PX) & ~in_any_2d[r0:r1, c0:c1]
-        rr, cc = np.nonzero(ring)
-        rings.append((rr + r0) * cols + (cc + c0))
+        # the same window and ring as from each pixel's row and column (np.divmod), without
+        # them (issue 39: support_around 3.2 -> 2.5 ms on test55 and test57): a pixel's row grows
+        # with its index, so the first and last rows are those of the least and greatest
+        # index; the columns are those the segment's rows set in a strip of whole rows
+        r0 = max(int(idx.min()) // cols - _RING_PX, 0)
+        r1 = min(int(idx.max()) // cols + _RING_PX + 1, rows)
+        strip = np.zeros((r1 - r0) * cols, dtype=bool)
+        strip[idx - r0 * cols] = True
+        strip_2d = strip.reshape(r1 - r0, cols)
+        used = np.flatnonzero(strip_2d.any(axis=0))
+        c0, c1 = max(int(used[0]) - _RING_PX, 0), min(int(used[-1]) + _RING_PX + 1, cols)
+        # dilated and in no segment: greater, of bools, is "and not"
+        ring = np.greater(dilate_square(strip_2d[:, c0:c1], _RING_PX), in_any_2d[r0:r1, c0:c1])
+        # the ring's pixels in the window's row-major order (np.nonzero's), as frame indices
+        k = np.flatnonzero(ring)
+        width = c1 - c0
+        rings.append(k + (k // width) * (cols - width) + (r0 * cols + c0))
     # every ring's pixels in one call of ``state`` (elementwise: the same answer per pixel)
     if not rings:
         return []
@@ -644,7 +653,10 @@ def _faces(
     _, vecs_each = np.linalg.eigh(np.stack([c.T @ c for c in cs]))
     faces = {}
     for k, mid, c, vecs in zip(ks, mids, cs, vecs_each, strict=True):
-        across_5, across_95 = _percentiles(c @ vecs[:, 0], (5, 95))
+        across = c @ vecs[:, 0]
+        if _surely_wider(across, _FACE_THIN_M):
+            continue  # no face: the percentiles' partition is not needed to tell
+        across_5, across_95 = _percentiles(across, (5, 95))
         thick = float(across_95 - across_5)
         if thick > _FACE_THIN_M:
             continue
@@ -652,6 +664,28 @@ def _faces(
         h_2, h_98 = _percentiles(h_each[k], (2, 98))
         faces[k] = (mid, vecs[:, 0], thick, float(along_98 - along_2), float(h_98 - h_2))
     return faces
+
+
+# `_surely_wider`: a margin far above the rounding of a percentile's interpolation and of
+# its difference (the values are metres, under one: ulps of 1e-16)
+_WIDER_SLACK_M = 1e-6
+
+
+def _surely_wider(values: np.ndarray, width: float) -> bool:
+    """Is the spread of the 5th to the 95th percentile of centred ``values`` (`_percentiles`,
+    at least two) more than ``width``, told by two counts: at least the two order statistics
+    the 5th percentile lies between at or below -(``width`` / 2 + `_WIDER_SLACK_M`), and the
+    two of the 95th at or above +that. False says nothing (the partition must tell). Most
+    segments are no face, thicker than one on either side of their middle: their
+    percentiles were most of `_faces`' time (issue 39: _faces 2.3 -> 2.0 ms on test55 and
+    test57)."""
+    n = values.shape[0]
+    half = width / 2 + _WIDER_SLACK_M
+    low = math.floor((n - 1) * (5 / 100))  # the virtual indices as `_percentiles` takes them
+    high = math.floor((n - 1) * (95 / 100))
+    if high + 1 >= n:
+        return False
+    return int(np.count_nonzero(values <= -half)) >= low + 2 and int(np.count_nonzero(values >= half)) >= n - high
 
 
 def _along_the_edge(mid: np.ndarray, normal: np.ndarray, length: float, support_xy: np.ndarray) -> float:
