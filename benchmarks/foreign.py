@@ -82,7 +82,6 @@ def _plane(points: np.ndarray, rng: np.random.Generator) -> tuple[np.ndarray, fl
 def load(name: str):  # -> (Frame, labels (N,) int64, spec dict)
     from matplotlib.path import Path as Polygon
 
-    from clearcli.io.frames import LABEL_TABLE, object_label
     from clearcli.io.read import read_frame
 
     spec = tomllib.loads((LABELS / f"{name}.toml").read_text(encoding="utf-8"))
@@ -99,19 +98,29 @@ def load(name: str):  # -> (Frame, labels (N,) int64, spec dict)
     outside = finite & ~inside.any(axis=0) & (np.linalg.norm(np.nan_to_num(frame.points), axis=1) < 2.0)
     n, d = _plane(frame.points[outside].astype(np.float64), np.random.default_rng(0))
     height = np.where(finite, np.nan_to_num(frame.points.astype(np.float64)) @ n + d, -np.inf)
-    labels = np.zeros(h * w, dtype=np.int64)
+    return frame, _labels(spec, inside, finite, height, pixels), spec
+
+
+def _labels(spec: dict, inside: np.ndarray, finite: np.ndarray, height: np.ndarray, where: np.ndarray) -> np.ndarray:
+    """(N,) labels: the table (within 1 cm of the plane) and each object, its points
+    ``inside`` its polygon, finite, and above the plane by its ``above_m``; later objects
+    take overlapping points. ``where`` (N, 2): the coordinates the polygons are in
+    (pixels, or metres in x-y), for a container's convex hull (``fill``)."""
+    from clearcli.io.frames import LABEL_TABLE, object_label
+
+    labels = np.zeros(finite.shape[0], dtype=np.int64)
     labels[finite & (np.abs(height) < 0.01)] = LABEL_TABLE
-    for k, obj in enumerate(spec["object"]):  # later objects take overlapping pixels
+    for k, obj in enumerate(spec["object"]):
         mask = inside[k] & finite & (height > float(obj.get("above_m", ABOVE_PLANE_M)))
         if obj.get("fill") and mask.any():
             # a container: its floor may stand less than 8 mm above the table; take what
             # lies above the plane within the silhouette's convex hull
             from scipy.spatial import Delaunay
 
-            hull = Delaunay(pixels[mask])
-            mask = inside[k] & finite & (height > 0.0) & (hull.find_simplex(pixels) >= 0)
+            hull = Delaunay(where[mask])
+            mask = inside[k] & finite & (height > 0.0) & (hull.find_simplex(where) >= 0)
         labels[mask] = object_label(k)
-    return frame, labels, spec
+    return labels
 
 
 def _load_xy(frame, spec: dict):  # -> (Frame, labels (N,) int64, spec dict)
@@ -121,8 +130,6 @@ def _load_xy(frame, spec: dict):  # -> (Frame, labels (N,) int64, spec dict)
     RANSAC plane fitted to the finite points outside every polygon, its normal taken
     upwards, +z); overlaps and `fill` (the convex hull in x-y) as for pixel labels."""
     from matplotlib.path import Path as Polygon
-
-    from clearcli.io.frames import LABEL_TABLE, object_label
 
     finite = np.isfinite(frame.points).all(axis=1)
     points = np.nan_to_num(frame.points.astype(np.float64))
@@ -134,17 +141,7 @@ def _load_xy(frame, spec: dict):  # -> (Frame, labels (N,) int64, spec dict)
     if n[2] < 0:  # _plane turns the normal to the origin; here up is +z
         n, d = -n, -d
     height = np.where(finite, points @ n + d, -np.inf)
-    labels = np.zeros(frame.n_points, dtype=np.int64)
-    labels[finite & (np.abs(height) < 0.01)] = LABEL_TABLE
-    for k, obj in enumerate(spec["object"]):  # later objects take overlapping points
-        mask = inside[k] & finite & (height > float(obj.get("above_m", ABOVE_PLANE_M)))
-        if obj.get("fill") and mask.any():
-            from scipy.spatial import Delaunay
-
-            hull = Delaunay(xy[mask])
-            mask = inside[k] & finite & (height > 0.0) & (hull.find_simplex(xy) >= 0)
-        labels[mask] = object_label(k)
-    return frame, labels, spec
+    return frame, _labels(spec, inside, finite, height, xy), spec
 
 
 def names(part: str) -> list[str]:

@@ -30,6 +30,19 @@ def _json(res: subprocess.CompletedProcess[str]) -> dict[str, Any]:
     return json.loads(res.stdout.strip().splitlines()[-1])
 
 
+def _scene_errors(src: Path) -> list[str]:
+    """`clear segment` and `clear plan` on ``src``: each exits 4 (a scene it cannot use)
+    with one line on stderr; those lines."""
+    out = []
+    for command in ("segment", "plan"):
+        res = _clear(command, str(src))
+        assert res.returncode == EXIT_SCENE, (command, res.returncode, res.stderr)
+        lines = res.stderr.strip().splitlines()
+        assert len(lines) == 1, res.stderr
+        out.append(lines[0])
+    return out
+
+
 def test_no_support_surface_is_exit_4_in_one_line_naming_the_surfaces_considered(tmp_path: Path) -> None:
     # a strip of table 15 pixels tall (a few cm): planes, none of table size
     frame = support_frame("mat_on_table", 2)
@@ -39,12 +52,8 @@ def test_no_support_surface_is_exit_4_in_one_line_naming_the_surfaces_considered
     pts[(rows < 300) | (rows >= 315)] = np.nan
     src = tmp_path / "strip.pcd"
     write_pcd(src, dataclasses.replace(frame, points=pts))
-    for command in ("segment", "plan"):
-        res = _clear(command, str(src))
-        assert res.returncode == EXIT_SCENE, (command, res.returncode, res.stderr)
-        lines = res.stderr.strip().splitlines()
-        assert len(lines) == 1, res.stderr
-        assert "surfaces considered:" in lines[0] and "m^2 at" in lines[0], lines[0]
+    for line in _scene_errors(src):
+        assert "surfaces considered:" in line and "m^2 at" in line, line
 
 
 def test_an_office_without_a_table_is_exit_4_in_one_line_naming_the_surfaces_considered() -> None:
@@ -52,17 +61,12 @@ def test_an_office_without_a_table_is_exit_4_in_one_line_naming_the_surfaces_con
     # it, the negative case of the foreign frames (issue 37; not labelled). The best plane
     # found has more points behind it than on it: no usable table, said in one line that
     # names that plane, how far it is, and every surface considered
-    src = shared_path("scenes/pcl/office1.pcd")
-    for command in ("segment", "plan"):
-        res = _clear(command, str(src))
-        assert res.returncode == EXIT_SCENE, (command, res.returncode, res.stderr)
-        lines = res.stderr.strip().splitlines()
-        assert len(lines) == 1, res.stderr
-        assert "office1.pcd" in lines[0] and "no usable table" in lines[0], lines[0]
-        assert "the best support plane (" in lines[0] and " m from the camera)" in lines[0], lines[0]
+    for line in _scene_errors(shared_path("scenes/pcl/office1.pcd")):
+        assert "office1.pcd" in line and "no usable table" in line, line
+        assert "the best support plane (" in line and " m from the camera)" in line, line
         # and which surfaces were considered (issue 37's "Bad input"), the chosen one among them
-        considered = lines[0].split("(surfaces considered: ", 1)[1]
-        assert considered.endswith(")") and considered.count(" m^2 at ") >= 1, lines[0]
+        considered = line.split("(surfaces considered: ", 1)[1]
+        assert considered.endswith(")") and considered.count(" m^2 at ") >= 1, line
 
 
 def test_everything_excluded_is_an_empty_object_list_with_the_reasons(tmp_path: Path) -> None:
