@@ -246,9 +246,12 @@ def _top_down(frame, spec: dict, segments, colours, texts, title: str, out: Path
     dashed, a 5 cm grid to read polygons off."""
     import matplotlib.pyplot as plt
 
-    p = frame.points[np.isfinite(frame.points).all(axis=1)]
+    finite = np.isfinite(frame.points).all(axis=1)
+    p = frame.points[finite]
     fig, ax = plt.subplots(figsize=(12.8, 9.6), dpi=100)
-    ax.scatter(p[:, 0], p[:, 1], c=frame.colors[np.isfinite(frame.points).all(axis=1)] / 255.0, s=3, linewidths=0)
+    # in the cloud's own colours, grey without any
+    shade = frame.colors[finite] / 255.0 if frame.colors is not None else "0.6"
+    ax.scatter(p[:, 0], p[:, 1], c=shade, s=3, linewidths=0)
     for idx, colour, text in zip(segments, colours, texts):
         if idx.size:
             q = frame.points[idx]
