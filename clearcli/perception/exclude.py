@@ -96,6 +96,7 @@ import numpy as np
 
 from clearcli.perception.graph import components
 from clearcli.perception.raster import dilate_square
+from clearcli.perception.table import hull_vertices, inside_convex
 
 _BORDER_M = 0.02  # a segment's points this near the prism's side touch it
 _GOES_ON_M = 0.02  # points beyond the side within this of those continue the segment
@@ -381,7 +382,6 @@ def _rests_on_another(k: int, objects: list[np.ndarray], h_each: list[np.ndarray
 
 # _reached(): the points are queried this many at a time
 _QUERY_CHUNK = 512
-_HULL_CHUNK = 1 << 22  # (points x hull sides) per block in at_cloud_border: 32 MB of floats
 _HULL_MAX_SIDES = 256  # at_cloud_border's footprint: more sides are read through fewer corners
 
 
@@ -494,39 +494,25 @@ def at_cloud_border(object_xy: list[np.ndarray], cloud_xy: np.ndarray, border_m:
     """Per object (its points in the support's plane, ``object_xy``), which of them lie
     within ``border_m`` of the edge of the cloud's footprint (``cloud_xy``: every point,
     in-plane): an unorganized cloud's `at_image_border`. The footprint's edge is its
-    convex hull's: a cloud cropped to a box, or a sensor's view, ends in straight lines,
-    while the shadows objects cast (holes in the footprint, some open to its edge) lie
-    inside the hull and cut no object off (the footprint's own outline, holes filled,
-    took a tall box's back edge, where its shadow reached the cloud's far end, for a cut)."""
-    from scipy.spatial import ConvexHull, QhullError
+    convex hull's (`table.hull_vertices`, tested as the support's own outline is,
+    `table.inside_convex` shrunk by ``border_m``): a cloud cropped to a box, or a sensor's
+    view, ends in straight lines, while the shadows objects cast (holes in the footprint,
+    some open to its edge) lie inside the hull and cut no object off (the footprint's own
+    outline, holes filled, took a tall box's back edge, where its shadow reached the
+    cloud's far end, for a cut)."""
+    from scipy.spatial import QhullError
 
     if not object_xy:
         return []
     try:
-        hull = ConvexHull(cloud_xy)
+        corners = hull_vertices(cloud_xy)  # counter-clockwise
     except (QhullError, ValueError):  # all points on a line: no footprint to speak of
         return [np.zeros(xy.shape[0], dtype=bool) for xy in object_xy]
-    eq = hull.equations  # (F, 3): a x + b y + c <= 0 inside
-    if eq.shape[0] > _HULL_MAX_SIDES:
-        # a footprint of many sides (a round one: thousands) is read through every k-th
-        # of its corners, an inscribed polygon: the cost stays (points x 256), and what
-        # lies between the two is within the arc's sagitta of the edge
-        corners = cloud_xy[hull.vertices[:: -(-hull.vertices.size // _HULL_MAX_SIDES)]]  # counter-clockwise
-        d = np.roll(corners, -1, axis=0) - corners
-        out_n = np.column_stack([d[:, 1], -d[:, 0]]) / np.hypot(d[:, 0], d[:, 1])[:, None]  # outward
-        eq = np.column_stack([out_n, -(out_n * corners).sum(axis=1)])
-    normals, offsets = eq[:, :2].T, eq[:, 2]
-    # rows at a time: (points x sides) at once could take hundreds of megabytes
-    step = max(1, _HULL_CHUNK // eq.shape[0])
-    out = []
-    for xy in object_xy:
-        at = np.zeros(xy.shape[0], dtype=bool)
-        for i in range(0, xy.shape[0], step):
-            # distance to the edge of a convex polygon: to the nearest of its sides' lines
-            depth = -(xy[i : i + step] @ normals + offsets).max(axis=1)
-            at[i : i + step] = depth <= border_m
-        out.append(at)
-    return out
+    # a footprint of many sides (a round one: thousands) is read through every k-th of
+    # its corners, an inscribed polygon: the test's cost stays (points x 256), and what
+    # lies between the two is within the arc's sagitta of the edge
+    polygon = cloud_xy[corners[:: -(-corners.size // _HULL_MAX_SIDES)]]
+    return [~inside_convex(xy, polygon, -border_m) for xy in object_xy]
 
 
 def support_around(
