@@ -209,9 +209,12 @@ def push_geometry(obj: ObjectGeometry, gripper: GripperModel, push: PushSettings
         across = hull_xy @ side[:2]
         face_half = float(np.ptp(across)) / 2.0
         centre_across = float((across.max() + across.min()) / 2.0 - c[:2] @ side[:2])
-        yaws: list[PushGeometry] = []
-        shifted: list[PushGeometry] = []
-        raised: list[PushGeometry] = []
+        # every variant's gripper start, in the order the alternatives keep: per yaw (the
+        # documented one first) the centred push, its raised contacts, its shifted ones;
+        # then their sequences built together (`_push_sequences`)
+        xs: list[np.ndarray] = []
+        starts: list[np.ndarray] = []
+        kinds: list[str] = []  # "yaw", "raised" or "shifted", per variant
         lifts = raised_contact_lifts(push, part.band_m, extent, obj.top_height_m)
         for along in (parallel, not parallel):  # the documented yaw first, then the other
             x = d if along else cross3(UP, d)
@@ -226,25 +229,23 @@ def push_geometry(obj: ObjectGeometry, gripper: GripperModel, push: PushSettings
                 across_m = (centre_across if k > 0 else 0.0) + offset
                 start = lateral + (rear - push.gripper_behind_m - half_along) * d + across_m * side
                 start[2] = height
-                seq_pose = _push_sequence(x, start, up_approach, translations, n)
-                geometry = PushGeometry(
-                    direction=name,
-                    unit=d,
-                    length_m=length,
-                    object_translations=translations,
-                    candidates=seq_pose,
-                )
-                (yaws if k == 0 else shifted).append(geometry)
+                xs.append(x)
+                starts.append(start)
+                kinds.append("yaw" if k == 0 else "shifted")
                 if k == 0:
-                    raised.extend(
-                        dataclasses.replace(
-                            geometry,
-                            candidates=_push_sequence(
-                                x, start + np.array([0.0, 0.0, lift]), up_approach, translations, n
-                            ),
-                        )
-                        for lift in lifts
-                    )
+                    for lift in lifts:
+                        xs.append(x)
+                        starts.append(start + np.array([0.0, 0.0, lift]))
+                        kinds.append("raised")
+        sequences = _push_sequences(np.array(xs), np.array(starts), up_approach, translations, n)
+        made: dict[str, list[PushGeometry]] = {"yaw": [], "raised": [], "shifted": []}
+        for kind, seq_pose in zip(kinds, sequences, strict=True):
+            made[kind].append(
+                PushGeometry(
+                    direction=name, unit=d, length_m=length, object_translations=translations, candidates=seq_pose
+                )
+            )
+        yaws, raised, shifted = made["yaw"], made["raised"], made["shifted"]
         out[name] = dataclasses.replace(yaws[0], alternatives=tuple(yaws[1:] + raised + shifted))
     return out
 
@@ -273,15 +274,37 @@ def raised_contact_lifts(
 
 def _push_sequence(
     x: np.ndarray, start: np.ndarray, up_approach: np.ndarray, translations: np.ndarray, n: int
-) -> tuple[tuple[np.ndarray, ...], ...]:
+) -> tuple[tuple[np.ndarray, ...], tuple[np.ndarray, ...]]:
     """Both half-turn candidates of a push from ``start`` with closing direction ``x``:
     pre, start, path points, retreat."""
-    T, T_turned = _half_turns(x, -UP, start)
-    seq = np.repeat(T[None], n + 3, axis=0)
-    seq[0, :3, 3] += up_approach
-    seq[2:-1, :3, 3] += translations
-    seq[-1, :3, 3] += translations[-1] + up_approach
+    return _push_sequences(x[None, :], start[None, :], up_approach, translations, n)[0]
+
+
+def _push_sequences(
+    xs: np.ndarray, starts: np.ndarray, up_approach: np.ndarray, translations: np.ndarray, n: int
+) -> list[tuple[tuple[np.ndarray, ...], tuple[np.ndarray, ...]]]:
+    """`_push_sequence` of each row of ``xs`` and ``starts`` (m, 3), in one set of array
+    operations for all m: the same floats as one call each (each entry is made by the
+    same operations on the same numbers), for a fraction of the calls. An object's four
+    directions have 6 to 16 variants each (two yaws, raised and shifted contacts), and
+    building them one at a time was ~85 small-array calls a frame (issue 39)."""
+    down = -UP
+    m = xs.shape[0]
+    # each pose's rotation: columns x, z cross x, z with z down; the half-turned one -x, z cross -x, z
+    y = cross3(np.broadcast_to(down, xs.shape), xs)
+    y_turned = cross3(np.broadcast_to(down, xs.shape), -xs)
+    seq = np.zeros((m, n + 3, 4, 4))
+    seq[:, :, :3, 0] = xs[:, None, :]
+    seq[:, :, :3, 1] = y[:, None, :]
+    seq[:, :, :3, 2] = down
+    seq[:, :, 3, 3] = 1.0
+    position = seq[:, :, :3, 3]  # a view
+    position[:] = starts[:, None, :]
+    position[:, 0] += up_approach
+    position[:, 2:-1] += translations
+    position[:, -1] += translations[-1] + up_approach
     # the half-turned candidate: the same positions, its own rotation
     turned = seq.copy()
-    turned[:, :3, :3] = T_turned[:3, :3]
-    return (tuple(seq), tuple(turned))
+    turned[:, :, :3, 0] = -xs[:, None, :]
+    turned[:, :, :3, 1] = y_turned[:, None, :]
+    return [(tuple(seq[i]), tuple(turned[i])) for i in range(m)]
