@@ -1,9 +1,10 @@
 """Cold start of `clear`: wall time per command, each run a fresh process, and the
 share of it spent importing.
 
-    .venv/bin/python benchmarks/startup.py [--runs N] [--no-imports] [--top K] [--against DIR]
+    .venv/bin/python benchmarks/startup.py [--runs N] [--no-imports] [--top K] [--against DIR] [--frame F]
 
-Commands timed (FRAME = mosd/test/test57.pcd of the shared data): `clear --help`,
+Commands timed (FRAME = --frame, by default mosd/test/test57.pcd of the shared data:
+mOSD's most cluttered 640x480 frame, so the most work after the imports): `clear --help`,
 `clear info FRAME`, `clear segment FRAME`, `clear predicates FRAME`, `clear plan FRAME`.
 Every run is a new process of the venv's `clear` script (stdout and stderr discarded);
 one untimed run per command first warms the page cache. The commands' runs are
@@ -181,15 +182,22 @@ def main() -> None:
     ap.add_argument(
         "--against", type=Path, help="a folder holding another clearcli package: measured back to back, rows marked *"
     )
+    ap.add_argument(
+        "--frame",
+        default="mosd/test/test57.pcd",
+        help="the frame the frame commands read: a path, or one relative to the shared data "
+        "(default mosd/test/test57.pcd, mOSD's most cluttered 640x480 frame: 16 objects)",
+    )
     opts = ap.parse_args()
     runs = max(1, opts.runs)
 
     data = _shared()
-    frame = data / "mosd" / "test" / "test57.pcd"
+    frame = Path(opts.frame) if Path(opts.frame).is_file() else data / opts.frame
     if not frame.is_file():
         sys.exit(
-            f"startup.py: shared data not found: {frame} is missing.\n"
-            "Set CLEAR_SHARED to the shared data directory (the one holding mosd/test/test57.pcd)."
+            f"startup.py: frame not found: {frame} is missing.\n"
+            "Set CLEAR_SHARED to the shared data directory (the one holding mosd/test/test57.pcd), "
+            "or give --frame an existing file."
         )
     # (mark, environment): this checkout as the environment has it, and --against's
     versions: list[tuple[str, dict[str, str] | None]] = [("", None)]
