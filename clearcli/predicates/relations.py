@@ -312,18 +312,28 @@ def least_blocked_pushes(
     start hits the fewest other objects, the first on ties, with the others no more
     blocked as IK fallbacks (as the pinch's grasps: grasps/pinch.py `least_blocked_grasps`)."""
     allowed = _allowed(len(objects), exclude)
-    out = []
+    # every push's options, and their start poses tested in one `_gripper_hits` call for
+    # all objects and directions (each pose's hits are its own: the same as a call per
+    # push, for one set of box products and one object table instead of ~13 a frame)
+    groups: list[tuple[int, str, tuple[PushGeometry, ...], int]] = []  # object, direction, options, first pose
+    starts: list[np.ndarray] = []
+    rows: list[int] = []  # the object whose push each pose starts
     for b, by_dir in enumerate(pushes):
-        chosen = {}
         for name, push in by_dir.items():
             options = (dataclasses.replace(push, alternatives=()), *push.alternatives)
+            groups.append((b, name, options, len(starts)))
             if len(options) > 1:
-                poses = np.stack([p.T_start for p in options])
-                hits = _gripper_hits(gripper, True, poses, objects, np.repeat(allowed[b : b + 1], len(options), axis=0))
-                chosen[name] = _with_fallbacks(options, hits)
-            else:
-                chosen[name] = options[0]
-        out.append(chosen)
+                starts.extend(p.T_start for p in options)
+                rows.extend([b] * len(options))
+    hits_of: dict[int, list[tuple[int, int]]] = {}  # by the group's first pose
+    if starts:
+        firsts = np.array([g[3] for g in groups if len(g[2]) > 1])
+        for p, i in _gripper_hits(gripper, True, np.stack(starts), objects, allowed[rows]):
+            first = int(firsts[np.searchsorted(firsts, p, side="right") - 1])
+            hits_of.setdefault(first, []).append((p - first, i))
+    out: list[dict[str, PushGeometry]] = [{} for _ in pushes]
+    for b, name, options, first in groups:
+        out[b][name] = _with_fallbacks(options, hits_of.get(first, [])) if len(options) > 1 else options[0]
     return out
 
 
