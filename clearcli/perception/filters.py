@@ -40,13 +40,24 @@ def _organized_neighbor_counts(points: np.ndarray, shape: tuple[int, int], radiu
     4 of the 8 offsets do all the work (each hit counts for both pixels). Blocks of rows
     at a time (`_BLOCK_PIXELS`), each with the row below it for the downward offsets.
     """
-    h, w = shape
+    # at most 8: counted in uint8, adding the hits' bytes (a bool's byte is 0 or 1), where
+    # adding bools to int16 went through a cast on every pass
+    counts_image = np.zeros(shape, dtype=np.uint8)
+    # Only the box of the pixels with a finite depth: a pixel without one has a NaN or
+    # infinite range and no neighbour, so no pair out of the box is a hit. A fifth to a
+    # third of an mOSD frame's rows have no depth at all; the counts 247 -> 206 ms over
+    # mOSD's 50 and the 9 RealSense frames (issue 39)
+    finite = np.isfinite(points[:, 2]).reshape(shape)
+    rows_in = np.flatnonzero(finite.any(axis=1))
+    if rows_in.size == 0:
+        return counts_image.reshape(-1).astype(np.int16)
+    cols_in = np.flatnonzero(finite.any(axis=0))
+    box = (slice(int(rows_in[0]), int(rows_in[-1]) + 1), slice(int(cols_in[0]), int(cols_in[-1]) + 1))
     # one contiguous float32 plane per coordinate: the squared lengths below are the sums
     # einsum("ijk,ijk->ij") gave on (h, w, 3) rows, in its order ((x x + y y) + z z), in
     # half its time
-    grid = points.reshape(h, w, 3)
-    # at most 8: counted in uint8, adding the hits' bytes (a bool's byte is 0 or 1), where
-    # adding bools to int16 went through a cast on every pass
+    grid = points.reshape(shape[0], shape[1], 3)[box]
+    h, w = grid.shape[0], grid.shape[1]
     counts = np.zeros(h * w, dtype=np.uint8)
     k2 = np.float32((radius_at_1m_m * 0.5) ** 2)
     rows = max(1, _BLOCK_PIXELS // max(w, 1))
@@ -93,7 +104,8 @@ def _organized_neighbor_counts(points: np.ndarray, shape: tuple[int, int], radiu
                 hit8 = hit.view(np.uint8)
                 block[:n] += hit8
                 block[step : step + n] += hit8
-    return counts.reshape(-1).astype(np.int16)
+    counts_image[box] = counts.reshape(h, w)
+    return counts_image.reshape(-1).astype(np.int16)
 
 
 def depth_radius_mask(
