@@ -456,7 +456,13 @@ def _depth_edges(w: _Work) -> None:
         vox, shape, size = w.vox, w.frame.shape, w.size
         assert vox is not None and shape is not None and size is not None  # above the table, organized, sized
         w.vox = cut_depth_edges(
-            vox, w.frame.points, shape, w.obj_idx, w.settings.depth_edge_rel, size.min_edge_piece_voxels
+            vox,
+            w.frame.points,
+            shape,
+            w.obj_idx,
+            w.settings.depth_edge_rel,
+            size.min_edge_piece_voxels,
+            xyz=w.obj_pts,  # the frame's points at obj_idx, in float64 (_filter, _voxels)
         )
 
 

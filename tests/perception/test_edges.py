@@ -121,9 +121,9 @@ def test55_edge_cut() -> tuple[Any, ...]:
     seen: list[tuple[Any, ...]] = []
     real = edges.cut_depth_edges
 
-    def record(*args: Any) -> Any:
-        seen.append(args)
-        return real(*args)
+    def record(*args: Any, **kwargs: Any) -> Any:
+        seen.append(args)  # positional: what pixel_pieces needs (xyz: those points again)
+        return real(*args, **kwargs)
 
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr("clearcli.perception.segment.cut_depth_edges", record)
