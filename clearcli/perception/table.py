@@ -151,6 +151,19 @@ def ransac_plane(
     usable: np.ndarray | None = None,
     range2: np.ndarray | None = None,
 ) -> tuple[np.ndarray, float]:
+    """`_ransac_fit`'s plane."""
+    n, d, _ = _ransac_fit(points, distance_m, iterations, rng, usable, range2)
+    return n, d
+
+
+def _ransac_fit(
+    points: np.ndarray,
+    distance_m: float,
+    iterations: int,
+    rng: np.random.Generator,
+    usable: np.ndarray | None = None,
+    range2: np.ndarray | None = None,
+) -> tuple[np.ndarray, float, np.ndarray | None]:
     """The plane with the most inliers among random triplets (scored on a subsample),
     refined by least squares on its inliers. Hypotheses are drawn in chunks and the
     search stops once enough were drawn to have hit an all-inlier triplet of the best
@@ -167,7 +180,11 @@ def ransac_plane(
     issue 37). All usable: the same draws as without the mask, bit for bit.
 
     ``range2``: (N,) the points' `squared_range`, when the caller has it (`_refined`
-    reads their largest)."""
+    reads their largest).
+
+    Returns (normal, offset, fitted): ``fitted`` the sorted positions in ``points`` of
+    the rows whose `fit_plane_lsq` the plane is (None: RANSAC's own plane, under 3
+    inliers), for a caller that would fit those rows again (`find_table`)."""
     n_pts = points.shape[0]
     redirect = None
     if usable is not None and not bool(usable.all()):
@@ -218,7 +235,10 @@ def ransac_plane(
     if usable is not None and redirect is not None:
         points = np.compress(usable, points, axis=0)  # rows by a mask: compress is faster
         range2 = None if range2 is None else np.compress(usable, range2)
-    return _refined(points, best_n, best_d, distance_m, range2)
+        n, d, fitted = _refined(points, best_n, best_d, distance_m, range2)
+        return n, d, None if fitted is None else np.flatnonzero(usable)[fitted]
+    n, d, fitted = _refined(points, best_n, best_d, distance_m, range2)
+    return n, d, None if fitted is None else np.flatnonzero(fitted)
 
 
 # `_redirection`'s scrambled order: position i comes at rank (i * a) mod N, with the
@@ -271,7 +291,7 @@ def _redirected(at: np.ndarray, usable_ranks: np.ndarray, usable_at: np.ndarray,
 
 def _refined(
     points: np.ndarray, n: np.ndarray, d: float, distance_m: float, range2: np.ndarray | None = None
-) -> tuple[np.ndarray, float]:
+) -> tuple[np.ndarray, float, np.ndarray | None]:
     """RANSAC's plane (n, d) refined: least squares on the inliers until they no longer
     change, so that the plane is a fixed point of the refit rather than of the draws
     (which points the random indices pick changes when one point more or less survives
@@ -285,14 +305,18 @@ def _refined(
     of it, or an ill-posed scatter), that refit and those after it are SVDs.
 
     ``range2``: the points' `squared_range` when the caller has it (their largest bounds
-    the rounding)."""
+    the rounding).
+
+    Returns (normal, offset, fitted): ``fitted`` (N,) bool, the inliers whose
+    `fit_plane_lsq` the plane is (None: the plane given, under 3 inliers)."""
     # each refit's distances, and their distances from distance_m, in two buffers, in
     # place (the same floats; fresh temporaries cost as much as the arithmetic, issue 39)
     dist, off = np.empty(points.shape[0]), np.empty(points.shape[0])
     np.matmul(points, n, out=dist)
     dist += d
     inl = np.abs(dist, out=dist) <= distance_m
-    fitted: np.ndarray | None = None  # the inliers of the last refit, when it was by moments
+    fitted: np.ndarray | None = None  # the inliers of the last refit
+    by_svd = False  # was it `fit_plane_lsq`'s (or the moments' plane, to be fitted so at the end)
     if range2 is None:
         range2 = squared_range(points)
     r2 = float(range2.max()) if points.shape[0] else 0.0
@@ -314,12 +338,13 @@ def _refined(
                 np.subtract(dist, distance_m, out=off)
                 if bool((np.abs(off, out=off) <= plane[2]).any()):
                     exact = True
+        fitted = inl
         if exact:
-            fitted = None
+            by_svd = True
             n, d = fit_plane_lsq(np.compress(inl, points, axis=0))
             again = np.abs(points @ n + d) <= distance_m
         else:
-            fitted = inl
+            by_svd = False
             again = dist <= distance_m
         if (again == inl).all():
             break
@@ -331,9 +356,9 @@ def _refined(
             s2 = s2 + (moved * sign[:, None]).T @ moved
         count += int(again[changed].sum()) * 2 - changed.size
         inl = again
-    if fitted is not None:
-        return fit_plane_lsq(np.compress(fitted, points, axis=0))
-    return n, d
+    if fitted is not None and not by_svd:
+        n, d = fit_plane_lsq(np.compress(fitted, points, axis=0))
+    return n, d, fitted
 
 
 def _moments_plane(s1: np.ndarray, s2: np.ndarray, count: int, r2: float) -> tuple[np.ndarray, float, float] | None:
@@ -660,6 +685,7 @@ class _Candidate:
     members: np.ndarray  # indices into the sample of the largest connected piece
     area_m2: float
     on_plane: np.ndarray  # bool over the sample: within distance of this plane
+    refit: tuple[np.ndarray, float] | None = None  # `fit_plane_lsq` of the members, when known
 
 
 def _residue(n: np.ndarray, inliers: np.ndarray, candidates: list[_Candidate]) -> bool:
@@ -714,12 +740,17 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
             # drawn over the whole sample, the points of earlier planes redirected to
             # remaining ones (`ransac_plane`'s ``usable``): one point more or less left by
             # an earlier plane changes only the draws that meet it, not every draw after it
-            n, d = ransac_plane(sample, dist, settings.ransac_iterations, rng, remaining, sample_range2)
+            n, d, fitted = _ransac_fit(sample, dist, settings.ransac_iterations, rng, remaining, sample_range2)
+        elif idx.size == sample.shape[0]:
+            # every point remains (the first plane): the sample itself, not a copy of it
+            # taken by index (the same rows)
+            n, d, fitted = _ransac_fit(sample, dist, settings.ransac_iterations, rng, range2=sample_range2)
         else:
             # rows by index: take is faster than a[idx]
-            n, d = ransac_plane(
+            n, d, fitted = _ransac_fit(
                 np.take(sample, idx, axis=0), dist, settings.ransac_iterations, rng, range2=np.take(sample_range2, idx)
             )
+            fitted = None if fitted is None else np.take(idx, fitted)  # positions in the sample
         on_plane = np.abs(sample @ n + d) <= dist
         inl = np.flatnonzero(on_plane & remaining)
         remaining &= ~on_plane
@@ -750,7 +781,12 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
                 )
             )
             continue
-        candidates.append(_Candidate(n, d, inl[comp], area, on_plane))
+        members = inl[comp]
+        # the rows of the plane's own last fit: their least-squares plane is (n, d), the
+        # very SVD `fit_plane_lsq` of the members below would repeat (on the table of
+        # most frames, whose points all lie in one piece: a 25 000-row SVD, issue 39)
+        refit = (n, d) if fitted is not None and np.array_equal(members, fitted) else None
+        candidates.append(_Candidate(n, d, members, area, on_plane, refit))
     if not candidates:
         considered = (
             ", ".join(
@@ -777,7 +813,7 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
     scored: list[tuple[TableFit, int, float]] = []
     for c in candidates:
         members = np.take(sample, c.members, axis=0)  # rows by index: take is several times faster than a[idx]
-        n, d = fit_plane_lsq(members)
+        n, d = fit_plane_lsq(members) if c.refit is None else c.refit
         camera_is_origin = abs(d) >= _MIN_CAMERA_HEIGHT_M
         if camera_is_origin and abs(d) > settings.table_max_distance_m:
             far.append(
