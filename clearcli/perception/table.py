@@ -1048,52 +1048,65 @@ def beyond_the_edge(
     if table_pixels.size == 0:
         return drop, ~drop
     pts = points.reshape(height, width, 3)
+    # the rows of the table's pixels and one more each side (where the image has them):
+    # a jump cuts a table pixel off only from its neighbours, so the pieces are those of
+    # this band alone, the same cells labelled in the same raster order (the rows above a
+    # mOSD table, a sixth of the image, are no longer scanned, issue 39)
+    top = max(int(table_pixels.min()) // width - 1, 0)
+    bottom = min(int(table_pixels.max()) // width + 2, height)
+    rows = bottom - top
+    at = table_pixels - top * width  # the table's pixels, flat in the band
     # depth along the optical axis (NaN where none): a jump in it is a jump in range
     # to within the pixel's angle off the axis, and it costs no square roots (a
     # contiguous copy: the passes below over a strided view cost twice as much)
-    rng = np.ascontiguousarray(pts[..., 2])
-    is_table: np.ndarray = np.zeros(height * width, dtype=bool)  # flat, then (height, width)
-    is_table[table_pixels] = True
-    is_table = is_table.reshape(height, width)
+    band = np.ascontiguousarray(pts[top:bottom, :, 2])
+    # the pieces' cells: table pixels without a jump to a neighbour, flat, then (rows, width)
+    keep: np.ndarray = np.zeros(rows * width, dtype=bool)
+    keep[at] = True
+    keep = keep.reshape(rows, width)
     rel = settings.depth_edge_rel
     # a table pixel with a jump to its right or lower neighbour belongs to no piece: both
-    # sides of a jump are left out, so no 8-neighbour path crosses it
-    cut = np.zeros_like(is_table)
-    # the two directions' differences, limits and jumps in the same three buffers: fresh
-    # frame-sized temporaries cost their pages' first touch as well (issue 39)
-    diff_buf, limit_buf = np.empty(height * width, dtype=rng.dtype), np.empty(height * width, dtype=rng.dtype)
-    jump_buf = np.empty(height * width, dtype=bool)
+    # sides of a jump are left out, so no 8-neighbour path crosses it. The two directions'
+    # differences, limits and verdicts in the same three buffers: fresh frame-sized
+    # temporaries cost their pages' first touch as well (issue 39). Each direction's pairs as two flat, contiguous runs of the band, a pixel and the
+    # one ``step`` after it (along a row: the pair from a row's last pixel to the next
+    # row's first is no pair, and is let through): the same pairs and floats as the 2D
+    # views, whose row-by-row strides cost half as much again
+    size = rows * width
+    flat_depth, flat_keep = band.ravel(), keep.ravel()
+    diff_buf, limit_buf = np.empty(size, dtype=band.dtype), np.empty(size, dtype=band.dtype)
+    smooth_buf = np.empty(size, dtype=bool)
     with np.errstate(invalid="ignore"):
-        for dv, du in ((0, 1), (1, 0)):
-            a = rng[: height - dv, : width - du]
-            b = rng[dv:, du:]
-            size = a.shape[0] * a.shape[1]
-            diff, limit = diff_buf[:size].reshape(a.shape), limit_buf[:size].reshape(a.shape)
-            jump = jump_buf[:size].reshape(a.shape)
-            # ~(|a - b| <= rel min(a, b)) (NaN: a jump), in place: no temporary per operation
+        for step, along_row in ((1, True), (width, False)):
+            if step >= size:
+                continue
+            a, b = flat_depth[:-step], flat_depth[step:]
+            diff, limit, smooth = diff_buf[: size - step], limit_buf[: size - step], smooth_buf[: size - step]
+            # |a - b| <= rel min(a, b) (NaN: a jump), in place: no temporary per operation;
+            # a cell stays when no jump touches it (ANDs of the verdicts: the same cells
+            # as table and not the OR of the jumps, without negating either)
             np.subtract(a, b, out=diff)
             np.abs(diff, out=diff)
             np.minimum(a, b, out=limit)
             limit *= rel
-            np.less_equal(diff, limit, out=jump)
-            np.logical_not(jump, out=jump)
-            cut[: height - dv, : width - du] |= jump
-            cut[dv:, du:] |= jump
-    # the pieces' cells: table and not cut (in place: cut is not read again)
-    np.logical_not(cut, out=cut)
-    cut &= is_table
-    pieces, n = label_8(cut)
+            np.less_equal(diff, limit, out=smooth)
+            if along_row:
+                smooth[width - 1 :: width] = True  # a row's last pixel and the next row's first
+            flat_keep[:-step] &= smooth
+            flat_keep[step:] &= smooth
+    pieces, n = label_8(keep)
     if n < 2:
         return drop, ~drop
     # each table point's piece (0: on a jump): the pieces lie on the table's pixels only, so
     # their sizes are counted over those, not over the whole image
-    piece_of = np.take(pieces.ravel(), table_pixels)
+    piece_of = np.take(pieces.ravel(), at)
     sizes = np.bincount(piece_of, minlength=n + 1)
     sizes[0] = 0
     main = int(sizes.argmax())
     others = [k for k in range(1, n + 1) if k != main and sizes[k] >= _EDGE_MIN_PIECE_PX]
     if not others:
         return drop, ~drop
+    rng = np.ascontiguousarray(pts[..., 2])  # the whole image's depth: the looks may fall anywhere
     camera = _pinhole_of(pts, rng)
     if camera is None:
         return drop, ~drop
