@@ -106,10 +106,39 @@ def _tuple(v: np.ndarray) -> tuple[float, float, float]:
     return (float(v[0]), float(v[1]), float(v[2]))
 
 
+# A matrix-vector product of more entries than OpenBLAS's threshold (9216: 3072 rows of
+# 3) runs on its threads: on a 2-core machine shared with other work the caller's thread
+# spins while the worker waits for a core (a 200 000-point product measured 4 ms of the
+# thread's time and 8 ms of wall clock, against 0.33 ms in blocks on the caller's thread
+# alone, issue 39). `matvec` runs a longer product in blocks of `_MATVEC_ROWS` rows, the
+# last one taking a remainder under `_MATVEC_MIN_ROWS` rows (at most 3063 rows in all).
+_MATVEC_ROWS = 3000
+_MATVEC_MIN_ROWS = 64
+
+
+def matvec(points: np.ndarray, v: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+    """``points @ v`` of (N, 3) ``points`` and a (3,) ``v`` (into ``out`` when given),
+    the same floats: in blocks of rows (a row's product does not depend on the rows
+    around it; checked on every mOSD and uois frame), none of them a single row (NumPy
+    takes a one-row product as a dot product, whose sum can differ in the last bit)."""
+    n = points.shape[0]
+    if points.ndim != 2 or n < _MATVEC_ROWS + _MATVEC_MIN_ROWS:
+        return np.matmul(points, v, out=out)
+    if out is None:
+        out = np.empty(n, dtype=np.result_type(points.dtype, v.dtype))
+    starts = list(range(0, n, _MATVEC_ROWS))
+    if n - starts[-1] < _MATVEC_MIN_ROWS:
+        starts.pop()  # the remainder joins the block before it
+    for start, stop in zip(starts, [*starts[1:], n], strict=True):
+        np.matmul(points[start:stop], v, out=out[start:stop])
+    return out
+
+
 def project(points: np.ndarray, axes: np.ndarray) -> np.ndarray:
     """(N, K) coordinates of points along the K rows of ``axes``. One matrix-vector
-    product per axis: (N, 3) @ (3, K) with a tiny inner size is several times slower."""
-    return np.stack([points @ a for a in axes], axis=1)
+    product per axis (`matvec`): (N, 3) @ (3, K) with a tiny inner size is several times
+    slower."""
+    return np.stack([matvec(points, a) for a in axes], axis=1)
 
 
 def plane_basis(normal: np.ndarray) -> np.ndarray:
@@ -151,6 +180,19 @@ def ransac_plane(
     usable: np.ndarray | None = None,
     range2: np.ndarray | None = None,
 ) -> tuple[np.ndarray, float]:
+    """`_ransac_fit`'s plane."""
+    n, d, _ = _ransac_fit(points, distance_m, iterations, rng, usable, range2)
+    return n, d
+
+
+def _ransac_fit(
+    points: np.ndarray,
+    distance_m: float,
+    iterations: int,
+    rng: np.random.Generator,
+    usable: np.ndarray | None = None,
+    range2: np.ndarray | None = None,
+) -> tuple[np.ndarray, float, np.ndarray | None]:
     """The plane with the most inliers among random triplets (scored on a subsample),
     refined by least squares on its inliers. Hypotheses are drawn in chunks and the
     search stops once enough were drawn to have hit an all-inlier triplet of the best
@@ -167,7 +209,11 @@ def ransac_plane(
     issue 37). All usable: the same draws as without the mask, bit for bit.
 
     ``range2``: (N,) the points' `squared_range`, when the caller has it (`_refined`
-    reads their largest)."""
+    reads their largest).
+
+    Returns (normal, offset, fitted): ``fitted`` the sorted positions in ``points`` of
+    the rows whose `fit_plane_lsq` the plane is (None: RANSAC's own plane, under 3
+    inliers), for a caller that would fit those rows again (`find_table`)."""
     n_pts = points.shape[0]
     redirect = None
     if usable is not None and not bool(usable.all()):
@@ -218,7 +264,10 @@ def ransac_plane(
     if usable is not None and redirect is not None:
         points = np.compress(usable, points, axis=0)  # rows by a mask: compress is faster
         range2 = None if range2 is None else np.compress(usable, range2)
-    return _refined(points, best_n, best_d, distance_m, range2)
+        n, d, fitted = _refined(points, best_n, best_d, distance_m, range2)
+        return n, d, None if fitted is None else np.flatnonzero(usable)[fitted]
+    n, d, fitted = _refined(points, best_n, best_d, distance_m, range2)
+    return n, d, None if fitted is None else np.flatnonzero(fitted)
 
 
 # `_redirection`'s scrambled order: position i comes at rank (i * a) mod N, with the
@@ -271,7 +320,7 @@ def _redirected(at: np.ndarray, usable_ranks: np.ndarray, usable_at: np.ndarray,
 
 def _refined(
     points: np.ndarray, n: np.ndarray, d: float, distance_m: float, range2: np.ndarray | None = None
-) -> tuple[np.ndarray, float]:
+) -> tuple[np.ndarray, float, np.ndarray | None]:
     """RANSAC's plane (n, d) refined: least squares on the inliers until they no longer
     change, so that the plane is a fixed point of the refit rather than of the draws
     (which points the random indices pick changes when one point more or less survives
@@ -285,14 +334,18 @@ def _refined(
     of it, or an ill-posed scatter), that refit and those after it are SVDs.
 
     ``range2``: the points' `squared_range` when the caller has it (their largest bounds
-    the rounding)."""
+    the rounding).
+
+    Returns (normal, offset, fitted): ``fitted`` (N,) bool, the inliers whose
+    `fit_plane_lsq` the plane is (None: the plane given, under 3 inliers)."""
     # each refit's distances, and their distances from distance_m, in two buffers, in
     # place (the same floats; fresh temporaries cost as much as the arithmetic, issue 39)
     dist, off = np.empty(points.shape[0]), np.empty(points.shape[0])
-    np.matmul(points, n, out=dist)
+    matvec(points, n, dist)
     dist += d
     inl = np.abs(dist, out=dist) <= distance_m
-    fitted: np.ndarray | None = None  # the inliers of the last refit, when it was by moments
+    fitted: np.ndarray | None = None  # the inliers of the last refit
+    by_svd = False  # was it `fit_plane_lsq`'s (or the moments' plane, to be fitted so at the end)
     if range2 is None:
         range2 = squared_range(points)
     r2 = float(range2.max()) if points.shape[0] else 0.0
@@ -308,18 +361,19 @@ def _refined(
             if plane is None:
                 exact = True
             else:
-                np.matmul(points, plane[0], out=dist)
+                matvec(points, plane[0], dist)
                 dist += plane[1]
                 np.abs(dist, out=dist)
                 np.subtract(dist, distance_m, out=off)
                 if bool((np.abs(off, out=off) <= plane[2]).any()):
                     exact = True
+        fitted = inl
         if exact:
-            fitted = None
+            by_svd = True
             n, d = fit_plane_lsq(np.compress(inl, points, axis=0))
-            again = np.abs(points @ n + d) <= distance_m
+            again = np.abs(matvec(points, n) + d) <= distance_m
         else:
-            fitted = inl
+            by_svd = False
             again = dist <= distance_m
         if (again == inl).all():
             break
@@ -331,9 +385,9 @@ def _refined(
             s2 = s2 + (moved * sign[:, None]).T @ moved
         count += int(again[changed].sum()) * 2 - changed.size
         inl = again
-    if fitted is not None:
-        return fit_plane_lsq(np.compress(fitted, points, axis=0))
-    return n, d
+    if fitted is not None and not by_svd:
+        n, d = fit_plane_lsq(np.compress(fitted, points, axis=0))
+    return n, d, fitted
 
 
 def _moments_plane(s1: np.ndarray, s2: np.ndarray, count: int, r2: float) -> tuple[np.ndarray, float, float] | None:
@@ -618,27 +672,37 @@ def unique_cells(cells: np.ndarray) -> np.ndarray:
     return np.stack([keys // span + lo[0], keys % span + lo[1]], axis=1)
 
 
-def largest_component(points_2d: np.ndarray, cell_m: float, join_gap_m: float = 0.0) -> tuple[np.ndarray, float]:
-    """Mask of the points in the largest 8-connected piece of the occupied grid cells,
-    together with every other piece within ``join_gap_m`` of it (objects standing on a
-    table and their shadows cut its visible surface into pieces), and their area (m^2)."""
-    # reductions per column: along axis 0 of an (N, 2) array they cost several times more
-    offsets = np.floor((points_2d - np.array([points_2d[:, k].min() for k in (0, 1)])) / cell_m)
+def largest_component(u: np.ndarray, v: np.ndarray, cell_m: float, join_gap_m: float = 0.0) -> tuple[np.ndarray, float]:
+    """Mask of the points (``u``, ``v``: their two in-plane coordinates, (N,) each) in
+    the largest 8-connected piece of the occupied grid cells, together with every other
+    piece within ``join_gap_m`` of it (objects standing on a table and their shadows cut
+    its visible surface into pieces), and their area (m^2).
+
+    Column by column, in place, and the cells as one flat index each: the same floats
+    and cells as (N, 2) rows broadcast against the two minima and indexed by pairs of
+    arrays, at half the cost (the table's 25 000 sample points, issue 39)."""
+    offsets = []
+    for c in (u, v):
+        o = np.subtract(c, c.min())
+        o /= cell_m
+        offsets.append(np.floor(o, out=o))
     # counted in floats: points from absurd intrinsics (a principal point 1e18 px away)
     # span more cells than an int64 holds, and the product of the sides wrapped round
-    sides = np.array([offsets[:, k].max() for k in (0, 1)]) + 1
+    sides = np.array([o.max() for o in offsets]) + 1
     n_cells = float(np.prod(sides))
     if n_cells > 4_000_000:  # a plane reaching far away: coarser cells (a long thin one: by its long side)
         scale = float(np.ceil(max(np.sqrt(n_cells / 4_000_000), float(sides.max()) / 4_000_000)))
-        offsets = np.floor(offsets / scale)
+        offsets = [np.floor(o / scale) for o in offsets]
         cell_m *= scale
-    cells = offsets.astype(np.int64)
-    dims = np.array([cells[:, k].max() for k in (0, 1)]) + 1
-    grid = np.zeros(dims, dtype=bool)
-    grid[cells[:, 0], cells[:, 1]] = True
-    labels, n = label_8(grid)
+    cu, cv = (o.astype(np.int64) for o in offsets)
+    dims = (int(cu.max()) + 1, int(cv.max()) + 1)
+    flat = cu * dims[1]
+    flat += cv
+    grid = np.zeros(dims[0] * dims[1], dtype=bool)
+    grid[flat] = True
+    labels, n = label_8(grid.reshape(dims))
     if n == 0:
-        return np.zeros(points_2d.shape[0], dtype=bool), 0.0
+        return np.zeros(u.shape[0], dtype=bool), 0.0
     sizes = np.bincount(labels.ravel())
     sizes[0] = 0
     best = int(np.argmax(sizes))
@@ -650,7 +714,7 @@ def largest_component(points_2d: np.ndarray, cell_m: float, join_gap_m: float = 
         touched = np.unique(labels[near])
         touched = touched[(touched > 0) & (sizes[touched] >= 4)]  # not specks
         chosen[touched] = True
-    return chosen[labels[cells[:, 0], cells[:, 1]]], float(sizes[chosen].sum()) * cell_m * cell_m
+    return np.take(chosen, np.take(labels.ravel(), flat)), float(sizes[chosen].sum()) * cell_m * cell_m
 
 
 @dataclass
@@ -660,6 +724,10 @@ class _Candidate:
     members: np.ndarray  # indices into the sample of the largest connected piece
     area_m2: float
     on_plane: np.ndarray  # bool over the sample: within distance of this plane
+    refit: tuple[np.ndarray, float] | None = None  # `fit_plane_lsq` of the members, when known
+    # with ``refit``: the coordinates of the plane's inliers along plane_basis(normal)
+    # (two columns) and which of them are the members
+    uv: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
 
 def _residue(n: np.ndarray, inliers: np.ndarray, candidates: list[_Candidate]) -> bool:
@@ -714,28 +782,33 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
             # drawn over the whole sample, the points of earlier planes redirected to
             # remaining ones (`ransac_plane`'s ``usable``): one point more or less left by
             # an earlier plane changes only the draws that meet it, not every draw after it
-            n, d = ransac_plane(sample, dist, settings.ransac_iterations, rng, remaining, sample_range2)
+            n, d, fitted = _ransac_fit(sample, dist, settings.ransac_iterations, rng, remaining, sample_range2)
+        elif idx.size == sample.shape[0]:
+            # every point remains (the first plane): the sample itself, not a copy of it
+            # taken by index (the same rows)
+            n, d, fitted = _ransac_fit(sample, dist, settings.ransac_iterations, rng, range2=sample_range2)
         else:
             # rows by index: take is faster than a[idx]
-            n, d = ransac_plane(
+            n, d, fitted = _ransac_fit(
                 np.take(sample, idx, axis=0), dist, settings.ransac_iterations, rng, range2=np.take(sample_range2, idx)
             )
-        on_plane = np.abs(sample @ n + d) <= dist
+            fitted = None if fitted is None else np.take(idx, fitted)  # positions in the sample
+        on_plane = np.abs(matvec(sample, n) + d) <= dist
         inl = np.flatnonzero(on_plane & remaining)
         remaining &= ~on_plane
         if inl.size < 30:
             continue
         basis = plane_basis(n)
-        comp, area = largest_component(
-            project(np.take(sample, inl, axis=0), basis), settings.table_cell_m, settings.table_join_gap_m
-        )
+        on = np.take(sample, inl, axis=0)  # rows by index: take is faster than a[idx]
+        on_uv = (matvec(on, basis[0]), matvec(on, basis[1]))
+        comp, area = largest_component(*on_uv, settings.table_cell_m, settings.table_join_gap_m)
         if np.count_nonzero(comp) < 3:
             # fewer than 3 points is no plane (points far apart, as an absurd depth scale
             # gives, where a coarsened cell holds one point but a table's area)
             small.append(PlaneVerdict(_tuple(n), float(d), area, 0, False, "its largest piece holds under 3 points"))
             continue
         if area < settings.table_min_area_m2 and residues < settings.plane_candidates:
-            if _residue(n, np.take(sample, inl, axis=0), candidates):
+            if _residue(n, on, candidates):
                 tries -= 1  # the residue of a surface found: not a try (`_RESIDUE_M`)
                 residues += 1
         if area < settings.table_min_area_m2:
@@ -750,7 +823,15 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
                 )
             )
             continue
-        candidates.append(_Candidate(n, d, inl[comp], area, on_plane))
+        piece = inl[comp]
+        # the rows of the plane's own last fit: their least-squares plane is (n, d), the
+        # very SVD `fit_plane_lsq` of the members below would repeat (on the table of
+        # most frames, whose points all lie in one piece: a 25 000-row SVD, issue 39)
+        refit = (n, d) if fitted is not None and np.array_equal(piece, fitted) else None
+        if refit is None:
+            candidates.append(_Candidate(n, d, piece, area, on_plane))
+        else:
+            candidates.append(_Candidate(n, d, piece, area, on_plane, refit, (*on_uv, comp)))
     if not candidates:
         considered = (
             ", ".join(
@@ -776,8 +857,14 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
     far: list[PlaneVerdict] = []
     scored: list[tuple[TableFit, int, float]] = []
     for c in candidates:
-        members = np.take(sample, c.members, axis=0)  # rows by index: take is several times faster than a[idx]
-        n, d = fit_plane_lsq(members)
+        # rows by index: take is several times faster than a[idx]; none taken for the
+        # plane and the hull of a candidate whose fit and coordinates are known
+        members: np.ndarray | None = None
+        if c.refit is None:
+            members = np.take(sample, c.members, axis=0)
+            n, d = fit_plane_lsq(members)
+        else:
+            n, d = c.refit
         camera_is_origin = abs(d) >= _MIN_CAMERA_HEIGHT_M
         if camera_is_origin and abs(d) > settings.table_max_distance_m:
             far.append(
@@ -802,11 +889,20 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
             # below; one hull of the members, not two
             turned_n, turned_d = -n, -d  # what the turn below makes them
             turned_basis = plane_basis(turned_n)
+            members = np.take(sample, c.members, axis=0) if members is None else members
             turned_poly = convex_hull_2d(project(members, turned_basis) - (-turned_d * turned_n) @ turned_basis.T)
             poly = mirrored_hull(turned_poly)
+        elif members is None and c.uv is not None:
+            # the members' coordinates along this very basis (the plane is the RANSAC
+            # plane's own), from the piece's search: the same rows' products
+            u, v, in_piece = c.uv
+            poly = convex_hull_2d(
+                np.stack([np.compress(in_piece, u), np.compress(in_piece, v)], axis=1) - origin @ basis.T
+            )
         else:
+            members = np.take(sample, c.members, axis=0) if members is None else members
             poly = convex_hull_2d(project(members, basis) - origin @ basis.T)
-        h = loose @ n + d
+        h = matvec(loose, n) + d
         # depth noise grows with the square of the range: far off-plane points are
         # noise of the plane itself, not things standing on it
         band = (np.abs(h) > settings.prism_min_height_m + _NOISE_PER_M2 * loose_range2) & (np.abs(h) <= _SCORE_HEIGHT_M)
@@ -822,7 +918,11 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
             # the hull again in the turned plane's axes (unturned, it is the one above)
             basis = plane_basis(n)
             origin = -d * n
-            poly = convex_hull_2d(project(members, basis) - origin @ basis.T) if turned_poly is None else turned_poly
+            if turned_poly is None:
+                members = np.take(sample, c.members, axis=0) if members is None else members
+                poly = convex_hull_2d(project(members, basis) - origin @ basis.T)
+            else:
+                poly = turned_poly
         fit = TableFit(TablePlane(normal=n, offset=float(d)), poly, origin, basis, camera_is_origin)
         # noise lies on both sides of a plane, objects on one: score the difference
         key = (abs(above - below), c.area_m2)
@@ -930,7 +1030,9 @@ class Lift:
 def lift(points: np.ndarray, fit: TableFit, settings: SegmentSettings, range2: np.ndarray | None = None) -> Lift:
     """`Lift` of ``points`` (M, 3) against ``fit`` (``range2``: their `squared_range`,
     when the caller has it)."""
-    h = fit.plane.height_of(points)
+    # fit.plane.height_of(points): its product and sum, the product in blocks (`matvec`)
+    h = matvec(points, fit.plane.normal)
+    h += fit.plane.offset
     # one (M,) scratch array for |h|, the prism's floor and the two projections in turn:
     # each fresh whole-frame temporary costs its pages' first touch too (issue 39)
     scratch = np.abs(h)
@@ -949,7 +1051,7 @@ def lift(points: np.ndarray, fit: TableFit, settings: SegmentSettings, range2: n
     # candidates' entries: a row's product does not depend on the rows around it (the
     # same bits as projecting a copy of the candidates' rows, which cost several times more)
     # (in two columns: the raster reads them so, and stacking them cost as much as the projection)
-    x, y = (np.take(np.matmul(points, a, out=scratch), cand) for a in fit.basis)
+    x, y = (np.take(matvec(points, a, scratch), cand) for a in fit.basis)
     ox, oy = (fit.origin @ fit.basis.T).tolist()
     x -= ox
     y -= oy
@@ -1012,52 +1114,65 @@ def beyond_the_edge(
     if table_pixels.size == 0:
         return drop, ~drop
     pts = points.reshape(height, width, 3)
+    # the rows of the table's pixels and one more each side (where the image has them):
+    # a jump cuts a table pixel off only from its neighbours, so the pieces are those of
+    # this band alone, the same cells labelled in the same raster order (the rows above a
+    # mOSD table, a sixth of the image, are no longer scanned, issue 39)
+    top = max(int(table_pixels.min()) // width - 1, 0)
+    bottom = min(int(table_pixels.max()) // width + 2, height)
+    rows = bottom - top
+    at = table_pixels - top * width  # the table's pixels, flat in the band
     # depth along the optical axis (NaN where none): a jump in it is a jump in range
     # to within the pixel's angle off the axis, and it costs no square roots (a
     # contiguous copy: the passes below over a strided view cost twice as much)
-    rng = np.ascontiguousarray(pts[..., 2])
-    is_table: np.ndarray = np.zeros(height * width, dtype=bool)  # flat, then (height, width)
-    is_table[table_pixels] = True
-    is_table = is_table.reshape(height, width)
+    band = np.ascontiguousarray(pts[top:bottom, :, 2])
+    # the pieces' cells: table pixels without a jump to a neighbour, flat, then (rows, width)
+    keep: np.ndarray = np.zeros(rows * width, dtype=bool)
+    keep[at] = True
+    keep = keep.reshape(rows, width)
     rel = settings.depth_edge_rel
     # a table pixel with a jump to its right or lower neighbour belongs to no piece: both
-    # sides of a jump are left out, so no 8-neighbour path crosses it
-    cut = np.zeros_like(is_table)
-    # the two directions' differences, limits and jumps in the same three buffers: fresh
-    # frame-sized temporaries cost their pages' first touch as well (issue 39)
-    diff_buf, limit_buf = np.empty(height * width, dtype=rng.dtype), np.empty(height * width, dtype=rng.dtype)
-    jump_buf = np.empty(height * width, dtype=bool)
+    # sides of a jump are left out, so no 8-neighbour path crosses it. The two directions'
+    # differences, limits and verdicts in the same three buffers: fresh frame-sized
+    # temporaries cost their pages' first touch as well (issue 39). Each direction's pairs as two flat, contiguous runs of the band, a pixel and the
+    # one ``step`` after it (along a row: the pair from a row's last pixel to the next
+    # row's first is no pair, and is let through): the same pairs and floats as the 2D
+    # views, whose row-by-row strides cost half as much again
+    size = rows * width
+    flat_depth, flat_keep = band.ravel(), keep.ravel()
+    diff_buf, limit_buf = np.empty(size, dtype=band.dtype), np.empty(size, dtype=band.dtype)
+    smooth_buf = np.empty(size, dtype=bool)
     with np.errstate(invalid="ignore"):
-        for dv, du in ((0, 1), (1, 0)):
-            a = rng[: height - dv, : width - du]
-            b = rng[dv:, du:]
-            size = a.shape[0] * a.shape[1]
-            diff, limit = diff_buf[:size].reshape(a.shape), limit_buf[:size].reshape(a.shape)
-            jump = jump_buf[:size].reshape(a.shape)
-            # ~(|a - b| <= rel min(a, b)) (NaN: a jump), in place: no temporary per operation
+        for step, along_row in ((1, True), (width, False)):
+            if step >= size:
+                continue
+            a, b = flat_depth[:-step], flat_depth[step:]
+            diff, limit, smooth = diff_buf[: size - step], limit_buf[: size - step], smooth_buf[: size - step]
+            # |a - b| <= rel min(a, b) (NaN: a jump), in place: no temporary per operation;
+            # a cell stays when no jump touches it (ANDs of the verdicts: the same cells
+            # as table and not the OR of the jumps, without negating either)
             np.subtract(a, b, out=diff)
             np.abs(diff, out=diff)
             np.minimum(a, b, out=limit)
             limit *= rel
-            np.less_equal(diff, limit, out=jump)
-            np.logical_not(jump, out=jump)
-            cut[: height - dv, : width - du] |= jump
-            cut[dv:, du:] |= jump
-    # the pieces' cells: table and not cut (in place: cut is not read again)
-    np.logical_not(cut, out=cut)
-    cut &= is_table
-    pieces, n = label_8(cut)
+            np.less_equal(diff, limit, out=smooth)
+            if along_row:
+                smooth[width - 1 :: width] = True  # a row's last pixel and the next row's first
+            flat_keep[:-step] &= smooth
+            flat_keep[step:] &= smooth
+    pieces, n = label_8(keep)
     if n < 2:
         return drop, ~drop
     # each table point's piece (0: on a jump): the pieces lie on the table's pixels only, so
     # their sizes are counted over those, not over the whole image
-    piece_of = np.take(pieces.ravel(), table_pixels)
+    piece_of = np.take(pieces.ravel(), at)
     sizes = np.bincount(piece_of, minlength=n + 1)
     sizes[0] = 0
     main = int(sizes.argmax())
     others = [k for k in range(1, n + 1) if k != main and sizes[k] >= _EDGE_MIN_PIECE_PX]
     if not others:
         return drop, ~drop
+    rng = np.ascontiguousarray(pts[..., 2])  # the whole image's depth: the looks may fall anywhere
     camera = _pinhole_of(pts, rng)
     if camera is None:
         return drop, ~drop
@@ -1068,7 +1183,7 @@ def beyond_the_edge(
     # rows around it: the same bits as projecting each piece's rows apart), taken per
     # piece in raster order
     on_table = np.take(points.reshape(-1, 3), table_pixels, axis=0).astype(np.float64)  # take: faster than a[idx]
-    table_u, table_v = (on_table @ a for a in basis)
+    table_u, table_v = (matvec(on_table, a) for a in basis)
 
     ou, ov = (origin @ basis.T).tolist()
 
