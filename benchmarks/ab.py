@@ -6,7 +6,7 @@ OLD_TREE and NEW_TREE are checkouts (NEW_TREE defaults to this one). Both are im
 into this process, each with its own `clearcli` modules (swapped in `sys.modules` round
 each call, so the imports made inside functions find their own tree's). On each frame the
 two sides run in turn, ``--runs`` times each, interleaved (old, new, old, new, ...), and
-each step keeps the minimum over the runs. The steps' clocks (perception/clock.py, and
+each step keeps the minimum over the runs. NumPy's BLAS runs one thread, as in `clear`. The steps' clocks (perception/clock.py, and
 resolution.py's) read the thread's CPU time instead of the wall clock: the machine is
 shared, and another process's work does not count in the thread's time.
 
@@ -24,12 +24,19 @@ truth: their object count is clear's, and the per-object fit reads it).
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
 import types
 from pathlib import Path
 
-import numpy as np
+# one BLAS thread, as `clear` itself runs (clearcli/startup.py), before NumPy loads: with
+# OpenBLAS's threads a large product waits for its worker on a busy machine, and the
+# sides' times measured that wait instead of the work `clear` does (stop 57)
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import numpy as np  # noqa: E402
 
 HERE = Path(__file__).resolve().parent.parent
 DATA = HERE.parent / "shared" / "data" / "mosd"
