@@ -169,15 +169,18 @@ def _lab_keys(rgb: np.ndarray) -> np.ndarray:
 def _far_from(rgb: np.ndarray, centre: np.ndarray, threshold: float) -> np.ndarray:
     """(N,) bool: colours whose CIELAB (`lab_of`) is more than ``threshold`` from
     ``centre``: each distinct quantized colour judged once (a table shows a few
-    thousand of the 262144), the same float32 sums as per pixel."""
+    thousand of the 262144), the same float32 sums as per pixel. Each colour's verdict
+    is read per pixel from a table of bools (``seen``'s entries, overwritten: only the
+    used ones are read), not its float32 distance compared pixel by pixel: the same
+    comparison of the same numbers, a gather of bytes and a few thousand comparisons
+    instead of a float per pixel (issue 39: 0.73 -> 0.63 ms a call on a table's 110k pixels)."""
     key = _lab_keys(rgb)
     seen = np.zeros(1 << 18, dtype=bool)
     seen[key] = True
     used = np.flatnonzero(seen)
     diff = _lab_rows(used) - centre.astype(np.float32)
-    d2 = np.zeros(seen.shape[0], dtype=np.float32)
-    d2[used] = np.einsum("ij,ij->i", diff, diff)
-    return np.take(d2, key) > threshold * threshold
+    seen[used] = np.einsum("ij,ij->i", diff, diff) > threshold * threshold
+    return np.take(seen, key)
 
 
 def support_colour(

@@ -286,8 +286,13 @@ def _flat_objects(
     ``objects``: (object, the foot's pixels) each): flat.py; ``support``:
     `support_colour` of ``table_idx`` when the caller has it."""
     assert frame.colors is not None and frame.shape is not None  # an organized frame's, with usable colour
+    # the points above the table that no object kept: np.setdiff1d(obj_idx, the objects'
+    # indices, assume_unique=True) (obj_idx's own order), by a mask of the frame's pixels
+    # instead of a sort of both (issue 39: 0.59 -> 0.18 ms on a cluttered table's 95k)
     taken = np.concatenate([o.indices for o in objects]) if objects else np.zeros(0, dtype=np.int64)
-    loose = np.setdiff1d(obj_idx, taken, assume_unique=True)
+    is_taken = np.zeros(frame.n_points, dtype=bool)
+    is_taken[taken] = True
+    loose = np.compress(~np.take(is_taken, obj_idx), obj_idx)
     cell = size.voxel_m
 
     def area(pixels: np.ndarray) -> float:
@@ -518,7 +523,10 @@ def _objects(w: _Work) -> None:
     kept = np.flatnonzero(ok)
     kept = kept[np.argsort(-seg_points[kept], kind="stable")]  # largest first
     order = by_label(seg_of_point, n_seg)  # a stable argsort (by radix: 100k points on a cluttered table)
-    bounds = np.searchsorted(seg_of_point[order], np.arange(n_seg + 1))
+    # where each segment's points start in ``order``: the counts' running sum (what a
+    # binary search of the sorted labels gave, without gathering them: issue 39, 0.12 ms
+    # of a cluttered table's 95k points)
+    bounds = np.concatenate([[0], np.cumsum(seg_points)])
     rests = settings.prism_min_height_m + settings.plane_distance_m
     # the points' squared ranges from the table's step (einsum's sums are the same per row
     # on a part of the rows as on all of them)
@@ -532,7 +540,7 @@ def _objects(w: _Work) -> None:
         if fit.camera_is_origin:
             r2 = np.take(obj_range2, members) if obj_range2 is not None else squared_range(p)
             noise = settings.prism_noise_per_m2 * float(np.min(r2))
-        found.append((w.obj_idx[members], p, rests + noise))
+        found.append((np.take(w.obj_idx, members), p, rests + noise))
     w.objects.extend(make_objects(found, fit.plane))
 
 
