@@ -263,27 +263,6 @@ def test_refits_by_moments_give_the_svd_refits_plane_bit_for_bit(monkeypatch: py
     assert len(calls) == 1
 
 
-def test_matvec_is_the_products_floats() -> None:
-    """matvec (blocks of rows, none of one row) gives points @ v to the bit: sizes round
-    the block boundaries (a remainder of one row and of just under and over the one
-    merged into the block before), float32 points, and into a given array."""
-    from clearcli.perception.table import _MATVEC_MIN_ROWS, _MATVEC_ROWS, matvec
-
-    gen = np.random.default_rng(3)
-    v = gen.normal(size=3)
-    v /= np.linalg.norm(v)
-    sizes = [0, 1, 2, _MATVEC_ROWS, _MATVEC_ROWS + _MATVEC_MIN_ROWS - 1, _MATVEC_ROWS + _MATVEC_MIN_ROWS]
-    sizes += [2 * _MATVEC_ROWS + 1, 5 * _MATVEC_ROWS + _MATVEC_MIN_ROWS, 70001]
-    for n in sizes:
-        points = gen.normal(scale=2.0, size=(n, 3))
-        assert np.array_equal(matvec(points, v), points @ v)
-        single = points.astype(np.float32)
-        got = matvec(single, v)
-        assert got.dtype == (single @ v).dtype and np.array_equal(got, single @ v)
-        out = np.empty(n)
-        assert matvec(points, v, out) is out and np.array_equal(out, points @ v)
-
-
 def test_column_sums_are_the_reductions_floats() -> None:
     """column_sums (einsum) gives sum(axis=0) to the bit, signs of zero included (a
     column of -0.0, one all zero, a single row), and a mean over the count is mean(axis=0)."""
