@@ -106,39 +106,10 @@ def _tuple(v: np.ndarray) -> tuple[float, float, float]:
     return (float(v[0]), float(v[1]), float(v[2]))
 
 
-# A matrix-vector product of more entries than OpenBLAS's threshold (9216: 3072 rows of
-# 3) runs on its threads: on a 2-core machine shared with other work the caller's thread
-# spins while the worker waits for a core (a 200 000-point product measured 4 ms of the
-# thread's time and 8 ms of wall clock, against 0.33 ms in blocks on the caller's thread
-# alone, issue 39). `matvec` runs a longer product in blocks of `_MATVEC_ROWS` rows, the
-# last one taking a remainder under `_MATVEC_MIN_ROWS` rows (at most 3063 rows in all).
-_MATVEC_ROWS = 3000
-_MATVEC_MIN_ROWS = 64
-
-
-def matvec(points: np.ndarray, v: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
-    """``points @ v`` of (N, 3) ``points`` and a (3,) ``v`` (into ``out`` when given),
-    the same floats: in blocks of rows (a row's product does not depend on the rows
-    around it; checked on every mOSD and uois frame), none of them a single row (NumPy
-    takes a one-row product as a dot product, whose sum can differ in the last bit)."""
-    n = points.shape[0]
-    if points.ndim != 2 or n < _MATVEC_ROWS + _MATVEC_MIN_ROWS:
-        return np.matmul(points, v, out=out)
-    if out is None:
-        out = np.empty(n, dtype=np.result_type(points.dtype, v.dtype))
-    starts = list(range(0, n, _MATVEC_ROWS))
-    if n - starts[-1] < _MATVEC_MIN_ROWS:
-        starts.pop()  # the remainder joins the block before it
-    for start, stop in zip(starts, [*starts[1:], n], strict=True):
-        np.matmul(points[start:stop], v, out=out[start:stop])
-    return out
-
-
 def project(points: np.ndarray, axes: np.ndarray) -> np.ndarray:
     """(N, K) coordinates of points along the K rows of ``axes``. One matrix-vector
-    product per axis (`matvec`): (N, 3) @ (3, K) with a tiny inner size is several times
-    slower."""
-    return np.stack([matvec(points, a) for a in axes], axis=1)
+    product per axis: (N, 3) @ (3, K) with a tiny inner size is several times slower."""
+    return np.stack([points @ a for a in axes], axis=1)
 
 
 def plane_basis(normal: np.ndarray) -> np.ndarray:
@@ -341,7 +312,7 @@ def _refined(
     # each refit's distances, and their distances from distance_m, in two buffers, in
     # place (the same floats; fresh temporaries cost as much as the arithmetic, issue 39)
     dist, off = np.empty(points.shape[0]), np.empty(points.shape[0])
-    matvec(points, n, dist)
+    np.matmul(points, n, out=dist)
     dist += d
     inl = np.abs(dist, out=dist) <= distance_m
     fitted: np.ndarray | None = None  # the inliers of the last refit
@@ -361,7 +332,7 @@ def _refined(
             if plane is None:
                 exact = True
             else:
-                matvec(points, plane[0], dist)
+                np.matmul(points, plane[0], out=dist)
                 dist += plane[1]
                 np.abs(dist, out=dist)
                 np.subtract(dist, distance_m, out=off)
@@ -371,7 +342,7 @@ def _refined(
         if exact:
             by_svd = True
             n, d = fit_plane_lsq(np.compress(inl, points, axis=0))
-            again = np.abs(matvec(points, n) + d) <= distance_m
+            again = np.abs(points @ n + d) <= distance_m
         else:
             by_svd = False
             again = dist <= distance_m
@@ -793,14 +764,14 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
                 np.take(sample, idx, axis=0), dist, settings.ransac_iterations, rng, range2=np.take(sample_range2, idx)
             )
             fitted = None if fitted is None else np.take(idx, fitted)  # positions in the sample
-        on_plane = np.abs(matvec(sample, n) + d) <= dist
+        on_plane = np.abs(sample @ n + d) <= dist
         inl = np.flatnonzero(on_plane & remaining)
         remaining &= ~on_plane
         if inl.size < 30:
             continue
         basis = plane_basis(n)
         on = np.take(sample, inl, axis=0)  # rows by index: take is faster than a[idx]
-        on_uv = (matvec(on, basis[0]), matvec(on, basis[1]))
+        on_uv = (on @ basis[0], on @ basis[1])
         comp, area = largest_component(*on_uv, settings.table_cell_m, settings.table_join_gap_m)
         if np.count_nonzero(comp) < 3:
             # fewer than 3 points is no plane (points far apart, as an absurd depth scale
@@ -902,7 +873,7 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
         else:
             members = np.take(sample, c.members, axis=0) if members is None else members
             poly = convex_hull_2d(project(members, basis) - origin @ basis.T)
-        h = matvec(loose, n) + d
+        h = loose @ n + d
         # depth noise grows with the square of the range: far off-plane points are
         # noise of the plane itself, not things standing on it
         band = (np.abs(h) > settings.prism_min_height_m + _NOISE_PER_M2 * loose_range2) & (np.abs(h) <= _SCORE_HEIGHT_M)
@@ -1030,9 +1001,7 @@ class Lift:
 def lift(points: np.ndarray, fit: TableFit, settings: SegmentSettings, range2: np.ndarray | None = None) -> Lift:
     """`Lift` of ``points`` (M, 3) against ``fit`` (``range2``: their `squared_range`,
     when the caller has it)."""
-    # fit.plane.height_of(points): its product and sum, the product in blocks (`matvec`)
-    h = matvec(points, fit.plane.normal)
-    h += fit.plane.offset
+    h = fit.plane.height_of(points)
     # one (M,) scratch array for |h|, the prism's floor and the two projections in turn:
     # each fresh whole-frame temporary costs its pages' first touch too (issue 39)
     scratch = np.abs(h)
@@ -1051,7 +1020,7 @@ def lift(points: np.ndarray, fit: TableFit, settings: SegmentSettings, range2: n
     # candidates' entries: a row's product does not depend on the rows around it (the
     # same bits as projecting a copy of the candidates' rows, which cost several times more)
     # (in two columns: the raster reads them so, and stacking them cost as much as the projection)
-    x, y = (np.take(matvec(points, a, scratch), cand) for a in fit.basis)
+    x, y = (np.take(np.matmul(points, a, out=scratch), cand) for a in fit.basis)
     ox, oy = (fit.origin @ fit.basis.T).tolist()
     x -= ox
     y -= oy
@@ -1183,7 +1152,7 @@ def beyond_the_edge(
     # rows around it: the same bits as projecting each piece's rows apart), taken per
     # piece in raster order
     on_table = np.take(points.reshape(-1, 3), table_pixels, axis=0).astype(np.float64)  # take: faster than a[idx]
-    table_u, table_v = (matvec(on_table, a) for a in basis)
+    table_u, table_v = (on_table @ a for a in basis)
 
     ou, ov = (origin @ basis.T).tolist()
 
