@@ -119,3 +119,37 @@ def test_points_beyond_float32_squares_have_no_neighbour_and_no_warning() -> Non
         warnings.simplefilter("error")
         kept = depth_radius_mask(grid.reshape(-1, 3), (4, 5), 0.01, 2)
     assert not kept[:5].any() and kept[5:].all()
+
+
+def test_neighbour_counts_on_the_box_of_finite_pixels_as_on_the_whole_image() -> None:
+    """The counts run only over the box of the pixels with a finite depth (rows and
+    columns without one have no neighbour): NaN borders of every width, a box one pixel
+    wide or tall, and no finite pixel at all give what the whole image gives."""
+    from clearcli.perception.filters import _organized_neighbor_counts
+
+    gen = np.random.default_rng(11)
+    h, w = 31, 23
+    v, u = np.mgrid[0:h, 0:w]
+    z = 0.85 + 0.002 * u + gen.normal(0, 0.003, size=(h, w))
+    base = np.stack([(u - w / 2) * z / 500, (v - h / 2) * z / 500, z], axis=-1).astype(np.float32)
+    boxes = [
+        (slice(5, h - 3), slice(4, w)),  # NaN rows above and below, columns on the left
+        (slice(0, h), slice(7, 8)),  # one column
+        (slice(12, 13), slice(0, w)),  # one row
+        (slice(9, 11), slice(w - 2, w)),  # a 2 x 2 corner piece
+        (slice(0, 0), slice(0, 0)),  # nothing finite
+    ]
+    for rows, cols in boxes:
+        grid = np.full_like(base, np.nan)
+        grid[rows, cols] = base[rows, cols]
+        pts = grid.reshape(-1, 3)
+        want = _counts_by_einsum(pts, (h, w), 0.01)
+        got = _organized_neighbor_counts(pts, (h, w), 0.01)
+        assert got.dtype == want.dtype and np.array_equal(got, want), (rows, cols)
+    # a box whose every pixel is finite but one column's: its neighbours still count
+    grid = base.copy()
+    grid[:, 3] = np.nan
+    assert np.array_equal(
+        _organized_neighbor_counts(grid.reshape(-1, 3), (h, w), 0.01),
+        _counts_by_einsum(grid.reshape(-1, 3), (h, w), 0.01),
+    )
