@@ -174,3 +174,57 @@ def test_push_length_is_capped() -> None:
     _, obj = one_box(Box((0.0, 0.0), BOX), cfg)
     assert obj.pushes["dir1"].push_length_m == pytest.approx(0.6)
     assert obj.pushes["dir3"].push_length_m == pytest.approx(0.5, abs=0.04)
+
+
+# ------------------------------------------------------------------------------ push poses
+def _push_sequence_one_by_one(
+    x: np.ndarray, start: np.ndarray, up_approach: np.ndarray, translations: np.ndarray, n: int
+) -> tuple[tuple[np.ndarray, ...], tuple[np.ndarray, ...]]:
+    """A push's two candidates built pose by pose, as before they were built together:
+    rotation columns x, z cross x, z (z down), then the half turn's -x, z cross -x, z."""
+    from clearcli.transforms import cross3
+
+    down = -np.array([0.0, 0.0, 1.0])
+
+    def pose(xx: np.ndarray) -> np.ndarray:
+        T = np.eye(4)
+        T[:3, 0], T[:3, 1], T[:3, 2], T[:3, 3] = xx, cross3(down, xx), down, start
+        return T
+
+    T, T_turned = pose(x), pose(-x)
+    seq = np.repeat(T[None], n + 3, axis=0)
+    seq[0, :3, 3] += up_approach
+    seq[2:-1, :3, 3] += translations
+    seq[-1, :3, 3] += translations[-1] + up_approach
+    turned = seq.copy()
+    turned[:, :3, :3] = T_turned[:3, :3]
+    return tuple(seq), tuple(turned)
+
+
+def test_push_variants_built_together_are_those_built_one_by_one() -> None:
+    """`_push_sequences` (an object's variants of one direction at once) gives each
+    variant's poses bit for bit as building it alone does, signs of zero included."""
+    from clearcli.geometry.poses import _push_sequence, _push_sequences
+
+    gen = np.random.default_rng(8)
+    up_approach = np.array([0.0, 0.0, 0.05])
+    for n in (1, 3, 7):
+        angles = gen.uniform(-np.pi, np.pi, size=6)
+        xs = np.column_stack([np.cos(angles), np.sin(angles), np.zeros(6)])
+        xs[0] = (1.0, 0.0, 0.0)  # axis-aligned: products that come out zero
+        xs[1] = (0.0, -1.0, 0.0)
+        starts = gen.uniform(-0.5, 0.5, size=(6, 3))
+        d = xs[2]
+        translations = (0.04 * np.arange(1, n + 1) / n)[:, None] * d[None, :]
+        together = _push_sequences(xs, starts, up_approach, translations, n)
+        assert len(together) == 6
+        for k in range(6):
+            want = _push_sequence_one_by_one(xs[k], starts[k], up_approach, translations, n)
+            for got_seq, want_seq in (
+                (together[k], want),
+                (_push_sequence(xs[k], starts[k], up_approach, translations, n), want),
+            ):
+                for got_half, want_half in zip(got_seq, want_seq, strict=True):
+                    assert len(got_half) == n + 3
+                    for got_T, want_T in zip(got_half, want_half, strict=True):
+                        assert got_T.tobytes() == want_T.tobytes()

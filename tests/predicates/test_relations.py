@@ -287,3 +287,66 @@ def test_least_blocked_option_keeps_its_facts_and_gets_the_others_as_ik_fallback
     assert chosen.candidates == ("o0a", "o0b")
     chosen = _with_fallbacks(options[:2], [(0, 1), (1, 1)])
     assert chosen.candidates == ("o0a", "o0b", "o1a", "o1b")
+
+
+def _least_blocked_one_push_at_a_time(objects, pushes, gripper, exclude):  # type: ignore[no-untyped-def]
+    """relations.least_blocked_pushes as it was: one `_gripper_hits` call per push."""
+    from clearcli.predicates import relations as R
+
+    allowed = R._allowed(len(objects), exclude)
+    out = []
+    for b, by_dir in enumerate(pushes):
+        chosen = {}
+        for name, push in by_dir.items():
+            options = (dataclasses.replace(push, alternatives=()), *push.alternatives)
+            if len(options) > 1:
+                poses = np.stack([p.T_start for p in options])
+                rows = np.repeat(allowed[b : b + 1], len(options), axis=0)
+                chosen[name] = R._with_fallbacks(options, R._gripper_hits(gripper, True, poses, objects, rows))
+            else:
+                chosen[name] = options[0]
+        out.append(chosen)
+    return out
+
+
+def test_pushes_judged_together_choose_as_one_push_at_a_time() -> None:
+    """least_blocked_pushes meets every push's options with the other objects in one
+    query: each push keeps the option (and fallbacks) a query of its own chose, on a
+    tight row of boxes where neighbours block some yaws and contact points."""
+    from clearcli.geometry.gripper import gripper_model
+    from clearcli.geometry.models import TableFrame, build_from_columns, object_columns
+    from clearcli.geometry.poses import push_geometry
+    from clearcli.predicates.relations import least_blocked_pushes
+    from clearcli.sim.camera import render
+    from clearcli.sim.truth import truth_segment
+
+    settings = Settings()
+    # a short box between two tall ones, each 2 cm off along x and 5 cm aside: beside a
+    # tall neighbour one yaw of the gripper fits where the other does not
+    world = S.make_scene(
+        "row",
+        [
+            S.Box(0, 0.06, 0.06, 0.10, x_m=0.0, y_m=0.0),
+            S.Box(1, 0.06, 0.06, 0.20, x_m=0.08, y_m=0.05),
+            S.Box(2, 0.06, 0.06, 0.20, x_m=-0.08, y_m=-0.05),
+        ],
+    )
+    frame = render(world, seed=2)
+    seg = truth_segment(frame)
+    tf = TableFrame.from_plane(seg.table)
+    cols = object_columns(frame.points, [o.indices for o in seg.objects], tf, settings.predicates.model_cell_m)
+    objects = [build_from_columns(c, k, settings.predicates) for k, c in enumerate(cols) if c is not None]
+    gripper = gripper_model(settings.gripper)
+    pushes = [push_geometry(o, gripper, settings.push) for o in objects]
+    for exclude in (set(), {(0, 1), (1, 0)}):
+        got = least_blocked_pushes(objects, pushes, gripper, exclude)
+        want = _least_blocked_one_push_at_a_time(objects, pushes, gripper, exclude)
+        assert len(got) == len(want) == 3
+        moved = 0
+        for b, (g, w) in enumerate(zip(got, want, strict=True)):
+            assert list(g) == list(w)
+            for name in g:
+                g_starts = [seq[1].tobytes() for seq in g[name].candidates]
+                assert g_starts == [seq[1].tobytes() for seq in w[name].candidates]
+                moved += g[name].candidates[0][1].tobytes() != pushes[b][name].candidates[0][1].tobytes()
+        assert moved > 0  # some push took another option than its first: the neighbours count
