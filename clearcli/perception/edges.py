@@ -33,6 +33,7 @@ import dataclasses
 import numpy as np
 
 from clearcli.perception.graph import components
+from clearcli.perception.raster import flat_step
 from clearcli.perception.supervoxels import VoxelCloud
 
 # 4 of the 8 neighbour offsets (row, column): each undirected pixel pair found once; the
@@ -80,9 +81,9 @@ def pixel_pieces(
     # width + 1), over the flat images: one run over contiguous memory per pass, where
     # (rows, columns) views went a row at a time and boolean indexing of a 2-D view is
     # slow; with the buffers below and the division, pixel_pieces 142 -> 117 ms over
-    # mOSD's 50 and the 9 RealSense frames (issue 39). A step of 1 or width + 1 from the
-    # last column, or of width - 1 from the first, wraps to the wrong row: those pairs
-    # are struck out, and the pairs left come in the (row, column) order of the views.
+    # mOSD's 50 and the 9 RealSense frames (issue 39). The pairs that wrap to the wrong
+    # row (raster.flat_step) are struck out, and the pairs left come in the (row, column)
+    # order of the views.
     def near(step: int, wrap_col: int) -> np.ndarray:
         """(max(0, n_pixels - step),) bool: the pixel and the one ``step`` after it are
         both in the set with near ranges (NaN compares False), False for the pixels of
@@ -101,14 +102,14 @@ def pixel_pieces(
     # raster order: a pixel joined to the one before it in its row is the point before
     # (never the first of a row: the step from the row before's last column wraps)
     joined_img = np.zeros(n_pixels, dtype=bool)
-    joined_img[1:] = near(1, width - 1)
+    joined_img[1:] = near(*flat_step(_PIXEL_OFFSETS[0], width))
     start = ~np.take(joined_img, at)
     start[0] = True  # the first point has none before it
     run = np.cumsum(start) - 1
     runs = np.zeros(n_pixels, dtype=np.int64)  # off the set: never read (near is False)
     runs[at] = run
     ra_parts, rb_parts = [], []
-    for step, wrap_col in ((width, -1), (width + 1, width - 1), (width - 1, 0)):  # _PIXEL_OFFSETS[1:]
+    for step, wrap_col in (flat_step(offset, width) for offset in _PIXEL_OFFSETS[1:]):
         hit = near(step, wrap_col)
         n = hit.shape[0]
         # a pair whose two pixels are each joined to the one before in their row, where

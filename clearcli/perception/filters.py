@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from clearcli.errors import SettingsError
+from clearcli.perception.raster import flat_step
 from clearcli.settings.segment import SegmentSettings
 
 
@@ -67,10 +68,9 @@ def _organized_neighbor_counts(points: np.ndarray, shape: tuple[int, int], radiu
     # Each offset as one step along the block's pixels in row order (1, w - 1, w, w + 1):
     # one run over contiguous memory per pass, where (rows, columns) views went a row at
     # a time: the counts 304 -> 233 ms over mOSD's 50 and the 9 RealSense frames, the
-    # filter step 382 -> 326 ms over mOSD's 50 (issue 39). A step of 1 or w + 1 from the
-    # last column, or of w - 1 from the first, wraps to the wrong row: those pairs' hits
-    # are struck out. (step, the column whose pairs wrap; -1 none)
-    steps = ((1, w - 1), (w - 1, 0), (w, -1), (w + 1, w - 1))
+    # filter step 382 -> 326 ms over mOSD's 50 (issue 39). The pairs that wrap to the
+    # wrong row (raster.flat_step) have their hits struck out.
+    steps = [flat_step(offset, w) for offset in ((0, 1), (1, -1), (1, 0), (1, 1))]
     # A point beyond 1e19 m (absurd intrinsics: a principal point at 1e30 pixels) squares
     # to inf, and inf - inf is NaN: such a point has no neighbour, silently (NaN compares False)
     with np.errstate(over="ignore", invalid="ignore"):

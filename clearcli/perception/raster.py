@@ -22,6 +22,17 @@ import numpy as np
 _SQUARE = np.ones((3, 3), dtype=bool)  # 8-connectivity
 
 
+def flat_step(offset: tuple[int, int], width: int) -> tuple[int, int]:
+    """A pixel offset (rows down >= 0, columns right) as one step along a raster's flat
+    pixels of ``width`` columns, and the column whose pixels that step carries to the
+    wrong row (-1: none): a step right wraps from the last column to the next row's
+    first, a step down-left from the first column to the row's own last. A pass over
+    the flat image pairs every pixel with the one a step on, in one contiguous run;
+    the pairs from that column are struck out (filters.py, edges.py)."""
+    rows, cols = offset
+    return rows * width + cols, (width - 1 if cols > 0 else 0 if cols < 0 else -1)
+
+
 def _ndimage_c() -> tuple[Any, Any] | None:
     """(scipy.ndimage._ni_label, scipy.ndimage._nd_image), or None if SciPy moved them.
     `import a.b.c` binds the submodule itself: no attribute of the deferred package is

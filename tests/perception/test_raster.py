@@ -122,3 +122,18 @@ def test_dilate_square_reaches_exactly_steps_cells() -> None:
     assert np.flatnonzero(got[0]).tolist() == list(range(15, 26))
     # and the input is left alone
     assert int(row.sum()) == 1
+
+
+def test_flat_step_of_each_offset_by_hand() -> None:
+    """On a raster 5 columns wide: right is 1 on (wrapping from column 4), down 5 (never
+    wraps), down-right 6 (wrapping from column 4), down-left 4 (wrapping from column 0)."""
+    from clearcli.perception.raster import flat_step
+
+    assert flat_step((0, 1), 5) == (1, 4)
+    assert flat_step((1, 0), 5) == (5, -1)
+    assert flat_step((1, 1), 5) == (6, 4)
+    assert flat_step((1, -1), 5) == (4, 0)
+    # what wraps really lands in another row: pixel 4 (row 0, column 4) a step right is
+    # pixel 5 (row 1, column 0); pixel 5 (row 1, column 0) down-left is pixel 9 (row 1)
+    assert divmod(4 + flat_step((0, 1), 5)[0], 5) == (1, 0)
+    assert divmod(5 + flat_step((1, -1), 5)[0], 5) == (1, 4)
