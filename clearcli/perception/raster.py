@@ -28,7 +28,8 @@ def flat_step(offset: tuple[int, int], width: int) -> tuple[int, int]:
     wrong row (-1: none): a step right wraps from the last column to the next row's
     first, a step down-left from the first column to the row's own last. A pass over
     the flat image pairs every pixel with the one a step on, in one contiguous run;
-    the pairs from that column are struck out (filters.py, edges.py)."""
+    the pairs from that column are struck out, or let through (filters.py, edges.py,
+    table.py `beyond_the_edge`)."""
     rows, cols = offset
     return rows * width + cols, (width - 1 if cols > 0 else 0 if cols < 0 else -1)
 

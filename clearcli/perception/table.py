@@ -18,7 +18,7 @@ from functools import lru_cache
 import numpy as np
 
 from clearcli.errors import SceneError
-from clearcli.perception.raster import dilate_square, label_8
+from clearcli.perception.raster import dilate_square, flat_step, label_8
 from clearcli.perception.support import Surface, choose, standing_on
 from clearcli.perception.types import PlaneVerdict, TablePlane
 from clearcli.settings.segment import SegmentSettings
@@ -1103,16 +1103,17 @@ def beyond_the_edge(
     # a table pixel with a jump to its right or lower neighbour belongs to no piece: both
     # sides of a jump are left out, so no 8-neighbour path crosses it. The two directions'
     # differences, limits and verdicts in the same three buffers: fresh frame-sized
-    # temporaries cost their pages' first touch as well (issue 39). Each direction's pairs as two flat, contiguous runs of the band, a pixel and the
-    # one ``step`` after it (along a row: the pair from a row's last pixel to the next
-    # row's first is no pair, and is let through): the same pairs and floats as the 2D
-    # views, whose row-by-row strides cost half as much again
+    # temporaries cost their pages' first touch as well (issue 39). Each direction's
+    # pairs as two flat, contiguous runs of the band, a pixel and the one a step after it
+    # (raster.flat_step; a pair that wraps to the next row is no pair, and is let
+    # through): the same pairs and floats as the 2D views, whose row-by-row strides cost
+    # half as much again
     size = rows * width
     flat_depth, flat_keep = band.ravel(), keep.ravel()
     diff_buf, limit_buf = np.empty(size, dtype=band.dtype), np.empty(size, dtype=band.dtype)
     smooth_buf = np.empty(size, dtype=bool)
     with np.errstate(invalid="ignore"):
-        for step, along_row in ((1, True), (width, False)):
+        for step, wrap_col in (flat_step(offset, width) for offset in ((0, 1), (1, 0))):
             if step >= size:
                 continue
             a, b = flat_depth[:-step], flat_depth[step:]
@@ -1125,8 +1126,8 @@ def beyond_the_edge(
             np.minimum(a, b, out=limit)
             limit *= rel
             np.less_equal(diff, limit, out=smooth)
-            if along_row:
-                smooth[width - 1 :: width] = True  # a row's last pixel and the next row's first
+            if wrap_col >= 0:
+                smooth[wrap_col::width] = True  # a row's last pixel and the next row's first
             flat_keep[:-step] &= smooth
             flat_keep[step:] &= smooth
     pieces, n = label_8(keep)
