@@ -318,6 +318,7 @@ def least_blocked_pushes(
     groups: list[tuple[int, str, tuple[PushGeometry, ...], int]] = []  # object, direction, options, first pose
     starts: list[np.ndarray] = []
     rows: list[int] = []  # the object whose push each pose starts
+    group_of: list[int] = []  # the group each pose is an option of
     for b, by_dir in enumerate(pushes):
         for name, push in by_dir.items():
             options = (dataclasses.replace(push, alternatives=()), *push.alternatives)
@@ -325,15 +326,15 @@ def least_blocked_pushes(
             if len(options) > 1:
                 starts.extend(p.T_start for p in options)
                 rows.extend([b] * len(options))
-    hits_of: dict[int, list[tuple[int, int]]] = {}  # by the group's first pose
+                group_of.extend([len(groups) - 1] * len(options))
+    hits_of: list[list[tuple[int, int]]] = [[] for _ in groups]  # (option, object) per group
     if starts:
-        firsts = np.array([g[3] for g in groups if len(g[2]) > 1])
         for p, i in _gripper_hits(gripper, True, np.stack(starts), objects, allowed[rows]):
-            first = int(firsts[np.searchsorted(firsts, p, side="right") - 1])
-            hits_of.setdefault(first, []).append((p - first, i))
+            g = group_of[p]
+            hits_of[g].append((p - groups[g][3], i))
     out: list[dict[str, PushGeometry]] = [{} for _ in pushes]
-    for b, name, options, first in groups:
-        out[b][name] = _with_fallbacks(options, hits_of.get(first, [])) if len(options) > 1 else options[0]
+    for (b, name, options, _), hits in zip(groups, hits_of, strict=True):
+        out[b][name] = _with_fallbacks(options, hits) if len(options) > 1 else options[0]
     return out
 
 
