@@ -194,6 +194,14 @@ class _OnFirstUse:
         self._console().__exit__(*exc)
 
 
+def is_pipe(target: Console) -> bool:
+    """Whether ``target`` (`stdout` or `stderr`) is not built yet and rich would take its
+    stream for a pipe or a file: nothing drawn for a terminal (a progress bar) is shown
+    there, and the caller can skip importing rich for it (a batch's --json run, issue 39).
+    A built console, or another one: False (ask the console)."""
+    return isinstance(target, _OnFirstUse) and target._plain_file() is not None
+
+
 def _isatty(file: Any) -> bool:
     """rich's test (Console.is_terminal, after the environment's overrides): a stream
     without isatty, or one that fails it, is not a terminal."""

@@ -29,14 +29,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
-from rich.table import Table
-
 from clearcli import interrupts, tasks
 from clearcli.batch import cluster
 from clearcli.batch.pool import WorkerPool
 from clearcli.batch.work import MARK, RESULT_CODES, Job, run_job
-from clearcli.console import stderr, stdout
+from clearcli.console import is_pipe, print_table, stderr, stdout
 from clearcli.errors import (
     EXIT_BATCH_FAILED,
     EXIT_INTERRUPTED,
@@ -363,15 +360,7 @@ def run_batch(
 
     backend = "in-process"
     interrupted = terminated = False
-    progress = Progress(
-        TextColumn(f"{req.command}"),
-        BarColumn(),
-        MofNCompleteColumn(),
-        TimeRemainingColumn(),
-        console=stderr,
-        transient=True,
-        disable=not stderr.is_terminal,
-    )
+    progress = _progress(req.command)
     try:
         interrupts.release()  # a Ctrl-C/SIGTERM held since start-up stops here, with a summary
         cfg = getattr(req.request, "settings", None)
@@ -546,11 +535,46 @@ def run_command_batch(
     return run_batch(req, on_line=on_line, extra_summary=extra_summary, render=render)
 
 
+class _NoProgress:
+    """What run_batch asks of rich's Progress, doing nothing: the bar where stderr is a
+    pipe or a file, where rich would draw none."""
+
+    def __enter__(self) -> _NoProgress:
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        return None
+
+    def add_task(self, description: str, total: float | None = None) -> int:
+        return 0
+
+    def advance(self, task: int) -> None:
+        return None
+
+
+def _progress(command: str) -> Any:
+    """The progress bar on stderr: rich's when stderr may be a terminal, else `_NoProgress`
+    (rich.progress and rich.console were ~40 ms of a batch's parent before its workers
+    started, for a bar that rich disables on a pipe; issue 39)."""
+    if is_pipe(stderr):
+        return _NoProgress()
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn  # noqa: PLC0415
+
+    return Progress(
+        TextColumn(f"{command}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TimeRemainingColumn(),
+        console=stderr,
+        transient=True,
+        disable=not stderr.is_terminal,
+    )
+
+
 def _print_table(rows: Sequence[Mapping[str, Any]], summary: Mapping[str, Any], out: Any) -> None:
-    table = Table("source", "frame", "exit", "result")
-    for line in rows:
-        table.add_row(str(line["source"]), str(line["frame"]), str(line["exit_code"]), _short(line))
-    out.print(table)
+    # drawn without rich where `print_table` can (a pipe, a file): the same characters
+    cells = [[str(line["source"]), str(line["frame"]), str(line["exit_code"]), _short(line)] for line in rows]
+    print_table(out, ("source", "frame", "exit", "result"), cells)
     codes = ", ".join(f"exit {k}: {v}" for k, v in summary["exit_codes"].items())
     out.print(
         f"{summary['frames']} frames: {summary['done']} done, {summary['resumed']} resumed, "

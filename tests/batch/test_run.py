@@ -9,6 +9,7 @@ import subprocess
 import time
 from pathlib import Path
 
+import pytest
 from helpers import FIXTURES, start_clear
 from helpers.batch import FRAMES, clear, comparable, hooked_env, lines_of
 
@@ -446,3 +447,25 @@ def test_a_signal_during_start_up_still_gives_the_summary_and_its_exit_code(tmp_
         )
         if out.exists():  # no temporaries
             assert [p.name for p in out.iterdir() if p.name.startswith(".")] in ([], [".clear-batch.lock"])
+
+
+def test_progress_bar_only_where_stderr_may_be_a_terminal(monkeypatch: pytest.MonkeyPatch) -> None:
+    """`_progress`: nothing (and no rich import) on a pipe; rich's bar, enabled, where rich
+    takes the stream for a terminal (FORCE_COLOR makes it one, as a terminal would)."""
+    from rich.progress import Progress
+
+    from clearcli import console
+    from clearcli.batch import run
+
+    for name in ("FORCE_COLOR", "TTY_COMPATIBLE", "JUPYTER_COLUMNS", "JUPYTER_LINES"):
+        monkeypatch.delenv(name, raising=False)
+    monkeypatch.setattr(run, "stderr", console._OnFirstUse(stderr=True))  # not built: a pipe here
+    bar = run._progress("plan")
+    assert isinstance(bar, run._NoProgress)
+    with bar:
+        assert bar.add_task("frames", total=3) == 0
+        bar.advance(0)
+    monkeypatch.setenv("FORCE_COLOR", "1")
+    monkeypatch.setattr(run, "stderr", console._OnFirstUse(stderr=True))
+    bar = run._progress("plan")
+    assert isinstance(bar, Progress) and not bar.disable

@@ -27,6 +27,8 @@ def _report():
         lazy = type(module) is importlib.util._LazyModule or type(module).__name__ == "_DeferredPackage"
         state[name] = "absent" if module is None else "deferred" if lazy else "loaded"
     state["scipy_array_api"] = "scipy._lib._array_api" in sys.modules
+    state["batch_parent"] = multiprocessing.parent_process() is None and "clearcli.batch.run" in sys.modules
+    state["rich"] = sorted(name for name in sys.modules if name == "rich" or name.startswith("rich."))
     state["env"] = {var: os.environ.get(var) for var in THREADS}
     with open(os.path.join(os.environ["CLEAR_TEST_REPORTS"], f"{os.getpid()}.json"), "w") as out:
         json.dump(state, out)
@@ -54,6 +56,8 @@ def test_batch_workers_start_light(tmp_path: Path) -> None:
     for state in workers:
         assert state.pop("scipy") is True, "the worker did not import SciPy: nothing was checked"
         assert state.pop("scipy_array_api") is False  # scipy._lib._util's code not run
+        state.pop("rich")
+        state.pop("batch_parent")
         assert state.pop("env") == dict.fromkeys(SINGLE_THREADED, "1")
         # scipy.spatial.transform: not imported, scipy.spatial's code (which imports it) not
         # run; nor scipy.special, which scipy.ndimage's code imported (clearcli/perception/
@@ -65,3 +69,27 @@ def test_batch_workers_start_light(tmp_path: Path) -> None:
             "scipy.spatial.transform": "absent",
             "scipy.special": "absent",
         }
+
+
+def test_json_batch_parent_loads_no_rich_and_workers_run_their_exit_handlers(tmp_path: Path) -> None:
+    """A --json batch whose stderr is a pipe draws no progress bar and no table: its parent
+    imports none of rich (rich.progress and rich.console were ~40 ms before the workers
+    started, issue 39). The workers end by `os._exit` after their exit handlers: the
+    hook's report, written by an atexit handler, comes from every worker."""
+    reports = tmp_path / "reports"
+    reports.mkdir()
+    env = hooked_env(tmp_path, _HOOK)
+    env["CLEAR_TEST_REPORTS"] = str(reports)
+    for var in ("FORCE_COLOR", "TTY_COMPATIBLE", "JUPYTER_COLUMNS", "JUPYTER_LINES"):
+        env.pop(var, None)
+    frames = [FIXTURES / "isolated_box.pcd", FIXTURES / "two_touching_boxes.pcd"]
+    res = clear("segment", *frames, "--json", "--jobs", "2", env=env)
+    assert res.returncode == 0, res.stderr
+    rows, summary = lines_of(res.stdout)
+    assert summary["failed"] == 0 and summary["backend"] == "2 worker processes"
+    states = [json.loads(p.read_text()) for p in reports.glob("*.json")]
+    workers = [s for s in states if s["worker"]]
+    parents = [s for s in states if s["batch_parent"]]
+    assert len(workers) == 2, states
+    assert len(parents) == 1, states
+    assert parents[0]["rich"] == []
