@@ -213,8 +213,9 @@ def main() -> None:
     if len(sys.argv) == 1 and Path(sys.argv[0]).name == "clear" and sys.stdout.isatty() and sys.stdin.isatty():
         _run_terminal_clear()
         return
-    # a new `clear` process, not a test or a program calling main with the libraries loaded
-    fresh = "numpy" not in sys.modules
+    # a new `clear` process (`clear`, `clearcli`, `python -m clearcli.cli`), not a test or a
+    # program calling main with the libraries loaded, which may go on after it
+    fresh = "numpy" not in sys.modules and _is_entry_point()
     interrupts.hold()  # until the command can answer a signal properly (clearcli/interrupts.py)
     code: int | None = None  # the exit code, when the command ended with one
     try:
@@ -229,6 +230,15 @@ def main() -> None:
         interrupts.finish()  # a signal during the interpreter's exit: 130/143 at once, no traceback
         if fresh and code is not None:
             _leave(code)
+
+
+def _is_entry_point() -> bool:
+    """Whether the program is `clear` itself: its console scripts, or ``-m clearcli.cli``."""
+    top = sys.modules.get("__main__")
+    spec = getattr(top, "__spec__", None)
+    if spec is not None:
+        return bool(spec.name == "clearcli.cli")
+    return Path(getattr(top, "__file__", None) or "").stem in ("clear", "clearcli")
 
 
 def _leave(code: int) -> None:

@@ -6,6 +6,8 @@ for it."""
 
 from __future__ import annotations
 
+import subprocess
+import sys
 from pathlib import Path
 
 from helpers import FIXTURES, run_clear
@@ -78,3 +80,16 @@ def test_a_running_thread_keeps_the_usual_exit(tmp_path: Path) -> None:
     assert code == 0
     # the usual exit: the thread finished first, then the handlers, then the teardown
     assert notes == ["thread", "atexit", "teardown"]
+
+
+def test_a_program_calling_main_goes_on_after_it(tmp_path: Path) -> None:
+    """Only `clear` itself ends at once: a script of the user's that calls main (and
+    catches its SystemExit) runs on, as before."""
+    script = tmp_path / "wrapper.py"
+    script.write_text(
+        "import sys\nfrom clearcli.cli import main\nsys.argv = ['clear', '--version']\n"
+        "try:\n    main()\nexcept SystemExit as exc:\n    print('went on', exc.code)\n"
+    )
+    res = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=120)
+    assert res.returncode == 0, res.stderr
+    assert res.stdout.splitlines()[-1] == "went on 0"
