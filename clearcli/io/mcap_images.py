@@ -82,7 +82,9 @@ def camera_info_topic(summary: LogSummary, depth_topic: str) -> str:
             return near[0]
         if near:
             break  # several in this namespace: which is ambiguous
-        parent = parent.rsplit("/", 1)[0]
+        # up one namespace; a name with no "/" left ("camera", a topic without its
+        # leading slash) has none above it (rsplit would give the name back: no end)
+        parent = parent.rsplit("/", 1)[0] if "/" in parent else ""
     raise InputError(
         f"{summary.path}: no camera info for the depth images on {depth_topic} (expected {sibling}"
         + (f"; camera info topics: {', '.join(infos)}" if infos else "; the log holds none")

@@ -183,3 +183,37 @@ def test_compressed_depth_is_refused_by_name(tmp_path: Path) -> None:
         writer.finish()
     with pytest.raises(InputError, match="compressed.*record the raw topic"):
         read_frame(log)
+
+
+class _Topics:
+    """A log summary holding only its topics (what `camera_info_topic` reads)."""
+
+    def __init__(self, topics: dict[str, str]) -> None:
+        self._topics = topics
+        self.path = Path("log.mcap")
+
+    def topics(self) -> list[tuple[str, str]]:
+        return list(self._topics.items())
+
+
+@pytest.mark.parametrize(
+    ("depth_topic", "found"),
+    [
+        ("/camera/depth/image_raw", "/camera/depth/camera_info"),  # the sibling
+        ("/camera/depth/sub/image", "/camera/depth/camera_info"),  # the one in the namespace above
+        ('"camera/depth/image_raw', None),  # a damaged name (fuzz seed 60, case 1107): no leading "/"
+        ("camera/depth/image_raw", None),  # nor any other name without one
+        ("image_raw", None),  # no namespace at all
+    ],
+)
+def test_camera_info_is_found_up_the_namespaces_and_the_search_ends(depth_topic: str, found: str | None) -> None:
+    """The search goes up one namespace at a time and ends at the top, whatever the name:
+    one without a leading "/" once looped for ever (`rsplit` gave the name back)."""
+    from clearcli.io.mcap_images import camera_info_topic
+
+    summary = _Topics({depth_topic: "sensor_msgs/msg/Image", "/camera/depth/camera_info": "sensor_msgs/msg/CameraInfo"})
+    if found is None:
+        with pytest.raises(InputError, match="no camera info"):
+            camera_info_topic(summary, depth_topic)  # type: ignore[arg-type]  # a summary by the names it reads
+    else:
+        assert camera_info_topic(summary, depth_topic) == found  # type: ignore[arg-type]
