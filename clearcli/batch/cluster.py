@@ -52,8 +52,10 @@ def _probe(address: str, timeout_s: float = 5.0) -> None:
     answers at is reported at once (ray.init would retry for minutes)."""
     hostport = address.split("://", 1)[-1].rstrip("/")
     host, sep, port = hostport.rpartition(":")
-    if not sep or not port.isdigit():
+    if not sep or not port.isdecimal():  # what int() reads (isdigit also takes "²")
         raise InputError(f"--ray {address}: expected HOST:PORT, ray://HOST:PORT, 'auto' or nothing (a local cluster)")
+    if not 0 < int(port) < 65536:  # the socket refuses others, some with OverflowError
+        raise InputError(f"--ray {address}: the port must be 1 to 65535, not {port}")
     try:
         with socket.create_connection((host.strip("[]"), int(port)), timeout=timeout_s):
             pass

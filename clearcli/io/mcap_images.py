@@ -200,7 +200,8 @@ def _rs_groups(log: LogAccess, stream: str) -> dict[int, str]:
     groups = {}
     for topic, _ in log.summary.topics():
         head, _, group = topic.rpartition("/")
-        if head == f"{stream}/tf" and group.isdigit() and log.summary.count(topic):
+        # isdecimal: what int() reads (isdigit also takes "²", which int() refuses)
+        if head == f"{stream}/tf" and group.isdecimal() and log.summary.count(topic):
             groups[int(group)] = topic
     return groups
 

@@ -25,8 +25,9 @@ if TYPE_CHECKING:
 
 
 def natural_key(path: Path) -> tuple[int | str, ...]:
-    """learn2 before learn10: digit runs compare as numbers."""
-    return tuple(int(t) if t.isdigit() else t for t in re.split(r"(\d+)", path.name))
+    """learn2 before learn10: digit runs compare as numbers. (isdecimal: the runs \\d
+    finds, which int() reads; isdigit also took a "²" between them, which int() refuses.)"""
+    return tuple(int(t) if t.isdecimal() else t for t in re.split(r"(\d+)", path.name))
 
 
 def special(path: Path) -> str | None:

@@ -33,3 +33,19 @@ def test_ray_address_that_cannot_be_reached() -> None:
     res = clear("plan", *FRAMES[:2], "--ray", "127.0.0.1:1", timeout=120)
     assert res.returncode == 3 and "127.0.0.1:1" in res.stderr and "Traceback" not in res.stderr
     assert res.stdout == ""  # before any work
+
+
+@pytest.mark.parametrize(
+    ("address", "says"),
+    [
+        ("127.0.0.1:99999999999999999999", "the port must be 1 to 65535"),  # once an OverflowError
+        ("127.0.0.1:0", "the port must be 1 to 65535"),
+        ("127.0.0.1:\u00b2", "expected HOST:PORT"),  # "²": a digit to isdigit, not to int()
+        ("127.0.0.1", "expected HOST:PORT"),
+    ],
+)
+def test_a_bad_ray_address_is_one_line(address: str, says: str) -> None:
+    _need_ray()
+    res = clear("plan", *FRAMES[:1], "--ray", address, timeout=120)
+    assert res.returncode == 3 and says in res.stderr and "Traceback" not in res.stderr, res.stderr
+    assert res.stderr.count("\n") == 1 and res.stdout == ""

@@ -23,6 +23,16 @@ def test_natural_key_orders_numbers_by_value() -> None:
     assert sorted(names, key=lambda n: natural_key(Path(n))) == ["a.pcd", "learn1.pcd", "learn2.pcd", "learn10.pcd"]
 
 
+def test_natural_key_of_names_with_other_digits() -> None:
+    """Superscripts are digits to str.isdigit but not numbers to int(): "1²3.pcd" once
+    made a folder's batch an internal error (and an int against a str in the sort).
+    Decimal digits of other scripts are numbers, as \\d finds them."""
+    names = ["1²3.pcd", "a².pcd", "12.pcd", "\u0663.pcd", "2.pcd"]  # \u0663: ARABIC-INDIC DIGIT THREE
+    keys = [natural_key(Path(n)) for n in names]
+    assert keys[0] == ("", 1, "²", 3, ".pcd") and keys[3] == ("", 3, ".pcd")
+    assert sorted(names, key=lambda n: natural_key(Path(n))) == ["1²3.pcd", "2.pcd", "\u0663.pcd", "12.pcd", "a².pcd"]
+
+
 def test_folder_expands_to_its_frames_in_natural_order(tmp_path: Path) -> None:
     for name in ("f10.pcd", "f2.pcd", "f1.pcd"):
         shutil.copy(FIXTURES / "isolated_box.pcd", tmp_path / name)
