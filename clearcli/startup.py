@@ -397,6 +397,17 @@ def _cache_dataclass_code(module: ModuleType) -> None:
     atexit.register(cached.save)
 
 
+def cache_dataclass_code() -> None:
+    """The dataclass code cache in a process whose `dataclasses` module was imported
+    before `lighten_imports` could patch it: a batch's worker, where multiprocessing and
+    the pool's own module import it first. Without this each worker compiled again the
+    ~500 texts of the classes its first frame defines (issue 39). Nothing when the module
+    is not imported yet (`lighten_imports` patches it then) or is patched already."""
+    module = sys.modules.get("dataclasses")
+    if module is not None:
+        _cache_dataclass_code(module)
+
+
 # Modules patched right after their own code ran, before anything uses them.
 PATCHED_MODULES: dict[str, Callable[[ModuleType], None]] = {
     "scipy._lib._array_api": _keep_scipy_docstrings,

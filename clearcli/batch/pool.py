@@ -62,6 +62,7 @@ def _worker(conn: Connection, parent_pid: int) -> None:
     # (issue 39: scipy.spatial 1.0 s of a worker's start on a loaded machine).
     startup.single_threaded_numerics()
     startup.lighten_imports()
+    startup.cache_dataclass_code()  # dataclasses is imported by now: patched here
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, _stop_worker)
     _die_with(parent_pid)

@@ -28,6 +28,7 @@ def _report():
         state[name] = "absent" if module is None else "deferred" if lazy else "loaded"
     state["scipy_array_api"] = "scipy._lib._array_api" in sys.modules
     state["batch_parent"] = multiprocessing.parent_process() is None and "clearcli.batch.run" in sys.modules
+    state["dataclass_exec"] = type(getattr(sys.modules.get("dataclasses"), "exec", None)).__name__
     state["rich"] = sorted(name for name in sys.modules if name == "rich" or name.startswith("rich."))
     state["env"] = {var: os.environ.get(var) for var in THREADS}
     with open(os.path.join(os.environ["CLEAR_TEST_REPORTS"], f"{os.getpid()}.json"), "w") as out:
@@ -58,6 +59,9 @@ def test_batch_workers_start_light(tmp_path: Path) -> None:
         assert state.pop("scipy_array_api") is False  # scipy._lib._util's code not run
         state.pop("rich")
         state.pop("batch_parent")
+        # the dataclass code cache (clearcli/startup.py), though multiprocessing imported
+        # dataclasses before the worker could patch it at its import
+        assert state.pop("dataclass_exec") == "_CachedExec"
         assert state.pop("env") == dict.fromkeys(SINGLE_THREADED, "1")
         # scipy.spatial.transform: not imported, scipy.spatial's code (which imports it) not
         # run; nor scipy.special, which scipy.ndimage's code imported (clearcli/perception/
