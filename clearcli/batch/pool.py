@@ -63,6 +63,9 @@ def _worker(conn: Connection, parent_pid: int) -> None:
     startup.single_threaded_numerics()
     startup.lighten_imports()
     startup.cache_dataclass_code()  # dataclasses is imported by now: patched here
+    # no cyclic collection while the first frame loads the libraries, as in a single call
+    # (startup.pause_collection); on again at the frame's read, or after the job at most
+    startup.pause_collection()
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, _stop_worker)
     _die_with(parent_pid)
@@ -103,7 +106,10 @@ def _serve(conn: Connection) -> None:
         if msg is None:
             return
         i, job = msg
-        line = run_job(job)
+        try:
+            line = run_job(job)
+        finally:
+            startup.resume_collection()  # (pipeline.read resumes it; a job that never reached it, here)
         line["_rss_mb"] = _rss_mb()
         line["_pid"] = os.getpid()
         conn.send((i, line))

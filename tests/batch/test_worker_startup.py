@@ -29,6 +29,8 @@ def _report():
     state["scipy_array_api"] = "scipy._lib._array_api" in sys.modules
     state["batch_parent"] = multiprocessing.parent_process() is None and "clearcli.batch.run" in sys.modules
     state["dataclass_exec"] = type(getattr(sys.modules.get("dataclasses"), "exec", None)).__name__
+    import gc
+    state["gc"] = [gc.isenabled(), gc.get_freeze_count() > 0]
     state["rich"] = sorted(name for name in sys.modules if name == "rich" or name.startswith("rich."))
     state["env"] = {var: os.environ.get(var) for var in THREADS}
     with open(os.path.join(os.environ["CLEAR_TEST_REPORTS"], f"{os.getpid()}.json"), "w") as out:
@@ -62,6 +64,8 @@ def test_batch_workers_start_light(tmp_path: Path) -> None:
         # the dataclass code cache (clearcli/startup.py), though multiprocessing imported
         # dataclasses before the worker could patch it at its import
         assert state.pop("dataclass_exec") == "_CachedExec"
+        # the collector paused while the libraries loaded, on again (what they made frozen)
+        assert state.pop("gc") == [True, True]
         assert state.pop("env") == dict.fromkeys(SINGLE_THREADED, "1")
         # scipy.spatial.transform: not imported, scipy.spatial's code (which imports it) not
         # run; nor scipy.special, which scipy.ndimage's code imported (clearcli/perception/
@@ -97,3 +101,22 @@ def test_json_batch_parent_loads_no_rich_and_workers_run_their_exit_handlers(tmp
     assert len(workers) == 2, states
     assert len(parents) == 1, states
     assert parents[0]["rich"] == []
+
+
+def test_workers_collect_again_after_jobs_that_read_no_frame(tmp_path: Path) -> None:
+    """A worker pauses the cyclic collector until its first frame is read
+    (clearcli/startup.py pause_collection): a batch of inputs that are no point cloud
+    does not go on without it (the read turns it on before it fails, and the pool after
+    every job in any case)."""
+    reports = tmp_path / "reports"
+    reports.mkdir()
+    env = hooked_env(tmp_path, _HOOK)
+    env["CLEAR_TEST_REPORTS"] = str(reports)
+    broken = tmp_path / "broken.pcd"
+    broken.write_text("not a point cloud")
+    res = clear("segment", broken, broken, "--json", "--jobs", "2", env=env)
+    rows, _ = lines_of(res.stdout)
+    assert [r["exit_code"] for r in rows] == [3, 3], res.stderr
+    workers = [s for s in (json.loads(p.read_text()) for p in reports.glob("*.json")) if s["worker"]]
+    assert len(workers) == 2
+    assert all(w["gc"] == [True, True] for w in workers)
