@@ -229,7 +229,7 @@ def main() -> None:
         startup.resume_collection(freeze=False)  # no frame read (--help, an error): as it was
         interrupts.finish()  # a signal during the interpreter's exit: 130/143 at once, no traceback
         if fresh and code is not None:
-            _leave(code)
+            interrupts.end_process(code)  # at once: no teardown of every module
 
 
 def _is_entry_point() -> bool:
@@ -239,31 +239,6 @@ def _is_entry_point() -> bool:
     if spec is not None:
         return bool(spec.name == "clearcli.cli")
     return Path(getattr(top, "__file__", None) or "").stem in ("clear", "clearcli")
-
-
-def _leave(code: int) -> None:
-    """End the process with ``code`` now that the command is over: the exit handlers run,
-    stdout and stderr are flushed, and the interpreter's own teardown of every module
-    (NumPy's, SciPy's, pinocchio's, ~5-15 ms of a cold `clear plan`, issue 39) is skipped:
-    scripts call `clear` thousands of times. What `clear` writes is written whole and
-    closed before the command returns (files.py), so nothing waits for the teardown.
-    Returns (the usual exit follows) where the teardown may matter: a thread other than
-    daemons still running, or a stream that cannot be flushed (the usual exit reports it)."""
-    import atexit  # noqa: PLC0415  (loaded already: the interpreter imports it)
-
-    threading = sys.modules.get("threading")
-    if threading is not None:
-        main_thread = threading.main_thread()
-        if any(t is not main_thread and not t.daemon and t.is_alive() for t in threading.enumerate()):
-            return
-    atexit._run_exitfuncs()
-    for stream in (sys.stdout, sys.stderr):
-        try:
-            if stream is not None:
-                stream.flush()
-        except (OSError, ValueError):
-            return
-    os._exit(code & 0xFF)
 
 
 def _main() -> None:

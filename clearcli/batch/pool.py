@@ -11,7 +11,6 @@ writers' clean-up, so no half-written file is left.
 
 from __future__ import annotations
 
-import atexit
 import ctypes
 import multiprocessing as mp
 import os
@@ -75,18 +74,9 @@ def _worker(conn: Connection, parent_pid: int) -> None:
         # done: a SIGTERM while the interpreter exits ends it at once, raising nothing
         # (a SystemExit raised in its teardown prints "Exception ignored" and a traceback)
         signal.signal(signal.SIGTERM, lambda *_: os._exit(143))
-    # No more work (the batch ended, or its pipe closed): the exit handlers, then out at
-    # once. The interpreter's own exit, tearing down NumPy's, SciPy's and pinocchio's
-    # modules, took ~40 ms that the batch waited for in `WorkerPool.close` (issue 39).
-    # Nothing is left half done: a frame's outputs are written whole before its line is
-    # sent, and what the libraries registered to run at exit runs here.
-    atexit._run_exitfuncs()
-    for stream in (sys.stdout, sys.stderr):
-        try:
-            stream.flush()
-        except (OSError, ValueError, AttributeError):
-            pass
-    os._exit(0)
+    # No more work (the batch ended, or its pipe closed): out at once, as a `clear` call
+    # ends (the batch waited ~40 ms for each worker's teardown in `WorkerPool.close`)
+    interrupts.end_process(0)
 
 
 def _stop_worker(signum: int, frame: Any) -> None:

@@ -1,8 +1,8 @@
-"""How a `clear` process ends (clearcli/cli.py `_leave`): once the command is over, the
-exit handlers run, stdout and stderr are flushed, and the process ends with the command's
-exit code without the interpreter's teardown of every module (issue 39: 5-25 ms of each
-cold call); a thread that is not a daemon still running keeps the usual exit, which waits
-for it."""
+"""How a `clear` process ends (clearcli/interrupts.py `end_process`, called by
+clearcli/cli.py): once the command is over, the exit handlers run, stdout and stderr are
+flushed, and the process ends with the command's exit code without the interpreter's
+teardown of every module (issue 39: 5-25 ms of each cold call); a thread that is not a
+daemon still running keeps the usual exit, which waits for it."""
 
 from __future__ import annotations
 
