@@ -191,6 +191,13 @@ def main() -> None:
     parser.add_argument("--table", action="store_true", help="the table step's point classes alone (issue 37)")
     parser.add_argument("--first", type=int, default=None, help="only the first N frames of each set")
     parser.add_argument(
+        "--dither-mm",
+        type=float,
+        default=0.0,
+        help="first move every point by a fixed uniform draw in [-D, +D] mm (seed 9999): a whole-millimetre "
+        "frame made a float-metre one, whose micrometre flips can then be hunted on labelled frames",
+    )
+    parser.add_argument(
         "--fixed-draws", action="store_true", help="with settings.ransac_fixed_draws (as --set ransac_fixed_draws=1)"
     )
     args = parser.parse_args()
@@ -211,6 +218,8 @@ def main() -> None:
     starts: dict[str, int] = {}
     for set_name, path in cases(args.sets.split(","), skip, args.first):
         frame = read_frame(path)
+        if args.dither_mm > 0:
+            frame = perturbed(frame, args.dither_mm * 1e-3, seed=9999)
         try:
             base = seg_mod.segment(frame, settings)
         except ClearError:

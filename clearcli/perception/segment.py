@@ -49,7 +49,7 @@ from clearcli.perception.flat import differing_shares, flat_objects, support_col
 from clearcli.perception.lccp import lccp_segments
 from clearcli.perception.openings import RIM_MAX_POINTS, Opening, TableEdge, rim_of, seen_edges
 from clearcli.perception.refine import STAGES, refine
-from clearcli.perception.resolution import WorkingGrid
+from clearcli.perception.resolution import WorkingGrid, pixel_pitch
 from clearcli.perception.size import SegmentSize
 from clearcli.perception.supervoxels import Supervoxels, VoxelCloud, compute_supervoxels, voxelize
 from clearcli.perception.table import (
@@ -411,6 +411,28 @@ class _Work:
     support_rgb: tuple[np.ndarray, np.ndarray, float] | None = None
 
 
+# A depth sensor's points lie within some 10 m of it, a table scene's within a few: a
+# frame whose points lie a median this far from its origin is in another unit (in
+# millimetres a table scene lies 300 to 3000 units away), five times over either way.
+_FAR_MEDIAN_M = 50.0
+
+
+def _unit_hint(points: np.ndarray) -> str:
+    """A clause for a "no table" message when ``points`` lie so far from the origin that
+    they are likely millimetres (`_FAR_MEDIAN_M`); "" otherwise."""
+    sample = np.asarray(points[:: max(1, points.shape[0] // 10000)], dtype=np.float64)
+    sample = sample[np.isfinite(sample).all(axis=1)]
+    if sample.shape[0] == 0:
+        return ""
+    median = float(np.median(np.linalg.norm(sample, axis=1)))
+    if median <= _FAR_MEDIAN_M:
+        return ""
+    return (
+        f"; its points lie a median {median:.0f} m from the origin, beyond any depth sensor's reach: "
+        "if they are millimetres, scale them to metres (x 0.001)"
+    )
+
+
 def _filter(w: _Work) -> None:
     """1. finite points, outliers (filters.py)."""
     where = f"{w.frame.source}: " if w.frame.source else ""
@@ -420,13 +442,25 @@ def _filter(w: _Work) -> None:
     if w.idx.size == 0:
         if not np.isfinite(points).all(axis=1).any():
             raise SceneError(f"{where}the frame has no finite points (all NaN)")
-        raise SceneError(f"{where}no table: no points are left after outlier removal")
+        raise SceneError(f"{where}no table: no points are left after outlier removal{_unit_hint(points)}")
     w.pts = np.take(points, w.idx, axis=0).astype(np.float64)  # rows by index: take is faster than a[idx]
 
 
 def _table(w: _Work) -> None:
     """2. the table, its hull, the prism above it (table.py)."""
-    fit = find_table(w.pts, w.settings, w.organized, w.frame.source)
+    frame = w.frame
+
+    def pinhole() -> bool:
+        # a pinhole's grid about the origin: a camera image in its optical frame (resolution.py)
+        return w.organized and frame.shape is not None and pixel_pitch(frame.points, frame.shape) is not None
+
+    try:
+        fit = find_table(w.pts, w.settings, w.organized, frame.source, pinhole)
+    except SceneError as err:
+        hint = _unit_hint(w.pts)
+        if not hint:
+            raise
+        raise SceneError(f"{err}{hint}") from None
     # heights and squared ranges of the kept points: the table's stage and _exclude read them
     w.range2 = squared_range(w.pts) if fit.camera_is_origin else None
     # the plane against the points once: a hull drawn anew and _exclude read it again

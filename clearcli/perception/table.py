@@ -713,16 +713,45 @@ def _residue(n: np.ndarray, inliers: np.ndarray, candidates: list[_Candidate]) -
     return False
 
 
+def _hidden_from_origin(fit: TableFit, loose: np.ndarray, loose_range2: np.ndarray, settings: SegmentSettings) -> int:
+    """How many of ``loose`` stand behind ``fit``'s support as seen from the origin (its
+    normal turned towards the origin; within the scoring's height band, beyond its noise)
+    with their line of sight from the origin crossing the support inside its outline
+    (shrunk by `_EDGE_BAND_M`): points a camera at the origin could not see through an
+    opaque support. Points seen past its edge (a floor beyond a table) cross outside it."""
+    n, d = fit.plane.normal, fit.plane.offset  # d > 0: the origin on the normal's side
+    h = loose @ n + d
+    behind = (h < -(settings.prism_min_height_m + _NOISE_PER_M2 * loose_range2)) & (h >= -_SCORE_HEIGHT_M)
+    far = np.compress(behind, loose, axis=0)
+    # the ray t * p meets the plane n . x + d = 0 at t = d / (d - h), 0 < t < 1 behind it
+    crossing = far * (d / (d - np.compress(behind, h)))[:, None]
+    return int(np.count_nonzero(inside_convex(fit.to_2d(crossing), fit.polygon_2d, -_EDGE_BAND_M)))
+
+
 def _considered(planes: Sequence[PlaneVerdict]) -> str:
     """The candidate planes for a one-line error, as a user can find them in the view:
     each one's area and distance from the sensor's origin."""
     return ", ".join(f"{v.area_m2:.3f} m^2 at {abs(v.offset_m):.2f} m" for v in planes)
 
 
-def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, source: str = "") -> TableFit:
+def find_table(
+    points: np.ndarray,
+    settings: SegmentSettings,
+    organized: bool,
+    source: str = "",
+    pinhole: Callable[[], bool] | None = None,
+) -> TableFit:
     """Stage 2a: the support plane among up to ``plane_candidates`` RANSAC planes.
 
-    ``points``: (M, 3) finite float64 points that survived outlier removal.
+    ``points``: (M, 3) finite float64 points that survived outlier removal. ``pinhole``:
+    whether the frame is an organized pinhole grid about its origin (a camera image in
+    its optical frame), asked only when the origin's being the camera is in doubt.
+
+    The cloud is taken to be in a camera frame (the sensor at the origin) when the
+    support lies `_MIN_CAMERA_HEIGHT_M` or more from the origin, unless the origin sees
+    the support from behind while what the support would hide stands there
+    (`_hidden_from_origin`): then the origin is a robot's or the world's frame beneath
+    the table, and the support's normal is turned up where the objects are.
     Raises SceneError when no plane of at least ``table_min_area_m2`` exists, or when the
     objects are on the far side of the table (a table seen from below).
     """
@@ -824,82 +853,110 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
     loose = np.compress(~any_plane, sample, axis=0)
     loose_range2 = np.compress(~any_plane, sample_range2)
 
-    best: tuple[tuple[int, float], TableFit, int, int] | None = None
-    far: list[PlaneVerdict] = []
-    scored: list[tuple[TableFit, int, float]] = []
-    for c in candidates:
-        # rows by index: take is several times faster than a[idx]; none taken for the
-        # plane and the hull of a candidate whose fit and coordinates are known
-        members: np.ndarray | None = None
-        if c.refit is None:
-            members = np.take(sample, c.members, axis=0)
-            n, d = fit_plane_lsq(members)
-        else:
-            n, d = c.refit
-        camera_is_origin = abs(d) >= _MIN_CAMERA_HEIGHT_M
-        if camera_is_origin and abs(d) > settings.table_max_distance_m:
-            far.append(
-                PlaneVerdict(
-                    _tuple(n),
-                    float(d),
-                    c.area_m2,
-                    0,
-                    False,
-                    f"farther than table_max_distance_m ({abs(d):.2f} > {settings.table_max_distance_m:g} m)",
+    # the best candidate ((score, area), fit, points before it, behind it), those too far,
+    # and every candidate's (fit, score, area)
+    Best = tuple[tuple[int, float], TableFit, int, int]
+
+    def score(origin_may_be_camera: bool) -> tuple[Best | None, list[PlaneVerdict], list[tuple[TableFit, int, float]]]:
+        """Each candidate's fit, its normal turned towards the camera at the origin (or
+        "up", where the objects are, when the origin is no camera), and the best one."""
+        best: Best | None = None
+        far: list[PlaneVerdict] = []
+        scored: list[tuple[TableFit, int, float]] = []
+        for c in candidates:
+            # rows by index: take is several times faster than a[idx]; none taken for the
+            # plane and the hull of a candidate whose fit and coordinates are known
+            members: np.ndarray | None = None
+            if c.refit is None:
+                members = np.take(sample, c.members, axis=0)
+                n, d = fit_plane_lsq(members)
+            else:
+                n, d = c.refit
+            camera_is_origin = origin_may_be_camera and abs(d) >= _MIN_CAMERA_HEIGHT_M
+            if camera_is_origin and abs(d) > settings.table_max_distance_m:
+                far.append(
+                    PlaneVerdict(
+                        _tuple(n),
+                        float(d),
+                        c.area_m2,
+                        0,
+                        False,
+                        f"farther than table_max_distance_m ({abs(d):.2f} > {settings.table_max_distance_m:g} m)",
+                    )
                 )
-            )
-            continue
-        basis = plane_basis(n)
-        origin = -d * n
-        turned_poly = None
-        if camera_is_origin and d < 0:
-            # turned towards the camera below: its hull is wanted in the turned plane's axes,
-            # and the one in these is its mirror image (u turns to -u exactly, v stays: the
-            # same points with x negated, bit for bit), read backwards to run counter-
-            # clockwise: the same directed edges as Qhull's of these, so the same test
-            # below; one hull of the members, not two
-            turned_n, turned_d = -n, -d  # what the turn below makes them
-            turned_basis = plane_basis(turned_n)
-            members = np.take(sample, c.members, axis=0) if members is None else members
-            turned_poly = convex_hull_2d(project(members, turned_basis) - (-turned_d * turned_n) @ turned_basis.T)
-            poly = mirrored_hull(turned_poly)
-        elif members is None and c.uv is not None:
-            # the members' coordinates along this very basis (the plane is the RANSAC
-            # plane's own), from the piece's search: the same rows' products
-            u, v, in_piece = c.uv
-            poly = convex_hull_2d(
-                np.stack([np.compress(in_piece, u), np.compress(in_piece, v)], axis=1) - origin @ basis.T
-            )
-        else:
-            members = np.take(sample, c.members, axis=0) if members is None else members
-            poly = convex_hull_2d(project(members, basis) - origin @ basis.T)
-        h = loose @ n + d
-        # depth noise grows with the square of the range: far off-plane points are
-        # noise of the plane itself, not things standing on it
-        band = (np.abs(h) > settings.prism_min_height_m + _NOISE_PER_M2 * loose_range2) & (np.abs(h) <= _SCORE_HEIGHT_M)
-        ins = np.zeros(loose.shape[0], dtype=bool)
-        loose_band = np.compress(band, loose, axis=0)  # rows by a mask: compress is faster
-        ins[band] = inside_convex(project(loose_band, basis) - origin @ basis.T, poly, -_EDGE_BAND_M)
-        above = int((ins & (h > 0)).sum())
-        below = int((ins & (h < 0)).sum())
-        # orient the normal towards the camera, or, not in a camera frame, "up" where the
-        # objects are
-        if (d < 0) if camera_is_origin else (below > above):
-            n, d, above, below = -n, -d, below, above
-            # the hull again in the turned plane's axes (unturned, it is the one above)
+                continue
             basis = plane_basis(n)
             origin = -d * n
-            if turned_poly is None:
+            turned_poly = None
+            if camera_is_origin and d < 0:
+                # turned towards the camera below: its hull is wanted in the turned plane's axes,
+                # and the one in these is its mirror image (u turns to -u exactly, v stays: the
+                # same points with x negated, bit for bit), read backwards to run counter-
+                # clockwise: the same directed edges as Qhull's of these, so the same test
+                # below; one hull of the members, not two
+                turned_n, turned_d = -n, -d  # what the turn below makes them
+                turned_basis = plane_basis(turned_n)
+                members = np.take(sample, c.members, axis=0) if members is None else members
+                turned_poly = convex_hull_2d(project(members, turned_basis) - (-turned_d * turned_n) @ turned_basis.T)
+                poly = mirrored_hull(turned_poly)
+            elif members is None and c.uv is not None:
+                # the members' coordinates along this very basis (the plane is the RANSAC
+                # plane's own), from the piece's search: the same rows' products
+                u, v, in_piece = c.uv
+                poly = convex_hull_2d(
+                    np.stack([np.compress(in_piece, u), np.compress(in_piece, v)], axis=1) - origin @ basis.T
+                )
+            else:
                 members = np.take(sample, c.members, axis=0) if members is None else members
                 poly = convex_hull_2d(project(members, basis) - origin @ basis.T)
-            else:
-                poly = turned_poly
-        fit = TableFit(TablePlane(normal=n, offset=float(d)), poly, origin, basis, camera_is_origin)
-        # noise lies on both sides of a plane, objects on one: score the difference
-        key = (abs(above - below), c.area_m2)
-        scored.append((fit, abs(above - below), c.area_m2))
-        if best is None or key > best[0]:
-            best = (key, fit, above, below)
+            h = loose @ n + d
+            # depth noise grows with the square of the range: far off-plane points are
+            # noise of the plane itself, not things standing on it
+            band = (np.abs(h) > settings.prism_min_height_m + _NOISE_PER_M2 * loose_range2) & (
+                np.abs(h) <= _SCORE_HEIGHT_M
+            )
+            ins = np.zeros(loose.shape[0], dtype=bool)
+            loose_band = np.compress(band, loose, axis=0)  # rows by a mask: compress is faster
+            ins[band] = inside_convex(project(loose_band, basis) - origin @ basis.T, poly, -_EDGE_BAND_M)
+            above = int((ins & (h > 0)).sum())
+            below = int((ins & (h < 0)).sum())
+            # orient the normal towards the camera, or, not in a camera frame, "up" where the
+            # objects are
+            if (d < 0) if camera_is_origin else (below > above):
+                n, d, above, below = -n, -d, below, above
+                # the hull again in the turned plane's axes (unturned, it is the one above)
+                basis = plane_basis(n)
+                origin = -d * n
+                if turned_poly is None:
+                    members = np.take(sample, c.members, axis=0) if members is None else members
+                    poly = convex_hull_2d(project(members, basis) - origin @ basis.T)
+                else:
+                    poly = turned_poly
+            fit = TableFit(TablePlane(normal=n, offset=float(d)), poly, origin, basis, camera_is_origin)
+            # noise lies on both sides of a plane, objects on one: score the difference
+            key = (abs(above - below), c.area_m2)
+            scored.append((fit, abs(above - below), c.area_m2))
+            if best is None or key > best[0]:
+                best = (key, fit, above, below)
+        return best, far, scored
+
+    best, far, scored = score(True)
+    min_obj = max(20, int(0.001 * sample.shape[0]))
+    origin_note = ""
+    if best is not None and best[1].camera_is_origin and best[3] > max(best[2], min_obj):
+        # More stands behind the support than before it, as seen from the origin. A camera
+        # there could not see what the support hides: the points whose line of sight from
+        # the origin crosses the support inside its outline. Many such points and the
+        # origin is no camera but a robot's or the world's frame beneath the table (a
+        # mobile base's on the floor): the planes are turned up where the objects are.
+        # An organized pinhole grid about the origin is a camera image whatever it shows.
+        hidden = _hidden_from_origin(best[1], loose, loose_range2, settings)
+        if hidden > max(best[2], min_obj) and not (pinhole is not None and pinhole()):
+            best, far, scored = score(False)
+            origin_note = (
+                f" (the frame's origin is no camera: {hidden} points stand behind the support as seen from "
+                "it, where it would hide them; up is where the objects stand)"
+            )
     if best is None:
         considered = _considered(far)
         raise SceneError(
@@ -909,7 +966,6 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
         )
     _, fit, above, below = best
     chosen_standing = abs(above - below)
-    min_obj = max(20, int(0.001 * sample.shape[0]))
     chosen_why = "the most points standing on it"
     turned: dict[int, str] = {}
     if settings.support_by_standing and len(scored) > 1:
@@ -943,7 +999,7 @@ def find_table(points: np.ndarray, settings: SegmentSettings, organized: bool, s
             area,
             standing,
             f is fit,
-            chosen_why
+            chosen_why + origin_note
             if f is fit
             else turned.get(k, f"fewer points standing on it ({standing} against {chosen_standing})"),
         )

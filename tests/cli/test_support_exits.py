@@ -90,3 +90,34 @@ def test_everything_excluded_is_an_empty_object_list_with_the_reasons(tmp_path: 
     assert res.returncode == EXIT_OK, res.stderr
     plan = _json(res)
     assert plan["status"] == "complete" and plan["actions"] == [] and plan["left"] == []
+
+
+def test_a_cloud_in_millimetres_is_exit_4_in_one_line_saying_so(tmp_path: Path) -> None:
+    # the table of support_frame's mat family written in millimetres, as PhoXi and Zivid
+    # write their clouds: no table in metres, and the one line says what is likely wrong
+    frame = support_frame("mat_on_table", 2)
+    src = tmp_path / "in_mm.pcd"
+    write_pcd(src, dataclasses.replace(frame, points=frame.points * np.float32(1000.0)))
+    for line in _scene_errors(src):
+        assert "in_mm.pcd" in line and "no table" in line, line
+        assert line.endswith("if they are millimetres, scale them to metres (x 0.001)"), line
+
+
+def test_a_z_up_cloud_whose_origin_lies_beneath_the_table_is_segmented(tmp_path: Path) -> None:
+    # a cloud in a mobile robot's base frame (z up, the origin on the floor 0.75 m under the
+    # table's top): exit 0 and the objects, the chosen support saying the origin is no camera
+    # (before: exit 4, "the table is seen from below")
+    from clearcli.sim.scene import clutter
+
+    scene = clutter(5, 3)  # five objects apart: five segments in its camera frame too
+    frame = render(scene, seed=0)
+    T_table_camera = np.linalg.inv(scene.T_camera_table)
+    p = frame.points.astype(np.float64) @ T_table_camera[:3, :3].T + T_table_camera[:3, 3] + [0.0, 0.0, 0.75]
+    src = tmp_path / "base_frame.pcd"
+    write_pcd(src, dataclasses.replace(frame, points=p.astype(np.float32)))
+    res = _clear("segment", str(src), "--json")
+    assert res.returncode == EXIT_OK, res.stderr
+    doc = _json(res)
+    assert len(doc["objects"]) == 5
+    assert "the frame's origin is no camera" in doc["support"]["why"], doc["support"]
+    assert doc["support"]["chosen"]["normal"][2] > 0.999

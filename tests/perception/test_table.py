@@ -59,8 +59,24 @@ def test_bad_scenes_raise_scene_error(box_frame: Frame) -> None:
         segment(few, S)
     # a cloud of scattered points: no plane of table size
     blob = Frame(points=np.random.default_rng(1).normal(scale=0.3, size=(20_000, 3)).astype(np.float32) + [0, 0, 2])
-    with pytest.raises(SceneError, match="no table"):
+    with pytest.raises(SceneError, match="no table") as err:
         segment(blob, S)
+    assert "millimetres" not in str(err.value)  # 2 m away: metres, no hint
+
+
+def test_a_frame_in_millimetres_is_no_table_with_a_hint_to_scale_it(box_frame: Frame) -> None:
+    # the same frame in millimetres (the unit PhoXi and Zivid clouds come in): its table lies
+    # ~600 units away, so no plane of table size fits; the message says what is likely wrong
+    from clearcli.perception.segment import segment
+
+    mm = replace(box_frame, points=box_frame.points * np.float32(1000.0))
+    with pytest.raises(SceneError, match="no table") as err:
+        segment(mm, S)
+    message = str(err.value)
+    assert "\n" not in message
+    assert message.endswith("if they are millimetres, scale them to metres (x 0.001)"), message
+    median = float(message.split("its points lie a median ", 1)[1].split(" m from")[0])
+    assert 500 < median < 1500  # the camera is ~0.6-1 m from the table (sim placement)
 
 
 def test_table_seen_from_below_is_a_scene_error(box_frame: Frame) -> None:
@@ -78,6 +94,70 @@ def test_table_seen_from_below_is_a_scene_error(box_frame: Frame) -> None:
     flipped = box_frame.points.reshape(480, 640, 3)[::-1].reshape(-1, 3) * np.array([1, -1, 1], np.float32)
     with pytest.raises(SceneError, match="seen from below"):
         segment(replace(box_frame, points=np.ascontiguousarray(flipped)), S)
+
+
+def test_what_the_origin_cannot_see_behind_the_support_is_counted_by_its_line_of_sight() -> None:
+    # worked by hand: the support z = 1 m over [-1, 1] x [-1, 1], the origin at 0 below it
+    # (the normal turned towards the origin: -z, offset +1). A point 0.1 m behind it at x = 0.5
+    # is seen through the support at x = 0.5 / 1.1 = 0.455 (inside: hidden); one at x = 3 through
+    # x = 2.73 (past its edge: a camera sees it); one in front, one beyond the 0.4 m band and one
+    # within the 1 cm band of the plane's own noise count for nothing
+    from clearcli.perception.table import TableFit, _hidden_from_origin
+    from clearcli.perception.types import TablePlane
+
+    n = np.array([0.0, 0.0, -1.0])
+    basis = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0]])  # u x v = n
+    square = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
+    fit = TableFit(TablePlane(normal=n, offset=1.0), square, -1.0 * n, basis, True)
+    loose = np.array([[0.5, 0.0, 1.1], [3.0, 0.0, 1.1], [0.5, 0.0, 0.9], [0.5, 0.0, 1.5], [0.5, 0.0, 1.003]])
+    assert _hidden_from_origin(fit, loose, np.zeros(5), S) == 1
+    # the first moved to x = 1.09: seen through x = 0.991, inside the square but within the
+    # 2 cm edge band (_EDGE_BAND_M) of its side: not counted; at x = 1.05 (through 0.955) it is
+    assert _hidden_from_origin(fit, loose[:1] + [0.59, 0.0, 0.0], np.zeros(1), S) == 0
+    assert _hidden_from_origin(fit, loose[:1] + [0.55, 0.0, 0.0], np.zeros(1), S) == 1
+
+
+def _frame_beneath_the_table(frame: Frame, T_camera_table: np.ndarray, below_m: float, organized: bool) -> Frame:
+    """``frame`` (camera frame) moved into a z-up frame whose origin lies ``below_m`` under the
+    table's top (a mobile robot's base on the floor), organized or not."""
+    T_table_camera = np.linalg.inv(T_camera_table)
+    p = frame.points.astype(np.float64) @ T_table_camera[:3, :3].T + T_table_camera[:3, 3] + [0.0, 0.0, below_m]
+    if organized:
+        return replace(frame, points=p.astype(np.float32))
+    keep = np.isfinite(p).all(axis=1)
+    colors = None if frame.colors is None else frame.colors[keep]
+    return Frame(points=p[keep].astype(np.float32), colors=colors, source="beneath.pcd")
+
+
+@pytest.mark.parametrize("organized", [True, False])
+def test_a_z_up_frame_whose_origin_lies_beneath_the_table_finds_its_objects(organized: bool) -> None:
+    # a robot's or the world's frame with its origin on the floor: the support is 0.75 m from
+    # the origin, which a camera frame would have, but the objects stand on its far side from
+    # there, where an opaque table would hide them from a camera: the origin is no camera and
+    # up is where the objects stand (before: "no usable table ... seen from below", exit 4)
+    from clearcli.perception.segment import segment
+    from clearcli.sim.scene import clutter
+
+    scene = clutter(5, 3)
+    camera = _render(scene)
+    seen = segment(camera, S)
+    moved = _frame_beneath_the_table(camera, scene.T_camera_table, 0.75, organized)
+    seg = segment(moved, S)
+    assert seg.table.normal[2] > 0.999  # up, the table's z axis
+    assert seg.table.offset == pytest.approx(-0.75, abs=0.005)
+    chosen = seg.support[0]
+    assert chosen.chosen and "the frame's origin is no camera" in chosen.why, chosen.why
+    # the same objects as in the camera frame: each matched by its points
+    assert len(seg.objects) == len(seen.objects) == 5
+    if organized:  # the same pixels
+        for o in seen.objects:
+            best = max(
+                np.intersect1d(o.indices, m.indices).size / np.union1d(o.indices, m.indices).size for m in seg.objects
+            )
+            assert best >= 0.9
+    # a camera frame with its origin above the table (moved 0.75 m up instead) is still one
+    over = segment(_frame_beneath_the_table(camera, scene.T_camera_table, -0.75, organized), S)
+    assert "origin is no camera" not in over.support[0].why and len(over.objects) == 5
 
 
 # ------------------------------------------------------------------ beyond the edge
