@@ -796,8 +796,64 @@ def segment(frame: Frame, settings: SegmentSettings, stride: int | None = None) 
     Raises SceneError when there is no usable table (no finite points, no plane, a table
     seen from below). A table with nothing on it is a result with zero objects.
     """
+    turn = _looks_along_minus_z(frame)
+    if turn:
+        frame = dataclasses.replace(frame, points=frame.points * _GL_TURN.astype(frame.points.dtype))
     grid = WorkingGrid.of(frame, settings, stride)
-    return grid.to_full_nominal(_segment(grid.frame, settings), settings)
+    seg = grid.to_full_nominal(_segment(grid.frame, settings), settings)
+    return _turned_back(seg) if turn else seg
+
+
+# A camera image in OpenGL's convention (x right, y up, looking along -z: Open3D's
+# tutorials turn their clouds so, and ARKit and Unity write them so) is turned into the
+# optical frame's (y down the image, looking along +z) for the steps, which read depth
+# along +z and "down the image" as +y; and the results are turned back. The turn, a
+# half turn about x, negates y and z: exact in floating point, so the objects are those
+# of the optical frame's cloud bit for bit, and their geometry its exact mirror.
+_GL_TURN = np.array([1.0, -1.0, -1.0])
+
+
+def _looks_along_minus_z(frame: Frame) -> bool:
+    """Whether ``frame`` is an organized pinhole image looking along -z (resolution.py's
+    pinhole test on the frame turned by `_GL_TURN`); a median z of a sample of its finite
+    points below 0 first, so that an image in the optical frame costs a few microseconds."""
+    shape = frame.shape
+    if not frame.is_organized or shape is None or shape[0] * shape[1] != frame.n_points or frame.points.ndim != 2:
+        return False
+    z = frame.points[:: max(1, frame.n_points // 4096), 2]
+    z = z[np.isfinite(z)]
+    if z.size < 100 or not float(np.median(z)) < 0.0:
+        return False
+    return pixel_pitch(frame.points * _GL_TURN.astype(frame.points.dtype), shape) is not None
+
+
+def _turned_back(seg: Segmentation) -> Segmentation:
+    """``seg`` of a frame turned by `_GL_TURN`, in the frame's own coordinates: every point
+    and direction turned back (the turn is its own inverse; rows of axes each a vector)."""
+    t = _GL_TURN
+
+    def opening(o: Opening) -> Opening:
+        return o if o.rim is None else dataclasses.replace(o, rim=dataclasses.replace(o.rim, center=o.rim.center * t))
+
+    return dataclasses.replace(
+        seg,
+        table=TablePlane(normal=seg.table.normal * t, offset=seg.table.offset),
+        table_polygon=seg.table_polygon * t,
+        objects=tuple(
+            dataclasses.replace(
+                o,
+                centroid=o.centroid * t,
+                obb_center=o.obb_center * t,
+                obb_axes=o.obb_axes * t,
+                principal_axes=o.principal_axes * t,
+            )
+            for o in seg.objects
+        ),
+        support=tuple(dataclasses.replace(v, normal=(v.normal[0], -v.normal[1], -v.normal[2])) for v in seg.support),
+        openings=tuple(opening(o) for o in seg.openings),
+        table_edges=tuple(dataclasses.replace(e, start=e.start * t, end=e.end * t) for e in seg.table_edges),
+        excluded=tuple(dataclasses.replace(e, centroid=e.centroid * t) for e in seg.excluded),
+    )
 
 
 def _segment(frame: Frame, settings: SegmentSettings) -> Segmentation:

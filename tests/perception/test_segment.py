@@ -21,6 +21,7 @@ from helpers.segment_bad_input import (
     _unorganized,
 )
 
+from clearcli.errors import SceneError
 from clearcli.evaluate.segmentation import score
 from clearcli.io.frames import Frame
 from clearcli.perception.segment import segment
@@ -413,3 +414,41 @@ def test_make_objects_are_make_object_s_one_by_one_bit_for_bit() -> None:
     # the box axes: the third is the table's normal; the first two in its plane
     assert np.allclose(made[0].obb_axes[2], table.normal)
     assert abs(float(made[0].obb_axes[0] @ table.normal)) < 1e-12
+
+
+def test_an_image_in_opengl_convention_gives_the_optical_frames_objects_turned() -> None:
+    # Open3D's tutorials turn a camera's cloud by diag(1, -1, -1) (y up, looking along -z),
+    # and ARKit and Unity write them so. Before, such an image was refused: "the table is
+    # seen from below: its top faces down the image". Now it is turned to the optical
+    # frame for the steps and the results turned back: the same pixels in each object,
+    # every point and direction exactly turned (negating is exact in floats)
+    from clearcli.sim.scene import clutter
+
+    frame = _render(clutter(6, 2))
+    optical = segment(frame, S)
+    turn = np.array([1.0, -1.0, -1.0])
+    gl = segment(replace(frame, points=frame.points * turn.astype(np.float32)), S)
+    assert len(gl.objects) == len(optical.objects) >= 4
+    assert np.array_equal(gl.labels(), optical.labels())
+    assert np.array_equal(gl.table.normal, optical.table.normal * turn) and gl.table.offset == optical.table.offset
+    assert np.array_equal(gl.table_polygon, optical.table_polygon * turn)
+    for a, b in zip(optical.objects, gl.objects, strict=True):
+        assert np.array_equal(b.centroid, a.centroid * turn) and np.array_equal(b.obb_center, a.obb_center * turn)
+        assert np.array_equal(b.obb_axes, a.obb_axes * turn) and np.array_equal(b.obb_extents, a.obb_extents)
+        assert np.array_equal(b.principal_axes, a.principal_axes * turn)
+    assert [v.normal for v in gl.support] == [(x, -y, -z) for x, y, z in (v.normal for v in optical.support)]
+    assert [(e.seen, e.why) for e in gl.table_edges] == [(e.seen, e.why) for e in optical.table_edges]
+    for a, b in zip(optical.table_edges, gl.table_edges, strict=True):
+        assert np.array_equal(b.start, a.start * turn) and np.array_equal(b.end, a.end * turn)
+    # the table's normal points up, towards the camera at the origin, in the cloud's own
+    # frame: the table lies along -z, and its normal has +z there
+    assert float(np.nanmedian(frame.points[:, 2] * -1.0)) < 0 and gl.table.normal[2] > 0.5
+
+
+def test_an_upside_down_image_in_opengl_convention_is_still_seen_from_below(box_frame: Frame) -> None:
+    # the upside-down image of test_table (rows flipped, y negated), then turned to OpenGL's
+    # convention: turned back it is the same upside-down optical image, refused as before
+    flipped = box_frame.points.reshape(480, 640, 3)[::-1].reshape(-1, 3) * np.array([1, -1, 1], np.float32)
+    gl = np.ascontiguousarray(flipped * np.array([1, -1, -1], np.float32))
+    with pytest.raises(SceneError, match="seen from below"):
+        segment(replace(box_frame, points=gl), S)
