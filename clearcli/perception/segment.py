@@ -48,6 +48,7 @@ from clearcli.perception.filters import clean_mask
 from clearcli.perception.flat import differing_shares, flat_objects, support_colour, within_reach
 from clearcli.perception.lccp import lccp_segments
 from clearcli.perception.openings import RIM_MAX_POINTS, Opening, TableEdge, rim_of, seen_edges
+from clearcli.perception.orientation import Orientation, axes_turn, quarter_turns_for
 from clearcli.perception.refine import STAGES, refine
 from clearcli.perception.resolution import WorkingGrid, pixel_pitch
 from clearcli.perception.size import SegmentSize
@@ -382,6 +383,7 @@ class _Work:
     settings: SegmentSettings
     organized: bool  # the frame's pixel grid is usable
     clock: Clock
+    may_roll: bool = False  # the table step may find the image rolled (`_Rolled`)
     idx: np.ndarray = field(default_factory=_empty)  # (K,) frame index of the points kept (finite, not outliers)
     pts: np.ndarray = field(default_factory=_empty)  # (K, 3) their coordinates
     fit: TableFit | None = None
@@ -455,12 +457,16 @@ def _table(w: _Work) -> None:
         return w.organized and frame.shape is not None and pixel_pitch(frame.points, frame.shape) is not None
 
     try:
-        fit = find_table(w.pts, w.settings, w.organized, frame.source, pinhole)
+        fit = find_table(w.pts, w.settings, w.organized, frame.source, pinhole, upright_check=not w.may_roll)
     except SceneError as err:
         hint = _unit_hint(w.pts)
         if not hint:
             raise
         raise SceneError(f"{err}{hint}") from None
+    if w.may_roll and w.organized and fit.camera_is_origin:
+        k = quarter_turns_for(fit.plane.normal)
+        if k:
+            raise _Rolled(k)
     # heights and squared ranges of the kept points: the table's stage and _exclude read them
     w.range2 = squared_range(w.pts) if fit.camera_is_origin else None
     # the plane against the points once: a hull drawn anew and _exclude read it again
@@ -796,75 +802,40 @@ def segment(frame: Frame, settings: SegmentSettings, stride: int | None = None) 
     Raises SceneError when there is no usable table (no finite points, no plane, a table
     seen from below). A table with nothing on it is a result with zero objects.
     """
-    turn = _looks_along_minus_z(frame)
-    if turn:
-        frame = dataclasses.replace(frame, points=frame.points * _GL_TURN.astype(frame.points.dtype))
-    grid = WorkingGrid.of(frame, settings, stride)
-    seg = grid.to_full_nominal(_segment(grid.frame, settings), settings)
-    return _turned_back(seg) if turn else seg
+    # an image in another axis convention, or rolled, is segmented as the upright optical
+    # image it is turned into, and the results turned back (orientation.py)
+    turn = axes_turn(frame)
+    for may_roll in (True, False):
+        work = frame if turn is None else turn.frame(frame)
+        grid = WorkingGrid.of(work, settings, stride)
+        try:
+            seg = grid.to_full_nominal(_segment(grid.frame, settings, may_roll), settings)
+        except _Rolled as rolled:
+            turn = (turn or Orientation()).rolled(rolled.quarter_turns)
+            continue
+        return seg if turn is None or turn.identity else turn.segmentation_back(seg, frame)
+    raise AssertionError("unreachable: the second pass may not roll")  # pragma: no cover
 
 
-# A camera image in OpenGL's convention (x right, y up, looking along -z: Open3D's
-# tutorials turn their clouds so, and ARKit and Unity write them so) is turned into the
-# optical frame's (y down the image, looking along +z) for the steps, which read depth
-# along +z and "down the image" as +y; and the results are turned back. The turn, a
-# half turn about x, negates y and z: exact in floating point, so the objects are those
-# of the optical frame's cloud bit for bit, and their geometry its exact mirror.
-_GL_TURN = np.array([1.0, -1.0, -1.0])
+class _Rolled(Exception):
+    """The table step's finding that the image is rolled (orientation.quarter_turns_for):
+    `segment` turns it and starts again."""
+
+    def __init__(self, quarter_turns: int) -> None:
+        super().__init__(quarter_turns)
+        self.quarter_turns = quarter_turns
 
 
-def _looks_along_minus_z(frame: Frame) -> bool:
-    """Whether ``frame`` is an organized pinhole image looking along -z (resolution.py's
-    pinhole test on the frame turned by `_GL_TURN`); a median z of a sample of its finite
-    points below 0 first, so that an image in the optical frame costs a few microseconds."""
-    shape = frame.shape
-    if not frame.is_organized or shape is None or shape[0] * shape[1] != frame.n_points or frame.points.ndim != 2:
-        return False
-    z = frame.points[:: max(1, frame.n_points // 4096), 2]
-    z = z[np.isfinite(z)]
-    if z.size < 100 or not float(np.median(z)) < 0.0:
-        return False
-    return pixel_pitch(frame.points * _GL_TURN.astype(frame.points.dtype), shape) is not None
-
-
-def _turned_back(seg: Segmentation) -> Segmentation:
-    """``seg`` of a frame turned by `_GL_TURN`, in the frame's own coordinates: every point
-    and direction turned back (the turn is its own inverse; rows of axes each a vector)."""
-    t = _GL_TURN
-
-    def opening(o: Opening) -> Opening:
-        return o if o.rim is None else dataclasses.replace(o, rim=dataclasses.replace(o.rim, center=o.rim.center * t))
-
-    return dataclasses.replace(
-        seg,
-        table=TablePlane(normal=seg.table.normal * t, offset=seg.table.offset),
-        table_polygon=seg.table_polygon * t,
-        objects=tuple(
-            dataclasses.replace(
-                o,
-                centroid=o.centroid * t,
-                obb_center=o.obb_center * t,
-                obb_axes=o.obb_axes * t,
-                principal_axes=o.principal_axes * t,
-            )
-            for o in seg.objects
-        ),
-        support=tuple(dataclasses.replace(v, normal=(v.normal[0], -v.normal[1], -v.normal[2])) for v in seg.support),
-        openings=tuple(opening(o) for o in seg.openings),
-        table_edges=tuple(dataclasses.replace(e, start=e.start * t, end=e.end * t) for e in seg.table_edges),
-        excluded=tuple(dataclasses.replace(e, centroid=e.centroid * t) for e in seg.excluded),
-    )
-
-
-def _segment(frame: Frame, settings: SegmentSettings) -> Segmentation:
-    """`segment` on the frame as given (the working grid)."""
+def _segment(frame: Frame, settings: SegmentSettings, may_roll: bool = False) -> Segmentation:
+    """`segment` on the frame as given (the working grid); ``may_roll``: the table step
+    raises `_Rolled` when the image is rolled, rather than reading it as it is."""
     clock = Clock(TIMINGS[:-1])
     points = frame.points
     if points.ndim != 2 or points.shape[1] != 3 or points.shape[0] == 0:
         where = f"{frame.source}: " if frame.source else ""
         raise SceneError(f"{where}the frame holds no points")
     organized = frame.is_organized and frame.shape is not None and frame.shape[0] * frame.shape[1] == points.shape[0]
-    w = _Work(frame, settings, organized, clock)
+    w = _Work(frame, settings, organized, clock, may_roll=may_roll)
     for step in STEPS:
         if step.above_table and w.vox is None:
             continue

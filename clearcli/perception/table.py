@@ -740,12 +740,15 @@ def find_table(
     organized: bool,
     source: str = "",
     pinhole: Callable[[], bool] | None = None,
+    upright_check: bool = True,
 ) -> TableFit:
     """Stage 2a: the support plane among up to ``plane_candidates`` RANSAC planes.
 
     ``points``: (M, 3) finite float64 points that survived outlier removal. ``pinhole``:
     whether the frame is an organized pinhole grid about its origin (a camera image in
     its optical frame), asked only when the origin's being the camera is in doubt.
+    ``upright_check``: an organized camera image whose table faces down the image is
+    refused (segment.py turns a rolled image upright first and passes False).
 
     The cloud is taken to be in a camera frame (the sensor at the origin) when the
     support lies `_MIN_CAMERA_HEIGHT_M` or more from the origin, unless the origin sees
@@ -1017,7 +1020,7 @@ def find_table(
             "camera) has more points behind it than standing on it; the table is seen from "
             f"below, or there is no table in view (surfaces considered: {_considered(fit.planes)})"
         )
-    if organized and fit.camera_is_origin and fit.plane.normal[1] > 0.5:
+    if upright_check and organized and fit.camera_is_origin and fit.plane.normal[1] > 0.5:
         raise SceneError(
             f"{where}the table is seen from below: its top faces down the image "
             f"(normal {np.round(fit.plane.normal, 2).tolist()} in the optical frame); "

@@ -1,0 +1,79 @@
+"""Tests of clearcli/perception/orientation.py: hand-worked turns and rolls."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from helpers.segment import _render
+
+from clearcli.io.frames import Frame
+from clearcli.perception.orientation import Orientation, axes_turn, quarter_turns_for
+
+
+def test_a_quarter_turn_moves_right_to_the_former_down_and_down_to_the_former_left() -> None:
+    # worked by hand: after np.rot90 (k = 1) the working image's right (x) is the frame's
+    # down (+y), its down (+y) the frame's left (-x); z stays
+    q = Orientation().rolled(1)
+    assert q.perm == (1, 0, 2) and q.sign == (1.0, -1.0, 1.0) and q.quarter_turns == 1
+    # two are a half turn: x and y negated; four are none
+    half = Orientation().rolled(2)
+    assert half.perm == (0, 1, 2) and half.sign == (-1.0, -1.0, 1.0)
+    assert Orientation().rolled(4).identity and not half.identity
+    # back() undoes the points' turn, exactly
+    p = np.array([[0.1, -0.2, 0.9], [1.5, 2.5, -3.5]], dtype=np.float32)
+    turned = q.frame(Frame(points=p)).points
+    assert np.array_equal(turned, np.array([[-0.2, -0.1, 0.9], [2.5, -1.5, -3.5]], dtype=np.float32))
+    assert np.array_equal(q.back(turned), p.astype(np.float64))
+
+
+def test_a_rolled_frame_moves_its_pixels_and_colours_with_its_points() -> None:
+    # a 2 x 3 image turned a quarter: 3 x 2, pixel (r, c) of the turn shows (c, 2 - r)
+    pts = np.arange(18, dtype=np.float32).reshape(6, 3) + 1.0
+    colors = np.arange(18, dtype=np.uint8).reshape(6, 3)
+    frame = Frame(points=pts, colors=colors, shape=(2, 3), fields={"label": np.arange(6)})
+    rolled = Orientation().rolled(1).frame(frame)
+    assert rolled.shape == (3, 2)
+    shows = [2, 5, 1, 4, 0, 3]  # np.rot90 of [[0, 1, 2], [3, 4, 5]]
+    assert rolled.fields["label"].tolist() == shows
+    assert np.array_equal(rolled.colors, colors[shows])
+    assert np.array_equal(rolled.points[:, 2], pts[shows, 2])  # z stays
+
+
+@pytest.mark.parametrize(
+    ("normal", "turns"),
+    [
+        ((0.0, -0.8, -0.6), 0),  # upright: the normal up the image
+        ((0.0, 0.8, -0.6), 2),  # upside down
+        ((0.8, 0.0, -0.6), 1),  # its top to the image's right: (x, y) -> (y, -x) = (0, -0.8), up
+        ((-0.8, 0.0, -0.6), 3),
+        ((0.0, 0.3, -0.95), 0),  # nearly straight down (0.3 < 0.5 in the image): no top
+        ((0.6, -0.4, -0.69), 0),  # 56 degrees off upright: within 60, read as it is
+        ((0.7, -0.3, -0.65), 1),  # 67 degrees off: a quarter turn, to (-0.3, -0.7)
+    ],
+)
+def test_quarter_turns_bring_the_tables_normal_nearest_the_images_top(normal: tuple[float, ...], turns: int) -> None:
+    n = np.array(normal) / np.linalg.norm(normal)
+    assert quarter_turns_for(n) == turns
+    if turns:
+        # after the turns the normal points up the image, within 45 degrees
+        after = Orientation().rolled(turns).frame(Frame(points=n[None].astype(np.float32))).points[0]
+        assert -after[1] >= math.cos(math.radians(45)) * math.hypot(after[0], after[1]) - 1e-6
+
+
+def test_the_axes_turn_is_found_for_other_conventions_and_none_for_the_optical_frame_or_a_mirror() -> None:
+    from clearcli.sim.scene import isolated_box
+
+    frame = _render(isolated_box())
+    p = frame.points
+    assert axes_turn(frame) is None  # the optical frame: as it is
+    gl = axes_turn(Frame(points=p * np.array([1, -1, -1], np.float32), shape=frame.shape))
+    assert gl is not None and gl.perm == (0, 1, 2) and gl.sign == (1.0, -1.0, -1.0)
+    link = axes_turn(Frame(points=np.ascontiguousarray(np.stack([p[:, 2], -p[:, 0], -p[:, 1]], 1)), shape=frame.shape))
+    # optical x = -link y, optical y = -link z, optical z = link x
+    assert link is not None and link.perm == (1, 2, 0) and link.sign == (-1.0, -1.0, 1.0)
+    # a mirror (x negated, looking along -z): no turn of a camera gives it
+    assert axes_turn(Frame(points=p * np.array([-1, -1, -1], np.float32), shape=frame.shape)) is None
+    # an unorganized cloud: no pixels to tell by
+    assert axes_turn(Frame(points=p * np.array([1, -1, -1], np.float32))) is None
