@@ -10,8 +10,9 @@ floating point, and the steps see the very points of the upright optical image:
 
 - another axis convention about the same camera (`axes_turn`): OpenGL's (y up, looking
   along -z: Open3D's tutorials turn their clouds so, ARKit and Unity write them so), ROS's
-  camera_link (x forward, y left, z up), and the rest. Told from the rays: the mean ray,
-  and the rays' steps along a row and down a column, each within `_AXIS_COS` of an axis,
+  camera_link (x forward, y left, z up), and the rest. Told from the rays: the mean point
+  nearest an axis (`_FORWARD_COS`), and the rays' steps along a row and down a column,
+  each within `_AXIS_COS` of an axis,
   the three a right-handed frame, and the turned frame a pinhole's grid about the origin
   (resolution.py). The optical frame itself is told by the mean ray alone, so it costs a
   sample's mean.
@@ -31,6 +32,7 @@ direction moved back to the frame's own.
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -40,18 +42,20 @@ from clearcli.perception.openings import Opening
 from clearcli.perception.resolution import pixel_pitch
 from clearcli.perception.types import Segmentation, TablePlane
 
-# a direction counts as an axis within 25 degrees of it (an image's mean ray lies within
-# half its field of view of the optical axis: 20-35 degrees for a tabletop camera's
-# valid pixels; its steps along a row and a column lie on the image's axes)
+# the rays' steps along a row and down a column lie on the image's axes: within 25 degrees
 _AXIS_COS = 0.9
+# the mean point lies within half the field of view of the axis the camera looks along
+# (a wide RealSense's 87 degrees across: 44): within 45 degrees, the nearest axis, which
+# the steps then confirm
+_FORWARD_COS = math.sqrt(0.5)
+# the mean point from a sample of about this many pixels
+_SAMPLE = 2048
 # the camera looks far enough off straight down for the image to have a top: the table's
 # normal (towards the camera) has at least this much in the image's plane (30 degrees)
 _TILT_MIN = 0.5
 # and the image is rolled when that part points more than 60 degrees from the image's
 # top (-y): cos 60
 _UPRIGHT_COS = 0.5
-# the mean ray from a sample of about this many pixels
-_SAMPLE = 4096
 
 
 @dataclass(frozen=True)
@@ -167,13 +171,13 @@ class Orientation:
         )
 
 
-def _axis(v: np.ndarray) -> tuple[int, float] | None:
-    """(axis, sign) of the axis ``v`` lies within `_AXIS_COS` of, or None."""
+def _axis(v: np.ndarray, within_cos: float = _AXIS_COS) -> tuple[int, float] | None:
+    """(axis, sign) of the axis ``v`` lies within ``within_cos`` of, or None."""
     norm = float(np.linalg.norm(v))
     if not norm > 0:
         return None
     k = int(np.argmax(np.abs(v)))
-    if abs(float(v[k])) < _AXIS_COS * norm:
+    if abs(float(v[k])) < within_cos * norm:
         return None
     return k, 1.0 if v[k] > 0 else -1.0
 
@@ -193,13 +197,13 @@ def axes_turn(frame: Frame) -> Orientation | None:
     points = frame.points
     if not frame.is_organized or shape is None or points.ndim != 2 or shape[0] * shape[1] != points.shape[0]:
         return None
-    sample = np.asarray(points[:: max(1, points.shape[0] // _SAMPLE)], dtype=np.float64)
+    # the mean of a sample of the points: it lies inside the cone of the image's rays, so
+    # within half the field of view (up to some 45 degrees) of the axis the camera looks along
+    sample = points[:: max(1, points.shape[0] // _SAMPLE)]
     sample = sample[np.isfinite(sample).all(axis=1)]
-    norms = np.linalg.norm(sample, axis=1)
-    sample = sample[norms > 0] / norms[norms > 0, None]
     if sample.shape[0] < 100:
         return None
-    forward = _axis(sample.mean(axis=0))
+    forward = _axis(sample.mean(axis=0, dtype=np.float64), _FORWARD_COS)
     if forward is None or forward == (2, 1.0):
         return None  # the optical frame's +z, or no axis: read as it is, as before
     h, w = shape
