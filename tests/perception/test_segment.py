@@ -444,33 +444,6 @@ def test_an_image_in_opengl_convention_gives_the_optical_frames_objects_turned()
     assert float(np.nanmedian(frame.points[:, 2] * -1.0)) < 0 and gl.table.normal[2] > 0.5
 
 
-def _grid_turns(frame: Frame) -> dict[str, tuple[Frame, np.ndarray]]:
-    """``frame`` (an organized optical image) as other cameras write the same view: each
-    variant and, per its pixel, the pixel of ``frame`` it shows."""
-    assert frame.shape is not None
-    h, w = frame.shape
-    grid, at = frame.points.reshape(h, w, 3), np.arange(h * w).reshape(h, w)
-    colors = None if frame.colors is None else frame.colors.reshape(h, w, 3)
-
-    def made(points: np.ndarray, pixels: np.ndarray) -> tuple[Frame, np.ndarray]:
-        c = None if colors is None else np.ascontiguousarray(colors.reshape(-1, 3)[pixels.reshape(-1)])
-        shape = (pixels.shape[0], pixels.shape[1])
-        return replace(frame, points=np.ascontiguousarray(points.reshape(-1, 3)), colors=c, shape=shape), pixels
-
-    p = frame.points
-    upside = grid[::-1, ::-1] * np.array([-1, -1, 1], np.float32)  # the camera rolled a half turn
-    quarter = np.rot90(grid, 1)  # a quarter turn: right is the former down, down the former left
-    return {
-        "opengl": made(p * np.array([1, -1, -1], np.float32), at),
-        "camera_link": made(np.stack([p[:, 2], -p[:, 0], -p[:, 1]], axis=1), at),
-        "upside_down": made(upside, at[::-1, ::-1]),
-        "on_its_side": made(np.stack([quarter[..., 1], -quarter[..., 0], quarter[..., 2]], axis=-1), np.rot90(at, 1)),
-        "camera_link_upside_down": made(
-            np.stack([upside[..., 2], -upside[..., 0], -upside[..., 1]], axis=-1), at[::-1, ::-1]
-        ),
-    }
-
-
 @pytest.mark.parametrize("variant", ["opengl", "camera_link", "upside_down", "on_its_side", "camera_link_upside_down"])
 def test_an_image_in_another_convention_or_rolled_gives_the_same_objects(variant: str) -> None:
     # the same view as other cameras and conventions write it: another axis convention
@@ -478,14 +451,15 @@ def test_an_image_in_another_convention_or_rolled_gives_the_same_objects(variant
     # Each is turned into the upright optical image (orientation.py): the same objects, pixel
     # for pixel; before, the first two and the upside-down ones were refused ("seen from
     # below") or segmented otherwise (camera_link: 2 objects more on a cluttered frame)
+    from clearcli.sim.conventions import variants
     from clearcli.sim.scene import clutter
 
     frame = _render(clutter(6, 2))
     upright = segment(frame, S)
-    turned, pixels = _grid_turns(frame)[variant]
+    turned, pixels = variants(frame)[variant]
     seg = segment(turned, S)
     back = np.zeros(frame.n_points, dtype=np.int32)
-    back[pixels.reshape(-1)] = seg.labels()
+    back[pixels] = seg.labels()
     assert len(seg.objects) == len(upright.objects) >= 4
     assert np.array_equal(back, upright.labels())
     # every point and direction in the variant's own coordinates: its points' own centroid,
