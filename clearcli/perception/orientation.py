@@ -40,7 +40,7 @@ import numpy as np
 from clearcli.io.frames import Frame
 from clearcli.perception.openings import Opening
 from clearcli.perception.resolution import pixel_pitch
-from clearcli.perception.types import Segmentation, TablePlane
+from clearcli.perception.types import PlaneVerdict, Segmentation, TablePlane
 
 # the rays' steps along a row and down a column lie on the image's axes: within 25 degrees
 _AXIS_COS = 0.9
@@ -50,6 +50,17 @@ _AXIS_COS = 0.9
 _FORWARD_COS = math.sqrt(0.5)
 # the mean point from a sample of about this many pixels
 _SAMPLE = 2048
+# the optical frame's pinhole grid told cheaply: every this many rows and columns probed
+_COARSE_PROBE = 32
+# a camera's pose from about this many pixels' points (camera_pose)
+_POSE_SAMPLE = 3000
+# a pinhole's image: its pixels' points reproject onto their pixels within this (median;
+# four times this for every one): a depth image's back-projection is exact but for the
+# points' float32 rounding (far below a hundredth of a pixel)
+_REPROJECTION_PX = 0.25
+# the projection is unique when its singular value is this many times below the next
+# (moved mOSD and RealSense frames: 1e5 to 1e6; points all on one plane: about 1)
+_UNIQUE_RATIO = 1000.0
 # the camera looks far enough off straight down for the image to have a top: the table's
 # normal (towards the camera) has at least this much in the image's plane (30 degrees)
 _TILT_MIN = 0.5
@@ -66,10 +77,19 @@ class Orientation:
     perm: tuple[int, int, int] = (0, 1, 2)
     sign: tuple[float, float, float] = (1.0, 1.0, 1.0)
     quarter_turns: int = 0
+    # first, before the axes' turn: the camera's pose recovered from the grid (`camera_pose`),
+    # camera = R_camera_frame @ frame + t_camera_frame (not exact: rounded to the frame's dtype)
+    R_camera_frame: np.ndarray | None = None
+    t_camera_frame: np.ndarray | None = None
 
     @property
     def identity(self) -> bool:
-        return self.perm == (0, 1, 2) and self.sign == (1.0, 1.0, 1.0) and self.quarter_turns % 4 == 0
+        return (
+            self.perm == (0, 1, 2)
+            and self.sign == (1.0, 1.0, 1.0)
+            and self.quarter_turns % 4 == 0
+            and self.R_camera_frame is None
+        )
 
     def rolled(self, k: int) -> Orientation:
         """This one, then the image turned by ``k`` more quarter turns: per quarter turn the
@@ -80,7 +100,9 @@ class Orientation:
             sign = [sign[1], -sign[0], sign[2]]
         p0, p1, p2 = perm
         s0, s1, s2 = sign
-        return Orientation((p0, p1, p2), (s0, s1, s2), (self.quarter_turns + k) % 4)
+        return dataclasses.replace(
+            self, perm=(p0, p1, p2), sign=(s0, s1, s2), quarter_turns=(self.quarter_turns + k) % 4
+        )
 
     def _pixels(self, shape: tuple[int, int]) -> np.ndarray:
         """(N,) the frame's pixel of each working pixel."""
@@ -88,18 +110,36 @@ class Orientation:
         return np.ascontiguousarray(np.rot90(np.arange(h * w).reshape(h, w), self.quarter_turns)).reshape(-1)
 
     def _points(self, points: np.ndarray) -> np.ndarray:
+        if self.R_camera_frame is not None and self.t_camera_frame is not None:
+            camera = points.astype(np.float64) @ self.R_camera_frame.T + self.t_camera_frame
+            points = camera.astype(points.dtype)
         out = np.empty_like(points)
         for i in range(3):
             np.multiply(points[:, self.perm[i]], points.dtype.type(self.sign[i]), out=out[:, i])
         return out
 
-    def back(self, vectors: np.ndarray) -> np.ndarray:
-        """Points or directions (..., 3) of the working frame in the frame's own."""
+    def back(self, vectors: np.ndarray, points: bool = True) -> np.ndarray:
+        """Points (or directions: ``points`` False) (..., 3) of the working frame in the
+        frame's own."""
         v = np.asarray(vectors, dtype=np.float64)
         out = np.empty_like(v)
         for i in range(3):
             out[..., self.perm[i]] = self.sign[i] * v[..., i]
+        if self.R_camera_frame is not None and self.t_camera_frame is not None:
+            out = (out - self.t_camera_frame if points else out) @ self.R_camera_frame
         return out
+
+    def offset_back(self, offset: float, normal: np.ndarray) -> float:
+        """A plane's offset in the frame's own coordinates (``normal``: the working one):
+        n . p_camera + d = 0 with p_camera = R p + t gives (R^T n) . p + (d + n . t) = 0;
+        the axes' turn moves no plane's distance from the origin."""
+        R, t = self.R_camera_frame, self.t_camera_frame
+        if R is None or t is None:
+            return float(offset)
+        camera_normal = np.empty(3)
+        for i in range(3):
+            camera_normal[self.perm[i]] = self.sign[i] * float(normal[i])
+        return float(offset) + float(camera_normal @ t)
 
     def frame(self, frame: Frame) -> Frame:
         """The working frame: ``frame``'s points turned, and its pixels (points, colours,
@@ -140,10 +180,17 @@ class Orientation:
                 o if rim is None else dataclasses.replace(o, rim=dataclasses.replace(rim, center=self.back(rim.center)))
             )
 
-        turned_normal = self.back(seg.table.normal)
+        def verdict(v: PlaneVerdict) -> PlaneVerdict:
+            normal = np.array(v.normal)
+            x, y, z = (float(c) for c in self.back(normal, points=False))
+            return dataclasses.replace(v, normal=(x, y, z), offset_m=self.offset_back(v.offset_m, normal))
+
+        table = seg.table
         return dataclasses.replace(
             seg,
-            table=TablePlane(normal=turned_normal, offset=seg.table.offset),
+            table=TablePlane(
+                normal=self.back(table.normal, points=False), offset=self.offset_back(table.offset, table.normal)
+            ),
             table_polygon=self.back(seg.table_polygon),
             table_indices=pixels(seg.table_indices),
             objects=tuple(
@@ -152,15 +199,12 @@ class Orientation:
                     indices=pixels(o.indices),
                     centroid=self.back(o.centroid),
                     obb_center=self.back(o.obb_center),
-                    obb_axes=self.back(o.obb_axes),
-                    principal_axes=self.back(o.principal_axes),
+                    obb_axes=self.back(o.obb_axes, points=False),
+                    principal_axes=self.back(o.principal_axes, points=False),
                 )
                 for o in seg.objects
             ),
-            support=tuple(
-                dataclasses.replace(v, normal=tuple(float(x) for x in self.back(np.array(v.normal))))  # type: ignore[arg-type]
-                for v in seg.support
-            ),
+            support=tuple(verdict(v) for v in seg.support),
             openings=tuple(opening(o) for o in seg.openings),
             table_edges=tuple(
                 dataclasses.replace(e, start=self.back(e.start), end=self.back(e.end)) for e in seg.table_edges
@@ -190,9 +234,10 @@ def _mean_step(rays: np.ndarray) -> np.ndarray:
 
 
 def axes_turn(frame: Frame) -> Orientation | None:
-    """The turn of ``frame``'s axes into the optical frame's when it is an organized pinhole
-    image in another axis convention about the camera (module docstring); None for the
-    optical frame itself, an unorganized cloud, or a grid that is no camera image."""
+    """The turn of ``frame`` into the optical frame of its camera when it is an organized
+    pinhole image in another axis convention about the camera, or a camera image moved
+    into another frame (module docstring); None for the optical frame itself, an
+    unorganized cloud, or a grid that is no camera image."""
     shape = frame.shape
     points = frame.points
     if not frame.is_organized or shape is None or points.ndim != 2 or shape[0] * shape[1] != points.shape[0]:
@@ -204,10 +249,23 @@ def axes_turn(frame: Frame) -> Orientation | None:
     if sample.shape[0] < 100:
         return None
     forward = _axis(sample.mean(axis=0, dtype=np.float64), _FORWARD_COS)
-    if forward is None or forward == (2, 1.0):
-        return None  # the optical frame's +z, or no axis: read as it is, as before
-    h, w = shape
-    grid = np.asarray(points, dtype=np.float64).reshape(h, w, 3)
+    if forward == (2, 1.0) and pixel_pitch(points, shape, _COARSE_PROBE) is not None:
+        return None  # the optical frame: read as it is
+    turn = _signed_axes(frame, forward) if forward is not None else None
+    if turn is not None:
+        return turn
+    pose = camera_pose(points, shape)
+    if pose is None:
+        return None  # no camera image: read as it is, as before
+    return Orientation(R_camera_frame=pose[0], t_camera_frame=pose[1])
+
+
+def _signed_axes(frame: Frame, forward: tuple[int, float]) -> Orientation | None:
+    """The signed reordering of ``frame``'s axes that makes it an optical pinhole image
+    about the origin (the camera looking along ``forward``), or None."""
+    assert frame.shape is not None
+    h, w = frame.shape
+    grid = np.asarray(frame.points, dtype=np.float64).reshape(h, w, 3)
     with np.errstate(invalid="ignore", divide="ignore"):
         rows = grid[:: max(1, h // 60)]
         rows = rows / np.linalg.norm(rows, axis=2, keepdims=True)
@@ -217,14 +275,80 @@ def axes_turn(frame: Frame) -> Orientation | None:
     if right is None or down is None or len({right[0], down[0], forward[0]}) != 3:
         return None
     turn = Orientation((right[0], down[0], forward[0]), (right[1], down[1], forward[1]))
+    if turn.identity:
+        return None  # the optical axes, yet no pinhole about the origin: moved (camera_pose)
     matrix = np.zeros((3, 3))
     for i in range(3):
         matrix[i, turn.perm[i]] = turn.sign[i]
     if np.linalg.det(matrix) < 0:
         return None  # a mirror image: no turn of a camera gives it
-    if pixel_pitch(turn.frame(frame).points, shape) is None:
+    if pixel_pitch(turn.frame(frame).points, frame.shape) is None:
         return None
     return turn
+
+
+def camera_pose(points: np.ndarray, shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray] | None:
+    """(R_camera_frame, t_camera_frame): the pose of the pinhole camera whose image the
+    organized ``points`` (of ``shape``) are, camera = R @ point + t in its optical frame;
+    None when they are no pinhole's image (their pixels' reprojection off by more than
+    `_REPROJECTION_PX`), or already in its optical frame about the origin.
+
+    Every pixel's point is a 3D point seen at that pixel: the camera's 3 x 4 projection
+    follows from a sample of them by the direct linear transform (Hartley's normalised
+    DLT), and its RQ decomposition gives the intrinsics and the pose."""
+    h, w = shape
+    flat = np.flatnonzero(np.isfinite(points).all(axis=1))
+    if flat.size < 100:
+        return None
+    flat = flat[:: max(1, flat.size // _POSE_SAMPLE)]
+    X = points[flat].astype(np.float64)
+    uv = np.stack([flat % w, flat // w], axis=1).astype(np.float64)
+    mean_x, mean_uv = X.mean(axis=0), uv.mean(axis=0)
+    scale_x = math.sqrt(3.0) / float(np.mean(np.linalg.norm(X - mean_x, axis=1)))
+    scale_uv = math.sqrt(2.0) / float(np.mean(np.linalg.norm(uv - mean_uv, axis=1)))
+    xn, un = (X - mean_x) * scale_x, (uv - mean_uv) * scale_uv
+    rows = np.zeros((2 * flat.size, 12))
+    rows[0::2, 0:3], rows[0::2, 3] = xn, 1.0
+    rows[0::2, 8:11], rows[0::2, 11] = -un[:, :1] * xn, -un[:, 0]
+    rows[1::2, 4:7], rows[1::2, 7] = xn, 1.0
+    rows[1::2, 8:11], rows[1::2, 11] = -un[:, 1:] * xn, -un[:, 1]
+    # the least singular vector of rows, from the 12 x 12 normal matrix (the data
+    # normalised: well conditioned), not an SVD of the (2N, 12) rows (100 times the time)
+    values, vectors = np.linalg.eigh(rows.T @ rows)
+    # one projection only: points all on a plane (an empty table) fit a family of them
+    # (each the same on the plane, different off it), their least two values alike
+    if not values[1] > _UNIQUE_RATIO**2 * max(values[0], 0.0):
+        return None
+    projection_n = vectors[:, 0].reshape(3, 4)
+    to_uv = np.array([[scale_uv, 0.0, -scale_uv * mean_uv[0]], [0.0, scale_uv, -scale_uv * mean_uv[1]], [0, 0, 1]])
+    to_x = np.eye(4)
+    to_x[:3, :3] *= scale_x
+    to_x[:3, 3] = -scale_x * mean_x
+    projection = np.linalg.solve(to_uv, projection_n @ to_x)
+    m = projection[:, :3]
+    if np.linalg.det(m) < 0:
+        projection, m = -projection, -m
+    # RQ of m by the QR of its rows reversed: m = K R, K upper triangular, diag(K) > 0
+    flip = np.eye(3)[::-1]
+    q, r = np.linalg.qr((flip @ m).T)
+    K, R = flip @ r.T @ flip, flip @ q.T
+    signs = np.diag(np.sign(np.diag(K)))
+    K, R = K @ signs, signs @ R
+    if np.linalg.det(R) < 0 or not K[2, 2] > 0:
+        return None
+    # projection = K [R | t] up to its scale, which K carries until it is normalised
+    t = np.linalg.solve(K, projection[:, 3])
+    K = K / K[2, 2]
+    camera = X @ R.T + t
+    if not (K[0, 0] > 0 and K[1, 1] > 0 and abs(K[0, 1]) <= 0.01 * K[0, 0]) or np.mean(camera[:, 2] > 0) < 0.99:
+        return None
+    seen = camera @ K.T
+    error = np.linalg.norm(seen[:, :2] / seen[:, 2:] - uv, axis=1)
+    if float(np.median(error)) > _REPROJECTION_PX or float(error.max()) > 4 * _REPROJECTION_PX:
+        return None
+    if np.abs(R - np.eye(3)).max() < 1e-4 and float(np.abs(t).max()) < 1e-4:
+        return None  # its own optical frame already
+    return R, t
 
 
 def quarter_turns_for(normal: np.ndarray) -> int:

@@ -74,17 +74,20 @@ def _median_step(tan: np.ndarray, depth: np.ndarray) -> float | None:
     return float(q50)
 
 
-def pixel_pitch(points: np.ndarray, shape: tuple[int, int]) -> tuple[float, float] | None:
+def pixel_pitch(
+    points: np.ndarray, shape: tuple[int, int], probe_step: int = _PROBE_STEP
+) -> tuple[float, float] | None:
     """(rows' pitch, columns' pitch): the step of y/z from one row to the next (1/fy)
     and of x/z from one column to the next (1/fx), radians at the image centre; None when
-    the frame is no pinhole's grid in its optical frame."""
+    the frame is no pinhole's grid in its optical frame. ``probe_step``: every this many
+    rows and columns are probed (a coarser probe only to tell a pinhole's grid, cheaply)."""
     h, w = shape
     if h < 2 or w < 2 or points.shape != (h * w, 3):
         return None
     grid = points.reshape(h, w, 3)
     with np.errstate(invalid="ignore", divide="ignore"):
-        rows = grid[::_PROBE_STEP].astype(np.float64)  # sampled rows, every column
-        cols = grid[:, ::_PROBE_STEP].astype(np.float64).transpose(1, 0, 2)  # sampled columns, every row
+        rows = grid[::probe_step].astype(np.float64)  # sampled rows, every column
+        cols = grid[:, ::probe_step].astype(np.float64).transpose(1, 0, 2)  # sampled columns, every row
         across = _median_step(rows[..., 0] / rows[..., 2], rows[..., 2])
         down = _median_step(cols[..., 1] / cols[..., 2], cols[..., 2])
     if across is None or down is None:

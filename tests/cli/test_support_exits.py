@@ -16,6 +16,7 @@ import numpy as np
 from helpers import run_clear_as_user, shared_path
 
 from clearcli.errors import EXIT_OK, EXIT_SCENE
+from clearcli.io.frames import Frame
 from clearcli.io.pcd import write_pcd
 from clearcli.sim.camera import render
 from clearcli.sim.families import FURNITURE_ID, SUPPORT_FAMILIES, support_frame
@@ -114,7 +115,9 @@ def test_a_z_up_cloud_whose_origin_lies_beneath_the_table_is_segmented(tmp_path:
     T_table_camera = np.linalg.inv(scene.T_camera_table)
     p = frame.points.astype(np.float64) @ T_table_camera[:3, :3].T + T_table_camera[:3, 3] + [0.0, 0.0, 0.75]
     src = tmp_path / "base_frame.pcd"
-    write_pcd(src, dataclasses.replace(frame, points=p.astype(np.float32)))
+    keep = np.isfinite(p).all(axis=1)  # an unorganized cloud (an organized one: its camera is found)
+    assert frame.colors is not None
+    write_pcd(src, Frame(points=p[keep].astype(np.float32), colors=frame.colors[keep]))
     res = _clear("segment", str(src), "--json")
     assert res.returncode == EXIT_OK, res.stderr
     doc = _json(res)

@@ -77,3 +77,61 @@ def test_the_axes_turn_is_found_for_other_conventions_and_none_for_the_optical_f
     assert axes_turn(Frame(points=p * np.array([-1, -1, -1], np.float32), shape=frame.shape)) is None
     # an unorganized cloud: no pixels to tell by
     assert axes_turn(Frame(points=p * np.array([1, -1, -1], np.float32))) is None
+
+
+def _pinhole_image(R: np.ndarray, t: np.ndarray, h: int = 120, w: int = 160) -> np.ndarray:
+    """(h * w, 3) points of a pinhole camera (fx = fy = 150, centre (79.5, 59.5)) looking at a
+    plane 1 m ahead tilted 30 degrees with a box's top 10 cm nearer over a part of it, moved
+    into a frame where camera = R @ point + t."""
+    v, u = np.mgrid[0:h, 0:w].astype(np.float64)
+    rays = np.stack([(u - 79.5) / 150.0, (v - 59.5) / 150.0, np.ones_like(u)], axis=-1).reshape(-1, 3)
+    # the plane z = 1 + 0.577 y (30 degrees): depth along each ray
+    depth = 1.0 / (1.0 - 0.577 * rays[:, 1])
+    box = ((u > 60) & (u < 100) & (v > 40) & (v < 80)).reshape(-1)
+    depth[box] -= 0.1
+    camera = rays * depth[:, None]
+    camera[::7] = np.nan  # some pixels without depth
+    return (camera - t) @ R  # point = R^T (camera - t)
+
+
+def test_the_camera_pose_of_a_moved_image_is_recovered_from_its_pixels() -> None:
+    from clearcli.perception.orientation import camera_pose
+
+    angle = math.radians(40.0)
+    R = np.array([[1.0, 0.0, 0.0], [0.0, math.cos(angle), -math.sin(angle)], [0.0, math.sin(angle), math.cos(angle)]])
+    R = R @ np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])  # and a quarter turn about z
+    t = np.array([0.3, -0.2, 0.9])
+    pose = camera_pose(_pinhole_image(R, t).astype(np.float32), (120, 160))
+    assert pose is not None
+    assert np.abs(pose[0] - R).max() < 1e-5 and np.abs(pose[1] - t).max() < 1e-5
+    # the image in its own optical frame: no pose to apply
+    assert camera_pose(_pinhole_image(np.eye(3), np.zeros(3)), (120, 160)) is None
+    # the pixels shuffled: no pinhole's image
+    shuffled = _pinhole_image(R, t)[np.random.default_rng(0).permutation(120 * 160)]
+    assert camera_pose(shuffled, (120, 160)) is None
+    # every point on one plane (no box): many projections fit it, so none is taken
+    v, u = np.mgrid[0:120, 0:160].astype(np.float64)
+    flat = np.stack([(u - 79.5) / 150.0, (v - 59.5) / 150.0, np.ones_like(u)], axis=-1).reshape(-1, 3)
+    assert camera_pose(((flat - t) @ R), (120, 160)) is None
+
+
+def test_a_moved_image_is_turned_into_its_cameras_frame_and_back() -> None:
+    from clearcli.perception.orientation import Orientation
+
+    angle = math.radians(25.0)
+    R = np.array([[math.cos(angle), 0.0, math.sin(angle)], [0.0, 1.0, 0.0], [-math.sin(angle), 0.0, math.cos(angle)]])
+    t = np.array([0.1, 0.2, -0.4])
+    frame = Frame(points=_pinhole_image(R, t), shape=(120, 160))
+    turn = axes_turn(frame)
+    assert turn is not None and turn.R_camera_frame is not None and turn.quarter_turns == 0
+    working = turn.frame(frame)
+    assert np.allclose(working.points, _pinhole_image(np.eye(3), np.zeros(3)), atol=1e-9, equal_nan=True)
+    # back: points (R^T (p - t)), directions (R^T n), a plane's offset (d + n . t)
+    p = np.array([0.2, -0.1, 1.3])
+    assert np.allclose(turn.back(p), (p - t) @ R)
+    assert np.allclose(turn.back(p, points=False), p @ R)
+    n, d = np.array([0.0, -0.6, -0.8]), 0.7  # a plane in the camera's frame
+    n_frame, d_frame = turn.back(n, points=False), turn.offset_back(d, n)
+    on_plane = p - (n @ p + d) * n
+    assert abs(n_frame @ turn.back(on_plane) + d_frame) < 1e-12
+    assert isinstance(turn.rolled(2), Orientation) and turn.rolled(2).R_camera_frame is turn.R_camera_frame

@@ -153,15 +153,16 @@ def test_a_z_up_frame_whose_origin_lies_beneath_the_table_finds_its_objects(orga
     assert seg.table.normal[2] > 0.999  # up, the table's z axis
     assert seg.table.offset == pytest.approx(-0.75, abs=0.005)
     chosen = seg.support[0]
-    assert chosen.chosen and "the frame's origin is no camera" in chosen.why, chosen.why
-    # the same objects as in the camera frame: each matched by its points
     assert len(seg.objects) == len(seen.objects) == 5
-    if organized:  # the same pixels
-        for o in seen.objects:
-            best = max(
-                np.intersect1d(o.indices, m.indices).size / np.union1d(o.indices, m.indices).size for m in seg.objects
-            )
-            assert best >= 0.9
+    if organized:
+        # a pinhole's image moved into another frame: the camera's pose is recovered from
+        # its pixels (orientation.camera_pose) and it is segmented in the camera's frame:
+        # the same pixels as there (the move rounds the points to float32: a micrometre)
+        assert chosen.chosen and "origin is no camera" not in chosen.why, chosen.why
+        assert np.array_equal(seg.labels(), seen.labels())
+    else:
+        # no pixels to find the camera by: the origin is no camera, up is where the objects stand
+        assert chosen.chosen and "the frame's origin is no camera" in chosen.why, chosen.why
     # a camera frame with its origin above the table (moved 0.75 m up instead) is still one
     over = segment(_frame_beneath_the_table(camera, scene.T_camera_table, -0.75, organized), S)
     assert "origin is no camera" not in over.support[0].why and len(over.objects) == 5
