@@ -16,6 +16,13 @@ floating point, and the steps see the very points of the upright optical image:
   the three a right-handed frame, and the turned frame a pinhole's grid about the origin
   (resolution.py). The optical frame itself is told by the mean ray alone, so it costs a
   sample's mean.
+- a camera image moved into another frame (a cloud transformed into a robot's base frame,
+  organized still, as ROS's transforms keep it; `camera_pose`): its pixels' points are a
+  pinhole's image seen from elsewhere, and the camera's pose follows from them (the
+  direct linear transform of points to pixels). The image is moved into the camera's
+  frame (rounded to the frame's dtype: not exact, micrometre changes) and the results
+  moved back. Tried when the frame is no pinhole image about its origin in any axis
+  convention.
 - a camera rolled about its optical axis (mounted upside down or on its side, as wrist
   cameras are; `quarter_turns_for`): told once the table is found, by its normal seen in
   the image. When the camera looks 30 degrees or more off straight down (the normal's
@@ -304,10 +311,24 @@ def camera_pose(points: np.ndarray, shape: tuple[int, int]) -> tuple[np.ndarray,
     X = points[flat].astype(np.float64)
     uv = np.stack([flat % w, flat // w], axis=1).astype(np.float64)
     mean_x, mean_uv = X.mean(axis=0), uv.mean(axis=0)
-    scale_x = math.sqrt(3.0) / float(np.mean(np.linalg.norm(X - mean_x, axis=1)))
-    scale_uv = math.sqrt(2.0) / float(np.mean(np.linalg.norm(uv - mean_uv, axis=1)))
+    with np.errstate(all="ignore"):
+        spread_x = float(np.mean(np.linalg.norm(X - mean_x, axis=1)))
+        spread_uv = float(np.mean(np.linalg.norm(uv - mean_uv, axis=1)))
+    if not (0.0 < spread_x < 1e6 and 0.0 < spread_uv):
+        return None  # one point repeated, or coordinates no camera gives
+    try:
+        return _pose_of(X, uv, mean_x, mean_uv, math.sqrt(3.0) / spread_x, math.sqrt(2.0) / spread_uv)
+    except np.linalg.LinAlgError:
+        return None
+
+
+def _pose_of(
+    X: np.ndarray, uv: np.ndarray, mean_x: np.ndarray, mean_uv: np.ndarray, scale_x: float, scale_uv: float
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """`camera_pose` of the points ``X`` seen at the pixels ``uv`` (their means and the
+    scales that normalise them given)."""
     xn, un = (X - mean_x) * scale_x, (uv - mean_uv) * scale_uv
-    rows = np.zeros((2 * flat.size, 12))
+    rows = np.zeros((2 * X.shape[0], 12))
     rows[0::2, 0:3], rows[0::2, 3] = xn, 1.0
     rows[0::2, 8:11], rows[0::2, 11] = -un[:, :1] * xn, -un[:, 0]
     rows[1::2, 4:7], rows[1::2, 7] = xn, 1.0
