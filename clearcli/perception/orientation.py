@@ -272,12 +272,13 @@ def _signed_axes(frame: Frame, forward: tuple[int, float]) -> Orientation | None
     about the origin (the camera looking along ``forward``), or None."""
     assert frame.shape is not None
     h, w = frame.shape
-    grid = np.asarray(frame.points, dtype=np.float64).reshape(h, w, 3)
+    grid = frame.points.reshape(h, w, 3)
     with np.errstate(invalid="ignore", divide="ignore"):
-        rows = grid[:: max(1, h // 60)]
-        rows = rows / np.linalg.norm(rows, axis=2, keepdims=True)
-        cols = grid[:, :: max(1, w // 80)].transpose(1, 0, 2)
-        cols = cols / np.linalg.norm(cols, axis=2, keepdims=True)
+        # some 16 rows and 16 columns, in float64 (not the whole grid): thousands of steps
+        rows = grid[:: max(1, h // 16)].astype(np.float64)
+        rows /= np.linalg.norm(rows, axis=2, keepdims=True)
+        cols = grid[:, :: max(1, w // 16)].transpose(1, 0, 2).astype(np.float64)
+        cols /= np.linalg.norm(cols, axis=2, keepdims=True)
         right, down = _axis(_mean_step(rows)), _axis(_mean_step(cols))
     if right is None or down is None or len({right[0], down[0], forward[0]}) != 3:
         return None
@@ -289,7 +290,7 @@ def _signed_axes(frame: Frame, forward: tuple[int, float]) -> Orientation | None
         matrix[i, turn.perm[i]] = turn.sign[i]
     if np.linalg.det(matrix) < 0:
         return None  # a mirror image: no turn of a camera gives it
-    if pixel_pitch(turn.frame(frame).points, frame.shape) is None:
+    if pixel_pitch(turn.frame(frame).points, frame.shape, _COARSE_PROBE) is None:
         return None
     return turn
 

@@ -108,10 +108,13 @@ def choose_stride(frame: Frame, settings: SegmentSettings) -> int:
     shape = frame.shape
     if not frame.is_organized or shape is None or shape[0] * shape[1] != frame.n_points:
         return 1
-    pitch = pixel_pitch(frame.points, shape)
-    if pitch is None:
-        return 1
-    return stride_for(max(pitch), settings.voxel_m)
+    return stride_of_pitch(pixel_pitch(frame.points, shape), settings)
+
+
+def stride_of_pitch(pitch: tuple[float, float] | None, settings: SegmentSettings) -> int:
+    """`choose_stride` of an organized frame whose `pixel_pitch` is ``pitch`` (None: no
+    pinhole's grid, every pixel)."""
+    return 1 if pitch is None else stride_for(max(pitch), settings.voxel_m)
 
 
 def _every_kth(values: np.ndarray, shape: tuple[int, int], k: int) -> np.ndarray:
