@@ -965,7 +965,8 @@ def find_table(
         raise SceneError(
             f"{where}no table: every plane of table size is more than "
             f"{settings.table_max_distance_m} m from the camera (surfaces considered: {considered}); "
-            "is a table in reach?"
+            "is a table in reach? (a depth image whose unit is not the millimetre needs "
+            "[images] depth_scale_m; a table farther away, [segment] table_max_distance_m)"
         )
     _, fit, above, below = best
     chosen_standing = abs(above - below)

@@ -77,6 +77,13 @@ def test_a_frame_in_millimetres_is_no_table_with_a_hint_to_scale_it(box_frame: F
     assert message.endswith("if they are millimetres, scale them to metres (x 0.001)"), message
     median = float(message.split("its points lie a median ", 1)[1].split(" m from")[0])
     assert 500 < median < 1500  # the camera is ~0.6-1 m from the table (sim placement)
+    # in tenths of millimetres read as millimetres (a depth image of another unit): the table
+    # 6-10 m away, beyond table_max_distance_m; the line names the two settings that help
+    tenths = replace(box_frame, points=box_frame.points * np.float32(10.0))
+    with pytest.raises(SceneError, match="more than 3.0 m from the camera") as err:
+        segment(tenths, S)
+    assert "[images] depth_scale_m" in str(err.value) and "[segment] table_max_distance_m" in str(err.value)
+    assert "millimetres, scale them" not in str(err.value)
 
 
 def test_table_seen_from_below_is_a_scene_error(box_frame: Frame) -> None:
