@@ -76,7 +76,7 @@ _TILT_MIN = 0.5
 _UPRIGHT_COS = 0.5
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Orientation:
     """working[:, i] = sign[i] * frame[:, perm[i]] for every point, and the working image
     the frame's turned by ``quarter_turns`` (np.rot90's k) after that."""
