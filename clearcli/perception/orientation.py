@@ -4,18 +4,19 @@ labs no one here has seen).
 The steps read an organized frame as a camera image in the optical frame (x right, y down
 the image, z forward, the camera at the origin), the right way up (the table's normal,
 seen in the image, towards its top): depth is read along +z, the table's far side up the
-image. Two kinds of frames meet that only after a turn; each turn keeps every coordinate
-or negates it and moves it to another axis, and moves pixels whole, so it is exact in
-floating point, and the steps see the very points of the upright optical image:
+image. Three kinds of frames meet that only after a turn. The first and the third turn
+keeps every coordinate or negates it and moves it to another axis, and moves pixels
+whole, so it is exact in floating point, and the steps see the very points of the
+upright optical image:
 
 - another axis convention about the same camera (`axes_turn`): OpenGL's (y up, looking
   along -z: Open3D's tutorials turn their clouds so, ARKit and Unity write them so), ROS's
   camera_link (x forward, y left, z up), and the rest. Told from the rays: the mean point
   nearest an axis (`_FORWARD_COS`), and the rays' steps along a row and down a column,
-  each within `_AXIS_COS` of an axis,
-  the three a right-handed frame, and the turned frame a pinhole's grid about the origin
-  (resolution.py). The optical frame itself is told by the mean ray alone, so it costs a
-  sample's mean.
+  each within `_AXIS_COS` of an axis, the three a right-handed frame, and the turned
+  frame a pinhole's grid about the origin (resolution.py). The optical frame itself is
+  told by its pixel pitch (`resolution.pixel_pitch` reads, which `segment` reads anyway
+  for the working grid's stride; `axes_turn` alone: the mean point and a coarse probe).
 - a camera image moved into another frame (a cloud transformed into a robot's base frame,
   organized still, as ROS's transforms keep it; `camera_pose`): its pixels' points are a
   pinhole's image seen from elsewhere, and the camera's pose follows from them (the
