@@ -10,6 +10,9 @@ move pixels, so the objects should be the frame's, pixel for pixel: per set and 
 the frames whose labels are identical (carried back to the frame's pixels), and the median
 extra time of a variant's segmentation against the frame's.
 
+The same without pixels: the finite points of the frame and of the OpenGL, camera_link and
+upside-down variants as unorganized clouds, in the same order: labels identical?
+
 Then the frame moved into a z-up frame whose origin lies 0.75 m beneath the table (a
 mobile robot's base on the floor; `beneath_the_table`), organized and as an unorganized
 cloud: not the same processing (no camera at the origin: no range noise, no rays), so
@@ -51,6 +54,12 @@ SETS = {
 }
 
 
+def _unorganized(frame: Frame, rows: np.ndarray) -> Frame:
+    """``frame``'s points ``rows`` (in that order) as an unorganized cloud."""
+    colors = None if frame.colors is None else np.ascontiguousarray(frame.colors[rows])
+    return Frame(points=np.ascontiguousarray(frame.points[rows]), colors=colors, source=frame.source)
+
+
 def _timed(frame: Frame, settings: SegmentSettings) -> tuple[object, float]:
     start = time.perf_counter()
     try:
@@ -87,6 +96,20 @@ def main() -> None:
                     back[pixels] = seg.labels()  # type: ignore[attr-defined]
                 same[name] = same.get(name, 0) + int(np.array_equal(back, labels))
                 extra.setdefault(name, []).append(t - t0)
+            # without pixels: the finite points alone, optical against the axes' variants
+            finite = np.flatnonzero(np.isfinite(frame.points).all(axis=1))
+            loose_optical, _ = _timed(_unorganized(frame, finite), settings)
+            if not isinstance(loose_optical, ClearError):
+                for name in ("opengl", "camera_link", "upside_down"):
+                    variant, pixels = variants(frame)[name]
+                    at = np.argsort(pixels)[finite]  # each finite frame pixel's place in the variant
+                    seg, _ = _timed(_unorganized(variant, at), settings)
+                    ok = not isinstance(seg, ClearError) and np.array_equal(
+                        seg.labels(),  # type: ignore[attr-defined]
+                        loose_optical.labels(),  # type: ignore[attr-defined]
+                    )
+                    key = f"unorganized {name}"
+                    same[key] = same.get(key, 0) + int(ok)
             table = base.table  # type: ignore[attr-defined]
             moved = beneath_the_table(frame, table.normal, table.offset)
             keep = np.isfinite(moved.points).all(axis=1)
@@ -112,10 +135,8 @@ def main() -> None:
                 beneath[kind][1] += int(len(seg.objects) == len(base.objects))  # type: ignore[attr-defined]
         print(f"{set_name}: {n} organized frames")
         for name in same:
-            print(
-                f"  {name:<24} labels identical {same[name]:>3} of {n}   "
-                f"extra time median {1e3 * float(np.median(extra[name])):+6.1f} ms"
-            )
+            timed = f"   extra time median {1e3 * float(np.median(extra[name])):+6.1f} ms" if name in extra else ""
+            print(f"  {name:<24} labels identical {same[name]:>3} of {n}{timed}")
         for kind, (objects, count, refused) in beneath.items():
             print(
                 f"  beneath the table, {kind:<11} same objects {objects:>3} of {n}, "

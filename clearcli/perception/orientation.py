@@ -386,3 +386,27 @@ def quarter_turns_for(normal: np.ndarray) -> int:
     # per quarter turn the in-image vector (x, y) becomes (y, -x): up (-y) after k turns
     ups = [-y, x, y, -x]  # the working y of the vector after k = 0, 1, 2, 3 turns, negated
     return int(np.argmax(ups))
+
+
+def cloud_turn(points: np.ndarray, normal: np.ndarray) -> Orientation | None:
+    """The turn of an unorganized cloud in a camera frame (its ``points``, the table's
+    ``normal`` towards the camera at the origin) into the optical frame's axes, the right
+    way up, or None when it is in them already (within 60 degrees of upright, as
+    `quarter_turns_for` reads an image) or looks along no axis.
+
+    Without pixels the axes are told by the view: forward is the axis the mean point lies
+    nearest (within 45 degrees), and the image's "up" the one the table's normal leans
+    along, across forward. The turn only reorders and negates coordinates: the cloud's
+    objects become those of the same points in the optical frame's axes (the voxel grid
+    lies along the axes, so the axes matter), exactly."""
+    forward = _axis(np.asarray(points, dtype=np.float64).mean(axis=0), _FORWARD_COS)
+    if forward is None:
+        return None
+    k, s = forward
+    # a right-handed frame with z along forward: x and y the next axes in cyclic order
+    provisional = Orientation(((k + 1) % 3, (k + 2) % 3, k), (1.0, s, s))
+    working_normal = np.empty(3)
+    for i in range(3):
+        working_normal[i] = provisional.sign[i] * float(normal[provisional.perm[i]])
+    turn = provisional.rolled(quarter_turns_for(working_normal))
+    return None if turn.identity else turn

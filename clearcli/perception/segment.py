@@ -48,7 +48,7 @@ from clearcli.perception.filters import clean_mask
 from clearcli.perception.flat import differing_shares, flat_objects, support_colour, within_reach
 from clearcli.perception.lccp import lccp_segments
 from clearcli.perception.openings import RIM_MAX_POINTS, Opening, TableEdge, rim_of, seen_edges
-from clearcli.perception.orientation import Orientation, axes_turn, quarter_turns_for
+from clearcli.perception.orientation import Orientation, axes_turn, cloud_turn, quarter_turns_for
 from clearcli.perception.refine import STAGES, refine
 from clearcli.perception.resolution import WorkingGrid, pixel_pitch, stride_of_pitch
 from clearcli.perception.size import SegmentSize
@@ -463,10 +463,12 @@ def _table(w: _Work) -> None:
         if not hint:
             raise
         raise SceneError(f"{err}{hint}") from None
-    if w.may_roll and w.organized and fit.camera_is_origin:
-        k = quarter_turns_for(fit.plane.normal)
-        if k:
-            raise _Rolled(k)
+    if w.may_roll and fit.camera_is_origin:
+        # a camera image the wrong way up, or an unorganized cloud in another axis convention
+        # or rolled: turned and segmented again (orientation.py)
+        turn = quarter_turns_for(fit.plane.normal) if w.organized else cloud_turn(w.pts, fit.plane.normal)
+        if turn:
+            raise _Rolled(turn)
     # heights and squared ranges of the kept points: the table's stage and _exclude read them
     w.range2 = squared_range(w.pts) if fit.camera_is_origin else None
     # the plane against the points once: a hull drawn anew and _exclude read it again
@@ -820,19 +822,23 @@ def segment(frame: Frame, settings: SegmentSettings, stride: int | None = None) 
         try:
             seg = grid.to_full_nominal(_segment(grid.frame, settings, may_roll), settings)
         except _Rolled as rolled:
-            turn = (turn or Orientation()).rolled(rolled.quarter_turns)
+            if isinstance(rolled.turn, Orientation):
+                turn = rolled.turn  # an unorganized cloud: no turn before this one
+            else:
+                turn = (turn or Orientation()).rolled(rolled.turn)
             continue
         return seg if turn is None or turn.identity else turn.segmentation_back(seg, frame)
     raise AssertionError("unreachable: the second pass may not roll")  # pragma: no cover
 
 
 class _Rolled(Exception):
-    """The table step's finding that the image is rolled (orientation.quarter_turns_for):
-    `segment` turns it and starts again."""
+    """The table step's finding that the image is rolled (orientation.quarter_turns_for:
+    how many quarter turns), or that an unorganized cloud is to be turned (cloud_turn: the
+    turn): `segment` turns it and starts again."""
 
-    def __init__(self, quarter_turns: int) -> None:
-        super().__init__(quarter_turns)
-        self.quarter_turns = quarter_turns
+    def __init__(self, turn: int | Orientation) -> None:
+        super().__init__(turn)
+        self.turn = turn
 
 
 def _segment(frame: Frame, settings: SegmentSettings, may_roll: bool = False) -> Segmentation:

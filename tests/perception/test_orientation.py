@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from helpers.segment import _render
+from helpers.segment import S, _render
 
 from clearcli.io.frames import Frame
 from clearcli.perception.orientation import Orientation, axes_turn, quarter_turns_for
@@ -135,3 +135,54 @@ def test_a_moved_image_is_turned_into_its_cameras_frame_and_back() -> None:
     on_plane = p - (n @ p + d) * n
     assert abs(n_frame @ turn.back(on_plane) + d_frame) < 1e-12
     assert isinstance(turn.rolled(2), Orientation) and turn.rolled(2).R_camera_frame is turn.R_camera_frame
+
+
+@pytest.mark.parametrize(
+    ("forward", "normal", "perm", "sign"),
+    [
+        # the optical frame, upright (the normal up the image, towards the camera): no turn
+        ((0.1, 0.2, 1.0), (0.0, -0.8, -0.6), None, None),
+        # OpenGL's axes (looking along -z, y up): optical x = x, y = -y, z = -z
+        ((0.1, -0.2, -1.0), (0.0, 0.8, 0.6), (0, 1, 2), (1.0, -1.0, -1.0)),
+        # camera_link's (x forward, y left, z up): optical x = -y, y = -z, z = x
+        ((1.0, -0.1, -0.2), (-0.6, 0.0, 0.8), (1, 2, 0), (-1.0, -1.0, 1.0)),
+        # looking along no axis (45 degrees between two): none
+        ((1.0, 0.0, 1.0), (0.0, -0.8, -0.6), None, None),
+    ],
+)
+def test_an_unorganized_camera_cloud_is_turned_into_the_optical_axes_by_its_view(
+    forward: tuple[float, ...], normal: tuple[float, ...], perm: tuple[int, ...] | None, sign: tuple[float, ...] | None
+) -> None:
+    from clearcli.perception.orientation import cloud_turn
+
+    points = np.array(forward)[None] * np.linspace(0.5, 1.5, 50)[:, None]
+    n = np.array(normal) / np.linalg.norm(normal)
+    turn = cloud_turn(points, n)
+    if perm is None:
+        assert turn is None
+        return
+    assert turn is not None and turn.perm == perm and turn.sign == sign
+    # the turned normal points up the image (-y) and towards the camera (-z)
+    turned = turn.frame(Frame(points=n[None])).points[0]
+    assert turned[1] < -0.5 and turned[2] < 0
+
+
+def test_an_unorganized_cloud_in_other_axes_gives_the_optical_clouds_objects() -> None:
+    # the same points, without pixels, in OpenGL's and camera_link's axes and upside down:
+    # turned into the optical axes by cloud_turn, the same objects point for point (before:
+    # camera_link 6 -> 7 objects on uois_image_0004, OpenGL's 15 -> 13 on test55)
+    from clearcli.perception.segment import segment
+    from clearcli.sim.scene import clutter
+
+    frame = _render(clutter(6, 2))
+    keep = np.isfinite(frame.points).all(axis=1)
+    p = np.ascontiguousarray(frame.points[keep])
+    optical = segment(Frame(points=p, colors=_kept_colors(frame, keep)), S)
+    for moved in (p * np.array([1, -1, -1], np.float32), np.stack([p[:, 2], -p[:, 0], -p[:, 1]], axis=1)):
+        seg = segment(Frame(points=np.ascontiguousarray(moved), colors=_kept_colors(frame, keep)), S)
+        assert len(seg.objects) == len(optical.objects) >= 4
+        assert np.array_equal(seg.labels(), optical.labels())
+
+
+def _kept_colors(frame: Frame, keep: np.ndarray) -> np.ndarray | None:
+    return None if frame.colors is None else np.ascontiguousarray(frame.colors[keep])
