@@ -1,10 +1,10 @@
-"""Which way an organized camera image looks, and which way is up in it (issue 37: frames of
-labs no one here has seen).
+"""Which way a camera's frame looks, and which way is up in it (issue 37: frames of labs
+no one here has seen).
 
 The steps read an organized frame as a camera image in the optical frame (x right, y down
 the image, z forward, the camera at the origin), the right way up (the table's normal,
 seen in the image, towards its top): depth is read along +z, the table's far side up the
-image. Three kinds of frames meet that only after a turn. The first and the third turn
+image. Four kinds of frames meet that only after a turn. All but the moved image's turn
 keeps every coordinate or negates it and moves it to another axis, and moves pixels
 whole, so it is exact in floating point, and the steps see the very points of the
 upright optical image:
@@ -24,6 +24,9 @@ upright optical image:
   frame (rounded to the frame's dtype: not exact, micrometre changes) and the results
   moved back. Tried when the frame is no pinhole image about its origin in any axis
   convention.
+- an unorganized cloud in a camera frame (`cloud_turn`): no pixels, so forward is the
+  axis its mean point lies nearest and up the one the table's normal leans along; the
+  same signed reordering, exact.
 - a camera rolled about its optical axis (mounted upside down or on its side, as wrist
   cameras are; `quarter_turns_for`): told once the table is found, by its normal seen in
   the image. When the camera looks 30 degrees or more off straight down (the normal's
@@ -98,6 +101,23 @@ class Orientation:
             and self.quarter_turns % 4 == 0
             and self.R_camera_frame is None
         )
+
+    def describe(self) -> str:
+        """How the frame was read, for the chosen support's ``why`` in --json."""
+        parts = []
+        if self.R_camera_frame is not None:
+            parts.append("a camera image in another frame, read in its camera's frame (its pose from its pixels)")
+        axes_only = self.rolled(-self.quarter_turns)
+        if axes_only.perm != (0, 1, 2) or axes_only.sign != (1.0, 1.0, 1.0):
+            names = "xyz"
+            axes = ", ".join(
+                f"{'-' if s < 0 else ''}{names[p]}" for p, s in zip(axes_only.perm, axes_only.sign, strict=True)
+            )
+            parts.append(f"the frame's axes turned into the optical frame's: x, y, z = {axes}")
+        if self.quarter_turns % 4:
+            turn = ("", "90 degrees counter-clockwise", "180 degrees", "90 degrees clockwise")[self.quarter_turns % 4]
+            parts.append(f"the image turned {turn} to be the right way up")
+        return "; ".join(parts)
 
     def rolled(self, k: int) -> Orientation:
         """This one, then the image turned by ``k`` more quarter turns: per quarter turn the
@@ -191,7 +211,8 @@ class Orientation:
         def verdict(v: PlaneVerdict) -> PlaneVerdict:
             normal = np.array(v.normal)
             x, y, z = (float(c) for c in self.back(normal, points=False))
-            return dataclasses.replace(v, normal=(x, y, z), offset_m=self.offset_back(v.offset_m, normal))
+            why = f"{v.why} ({self.describe()})" if v.chosen else v.why
+            return dataclasses.replace(v, normal=(x, y, z), offset_m=self.offset_back(v.offset_m, normal), why=why)
 
         table = seg.table
         return dataclasses.replace(
@@ -408,5 +429,6 @@ def cloud_turn(points: np.ndarray, normal: np.ndarray) -> Orientation | None:
     working_normal = np.empty(3)
     for i in range(3):
         working_normal[i] = provisional.sign[i] * float(normal[provisional.perm[i]])
-    turn = provisional.rolled(quarter_turns_for(working_normal))
+    rolled = provisional.rolled(quarter_turns_for(working_normal))
+    turn = Orientation(rolled.perm, rolled.sign)  # no pixels to move: the axes alone
     return None if turn.identity else turn

@@ -182,6 +182,7 @@ def test_an_unorganized_cloud_in_other_axes_gives_the_optical_clouds_objects() -
         seg = segment(Frame(points=np.ascontiguousarray(moved), colors=_kept_colors(frame, keep)), S)
         assert len(seg.objects) == len(optical.objects) >= 4
         assert np.array_equal(seg.labels(), optical.labels())
+        assert "the frame's axes turned into the optical frame's" in seg.support[0].why
 
 
 def _kept_colors(frame: Frame, keep: np.ndarray) -> np.ndarray | None:

@@ -462,6 +462,17 @@ def test_an_image_in_another_convention_or_rolled_gives_the_same_objects(variant
     back[pixels] = seg.labels()
     assert len(seg.objects) == len(upright.objects) >= 4
     assert np.array_equal(back, upright.labels())
+    # --json's chosen support says how the frame was read
+    expected = {
+        "opengl": "x, y, z = x, -y, -z",
+        "camera_link": "x, y, z = -y, -z, x",
+        "upside_down": "the image turned 180 degrees to be the right way up",
+        # the variant is np.rot90's counter-clockwise quarter turn: undone clockwise
+        "on_its_side": "the image turned 90 degrees clockwise",
+        "camera_link_upside_down": "the image turned 180 degrees",
+    }[variant]
+    assert seg.support[0].chosen and expected in seg.support[0].why, seg.support[0].why
+    assert "turned" not in upright.support[0].why
     # every point and direction in the variant's own coordinates: its points' own centroid,
     # the normal towards the camera at its origin
     for o in seg.objects:

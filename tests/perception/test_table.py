@@ -166,6 +166,7 @@ def test_a_z_up_frame_whose_origin_lies_beneath_the_table_finds_its_objects(orga
         # its pixels (orientation.camera_pose) and it is segmented in the camera's frame:
         # the same pixels as there (the move rounds the points to float32: a micrometre)
         assert chosen.chosen and "origin is no camera" not in chosen.why, chosen.why
+        assert "a camera image in another frame, read in its camera's frame" in chosen.why, chosen.why
         assert np.array_equal(seg.labels(), seen.labels())
     else:
         # no pixels to find the camera by: the origin is no camera, up is where the objects stand
