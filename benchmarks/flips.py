@@ -2,7 +2,7 @@
 
     .venv/bin/python benchmarks/flips.py [--sets mosd,uois,fixtures,scenes,rgbd]
         [--amplitude-um 1] [--seeds 0:10] [--with-report] [--margins] [--set KEY=VALUE]
-        [--fixed-draws]
+        [--fixed-draws] [--dither-mm 0.5]
     .venv/bin/python benchmarks/flips.py --table --sets mosd,fixtures,foreign --first 12 --seeds 0:6
 
 stability.py traces only the first perturbation seed that changes a frame's objects;
