@@ -361,7 +361,9 @@ def _pose_of(
     values, vectors = np.linalg.eigh(rows.T @ rows)
     # one projection only: points all on a plane (an empty table) fit a family of them
     # (each the same on the plane, different off it), their least two values alike
-    if not values[1] > _UNIQUE_RATIO**2 * max(values[0], 0.0):
+    # (the least may come out as rounding's noise, even below 0: a floor of the largest's
+    # 1e-15, so that a plane's points, whose least few are all such noise, are refused)
+    if not values[1] > _UNIQUE_RATIO**2 * max(values[0], 1e-15 * values[-1]):
         return None
     projection_n = vectors[:, 0].reshape(3, 4)
     to_uv = np.array([[scale_uv, 0.0, -scale_uv * mean_uv[0]], [0.0, scale_uv, -scale_uv * mean_uv[1]], [0, 0, 1]])
