@@ -89,7 +89,8 @@ def main() -> None:
                 continue
             n += 1
             labels = base.labels()  # type: ignore[attr-defined]
-            for name, (variant, pixels) in variants(frame).items():
+            made = variants(frame)  # once: the organized rows and the unorganized ones read them
+            for name, (variant, pixels) in made.items():
                 seg, t = _timed(variant, settings)
                 back = np.zeros(frame.n_points, dtype=np.int32)
                 if not isinstance(seg, ClearError):
@@ -101,7 +102,7 @@ def main() -> None:
             loose_optical, _ = _timed(_unorganized(frame, finite), settings)
             if not isinstance(loose_optical, ClearError):
                 for name in ("opengl", "camera_link", "upside_down"):
-                    variant, pixels = variants(frame)[name]
+                    variant, pixels = made[name]
                     at = np.argsort(pixels)[finite]  # each finite frame pixel's place in the variant
                     seg, _ = _timed(_unorganized(variant, at), settings)
                     ok = not isinstance(seg, ClearError) and np.array_equal(
