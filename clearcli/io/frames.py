@@ -81,3 +81,14 @@ class Frame:
     @property
     def is_organized(self) -> bool:
         return self.shape is not None and self.shape[0] > 1
+
+    @property
+    def grid(self) -> tuple[int, int] | None:
+        """(rows, columns) of the pixel grid the points lie on, one point per pixel in row
+        order: what every step that reads neighbours on the image needs; None for an
+        unorganized cloud, a single row (PCL's unorganized layout) or a shape that does
+        not hold the points (a hand-made frame)."""
+        shape = self.shape
+        if shape is None or shape[0] <= 1 or shape[0] * shape[1] != self.points.shape[0]:
+            return None
+        return shape

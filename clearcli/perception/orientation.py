@@ -267,9 +267,9 @@ def axes_turn(frame: Frame) -> Orientation | None:
     pinhole image in another axis convention about the camera, or a camera image moved
     into another frame (module docstring); None for the optical frame itself, an
     unorganized cloud, or a grid that is no camera image."""
-    shape = frame.shape
+    shape = frame.grid
     points = frame.points
-    if not frame.is_organized or shape is None or points.ndim != 2 or shape[0] * shape[1] != points.shape[0]:
+    if shape is None or points.ndim != 2:
         return None
     # the mean of a sample of the points: it lies inside the cone of the image's rays, so
     # within half the field of view (up to some 45 degrees) of the axis the camera looks along

@@ -105,8 +105,8 @@ def stride_for(pitch_rad: float, voxel_m: float) -> int:
 def choose_stride(frame: Frame, settings: SegmentSettings) -> int:
     """The working grid's stride for ``frame``: 1 (every pixel) unless it is an organized
     pinhole's grid finer than the rule of the module docstring asks."""
-    shape = frame.shape
-    if not frame.is_organized or shape is None or shape[0] * shape[1] != frame.n_points:
+    shape = frame.grid
+    if shape is None:
         return 1
     return stride_of_pitch(pixel_pitch(frame.points, shape), settings)
 

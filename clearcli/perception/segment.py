@@ -809,9 +809,8 @@ def segment(frame: Frame, settings: SegmentSettings, stride: int | None = None) 
     # organized frame whose pixel pitch reads (a pinhole's grid in its optical frame: what
     # almost every camera writes) needs no turn, and that pitch gives the working grid's
     # stride, read once (issue 39: 1.8 ms a 640x480 frame)
-    shape = frame.shape
-    organized = frame.is_organized and shape is not None and shape[0] * shape[1] == frame.n_points
-    pitch = pixel_pitch(frame.points, shape) if organized and shape is not None else None
+    shape = frame.grid
+    pitch = pixel_pitch(frame.points, shape) if shape is not None else None
     turn = None if pitch is not None else axes_turn(frame)
     for may_roll in (True, False):
         work = frame if turn is None else turn.frame(frame)
@@ -849,8 +848,7 @@ def _segment(frame: Frame, settings: SegmentSettings, may_roll: bool = False) ->
     if points.ndim != 2 or points.shape[1] != 3 or points.shape[0] == 0:
         where = f"{frame.source}: " if frame.source else ""
         raise SceneError(f"{where}the frame holds no points")
-    organized = frame.is_organized and frame.shape is not None and frame.shape[0] * frame.shape[1] == points.shape[0]
-    w = _Work(frame, settings, organized, clock, may_roll=may_roll)
+    w = _Work(frame, settings, frame.grid is not None, clock, may_roll=may_roll)
     for step in STEPS:
         if step.above_table and w.vox is None:
             continue
