@@ -810,10 +810,12 @@ def find_table(
             # gives, where a coarsened cell holds one point but a table's area)
             small.append(PlaneVerdict(_tuple(n), float(d), area, 0, False, "its largest piece holds under 3 points"))
             continue
-        if area < settings.table_min_area_m2 and residues < settings.plane_candidates:
-            if _residue(n, on, candidates):
-                tries -= 1  # the residue of a surface found: not a try (`_RESIDUE_M`)
-                residues += 1
+        if residues < settings.plane_candidates and _residue(n, on, candidates):
+            # the residue of a surface found, small or not (a floor thickened by a stereo
+            # sensor's noise gives two or three parallel planes a centimetre apart): not
+            # a try (`_RESIDUE_M`), so the planes sought after it are still sought
+            tries -= 1
+            residues += 1
         if area < settings.table_min_area_m2:
             small.append(
                 PlaneVerdict(
@@ -856,14 +858,19 @@ def find_table(
     loose = np.compress(~any_plane, sample, axis=0)
     loose_range2 = np.compress(~any_plane, sample_range2)
 
-    # the best candidate ((score, area), fit, points before it, behind it), those too far,
-    # and every candidate's (fit, score, area)
+    # the best candidate ((score, area), fit, points before it, behind it), the best of
+    # those with more before them than behind (and `min_obj` at least), those too far, and
+    # every candidate's (fit, score, area)
     Best = tuple[tuple[int, float], TableFit, int, int]
+    min_obj = max(20, int(0.001 * sample.shape[0]))
 
-    def score(origin_may_be_camera: bool) -> tuple[Best | None, list[PlaneVerdict], list[tuple[TableFit, int, float]]]:
+    def score(
+        origin_may_be_camera: bool,
+    ) -> tuple[Best | None, Best | None, list[PlaneVerdict], list[tuple[TableFit, int, float]]]:
         """Each candidate's fit, its normal turned towards the camera at the origin (or
         "up", where the objects are, when the origin is no camera), and the best one."""
         best: Best | None = None
+        best_before: Best | None = None
         far: list[PlaneVerdict] = []
         scored: list[tuple[TableFit, int, float]] = []
         for c in candidates:
@@ -941,10 +948,11 @@ def find_table(
             scored.append((fit, abs(above - below), c.area_m2))
             if best is None or key > best[0]:
                 best = (key, fit, above, below)
-        return best, far, scored
+            if above > max(below, min_obj) and (best_before is None or key > best_before[0]):
+                best_before = (key, fit, above, below)
+        return best, best_before, far, scored
 
-    best, far, scored = score(True)
-    min_obj = max(20, int(0.001 * sample.shape[0]))
+    best, best_before, far, scored = score(True)
     origin_note = ""
     if best is not None and best[1].camera_is_origin and best[3] > max(best[2], min_obj):
         # More stands behind the support than before it, as seen from the origin. A camera
@@ -955,7 +963,7 @@ def find_table(
         # An organized pinhole grid about the origin is a camera image whatever it shows.
         hidden = _hidden_from_origin(best[1], loose, loose_range2, settings)
         if hidden > max(best[2], min_obj) and not (pinhole is not None and pinhole()):
-            best, far, scored = score(False)
+            best, best_before, far, scored = score(False)
             origin_note = (
                 f" (the frame's origin is no camera: {hidden} points stand behind the support as seen from "
                 "it, where it would hide them; up is where the objects stand)"
@@ -968,6 +976,19 @@ def find_table(
             "is a table in reach? (a depth image whose unit is not the millimetre needs "
             "[images] depth_scale_m; a table farther away, [segment] table_max_distance_m)"
         )
+    behind_note = ""
+    if best[1].camera_is_origin and best[3] > max(best[2], min_obj) and best_before is not None:
+        # The most points across a plane, but behind it as the camera sees it: no support
+        # seen from above but a face with a body behind it (the front of a box or a raised
+        # surface seen at an angle: its body rises behind it). Another plane holds points
+        # on the camera's side, standing on it: that one is the support. (With none, the
+        # frame is a table seen from below and is refused below, as before.)
+        k_behind = next(k for k, (f, _, _) in enumerate(scored) if f is best[1])
+        behind_note = (
+            f"more points behind it than standing on it ({best[3]} against {best[2]}, as the camera sees it): "
+            "a face with its body behind it, not a support"
+        )
+        best = best_before
     _, fit, above, below = best
     chosen_standing = abs(above - below)
     chosen_why = "the most points standing on it"
@@ -996,6 +1017,8 @@ def find_table(
             on = standing_on(surfaces[choice.index], loose, band_m)
             above, below = int(on.sum()), 0
             chosen_standing = scored[choice.index][1]
+    if behind_note:
+        turned[k_behind] = behind_note
     verdicts = [
         PlaneVerdict(
             _tuple(f.plane.normal),
