@@ -457,7 +457,17 @@ def _table(w: _Work) -> None:
         return w.organized and frame.shape is not None and pixel_pitch(frame.points, frame.shape) is not None
 
     try:
-        fit = find_table(w.pts, w.settings, w.organized, frame.source, pinhole, upright_check=not w.may_roll)
+        fit = find_table(
+            w.pts,
+            w.settings,
+            w.organized,
+            frame.source,
+            pinhole,
+            upright_check=not w.may_roll,
+            # only a camera image may be turned for its support (an unorganized cloud's turn
+            # is cloud_turn's, told by its view)
+            needs_turn=(lambda normal: quarter_turns_for(normal) != 0) if w.may_roll and w.organized else None,
+        )
     except SceneError as err:
         hint = _unit_hint(w.pts)
         if not hint:

@@ -44,6 +44,13 @@ _REFITS = 10  # least-squares refits of a RANSAC plane at most (they settle in a
 # of a wall (or of a big box's front face) lies there off the wall's bottom edge; both
 # within a few mm. What stands on a table, or under one seen from below, is inside.
 _EDGE_BAND_M = 0.02
+# points resting on a support: within this past its noise band (the feet of what stands on
+# it). Objects on a table: hundreds to thousands of points on the choose part; a face seen
+# with things before it (a desk's front behind a table): 0 on the self-made desks
+_RESTING_M = 0.03
+# a support the image would be turned for gives way to an upright one with this many
+# times the points resting on it (and `min_obj`): desks behind tables 0 against 248-335
+_RESTING_OVER = 4
 # A RANSAC plane smaller than table_min_area_m2 lying along a candidate already found
 # (parallel within `_RESIDUE_COS`, its inliers' median within `_RESIDUE_M` of that plane)
 # is the residue of that surface's own noise: a far floor's depth noise (3 sigma 13 mm at
@@ -741,6 +748,7 @@ def find_table(
     source: str = "",
     pinhole: Callable[[], bool] | None = None,
     upright_check: bool = True,
+    needs_turn: Callable[[np.ndarray], bool] | None = None,
 ) -> TableFit:
     """Stage 2a: the support plane among up to ``plane_candidates`` RANSAC planes.
 
@@ -749,6 +757,10 @@ def find_table(
     its optical frame), asked only when the origin's being the camera is in doubt.
     ``upright_check``: an organized camera image whose table faces down the image is
     refused (segment.py turns a rolled image upright first and passes False).
+    ``needs_turn``: whether a support of that normal (towards the camera) would have the
+    image turned (segment.py's rolled-camera test; None: no turn is considered). A support
+    that would, on which nothing rests, gives way to one the image is upright for on
+    which objects rest (`_RESTING_M`).
 
     The cloud is taken to be in a camera frame (the sensor at the origin) when the
     support lies `_MIN_CAMERA_HEIGHT_M` or more from the origin, unless the origin sees
@@ -863,6 +875,7 @@ def find_table(
     # every candidate's (fit, score, area)
     Best = tuple[tuple[int, float], TableFit, int, int]
     min_obj = max(20, int(0.001 * sample.shape[0]))
+    every_best: list[tuple[Best, int]] = []  # per scored candidate: its Best, and the points resting on it
 
     def score(
         origin_may_be_camera: bool,
@@ -871,6 +884,7 @@ def find_table(
         "up", where the objects are, when the origin is no camera), and the best one."""
         best: Best | None = None
         best_before: Best | None = None
+        every_best.clear()
         far: list[PlaneVerdict] = []
         scored: list[tuple[TableFit, int, float]] = []
         for c in candidates:
@@ -930,10 +944,14 @@ def find_table(
             ins[band] = inside_convex(project(loose_band, basis) - origin @ basis.T, poly, -_EDGE_BAND_M)
             above = int((ins & (h > 0)).sum())
             below = int((ins & (h < 0)).sum())
+            # the points resting on either side: within `_RESTING_M` past the noise band
+            near = ins & (np.abs(h) <= settings.prism_min_height_m + _NOISE_PER_M2 * loose_range2 + _RESTING_M)
+            rest_above, rest_below = int((near & (h > 0)).sum()), int((near & (h < 0)).sum())
             # orient the normal towards the camera, or, not in a camera frame, "up" where the
             # objects are
             if (d < 0) if camera_is_origin else (below > above):
                 n, d, above, below = -n, -d, below, above
+                rest_above = rest_below
                 # the hull again in the turned plane's axes (unturned, it is the one above)
                 basis = plane_basis(n)
                 origin = -d * n
@@ -950,6 +968,7 @@ def find_table(
                 best = (key, fit, above, below)
             if above > max(below, min_obj) and (best_before is None or key > best_before[0]):
                 best_before = (key, fit, above, below)
+            every_best.append(((key, fit, above, below), rest_above))
         return best, best_before, far, scored
 
     best, best_before, far, scored = score(True)
@@ -989,6 +1008,30 @@ def find_table(
             "a face with its body behind it, not a support"
         )
         best = best_before
+    turn_note = ""
+    if needs_turn is not None and best[1].camera_is_origin and needs_turn(best[1].plane.normal):
+        # A support the image would be turned for (a rolled camera), on which nothing
+        # rests: the points before it stand apart from it (the objects on a table in front
+        # of a desk's face, seen at an angle). Another plane that the image is upright for
+        # holds objects resting on it, `_RESTING_OVER` times as many at least: that one is
+        # the support, and the image is read as it is (a rolled camera's table holds its
+        # objects resting on it; a wall behind it, nothing).
+        k_best = next(k for k, (b, _) in enumerate(every_best) if b[1] is best[1])
+        resting_best = every_best[k_best][1]
+        upright = [
+            (b, resting)
+            for b, resting in every_best
+            if not needs_turn(b[1].plane.normal)
+            and resting >= max(_RESTING_OVER * resting_best, min_obj)
+            and b[2] > max(b[3], min_obj)
+        ]
+        if upright:
+            turned_from, best = k_best, max(upright, key=lambda br: br[0][0])[0]
+            turn_note = (
+                f"nothing rests on it ({resting_best} points within {_RESTING_M * 100:.0f} cm of it, against "
+                f"{next(r for b, r in every_best if b[1] is best[1])} on the support): a face with things before "
+                "it, seen as a rolled camera's table"
+            )
     _, fit, above, below = best
     chosen_standing = abs(above - below)
     chosen_why = "the most points standing on it"
@@ -1019,6 +1062,8 @@ def find_table(
             chosen_standing = scored[choice.index][1]
     if behind_note:
         turned[k_behind] = behind_note
+    if turn_note:
+        turned[turned_from] = turn_note
     verdicts = [
         PlaneVerdict(
             _tuple(f.plane.normal),

@@ -270,3 +270,35 @@ def test_a_face_with_its_body_behind_it_is_no_support() -> None:
     assert abs(faces[0].offset_m - 0.71) < 0.02 and abs(chosen.offset_m - 0.60) < 0.02
     # by the score alone the face wins: what the fallback turns down
     assert faces[0].standing_points > chosen.standing_points
+
+
+@pytest.mark.parametrize("seed", [32, 39])
+def test_a_desks_face_with_the_objects_before_it_is_no_rolled_cameras_table(
+    seed: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # a second desk behind the table (seeds 32, 39), seen from a Kinect: the objects on
+    # the table stand before the desk's front face, so the face has as many points
+    # "standing" on it as the table (1173 against 1111 on seed 32) and was taken; its
+    # normal points down the image, so the image was read as a rolled camera's, turned,
+    # and the face segmented as the support. Nothing rests on the face (0 points within
+    # 3 cm of it), hundreds on the table, which the image is upright for: the table is
+    # the support and the image is read as it is
+    frame = support_frame("desk_behind", seed)
+    seg = segment(frame, ON)
+    assert _right(frame, ON)
+    (chosen,) = [v for v in seg.support if v.chosen]
+    assert chosen.normal[1] < -0.5  # up the image: no turn
+    faces = [v for v in seg.support if v.why.startswith("nothing rests on it")]
+    assert len(faces) == 1 and faces[0].normal[1] > 0.5
+    assert faces[0].standing_points >= chosen.standing_points  # by the score alone it wins
+    # without the rule the face is taken as the support (the image turned for it)
+    monkeypatch.setattr(table, "_RESTING_M", -1.0)  # no point rests on any plane
+    (off,) = [v for v in segment(frame, ON).support if v.chosen]
+    assert off.normal[1] > 0.5 and abs(off.offset_m - faces[0].offset_m) < 0.01
+    # and the same view by a stereo sensor at 1280x720 was refused ("seen from below")
+    if seed == 32:
+        stereo = support_frame("desk_behind", seed, noise=STEREO_NOISE, **OBLIQUE)
+        with pytest.raises(SceneError, match="seen from below"):
+            segment(stereo, ON)
+        monkeypatch.undo()
+        assert len(segment(stereo, ON).objects) >= 4
