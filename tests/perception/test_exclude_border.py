@@ -85,15 +85,22 @@ def test_what_the_border_cuts_above_its_own_base_stands(arm_m: float, excluded: 
     base = _column(0.0, 0.0, 0.03, 0.0, 0.10)
     top = _column(arm_m, 0.0, 0.03, 0.10, 0.22)
     p = np.vstack([base, top])
-    at_border = p[:, 2] > 0.19
+    found = _judged_at_border(p, p[:, 2] > 0.19)
+    assert any(v.reason.startswith(BORDER) for v in found) == excluded, [v.reason for v in found]
+
+
+def _judged_at_border(p: np.ndarray, at_border: np.ndarray) -> list[exclude.Verdict]:
+    """`not_standing`'s verdicts on one segment (points ``p``, those ``at_border`` at the
+    image's border) over a 40 cm square support in z = 0, resting height 13 mm, nothing
+    outside the outline."""
     g = np.arange(-0.2, 0.2, 0.005)
-    support = np.stack(np.meshgrid(g, g, [0.0]), -1).reshape(-1, 3)
+    support = np.stack(np.meshgrid(g, g), -1).reshape(-1, 2)  # in-plane: the support lies in z = 0
     none = np.zeros((0, 3))
-    found = not_standing(
+    return not_standing(
         [p],
         none,
         none,
-        support[:, :2],  # in-plane: the support lies in z = 0
+        support,
         lambda q: q[:, 2],
         lambda q: q[:, :2],
         lambda q: np.ones(q.shape[0], dtype=bool),
@@ -101,7 +108,6 @@ def test_what_the_border_cuts_above_its_own_base_stands(arm_m: float, excluded: 
         None,
         [at_border],
     )
-    assert any(v.reason.startswith(BORDER) for v in found) == excluded, [v.reason for v in found]
 
 
 # ------------------------------------------------------------------ an unorganized cloud's edge
@@ -188,23 +194,7 @@ def test_a_sliver_mostly_at_the_views_border_is_excluded(n_border: int, excluded
     n = 40 if n_border != 14 else 17
     x = np.linspace(0.0, 0.1, n)
     p = np.column_stack([x, np.zeros(n), np.full(n, 0.01)])
-    at_border = np.arange(n) < n_border
-    g = np.arange(-0.2, 0.2, 0.005)
-    support = np.stack(np.meshgrid(g, g), -1).reshape(-1, 2)
-    none = np.zeros((0, 3))
-    found = not_standing(
-        [p],
-        none,
-        none,
-        support,
-        lambda q: q[:, 2],
-        lambda q: q[:, :2],
-        lambda q: np.ones(q.shape[0], dtype=bool),
-        lambda q: 0.013,
-        None,
-        [at_border],
-    )
-    reasons = [v.reason for v in found]
+    reasons = [v.reason for v in _judged_at_border(p, np.arange(n) < n_border)]
     assert any(r.startswith(SLIVER) for r in reasons) == excluded, reasons
     if excluded:
         assert f"{n_border} of its {n} points lie at the image's border" in reasons[0]
