@@ -1028,7 +1028,7 @@ def find_table(
         if upright:
             turned_from, best = k_best, max(upright, key=lambda br: br[0][0])[0]
             turn_note = (
-                f"nothing rests on it ({resting_best} points within {_RESTING_M * 100:.0f} cm of it, against "
+                f"{'nothing' if resting_best == 0 else 'little'} rests on it ({resting_best} points within {_RESTING_M * 100:.0f} cm of it, against "
                 f"{next(r for b, r in every_best if b[1] is best[1])} on the support): a face with things before "
                 "it, seen as a rolled camera's table"
             )
