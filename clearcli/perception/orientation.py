@@ -428,9 +428,7 @@ def cloud_turn(points: np.ndarray, normal: np.ndarray) -> Orientation | None:
     k, s = forward
     # a right-handed frame with z along forward: x and y the next axes in cyclic order
     provisional = Orientation(((k + 1) % 3, (k + 2) % 3, k), (1.0, s, s))
-    working_normal = np.empty(3)
-    for i in range(3):
-        working_normal[i] = provisional.sign[i] * float(normal[provisional.perm[i]])
+    working_normal = provisional._points(np.asarray(normal, dtype=np.float64)[None])[0]
     rolled = provisional.rolled(quarter_turns_for(working_normal))
     turn = Orientation(rolled.perm, rolled.sign)  # no pixels to move: the axes alone
     return None if turn.identity else turn

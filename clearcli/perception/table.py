@@ -11,7 +11,7 @@ itself a plane, and a book's hull holds little.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field, replace
 from functools import lru_cache
 
@@ -870,21 +870,18 @@ def find_table(
     loose = np.compress(~any_plane, sample, axis=0)
     loose_range2 = np.compress(~any_plane, sample_range2)
 
-    # the best candidate ((score, area), fit, points before it, behind it), the best of
-    # those with more before them than behind (and `min_obj` at least), those too far, and
-    # every candidate's (fit, score, area)
+    # per candidate within reach: ((score, area), fit, points before it, behind it) and the
+    # points resting on it; those too far; and every candidate's (fit, score, area), in the
+    # same order as the first
     Best = tuple[tuple[int, float], TableFit, int, int]
     min_obj = max(20, int(0.001 * sample.shape[0]))
-    every_best: list[tuple[Best, int]] = []  # per scored candidate: its Best, and the points resting on it
 
     def score(
         origin_may_be_camera: bool,
-    ) -> tuple[Best | None, Best | None, list[PlaneVerdict], list[tuple[TableFit, int, float]]]:
+    ) -> tuple[list[tuple[Best, int]], list[PlaneVerdict], list[tuple[TableFit, int, float]]]:
         """Each candidate's fit, its normal turned towards the camera at the origin (or
-        "up", where the objects are, when the origin is no camera), and the best one."""
-        best: Best | None = None
-        best_before: Best | None = None
-        every_best.clear()
+        "up", where the objects are, when the origin is no camera), and its score."""
+        ranked: list[tuple[Best, int]] = []
         far: list[PlaneVerdict] = []
         scored: list[tuple[TableFit, int, float]] = []
         for c in candidates:
@@ -964,14 +961,21 @@ def find_table(
             # noise lies on both sides of a plane, objects on one: score the difference
             key = (abs(above - below), c.area_m2)
             scored.append((fit, abs(above - below), c.area_m2))
-            if best is None or key > best[0]:
-                best = (key, fit, above, below)
-            if above > max(below, min_obj) and (best_before is None or key > best_before[0]):
-                best_before = (key, fit, above, below)
-            every_best.append(((key, fit, above, below), rest_above))
-        return best, best_before, far, scored
+            ranked.append(((key, fit, above, below), rest_above))
+        return ranked, far, scored
 
-    best, best_before, far, scored = score(True)
+    def first_best(ks: Iterable[int]) -> int | None:
+        """Of the candidates ``ks``, the one of the highest (score, area), the first of equals."""
+        return max(ks, key=lambda k: ranked[k][0][0], default=None)
+
+    def before(k: int) -> bool:
+        """More points before candidate ``k`` than behind it, and `min_obj` at least."""
+        _, _, above, below = ranked[k][0]
+        return above > max(below, min_obj)
+
+    ranked, far, scored = score(True)
+    k_best = first_best(range(len(ranked)))
+    best = None if k_best is None else ranked[k_best][0]
     origin_note = ""
     if best is not None and best[1].camera_is_origin and best[3] > max(best[2], min_obj):
         # More stands behind the support than before it, as seen from the origin. A camera
@@ -982,7 +986,9 @@ def find_table(
         # An organized pinhole grid about the origin is a camera image whatever it shows.
         hidden = _hidden_from_origin(best[1], loose, loose_range2, settings)
         if hidden > max(best[2], min_obj) and not (pinhole is not None and pinhole()):
-            best, best_before, far, scored = score(False)
+            ranked, far, scored = score(False)
+            k_best = first_best(range(len(ranked)))
+            best = None if k_best is None else ranked[k_best][0]
             origin_note = (
                 f" (the frame's origin is no camera: {hidden} points stand behind the support as seen from "
                 "it, where it would hide them; up is where the objects stand)"
@@ -995,19 +1001,22 @@ def find_table(
             "is a table in reach? (a depth image whose unit is not the millimetre needs "
             "[images] depth_scale_m; a table farther away, [segment] table_max_distance_m)"
         )
+    assert k_best is not None  # with the best
+    k_before = first_best(k for k in range(len(ranked)) if before(k))
     behind_note = ""
-    if best[1].camera_is_origin and best[3] > max(best[2], min_obj) and best_before is not None:
+    if best[1].camera_is_origin and best[3] > max(best[2], min_obj) and k_before is not None:
         # The most points across a plane, but behind it as the camera sees it: no support
         # seen from above but a face with a body behind it (the front of a box or a raised
         # surface seen at an angle: its body rises behind it). Another plane holds points
         # on the camera's side, standing on it: that one is the support. (With none, the
         # frame is a table seen from below and is refused below, as before.)
-        k_behind = next(k for k, (f, _, _) in enumerate(scored) if f is best[1])
+        k_behind = k_best
         behind_note = (
             f"more points behind it than standing on it ({best[3]} against {best[2]}, as the camera sees it): "
             "a face with its body behind it, not a support"
         )
-        best = best_before
+        k_best = k_before
+        best = ranked[k_best][0]
     turn_note = ""
     if needs_turn is not None and best[1].camera_is_origin and needs_turn(best[1].plane.normal):
         # A support the image would be turned for (a rolled camera), on which nothing
@@ -1016,21 +1025,21 @@ def find_table(
         # holds objects resting on it, `_RESTING_OVER` times as many at least: that one is
         # the support, and the image is read as it is (a rolled camera's table holds its
         # objects resting on it; a wall behind it, nothing).
-        k_best = next(k for k, (b, _) in enumerate(every_best) if b[1] is best[1])
-        resting_best = every_best[k_best][1]
-        upright = [
-            (b, resting)
-            for b, resting in every_best
-            if not needs_turn(b[1].plane.normal)
-            and resting >= max(_RESTING_OVER * resting_best, min_obj)
-            and b[2] > max(b[3], min_obj)
-        ]
-        if upright:
-            turned_from, best = k_best, max(upright, key=lambda br: br[0][0])[0]
+        resting_best = ranked[k_best][1]
+        k_upright = first_best(
+            k
+            for k in range(len(ranked))
+            if not needs_turn(ranked[k][0][1].plane.normal)
+            and ranked[k][1] >= max(_RESTING_OVER * resting_best, min_obj)
+            and before(k)
+        )
+        if k_upright is not None:
+            turned_from, k_best = k_best, k_upright
+            best = ranked[k_best][0]
             turn_note = (
-                f"{'nothing' if resting_best == 0 else 'little'} rests on it ({resting_best} points within {_RESTING_M * 100:.0f} cm of it, against "
-                f"{next(r for b, r in every_best if b[1] is best[1])} on the support): a face with things before "
-                "it, seen as a rolled camera's table"
+                f"{'nothing' if resting_best == 0 else 'little'} rests on it ({resting_best} points within "
+                f"{_RESTING_M * 100:.0f} cm of it, against {ranked[k_best][1]} on the support): a face with things "
+                "before it, seen as a rolled camera's table"
             )
     _, fit, above, below = best
     chosen_standing = abs(above - below)
