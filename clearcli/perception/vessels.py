@@ -34,8 +34,10 @@ For every group of segments whose tops lie within ``rim_tolerance_m`` of each ot
    holding the rim, the container's own, is one piece wherever it is connected: their
    boundary may run through a handle); a piece of at least an object's
    area is an object of its own when, inside the rim's circle, it rises above the rim
-   (the can standing in the bowl), or, outside it, it stands on the table (the drill
-   leaning on the rim); any other (a mug's handle, a strip of wall the circle did not
+   (the can standing in the bowl); inside it and below the rim, what stands on the
+   floor is (`_standing_inside`: a can in a wide bowl, issue 37's large bowl); outside
+   the circle, a piece that stands on the table is (the drill leaning on the rim); any
+   other (a mug's handle, a strip of wall the circle did not
    cover, the floor, the surface a stereo camera spans across a mug's opening) goes
    with the container.
 Applied only when the container takes an object's area of voxels from two or more
@@ -53,6 +55,15 @@ from clearcli.perception.graph import components, dense_labels
 from clearcli.perception.rings import cover_deg, facing_cos, fit_circle_rows, kasa_rows
 
 _MIN_RADIUS_M = 0.02
+# a rim wider than _WIDE_M in radius holds _WIDE_MIN_ON of its segments' band voxels on
+# its circle: the sides of a rectangle that wide (a bin's walls, 37 x 42 cm) meet a
+# circle in arcs that cover 200 degrees with 38-45 % of their band on it; large_bowl's
+# rims (18-21 cm) hold 96-100 %. Narrower rims are not asked: a mug's band, its handle
+# and noise in it, holds 45-100 % on mOSD and the foreign frames, and no rectangle that
+# small covers 200 degrees of a circle (`ring_max_radius_m` was 0.15 until issue 37's
+# large bowl)
+_WIDE_M = 0.15
+_WIDE_MIN_ON = 0.8
 _RANSAC_ROUNDS = 200
 _SCORE_SAMPLES = 500
 _REFITS = 20  # at most this many least-squares refits of the circle (they settle in a few)
@@ -75,6 +86,17 @@ _BIN_M = 0.01  # the wall's distance from the axis is read per this much height
 # most _MAX_FILLED of it (a container's inside is empty there; a box's top is not)
 _OPEN = 0.8
 _MAX_FILLED = 0.25
+# inside the rim, below it: a thing standing on the container's floor keeps its top this
+# far below the rim's height (a surface at the rim's height, or a strip of wall reaching
+# it, is the container's), and the floor is a piece's top-facing voxels within
+# _FLOOR_BAND_M of its lowest (a floor's depth noise is a few millimetres)
+_BELOW_RIM_M = 0.005
+_FLOOR_BAND_M = 0.01
+# ... or, reaching the rim's height, it stands clear of the wall: this share of its
+# voxels lies beyond _SURE_INSIDE of the radius inside the wall (a can as tall as the
+# rim: 0.98 on large_bowl(4); a surface spanning the opening reaches the wall, about
+# 0.7 of a disc's area lying that far in; a strip of wall, none)
+_CLEAR_SHARE = 0.9
 # with colour: within _SURE_WALL of the radius inside the wall a voxel is the wall for
 # certain, beyond _SURE_INSIDE it is what stands inside; between, where a can's side
 # and the bowl's lower wall both lie, each voxel goes to the one whose colour it is
@@ -212,6 +234,47 @@ def _wall_profile(d: np.ndarray, h: np.ndarray, rim_h: float, radius: float) -> 
     return prof
 
 
+def _standing_inside(
+    piece: np.ndarray,
+    voxel_height: np.ndarray,
+    wall_vox: np.ndarray,
+    voxel_edges: np.ndarray,
+    rim_h: float,
+    standing_max_m: float,
+    min_voxels: int,
+    clear_of_wall: np.ndarray,
+) -> list[np.ndarray]:
+    """The objects standing on a container's floor below its rim within ``piece`` (voxel
+    indices, inside the rim's circle): the piece without its floor (its top-facing voxels
+    within ``_FLOOR_BAND_M`` of its lowest: LCCP may leave the floor and a can standing on
+    it in one segment), in connected pieces; each one of at least ``min_voxels`` that
+    rises ``standing_max_m`` or more and keeps its top ``_BELOW_RIM_M`` or more below the
+    rim is an object (a can in a wide bowl). A flat floor leaves nothing that rises. A
+    part reaching the rim's height is one only when ``_CLEAR_SHARE`` of it stands clear
+    of the wall (``clear_of_wall``, per voxel): a can as tall as the rim is; the surface
+    a stereo camera spans across an opening, or a strip of wall the circle missed, both
+    reaching the wall, are the container's."""
+    if piece.size < min_voxels:
+        return []
+    h = voxel_height[piece]
+    body = piece[wall_vox[piece] | (h > h.min() + _FLOOR_BAND_M)]
+    if body.size < min_voxels:
+        return []
+    local = np.full(voxel_height.size, -1, dtype=np.int64)
+    local[body] = np.arange(body.size)
+    a, b = local[voxel_edges[:, 0]], local[voxel_edges[:, 1]]
+    inner = (a >= 0) & (b >= 0)
+    comp = components(body.size, np.column_stack([a[inner], b[inner]]))
+    parts = []
+    for c in np.unique(comp):
+        part = body[comp == c]
+        hp = voxel_height[part]
+        below_rim = hp.max() < rim_h - _BELOW_RIM_M or float(clear_of_wall[part].mean()) >= _CLEAR_SHARE
+        if part.size >= min_voxels and below_rim and hp.max() - hp.min() >= standing_max_m:
+            parts.append(part)
+    return parts
+
+
 def rebuild_vessels(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
     """The stage: (V,) segment per voxel, 0..G-1, with each open container rebuilt from
     its rim (module docstring). The voxels and supervoxels in the table plane and above
@@ -307,6 +370,8 @@ def rebuild_vessels(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
         # the container reaches down as far as the segments holding its rim do within
         # the circle: what it stands on (a box under a bowl) lies lower
         holders = np.unique(seg[band[on_rim]])
+        if radius > _WIDE_M and float(on_rim[np.isin(seg[band], holders)].mean()) < _WIDE_MIN_ON:
+            continue  # a wide rectangle's sides (a bin's walls) met by a circle in arcs
         holders_inside = inside_rim & np.isin(seg, holders)
         if not holders_inside.any():  # a wide rim's inliers may all lie just beyond _OUT_M
             continue
@@ -339,6 +404,8 @@ def rebuild_vessels(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
                 shell[sure_wall] = True
                 shell[sure_in] = False
                 shell[unsure] = _by_colour(voxel_lab, sure_wall, sure_in, unsure, np.random.default_rng([1, *group]))
+        # clear of the wall: farther inside it than the sure wall and the unsure band
+        clear = depth_in >= _SURE_INSIDE * radius
         share = np.bincount(seg[shell])
         touched = np.flatnonzero(share >= 3)
         # the rim's own segments are this container's whatever follows (a second
@@ -376,16 +443,22 @@ def rebuild_vessels(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
         # two holders' pieces join): by the segment of each piece's first voxel
         for piece in sorted(pieces, key=lambda p: (int(owner[p[0]]), int(p[0]))):
             if np.median(d[piece]) <= radius:
-                # inside the rim: what stands in it rises above the rim; a surface
-                # below it is the container's (its floor, or the surface a stereo
-                # camera spans across a narrow opening it cannot see into)
-                own = voxel_height[piece].max() > rim_h + tolerance_m
+                # inside the rim: what stands in it rises above the rim (the whole piece),
+                # or stands on the floor below the rim (`_standing_inside`); the rest is
+                # the container's (its floor; the surface a stereo camera spans across a
+                # narrow opening it cannot see into)
+                if voxel_height[piece].max() > rim_h + tolerance_m:
+                    parts = [piece] if piece.size >= min_voxels else []
+                else:
+                    parts = _standing_inside(
+                        piece, voxel_height, wall_vox, voxel_edges, rim_h, standing_max_m, min_voxels, clear
+                    )
             else:
                 # outside: what leans on it stands on the table; a handle does not
                 own = voxel_height[piece].min() <= standing_max_m
-            if piece.size >= min_voxels and own:
-                seg[piece] = next_label
+                parts = [piece] if piece.size >= min_voxels and own else []
+            seg[piece] = vessel
+            for part in parts:
+                seg[part] = next_label
                 next_label += 1
-            else:
-                seg[piece] = vessel
     return dense_labels(seg)

@@ -333,8 +333,11 @@ class SegmentSettings(Section):
     # two arcs of one circle, the inner wall facing its centre, the outer facing away
     # (rings.py)
     ring_merge: bool = param(True)
-    # the largest rim radius (m): a wide bowl or pot
-    ring_max_radius_m: float = param(0.15, gt=0, le=1)
+    # the largest rim radius (m): a wide bowl or pot. 0.25: a salad or mixing bowl up to
+    # 50 cm across (large_bowl's are 36-42 cm; at 0.15 they stayed in two pieces, floor
+    # and wall); rings.py and vessels.py each also ask for walls facing the centre, so a
+    # wider circle through boxes' edges is still no rim
+    ring_max_radius_m: float = param(0.25, gt=0, le=1)
     # RMS distance of the bands from the circle, as a share of its radius. On the 45
     # mOSD learn frames and 400 renders of the choose seeds (0-99) of four families:
     # the walls of one container 0.03-0.07, any other pair of segments with tops at one

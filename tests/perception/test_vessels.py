@@ -212,3 +212,98 @@ def test_a_rim_outvoted_by_a_larger_object_beside_it_is_found_without_that_objec
     bowl = np.isin(seg, [1, 2])
     assert np.unique(out[bowl]).size == 1 and (out == out[bowl][0]).sum() == bowl.sum()
     assert np.unique(out[seg == 0]).size == 1 and out[seg == 0][0] != out[bowl][0]
+
+
+def _disc(radius_m: float, z: float, centre: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Points (N, 3) of a flat disc every STEP_M, and their in-plane normals (0: a top)."""
+    g = np.arange(-radius_m, radius_m + 1e-9, STEP_M)
+    xy = np.array([(x, y) for x in g for y in g if x * x + y * y <= radius_m**2]) + centre
+    return np.column_stack([xy, np.full(len(xy), z)]), np.zeros((len(xy), 2))
+
+
+def _wide_bowl(can_top_m: float, rim_m: float = 0.08):
+    """A bowl 42 cm across at its rim (a salad or mixing bowl), its floor 2 cm up, and
+    a can 6 cm across standing on the floor 5 cm off the axis: segments 0-1 its walls,
+    2 its floor, 3 the can, which also holds five voxels of the inner wall (a patch at a
+    seam blended with the can's colour, as LCCP leaves them)."""
+    r_out = lambda z: 0.18 + 0.03 * z / rim_m  # noqa: E731
+    outer = _wall(r_out, 0.0, rim_m, 180, 360, outward=True)
+    inner = _wall(lambda z: r_out(z) - 0.004, 0.02, rim_m, 0, 180, outward=False)
+    floor = _disc(0.17, 0.02, CENTRE)
+    can_c = CENTRE + [0.05, 0.0]
+    side = _wall(lambda z: 0.03, 0.024, can_top_m, 0, 360, outward=True, centre=can_c)
+    top = _disc(0.026, can_top_m, can_c)
+    can_pts = np.vstack([side[0], top[0], inner[0][:5]])
+    can_nrm = np.vstack([side[1], top[1], inner[1][:5]])
+    can_wall = np.concatenate([np.ones(len(side[0]), bool), np.zeros(len(top[0]), bool), np.ones(5, bool)])
+    parts = [
+        (outer[0], outer[1], True, 0),
+        (inner[0][5:], inner[1][5:], True, 1),
+        (floor[0], floor[1], False, 2),
+    ]
+    return parts, (can_pts, can_nrm, can_wall)
+
+
+def _rebuild_mixed(parts, can, max_radius_m: float | None = None):
+    """`_rebuild` with the can's voxels last, walls and tops mixed in one segment (3);
+    ``max_radius_m``: ring_max_radius_m, else the default."""
+    from helpers.refine import hand_context
+    from scipy.spatial import cKDTree
+
+    from clearcli.perception.supervoxels import Supervoxels
+    from clearcli.perception.vessels import rebuild_vessels
+    from clearcli.settings.segment import SegmentSettings
+
+    pts = np.vstack([p[0] for p in parts] + [can[0]])
+    nrm = np.vstack([p[1] for p in parts] + [can[1]])
+    wall = np.concatenate([np.full(p[0].shape[0], p[2]) for p in parts] + [can[2]])
+    seg = np.concatenate([np.full(p[0].shape[0], p[3]) for p in parts] + [np.full(len(can[0]), 3)])
+    edges = cKDTree(pts).query_pairs(1.8 * STEP_M, output_type="ndarray")
+    n = pts.shape[0]
+    normals = np.column_stack([nrm, np.where(wall, 0.0, 1.0)])
+    sv = Supervoxels(np.arange(n), pts, normals, np.ones(n, dtype=np.int64), np.zeros((0, 2), dtype=np.int64))
+    settings = SegmentSettings(voxel_m=STEP_M, min_object_area_m2=20.5 * STEP_M**2)
+    if max_radius_m is not None:
+        settings = SegmentSettings(voxel_m=STEP_M, min_object_area_m2=20.5 * STEP_M**2, ring_max_radius_m=max_radius_m)
+    ctx = hand_context(pts, sv, settings, edges)
+    return seg, rebuild_vessels(seg, ctx)
+
+
+def test_a_wide_bowl_is_rebuilt_and_a_can_standing_on_its_floor_below_the_rim_stays_apart() -> None:
+    # issue 37's large bowl: 42 cm across, beyond the 30 cm the rim search took before
+    # (ring_max_radius_m 0.15 -> 0.25), and the can in it rises 4 cm above the floor but
+    # stays below the rim: it stands on the floor, an object (before, only what rose
+    # above the rim was). The floor, flat, is the bowl's.
+    parts, can = _wide_bowl(can_top_m=0.06)
+    seg, out = _rebuild_mixed(parts, can)
+    bowl = out[seg == 0][0]
+    assert np.all(out[seg <= 2] == bowl)  # walls and floor: one container
+    own = seg == 3
+    own[np.flatnonzero(own)[-5:]] = False  # the five wall voxels the can's segment held
+    assert np.unique(out[own]).size == 1 and out[own][0] != bowl
+    assert np.all(out[np.flatnonzero(seg == 3)[-5:]] == bowl)  # those go to the wall
+    # with the rim search at its former reach (15 cm) there is no container: four pieces
+    _, before = _rebuild_mixed(parts, can, max_radius_m=0.15)
+    assert np.array_equal(before, seg)
+
+
+def test_a_can_below_the_rim_went_with_the_bowl_without_the_standing_rule(monkeypatch: pytest.MonkeyPatch) -> None:
+    # the rule off (nothing inside below the rim stands apart): the can in the wide
+    # bowl is taken into the container, as only what rose above the rim was kept apart
+    from clearcli.perception import vessels
+
+    monkeypatch.setattr(vessels, "_standing_inside", lambda *args: [])
+    parts, can = _wide_bowl(can_top_m=0.06)
+    seg, out = _rebuild_mixed(parts, can)
+    assert np.all(out == out[seg == 0][0])
+
+
+def test_a_can_as_tall_as_the_rim_clear_of_the_wall_stands_apart() -> None:
+    # its top 2 mm below the rim's height, where a strip of wall or a surface spanning
+    # the opening would end too; it stands clear of the wall (its voxels all farther in
+    # than _SURE_INSIDE of the radius): an object (large_bowl(4))
+    parts, can = _wide_bowl(can_top_m=0.078)
+    seg, out = _rebuild_mixed(parts, can)
+    own = np.flatnonzero(seg == 3)[:-5]
+    assert np.unique(out[own]).size == 1 and out[own][0] != out[seg == 0][0]
+    assert np.all(out[seg <= 2] == out[seg == 0][0])
