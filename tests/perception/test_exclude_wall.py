@@ -128,7 +128,6 @@ def test_a_bins_walls_are_no_objects(seed: int, monkeypatch: pytest.MonkeyPatch)
     assert sc_off.n_pred >= sc_off.n_true + 2
 
 
-
 def test_a_bins_walls_are_no_wide_bowls_rim(monkeypatch: pytest.MonkeyPatch) -> None:
     # the bin's rim, 37 x 42 cm, meets a circle of 21 cm radius in four arcs covering
     # 200 degrees: within ring_max_radius_m (0.25 m, for a large bowl), so the vessels
@@ -142,6 +141,7 @@ def test_a_bins_walls_are_no_wide_bowls_rim(monkeypatch: pytest.MonkeyPatch) -> 
     monkeypatch.setattr(vessels, "_WIDE_MIN_ON", 0.0)
     sc = score(segment(frame, ON).labels(), truth)
     assert sc.n_pred > sc.n_true, sc
+
 
 def test_a_wall_seen_face_on_from_a_low_camera_is_excluded_strip_by_strip(monkeypatch: pytest.MonkeyPatch) -> None:
     # wall_at_edge(2) (desk_behind(2)'s objects, a wall 1 cm inside the table's far edge)
