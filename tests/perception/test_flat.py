@@ -228,7 +228,6 @@ def test_thin_things_lying_on_a_table_keep_their_feet() -> None:
     assert (off[3], off[4]) == ("missed", "missed")
 
 
-
 def test_a_notebook_lying_flat_is_found_up_to_an_a4_pages_area() -> None:
     # thin_flat(1) (a choose seed), seen by the Kinect: its object 3 is a notebook 11 x
     # 24 cm and 9 mm thick, all of it under the prism's lower bound; by colour and relief
@@ -248,6 +247,7 @@ def test_a_notebook_lying_flat_is_found_up_to_an_a4_pages_area() -> None:
     before = exact_report(segment(frame, replace(SegmentSettings(), flat_max_area_m2=0.02)).labels(), truth)
     assert on.verdicts[3] == "right" and on.spurious == 0
     assert before.verdicts[3] == "missed"
+
 
 def test_colour_keys_pack_the_top_six_bits_of_each_channel() -> None:
     from clearcli.perception.flat import _lab_keys
