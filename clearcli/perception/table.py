@@ -70,6 +70,12 @@ _RESIDUE_M = 0.03
 _EDGE_MIN_PIECE_PX = 200
 _EDGE_MIN_CELLS = 5
 _EDGE_RATIO = 1.25
+# ... and a table pixel more than this far under the plane belongs to no piece (as one
+# at a depth jump): a face's top beyond a narrow gap, seen over the table's edge, lies in
+# the plane's band under the plane and joined the bench behind to the table pixel by
+# pixel (desk_level_behind(3, 9); half the band: a table's noise crosses it in scattered
+# pixels, which split no piece)
+_EDGE_UNDER_M = 0.005
 # hull_vertices(): below this many points Qhull runs on them all; above, on the points
 # not more than this far (m) inside the octagon of extreme points (rounding is 1e-16 m)
 _HULL_FILTER_FROM = 64
@@ -1239,6 +1245,11 @@ def beyond_the_edge(
     # the pieces' cells: table pixels without a jump to a neighbour, flat, then (rows, width)
     keep: np.ndarray = np.zeros(rows * width, dtype=bool)
     keep[at] = True
+    # ... and not well under the plane: the top of a face beyond a narrow gap (a bench's
+    # front seen over the table's edge) lies within the plane's band, under the plane,
+    # and joined the bench's top to the table's pixel by pixel
+    on_table_xyz = np.take(points.reshape(-1, 3), table_pixels, axis=0).astype(np.float64)
+    keep[at[plane.height_of(on_table_xyz) < -_EDGE_UNDER_M]] = False
     keep = keep.reshape(rows, width)
     rel = settings.depth_edge_rel
     # a table pixel with a jump to its right or lower neighbour belongs to no piece: both
@@ -1293,8 +1304,7 @@ def beyond_the_edge(
     # each table point's plane coordinates once (a row's product does not depend on the
     # rows around it: the same bits as projecting each piece's rows apart), taken per
     # piece in raster order
-    on_table = np.take(points.reshape(-1, 3), table_pixels, axis=0).astype(np.float64)  # take: faster than a[idx]
-    table_u, table_v = (on_table @ a for a in basis)
+    table_u, table_v = (on_table_xyz @ a for a in basis)
 
     ou, ov = (origin @ basis.T).tolist()
 

@@ -283,6 +283,26 @@ def test_a_bench_beyond_a_gap_half_hidden_by_the_tables_objects_is_no_table(monk
     assert before.right == 5 and before.spurious == 5
 
 
+def test_a_benchs_face_seen_over_a_narrow_gap_does_not_join_it_to_the_table(monkeypatch: pytest.MonkeyPatch) -> None:
+    """desk_level_behind(9): the bench's front face, seen over the table's far edge, has
+    its top centimetre within the plane's band, under the plane; pixel by pixel, with no
+    depth jump, it joined the bench's top to the table (one piece: nothing to judge). Its
+    pixels more than `_EDGE_UNDER_M` (5 mm) under the plane belong to no piece, the bench
+    is a piece of its own beyond the gap and goes: no spurious object. Off (no pixel
+    too far under), its three things are objects."""
+    from clearcli.evaluate.exact import exact_report
+    from clearcli.perception import table
+    from clearcli.perception.segment import segment
+    from clearcli.sim.families import support_frame
+
+    frame = support_frame("desk_level_behind", 9)
+    on = exact_report(segment(frame, S).labels(), frame.fields["label"])
+    assert (on.right, on.n_objects, on.spurious) == (4, 4, 0)
+    monkeypatch.setattr(table, "_EDGE_UNDER_M", np.inf)
+    off = exact_report(segment(frame, S).labels(), frame.fields["label"])
+    assert off.right == 4 and off.spurious == 3
+
+
 def test_polygon_area_by_hand() -> None:
     from clearcli.perception.table import polygon_area
 
