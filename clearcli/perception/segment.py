@@ -214,7 +214,9 @@ def _without_what_lies_beyond(
     Returns (fit, table mask, prism mask, area of the plane dropped in m^2)."""
     assert frame.shape is not None  # an organized frame's only
     on_table = np.flatnonzero(table_mask)
-    drop, solid = beyond_the_edge(frame.points, frame.shape, idx[on_table], fit.plane, settings)
+    drop, solid = beyond_the_edge(
+        frame.points, frame.shape, idx[on_table], fit.plane, settings, np.take(lifted.heights, on_table)
+    )
     if not drop.any():
         return fit, table_mask, prism_mask, 0.0
     kept = np.take(pts, on_table[solid], axis=0)  # rows by index: take is faster than a[idx]

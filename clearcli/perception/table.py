@@ -1205,9 +1205,11 @@ def beyond_the_edge(
     table_pixels: np.ndarray,
     plane: TablePlane,
     settings: SegmentSettings,
+    heights: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Two (T,) bool masks over ``table_pixels`` (flat pixel indices of the table's points
-    in the organized ``points`` of ``shape``, a camera frame): the pieces of the plane
+    in the organized ``points`` of ``shape``, a camera frame; ``heights``: theirs above
+    ``plane`` when the caller has them): the pieces of the plane
     that lie beyond a gap the camera sees through, which are not the table; and the
     pieces that are (the largest and those judged to stay), whose hull is the table's
     when something was dropped (stray pixels between pieces do not stretch it).
@@ -1248,8 +1250,9 @@ def beyond_the_edge(
     # ... and not well under the plane: the top of a face beyond a narrow gap (a bench's
     # front seen over the table's edge) lies within the plane's band, under the plane,
     # and joined the bench's top to the table's pixel by pixel
-    on_table_xyz = np.take(points.reshape(-1, 3), table_pixels, axis=0).astype(np.float64)
-    keep[at[plane.height_of(on_table_xyz) < -_EDGE_UNDER_M]] = False
+    if heights is None:
+        heights = plane.height_of(np.take(points.reshape(-1, 3), table_pixels, axis=0).astype(np.float64))
+    keep[at[heights < -_EDGE_UNDER_M]] = False
     keep = keep.reshape(rows, width)
     rel = settings.depth_edge_rel
     # a table pixel with a jump to its right or lower neighbour belongs to no piece: both
@@ -1304,7 +1307,8 @@ def beyond_the_edge(
     # each table point's plane coordinates once (a row's product does not depend on the
     # rows around it: the same bits as projecting each piece's rows apart), taken per
     # piece in raster order
-    table_u, table_v = (on_table_xyz @ a for a in basis)
+    on_table = np.take(points.reshape(-1, 3), table_pixels, axis=0).astype(np.float64)  # take: faster than a[idx]
+    table_u, table_v = (on_table @ a for a in basis)
 
     ou, ov = (origin @ basis.T).tolist()
 
