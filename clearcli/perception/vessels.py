@@ -56,12 +56,12 @@ from clearcli.perception.rings import cover_deg, facing_cos, fit_circle_rows, ka
 
 _MIN_RADIUS_M = 0.02
 # a rim wider than _WIDE_M in radius holds _WIDE_MIN_ON of its segments' band voxels on
-# its circle: the sides of a rectangle that wide (a bin's walls, 37 x 42 cm) meet a
-# circle in arcs that cover 200 degrees with 38-45 % of their band on it; large_bowl's
-# rims (18-21 cm) hold 96-100 %. Narrower rims are not asked: a mug's band, its handle
-# and noise in it, holds 45-100 % on mOSD and the foreign frames, and no rectangle that
-# small covers 200 degrees of a circle (`ring_max_radius_m` was 0.15 until issue 37's
-# large bowl)
+# its circle: the sides of a rectangle that wide (the walls of a bin whose floor is the
+# support, 37 x 42 cm) meet a circle in arcs that cover 200 degrees with 38-45 % of
+# their band on it; large_bowl's rims (18-21 cm) hold 96-100 %. Narrower rims keep the
+# tests they had (`ring_max_radius_m` was 0.15 until issue 37's large bowl): a mug's
+# band, its handle and noise in it, holds 45-100 % on mOSD and the foreign frames, and a
+# small open box taken for a container is one
 _WIDE_M = 0.15
 _WIDE_MIN_ON = 0.8
 _RANSAC_ROUNDS = 200
