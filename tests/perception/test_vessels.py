@@ -307,3 +307,30 @@ def test_a_can_as_tall_as_the_rim_clear_of_the_wall_stands_apart() -> None:
     own = np.flatnonzero(seg == 3)[:-5]
     assert np.unique(out[own]).size == 1 and out[own][0] != out[seg == 0][0]
     assert np.all(out[seg <= 2] == out[seg == 0][0])
+
+
+def test_a_rim_is_sought_wide_only_when_no_narrow_one_is_and_the_band_is_wide(monkeypatch: pytest.MonkeyPatch) -> None:
+    # `_rim_of`: up to _WIDE_M first, with the group's own generator (a narrow rim is
+    # found as before wide ones were sought); a second search up to ring_max_radius_m
+    # only where none was found and the band spans more than 2 _WIDE_M
+    from clearcli.perception import vessels
+
+    calls: list[float] = []
+    real = vessels.find_rim
+
+    def spy(band_xy, max_radius_m, rng):  # noqa: ANN001, ANN202
+        calls.append(max_radius_m)
+        return real(band_xy, max_radius_m, rng)
+
+    monkeypatch.setattr(vessels, "find_rim", spy)
+    a = np.radians(np.linspace(0.0, 300.0, 200))
+    mug = np.column_stack([0.05 * np.cos(a), 0.05 * np.sin(a)])
+    found = vessels._rim_of(mug, 0.25, [0, 1])
+    assert found is not None and found[1] == pytest.approx(0.05, abs=1e-6) and calls == [0.15]
+    calls.clear()
+    bowl = mug * 4.0  # 20 cm: nothing up to 15 cm, then found
+    found = vessels._rim_of(bowl, 0.25, [0, 1])
+    assert found is not None and found[1] == pytest.approx(0.2, abs=1e-6) and calls == [0.15, 0.25]
+    calls.clear()
+    line = np.column_stack([np.linspace(0.0, 0.25, 50), np.zeros(50)])  # 25 cm: no wide band
+    assert vessels._rim_of(line, 0.25, [0, 1]) is None and calls == [0.15]
