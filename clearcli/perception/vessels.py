@@ -55,14 +55,13 @@ from clearcli.perception.graph import components, dense_labels
 from clearcli.perception.rings import cover_deg, facing_cos, fit_circle_rows, kasa_rows
 
 _MIN_RADIUS_M = 0.02
-# a rim wider than _WIDE_M in radius holds _WIDE_MIN_ON of its segments' band voxels on
-# its circle: the sides of a rectangle that wide (the walls of a bin whose floor is the
-# support, 37 x 42 cm) meet a circle in arcs that cover 200 degrees with 38-45 % of
-# their band on it; large_bowl's rims (18-21 cm) hold 96-100 %. Narrower rims keep the
-# tests they had (`ring_max_radius_m` was 0.15 until issue 37's large bowl): a mug's
-# band, its handle and noise in it, holds 45-100 % on mOSD and the foreign frames, and a
-# small open box taken for a container is one
-_WIDE_M = 0.15
+# a rim wider than ``ring_max_radius_m`` (found by the wider search up to
+# ``vessel_max_radius_m``) holds _WIDE_MIN_ON of its segments' band voxels on its
+# circle: the sides of a rectangle that wide (the walls of a bin whose floor is the
+# support, 37 x 42 cm) meet a circle in arcs that cover 200 degrees with 38-45 % of their
+# band on it; large_bowl's rims (18-21 cm) hold 96-100 %. Narrower rims keep the tests
+# they had: a mug's band, its handle and noise in it, holds 45-100 % on mOSD and the
+# foreign frames, and a small open box taken for a container is one
 _WIDE_MIN_ON = 0.8
 _RANSAC_ROUNDS = 200
 _SCORE_SAMPLES = 500
@@ -202,22 +201,23 @@ def find_rim(
     return centre, radius, inl
 
 
-def _rim_of(band_xy: np.ndarray, max_radius_m: float, seed: list[int]) -> tuple[np.ndarray, float, np.ndarray] | None:
-    """`find_rim` up to ``_WIDE_M`` in radius, and only when none is found there and the
-    band spans more than a wide rim's diameter (2 ``_WIDE_M``: an arc of more than 180
-    degrees holds two opposite points), once more up to ``max_radius_m``, each search
-    from a generator seeded by ``seed``. A narrow rim is found as before wide ones were
-    sought (a box at 2.4 m, cut in two, was joined by a rim of 11 cm; a search up to 25 cm
-    drew another circle and left it in two), and a group with no wide band pays for no
-    second search."""
-    narrow = min(max_radius_m, _WIDE_M)
-    found = find_rim(band_xy, narrow, np.random.default_rng(seed))
-    if found is not None or max_radius_m <= narrow or band_xy.shape[0] < 10:
+def _rim_of(
+    band_xy: np.ndarray, max_radius_m: float, wide_radius_m: float, seed: list[int]
+) -> tuple[np.ndarray, float, np.ndarray] | None:
+    """`find_rim` up to ``max_radius_m`` (``ring_max_radius_m``), and only when none is
+    found there and the band spans more than that rim's diameter (an arc of more than 180
+    degrees holds two opposite points), once more up to ``wide_radius_m``
+    (``vessel_max_radius_m``), each search from a generator seeded by ``seed``: a narrow
+    rim is found as it was before wide ones were sought (a box at 2.4 m, cut in two, is
+    joined by a rim of 11 cm; a search up to 25 cm drew another circle and left it in
+    two), and a group with no wide band pays for no second search."""
+    found = find_rim(band_xy, max_radius_m, np.random.default_rng(seed))
+    if found is not None or wide_radius_m <= max_radius_m or band_xy.shape[0] < 10:
         return found
     span = np.ptp(band_xy, axis=0)
-    if float(np.hypot(span[0], span[1])) <= 2 * _WIDE_M:
+    if float(np.hypot(span[0], span[1])) <= 2 * max_radius_m:
         return None
-    return find_rim(band_xy, max_radius_m, np.random.default_rng(seed))
+    return find_rim(band_xy, wide_radius_m, np.random.default_rng(seed))
 
 
 def _wall_profile(d: np.ndarray, h: np.ndarray, rim_h: float, radius: float) -> np.ndarray:
@@ -303,9 +303,7 @@ def rebuild_vessels(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
     voxel_xy, voxel_height, voxel_edges, voxel_label = ctx.voxel_xy, ctx.voxel_height, ctx.vox.edges, ctx.sv.voxel_label
     sv_normals_xy, sv_xy, sv_is_wall, voxel_lab = ctx.sv_normals_xy, ctx.sv_xy, ctx.sv_is_wall, ctx.voxel_lab
     tolerance_m, max_radius_m = settings.rim_tolerance_m, settings.ring_max_radius_m
-    # groups are drawn, and rims sought first, up to _WIDE_M: what a narrower search finds
-    # is what it found before wide rims were sought (`_rim_of`)
-    group_radius_m = min(max_radius_m, _WIDE_M)
+    wide_radius_m = settings.vessel_max_radius_m
     standing_max_m = settings.standing_max_m
     min_voxels, voxel_m = ctx.size.min_object_voxels, ctx.size.voxel_m
 
@@ -339,7 +337,7 @@ def rebuild_vessels(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
     mid_c = mid[cand_arr]
     d_mid = np.sqrt((mid_c[:, None, 0] - mid_c[None, :, 0]) ** 2 + (mid_c[:, None, 1] - mid_c[None, :, 1]) ** 2)
     may_group = (np.abs(top[cand_arr][:, None] - top[cand_arr][None, :]) <= tolerance_m) & (
-        d_mid <= 2 * group_radius_m * (1 + 1e-6) + 1e-9
+        d_mid <= 2 * max_radius_m * (1 + 1e-6) + 1e-9
     )
     row_of = {k: i for i, k in enumerate(cand)}
     # a group's circle is drawn from a generator seeded by its own segments (integers:
@@ -357,7 +355,7 @@ def rebuild_vessels(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
             for k in cand_arr[may_group[row_of[s]]].tolist()
             if k not in done
             and abs(top[k] - top[s]) <= tolerance_m
-            and np.linalg.norm(mid[k] - mid[s]) <= 2 * group_radius_m
+            and np.linalg.norm(mid[k] - mid[s]) <= 2 * max_radius_m
         ]
         key = tuple(group)
         if failed_at.get(key, -1) == n_changes:
@@ -365,7 +363,7 @@ def rebuild_vessels(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
         failed_at[key] = n_changes  # until it gets as far as changing segments below
         band = np.concatenate([band_of[k] for k in group])
         if key not in rims_of:
-            rims_of[key] = _rim_of(voxel_xy[band], max_radius_m, [0, *group])
+            rims_of[key] = _rim_of(voxel_xy[band], max_radius_m, wide_radius_m, [0, *group])
         found = rims_of[key]
         if found is None and len(group) >= 2:
             # another object's top at the rim's height (a drill beside a bowl) may hold
@@ -377,7 +375,7 @@ def rebuild_vessels(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
             band = np.concatenate([band_of[k] for k in group])
             key = tuple(group)
             if key not in rims_of:
-                rims_of[key] = _rim_of(voxel_xy[band], max_radius_m, [0, *group])
+                rims_of[key] = _rim_of(voxel_xy[band], max_radius_m, wide_radius_m, [0, *group])
             found = rims_of[key]
         if found is None:
             continue
@@ -391,7 +389,7 @@ def rebuild_vessels(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
         # the container reaches down as far as the segments holding its rim do within
         # the circle: what it stands on (a box under a bowl) lies lower
         holders = np.unique(seg[band[on_rim]])
-        if radius > _WIDE_M and float(on_rim[np.isin(seg[band], holders)].mean()) < _WIDE_MIN_ON:
+        if radius > max_radius_m and float(on_rim[np.isin(seg[band], holders)].mean()) < _WIDE_MIN_ON:
             continue  # a wide rectangle's sides (a bin's walls) met by a circle in arcs
         holders_inside = inside_rim & np.isin(seg, holders)
         if not holders_inside.any():  # a wide rim's inliers may all lie just beyond _OUT_M

@@ -333,13 +333,15 @@ class SegmentSettings(Section):
     # two arcs of one circle, the inner wall facing its centre, the outer facing away
     # (rings.py)
     ring_merge: bool = param(True)
-    # the largest rim radius (m): a wide bowl or pot. 0.25: a salad or mixing bowl up to
-    # 50 cm across (large_bowl's are 36-42 cm; at 0.15 they stayed in two pieces, floor
-    # and wall); rings.py and vessels.py each also ask for walls facing the centre, so a
-    # wider circle through boxes' edges is still no rim. vessels.py seeks a rim up to
-    # 15 cm first and a wider one only where none was found and the band spans more than
-    # 30 cm, and a rim over 15 cm must hold 80 % of its band (a bin's walls do not)
-    ring_max_radius_m: float = param(0.25, gt=0, le=1)
+    # the largest rim radius (m): a wide bowl or pot
+    ring_max_radius_m: float = param(0.15, gt=0, le=1)
+    # the vessels stage also seeks a rim wider than ring_max_radius_m, up to this radius
+    # (m), where none narrower was found and the rim band spans more than
+    # 2 ring_max_radius_m; such a rim must hold 80 % of its band on its circle (a bin's
+    # walls do not). 0.25: a salad or mixing bowl up to 50 cm across (large_bowl's are
+    # 36-42 cm; with no wider search they stayed in two pieces, floor and wall). At or
+    # under ring_max_radius_m: no wider search
+    vessel_max_radius_m: float = param(0.25, gt=0, le=1)
     # RMS distance of the bands from the circle, as a share of its radius. On the 45
     # mOSD learn frames and 400 renders of the choose seeds (0-99) of four families:
     # the walls of one container 0.03-0.07, any other pair of segments with tops at one

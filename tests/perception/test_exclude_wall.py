@@ -130,7 +130,7 @@ def test_a_bins_walls_are_no_objects(seed: int, monkeypatch: pytest.MonkeyPatch)
 
 def test_a_bins_walls_are_no_wide_bowls_rim(monkeypatch: pytest.MonkeyPatch) -> None:
     # the bin's rim, 37 x 42 cm, meets a circle of 21 cm radius in four arcs covering
-    # 200 degrees: within ring_max_radius_m (0.25 m, for a large bowl), so the vessels
+    # 200 degrees: within vessel_max_radius_m (0.25 m, for a large bowl), so the vessels
     # stage asks a rim that wide to hold 80 % of its band on the circle (this one: 42 %).
     # Without that, the walls are rebuilt as a container and the frame's objects are wrong
     from clearcli.perception import vessels

@@ -246,7 +246,7 @@ def _wide_bowl(can_top_m: float, rim_m: float = 0.08):
 
 def _rebuild_mixed(parts, can, max_radius_m: float | None = None):
     """`_rebuild` with the can's voxels last, walls and tops mixed in one segment (3);
-    ``max_radius_m``: ring_max_radius_m, else the default."""
+    ``max_radius_m``: vessel_max_radius_m, else the default."""
     from helpers.refine import hand_context
     from scipy.spatial import cKDTree
 
@@ -264,14 +264,16 @@ def _rebuild_mixed(parts, can, max_radius_m: float | None = None):
     sv = Supervoxels(np.arange(n), pts, normals, np.ones(n, dtype=np.int64), np.zeros((0, 2), dtype=np.int64))
     settings = SegmentSettings(voxel_m=STEP_M, min_object_area_m2=20.5 * STEP_M**2)
     if max_radius_m is not None:
-        settings = SegmentSettings(voxel_m=STEP_M, min_object_area_m2=20.5 * STEP_M**2, ring_max_radius_m=max_radius_m)
+        settings = SegmentSettings(
+            voxel_m=STEP_M, min_object_area_m2=20.5 * STEP_M**2, vessel_max_radius_m=max_radius_m
+        )
     ctx = hand_context(pts, sv, settings, edges)
     return seg, rebuild_vessels(seg, ctx)
 
 
 def test_a_wide_bowl_is_rebuilt_and_a_can_standing_on_its_floor_below_the_rim_stays_apart() -> None:
     # issue 37's large bowl: 42 cm across, beyond the 30 cm the rim search took before
-    # (ring_max_radius_m 0.15 -> 0.25), and the can in it rises 4 cm above the floor but
+    # (vessel_max_radius_m 0.25 over ring_max_radius_m's 0.15), and the can in it rises 4 cm above the floor but
     # stays below the rim: it stands on the floor, an object (before, only what rose
     # above the rim was). The floor, flat, is the bowl's.
     parts, can = _wide_bowl(can_top_m=0.06)
@@ -310,9 +312,10 @@ def test_a_can_as_tall_as_the_rim_clear_of_the_wall_stands_apart() -> None:
 
 
 def test_a_rim_is_sought_wide_only_when_no_narrow_one_is_and_the_band_is_wide(monkeypatch: pytest.MonkeyPatch) -> None:
-    # `_rim_of`: up to _WIDE_M first, with the group's own generator (a narrow rim is
-    # found as before wide ones were sought); a second search up to ring_max_radius_m
-    # only where none was found and the band spans more than 2 _WIDE_M
+    # `_rim_of`: up to ring_max_radius_m first, with the group's own generator (a narrow
+    # rim is found as before wide ones were sought); a second search up to
+    # vessel_max_radius_m only where none was found and the band spans more than twice
+    # ring_max_radius_m
     from clearcli.perception import vessels
 
     calls: list[float] = []
@@ -325,12 +328,12 @@ def test_a_rim_is_sought_wide_only_when_no_narrow_one_is_and_the_band_is_wide(mo
     monkeypatch.setattr(vessels, "find_rim", spy)
     a = np.radians(np.linspace(0.0, 300.0, 200))
     mug = np.column_stack([0.05 * np.cos(a), 0.05 * np.sin(a)])
-    found = vessels._rim_of(mug, 0.25, [0, 1])
+    found = vessels._rim_of(mug, 0.15, 0.25, [0, 1])
     assert found is not None and found[1] == pytest.approx(0.05, abs=1e-6) and calls == [0.15]
     calls.clear()
     bowl = mug * 4.0  # 20 cm: nothing up to 15 cm, then found
-    found = vessels._rim_of(bowl, 0.25, [0, 1])
+    found = vessels._rim_of(bowl, 0.15, 0.25, [0, 1])
     assert found is not None and found[1] == pytest.approx(0.2, abs=1e-6) and calls == [0.15, 0.25]
     calls.clear()
     line = np.column_stack([np.linspace(0.0, 0.25, 50), np.zeros(50)])  # 25 cm: no wide band
-    assert vessels._rim_of(line, 0.25, [0, 1]) is None and calls == [0.15]
+    assert vessels._rim_of(line, 0.15, 0.25, [0, 1]) is None and calls == [0.15]
