@@ -260,7 +260,8 @@ def _standing_inside(
     rim_h: float,
     standing_max_m: float,
     min_voxels: int,
-    clear_of_wall: np.ndarray,
+    depth_in: np.ndarray,
+    clear_m: float,
 ) -> list[np.ndarray]:
     """The objects standing on a container's floor below its rim within ``piece`` (voxel
     indices, inside the rim's circle): the piece without its floor (its top-facing voxels
@@ -269,7 +270,8 @@ def _standing_inside(
     rises ``standing_max_m`` or more and keeps its top ``_BELOW_RIM_M`` or more below the
     rim is an object (a can in a wide bowl). A flat floor leaves nothing that rises. A
     part reaching the rim's height is one only when ``_CLEAR_SHARE`` of it stands clear
-    of the wall (``clear_of_wall``, per voxel): a can as tall as the rim is; the surface
+    of the wall (``depth_in``, each voxel's distance inside the wall at its height, at
+    least ``clear_m``): a can as tall as the rim is; the surface
     a stereo camera spans across an opening, or a strip of wall the circle missed, both
     reaching the wall, are the container's."""
     if piece.size < min_voxels:
@@ -287,7 +289,7 @@ def _standing_inside(
     for c in np.unique(comp):
         part = body[comp == c]
         hp = voxel_height[part]
-        below_rim = hp.max() < rim_h - _BELOW_RIM_M or float(clear_of_wall[part].mean()) >= _CLEAR_SHARE
+        below_rim = hp.max() < rim_h - _BELOW_RIM_M or float(np.mean(depth_in[part] >= clear_m)) >= _CLEAR_SHARE
         if part.size >= min_voxels and below_rim and hp.max() - hp.min() >= standing_max_m:
             parts.append(part)
     return parts
@@ -423,8 +425,6 @@ def rebuild_vessels(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
                 shell[sure_wall] = True
                 shell[sure_in] = False
                 shell[unsure] = _by_colour(voxel_lab, sure_wall, sure_in, unsure, np.random.default_rng([1, *group]))
-        # clear of the wall: farther inside it than the sure wall and the unsure band
-        clear = depth_in >= _SURE_INSIDE * radius
         share = np.bincount(seg[shell])
         touched = np.flatnonzero(share >= 3)
         # the rim's own segments are this container's whatever follows (a second
@@ -470,7 +470,15 @@ def rebuild_vessels(seg_of_voxel: np.ndarray, ctx: RefineContext) -> np.ndarray:
                     parts = [piece] if piece.size >= min_voxels else []
                 else:
                     parts = _standing_inside(
-                        piece, voxel_height, wall_vox, voxel_edges, rim_h, standing_max_m, min_voxels, clear
+                        piece,
+                        voxel_height,
+                        wall_vox,
+                        voxel_edges,
+                        rim_h,
+                        standing_max_m,
+                        min_voxels,
+                        depth_in,
+                        _SURE_INSIDE * radius,  # clear of the wall: beyond the sure wall and the unsure band
                     )
             else:
                 # outside: what leans on it stands on the table; a handle does not

@@ -24,10 +24,11 @@ def _wall(r_of_z, z0: float, z1: float, deg0: float, deg1: float, outward: bool,
     return np.vstack(pts), np.vstack(nrm)
 
 
-def _rebuild(parts):
-    """parts: (points, normals xy, is_wall, segment) per surface -> (segment in, out).
-    Each voxel its own supervoxel, a wall's normal level, a top's straight up; the voxel
-    STEP_M and the smallest object 20.5 voxels' area: 20 voxels, rounded down."""
+def _rebuild(parts, **settings_kw):
+    """parts: (points, normals xy, is_wall, segment) per surface -> (segment in, out);
+    is_wall one bool for the surface or one per point. Each voxel its own supervoxel, a
+    wall's normal level, a top's straight up; the voxel STEP_M and the smallest object
+    20.5 voxels' area: 20 voxels, rounded down; ``settings_kw``: other settings."""
     from helpers.refine import hand_context
     from scipy.spatial import cKDTree
 
@@ -44,7 +45,7 @@ def _rebuild(parts):
     normals = np.column_stack([nrm, np.where(wall, 0.0, 1.0)])
     sv = Supervoxels(np.arange(n), pts, normals, np.ones(n, dtype=np.int64), np.zeros((0, 2), dtype=np.int64))
     # the defaults otherwise: rims within 15 mm, radius up to 15 cm, standing within 2 cm
-    settings = SegmentSettings(voxel_m=STEP_M, min_object_area_m2=20.5 * STEP_M**2)
+    settings = SegmentSettings(voxel_m=STEP_M, min_object_area_m2=20.5 * STEP_M**2, **settings_kw)
     ctx = hand_context(pts, sv, settings, edges)
     assert ctx.size.min_object_voxels == 20 and np.array_equal(ctx.sv_is_wall, wall)
     return seg, rebuild_vessels(seg, ctx)
@@ -247,35 +248,15 @@ def _wide_bowl(can_top_m: float, rim_m: float = 0.08):
 def _rebuild_mixed(parts, can, max_radius_m: float | None = None):
     """`_rebuild` with the can's voxels last, walls and tops mixed in one segment (3);
     ``max_radius_m``: vessel_max_radius_m, else the default."""
-    from helpers.refine import hand_context
-    from scipy.spatial import cKDTree
-
-    from clearcli.perception.supervoxels import Supervoxels
-    from clearcli.perception.vessels import rebuild_vessels
-    from clearcli.settings.segment import SegmentSettings
-
-    pts = np.vstack([p[0] for p in parts] + [can[0]])
-    nrm = np.vstack([p[1] for p in parts] + [can[1]])
-    wall = np.concatenate([np.full(p[0].shape[0], p[2]) for p in parts] + [can[2]])
-    seg = np.concatenate([np.full(p[0].shape[0], p[3]) for p in parts] + [np.full(len(can[0]), 3)])
-    edges = cKDTree(pts).query_pairs(1.8 * STEP_M, output_type="ndarray")
-    n = pts.shape[0]
-    normals = np.column_stack([nrm, np.where(wall, 0.0, 1.0)])
-    sv = Supervoxels(np.arange(n), pts, normals, np.ones(n, dtype=np.int64), np.zeros((0, 2), dtype=np.int64))
-    settings = SegmentSettings(voxel_m=STEP_M, min_object_area_m2=20.5 * STEP_M**2)
-    if max_radius_m is not None:
-        settings = SegmentSettings(
-            voxel_m=STEP_M, min_object_area_m2=20.5 * STEP_M**2, vessel_max_radius_m=max_radius_m
-        )
-    ctx = hand_context(pts, sv, settings, edges)
-    return seg, rebuild_vessels(seg, ctx)
+    kw = {} if max_radius_m is None else {"vessel_max_radius_m": max_radius_m}
+    return _rebuild([*parts, (can[0], can[1], can[2], 3)], **kw)
 
 
 def test_a_wide_bowl_is_rebuilt_and_a_can_standing_on_its_floor_below_the_rim_stays_apart() -> None:
     # issue 37's large bowl: 42 cm across, beyond the 30 cm the rim search took before
-    # (vessel_max_radius_m 0.25 over ring_max_radius_m's 0.15), and the can in it rises 4 cm above the floor but
-    # stays below the rim: it stands on the floor, an object (before, only what rose
-    # above the rim was). The floor, flat, is the bowl's.
+    # (vessel_max_radius_m 0.25 over ring_max_radius_m's 0.15), and the can in it rises
+    # 4 cm above the floor but stays below the rim: it stands on the floor, an object
+    # (before, only what rose above the rim was). The floor, flat, is the bowl's.
     parts, can = _wide_bowl(can_top_m=0.06)
     seg, out = _rebuild_mixed(parts, can)
     bowl = out[seg == 0][0]
