@@ -8,7 +8,8 @@ the table's noise with it. Depth alone cannot tell; colour can, where the frame 
 
 1. The table's colour: the median CIELAB colour of the table's points; a pixel of the
    table (or a point above it left over by segmentation: too small to be an object on
-   its own) differs when its colour is more than ``flat_min_color_delta`` (CIE76 dE)
+   its own; or one under the prism's floor and above the table's band, where a
+   notebook lying flat keeps much of its top) differs when its colour is more than ``flat_min_color_delta`` (CIE76 dE)
    from it, and more than three times the table's own median difference (a wood grain,
    a cloth's pattern).
 2. Such pixels, joined over 8 neighbours, are a candidate when the candidate keeps
@@ -39,6 +40,10 @@ the table's noise with it. Depth alone cannot tell; colour can, where the frame 
    bound cut off. It joins the object, but only its points within ``flat_foot_reach_m``
    (across the table) of the object's own (`within_reach`): the foot stands under the
    faces seen above it, and its points farther out are depth mixed at the lower edge.
+   A foot of half the object's points or more joins whole (segment.py,
+   `_WHOLE_FOOT_RATIO`): the object is then a thing lying flat whose top the prism
+   kept only a speckle of, the highest of its noisy points, and that speckle is no
+   outline of it.
 
 Organized frames with colour only: the ring and the joining need the pixel grid. On
 the 45 mOSD learn frames no candidate far from the objects exists; results there are

@@ -284,10 +284,12 @@ def _flat_objects(
     settings: SegmentSettings,
     size: SegmentSize,
     support: tuple[np.ndarray, float] | None = None,
+    below: np.ndarray | None = None,
 ) -> tuple[np.ndarray, list[SegmentedObject], list[tuple[SegmentedObject, np.ndarray]]]:
     """(table indices without the flat objects' points, the flat objects, the feet of
     ``objects``: (object, the foot's pixels) each): flat.py; ``support``:
-    `support_colour` of ``table_idx`` when the caller has it."""
+    `support_colour` of ``table_idx`` when the caller has it; ``below``: the points
+    under the prism's floor (`_below_prism`), looked at with the loose ones."""
     assert frame.colors is not None and frame.shape is not None  # an organized frame's, with usable colour
     # the points above the table that no object kept: np.setdiff1d(obj_idx, the objects'
     # indices, assume_unique=True) (obj_idx's own order), by a mask of the frame's pixels
@@ -296,6 +298,8 @@ def _flat_objects(
     is_taken = np.zeros(frame.n_points, dtype=bool)
     is_taken[taken] = True
     loose = np.compress(~np.take(is_taken, obj_idx), obj_idx)
+    if below is not None and below.size:
+        loose = np.concatenate([loose, below])
     cell = size.voxel_m
 
     def area(pixels: np.ndarray) -> float:
@@ -330,6 +334,32 @@ def _flat_objects(
     return table_idx, made, feet
 
 
+# an object whose foot (its pixels of its colour under the prism's floor, flat.py 5.)
+# holds at least this share of its own points, and whose points lie low (`_lies_flat`),
+# is a thing lying flat, most of it under the floor: its whole foot joins it, not only
+# the points under its outline. On the support families' choose seeds (the four
+# sensors) the feet of objects standing up hold 0.05-0.42 of their object's points
+# (mOSD: at most 0.15); those of notebooks, phones and pens lying flat 0.69-46: 0.5
+# lies between, near their geometric mean
+_WHOLE_FOOT_RATIO = 0.5
+# ... and lying low: its points' median height at most this far (m) above the prism's
+# floor at their range. The things lying flat on those seeds: 0.6-3.8 mm; a bowl 4.6
+# cm tall with a foot as large as itself (uois_image_0000, where the foot was a dark
+# grain of the table's wood beside it, which a whole foot took): 16.4 mm. 8 mm lies
+# between, near their geometric mean (7.9)
+_FLAT_TOP_M = 0.008
+
+
+def _lies_flat(obj_pts: np.ndarray, fit: TableFit, settings: SegmentSettings) -> bool:
+    """Does the object of points ``obj_pts`` (camera frame, float64) lie low, its
+    points' median height at most `_FLAT_TOP_M` above the prism's floor at their median
+    range (the floor `table.lift` draws)?"""
+    floor_m = settings.prism_min_height_m
+    if fit.camera_is_origin:
+        floor_m += settings.prism_noise_per_m2 * float(np.median(squared_range(obj_pts)))
+    return float(np.median(fit.plane.height_of(obj_pts))) - floor_m <= _FLAT_TOP_M
+
+
 def _with_feet(w: _Work) -> None:
     """5. the feet `_flat` found joined to their objects, if these were kept (flat.py,
     5.): after `_exclude`, which judges each object as the prism cut it. The grown objects'
@@ -355,8 +385,15 @@ def _with_feet(w: _Work) -> None:
         # grown object's are the object's and the foot's kept ones, in that order
         obj_pts = np.take(w.frame.points, obj.indices, axis=0).astype(np.float64)
         foot_pts = np.take(w.frame.points, foot, axis=0).astype(np.float64)
-        # held to the object's own outline: a foot's mixed points beyond it widened the box
-        inside = within_reach(project(obj_pts, fit.basis), project(foot_pts, fit.basis), w.settings.flat_foot_reach_m)
+        if foot.size >= _WHOLE_FOOT_RATIO * obj.indices.size and _lies_flat(obj_pts, fit, w.settings):
+            # a thing lying flat, most of it under the prism's floor: the prism kept a
+            # speckle of its top's highest points, no outline of it; the foot is the thing
+            inside = np.ones(foot.size, dtype=bool)
+        else:
+            # held to the object's own outline: a foot's mixed points beyond it widened the box
+            inside = within_reach(
+                project(obj_pts, fit.basis), project(foot_pts, fit.basis), w.settings.flat_foot_reach_m
+            )
         foot = np.compress(inside, foot)
         if not foot.size:
             continue
@@ -598,6 +635,23 @@ def _objects(w: _Work) -> None:
     w.objects.extend(make_objects(found, fit.plane))
 
 
+def _below_prism(w: _Work) -> np.ndarray:
+    """The frame's indices of the points over the support, above its band
+    (``plane_distance_m``) and under the prism's floor (``prism_min_height_m``, growing
+    with range): neither table nor object. A notebook or a tablet lying flat (6-20 mm
+    thick) has most of its top there, a Kinect or a RealSense a metre away scattering it
+    over the band, this layer and the prism; the flat objects' step reads them with the
+    table's and the loose points, so that such a thing is found whole (flat.py)."""
+    fit, settings = w.fit, w.settings
+    assert fit is not None  # the table's step ran
+    h = w.heights
+    floor = settings.prism_min_height_m
+    if w.range2 is not None:  # a camera frame's: lift's floor, the same floats
+        floor = settings.prism_min_height_m + settings.prism_noise_per_m2 * w.range2
+    rows, xy = _in_plane(w, ~w.table_mask & ~w.prism_mask & (h > settings.plane_distance_m) & (h < floor))
+    return np.take(w.idx, np.compress(fit.inside_2d(xy, settings.hull_margin_m), rows))
+
+
 def _flat(w: _Work) -> None:
     """4'. objects lying flat, found by colour (flat.py; organized frames)."""
     w.table_idx = w.idx[w.table_mask]
@@ -610,7 +664,7 @@ def _flat(w: _Work) -> None:
             support = support_colour(w.frame.colors, w.frame.shape, w.table_idx, w.settings.flat_min_color_delta)
             w.support_rgb = (w.table_idx, *support)
         w.table_idx, found, w.feet = _flat_objects(
-            w.frame, w.table_idx, w.obj_idx, w.objects, w.fit, w.settings, w.size, support
+            w.frame, w.table_idx, w.obj_idx, w.objects, w.fit, w.settings, w.size, support, _below_prism(w)
         )
         w.objects.extend(found)
 

@@ -249,6 +249,41 @@ def test_a_notebook_lying_flat_is_found_up_to_an_a4_pages_area() -> None:
     assert before.verdicts[3] == "missed"
 
 
+@pytest.mark.parametrize("seed", [0, 8])
+def test_a_notebook_under_the_prisms_floor_is_found_whole(seed: int, monkeypatch: pytest.MonkeyPatch) -> None:
+    # thin_flat(0) and (8) (choose seeds), seen by the Kinect: notebooks 11-14 mm thick,
+    # their tops spread by noise over the table's band, the layer above it under the
+    # prism's floor (1.7 cm at their range) and the prism. thin_flat(0)'s object 0 (18 x
+    # 14 cm) is found by colour apart from every object: 886 of its 5712 pixels without
+    # the layer, 5601 with it. thin_flat(8)'s objects 0 and 3 are a speckle of 811 and
+    # 128 points in the prism, their feet of 4994 and 4116 pixels (6.2 and 32 times as
+    # many): held to the speckle's outline, 1926 and 355 of their 5805 and 4244 pixels
+    import math
+
+    import clearcli.perception.segment as seg
+    from clearcli.evaluate.exact import exact_report
+    from clearcli.settings.segment import SegmentSettings
+    from clearcli.sim.families import support_frame
+
+    frame = support_frame("thin_flat", seed)
+    truth = np.asarray(frame.fields["label"])
+
+    def verdicts() -> tuple[str, ...]:
+        report = exact_report(seg.segment(frame, SegmentSettings()).labels(), truth)
+        assert report.spurious == 0
+        return tuple(report.verdicts)
+
+    thin = {0: [0], 8: [0, 3]}[seed]
+    on = verdicts()
+    assert set(on) == {"right"}
+    with monkeypatch.context() as m:  # the layer under the prism's floor not looked at
+        m.setattr(seg, "_below_prism", lambda w: np.zeros(0, dtype=np.int64))
+        assert [k for k, v in enumerate(verdicts()) if v != "right"] == thin
+    if seed == 8:  # every foot held to its object's outline
+        monkeypatch.setattr(seg, "_WHOLE_FOOT_RATIO", math.inf)
+        assert [k for k, v in enumerate(verdicts()) if v != "right"] == thin
+
+
 def test_colour_keys_pack_the_top_six_bits_of_each_channel() -> None:
     from clearcli.perception.flat import _lab_keys
 

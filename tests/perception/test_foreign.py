@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from helpers.foreign import judged
+from helpers.foreign import judged, labelled
 
 
 @pytest.mark.parametrize(
@@ -133,3 +133,25 @@ def test_a_bowl_with_a_can_in_it_is_two_objects() -> None:
     verdicts, _, seg = judged("uois_image_0002", vessel_rebuild=False)
     assert verdicts["teal bowl"] == "split"
     assert best(seg, "teal bowl")[1] < 0.5
+
+
+def test_a_low_bowl_with_a_large_foot_keeps_it_held_to_its_outline(monkeypatch: pytest.MonkeyPatch) -> None:
+    # uois_image_0000's white bowl (4.6 cm tall) has a foot under the prism's floor as
+    # large as itself: its lower wall, and a dark grain of the table's wood beside it,
+    # of its shaded side's colour. It does not lie flat (its points' median height 16
+    # mm above the floor, a notebook's 0.6-3.8 mm), so the foot is held to the bowl's
+    # outline; joined whole, the grain reached 32 cm across the table
+    import clearcli.perception.segment as seg
+    from clearcli.io.frames import object_label
+
+    def bowl_extent_m() -> float:
+        verdicts, _, s = judged("uois_image_0000")
+        assert verdicts["white bowl"] == "right"
+        _, truth, spec = labelled("uois_image_0000")
+        label = object_label(next(k for k, o in enumerate(spec["object"]) if o["name"] == "white bowl"))
+        bowl = max(s.objects, key=lambda o: int(np.count_nonzero(truth[o.indices] == label)))
+        return float(bowl.obb_extents.max())
+
+    assert bowl_extent_m() < 0.18
+    monkeypatch.setattr(seg, "_FLAT_TOP_M", float("inf"))
+    assert bowl_extent_m() > 0.3
