@@ -324,6 +324,52 @@ def test_two_candidates_touching_one_object_are_judged_on_its_own_colour() -> No
     assert np.array_equal(finds.feet[0], _strip(slice(28, 33), slice(30, 56)))
 
 
+@pytest.mark.parametrize("left_rgb, owner", [((30, 30, 200), 1), ((200, 30, 30), None)])
+def test_a_foot_touching_two_objects_is_that_of_the_one_of_its_colour(
+    left_rgb: tuple[int, int, int], owner: int | None
+) -> None:
+    # a red strip (rows 28-32, columns 30-55, 8 mm up: a pen's foot) touches a red object
+    # on its right (columns 56-63) and another on its left (columns 22-29): a blue one
+    # (thin_flat(5)'s pen lying against a box of another colour): the strip is the red
+    # one's foot; a red one: it could be either's, so it is neither's. Until stop 62 a
+    # foot had to touch one object only
+    v, u = np.mgrid[0:_H, 0:_W]
+    z = np.zeros((_H, _W))
+    z[28:33, 30:56] = 0.008
+    z[20:41, 56:64] = 0.05
+    z[20:41, 22:30] = 0.05
+    points = np.stack([u * 0.001, v * 0.001, z], axis=2).reshape(-1, 3).astype(np.float32)
+    colors = np.tile(np.array(_TABLE_RGB, dtype=np.uint8), (_H, _W, 1))
+    colors[28:33, 30:56] = (200, 30, 30)
+    colors[20:41, 56:64] = (200, 30, 30)
+    colors[20:41, 22:30] = left_rgb
+    left, right = np.zeros((_H, _W), dtype=bool), np.zeros((_H, _W), dtype=bool)
+    left[20:41, 22:30], right[20:41, 56:64] = True, True
+    objects = [np.flatnonzero(left.ravel()), np.flatnonzero(right.ravel())]
+    finds = flat_objects(
+        points,
+        colors.reshape(-1, 3),
+        (_H, _W),
+        np.flatnonzero(~(left | right).ravel()),
+        np.zeros(0, dtype=np.int64),
+        np.concatenate(objects),
+        lambda p: p[:, 2].astype(np.float64),
+        lambda pixels: pixels.size * 1e-6,
+        20.0,
+        0.0015,
+        4e-5,
+        0.02,
+        0.0025,
+        object_sizes=[o.size for o in objects],
+    )
+    assert finds.objects == []
+    if owner is None:
+        assert finds.feet == {}
+    else:
+        assert list(finds.feet) == [owner]
+        assert np.array_equal(finds.feet[owner], _strip(slice(28, 33), slice(30, 56)))
+
+
 def test_a_foots_points_are_held_within_reach_of_its_objects_own() -> None:
     from clearcli.perception.flat import within_reach
 
@@ -388,7 +434,9 @@ def test_within_reach_answers_as_one_tree_where_foot_and_object_interleave() -> 
         assert got.tolist() == (gap_m <= reach_m).tolist()
 
 
-def test_a_foot_held_to_its_objects_outline_leaves_its_box_as_wide_as_the_object() -> None:
+def test_a_foot_held_to_its_objects_outline_leaves_its_box_as_wide_as_the_object(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
     # mOSD learn7: a box 0.0710 m across (its labelled points' box too) gains a foot; unheld,
     # the foot's few points of depth mixed at its lower edge, out in front of it, widened
     # its box to 0.0810 m (the WAM then called it too wide to grasp)
@@ -416,6 +464,13 @@ def test_a_foot_held_to_its_objects_outline_leaves_its_box_as_wide_as_the_object
     assert abs(off[1] - 0.0710) < 0.0005
     assert abs(held[1] - off[1]) < 0.0005
     assert unheld[1] > off[1] + 0.008
+    # since stop 62 the foot holds the box's lower side under the prism's floor too, in
+    # the table's shade: 17.6 dE from the box's median colour, 2.0 from its pixels
+    # beside the foot. Judged on the median alone, the box has no foot
+    import clearcli.perception.flat as flat
+
+    monkeypatch.setattr(flat, "_FOOT_SIDE_PX", 0)
+    assert the_box(SegmentSettings())[0] == off[0]
 
 
 def _through_glass(no_depth_rows: slice) -> list[np.ndarray]:
