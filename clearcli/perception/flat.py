@@ -376,7 +376,8 @@ def _foot_of(
     of_colour = []
     beside = dilate_square(whole, _FOOT_SIDE_PX)
     for j in touched.tolist():
-        # first against the object's pixels just above the foot, in the same light
+        # first against the object's pixels just above the foot, in the same light (most
+        # feet pass it: the median over all the object's pixels is then not worked out)
         rows_j, cols_j = np.nonzero(beside & (owner_window == j))
         if rows_j.size:
             side_lab = np.median(lab_of(np.take(colors, (rows_j + v0) * width + (cols_j + u0), axis=0)), axis=0)

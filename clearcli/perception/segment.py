@@ -642,13 +642,15 @@ def _below_prism(w: _Work) -> np.ndarray:
     thick) has most of its top there, a Kinect or a RealSense a metre away scattering it
     over the band, this layer and the prism; the flat objects' step reads them with the
     table's and the loose points, so that such a thing is found whole (flat.py)."""
-    fit, settings = w.fit, w.settings
-    assert fit is not None  # the table's step ran
+    fit, settings, lifted = w.fit, w.settings, w.lifted
+    assert fit is not None and lifted is not None  # the table's step ran
     h = w.heights
-    floor = settings.prism_min_height_m
-    if w.range2 is not None:  # a camera frame's: lift's floor, the same floats
-        floor = settings.prism_min_height_m + settings.prism_noise_per_m2 * w.range2
-    rows, xy = _in_plane(w, ~w.table_mask & ~w.prism_mask & (h > settings.plane_distance_m) & (h < floor))
+    # above the band (so no table point) and in no prism's band (so no object point)
+    # up to its top: under its floor, which lift drew (not drawn again here)
+    layer = h > settings.plane_distance_m
+    layer &= ~lifted.band
+    layer &= h <= settings.prism_max_height_m
+    rows, xy = _in_plane(w, layer)
     return np.take(w.idx, np.compress(fit.inside_2d(xy, settings.hull_margin_m), rows))
 
 
