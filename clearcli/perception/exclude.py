@@ -42,7 +42,7 @@ set aside with the reason, for --json to list as ``excluded``.
 - goes on below the support's level beneath itself (`_beneath_below`): an upright face (its
   footprint a line, `_FACE_THIN_M` across, at least `_BELOW_UPRIGHT` times as tall as
   thick) over at least `_BENEATH_SHARE` of whose footprint cells the camera sees points
-  between `_BELOW_M` and `_BELOW_DEEP_M` below the support's level: its surface goes on
+  between `_BELOW_M` and `_BELOWDEEP_INSIDE_M` below the support's level: its surface goes on
   down past the level of the support it seems to stand on (a chair's back, a board, a
   cupboard's front standing on the floor at the support's edge, its strip at the
   support's level taken for support). An object standing on the support has the support
@@ -121,10 +121,10 @@ _FOOT_INSIDE_SHARE = 0.2
 _CELL_M = 0.01
 # what goes on below the support's level beneath an upright face: points this far below it
 # (twice the plane's inlier distance; the table's own noise reaches 9 mm on 1 % of its points)
-# and not deeper than `_BELOW_DEEP_M` (the floor under the table, seen past its near edge,
+# and not deeper than `_BELOWDEEP_INSIDE_M` (the floor under the table, seen past its near edge,
 # lies some 70 cm down beneath every object near that edge: no face's continuation)
 _BELOW_M = 0.02
-_BELOW_DEEP_M = 0.15
+_BELOWDEEP_INSIDE_M = 0.15
 # a face this many times as tall as it is thick stands upright (a lying pen or strip does not:
 # 0.6 times); rendered boards standing at the table's edge: 3.4 to 6.5 times
 _BELOW_UPRIGHT = 2.0
@@ -204,6 +204,14 @@ _RING_PX = 4
 AROUND_LEVEL_M = 0.03
 _RING_MIN_PX = 100
 _RING_SUPPORT_SHARE = 0.05
+# ... and only of a segment some of whose points lie within this of the support's outline
+# (its convex hull) or beyond it: one farther inside has the support going on all round
+# it, so it stands on something else there, a container's floor (large_bowl's objects
+# in the bowl: 21-24 cm inside, the bowl's floor round them 1.5-2.5 cm up, within
+# `AROUND_LEVEL_M`). What stood beyond the edge on the choose part and seeds: at most
+# 1.2 cm inside (gqcnn's bench behind the foam board); 5 cm lies between, near their
+# geometric mean, and is the prism's own margin beyond the outline
+DEEP_INSIDE_M = 0.05
 # pixels this near the image's edge are where it cuts a segment (a few, not one: a working
 # grid at stride k ends up to k - 1 pixels short of the edge; a sensor's edge pixels drop out)
 _BORDER_PX = 3
@@ -836,7 +844,7 @@ def _beneath_below(
     """Add to ``verdicts`` the upright faces (``faces``, by object; in-plane points
     ``xy_each``) whose surface goes on below the support's level beneath them:
     `_BENEATH_SHARE` of their footprint's cells hold points between `_BELOW_M` and
-    `_BELOW_DEEP_M` below it (``below_cells``: those cells, `_cells`)."""
+    `_BELOWDEEP_INSIDE_M` below it (``below_cells``: those cells, `_cells`)."""
     for k, (_, _, thick, _, tall) in faces.items():
         if k in verdicts or tall < _BELOW_UPRIGHT * thick:
             continue
@@ -848,7 +856,7 @@ def _beneath_below(
             verdicts[k] = (
                 f"stands beyond the support's edge: an upright face {tall:.2f} m high that goes on below the "
                 f"support's level beneath {100 * under / own.size:.0f} % of it ({1000 * _BELOW_M:.0f} to "
-                f"{1000 * _BELOW_DEEP_M:.0f} mm below): a chair's back, a board, furniture standing on the floor"
+                f"{1000 * _BELOWDEEP_INSIDE_M:.0f} mm below): a chair's back, a board, furniture standing on the floor"
             )
 
 
@@ -888,6 +896,7 @@ def not_standing(
     outside_reach: np.ndarray | None = None,
     at_border: list[np.ndarray] | None = None,
     around: list[tuple[int, int]] | None = None,
+    inside_deep: Callable[[np.ndarray], np.ndarray] | None = None,
     below: np.ndarray | None = None,
     off_colour: list[float] | None = None,
     border_edge: str = "the image's border",
@@ -906,7 +915,9 @@ def not_standing(
     ``at_border``: per object, (M,) bool, its points at the image's border, or at an
     unorganized cloud's edge (`at_cloud_border`), ``border_edge`` saying which (None: not
     known); ``around``: per object, `support_around`'s counts (None:
-    no pixel grid); ``below``: the points below the support's level, not the support's,
+    no pixel grid); ``inside_deep``: for in-plane points (N, 2), (N,) bool, those farther
+    than `DEEP_INSIDE_M` inside the support's outline (None: not known, every object may stand
+    beyond the edge); ``below``: the points below the support's level, not the support's,
     inside the outline or not (None: not known, `_beneath_below` is not decided);
     ``off_colour``: per object, the share of its pixels whose colour differs from the
     support's (None: no colour, `_fringe` is not decided).
@@ -999,17 +1010,19 @@ def not_standing(
         below_once: list[np.ndarray] = []
 
         def below_cells() -> np.ndarray:
-            """The cells of the points `_BELOW_M` to `_BELOW_DEEP_M` below the support, the first time."""
+            """The cells of the points `_BELOW_M` to `_BELOWDEEP_INSIDE_M` below the support, the first time."""
             if not below_once:
                 assert below is not None  # checked above
                 hb = height(below)
-                near = np.compress((hb <= -_BELOW_M) & (hb >= -_BELOW_DEEP_M), below, axis=0)
+                near = np.compress((hb <= -_BELOW_M) & (hb >= -_BELOWDEEP_INSIDE_M), below, axis=0)
                 below_once.append(_cells(to_2d(near)) if near.shape[0] else np.zeros(0, dtype=np.int64))
             return below_once[0]
 
         _beneath_below(faces, xy_each, verdicts, below_cells)
     for k, (n_free, n_support) in enumerate(around or ()):
-        if k not in verdicts and n_free >= _RING_MIN_PX and n_support < _RING_SUPPORT_SHARE * n_free:
+        if k in verdicts or n_free < _RING_MIN_PX or n_support >= _RING_SUPPORT_SHARE * n_free:
+            continue
+        if inside_deep is None or not bool(np.all(inside_deep(xy_each[k]))):
             verdicts[k] = (
                 f"stands beyond the support's edge: the support is seen nowhere around it ({n_support} of the "
                 f"{n_free} pixels seen around it): another surface at nearly the support's height, furniture behind"

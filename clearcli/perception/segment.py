@@ -35,6 +35,7 @@ from clearcli.perception.context import RefineContext, by_label
 from clearcli.perception.edges import cut_depth_edges
 from clearcli.perception.exclude import (
     AROUND_LEVEL_M,
+    DEEP_INSIDE_M,
     at_cloud_border,
     at_image_border,
     beyond_outline,
@@ -730,6 +731,7 @@ def _exclude(w: _Work) -> None:
         if settings.exclude_cloud_border
         else None,
         _support_around(w) if w.organized else None,
+        lambda xy: fit.inside_2d(xy, -DEEP_INSIDE_M),
         below=below_pts,
         off_colour=_off_colour(w),
         border_edge="the image's border" if w.organized else "the cloud's edge",

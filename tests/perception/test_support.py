@@ -50,6 +50,31 @@ def test_a_large_bowl_is_one_object_and_what_stands_in_it_apart(seed: int, monke
     assert taken.merged >= 2, taken  # the bowl and what stands in it, one segment
 
 
+@pytest.mark.parametrize("seed", [3, 5])
+def test_what_stands_on_a_bowls_floor_deep_inside_the_table_stands_on_no_other_furniture(
+    seed: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # large_bowl(3) and (5) (choose seeds): a box or two stand in the bowl, the bowl's
+    # floor all round them 1.5-2.5 cm up: no table is seen round them. They stand 21-24 cm
+    # inside the table's outline, so not beyond its edge (exclude.DEEP_INSIDE_M, 5 cm):
+    # every object exactly right. Before (the rule judged at any depth), they were set
+    # aside as standing on another surface behind the table
+    import clearcli.perception.segment as seg
+    from clearcli.evaluate.exact import exact_report
+
+    frame = support_frame("large_bowl", seed)
+    truth = np.asarray(frame.fields["label"])
+    result = segment(frame, ON)
+    r = exact_report(result.labels(), truth)
+    assert r.right == r.n_objects and r.spurious == 0, r
+    assert not any("beyond the support's edge" in e.reason for e in result.excluded)
+    monkeypatch.setattr(seg, "DEEP_INSIDE_M", 10.0)  # no point that deep: judged everywhere
+    before = segment(frame, ON)
+    gone = [e for e in before.excluded if "beyond the support's edge" in e.reason]
+    assert len(gone) == {3: 1, 5: 2}[seed]
+    assert exact_report(before.labels(), truth).missed == len(gone)
+
+
 @pytest.mark.parametrize("seed", [1, 2])
 def test_a_raised_surface_beats_the_floor_around_it(seed: int) -> None:
     # objects on a stool's top 75 cm above a floor that holds the stool's body and bags:
