@@ -64,9 +64,11 @@ def _foreign():  # benchmarks/foreign.py, loaded by path (benchmarks is no packa
         # foam board in two halves that meet at a convex seam (0.73 of 11 adjacencies),
         # tops 4 mm apart; the spring clamp's two arms, one convex adjacency across 6 mm.
         # Of their labelled points (all above 8 mm in the polygon, the board's noise too)
-        # the largest segment holds 48 % and 45 % without the stage, 80 % and 57 % with it
+        # the largest segment holds 48 % and 45 % without the stage, 80 % and 57 % with it.
+        # Since stop 62 the clamp's arms keep their feet under the prism's floor (flat.py):
+        # 78 % without the stage, 94 % with it
         ("gqcnn_primesense_2", "brown bracket", 0.55, 0.75),
-        ("gqcnn_primesense_0", "spring clamp", 0.5, 0.55),
+        ("gqcnn_primesense_0", "spring clamp", 0.85, 0.9),
     ],
 )
 def test_the_stage_joins_an_object_in_two_and_is_stable_under_a_micrometre(
