@@ -156,17 +156,23 @@ def test_a_flat_object_is_found_on_its_colours_area() -> None:
 
 
 def _flat_finds(
-    points: np.ndarray, colors: np.ndarray, taken: np.ndarray, feet: bool = True, max_area_m2: float = 0.02
+    points: np.ndarray,
+    colors: np.ndarray,
+    taken: np.ndarray | list[np.ndarray],
+    feet: bool = True,
+    max_area_m2: float = 0.02,
 ) -> FlatFinds:
     """flat_objects on a (_H, _W) scene of 1 mm pixels whose one object (if any) holds the
-    pixels ``taken``: heights are z, a pixel is 1 mm^2; feet looked for unless ``feet`` is
-    False."""
-    object_pixels = np.flatnonzero(taken.ravel())
+    pixels ``taken`` (a list: each object's, in turn): heights are z, a pixel is 1 mm^2;
+    feet looked for unless ``feet`` is False."""
+    masks = taken if isinstance(taken, list) else [taken]
+    objects = [np.flatnonzero(mask.ravel()) for mask in masks]
+    object_pixels = np.concatenate(objects)
     return flat_objects(
         points,
         colors.reshape(-1, 3),
         (_H, _W),
-        np.flatnonzero(~taken.ravel()),
+        np.flatnonzero(~np.logical_or.reduce(masks).ravel()),
         np.zeros(0, dtype=np.int64),
         object_pixels,
         lambda p: p[:, 2].astype(np.float64),
@@ -176,7 +182,7 @@ def _flat_finds(
         4e-5,
         max_area_m2,
         0.0025,
-        object_sizes=[object_pixels.size] if feet else (),
+        object_sizes=[o.size for o in objects] if feet else (),
     )
 
 
@@ -301,21 +307,30 @@ def test_colour_keys_pack_the_top_six_bits_of_each_channel() -> None:
     assert np.array_equal(lab_of(rgb).view(np.uint32), _lab_table()[want].view(np.uint32))
 
 
+def _painted(parts: list[tuple[slice, slice, float, tuple[int, int, int]]]) -> tuple[np.ndarray, np.ndarray]:
+    """(points (N, 3), colours (_H, _W, 3)) of a scene of 1 mm pixels: the table at z = 0
+    in `_TABLE_RGB`, each part (rows, columns, height (m), colour) laid on it in turn."""
+    v, u = np.mgrid[0:_H, 0:_W]
+    z = np.zeros((_H, _W))
+    colors = np.tile(np.array(_TABLE_RGB, dtype=np.uint8), (_H, _W, 1))
+    for rows, cols, height_m, rgb in parts:
+        z[rows, cols] = height_m
+        colors[rows, cols] = rgb
+    return np.stack([u * 0.001, v * 0.001, z], axis=2).reshape(-1, 3).astype(np.float32), colors
+
+
 def test_two_candidates_touching_one_object_are_judged_on_its_own_colour() -> None:
     # a red strip (rows 22-26) and a black one (rows 28-32), both 8 mm up, touch one black
     # object (rows 20-40, columns 56-63); the object's colour is worked out once, for the
     # red strip (first in raster order), and the black strip is judged against it too:
     # only the black one is its foot
-    v, u = np.mgrid[0:_H, 0:_W]
-    z = np.zeros((_H, _W))
-    z[22:27, 30:56] = 0.008
-    z[28:33, 30:56] = 0.008
-    z[20:41, 56:64] = 0.05
-    points = np.stack([u * 0.001, v * 0.001, z], axis=2).reshape(-1, 3).astype(np.float32)
-    colors = np.tile(np.array(_TABLE_RGB, dtype=np.uint8), (_H, _W, 1))
-    colors[22:27, 30:56] = (200, 30, 30)
-    colors[28:33, 30:56] = _MARKER_RGB
-    colors[20:41, 56:64] = _MARKER_RGB
+    points, colors = _painted(
+        [
+            (slice(22, 27), slice(30, 56), 0.008, (200, 30, 30)),
+            (slice(28, 33), slice(30, 56), 0.008, _MARKER_RGB),
+            (slice(20, 41), slice(56, 64), 0.05, _MARKER_RGB),
+        ]
+    )
     taken = np.zeros((_H, _W), dtype=bool)
     taken[20:41, 56:64] = True
     finds = _flat_finds(points, colors, taken)
@@ -333,35 +348,16 @@ def test_a_foot_touching_two_objects_is_that_of_the_one_of_its_colour(
     # (thin_flat(5)'s pen lying against a box of another colour): the strip is the red
     # one's foot; a red one: it could be either's, so it is neither's. Until stop 62 a
     # foot had to touch one object only
-    v, u = np.mgrid[0:_H, 0:_W]
-    z = np.zeros((_H, _W))
-    z[28:33, 30:56] = 0.008
-    z[20:41, 56:64] = 0.05
-    z[20:41, 22:30] = 0.05
-    points = np.stack([u * 0.001, v * 0.001, z], axis=2).reshape(-1, 3).astype(np.float32)
-    colors = np.tile(np.array(_TABLE_RGB, dtype=np.uint8), (_H, _W, 1))
-    colors[28:33, 30:56] = (200, 30, 30)
-    colors[20:41, 56:64] = (200, 30, 30)
-    colors[20:41, 22:30] = left_rgb
+    points, colors = _painted(
+        [
+            (slice(28, 33), slice(30, 56), 0.008, (200, 30, 30)),
+            (slice(20, 41), slice(56, 64), 0.05, (200, 30, 30)),
+            (slice(20, 41), slice(22, 30), 0.05, left_rgb),
+        ]
+    )
     left, right = np.zeros((_H, _W), dtype=bool), np.zeros((_H, _W), dtype=bool)
     left[20:41, 22:30], right[20:41, 56:64] = True, True
-    objects = [np.flatnonzero(left.ravel()), np.flatnonzero(right.ravel())]
-    finds = flat_objects(
-        points,
-        colors.reshape(-1, 3),
-        (_H, _W),
-        np.flatnonzero(~(left | right).ravel()),
-        np.zeros(0, dtype=np.int64),
-        np.concatenate(objects),
-        lambda p: p[:, 2].astype(np.float64),
-        lambda pixels: pixels.size * 1e-6,
-        20.0,
-        0.0015,
-        4e-5,
-        0.02,
-        0.0025,
-        object_sizes=[o.size for o in objects],
-    )
+    finds = _flat_finds(points, colors, [left, right])
     assert finds.objects == []
     if owner is None:
         assert finds.feet == {}
