@@ -42,7 +42,7 @@ set aside with the reason, for --json to list as ``excluded``.
 - goes on below the support's level beneath itself (`_beneath_below`): an upright face (its
   footprint a line, `_FACE_THIN_M` across, at least `_BELOW_UPRIGHT` times as tall as
   thick) over at least `_BENEATH_SHARE` of whose footprint cells the camera sees points
-  between `_BELOW_M` and `_BELOWDEEP_INSIDE_M` below the support's level: its surface goes on
+  between `_BELOW_M` and `_BELOW_DEEP_M` below the support's level: its surface goes on
   down past the level of the support it seems to stand on (a chair's back, a board, a
   cupboard's front standing on the floor at the support's edge, its strip at the
   support's level taken for support). An object standing on the support has the support
@@ -121,10 +121,10 @@ _FOOT_INSIDE_SHARE = 0.2
 _CELL_M = 0.01
 # what goes on below the support's level beneath an upright face: points this far below it
 # (twice the plane's inlier distance; the table's own noise reaches 9 mm on 1 % of its points)
-# and not deeper than `_BELOWDEEP_INSIDE_M` (the floor under the table, seen past its near edge,
+# and not deeper than `_BELOW_DEEP_M` (the floor under the table, seen past its near edge,
 # lies some 70 cm down beneath every object near that edge: no face's continuation)
 _BELOW_M = 0.02
-_BELOWDEEP_INSIDE_M = 0.15
+_BELOW_DEEP_M = 0.15
 # a face this many times as tall as it is thick stands upright (a lying pen or strip does not:
 # 0.6 times); rendered boards standing at the table's edge: 3.4 to 6.5 times
 _BELOW_UPRIGHT = 2.0
@@ -844,7 +844,7 @@ def _beneath_below(
     """Add to ``verdicts`` the upright faces (``faces``, by object; in-plane points
     ``xy_each``) whose surface goes on below the support's level beneath them:
     `_BENEATH_SHARE` of their footprint's cells hold points between `_BELOW_M` and
-    `_BELOWDEEP_INSIDE_M` below it (``below_cells``: those cells, `_cells`)."""
+    `_BELOW_DEEP_M` below it (``below_cells``: those cells, `_cells`)."""
     for k, (_, _, thick, _, tall) in faces.items():
         if k in verdicts or tall < _BELOW_UPRIGHT * thick:
             continue
@@ -856,7 +856,7 @@ def _beneath_below(
             verdicts[k] = (
                 f"stands beyond the support's edge: an upright face {tall:.2f} m high that goes on below the "
                 f"support's level beneath {100 * under / own.size:.0f} % of it ({1000 * _BELOW_M:.0f} to "
-                f"{1000 * _BELOWDEEP_INSIDE_M:.0f} mm below): a chair's back, a board, furniture standing on the floor"
+                f"{1000 * _BELOW_DEEP_M:.0f} mm below): a chair's back, a board, furniture standing on the floor"
             )
 
 
@@ -1010,11 +1010,11 @@ def not_standing(
         below_once: list[np.ndarray] = []
 
         def below_cells() -> np.ndarray:
-            """The cells of the points `_BELOW_M` to `_BELOWDEEP_INSIDE_M` below the support, the first time."""
+            """The cells of the points `_BELOW_M` to `_BELOW_DEEP_M` below the support, the first time."""
             if not below_once:
                 assert below is not None  # checked above
                 hb = height(below)
-                near = np.compress((hb <= -_BELOW_M) & (hb >= -_BELOWDEEP_INSIDE_M), below, axis=0)
+                near = np.compress((hb <= -_BELOW_M) & (hb >= -_BELOW_DEEP_M), below, axis=0)
                 below_once.append(_cells(to_2d(near)) if near.shape[0] else np.zeros(0, dtype=np.int64))
             return below_once[0]
 
