@@ -9,9 +9,9 @@ the table's noise with it. Depth alone cannot tell; colour can, where the frame 
 1. The table's colour: the median CIELAB colour of the table's points; a pixel of the
    table (or a point above it left over by segmentation: too small to be an object on
    its own; or one under the prism's floor and above the table's band, where a
-   notebook lying flat keeps much of its top) differs when its colour is more than ``flat_min_color_delta`` (CIE76 dE)
-   from it, and more than three times the table's own median difference (a wood grain,
-   a cloth's pattern).
+   notebook lying flat keeps much of its top) differs when its colour is more than
+   ``flat_min_color_delta`` (CIE76 dE) from it, and more than three times the table's
+   own median difference (a wood grain, a cloth's pattern).
 2. Such pixels, joined over 8 neighbours, are a candidate when the candidate keeps
    ``_CLEARANCE_PX`` pixels away from every object found (a candidate touching an
    object is its foot, its shadow or its reflection on the table), or all but
@@ -36,16 +36,17 @@ the table's noise with it. Depth alone cannot tell; colour can, where the frame 
    Whether it is an object at all is judged on its colour's pixels (3.).
 5. A candidate too near an object (2.) that touches it, has its colour (`_FOOT_MAX_DE`
    from the median of the object's pixels beside it, or of all of them), and no other
-   object's among those it touches, and stands up from the table round it
-   (3.'s relief) is that object's foot (a pen's lying against a box of another colour
-   is the pen's; one between two objects of its colour is neither's): the part of a box or a notebook a centimetre or two high that the prism's lower
-   bound cut off. It joins the object, but only its points within ``flat_foot_reach_m``
-   (across the table) of the object's own (`within_reach`): the foot stands under the
-   faces seen above it, and its points farther out are depth mixed at the lower edge.
-   A foot of half the object's points or more joins whole (segment.py,
-   `_WHOLE_FOOT_RATIO`): the object is then a thing lying flat whose top the prism
-   kept only a speckle of, the highest of its noisy points, and that speckle is no
-   outline of it.
+   object's among those it touches, and stands up from the table round it (3.'s
+   relief) is that object's foot (a pen's lying against a box of another colour is the
+   pen's; one between two objects of its colour is neither's): the part of a box or a
+   notebook a centimetre or two high that the prism's lower bound cut off. It joins the
+   object, but only its points within ``flat_foot_reach_m`` (across the table) of the
+   object's own (`within_reach`): the foot stands under the faces seen above it, and
+   its points farther out are depth mixed at the lower edge. A foot of half the
+   object's points or more, of an object lying low, joins whole (segment.py,
+   `_WHOLE_FOOT_RATIO`, `_FLAT_TOP_M`): the object is then a thing lying flat whose top
+   the prism kept only a speckle of, the highest of its noisy points, and that speckle
+   is no outline of it.
 
 Organized frames with colour only: the ring and the joining need the pixel grid. On
 the 45 mOSD learn frames no candidate far from the objects exists; results there are

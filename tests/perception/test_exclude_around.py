@@ -7,6 +7,7 @@ self-made pixel grid, and on the real gqcnn frame (../shared/data)."""
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 
 import numpy as np
 import pytest
@@ -53,7 +54,9 @@ def test_support_around_counts_the_seen_pixels_of_the_ring() -> None:
     assert n_strip >= exclude._RING_MIN_PX and s_strip == 0
 
 
-def _verdicts(around: list[tuple[int, int]] | None) -> list[str]:
+def _verdicts(
+    around: list[tuple[int, int]] | None, inside_deep: Callable[[np.ndarray], np.ndarray] | None = None
+) -> list[str]:
     rng = np.random.default_rng(0)
     # two small objects standing on the support (heights 0 to 5 cm), apart in the plane
     objs = [
@@ -73,6 +76,7 @@ def _verdicts(around: list[tuple[int, int]] | None) -> list[str]:
         None,
         None,
         around,
+        inside_deep,
     )
     return [f"{v.index}: {v.reason}" for v in verdicts]
 
@@ -86,6 +90,18 @@ def test_a_segment_with_no_support_seen_around_it_is_excluded() -> None:
     assert _verdicts(None) == []
     # too few pixels seen around it to tell (inside a heap, or its ring without depth): it stands
     assert _verdicts([(300, 300), (exclude._RING_MIN_PX - 1, 0)]) == []
+
+
+def test_a_segment_deep_inside_the_outline_does_not_stand_beyond_its_edge() -> None:
+    # the same strip with no support round it, all of its points more than
+    # DEEP_INSIDE_M inside the outline: the support goes on round it, so it stands on
+    # something else there (a bowl's floor), not beyond the edge; one point nearer the
+    # outline, and it is judged as before
+    indices, support, seen = _grid()
+    around = support_around(indices, SHAPE, _state(support, seen))
+    assert _verdicts(around, lambda xy: np.ones(xy.shape[0], dtype=bool)) == []
+    near_the_edge = _verdicts(around, lambda xy: np.arange(xy.shape[0]) > 0)
+    assert len(near_the_edge) == 1 and near_the_edge[0].startswith("1: stands beyond the support's edge")
 
 
 def test_the_bench_behind_gqcnns_foam_board_is_excluded(monkeypatch: pytest.MonkeyPatch) -> None:
