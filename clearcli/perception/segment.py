@@ -339,15 +339,16 @@ def _flat_objects(
 # holds at least this share of its own points, and whose points lie low (`_lies_flat`),
 # is a thing lying flat, most of it under the floor: its whole foot joins it, not only
 # the points under its outline. On the support families' choose seeds (the four
-# sensors) the feet of objects standing up hold 0.05-0.42 of their object's points
-# (mOSD: at most 0.15); those of notebooks, phones and pens lying flat 0.69-46: 0.5
-# lies between, near their geometric mean
+# sensors) the feet of objects standing up hold 0.05-0.40 of their object's points
+# (mOSD: at most 0.15), and those of things lying flat whose top the prism kept up to
+# 0.42; of those it kept a speckle of, 0.69-46: 0.5 lies between, near the geometric
+# mean of 0.42 and 0.69
 _WHOLE_FOOT_RATIO = 0.5
 # ... and lying low: its points' median height at most this far (m) above the prism's
-# floor at their range. The things lying flat on those seeds: 0.6-3.8 mm; a bowl 4.6
+# floor at their range. The things lying flat on those seeds: 0.5-3.6 mm; a bowl 4.6
 # cm tall with a foot as large as itself (uois_image_0000, where the foot was a dark
 # grain of the table's wood beside it, which a whole foot took): 16.4 mm. 8 mm lies
-# between, near their geometric mean (7.9)
+# between, near their geometric mean (7.7)
 _FLAT_TOP_M = 0.008
 
 

@@ -139,7 +139,7 @@ def test_a_low_bowl_with_a_large_foot_keeps_it_held_to_its_outline(monkeypatch: 
     # uois_image_0000's white bowl (4.6 cm tall) has a foot under the prism's floor as
     # large as itself: its lower wall, and a dark grain of the table's wood beside it,
     # of its shaded side's colour. It does not lie flat (its points' median height 16
-    # mm above the floor, a notebook's 0.6-3.8 mm), so the foot is held to the bowl's
+    # mm above the floor, a notebook's 0.5-3.6 mm), so the foot is held to the bowl's
     # outline; joined whole, the grain reached 32 cm across the table
     import clearcli.perception.segment as seg
     from clearcli.io.frames import object_label
