@@ -39,6 +39,13 @@ set aside with the reason, for --json to list as ``excluded``.
   An object standing on the support rests on it inside the outline, where the support is
   seen: at least 94 % of its resting points on the choose part and mOSD, the table hidden
   behind it or not (the hull cut short at its foot).
+- the support seen nowhere around it (`support_around`; organized frames): in the ring
+  `_RING_PX` pixels round its silhouette, of at least `_RING_MIN_PX` pixels seen at about
+  the support's level and in no segment, under `_RING_SUPPORT_SHARE` are the support's:
+  another surface at nearly its height (a bench behind a foam board). Not said of a
+  segment all of whose points lie `DEEP_INSIDE_M` or more inside the support's outline:
+  the support goes on all round it there, and what surrounds it is a container's floor
+  (objects standing in a large bowl).
 - goes on below the support's level beneath itself (`_beneath_below`): an upright face (its
   footprint a line, `_FACE_THIN_M` across, at least `_BELOW_UPRIGHT` times as tall as
   thick) over at least `_BENEATH_SHARE` of whose footprint cells the camera sees points
