@@ -233,11 +233,12 @@ def main() -> None:
 
 
 def _is_entry_point() -> bool:
-    """Whether the program is `clear` itself: its console scripts, or ``-m clearcli.cli``."""
+    """Whether the program is `clear` itself: its console scripts, ``-m clearcli`` or
+    ``-m clearcli.cli``."""
     top = sys.modules.get("__main__")
     spec = getattr(top, "__spec__", None)
     if spec is not None:
-        return bool(spec.name == "clearcli.cli")
+        return spec.name in ("clearcli.cli", "clearcli.__main__")
     return Path(getattr(top, "__file__", None) or "").stem in ("clear", "clearcli")
 
 
@@ -249,7 +250,9 @@ def _main() -> None:
                 from clearcli.commands.options import ray_argv  # noqa: PLC0415  (typer, after hold())
 
                 sys.argv = ray_argv(sys.argv)
-            prog_name = Path(sys.argv[0]).name or "clear"
+            # `python -m clearcli` shows its argv[0] as .../__main__.py: named as the script
+            prog_name = Path(sys.argv[0]).name
+            prog_name = "clear" if prog_name in ("", "__main__.py") else prog_name
             recorded = _recorded_root_help(sys.argv[1:], prog_name)
             if recorded is not None:
                 # as click's echo: written and flushed (a closed stdout shows here)
