@@ -12,7 +12,9 @@ holding things, which is wrong in two ways this module corrects:
 - a mat or a board a centimetre or so above the table: the table's plane leaves the mat
   in the prism (a flat "object" under the real ones, which lose their bottoms). A
   parallel candidate just above the best one, over it and holding objects, is the
-  support; the two are one support surface and the objects stand on the upper one.
+  support; the two are one support surface and the objects stand on the upper one. A
+  mat may be smaller than a table (`MAT_MIN_AREA_M2`): such a plane is a candidate for
+  this rule only (``mat_only``).
 
 Each decision has a margin: a surface is "over" another when four fifths of its outline
 is inside the other's (grown 5 cm), "parallel" within 15 degrees, "holds objects" with
@@ -30,6 +32,13 @@ _PARALLEL_COS = float(np.cos(np.radians(15.0)))
 _OVER_SHARE = 0.8  # of the upper surface's outline within the lower one's (grown)
 _OVER_GROW_M = 0.05
 _MAT_MAX_M = 0.03  # a mat, a board, a cloth: at most this far above the table
+# A mat is a support smaller than a table may be (``table_min_area_m2``, 0.1 m^2): a
+# plane down to this area is a candidate for the mat rule alone, never a table of its
+# own. The smallest common placemat is 35 x 25 cm (0.0875 m^2); the objects on a mat
+# hide 11-14 % of it from a camera at 35-45 degrees (self-made mats, measured), so its
+# plane shows 0.075 m^2 or more; an A4 notebook (0.062 m^2) or a 13-inch laptop
+# (0.064 m^2) with a cup on it stays a thing with a thing on it.
+MAT_MIN_AREA_M2 = 0.07
 _MAT_MIN_M = 0.004  # nearer than this, RANSAC has one plane for both
 _RAISED_MIN_M = 0.25  # a raised surface (a stool, furniture): this far above the floor; a box on a table is lower
 _STAND_MAX_M = 0.4  # objects standing on a surface are at most this tall
@@ -183,6 +192,7 @@ def choose(
     min_points: int,
     mat_seen_max_share: float = 1.0,
     raised_seen_max_share: float = 1.0,
+    mat_only: frozenset[int] = frozenset(),
 ) -> Choice | None:
     """The surface the objects stand on instead of ``surfaces[best]`` (the one with the
     most points above it), or None when that one stays (a Choice of ``best`` itself when
@@ -190,7 +200,8 @@ def choose(
     ``loose``: the points on no candidate plane (what stands on them), ``every``: all
     points (a raised surface's body is often a candidate plane itself, its front face);
     ``*band_m``: per point, the height above a surface that is off it (noise grows with
-    range)."""
+    range). ``mat_only``: the surfaces smaller than a table (`MAT_MIN_AREA_M2` and up),
+    which only the mat rule may choose."""
     lower = surfaces[best]
     low_h = lower.height(every)
     picks: list[tuple[float, int, str, str]] = []
@@ -200,7 +211,7 @@ def choose(
             continue
         outline = _outline_3d(s)
         rise = float(np.median(lower.height(outline)))
-        if rise <= _MAT_MIN_M:
+        if rise <= _MAT_MIN_M or (k in mat_only and rise > _MAT_MAX_M):
             continue
         if _over(lower, outline, rise, every) < _OVER_SHARE:
             continue

@@ -19,7 +19,7 @@ import numpy as np
 
 from clearcli.errors import SceneError
 from clearcli.perception.raster import dilate_square, flat_step, label_8
-from clearcli.perception.support import Surface, choose, standing_on
+from clearcli.perception.support import MAT_MIN_AREA_M2, Surface, choose, standing_on
 from clearcli.perception.types import PlaneVerdict, TablePlane
 from clearcli.settings.segment import SegmentSettings
 from clearcli.transforms import cross3
@@ -796,6 +796,9 @@ def find_table(
 
     candidates: list[_Candidate] = []
     small: list[PlaneVerdict] = []
+    # planes smaller than a table but as large as a mat: the support only by the mat
+    # rule (support.choose), each with its place in ``small``, its verdict unless chosen
+    mats: list[tuple[_Candidate, int]] = []
     remaining = np.ones(sample.shape[0], dtype=bool)
     tries, residues = 0, 0
     while tries < settings.plane_candidates:
@@ -839,6 +842,8 @@ def find_table(
             tries -= 1
             residues += 1
         if area < settings.table_min_area_m2:
+            if settings.support_by_standing and area >= MAT_MIN_AREA_M2:
+                mats.append((_Candidate(n, d, inl[comp], area, on_plane), len(small)))
             small.append(
                 PlaneVerdict(
                     _tuple(n),
@@ -888,13 +893,15 @@ def find_table(
 
     def score(
         origin_may_be_camera: bool,
-    ) -> tuple[list[tuple[Best, int]], list[PlaneVerdict], list[tuple[TableFit, int, float]]]:
+    ) -> tuple[list[tuple[Best, int]], list[PlaneVerdict], list[tuple[TableFit, int, float]], list[int]]:
         """Each candidate's fit, its normal turned towards the camera at the origin (or
-        "up", where the objects are, when the origin is no camera), and its score."""
+        "up", where the objects are, when the origin is no camera), and its score; the
+        mats after the candidates, each entry's place in ``small`` (-1: no mat)."""
         ranked: list[tuple[Best, int]] = []
         far: list[PlaneVerdict] = []
         scored: list[tuple[TableFit, int, float]] = []
-        for c in candidates:
+        mat_at: list[int] = []
+        for c, at in (*((c, -1) for c in candidates), *mats):
             # rows by index: take is several times faster than a[idx]; none taken for the
             # plane and the hull of a candidate whose fit and coordinates are known
             members: np.ndarray | None = None
@@ -905,6 +912,8 @@ def find_table(
                 n, d = c.refit
             camera_is_origin = origin_may_be_camera and abs(d) >= _MIN_CAMERA_HEIGHT_M
             if camera_is_origin and abs(d) > settings.table_max_distance_m:
+                if at >= 0:
+                    continue  # a mat: its verdict is in ``small`` already
                 far.append(
                     PlaneVerdict(
                         _tuple(n),
@@ -972,18 +981,20 @@ def find_table(
             key = (abs(above - below), c.area_m2)
             scored.append((fit, abs(above - below), c.area_m2))
             ranked.append(((key, fit, above, below), rest_above))
-        return ranked, far, scored
+            mat_at.append(at)
+        return ranked, far, scored, mat_at
 
     def first_best(ks: Iterable[int]) -> int | None:
-        """Of the candidates ``ks``, the one of the highest (score, area), the first of equals."""
-        return max(ks, key=lambda k: ranked[k][0][0], default=None)
+        """Of the candidates ``ks`` (a mat is none: `MAT_MIN_AREA_M2`), the one of the
+        highest (score, area), the first of equals."""
+        return max((k for k in ks if mat_at[k] < 0), key=lambda k: ranked[k][0][0], default=None)
 
     def before(k: int) -> bool:
         """More points before candidate ``k`` than behind it, and `min_obj` at least."""
         _, _, above, below = ranked[k][0]
         return above > max(below, min_obj)
 
-    ranked, far, scored = score(True)
+    ranked, far, scored, mat_at = score(True)
     k_best = first_best(range(len(ranked)))
     best = None if k_best is None else ranked[k_best][0]
     origin_note = ""
@@ -996,7 +1007,7 @@ def find_table(
         # An organized pinhole grid about the origin is a camera image whatever it shows.
         hidden = _hidden_from_origin(best[1], loose, loose_range2, settings)
         if hidden > max(best[2], min_obj) and not (pinhole is not None and pinhole()):
-            ranked, far, scored = score(False)
+            ranked, far, scored, mat_at = score(False)
             k_best = first_best(range(len(ranked)))
             best = None if k_best is None else ranked[k_best][0]
             origin_note = (
@@ -1070,6 +1081,7 @@ def find_table(
             min_obj,
             settings.mat_below_seen_max_share,
             settings.raised_below_seen_max_share,
+            frozenset(k for k, at in enumerate(mat_at) if at >= 0),
         )
         if choice is not None and choice.index == best_k:
             turned = choice.rejected_why  # it stays; the concave surfaces turned down say why
@@ -1095,8 +1107,19 @@ def find_table(
             else turned.get(k, f"fewer points standing on it ({standing} against {chosen_standing})"),
         )
         for k, (f, standing, area) in enumerate(scored)
+        if mat_at[k] < 0 or f is fit
     ]
     verdicts.sort(key=lambda v: not v.chosen)
+    # the mats not chosen keep their verdict as planes smaller than a table, with why the
+    # mat rule turned them down where it did; the one chosen is not listed twice
+    for k, at in enumerate(mat_at):
+        if at < 0:
+            continue
+        if scored[k][0] is fit:
+            small[at] = replace(small[at], why="")  # dropped below
+        elif k in turned:
+            small[at] = replace(small[at], why=f"{small[at].why}; as a mat: {turned[k]}")
+    small = [v for v in small if v.why]
     fit = replace(fit, planes=tuple(verdicts + far + small))
 
     # Seen from below: what stands on the table is on the far side from the camera (the

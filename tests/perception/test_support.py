@@ -17,6 +17,7 @@ from clearcli.perception import support, table
 from clearcli.perception.payload import segmentation_payload
 from clearcli.perception.segment import segment
 from clearcli.settings.segment import SegmentSettings
+from clearcli.settings.sim import DepthNoise
 from clearcli.sim.families import REALSENSE_HD, STEREO_NOISE, support_frame
 
 ON = SegmentSettings()
@@ -103,6 +104,30 @@ def test_the_mat_the_objects_stand_on_is_the_support(seed: int) -> None:
     assert _right(frame, ON)
     assert "mat or board" in next(v.why for v in seg.support if v.chosen)
     assert not _right(frame, OFF)
+
+
+@pytest.mark.parametrize(("seed", "noise"), [(0, None), (26, None), (25, STEREO_NOISE)])
+def test_a_mat_smaller_than_a_table_is_the_support(
+    seed: int, noise: DepthNoise | None, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # placemats of 39 x 25 and 35 x 27 cm, whose plane shows 0.082-0.088 m^2 round the
+    # objects on it: under table_min_area_m2 (0.1 m^2), over support.MAT_MIN_AREA_M2. The
+    # mat is the support, the table's verdict says it is one support with it, and the
+    # mat is no object
+    frame = support_frame("mat_on_table", seed, noise=noise)
+    seg = segment(frame, ON)
+    assert _right(frame, ON)
+    chosen = next(v for v in seg.support if v.chosen)
+    assert "mat or board" in chosen.why
+    assert support.MAT_MIN_AREA_M2 <= chosen.area_m2 < ON.table_min_area_m2
+    assert any(v.why.startswith("one support with the mat") for v in seg.support if not v.chosen)
+    assert sum(v.chosen for v in seg.support) == 1
+    # a plane under a table's area no candidate for the mat rule: the mat is an "object"
+    monkeypatch.setattr(table, "MAT_MIN_AREA_M2", ON.table_min_area_m2)
+    off = segment(frame, ON)
+    assert not _right(frame, ON)
+    assert len(off.objects) > len(seg.objects)
+    assert not any("mat or board" in v.why for v in off.support if v.chosen)
 
 
 def test_a_camera_looking_down_at_a_floor_still_has_its_support() -> None:
