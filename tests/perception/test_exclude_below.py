@@ -59,8 +59,10 @@ def test_a_board_at_the_table_edge_going_on_below_its_level_is_excluded(
     assert np.mean(truth[boards[0].indices] == LABEL_NONE) > 0.95  # the board's points, no object's
     doc = segmentation_payload(seg)
     assert any(e["reason"] == boards[0].reason and e["points"] == boards[0].indices.size for e in doc["excluded"])
-    # the rule off: the board is an object (a plan would try to grasp it)
+    # the rule off: the board is an object (a plan would try to grasp it); its foot, which
+    # goes on below the table's level too, off as well (`_foot_below`)
     monkeypatch.setattr(exclude, "_BENEATH_SHARE", np.inf)
+    monkeypatch.setattr(exclude, "_FOOT_BELOW_SHARE", np.inf)
     off = segment(frame, ON)
     sc_off = score(off.labels(), truth)
     assert sc_off.true_positives == sc_off.n_true and sc_off.n_pred == sc_off.n_true + 1 and not off.excluded
@@ -116,3 +118,27 @@ def test_what_goes_on_below_outside_the_outline_is_found_among_a_far_floors_poin
         assert len(reasons) == 1 and "goes on below the support's level outside its outline (21 of" in reasons[0]
     else:
         assert reasons == []
+
+
+@pytest.mark.parametrize("seed", [22, 27])
+def test_a_shelf_whose_side_boards_stand_in_the_prisms_margin_is_excluded_by_its_foot(
+    seed: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """shelf_above(seed): the side boards holding the shelf board stand on the floor 1-3 cm
+    beyond the table's ends, inside the prism's margin, so board and sides are one segment
+    that comes down to the table's level there, where no outline rule sees it. Its foot
+    (its points at resting height) goes on below the table's level beneath 95-100 % of it
+    (`_foot_below`); no object's foot does beyond 39 %. Every object is right and nothing
+    is spurious; with the rule off the shelf is an object, and so is what stands on it."""
+    from clearcli.evaluate.exact import exact_report
+    from clearcli.sim.families import support_frame
+
+    frame = support_frame("shelf_above", seed)
+    seg = segment(frame, ON)
+    report = exact_report(seg.labels(), frame.fields["label"])
+    assert report.right == report.n_objects and report.spurious == 0, report
+    feet = [e for e in seg.excluded if "its foot goes on below the support's level" in e.reason]
+    assert len(feet) == 1
+    monkeypatch.setattr(exclude, "_FOOT_BELOW_SHARE", 2.0)
+    off = exact_report(segment(frame, ON).labels(), frame.fields["label"])
+    assert off.right == report.right and off.spurious >= 1, off
