@@ -16,7 +16,10 @@ the table's noise with it. Depth alone cannot tell; colour can, where the frame 
    ``_CLEARANCE_PX`` pixels away from every object found (a candidate touching an
    object is its foot, its shadow or its reflection on the table), or all but
    ``_NEAR_MAX_SHARE`` of it does: then it is judged on those pixels alone (a marker
-   lying against a box).
+   lying against a box); or, when it is no object's foot (5.), at most
+   ``_NEAR_NOBODY_MAX_SHARE`` of it does and the table shows round at least
+   ``_NOBODY_RING_TABLE_MIN`` of its ring (a notebook lying beside a box; a bowl's floor
+   has the bowl's wall round it).
 3. A candidate is an object when it stands above the table around it: its median height
    is at least ``flat_min_relief_m`` above the median of a ring of table pixels around
    it (3 to 8 pixels out). A print, a stain or a shadow has no relief (on the choose
@@ -75,6 +78,17 @@ _NEAR_MAX_SHARE = 0.1
 # the markers 3.2 times; gqcnn_phoxi_dexnet4_0 has a patch beside an object at 0.98-1.0
 # times, which a micrometre flipped
 _NEAR_MIN_AREA_FACTOR = 2.0
+# ... and a candidate more of which lies near an object, but that is no object's foot
+# (`_foot_of`), is judged as one lying apart when at most this share of it lies near
+# objects and the table (no candidate's) fills at least `_NOBODY_RING_TABLE_MIN` of its
+# ring: thin_flat's notebooks and pens beside a box on a RealSense's 640 x 360 working
+# grid (1280 x 720 read every other pixel, resolution.py) lie 10-44 % near and show the
+# table round 64-84 % of their ring; the floor of uois_image_0002's white bowl, 30 %
+# near, 15 % (its wall round it). Feet and shadows beside their object lie 17-34 % near
+# too (uois_image_0000's bowls, gqcnn_primesense_0's clamp) and stay out by their relief
+# and area, as every other such candidate of the choose part, mOSD and the fixtures
+_NEAR_NOBODY_MAX_SHARE = 0.5
+_NOBODY_RING_TABLE_MIN = 0.5
 # a candidate touching an object (within this many pixels), of that object's colour
 # (median CIELAB within this dE of its median) and of no other's it touches, and standing
 # up from the table round it is that object's foot below the prism: thin_flat's
@@ -585,7 +599,16 @@ def flat_objects(
                     )
                     if measured is not None and measured[2] >= min_relief_m:
                         feet.setdefault(j, []).append(measured[0])
-            continue
+                    continue
+            # nobody's foot: a thing lying apart beside an object (a notebook against a
+            # box) when at most half of it lies near objects and the table shows round
+            # half its ring or more; else its pixels far from them do not count alone
+            if np.count_nonzero(mine) < max(_MIN_PIXELS, (1.0 - _NEAR_NOBODY_MAX_SHARE) * n_mine):
+                continue
+            ring = dilate_square(whole, _RING_OUTER_PX) & ~dilate_square(whole, _RING_INNER_PX)
+            ring_table = np.count_nonzero(ring & is_table()[v0:v1, u0:u1] & ~grid[v0:v1, u0:u1])
+            if ring_table < _NOBODY_RING_TABLE_MIN * np.count_nonzero(ring):
+                continue
         measured = _relief(
             mine, is_table()[v0:v1, u0:u1] & ~grid[v0:v1, u0:u1] & ~near, v0, u0, width, points, height_of
         )

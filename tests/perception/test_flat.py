@@ -64,8 +64,11 @@ def test_a_marker_lying_against_an_object_is_found_without_its_end() -> None:
     # of 21, under a tenth): judged on the rest, whose pixels are the object
     (found,) = _scene(slice(28, 33), slice(28, 33), slice(56, 60))
     assert np.array_equal(found, _strip(slice(28, 33), slice(30, 50)))
-    # at columns 53-56 the clearance takes 4 of 21 columns (19 %): an object's foot
-    assert _scene(slice(28, 33), slice(28, 33), slice(53, 57)) == []
+    # at columns 53-56 the clearance takes 4 of 21 columns (19 %): too much to leave out,
+    # but the object (the table's colour) has no foot of the strip's, and the table shows
+    # all round it: a thing lying apart, judged on its 17 columns beyond the clearance
+    (found,) = _scene(slice(28, 33), slice(28, 33), slice(53, 57))
+    assert np.array_equal(found, _strip(slice(28, 33), slice(30, 47)))
 
 
 def test_far_from_judges_each_colour_as_every_pixel_would() -> None:
@@ -200,7 +203,12 @@ def _foot_scene(object_rgb: tuple[int, int, int], feet: bool = True) -> dict[int
     taken = np.zeros((_H, _W), dtype=bool)
     taken[20:41, 56:64] = True
     finds = _flat_finds(points, colors, taken, feet)
-    assert finds.objects == []  # 6 of its 26 columns within the clearance: no flat object
+    if finds.feet:
+        assert finds.objects == []  # 6 of its 26 columns within the clearance: its foot
+    else:
+        # nobody's foot, the table round it: a thing lying apart, judged beyond the clearance
+        (found,) = finds.objects
+        assert np.array_equal(found, _strip(slice(28, 33), slice(30, 50)))
     return finds.feet
 
 
@@ -323,7 +331,8 @@ def test_two_candidates_touching_one_object_are_judged_on_its_own_colour() -> No
     # a red strip (rows 22-26) and a black one (rows 28-32), both 8 mm up, touch one black
     # object (rows 20-40, columns 56-63); the object's colour is worked out once, for the
     # red strip (first in raster order), and the black strip is judged against it too:
-    # only the black one is its foot
+    # only the black one is its foot; the red one, nobody's, lies apart (the table above
+    # it, the black strip below: 68 % of its ring the table's), judged beyond the clearance
     points, colors = _painted(
         [
             (slice(22, 27), slice(30, 56), 0.008, (200, 30, 30)),
@@ -334,7 +343,8 @@ def test_two_candidates_touching_one_object_are_judged_on_its_own_colour() -> No
     taken = np.zeros((_H, _W), dtype=bool)
     taken[20:41, 56:64] = True
     finds = _flat_finds(points, colors, taken)
-    assert finds.objects == []
+    (found,) = finds.objects
+    assert np.array_equal(found, _strip(slice(22, 27), slice(30, 50)))
     assert list(finds.feet) == [0]
     assert np.array_equal(finds.feet[0], _strip(slice(28, 33), slice(30, 56)))
 
@@ -549,3 +559,42 @@ def test_pieces_on_the_candidates_box_are_the_whole_grids() -> None:
         assert n == want_n
         assert np.array_equal(labels, want)
         assert found == boxes(want, want_n)
+
+
+@pytest.mark.parametrize("seed", [9, 14])
+def test_a_notebook_beside_a_box_on_a_working_grid_is_found(seed: int, monkeypatch: pytest.MonkeyPatch) -> None:
+    # thin_flat(9) and (14) (choose seeds) seen by a RealSense at 1280 x 720, segmented on
+    # its 640 x 360 working grid: notebooks (14 x 12, 14 x 11 and 16 x 19 cm, 6-12 mm
+    # thick) lie beside objects, 10-26 % of their colour's pixels within the clearance of
+    # one, and are no object's foot. Judged as things lying apart (at most half near,
+    # the table round 72-84 % of their ring) every object is right; with the rule off
+    # (`_NEAR_NOBODY_MAX_SHARE` 0) they are missed, as before
+    import clearcli.perception.flat as flat
+    from clearcli.evaluate.exact import exact_report
+    from clearcli.perception.segment import segment
+    from clearcli.settings.segment import SegmentSettings
+    from clearcli.sim.families import REALSENSE_HD, support_frame
+
+    frame = support_frame("thin_flat", seed, camera=REALSENSE_HD, view=(0.6, 35.0))
+    truth = np.asarray(frame.fields["label"])
+    on = exact_report(segment(frame, SegmentSettings()).labels(), truth)
+    assert on.right == on.n_objects and on.spurious == 0, on
+    monkeypatch.setattr(flat, "_NEAR_NOBODY_MAX_SHARE", 0.0)
+    off = exact_report(segment(frame, SegmentSettings()).labels(), truth)
+    assert off.missed == {9: 2, 14: 1}[seed], off
+
+
+def test_a_bowls_floor_beside_its_wall_is_no_thing_lying_apart(monkeypatch: pytest.MonkeyPatch) -> None:
+    # uois_image_0002 (choose part): the white bowl's floor differs from the table's colour,
+    # lies 30 % near the bowl's segments and is no object's foot; the table shows round
+    # 15 % of its ring (the wall round it), under `_NOBODY_RING_TABLE_MIN`: no object.
+    # Without that test it is an eleventh segment
+    from helpers.foreign import judged
+
+    import clearcli.perception.flat as flat
+
+    _, _, seg = judged("uois_image_0002")
+    assert len(seg.objects) == 10
+    monkeypatch.setattr(flat, "_NOBODY_RING_TABLE_MIN", 0.0)
+    _, _, seg = judged("uois_image_0002")
+    assert len(seg.objects) == 11
