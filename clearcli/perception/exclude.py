@@ -871,16 +871,22 @@ def _beneath_below(
     for k, (_, _, thick, _, tall) in faces.items():
         if k in verdicts or tall < _BELOW_UPRIGHT * thick:
             continue
-        own = _cells(xy_each[k])
-        if own.size < _GOES_ON_MIN:
-            continue
-        under = int(np.isin(own, below_cells(), assume_unique=True).sum())
-        if under >= _BENEATH_SHARE * own.size:
+        share = _over_below(_cells(xy_each[k]), below_cells, _BENEATH_SHARE)
+        if share is not None:
             verdicts[k] = (
                 f"stands beyond the support's edge: an upright face {tall:.2f} m high that goes on below the "
-                f"support's level beneath {100 * under / own.size:.0f} % of it ({1000 * _BELOW_M:.0f} to "
+                f"support's level beneath {100 * share:.0f} % of it ({1000 * _BELOW_M:.0f} to "
                 f"{1000 * _BELOW_DEEP_M:.0f} mm below): a chair's back, a board, furniture standing on the floor"
             )
+
+
+def _over_below(cells: np.ndarray, below_cells: Callable[[], np.ndarray], least: float) -> float | None:
+    """The share of ``cells`` (`_cells` keys, at least `_GOES_ON_MIN` of them) that hold
+    points below the support (``below_cells``), when it is ``least`` or more; else None."""
+    if cells.size < _GOES_ON_MIN:
+        return None
+    under = int(np.isin(cells, below_cells(), assume_unique=True).sum())
+    return under / cells.size if under >= least * cells.size else None
 
 
 def _foot_below(
@@ -897,14 +903,11 @@ def _foot_below(
     for k, (xy, h) in enumerate(zip(xy_each, h_each, strict=True)):
         if k in verdicts:
             continue
-        foot = _cells(np.compress(h <= rests[k], xy, axis=0))
-        if foot.size < _GOES_ON_MIN:
-            continue
-        under = int(np.isin(foot, below_cells(), assume_unique=True).sum())
-        if under >= _FOOT_BELOW_SHARE * foot.size:
+        share = _over_below(_cells(np.compress(h <= rests[k], xy, axis=0)), below_cells, _FOOT_BELOW_SHARE)
+        if share is not None:
             verdicts[k] = (
                 f"stands beyond the support's edge: its foot goes on below the support's level beneath "
-                f"{100 * under / foot.size:.0f} % of it ({1000 * _BELOW_M:.0f} to {1000 * _BELOW_DEEP_M:.0f} mm "
+                f"{100 * share:.0f} % of it ({1000 * _BELOW_M:.0f} to {1000 * _BELOW_DEEP_M:.0f} mm "
                 "below): furniture standing on the floor (a shelf's side boards)"
             )
 
