@@ -31,6 +31,13 @@ import numpy as np
 _PARALLEL_COS = float(np.cos(np.radians(15.0)))
 _OVER_SHARE = 0.8  # of the upper surface's outline within the lower one's (grown)
 _OVER_GROW_M = 0.05
+# the lower surface is hidden at a point when the camera's ray nearest to it (within
+# this angle: the RANSAC sample's 30 000 rays over a Kinect's or a RealSense's view lie
+# about 0.006 rad apart) meets something this much nearer (raised_surface(14) close up:
+# the stool's front 0.50-0.54 m before the floor under its far corners; a surface's own
+# noise is millimetres)
+_RAY_NEAR_RAD = 0.02
+_HIDDEN_M = 0.05
 _MAT_MAX_M = 0.03  # a mat, a board, a cloth: at most this far above the table
 # A mat is a support smaller than a table may be (``table_min_area_m2``, 0.1 m^2): a
 # plane down to this area is a candidate for the mat rule alone, never a table of its
@@ -112,7 +119,9 @@ def _over(lower: Surface, outline: np.ndarray, rise: float, every: np.ndarray) -
     ``lower``: inside its outline grown `_OVER_GROW_M`, or where the camera does not
     see ``lower`` at all (its rays through ``every`` point do not reach there: a camera
     low over a stool sees no floor under the stool's near half, below the image's bottom
-    edge). Without a camera above ``lower`` (offset under `_MAT_MIN_M`), the outline only."""
+    edge), or where something nearer hides it (`_hidden`: a camera close over a stool
+    sees the stool's front and top where the floor under its far half would be). Without
+    a camera above ``lower`` (offset under `_MAT_MIN_M`), the outline only."""
     inside = lower.inside(outline, _OVER_GROW_M)
     if inside.all() or lower.offset < _MAT_MIN_M or every.shape[0] < 3:
         return float(inside.mean())
@@ -131,7 +140,23 @@ def _over(lower: Surface, outline: np.ndarray, rise: float, every: np.ndarray) -
     beneath = outline - rise * lower.normal  # the outline's foot on the lower plane
     foot = np.stack([beneath @ a for a in lower.basis], axis=1) - lower.origin @ lower.basis.T
     unseen = ~_inside_convex(foot, hull, 0.0)
-    return float((inside | unseen).mean())
+    return float((inside | unseen | _hidden(beneath, every)).mean())
+
+
+def _hidden(points: np.ndarray, every: np.ndarray) -> np.ndarray:
+    """(N,) bool: the camera at the origin sees something nearer than each of ``points``
+    along its ray: the point of ``every`` whose ray is nearest (within `_RAY_NEAR_RAD`)
+    lies `_HIDDEN_M` or more nearer. No such ray: not known to be hidden."""
+    from scipy.spatial import cKDTree
+
+    reach = np.linalg.norm(points, axis=1)
+    every_reach = np.linalg.norm(every, axis=1)
+    rays = every / np.maximum(every_reach, 1e-12)[:, None]
+    d, j = cKDTree(rays).query(points / np.maximum(reach, 1e-12)[:, None], distance_upper_bound=_RAY_NEAR_RAD)
+    found = np.isfinite(d)
+    out = np.zeros(points.shape[0], dtype=bool)
+    out[found] = every_reach[j[found]] < reach[found] - _HIDDEN_M
+    return out
 
 
 def standing_on(s: Surface, loose: np.ndarray, band_m: np.ndarray) -> np.ndarray:
