@@ -85,8 +85,9 @@ _NEAR_MIN_AREA_FACTOR = 2.0
 # grid (1280 x 720 read every other pixel, resolution.py) lie 10-44 % near and show the
 # table round 64-84 % of their ring; the floor of uois_image_0002's white bowl, 30 %
 # near, 15 % (its wall round it). Feet and shadows beside their object lie 17-34 % near
-# too (uois_image_0000's bowls, gqcnn_primesense_0's clamp) and stay out by their relief
-# and area, as every other such candidate of the choose part, mOSD and the fixtures
+# too (uois_image_0000's bowls, gqcnn_primesense_0's clamp) and stay out by the ring's
+# table, their relief or their area, as every other such candidate of the choose part,
+# mOSD and the fixtures (their objects unchanged by the rule)
 _NEAR_NOBODY_MAX_SHARE = 0.5
 _NOBODY_RING_TABLE_MIN = 0.5
 # a candidate touching an object (within this many pixels), of that object's colour

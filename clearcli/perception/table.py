@@ -1112,14 +1112,15 @@ def find_table(
     verdicts.sort(key=lambda v: not v.chosen)
     # the mats not chosen keep their verdict as planes smaller than a table, with why the
     # mat rule turned them down where it did; the one chosen is not listed twice
+    chosen_mat = -1
     for k, at in enumerate(mat_at):
         if at < 0:
             continue
         if scored[k][0] is fit:
-            small[at] = replace(small[at], why="")  # dropped below
+            chosen_mat = at
         elif k in turned:
             small[at] = replace(small[at], why=f"{small[at].why}; as a mat: {turned[k]}")
-    small = [v for v in small if v.why]
+    small = [v for i, v in enumerate(small) if i != chosen_mat]
     fit = replace(fit, planes=tuple(verdicts + far + small))
 
     # Seen from below: what stands on the table is on the far side from the camera (the

@@ -110,7 +110,7 @@ def test_the_mat_the_objects_stand_on_is_the_support(seed: int) -> None:
 def test_a_mat_smaller_than_a_table_is_the_support(
     seed: int, noise: DepthNoise | None, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    # placemats of 39 x 25 and 35 x 27 cm, whose plane shows 0.082-0.088 m^2 round the
+    # placemats of 39 x 25, 39 x 26 and 35 x 27 cm, whose plane shows 0.082-0.088 m^2 round the
     # objects on it: under table_min_area_m2 (0.1 m^2), over support.MAT_MIN_AREA_M2. The
     # mat is the support, the table's verdict says it is one support with it, and the
     # mat is no object
