@@ -437,6 +437,12 @@ def _raised(
     return up
 
 
+def _ring(region: np.ndarray) -> np.ndarray:
+    """The ring round ``region`` (a bool window): its pixels `_RING_INNER_PX` to
+    `_RING_OUTER_PX` out (module doc, 3.)."""
+    return dilate_square(region, _RING_OUTER_PX) & ~dilate_square(region, _RING_INNER_PX)
+
+
 def _relief(
     region: np.ndarray,
     ring_may: np.ndarray,
@@ -451,7 +457,7 @@ def _relief(
     row ``v0``, column ``u0`` of the grid ``width`` wide; the ring `_RING_INNER_PX` to
     `_RING_OUTER_PX` pixels out, where ``ring_may`` (the table's pixels no candidate or
     object's reach holds), is measured; None when it holds under `_MIN_PIXELS`."""
-    ring = dilate_square(region, _RING_OUTER_PX) & ~dilate_square(region, _RING_INNER_PX) & ring_may
+    ring = _ring(region) & ring_may
     rows, cols = np.nonzero(ring)
     if rows.size < _MIN_PIXELS:
         return None
@@ -466,7 +472,7 @@ def _no_depth_share(region: np.ndarray, window: np.ndarray) -> float:
     """The share of the ring round ``region`` (`_RING_INNER_PX` to `_RING_OUTER_PX`
     pixels out, in a ``window`` of the pixel grid: (h, w, 3) points) whose pixels have no
     depth (module doc, 3.)."""
-    ring = dilate_square(region, _RING_OUTER_PX) & ~dilate_square(region, _RING_INNER_PX)
+    ring = _ring(region)
     n_ring = int(np.count_nonzero(ring))
     if not n_ring:
         return 0.0
@@ -606,7 +612,7 @@ def flat_objects(
             # half its ring or more; else its pixels far from them do not count alone
             if np.count_nonzero(mine) < max(_MIN_PIXELS, (1.0 - _NEAR_NOBODY_MAX_SHARE) * n_mine):
                 continue
-            ring = dilate_square(whole, _RING_OUTER_PX) & ~dilate_square(whole, _RING_INNER_PX)
+            ring = _ring(whole)
             ring_table = np.count_nonzero(ring & is_table()[v0:v1, u0:u1] & ~grid[v0:v1, u0:u1])
             if ring_table < _NOBODY_RING_TABLE_MIN * np.count_nonzero(ring):
                 continue

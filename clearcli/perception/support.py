@@ -129,9 +129,10 @@ def _over(lower: Surface, outline: np.ndarray, rise: float, every: np.ndarray) -
 
     # where the camera's rays (from the origin through the points seen) meet the lower
     # plane: the part of it in view, whatever hides it
-    rays = every / np.maximum(np.linalg.norm(every, axis=1, keepdims=True), 1e-12)
-    down = rays @ lower.normal
-    rays = rays[down < -1e-6]
+    reach = np.linalg.norm(every, axis=1)
+    unit = every / np.maximum(reach, 1e-12)[:, None]  # `_hidden` reads them too
+    down = unit @ lower.normal
+    rays = unit[down < -1e-6]
     if rays.shape[0] < 3:
         return float(inside.mean())
     hits = rays * (-lower.offset / (rays @ lower.normal))[:, None]
@@ -140,18 +141,17 @@ def _over(lower: Surface, outline: np.ndarray, rise: float, every: np.ndarray) -
     beneath = outline - rise * lower.normal  # the outline's foot on the lower plane
     foot = np.stack([beneath @ a for a in lower.basis], axis=1) - lower.origin @ lower.basis.T
     unseen = ~_inside_convex(foot, hull, 0.0)
-    return float((inside | unseen | _hidden(beneath, every)).mean())
+    return float((inside | unseen | _hidden(beneath, unit, reach)).mean())
 
 
-def _hidden(points: np.ndarray, every: np.ndarray) -> np.ndarray:
+def _hidden(points: np.ndarray, rays: np.ndarray, every_reach: np.ndarray) -> np.ndarray:
     """(N,) bool: the camera at the origin sees something nearer than each of ``points``
-    along its ray: the point of ``every`` whose ray is nearest (within `_RAY_NEAR_RAD`)
-    lies `_HIDDEN_M` or more nearer. No such ray: not known to be hidden."""
+    along its ray: of the points seen (their unit ``rays`` and ranges ``every_reach``),
+    the one whose ray is nearest (within `_RAY_NEAR_RAD`) lies `_HIDDEN_M` or more
+    nearer. No such ray: not known to be hidden."""
     from scipy.spatial import cKDTree
 
     reach = np.linalg.norm(points, axis=1)
-    every_reach = np.linalg.norm(every, axis=1)
-    rays = every / np.maximum(every_reach, 1e-12)[:, None]
     d, j = cKDTree(rays).query(points / np.maximum(reach, 1e-12)[:, None], distance_upper_bound=_RAY_NEAR_RAD)
     found = np.isfinite(d)
     out = np.zeros(points.shape[0], dtype=bool)
