@@ -127,9 +127,11 @@ def color_splits(
     if e.shape[0] == 0:
         return seg_of_sv
     piece, between = _pieces(seg_of_sv, sv, lab, min_delta, shape)
-    if not between.any():
-        return seg_of_sv
     n_piece = int(piece.max()) + 1
+    if not between.any() and n_piece == np.unique(seg_of_sv).size:
+        # no colour cut and every segment in one piece: nothing to split. A segment in
+        # parts that touch nowhere (occlusion.py) is still judged by step 5 without a cut
+        return seg_of_sv
     size = np.bincount(piece, weights=sv.n_voxels, minlength=n_piece)
     ci = np.flatnonzero(between)
     rise = seam_rise(sv, voxel_centroids, e[ci], voxels_by_sv)

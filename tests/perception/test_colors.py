@@ -134,3 +134,23 @@ def test_a_piece_split_off_joins_the_object_of_its_colour() -> None:
     # the rest of the wall green: the foot is a segment of its own
     out = color_splits(np.array([0, 0, 0, 1]), sv, sv.centroids, np.array([RED, RED, BLUE, GREEN]), 25.0, RISE_M, 60)
     assert len({int(out[0]), int(out[2]), int(out[3])}) == 3
+
+
+def test_a_segment_in_two_parts_of_two_colours_is_two_without_any_cut() -> None:
+    """A red part and a blue part of one segment that touch nowhere (occlusion.py joined
+    two objects seen either side of a nearer one), each of one colour: no adjacency
+    differs in colour, so no colour cut anywhere in the frame, and still the parts are
+    judged by their mean colours (step 5): two segments. One colour: one segment."""
+    from clearcli.perception.colors import color_splits
+
+    sv = Supervoxels(
+        voxel_label=np.arange(4),
+        centroids=np.array([[0.0, 0, 0], [-0.03, 0, 0], [0.1, 0, 0.0], [0.13, 0, 0.0]]),
+        normals=np.array([[0, 0, 1.0]] * 4),
+        n_voxels=np.full(4, 50),
+        edges=np.array([[0, 1], [2, 3]]),
+    )
+    one = np.zeros(4, dtype=np.int64)
+    out = color_splits(one, sv, sv.centroids, np.array([RED, RED, BLUE, BLUE]), 25.0, RISE_M, 60)
+    assert out[0] == out[1] and out[2] == out[3] and out[0] != out[2]
+    assert np.all(color_splits(one, sv, sv.centroids, np.array([RED, RED, RED, RED]), 25.0, RISE_M, 60) == 0)
