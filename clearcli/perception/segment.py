@@ -47,6 +47,8 @@ from clearcli.perception.exclude import (
 )
 from clearcli.perception.filters import clean_mask
 from clearcli.perception.flat import differing_shares, flat_objects, support_colour, within_reach
+from clearcli.perception.gaps import MAX_POINTS as GAP_MAX_POINTS
+from clearcli.perception.gaps import behind_the_gap, gap_behind
 from clearcli.perception.lccp import lccp_segments
 from clearcli.perception.openings import RIM_MAX_POINTS, Opening, TableEdge, rim_of, seen_edges
 from clearcli.perception.orientation import Orientation, axes_turn, cloud_turn, quarter_turns_for
@@ -737,9 +739,19 @@ def _exclude(w: _Work) -> None:
         off_colour=_off_colour(w),
         border_edge="the image's border" if w.organized else "the cloud's edge",
     )
-    if not verdicts:
-        return
     gone = {v.index: v.reason for v in verdicts}
+    # a desk or a table behind at nearly the support's level is one plane with it: a gap
+    # across the support with a step at it tells them apart (gaps.py)
+    if fit.camera_is_origin and len(gone) < len(w.objects):
+        # an even sample of the table's points, as gap_behind reads them
+        rows, table_xy = _in_plane(w, w.table_mask, max(1, -(-int(np.count_nonzero(w.table_mask)) // GAP_MAX_POINTS)))
+        gap = gap_behind(table_xy, np.take(h, rows), fit.to_2d(np.zeros((1, 3)))[0])
+        if gap is not None:
+            objects_xy = np.split(fit.to_2d(every), np.cumsum(sizes)[:-1])
+            for k in behind_the_gap(gap, objects_xy):
+                gone.setdefault(k, gap.why())
+    if not gone:
+        return
     w.excluded = [Excluded(o.indices, o.centroid, gone[k]) for k, o in enumerate(w.objects) if k in gone]
     w.objects = [o for k, o in enumerate(w.objects) if k not in gone]
 
