@@ -16,13 +16,17 @@ goes on at its level on the far side (no step); a sensor's warping of a flat tab
 it slowly, with no step at a line. What stands beyond such a gap, on the far side from
 the camera, stands on the surface behind.
 
-`gap_behind` looks for the gap along directions within `_TURN_DEG` of the camera's line
-of sight across the support (a surface "behind" lies beyond the table as the camera looks),
-in `_BIN_M` strips: a run of strips no wider than `_GAP_MAX_M` holding at most
-`_GAP_SHARE` of what the strips on either side hold (their median over `_SIDE_M`), both
-sides at least `_SIDE_MIN_SHARE` of the support's points, the far side reaching
-`_FAR_MIN_M` beyond the gap. Each side's heights are fitted by a line across the strips
-within `_SIDE_M` of the gap; their levels at the gap differ by `_STEP_MIN_M` or more.
+`gap_behind` looks for the gap across the camera's line of sight over the support (a
+surface "behind" lies beyond the table as the camera looks) and along each of the
+support's outline's `_EDGES` longest sides (a desk behind, turned, has its front
+parallel to its own far edge, which the outline takes in; a gap 2 cm wide is lost to a
+direction a few degrees off it over a metre of table, so the directions are the
+outline's own, not a sweep of angles). Along each, in `_BIN_M` strips: a run of strips
+no wider than `_GAP_MAX_M` holding at most `_GAP_SHARE` of what the strips on either
+side hold (their median over `_SIDE_M`), both sides at least `_SIDE_MIN_SHARE` of the
+support's points, the far side reaching `_FAR_MIN_M` beyond the gap. Each side's
+heights are fitted by a line across the strips within `_SIDE_M` of the gap; their
+levels at the gap differ by `_STEP_MIN_M` or more.
 
 Measured: the self-made desk_level_behind frames whose desk RANSAC takes into the
 table's plane (choose seeds 19, 20, 24: a desk 6-9 mm lower, 2-2.5 cm behind) show a gap
@@ -44,10 +48,10 @@ import numpy as np
 # strips across the support (m): a 2 cm gap is two to four of them, a Kinect's rows at
 # 1.3 m and 35 degrees lie 3-4 mm apart along the table
 _BIN_M = 0.005
-# directions tried: the camera's line of sight across the support, turned by up to this
-# much either way in `_TURN_STEP_DEG` steps (a desk behind faces the camera roughly)
-_TURN_DEG = 30
-_TURN_STEP_DEG = 5
+# directions tried besides the line of sight: across the outline's longest sides
+_EDGES = 4
+# two directions within this angle are one (rad)
+_SAME_DIRECTION_RAD = 0.01
 # a gap: strips holding at most this share of the median of the strips beside it
 _GAP_SHARE = 0.15
 # ... at most this wide (a gap between two pieces of furniture, not a missing half)
@@ -63,10 +67,11 @@ _FAR_MIN_M = 0.1
 # (module doc); half of the least, and ten times a median's spread over the thousands
 # of points on either side
 _STEP_MIN_M = 0.003
+# the support's points looked at: an even sample of at most this many (the desks'
+# frames: 200-500 in a strip beside the gap, 0-20 in it)
+_MAX_POINTS = 25000
 # an object stands behind the gap when this share of its points lie beyond its middle
 _BEYOND_SHARE = 0.8
-# the support's points looked at: an even sample of at most this many
-MAX_POINTS = 60000
 
 
 @dataclass(frozen=True)
@@ -108,63 +113,88 @@ def _gap_along(t: np.ndarray, h: np.ndarray) -> Gap | None:
     lo = float(t.min())
     strip = np.floor((t - lo) / _BIN_M).astype(np.int64)
     counts = np.bincount(strip)
+    n = counts.size
     n_side = int(round(_SIDE_M / _BIN_M))
     n_max = int(round(_GAP_MAX_M / _BIN_M))
+    if n < 2 * n_side + 1:
+        return None
+    # each window of n_side strips' median: the near side of strip i is window i - n_side,
+    # the far side of a run ending before strip j is window j
+    window_median = np.median(np.lib.stride_tricks.sliding_window_view(counts, n_side), axis=1)
+    ref = np.zeros(n)
+    ref[n_side:] = window_median[: n - n_side]
+    low = counts <= _GAP_SHARE * ref
+    low[:n_side] = False
+    # a run starts where a low strip follows one that is not (all strips at once; the few
+    # runs, none on most frames, one by one)
+    starts = np.flatnonzero(low & ~np.concatenate([[False], low[:-1]]))
+    if not starts.size:
+        return None
     total = t.size
     cum = np.concatenate([[0], np.cumsum(counts)])
     best: Gap | None = None
-    i = 0
-    n = counts.size
-    while i < n:
-        near = counts[max(0, i - n_side) : i]
-        ref = float(np.median(near)) if near.size >= n_side // 2 else 0.0
-        if ref <= 0 or counts[i] > _GAP_SHARE * ref:
-            i += 1
-            continue
+    for i in starts.tolist():
+        limit = _GAP_SHARE * ref[i]
         j = i
-        while j < n and j - i <= n_max and counts[j] <= _GAP_SHARE * ref:
+        while j < n and j - i <= n_max and counts[j] <= limit:
             j += 1
-        far = counts[j : j + n_side]
-        if j - i > n_max or far.size < n_side or float(np.median(far)) * _GAP_SHARE < counts[i:j].max():
-            i = j + 1
+        if j - i > n_max or j + n_side > n or window_median[j] * _GAP_SHARE < counts[i:j].max():
             continue
         near_share, far_share = cum[i] / total, (total - cum[j]) / total
-        far_reach = (n - j) * _BIN_M
-        if near_share >= _SIDE_MIN_SHARE and far_share >= _SIDE_MIN_SHARE and far_reach >= _FAR_MIN_M:
-            at = lo + 0.5 * (i + j) * _BIN_M
-            near_sel = (strip >= i - n_side) & (strip < i)
-            far_sel = (strip >= j) & (strip < j + n_side)
-            step = _level_at(t[near_sel], h[near_sel], at) - _level_at(t[far_sel], h[far_sel], at)
-            if best is None or abs(step) > abs(best.step_m):
-                best = Gap(np.zeros(2), at, (j - i) * _BIN_M, step)
-        i = j + 1
+        if near_share < _SIDE_MIN_SHARE or far_share < _SIDE_MIN_SHARE or (n - j) * _BIN_M < _FAR_MIN_M:
+            continue
+        at = lo + 0.5 * (i + j) * _BIN_M
+        near_sel = (strip >= i - n_side) & (strip < i)
+        far_sel = (strip >= j) & (strip < j + n_side)
+        step = _level_at(t[near_sel], h[near_sel], at) - _level_at(t[far_sel], h[far_sel], at)
+        if best is None or abs(step) > abs(best.step_m):
+            best = Gap(np.zeros(2), at, (j - i) * _BIN_M, step)
     return best
 
 
-def gap_behind(support_xy: np.ndarray, support_h: np.ndarray, camera_xy: np.ndarray) -> Gap | None:
+def _directions(polygon_2d: np.ndarray, sight: np.ndarray) -> list[np.ndarray]:
+    """Unit directions (2,) to look along, each pointing away from the camera: the line
+    of sight ``sight``, then across each of the outline's `_EDGES` longest sides."""
+    out = [sight / float(np.hypot(*sight))]
+    if polygon_2d.shape[0] >= 3:
+        sides = np.roll(polygon_2d, -1, axis=0) - polygon_2d
+        lengths = np.hypot(sides[:, 0], sides[:, 1])
+        for k in np.argsort(-lengths, kind="stable")[:_EDGES].tolist():
+            if lengths[k] <= 0:
+                continue
+            across = np.array([-sides[k, 1], sides[k, 0]]) / lengths[k]
+            if float(across @ sight) < 0:
+                across = -across
+            if float(across @ sight) <= 0 or any(float(across @ d) > np.cos(_SAME_DIRECTION_RAD) for d in out):
+                continue  # along the line of sight (no "behind" across it), or one tried already
+            out.append(across)
+    return out
+
+
+def gap_behind(
+    support_xy: np.ndarray, support_h: np.ndarray, camera_xy: np.ndarray, polygon_2d: np.ndarray
+) -> Gap | None:
     """The gap across the support (module doc) beyond which another surface lies, or
-    None. ``support_xy`` (N, 2): the support's points in its plane's coordinates,
-    ``support_h`` (N,) their heights above it; ``camera_xy`` (2,): the camera's foot on
-    the plane in the same coordinates."""
+    None. ``support_xy`` (N, 2): the support's points in its plane's coordinates (an even
+    sample of them will do), ``support_h`` (N,) their heights above it; ``camera_xy``
+    (2,): the camera's foot on the plane in the same coordinates; ``polygon_2d`` (K, 2):
+    the support's outline in them."""
     if support_xy.shape[0] < 1000:
         return None
-    step = max(1, -(-support_xy.shape[0] // MAX_POINTS))
-    xy, h = support_xy[::step], support_h[::step]
+    # an even sample: the strips beside a gap still hold a hundred points or more
+    every = max(1, -(-support_xy.shape[0] // _MAX_POINTS))
+    xy, h = support_xy[::every], support_h[::every]
     sight = xy.mean(axis=0) - camera_xy
-    norm = float(np.hypot(*sight))
-    if norm < 1e-6:
+    if float(np.hypot(*sight)) < 1e-6:
         return None  # a camera straight above the support's middle: no "behind"
-    base = float(np.arctan2(sight[1], sight[0]))
+    directions = _directions(polygon_2d, sight)
+    along = xy @ np.stack(directions, axis=1)  # every direction's positions in one product
     best: Gap | None = None
-    for deg in range(-_TURN_DEG, _TURN_DEG + 1, _TURN_STEP_DEG):
-        angle = base + np.radians(deg)
-        u = np.array([np.cos(angle), np.sin(angle)])
-        found = _gap_along(xy @ u, h)
-        if (
-            found is not None
-            and abs(found.step_m) >= _STEP_MIN_M
-            and (best is None or abs(found.step_m) > abs(best.step_m))
-        ):
+    for k, u in enumerate(directions):
+        found = _gap_along(np.ascontiguousarray(along[:, k]), h)
+        if found is None or abs(found.step_m) < _STEP_MIN_M:
+            continue
+        if best is None or abs(found.step_m) > abs(best.step_m):
             best = Gap(u, found.at_m, found.width_m, found.step_m)
     return best
 

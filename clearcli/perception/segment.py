@@ -47,7 +47,6 @@ from clearcli.perception.exclude import (
 )
 from clearcli.perception.filters import clean_mask
 from clearcli.perception.flat import differing_shares, flat_objects, support_colour, within_reach
-from clearcli.perception.gaps import MAX_POINTS as GAP_MAX_POINTS
 from clearcli.perception.gaps import behind_the_gap, gap_behind
 from clearcli.perception.lccp import lccp_segments
 from clearcli.perception.openings import RIM_MAX_POINTS, Opening, TableEdge, rim_of, seen_edges
@@ -710,7 +709,7 @@ def _exclude(w: _Work) -> None:
         ~fit.inside(near_pts, settings.hull_margin_m, of_n=below_pts.shape[0]), near_pts, axis=0
     )  # rows by a mask
     # an even sample of the table's points: no copy of every one first
-    _, support_xy = _in_plane(w, w.table_mask, max(1, int(np.count_nonzero(w.table_mask)) // 50000))
+    support_rows, support_xy = _in_plane(w, w.table_mask, max(1, int(np.count_nonzero(w.table_mask)) // 50000))
     rests = settings.prism_min_height_m + settings.plane_distance_m
 
     def rests_m(p: np.ndarray) -> float:
@@ -743,9 +742,7 @@ def _exclude(w: _Work) -> None:
     # a desk or a table behind at nearly the support's level is one plane with it: a gap
     # across the support with a step at it tells them apart (gaps.py)
     if fit.camera_is_origin and len(gone) < len(w.objects):
-        # an even sample of the table's points, as gap_behind reads them
-        rows, table_xy = _in_plane(w, w.table_mask, max(1, -(-int(np.count_nonzero(w.table_mask)) // GAP_MAX_POINTS)))
-        gap = gap_behind(table_xy, np.take(h, rows), fit.to_2d(np.zeros((1, 3)))[0])
+        gap = gap_behind(support_xy, np.take(h, support_rows), fit.to_2d(np.zeros((1, 3)))[0], fit.polygon_2d)
         if gap is not None:
             objects_xy = np.split(fit.to_2d(every), np.cumsum(sizes)[:-1])
             for k in behind_the_gap(gap, objects_xy):

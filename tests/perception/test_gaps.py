@@ -17,6 +17,8 @@ from clearcli.sim.families import REALSENSE_HD, STEREO_NOISE, support_frame
 
 ON = SegmentSettings()
 CAMERA_XY = np.array([0.0, -0.8])  # the camera's foot on the plane, in front of the slabs
+# the slabs' outline: the hull of both, counter-clockwise
+OUTLINE = np.array([[-0.5, 0.0], [0.495, 0.0], [0.495, 0.9975], [-0.5, 0.9975]])
 
 
 def _slabs(gap_m: float, step_m: float, shadow: tuple[float, float] | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -36,7 +38,7 @@ def _slabs(gap_m: float, step_m: float, shadow: tuple[float, float] | None = Non
 
 def test_a_gap_with_a_step_is_found_where_it_runs() -> None:
     xy, h = _slabs(0.02, 0.007)
-    gap = gaps.gap_behind(xy, h, CAMERA_XY)
+    gap = gaps.gap_behind(xy, h, CAMERA_XY, OUTLINE)
     assert gap is not None
     # the gap runs along x at y 0.50-0.52: its middle 0.51 along +y, away from the camera
     assert gap.direction == pytest.approx([0.0, 1.0], abs=0.01)
@@ -51,26 +53,29 @@ def test_a_gap_with_a_step_is_found_where_it_runs() -> None:
 
 
 def test_a_turned_desk_is_found_along_its_own_direction() -> None:
-    # the slabs turned 20 degrees about the camera's line of sight's foot: found along the
-    # direction turned 20 degrees (in 5 degree steps, within one)
+    # the slabs turned 20 degrees, the camera's foot where it was: the line of sight now
+    # crosses the gap 20 degrees off its normal (over a metre its edges smear by 36 cm);
+    # found across the outline's long sides, turned with the slabs
     xy, h = _slabs(0.02, 0.007)
     turn = np.radians(20.0)
     rot = np.array([[np.cos(turn), -np.sin(turn)], [np.sin(turn), np.cos(turn)]])
-    gap = gaps.gap_behind(xy @ rot.T, h, CAMERA_XY @ rot.T)
+    gap = gaps.gap_behind(xy @ rot.T, h, CAMERA_XY, OUTLINE @ rot.T)
     assert gap is not None and gap.step_m == pytest.approx(0.007, abs=1e-6)
-    assert gap.direction == pytest.approx(rot @ [0.0, 1.0], abs=0.01)
+    assert gap.direction == pytest.approx(rot @ [0.0, 1.0], abs=1e-9)
+    # looked for along the line of sight alone (no outline): not found
+    assert gaps.gap_behind(xy @ rot.T, h, CAMERA_XY, np.zeros((0, 2))) is None
 
 
 def test_no_step_no_gap_or_a_shadow_is_no_other_surface() -> None:
     # two tables side by side at one level: a gap, no step
-    assert gaps.gap_behind(*_slabs(0.02, 0.0), CAMERA_XY) is None
+    assert gaps.gap_behind(*_slabs(0.02, 0.0), CAMERA_XY, OUTLINE) is None
     # one table at two levels with no gap (a warp, a step of the cloth): no gap
-    assert gaps.gap_behind(*_slabs(0.0, 0.007), CAMERA_XY) is None
+    assert gaps.gap_behind(*_slabs(0.0, 0.007), CAMERA_XY, OUTLINE) is None
     # a shadow across the whole table, the table at one level beyond it
-    assert gaps.gap_behind(*_slabs(0.0, 0.0, shadow=(0.3, 0.33)), CAMERA_XY) is None
+    assert gaps.gap_behind(*_slabs(0.0, 0.0, shadow=(0.3, 0.33)), CAMERA_XY, OUTLINE) is None
     # the step under the threshold: none; the threshold at the step's size: found
-    assert gaps.gap_behind(*_slabs(0.02, 0.0025), CAMERA_XY) is None
-    assert gaps.gap_behind(*_slabs(0.02, 0.0031), CAMERA_XY) is not None
+    assert gaps.gap_behind(*_slabs(0.02, 0.0025), CAMERA_XY, OUTLINE) is None
+    assert gaps.gap_behind(*_slabs(0.02, 0.0031), CAMERA_XY, OUTLINE) is not None
 
 
 @pytest.mark.parametrize(
