@@ -30,10 +30,12 @@ levels at the gap differ by `_STEP_MIN_M` or more.
 
 Measured: the self-made desk_level_behind frames whose desk RANSAC takes into the
 table's plane (choose seeds 19, 20, 24: a desk 6-9 mm lower, 2-2.5 cm behind) show a gap
-0.5-1.5 cm wide with a step of 6.7-9.3 mm, and only their desk's objects lie beyond it;
-the 50 mOSD frames, the foreign choose part, the fixtures and the other families' choose
-frames show no gap at all (a step of 0 allowed), so `_STEP_MIN_M` decides only where a
-gap is seen: two tables side by side at one level (a gap, no step) stay one support.
+0.5-1.5 cm wide with a step of 7.0-9.5 mm, and only their desk's objects lie beyond it.
+Elsewhere a gap is rare and has no step: four of the 50 mOSD frames show one (a single
+5 mm strip) with steps of 0.01-0.69 mm, one of the families' 1600 choose frames 0.48 mm;
+the foreign choose part and the fixtures none.
+`_STEP_MIN_M` lies 4 times above those and 2.3 times below the desks': two tables side
+by side at one level (a gap, no step) stay one support.
 A thin board covering the table's whole width in front, a few millimetres thick, would
 look the same as a desk behind (the table behind its far edge is hidden by its
 thickness); no frame here has one.
@@ -68,9 +70,8 @@ _SIDE_M = 0.1
 _SIDE_MIN_SHARE = 0.1
 # the far side goes on at least this far beyond the gap (a surface, not a lip)
 _FAR_MIN_M = 0.1
-# the two sides' levels at the gap differ by at least this (m): the desks 6.7-9.3 mm
-# (module doc); half of the least, and ten times a median's spread over the thousands
-# of points on either side
+# the two sides' levels at the gap differ by at least this (m): the desks 7.0-9.5 mm,
+# gaps elsewhere at most 0.69 mm (module doc)
 _STEP_MIN_M = 0.003
 # the support's points looked at: an even sample of at most this many (the desks'
 # frames: 200-500 in a strip beside the gap, 0-20 in it)
