@@ -104,6 +104,12 @@ _FOOT_MAX_DE = 15.0
 # has the box's colour but not the print's (test46: its box lost a foot of 903 points
 # judged on the pixels beside it alone). mOSD mean IoU 0.9551 -> 0.9570 (stop 62)
 _FOOT_SIDE_PX = 6
+# a piece of a foot candidate of another colour (`_other_colour`): its pixels each at
+# least this far from the foot's colour and their median too is no part of the foot but
+# a candidate of its own. colors._PART_DE's 40: the parts of one object differ by up to
+# 26.7 dE on the mOSD learn frames (light and shade on a box), two objects of a heap by
+# 50-56 (thin_flat(23): a pen 98 dE from the notebook whose foot it lay against)
+_SPLIT_DE = 40.0
 # the ring of table pixels a candidate's relief is measured against (pixels out)
 _RING_INNER_PX = 3
 _RING_OUTER_PX = 8
@@ -372,7 +378,7 @@ def _foot_of(
     owner: np.ndarray,
     colors: np.ndarray,
     object_lab: dict[int, np.ndarray],
-) -> int | None:  # owner: (height * width,) each pixel's object, -1 none
+) -> tuple[int, np.ndarray, np.ndarray] | None:  # owner: (height * width,) each pixel's object, -1 none
     """The one object, among those a candidate (``whole``, in a window at row ``v0``,
     column ``u0`` of the grid ``width`` wide) touches (within 2 pixels), whose colour it
     has (median CIELAB within `_FOOT_MAX_DE` of the object's pixels beside it
@@ -382,14 +388,18 @@ def _foot_of(
     ``object_lab``: the objects' median colours worked out so far, filled here (an
     object's median over all its pixels cost most of the flat step when several
     candidates touched it, issue 39); ``object_bounds``: where each object's pixels
-    start in ``object_pixels`` (and the last ends)."""
+    start in ``object_pixels`` (and the last ends).
+
+    Returns (the object, the colour its foot matched (CIELAB, (3,)), the candidate's
+    pixels' colours in the order of ``np.nonzero(whole)``), or None."""
     touched = np.unique(owner_window[dilate_square(whole, _FOOT_TOUCH_PX) & near])
     touched = touched[touched >= 0]
     if not touched.size:
         return None
     rows, cols = np.nonzero(whole)
-    mine_lab = np.median(lab_of(np.take(colors, (rows + v0) * width + (cols + u0), axis=0)), axis=0)
-    of_colour = []
+    pixel_lab = lab_of(np.take(colors, (rows + v0) * width + (cols + u0), axis=0))
+    mine_lab = np.median(pixel_lab, axis=0)
+    of_colour: list[tuple[int, np.ndarray]] = []
     beside = dilate_square(whole, _FOOT_SIDE_PX)
     for j in touched.tolist():
         # first against the object's pixels just above the foot, in the same light (most
@@ -398,7 +408,7 @@ def _foot_of(
         if rows_j.size:
             side_lab = np.median(lab_of(np.take(colors, (rows_j + v0) * width + (cols_j + u0), axis=0)), axis=0)
             if float(np.linalg.norm(mine_lab - side_lab)) < _FOOT_MAX_DE:
-                of_colour.append(j)
+                of_colour.append((j, side_lab))
                 continue
         their_lab = object_lab.get(j)
         if their_lab is None:
@@ -410,8 +420,33 @@ def _foot_of(
                 theirs = np.compress(np.take(owner, object_pixels) == j, object_pixels)
             their_lab = object_lab[j] = np.median(lab_of(np.take(colors, theirs, axis=0)), axis=0)
         if float(np.linalg.norm(mine_lab - their_lab)) < _FOOT_MAX_DE:
-            of_colour.append(j)
-    return of_colour[0] if len(of_colour) == 1 else None
+            of_colour.append((j, their_lab))
+    return (*of_colour[0], pixel_lab) if len(of_colour) == 1 else None
+
+
+def _other_colour(whole: np.ndarray, pixel_lab: np.ndarray, foot_lab: np.ndarray) -> list[np.ndarray]:
+    """The pieces (each an (h, w) bool mask of ``whole``'s window) of a foot candidate
+    ``whole`` that are of another colour than its object's foot (``foot_lab``):
+    8-connected pixels each at least `_SPLIT_DE` from it (``pixel_lab``: the
+    candidate's pixels' CIELAB, in the order of ``np.nonzero(whole)``), `_MIN_PIXELS` or
+    more of them, their median `_SPLIT_DE` or more from it: a thing lying against the
+    object's foot, joined to it by the candidate's colour test alone."""
+    far = np.linalg.norm(pixel_lab - foot_lab, axis=1) >= _SPLIT_DE
+    if int(np.count_nonzero(far)) < _MIN_PIXELS:
+        return []
+    rows, cols = np.nonzero(whole)
+    grid = np.zeros(whole.shape, dtype=bool)
+    grid[rows[far], cols[far]] = True
+    labels, n = label_8(grid)
+    piece_of = labels[rows, cols]
+    out = []
+    for k in range(1, n + 1):
+        mine = piece_of == k
+        if int(np.count_nonzero(mine)) < _MIN_PIXELS:
+            continue
+        if float(np.linalg.norm(np.median(pixel_lab[mine], axis=0) - foot_lab)) >= _SPLIT_DE:
+            out.append(labels == k)
+    return out
 
 
 def _raised(
@@ -574,20 +609,24 @@ def flat_objects(
     object_bounds = np.concatenate([[0], np.cumsum(np.asarray(object_sizes, dtype=np.int64))])
     feet: dict[int, list[np.ndarray]] = {}
     object_lab: dict[int, np.ndarray] = {}  # _foot_of's, each object's once
+    # each candidate in its window (rows v0:v1, columns u0:u1); the pieces of another
+    # colour a foot gives up (`_other_colour`) join the end of the list
+    work: list[tuple[int, int, int, int, np.ndarray]] = []
+    pad = _RING_OUTER_PX + _GROW_PX + 1
     for k in big:
         box = comp_boxes[k - 1]
         if box is None:
             continue
-        pad = _RING_OUTER_PX + _GROW_PX + 1
         v0, v1 = max(0, box[0].start - pad), min(height, box[0].stop + pad)
         u0, u1 = max(0, box[1].start - pad), min(width, box[1].stop + pad)
-        whole = comps[v0:v1, u0:u1] == k
+        work.append((v0, v1, u0, u1, comps[v0:v1, u0:u1] == k))
+    for v0, v1, u0, u1, whole in work:  # (the list grows as it is read)
         near = dilate_square(taken[v0:v1, u0:u1], _CLEARANCE_PX)
         n_mine = int(np.count_nonzero(whole))
         mine = whole & ~near
         if np.count_nonzero(mine) < max(_MIN_PIXELS, (1.0 - _NEAR_MAX_SHARE) * n_mine):
             if len(object_sizes):
-                j = _foot_of(
+                foot = _foot_of(
                     whole,
                     owner().reshape(height, width)[v0:v1, u0:u1],
                     near,
@@ -600,7 +639,12 @@ def flat_objects(
                     colors,
                     object_lab,
                 )
-                if j is not None:
+                if foot is not None:
+                    j, foot_lab, pixel_lab = foot
+                    others = _other_colour(whole, pixel_lab, foot_lab)
+                    for piece in others:
+                        whole = whole & ~piece
+                        work.append((v0, v1, u0, u1, piece))
                     measured = _relief(
                         whole, is_table()[v0:v1, u0:u1] & ~grid[v0:v1, u0:u1] & ~near, v0, u0, width, points, height_of
                     )

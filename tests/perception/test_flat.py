@@ -598,3 +598,48 @@ def test_a_bowls_floor_beside_its_wall_is_no_thing_lying_apart(monkeypatch: pyte
     monkeypatch.setattr(flat, "_NOBODY_RING_TABLE_MIN", 0.0)
     _, _, seg = judged("uois_image_0002")
     assert len(seg.objects) == 11
+
+
+@pytest.mark.parametrize("noise", [None, "stereo"])
+def test_a_pen_against_a_notebooks_foot_is_a_thing_of_its_own(noise, monkeypatch: pytest.MonkeyPatch) -> None:
+    # thin_flat(23) (a choose seed): an olive pen lies against a magenta notebook. Both
+    # differ from the table's colour and touch, so they are one candidate; its median is
+    # the notebook's and it touches the notebook, so it was the notebook's foot, pen and
+    # all (merged). The pen's pixels, 98 dE from the notebook's colour, are a piece of
+    # another colour (`flat._SPLIT_DE`, 40) and are judged apart: every object is right.
+    # With the split off the pen is the notebook's again
+    import clearcli.perception.flat as flat
+    from clearcli.evaluate.exact import exact_report
+    from clearcli.perception.segment import segment
+    from clearcli.settings.segment import SegmentSettings
+    from clearcli.sim.families import STEREO_NOISE, support_frame
+
+    frame = support_frame("thin_flat", 23, noise=STEREO_NOISE if noise else None)
+    truth = np.asarray(frame.fields["label"])
+    on = exact_report(segment(frame, SegmentSettings()).labels(), truth)
+    assert on.right == on.n_objects and on.spurious == 0, on
+    monkeypatch.setattr(flat, "_SPLIT_DE", np.inf)
+    off = exact_report(segment(frame, SegmentSettings()).labels(), truth)
+    assert off.merged == 2 and off.right == on.n_objects - 2, off
+
+
+def test_a_foots_pieces_of_another_colour() -> None:
+    # by hand: a candidate of 40 magenta pixels and, touching them, 35 olive ones and a
+    # speck of 3 olive pixels apart from those (under _MIN_PIXELS); the foot's colour
+    # is the magenta: the olive piece of 35 is one of another colour, the speck is not
+    from clearcli.perception.flat import _MIN_PIXELS, _other_colour
+
+    magenta, olive = np.array([42.0, 57.0, -5.0]), np.array([50.0, -21.0, 54.0])
+    whole = np.zeros((12, 20), dtype=bool)
+    whole[0:4, 0:10] = True  # 40 magenta
+    whole[4:9, 0:7] = True  # 35 olive, touching the magenta
+    whole[11, 17:20] = True  # 3 olive, apart
+    rows, cols = np.nonzero(whole)
+    lab = np.where((rows >= 4)[:, None], olive, magenta)
+    pieces = _other_colour(whole, lab, magenta)
+    assert len(pieces) == 1 and int(pieces[0].sum()) == 35 >= _MIN_PIXELS
+    assert not (pieces[0] & (np.arange(12)[:, None] < 4)).any()
+    # one colour: nothing apart; the olive near the magenta (a shade of it): nothing
+    assert _other_colour(whole, np.tile(magenta, (rows.size, 1)), magenta) == []
+    shade = magenta + [-20.0, 0.0, 0.0]  # 20 dE darker: light and shade on one object
+    assert _other_colour(whole, np.where((rows >= 4)[:, None], shade, magenta), magenta) == []
