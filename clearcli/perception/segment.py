@@ -676,7 +676,8 @@ def _flat(w: _Work) -> None:
 
 def _exclude(w: _Work) -> None:
     """4''. only what stands on the support is an object (exclude.py): what reaches in
-    from beyond its outline, hangs above it, or stands on such a thing is set aside."""
+    from beyond its outline, hangs above it, or stands on such a thing is set aside; so
+    is what stands beyond a gap across the support with a step at it (gaps.py)."""
     fit, settings = w.fit, w.settings
     assert fit is not None  # the table's step ran
     if not settings.exclude_not_standing or not w.objects:
