@@ -74,7 +74,7 @@ _FAR_MIN_M = 0.1
 # gaps elsewhere at most 0.69 mm (module doc)
 _STEP_MIN_M = 0.003
 # the support's points looked at: an even sample of at most this many (the desks'
-# frames: 200-500 in a strip beside the gap, 0-20 in it)
+# frames: 70-100 in a strip beside the gap, 0-7 in its emptiest strips)
 _MAX_POINTS = 25000
 # an object stands behind the gap when this share of its points lie beyond its middle
 _BEYOND_SHARE = 0.8
