@@ -48,14 +48,22 @@ _TOP_DOWN = [[1, 0, 0, 0], [0, -1, 0, 0], [0, 0, -1, 0.8], [0, 0, 0, 1]]
 
 
 @pytest.mark.parametrize("T_camera_table", [None, _TOP_DOWN], ids=["oblique", "top_down"])
-def test_a_flat_package_lying_over_two_boxes_does_not_join_them(T_camera_table: object) -> None:
+def test_a_flat_package_lying_over_two_boxes_does_not_join_them(
+    T_camera_table: object, monkeypatch: pytest.MonkeyPatch
+) -> None:
     from clearcli.evaluate.exact import exact_report
+    from clearcli.perception import colors
     from clearcli.perception.segment import segment
 
     frame = _sheet_over_two_boxes(T_camera_table)
     on = exact_report(segment(frame, S).labels(), frame.fields["label"])
     assert on.verdicts == ("right", "right", "right")
-    # without the depth ratio the package passes for an occluder and the boxes join
+    # without the depth ratio the package passes for an occluder and the boxes join; the
+    # colour stage parts them again since stop 64 (two boxes of two colours, colors.py
+    # step 5): with that off too, they stay joined
+    off = exact_report(segment(frame, replace(S, occlusion_min_depth_ratio=0.0)).labels(), frame.fields["label"])
+    assert off.verdicts == ("right", "right", "right")
+    monkeypatch.setattr(colors, "_PART_DE", float("inf"))
     off = exact_report(segment(frame, replace(S, occlusion_min_depth_ratio=0.0)).labels(), frame.fields["label"])
     assert off.verdicts == ("merged", "merged", "right")
 

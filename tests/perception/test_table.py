@@ -248,17 +248,23 @@ def test_the_load_of_a_piece_beyond_a_gap_does_not_keep_it_table(monkeypatch: py
     assert not drop.any()
 
 
-def test_clutter_on_a_bench_level_with_the_table_is_no_object() -> None:
+def test_clutter_on_a_bench_level_with_the_table_is_no_object(monkeypatch: pytest.MonkeyPatch) -> None:
     """desk_level_behind(0): a bench at the table's height 2-6 cm beyond its far edge with
     things on it. The bench is no table, its things no objects (excluded), the table's
-    three objects right; off, the bench's things come out as five more objects."""
+    three objects right; off, the bench's things come out as five more objects. Since
+    stop 64 the gap across the support with a step at it (gaps.py) excludes them too:
+    off, this rule alone leaves none; both off, they are objects."""
     from clearcli.evaluate.exact import exact_report
+    from clearcli.perception import gaps
     from clearcli.perception.segment import segment
     from clearcli.sim.families import support_frame
 
     frame = support_frame("desk_level_behind", 0)
     on = exact_report(segment(frame, S).labels(), frame.fields["label"])
     assert (on.right, on.n_objects, on.spurious) == (3, 3, 0)
+    off = exact_report(segment(frame, replace(S, beyond_edge_own_load=False)).labels(), frame.fields["label"])
+    assert (off.right, off.spurious) == (3, 0)
+    monkeypatch.setattr(gaps, "_STEP_MIN_M", np.inf)
     off = exact_report(segment(frame, replace(S, beyond_edge_own_load=False)).labels(), frame.fields["label"])
     assert off.spurious >= 3
 
@@ -289,9 +295,10 @@ def test_a_benchs_face_seen_over_a_narrow_gap_does_not_join_it_to_the_table(monk
     depth jump, it joined the bench's top to the table (one piece: nothing to judge). Its
     pixels more than `_EDGE_UNDER_M` (5 mm) under the plane belong to no piece, the bench
     is a piece of its own beyond the gap and goes: no spurious object. Off (no pixel
-    too far under), its three things are objects."""
+    too far under), its three things are objects, unless the gap across the support
+    with a step at it (gaps.py, since stop 64) excludes them: it does."""
     from clearcli.evaluate.exact import exact_report
-    from clearcli.perception import table
+    from clearcli.perception import gaps, table
     from clearcli.perception.segment import segment
     from clearcli.sim.families import support_frame
 
@@ -299,6 +306,9 @@ def test_a_benchs_face_seen_over_a_narrow_gap_does_not_join_it_to_the_table(monk
     on = exact_report(segment(frame, S).labels(), frame.fields["label"])
     assert (on.right, on.n_objects, on.spurious) == (4, 4, 0)
     monkeypatch.setattr(table, "_EDGE_UNDER_M", np.inf)
+    off = exact_report(segment(frame, S).labels(), frame.fields["label"])
+    assert off.right == 4 and off.spurious == 0
+    monkeypatch.setattr(gaps, "_STEP_MIN_M", np.inf)
     off = exact_report(segment(frame, S).labels(), frame.fields["label"])
     assert off.right == 4 and off.spurious == 3
 
