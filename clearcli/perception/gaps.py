@@ -189,7 +189,7 @@ def gap_behind(
     the support's outline in them."""
     if support_xy.shape[0] < 1000:
         return None
-    # an even sample: the strips beside a gap still hold a hundred points or more
+    # an even sample: the strips beside the desks' gaps still hold 70-100 points
     every = max(1, -(-support_xy.shape[0] // _MAX_POINTS))
     xy, h = support_xy[::every], support_h[::every]
     sight = xy.mean(axis=0) - camera_xy
