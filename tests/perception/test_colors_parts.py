@@ -23,8 +23,8 @@ ON = SegmentSettings()
 
 @pytest.mark.parametrize("noise", [None, STEREO_NOISE])
 def test_two_cans_either_side_of_an_arm_are_two_objects(noise, monkeypatch: pytest.MonkeyPatch) -> None:
-    # arm_entering(37) seen by a RealSense at 1280x720: a blue and a magenta can 15 cm
-    # apart behind the arm hanging over the table
+    # arm_entering(37) seen by a RealSense at 1280x720: a blue and a magenta can, their
+    # centres 14 cm apart, behind the arm hanging over the table
     frame = support_frame("arm_entering", 37, camera=REALSENSE_HD, view=(0.6, 35.0), noise=noise)
     truth = np.asarray(frame.fields["label"])
     seg = segment(frame, ON)
