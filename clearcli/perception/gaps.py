@@ -113,9 +113,9 @@ def _level_at(t: np.ndarray, h: np.ndarray, at: float) -> float:
     return float(coef[0])
 
 
-def _gap_along(t: np.ndarray, h: np.ndarray) -> Gap | None:
-    """The gap across the strips of positions ``t`` (heights ``h``) with the largest
-    step, or None; ``direction`` left empty for the caller."""
+def _gap_along(direction: np.ndarray, t: np.ndarray, h: np.ndarray) -> Gap | None:
+    """The gap across the strips of positions ``t`` along ``direction`` (heights ``h``)
+    with the largest step, or None."""
     lo = float(t.min())
     strip = np.floor((t - lo) / _BIN_M).astype(np.int64)
     counts = np.bincount(strip)
@@ -154,7 +154,7 @@ def _gap_along(t: np.ndarray, h: np.ndarray) -> Gap | None:
         far_sel = (strip >= j) & (strip < j + n_side)
         step = _level_at(t[near_sel], h[near_sel], at) - _level_at(t[far_sel], h[far_sel], at)
         if best is None or abs(step) > abs(best.step_m):
-            best = Gap(np.zeros(2), at, (j - i) * _BIN_M, step)
+            best = Gap(direction, at, (j - i) * _BIN_M, step)
     return best
 
 
@@ -199,11 +199,13 @@ def gap_behind(
     along = xy @ np.stack(directions, axis=1)  # every direction's positions in one product
     best: Gap | None = None
     for k, u in enumerate(directions):
-        found = _gap_along(np.ascontiguousarray(along[:, k]), h)
-        if found is None or abs(found.step_m) < _STEP_MIN_M:
-            continue
-        if best is None or abs(found.step_m) > abs(best.step_m):
-            best = Gap(u, found.at_m, found.width_m, found.step_m)
+        found = _gap_along(u, np.ascontiguousarray(along[:, k]), h)
+        if (
+            found is not None
+            and abs(found.step_m) >= _STEP_MIN_M
+            and (best is None or abs(found.step_m) > abs(best.step_m))
+        ):
+            best = found
     return best
 
 
